@@ -1,0 +1,97 @@
+"""The one error type users see, and how it shows where the fault is.
+
+Every stage (MCL parser and checker, PNML reader, the net core, the CLI)
+raises :class:`Mcl2PnmlError`. The CLI catches exactly this type, prints it
+and exits with status 2; anything else escaping is a bug.
+
+Like lark's ``UnexpectedInput``, an error that knows its position renders as
+``file:line:col: message`` followed by the source line and a caret under the
+fault, so that a user finds the problem without opening the file.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+
+@dataclass(frozen=True)
+class Location:
+    """A position in a source file; line and column count from 1."""
+
+    file: str | None = None
+    line: int | None = None
+    column: int | None = None
+    source_line: str | None = None
+
+    def prefix(self) -> str:
+        parts = [self.file or "<input>"]
+        if self.line is not None:
+            parts.append(str(self.line))
+            parts.append(str(self.column if self.column is not None else 1))
+        return ":".join(parts)
+
+    def excerpt(self) -> str:
+        """The source line with a caret under the column, or ``""``."""
+        if self.source_line is None or self.line is None:
+            return ""
+        text = self.source_line.rstrip("\n").expandtabs(1)
+        col = max(1, self.column or 1)
+        return f"    {text}\n    {' ' * (col - 1)}^"
+
+
+class Mcl2PnmlError(Exception):
+    """A user-facing error: bad MCL, bad PNML, a bad net, a bad argument.
+
+    ``message`` says what is wrong and, where there is a choice, what is valid.
+    """
+
+    def __init__(self, message: str, location: Location | None = None):
+        super().__init__(message)
+        self.message = message
+        self.location = location
+
+    def __str__(self) -> str:
+        if self.location is None:
+            return self.message
+        head = f"{self.location.prefix()}: {self.message}"
+        excerpt = self.location.excerpt()
+        return f"{head}\n{excerpt}" if excerpt else head
+
+
+class NetError(Mcl2PnmlError):
+    """A net that breaks the rules of the core (dangling arc, duplicate id...)."""
+
+
+class PnmlError(Mcl2PnmlError):
+    """A PNML document that cannot be read as a P/T net."""
+
+
+class ErrorList(Mcl2PnmlError):
+    """Several errors found in one file, reported together."""
+
+    def __init__(self, errors: Sequence[Mcl2PnmlError]):
+        self.errors = tuple(errors)
+        super().__init__("\n".join(str(e) for e in self.errors))
+
+    def __str__(self) -> str:
+        return "\n".join(str(e) for e in self.errors)
+
+
+def raise_all(errors: Iterable[Mcl2PnmlError]) -> None:
+    """Raise the errors collected by a checking pass, if there are any."""
+    errors = list(errors)
+    if len(errors) == 1:
+        raise errors[0]
+    if errors:
+        raise ErrorList(errors)
+
+
+def did_you_mean(name: str, valid: Iterable[str], what: str) -> str:
+    """``"; did you mean 'Go'? declared tasks: Go, Stop"`` for error messages."""
+    import difflib
+
+    valid = sorted(set(valid))
+    close = difflib.get_close_matches(name, valid, n=1)
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    listing = ", ".join(valid) if valid else "none"
+    return f"{hint} {what}: {listing}" if hint else f"; {what}: {listing}"

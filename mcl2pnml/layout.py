@@ -1,0 +1,120 @@
+"""Positions for drawing a net, so that PNML opens as a picture, not a heap.
+
+PIPE, TAPAAL, WoPeD and TINA's nd draw a net where its ``<graphics>`` say.
+Small nets (the paper's templates, most missions) are laid out by graphviz
+``dot``: left to right, in the direction tokens flow. Large nets, where
+``dot`` would take minutes, are laid out in columns by their breadth-first
+distance from the initially marked places, which is linear in the size of
+the net and still shows the flow from start to end.
+
+Coordinates follow PNML: x to the right, y downwards, in points, all >= 0.
+"""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from typing import Mapping
+
+import networkx as nx
+
+from .net import Net
+
+#: Above this many nodes, ``dot`` is too slow and the layered layout is used.
+DOT_LIMIT = 1500
+#: Distance between neighbouring columns and rows of the layered layout.
+SPACING = 80.0
+MARGIN = 40.0
+
+
+def dot_available() -> bool:
+    return shutil.which("dot") is not None
+
+
+def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
+    """Node id -> (x, y). ``engine`` is ``"dot"``, ``"layers"`` or ``"auto"``."""
+    if engine not in ("auto", "dot", "layers"):
+        raise ValueError(f"unknown layout engine {engine!r}")
+    nodes = len(net.places) + len(net.transitions)
+    if engine == "dot" or (engine == "auto" and nodes <= DOT_LIMIT and dot_available()):
+        return _dot_layout(net)
+    return _layered_layout(net)
+
+
+def _dot_source(net: Net) -> str:
+    lines = ["digraph net {", "rankdir=LR; nodesep=0.4; ranksep=0.6;"]
+    for p in net.places:
+        lines.append(f"{json.dumps(p.id)} [shape=circle width=0.5 fixedsize=true label=\"\"];")
+    for t in net.transitions:
+        lines.append(f"{json.dumps(t.id)} [shape=box width=0.15 height=0.5 fixedsize=true label=\"\"];")
+    for a in net.arcs:
+        lines.append(f"{json.dumps(a.source)} -> {json.dumps(a.target)};")
+    lines.append("}")
+    return "\n".join(lines)
+
+
+def _dot_layout(net: Net) -> dict[str, tuple[float, float]]:
+    if not dot_available():
+        raise RuntimeError("graphviz 'dot' is not installed (apt-get install graphviz)")
+    result = subprocess.run(["dot", "-Tjson0"], input=_dot_source(net).encode(),
+                            capture_output=True, check=True, timeout=120)
+    graph = json.loads(result.stdout)
+    pos: dict[str, tuple[float, float]] = {}
+    for obj in graph.get("objects", []):
+        if "pos" in obj:
+            x, y = (float(v) for v in obj["pos"].split(","))
+            pos[obj["name"]] = (x, y)
+    return _normalise(pos, flip_y=True)  # graphviz's y axis points up
+
+
+def _layered_layout(net: Net) -> dict[str, tuple[float, float]]:
+    graph = nx.DiGraph()
+    graph.add_nodes_from(p.id for p in net.places)
+    graph.add_nodes_from(t.id for t in net.transitions)
+    graph.add_edges_from((a.source, a.target) for a in net.arcs)
+    # Column = BFS depth from the marked places, where the net starts; nodes
+    # that BFS cannot reach start new columns from the first unreached node.
+    # One pass over the graph in all: linear in its size.
+    layer: dict[str, int] = {}
+    first = 0
+    starts = [[p for p in net.initial]] if net.initial else []
+    pending = iter(graph)
+    while True:
+        if not starts:
+            start = next((n for n in pending if n not in layer), None)
+            if start is None:
+                break
+            starts = [[start]]
+        frontier = [n for n in starts.pop() if n not in layer]
+        depth = first
+        while frontier:
+            for n in frontier:
+                layer[n] = depth
+            nxt = []
+            for n in frontier:
+                for m in graph.successors(n):
+                    if m not in layer:
+                        layer[m] = depth + 1  # claimed now, so it is queued once
+                        nxt.append(m)
+            frontier, depth = nxt, depth + 1
+        first = depth
+    rows: dict[int, int] = {}
+    pos: dict[str, tuple[float, float]] = {}
+    for n in graph:  # insertion order keeps the nodes of one component together
+        col = layer[n]
+        rows[col] = rows.get(col, 0) + 1
+        pos[n] = (col * SPACING, (rows[col] - 1) * SPACING)
+    return _normalise(pos, flip_y=False)
+
+
+def _normalise(pos: Mapping[str, tuple[float, float]], flip_y: bool) -> dict[str, tuple[float, float]]:
+    if not pos:
+        return {}
+    xs = [x for x, _ in pos.values()]
+    ys = [y for _, y in pos.values()]
+    x0, y0, y1 = min(xs), min(ys), max(ys)
+    out = {}
+    for n, (x, y) in pos.items():
+        y = (y1 - y) if flip_y else (y - y0)
+        out[n] = (round(x - x0 + MARGIN, 1), round(y + MARGIN, 1))
+    return out

@@ -1,0 +1,40 @@
+"""XML ids for node ids that are not XML names.
+
+PNML ids are of type ``xsd:ID``, that is XML NCNames: ``AchieveDepth.MTX`` is
+one, but pm4py happily names a place ``({'a'}, {'b'})``. Such ids are written
+with the ``_xHHHH_`` escapes of XML name encoding (the convention of
+``XmlConvert.EncodeName`` and of spreadsheet XML) and decoded by our reader,
+so that any id survives a round trip and the file stays valid.
+"""
+from __future__ import annotations
+
+import re
+
+_ESCAPE = re.compile(r"_x([0-9A-F]{4,6})_")
+
+
+def _name_char(c: str, first: bool) -> bool:
+    """ASCII name characters; anything else is escaped (always valid, and simple)."""
+    if not c.isascii():
+        return False
+    if c == "_" or c.isalpha():
+        return True
+    return not first and (c.isdigit() or c in ".-")
+
+
+def encode(node_id: str) -> str:
+    """An NCName that :func:`decode` maps back to ``node_id``."""
+    out = []
+    for i, c in enumerate(node_id):
+        # an underscore that would read as the start of an escape is escaped itself
+        if c == "_" and _ESCAPE.match(node_id, i):
+            out.append("_x005F_")
+        elif _name_char(c, first=(i == 0)):
+            out.append(c)
+        else:
+            out.append(f"_x{ord(c):04X}_")
+    return "".join(out)
+
+
+def decode(xml_id: str) -> str:
+    return _ESCAPE.sub(lambda m: chr(int(m.group(1), 16)), xml_id)
