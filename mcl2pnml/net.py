@@ -268,6 +268,8 @@ class Marking(Mapping[str, int]):
 # The net
 
 _ID = re.compile(r"\S(?:.*\S)?\Z", re.S)
+# characters XML 1.0 cannot carry at all: names and labels must avoid them
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
 
 
 @dataclass(frozen=True, eq=False)
@@ -310,6 +312,11 @@ class Net:
                         f"duplicate id '{node.id}' (a {kinds[node.id]} and a {node_kind}); "
                         "ids must be unique across places and transitions")
                 kinds[node.id] = node_kind
+                for what in ("name", "interface"):
+                    text = getattr(node, what, None)
+                    if text is not None and (not isinstance(text, str) or _NOT_XML.search(text)):
+                        raise NetError(f"{what} of {node_kind} '{node.id}' must be text "
+                                       f"without control characters, not {text!r}")
         seen: set[tuple[str, str, ArcKind]] = set()
         inputs: set[tuple[str, str]] = set()
         reads: set[tuple[str, str]] = set()

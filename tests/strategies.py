@@ -26,7 +26,8 @@ def nets(draw, max_places: int = 8, max_transitions: int = 6):
     b = NetBuilder(draw(st.sampled_from(["net", "mission", "task"])))
     for p in places:
         b.place(p, draw(st.integers(0, 3)),
-                name=draw(st.none() | st.text(min_size=1, max_size=5).map(str.strip).filter(bool)),
+                name=draw(st.none() | st.text(st.characters(blacklist_categories=("Cs", "Cc")),
+                                              min_size=1, max_size=5)),
                 interface=draw(st.none() | st.sampled_from(["B", "A", "MTX", "OK", "E", "S1"])),
                 payload=draw(st.none() | payloads))
     for t in transitions:

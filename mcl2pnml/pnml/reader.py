@@ -32,6 +32,8 @@ from .writer import TOOL
 P_T_TYPES = {
     "http://www.pnml.org/version-2009/grammar/ptnet",
     "http://www.pnml.org/version-2009/grammar/pnmlcoremodel",
+    "http://www.informatik.hu-berlin.de/top/pntd/ptNetb",  # pre-standard PNML
+    "P/T net",  # PIPE
 }
 
 
@@ -324,8 +326,10 @@ def _parse_xml(data: bytes, src: _Source):
     except ValueError as e:  # e.g. a str with an encoding declaration
         raise XmlError(f"cannot parse as XML: {e}", src.at(None)) from None
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
+        line = next((i for i, text in enumerate(src.lines, 1) if "<!DOCTYPE" in text), 1)
+        col = src.lines[line - 1].find("<!DOCTYPE") + 1 if src.lines else 1
         raise XmlError("document type declarations are refused: PNML needs none, and "
-                        "entities are never expanded or fetched", src.at(1, 1))
+                       "entities are never expanded or fetched", src.at(line, max(col, 1)))
     return tree
 
 

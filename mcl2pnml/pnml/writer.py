@@ -91,8 +91,7 @@ def _payload(payload):
     return _E("payload", None, json.dumps(thaw(payload), sort_keys=True, separators=(",", ":")))
 
 
-def _elements(net: Net, layout_engine: str) -> Iterator[etree._Element]:
-    xid = _Ids(net)
+def _elements(net: Net, xid: _Ids, layout_engine: str) -> Iterator[etree._Element]:
     positioned = all(n.position is not None for n in (*net.places, *net.transitions))
     pos = ({n.id: n.position for n in (*net.places, *net.transitions)} if positioned
            else layout(net, layout_engine))
@@ -142,7 +141,7 @@ def write_pnml(net: Net, out: io.BufferedIOBase, layout_engine: str = "auto") ->
             with xf.element("net", {"id": net_id, "type": PTNET}):
                 xf.write(_name(net.name or "net"), pretty_print=True)
                 with xf.element("page", {"id": page_id}):
-                    for el in _elements(net, layout_engine):
+                    for el in _elements(net, xid, layout_engine):
                         xf.write(el, pretty_print=True)
                 xf.write(_toolspecific(_E("ids", {"encoding": "xml-name-escapes"})),
                          pretty_print=True)

@@ -1,0 +1,35 @@
+"""`pip install .` gives a working command from any directory, templates included."""
+import os
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+from conftest import ROOT
+
+
+def test_wheel_installs_the_command_and_the_templates(tmp_path):
+    wheel_dir, target = tmp_path / "wheel", tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
+                    "-w", str(wheel_dir), str(ROOT)], check=True, timeout=300)
+    wheel = next(wheel_dir.glob("mcl2pnml-*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    templates = sorted(n for n in names if n.startswith("mcl2pnml/templates/"))
+    shipped = sorted(f"mcl2pnml/templates/{p.name}" for p in (ROOT / "templates").iterdir()
+                     if p.suffix in (".py", ".net", ".md"))
+    assert templates == shipped
+    assert any(n.startswith("analysis/") for n in names)
+    assert any(n.endswith("entry_points.txt") for n in names)
+    subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                    "--target", str(target), str(wheel)], check=True, timeout=300)
+    # run from an unrelated directory, importing only the installed copy
+    env = {**os.environ, "PYTHONPATH": str(target)}
+    out = subprocess.run([sys.executable, "-P", "-c",
+                          "import mcl2pnml, mcl2pnml.templates as t; print(mcl2pnml.__file__); "
+                          "print(t.__file__)"],
+                         capture_output=True, text=True, cwd=tmp_path, env=env, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert all(line.startswith(str(target)) for line in out.stdout.split())
+    out = subprocess.run([str(target / "bin" / "mcl2pnml"), "--version"], capture_output=True,
+                         text=True, cwd=tmp_path, env=env, timeout=60)
+    assert out.returncode == 0 and out.stdout.startswith("mcl2pnml "), out.stderr

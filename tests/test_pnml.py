@@ -1,0 +1,169 @@
+"""PNML out and in: round trips, the official grammar, real tools' files, bad files."""
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+
+from mcl2pnml import (ArcKind, NetBuilder, PnmlError, Timing, load_pnml, parse_pnml,
+                      save_pnml, to_pnml_bytes)
+from mcl2pnml.errors import Mcl2PnmlError
+from mcl2pnml.pnml import ids
+
+from conftest import DATA
+from strategies import nets
+from examples.handbuilt_primitive import primitive
+
+INVALID = sorted((DATA / "pnml" / "invalid").glob("*.pnml"))
+FOREIGN = sorted((DATA / "pnml" / "foreign").glob("*.pnml"))
+
+
+def everything():
+    """A net with every feature of the core."""
+    b = NetBuilder("everything")
+    b.place("B", 1, interface="B", payload={"role": "begin"})
+    b.place("AchieveDepth.MTX", 1, interface="MTX")
+    b.place("({'a'}, {'b'})", name="a place pm4py could name")
+    b.place("heap", 3)
+    b.transition("t03", name="timeout", timing=Timing.delay(60),
+                 payload={"action": "disable", "primitive": "KeepDepth", "args": [4.0]})
+    b.transition("t_window", timing=Timing(1.5, None))
+    b.arc("B", "t03")
+    b.read("AchieveDepth.MTX", "t03")
+    b.arc("t03", "({'a'}, {'b'})", 2)
+    b.arc("heap", "t_window", 3)
+    b.arc("t_window", "B")
+    return b.build()
+
+
+def test_round_trip_keeps_everything(assert_valid, tmp_path):
+    net = everything()
+    path = save_pnml(net, tmp_path / "everything.pnml")
+    assert_valid(path.read_bytes())
+    back = load_pnml(path)
+    assert back == net
+    assert back.transition_index["t03"].timing == Timing.delay(60)
+    assert [a.kind for a in back.arcs if a.target == "t03" and a.source.endswith("MTX")] \
+        == [ArcKind.READ]
+    # every node has a drawing position, and positions survive a second trip
+    assert all(n.position is not None for n in (*back.places, *back.transitions))
+    again = parse_pnml(to_pnml_bytes(back))
+    assert {p.id: p.position for p in again.places} == {p.id: p.position for p in back.places}
+
+
+@settings(max_examples=60, deadline=None)
+@given(nets())
+def test_round_trip_of_random_nets_is_exact_and_valid(assert_valid, net):
+    data = to_pnml_bytes(net, layout_engine="layers")
+    assert_valid(data)
+    assert parse_pnml(data) == net
+
+
+def test_one_flat_page_and_a_position_for_every_node():
+    from lxml import etree
+    doc = etree.fromstring(to_pnml_bytes(primitive()))
+    ns = {"p": "http://www.pnml.org/version-2009/grammar/pnml"}
+    assert len(doc.findall(".//p:page", ns)) == 1
+    assert not doc.findall(".//p:page/p:page", ns)
+    nodes = doc.findall(".//p:place", ns) + doc.findall(".//p:transition", ns)
+    positions = {(n.find("p:graphics/p:position", ns).get("x"),
+                  n.find("p:graphics/p:position", ns).get("y")) for n in nodes}
+    assert len(positions) == len(nodes), "two nodes drawn on the same spot"
+
+
+def test_read_arc_is_a_self_loop_for_other_tools():
+    from lxml import etree
+    doc = etree.fromstring(to_pnml_bytes(everything()))
+    arcs = {(a.get("source"), a.get("target")) for a in doc.iter("{*}arc")}
+    assert ("AchieveDepth.MTX", "t03") in arcs and ("t03", "AchieveDepth.MTX") in arcs
+
+
+@pytest.mark.parametrize("node_id", ["AchieveDepth.MTX", "({'a'}, {'b'})", "1st", "_x0041_",
+                                     "é", "a b", "x" * 50])
+def test_ids_that_are_not_xml_names_are_escaped_and_restored(node_id):
+    encoded = ids.encode(node_id)
+    assert ids.decode(encoded) == node_id
+    from lxml import etree  # the encoded form is an XML name: it parses as an element name
+    etree.fromstring(f"<{encoded}/>")
+
+
+@pytest.mark.parametrize("path", FOREIGN, ids=lambda p: p.name)
+def test_reads_what_other_tools_write(path):
+    net = load_pnml(path)
+    assert net.places and net.transitions and net.arcs and net.initial
+
+
+def test_reader_flattens_pages_and_resolves_references():
+    net = load_pnml(DATA / "pnml" / "foreign" / "nested_pages_with_references.pnml")
+    assert {p.id for p in net.places} == {"ready", "busy", "log"}
+    assert {(a.source, a.target, a.weight) for a in net.arcs} == {
+        ("ready", "start", 1), ("start", "busy", 1), ("busy", "finish", 1),
+        ("finish", "ready", 1), ("finish", "log", 3)}
+    assert net.initial["ready"] == 2
+
+
+def test_reader_takes_pipe_value_labels():
+    net = load_pnml(DATA / "pnml" / "foreign" / "pipe_value_labels.pnml")
+    assert net.initial["P0"] == 3
+    assert {(a.source, a.target, a.weight) for a in net.arcs} == {("P0", "T0", 2), ("T0", "P1", 1)}
+
+
+def test_foreign_nets_round_trip_through_our_writer(assert_valid):
+    for path in FOREIGN:
+        net = load_pnml(path)
+        data = to_pnml_bytes(net)
+        assert_valid(data, path.name)
+        assert parse_pnml(data) == net, path.name
+
+
+@pytest.mark.parametrize("path", INVALID, ids=lambda p: p.name)
+def test_bad_files_give_the_expected_message(path):
+    """Golden messages: file:line:col, the line, a caret; one error type only."""
+    expected = path.with_suffix(".expected").read_text()
+    with pytest.raises(Mcl2PnmlError) as info:
+        parse_pnml(path.read_bytes(), path.name)
+    assert isinstance(info.value, PnmlError) or all(
+        isinstance(e, PnmlError) for e in getattr(info.value, "errors", ()))
+    assert str(info.value) + "\n" == expected
+
+
+def test_entities_are_never_expanded_or_fetched():
+    for name in ("entity_bomb.pnml", "external_entity.pnml"):
+        with pytest.raises(PnmlError, match="document type declarations are refused"):
+            parse_pnml((DATA / "pnml" / "invalid" / name).read_bytes(), name)
+
+
+def test_choosing_one_of_several_nets():
+    data = (DATA / "pnml" / "invalid" / "two_nets.pnml").read_bytes()
+    assert parse_pnml(data, net_id="second").name == "second"
+    with pytest.raises(PnmlError, match="no net with id 'third'; nets in this file: first, second"):
+        parse_pnml(data, net_id="third")
+
+
+def test_save_is_atomic(tmp_path, monkeypatch):
+    target = tmp_path / "net.pnml"
+    target.write_text("old")
+    import mcl2pnml.files as files
+
+    def broken(*_a, **_k):
+        raise OSError("disk full")
+    monkeypatch.setattr(files.os, "fsync", broken)
+    with pytest.raises(OSError):
+        save_pnml(everything(), target)
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["net.pnml"]
+
+
+def test_grammar_rejects_what_it_should(grammar_dir):
+    from mcl2pnml.pnml.grammar import validate_bytes
+    data = to_pnml_bytes(everything()).replace(b'type="http://www.pnml.org/version-2009/grammar/ptnet"',
+                                               b'type="urn:not-a-type"')
+    verdict = validate_bytes(data, "x.pnml", grammar_dir)
+    assert not verdict.valid
+    assert any("grammar:" in str(e) for e in verdict.errors)
+
+
+def test_missing_grammar_says_how_to_get_it(tmp_path, monkeypatch):
+    from mcl2pnml.pnml.grammar import ENV, find_grammar
+    monkeypatch.setenv(ENV, str(tmp_path))
+    with pytest.raises(PnmlError, match=f"no ptnet.pntd in {tmp_path}.*{ENV}"):
+        find_grammar()
