@@ -145,8 +145,28 @@ class Timing:
         return f"[{self.earliest:g}, {hi}]"
 
 
+class _Named:
+    """What places and transitions share: an id, and a name shown to people."""
+
+    id: str
+    name: str | None
+
+    def __post_init__(self) -> None:
+        # One canonical form keeps equality (and PNML round trips) exact:
+        # surrounding white space is layout, and a blank name or one equal to
+        # the id says nothing more.
+        name = self.name.strip() if isinstance(self.name, str) else self.name
+        if name == "" or name == self.id:
+            name = None
+        object.__setattr__(self, "name", name)
+
+    @property
+    def label(self) -> str:
+        return self.name if self.name is not None else self.id
+
+
 @dataclass(frozen=True)
-class Place:
+class Place(_Named):
     """A place. ``interface`` names its role as a fusion place (``"B"``...)."""
 
     id: str
@@ -155,19 +175,10 @@ class Place:
     payload: Any = None
     position: tuple[float, float] | None = field(default=None, compare=False)
 
-    def __post_init__(self) -> None:
-        # a name equal to the id says nothing more; one canonical form keeps
-        # equality (and PNML round trips) exact
-        if self.name == self.id:
-            object.__setattr__(self, "name", None)
-
-    @property
-    def label(self) -> str:
-        return self.name if self.name is not None else self.id
 
 
 @dataclass(frozen=True)
-class Transition:
+class Transition(_Named):
     """A transition, optionally timed (``timing``) and bound (``payload``)."""
 
     id: str
@@ -176,15 +187,6 @@ class Transition:
     payload: Any = None
     position: tuple[float, float] | None = field(default=None, compare=False)
 
-    def __post_init__(self) -> None:
-        # a name equal to the id says nothing more; one canonical form keeps
-        # equality (and PNML round trips) exact
-        if self.name == self.id:
-            object.__setattr__(self, "name", None)
-
-    @property
-    def label(self) -> str:
-        return self.name if self.name is not None else self.id
 
 
 @dataclass(frozen=True)

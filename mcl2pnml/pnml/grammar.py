@@ -26,8 +26,8 @@ from pathlib import Path
 
 from lxml import etree
 
-from ..errors import ErrorList, Location, Mcl2PnmlError, PnmlError
-from .reader import XmlError, _parse_xml, _Source, parse_pnml
+from ..errors import ErrorList, Mcl2PnmlError, PnmlError
+from .reader import XmlError, _parse_xml, _Source, parse_pnml, read_file
 
 ENV = "MCL2PNML_PNML_GRAMMAR"
 ENTRY = "ptnet.pntd"
@@ -74,12 +74,7 @@ class Verdict:
 
 def validate(path: str | Path, grammar: str | Path | None = None) -> Verdict:
     """Check a PNML file against the grammar and against the reader's rules."""
-    path = Path(path)
-    try:
-        data = path.read_bytes()
-    except OSError as e:
-        raise PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
-    return validate_bytes(data, str(path), grammar)
+    return validate_bytes(read_file(path), str(path), grammar)
 
 
 def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None) -> Verdict:

@@ -372,11 +372,14 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
         raise PnmlError(e.message, Location(filename)) from None
 
 
-def load_pnml(path: str | Path, net_id: str | None = None) -> Net:
-    """Read one P/T net from a PNML file."""
-    path = Path(path)
+def read_file(path: str | Path) -> bytes:
+    """A file's bytes, or a :class:`PnmlError` that names it."""
     try:
-        data = path.read_bytes()
+        return Path(path).read_bytes()
     except OSError as e:
         raise PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
-    return parse_pnml(data, str(path), net_id)
+
+
+def load_pnml(path: str | Path, net_id: str | None = None) -> Net:
+    """Read one P/T net from a PNML file."""
+    return parse_pnml(read_file(path), str(path), net_id)
