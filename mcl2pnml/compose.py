@@ -121,3 +121,50 @@ def compose(components: Mapping[str, Net] | Iterable[tuple[str, Net]],
             groups: Iterable[Sequence[str]], name: str = "net") -> Net:
     """Union of the components, then fusion of the groups (qualified ids)."""
     return fuse(union(components, name), groups)
+
+
+def glue(nets: Sequence[Net], name: str | None = None) -> Net:
+    """Join nets on their shared interface places: same id, both interface.
+
+    This is fusion by name, the way the paper's figures are joined: the task
+    net's ``E`` *is* the primitive's ``E``. Any other clash of ids (a place
+    that is interface on one side only, two transitions of the same name) is
+    an error, so that nothing is fused by accident. The first net's places
+    survive the fusion.
+    """
+    seen: dict[str, Place] = {}
+    transitions: set[str] = set()
+    parts: list[tuple[str, Net]] = []
+    groups: list[list[str]] = []
+    for k, net in enumerate(nets):
+        renames: dict[str, str] = {}
+        for p in net.places:
+            first = seen.get(p.id)
+            if first is None:
+                seen[p.id] = p
+            elif first.interface is not None and p.interface is not None:
+                renames[p.id] = f"{p.id}#{k}"  # a placeholder id, fused away below
+                groups.append([p.id, renames[p.id]])
+            else:
+                raise NetError(f"cannot join nets on place '{p.id}': it is not an interface "
+                               "place of both")
+        for t in net.transitions:
+            if t.id in transitions:
+                raise NetError(f"cannot join nets: both have a transition '{t.id}'")
+            transitions.add(t.id)
+        if renames:
+            r = lambda i: renames.get(i, i)
+            net = Net(net.name,
+                      tuple(Place(r(p.id), p.name, p.interface, p.payload, p.position)
+                            for p in net.places),
+                      net.transitions,
+                      tuple(Arc(r(a.source), r(a.target), a.weight, a.kind) for a in net.arcs),
+                      Marking({r(p): n for p, n in net.initial.items()}))
+        parts.append(("", net))
+    joined = union(parts, name or (nets[0].name if nets else "net"))
+    return fuse(joined, groups)
+
+
+def prefixed(net: Net, prefix: str, separator: str = "_") -> Net:
+    """The same net with every id prefixed (``B`` -> ``T1_B``); labels kept."""
+    return union([(prefix, net)], net.name, separator) if prefix else net

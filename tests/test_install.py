@@ -16,7 +16,7 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     templates = sorted(n for n in names if n.startswith("mcl2pnml/templates/"))
     shipped = sorted(f"mcl2pnml/templates/{p.name}" for p in (ROOT / "templates").iterdir()
-                     if p.suffix in (".py", ".net", ".md"))
+                     if p.suffix in (".py", ".pnt"))
     assert templates == shipped
     assert any(n.startswith("analysis/") for n in names)
     assert any(n.endswith("entry_points.txt") for n in names)

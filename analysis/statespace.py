@@ -1,0 +1,300 @@
+"""Reachable markings: the reachability graph, or the Karp-Miller coverability graph.
+
+:func:`explore` builds, from the net's initial marking,
+
+* the **reachability graph** when the net is bounded (every reachable
+  marking once, an edge per firing), or
+* a **coverability graph** (Karp and Miller 1969; Murata 1989, section V-A)
+  when it is not: a marking that strictly covers one of its ancestors gets
+  the token count ``omega`` (written ``w``) in the places that grew, and the
+  set of nodes covers every reachable marking.
+
+Transitions are explored untimed: a timed transition (the task's time-out
+``t03``) may fire in any order with the others, which is what equations.md
+asks for the coverability analysis ("any order of firing").
+
+Two explorers share one result type:
+
+* a bitset explorer for safe nets, where a marking is a Python int with one
+  bit per place and firing is three bit operations. It is tried first when
+  every weight is 1 and M0 is 0/1; the first firing that would put a second
+  token in a place hands over to
+* the general explorer, with markings as tuples of counts and the
+  Karp-Miller acceleration along the first-discovery path.
+
+Edges are kept in flat integer arrays (source, transition, target), which is
+what a graph of millions of states needs; :meth:`StateSpace.graph` turns them
+into a networkx graph on demand.
+"""
+from __future__ import annotations
+
+import math
+from array import array
+from collections import deque
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable, Sequence
+
+import networkx as nx
+
+from mcl2pnml.errors import Mcl2PnmlError
+
+from .matrix import Structure, structure as make_structure
+
+OMEGA = math.inf
+"""The token count of a place that the coverability graph found unbounded."""
+
+Progress = Callable[[int, int], None]
+"""Called now and then during a long exploration with (states, frontier)."""
+
+PROGRESS_EVERY = 100_000
+
+
+class ExplorationLimit(Mcl2PnmlError):
+    """The exploration met its state limit before it finished."""
+
+
+@dataclass(eq=False)
+class StateSpace:
+    """The explored graph: node 0 is the initial marking."""
+
+    structure: Structure
+    markings: list[tuple]                 # node -> token counts (OMEGA where unbounded)
+    src: array = field(repr=False)        # edge k goes src[k] --trans[k]--> dst[k]
+    trans: array = field(repr=False)
+    dst: array = field(repr=False)
+    coverability: bool = False            # True if acceleration was needed (unbounded)
+
+    # -- basic facts -------------------------------------------------------------
+
+    @property
+    def states(self) -> int:
+        return len(self.markings)
+
+    @property
+    def bounded(self) -> bool:
+        return not self.coverability
+
+    @cached_property
+    def bound(self) -> float:
+        """The largest token count of any place in any node (OMEGA if unbounded)."""
+        return max((max(m) for m in self.markings if m), default=0)
+
+    @property
+    def safe(self) -> bool:
+        return self.bounded and self.bound <= 1
+
+    @cached_property
+    def out_degree(self) -> array:
+        deg = array("i", bytes(4 * self.states))
+        for s in self.src:
+            deg[s] += 1
+        return deg
+
+    @cached_property
+    def terminal(self) -> list[int]:
+        """Nodes where no transition is enabled (dead markings)."""
+        return [n for n, d in enumerate(self.out_degree) if d == 0]
+
+    def marking(self, node: int) -> dict[str, float]:
+        places = self.structure.places
+        return {places[i]: n for i, n in enumerate(self.markings[node]) if n}
+
+    def format(self, node: int) -> list[str]:
+        """Sorted place names, ``P*2`` for counts above one, ``P*w`` for omega."""
+        out = []
+        for p, n in sorted(self.marking(node).items()):
+            out.append(p if n == 1 else f"{p}*{'w' if n == OMEGA else int(n)}")
+        return out
+
+    # -- graph questions -----------------------------------------------------------
+
+    def _reverse(self) -> list[list[int]]:
+        rev: list[list[int]] = [[] for _ in range(self.states)]
+        for s, d in zip(self.src, self.dst):
+            rev[d].append(s)
+        return rev
+
+    def can_reach(self, targets: Sequence[int]) -> list[bool]:
+        """For every node, whether some node of ``targets`` is reachable from it."""
+        rev = self._reverse()
+        seen = [False] * self.states
+        queue = deque(targets)
+        for t in targets:
+            seen[t] = True
+        while queue:
+            n = queue.popleft()
+            for m in rev[n]:
+                if not seen[m]:
+                    seen[m] = True
+                    queue.append(m)
+        return seen
+
+    def always_can_reach(self, targets: Sequence[int]) -> bool:
+        return all(self.can_reach(targets))
+
+    @property
+    def home_initial(self) -> bool:
+        """Whether the initial marking can be reached again from every marking."""
+        return self.always_can_reach([0])
+
+    def path_to(self, node: int) -> list[str]:
+        """Transition names of a shortest firing sequence from M0 to ``node``."""
+        parent: dict[int, tuple[int, int]] = {0: (-1, -1)}
+        adj: list[list[tuple[int, int]]] = [[] for _ in range(self.states)]
+        for s, t, d in zip(self.src, self.trans, self.dst):
+            adj[s].append((t, d))
+        queue = deque([0])
+        while queue and node not in parent:
+            n = queue.popleft()
+            for t, d in adj[n]:
+                if d not in parent:
+                    parent[d] = (n, t)
+                    queue.append(d)
+        path = []
+        while node in parent and parent[node][0] >= 0:
+            node, t = parent[node]
+            path.append(self.structure.transitions[t])
+        return path[::-1]
+
+    def graph(self) -> nx.MultiDiGraph:
+        """The graph as networkx: nodes carry ``marking``, edges ``transition``."""
+        g = nx.MultiDiGraph()
+        for n in range(self.states):
+            g.add_node(n, marking=self.marking(n))
+        names = self.structure.transitions
+        for s, t, d in zip(self.src, self.trans, self.dst):
+            g.add_edge(s, d, transition=names[t])
+        return g
+
+
+# ---------------------------------------------------------------------------
+# exploration
+
+
+def explore(net_or_structure, initial: dict[str, int] | None = None, *,
+            max_states: int = 5_000_000, progress: Progress | None = None) -> StateSpace:
+    """Explore the markings reachable from ``initial`` (default: the net's M0)."""
+    s = (net_or_structure if isinstance(net_or_structure, Structure)
+         else make_structure(net_or_structure))
+    if initial is None:
+        m0 = s.initial_vector()
+    else:
+        unknown = [p for p in initial if p not in s.place_index]
+        if unknown:
+            raise Mcl2PnmlError(f"initial marking names unknown places: {', '.join(unknown)}")
+        m0 = tuple(initial.get(p, 0) for p in s.places)
+    unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
+    if unit and all(n <= 1 for n in m0):
+        result = _explore_safe(s, m0, max_states, progress)
+        if result is not None:
+            return result
+    return _explore_general(s, m0, max_states, progress)
+
+
+def _limit(max_states: int) -> ExplorationLimit:
+    return ExplorationLimit(f"the state space has more than {max_states:,} markings; "
+                            "raise the limit (--max-states) or analyse a smaller net")
+
+
+def _explore_safe(s: Structure, m0: tuple, max_states: int,
+                  progress: Progress | None) -> StateSpace | None:
+    """Bitset exploration; None as soon as a place would hold two tokens."""
+    need, take, give = [], [], []
+    for pre, read, post in zip(s.pre, s.read, s.post):
+        take_mask = sum(1 << p for p in pre)
+        need.append(take_mask | sum(1 << p for p in read))
+        take.append(take_mask)
+        give.append(sum(1 << p for p in post))
+    order = range(len(need))
+    start = sum(1 << i for i, n in enumerate(m0) if n)
+    index = {start: 0}
+    states = [start]
+    src, trans, dst = array("i"), array("i"), array("i")
+    head = 0
+    while head < len(states):
+        m = states[head]
+        for t in order:
+            if m & need[t] == need[t]:
+                rest = m & ~take[t]
+                if rest & give[t]:
+                    return None  # a second token: not safe, use the general explorer
+                m2 = rest | give[t]
+                k = index.get(m2)
+                if k is None:
+                    k = len(states)
+                    if k >= max_states:
+                        raise _limit(max_states)
+                    index[m2] = k
+                    states.append(m2)
+                    if progress and k % PROGRESS_EVERY == 0:
+                        progress(k, k - head)
+                src.append(head)
+                trans.append(t)
+                dst.append(k)
+        head += 1
+    n = len(s.places)
+    markings = [tuple((m >> i) & 1 for i in range(n)) for m in states]
+    return StateSpace(s, markings, src, trans, dst)
+
+
+def _explore_general(s: Structure, m0: tuple, max_states: int,
+                     progress: Progress | None) -> StateSpace:
+    """Karp-Miller exploration with tuples of counts (OMEGA for unbounded)."""
+    need: list[list[tuple[int, int]]] = []
+    delta: list[list[tuple[int, int]]] = []
+    for j, (pre, read, post) in enumerate(zip(s.pre, s.read, s.post)):
+        needs = dict(read)
+        for p, w in pre.items():
+            needs[p] = max(needs.get(p, 0), w)
+        need.append(sorted(needs.items()))
+        delta.append(sorted(s.incidence[j].items()))
+    markings: list[tuple] = [tuple(m0)]
+    parent: list[int] = [-1]
+    index = {markings[0]: 0}
+    src, trans, dst = array("i"), array("i"), array("i")
+    accelerated = False
+    head = 0
+    while head < len(markings):
+        m = markings[head]
+        for t in range(len(need)):
+            if all(m[p] >= w for p, w in need[t]):
+                m2 = list(m)
+                for p, d in delta[t]:
+                    m2[p] += d  # OMEGA +- d stays OMEGA
+                m2 = tuple(m2)
+                if m2 not in index:
+                    m2, grew = _accelerate(m2, head, markings, parent)
+                    accelerated |= grew
+                k = index.get(m2)
+                if k is None:
+                    k = len(markings)
+                    if k >= max_states:
+                        raise _limit(max_states)
+                    index[m2] = k
+                    markings.append(m2)
+                    parent.append(head)
+                    if progress and k % PROGRESS_EVERY == 0:
+                        progress(k, k - head)
+                src.append(head)
+                trans.append(t)
+                dst.append(k)
+        head += 1
+    return StateSpace(s, markings, src, trans, dst, coverability=accelerated)
+
+
+def _accelerate(m: tuple, node: int, markings: list[tuple], parent: list[int]) -> tuple[tuple, bool]:
+    """Karp-Miller: places that grew since an ancestor it covers become OMEGA."""
+    total = sum(m)
+    grew = False
+    while node >= 0:
+        a = markings[node]
+        # a cheap filter first: covering needs at least as many tokens in all
+        if sum(a) <= total and a != m and all(x >= y for x, y in zip(m, a)):
+            m = tuple(OMEGA if x > y else x for x, y in zip(m, a))
+            total = sum(m)
+            grew = True
+        node = parent[node]
+    return m, grew
+
+
