@@ -14,12 +14,15 @@ from pathlib import Path
 import click
 
 from . import __version__
-from .errors import Mcl2PnmlError
+from .errors import Mcl2PnmlError, did_you_mean
 
 EXAMPLES = """\b
 Examples:
-  mcl2pnml validate mission.pnml
-  mcl2pnml validate mission.pnml --grammar ~/pnml/grammar
+  mcl2pnml template --list
+  mcl2pnml template task -o task.pnml
+  mcl2pnml analyze task.pnml
+  mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
+  mcl2pnml validate task.pnml --grammar ~/pnml/grammar
 """
 
 
@@ -88,6 +91,97 @@ def validate(file: Path, grammar: Path | None) -> int:
     click.echo(f"{file}: valid PNML P/T net (ISO/IEC 15909-2, 2009 grammar): "
                f"{len(net.places)} places, {len(net.transitions)} transitions, "
                f"{len(net.arcs)} arcs")
+    return 0
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("name", required=False)
+@click.option("--list", "list_", is_flag=True, help="List the template nets and exit.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write the PNML here (default: standard output).")
+def template(name: str | None, list_: bool, output: Path | None) -> int:
+    """Write the paper's net NAME as PNML, from the paper's initial marking M0.
+
+    A pattern (task) comes fused with its primitive, a structure with
+    reduced tasks in its slots: the nets the paper analyses.
+    """
+    from .pnml.writer import save_pnml, to_pnml_bytes
+    from .template_library import default_library
+
+    lib = default_library()
+    if list_:
+        rows = [(", ".join(t.names), t.kind.value, t.doc) for t in lib.unique()]
+        width = max(len(r[0]) for r in rows)
+        for names, kind, doc in rows:
+            click.echo(f"{names.ljust(width)}  {kind:<9}  {doc}")
+        return 0
+    if name is None:
+        raise click.UsageError("give a template NAME, or --list")
+    net = lib.composed(name)
+    if output is None:
+        click.echo(to_pnml_bytes(net).decode(), nl=False)
+    else:
+        save_pnml(net, output)
+        click.echo(f"wrote {output}: {net.summary()}", err=True)
+    return 0
+
+
+def _parse_initial(text: str) -> dict[str, int]:
+    marking: dict[str, int] = {}
+    for item in filter(None, (i.strip() for i in text.split(","))):
+        place, _, count = item.partition("*")
+        if count and not count.isdigit():
+            raise click.BadParameter(f"'{item}': a count is a natural number (P*2)",
+                                     param_hint="--initial")
+        marking[place] = marking.get(place, 0) + (int(count) if count else 1)
+    return marking
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
+@click.option("--initial", metavar="P,Q,...",
+              help="Start from this marking instead of the file's (P*2 for two tokens).")
+@click.option("--state-space", is_flag=True,
+              help="Explore the reachable markings only (no invariants, no siphons).")
+@click.option("--max-states", type=click.IntRange(min=1), default=5_000_000, show_default=True,
+              help="Stop exploring past this many markings.")
+@click.option("--progress/--no-progress", default=None,
+              help="Show progress of long explorations (default: when stderr is a terminal).")
+def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
+            max_states: int, progress: bool | None) -> int:
+    """Analyse the P/T net in FILE (PNML): invariants, siphons, reachable markings.
+
+    Works on any P/T net, not only ours: PNML from TAPAAL, PIPE, pm4py...
+    """
+    import json
+
+    from analysis.report import analyze as run, render_text
+
+    from .pnml.reader import load_pnml
+
+    if file.suffix == ".mcl":
+        raise click.UsageError("MCL input needs the compiler, which this version does not "
+                               "have yet; give a PNML file")
+    net = load_pnml(file)
+    start = None
+    if initial is not None:
+        start = _parse_initial(initial)
+        unknown = sorted(p for p in start if p not in net.place_index)
+        if unknown:
+            raise click.BadParameter(
+                f"no place {', '.join(unknown)} in {file}"
+                + did_you_mean(unknown[0], net.place_index, "places"), param_hint="--initial")
+    show = sys.stderr.isatty() if progress is None else progress
+
+    def report(states: int, frontier: int) -> None:
+        click.echo(f"\r  explored {states:,} markings, {frontier:,} to go...", err=True, nl=False)
+
+    result = run(net, start, state_space_only=state_space, max_states=max_states,
+                 progress=report if show else None)
+    if show:
+        click.echo("", err=True)
+    click.echo(json.dumps(result, indent=2) if as_json else render_text(result))
     return 0
 
 

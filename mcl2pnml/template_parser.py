@@ -164,6 +164,18 @@ class _ToData(Transformer):
         return (str(items[0]), items[0], str(items[1]))
 
 
+def _describe(terminal: str) -> str:
+    """A terminal as a user knows it: ``':'`` rather than ``COLON``."""
+    try:
+        pattern = _PARSER.get_terminal(terminal).pattern
+    except KeyError:
+        return terminal
+    if pattern.type == "str":
+        return f"'{pattern.value}'"
+    return {"NAME": "a name", "INT": "a number", "STRING": "a \"doc string\"",
+            "_NL": "end of line"}.get(terminal, terminal.lower())
+
+
 def _doc(token) -> str | None:
     return token[1:-1] if token is not None else None
 
@@ -183,8 +195,9 @@ def parse_template(text: str, filename: str = "<template>",
     try:
         items = _ToData().transform(_PARSER.parse(text if text.endswith("\n") else text + "\n"))
     except UnexpectedInput as e:
-        expected = sorted(getattr(e, "expected", None) or getattr(e, "allowed", None) or [])
-        hint = f"; expected one of: {', '.join(expected)}" if expected else ""
+        expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
+                                                   or getattr(e, "allowed", None) or [])})
+        hint = f"; expected {' or '.join(expected)}" if expected else ""
         src = lines[e.line - 1] if 0 < e.line <= len(lines) else None
         raise Mcl2PnmlError(f"syntax error in template{hint}",
                             Location(filename, e.line, e.column, src)) from None
