@@ -28,11 +28,17 @@ setup: system-deps $(STAMP)
 
 demo: setup
 	@mkdir -p $(OUT)
-	$(PY) examples/handbuilt_primitive.py $(OUT)/primitive.pnml
-	$(BIN)/mcl2pnml validate $(OUT)/primitive.pnml
+	$(BIN)/mcl2pnml template --list
+	$(BIN)/mcl2pnml template task -o $(OUT)/task.pnml
+	$(BIN)/mcl2pnml validate $(OUT)/task.pnml
+	$(BIN)/mcl2pnml analyze $(OUT)/task.pnml
+	$(PY) -m paper_repro
 	@echo
 	@echo "outputs:"
-	@echo "  $(OUT)/primitive.pnml  the vehicle primitive (Fig. 1) built with the net core, as PNML"
+	@echo "  $(OUT)/task.pnml                 the task of Fig. 2 with its primitive, as PNML"
+	@echo "  paper_repro/out/report.md        equations 1-26: the paper vs what the analysis computes"
+	@echo "  paper_repro/out/report.json      the same, for tools"
+	@echo "  paper_repro/out/fig1-4.svg/.png  Figs. 1 to 4 redrawn from the templates"
 
 test: setup
 	$(PY) -m pytest

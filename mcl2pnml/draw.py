@@ -9,7 +9,9 @@ Conventions of the drawings (a legend is part of every figure):
 * arcs run left to right, the way tokens flow; a read arc (the transition
   tests the place and leaves its token) is dashed and has no arrow head;
 * ``clusters`` group the nodes of one component (the primitive in the task,
-  each subordinate structure in a control structure).
+  each subordinate structure in a control structure);
+* a place that many transitions give tokens back to (a mutex) is drawn again,
+  dashed and small, beside each of them, like PNML's reference places.
 """
 from __future__ import annotations
 
@@ -21,6 +23,8 @@ from .files import atomic_write_bytes
 from .net import ArcKind, Net
 
 TOKEN = "\u25cf"
+#: A place that this many arcs return tokens to is drawn again beside each of them.
+COPY_RETURNS = 3
 
 
 def _tokens(n: int) -> str:
@@ -42,7 +46,9 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     def add_place(target, p) -> None:
         tokens = marking.get(p.id, 0)
         label = p.label + (f"\n{_tokens(tokens)}" if tokens else "")
-        target.node(p.id, label, shape="circle", width="0.75", fixedsize="true",
+        # circles all of one size read best; long names get a larger one
+        width = max(0.75, 0.085 * len(p.label) + 0.15)
+        target.node(p.id, label, shape="circle", width=f"{width:.2f}", fixedsize="true",
                     peripheries="2" if p.interface is not None else "1")
 
     def add_transition(target, t) -> None:
@@ -70,13 +76,49 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             for t in net.transitions:
                 if t.id in members:
                     add_transition(c, t)
+    # where tokens come in on the left, where results come out on the right
+    written = {a.target for a in net.arcs if a.target in net.place_index}
+    read_or_taken = {a.source for a in net.arcs if a.source in net.place_index}
+    first = [p.id for p in net.places if p.id not in clustered
+             and (p.id not in written or (p.interface is not None and p.id in net.initial))]
+    last = [p.id for p in net.places if p.id not in clustered and p.id not in read_or_taken]
+    for rank, members in (("source", first), ("sink", last)):
+        if members:
+            with g.subgraph() as r:
+                r.attr(rank=rank)
+                for m in members:
+                    r.node(m)
+    depth = flow_depth(net)
+    back = [a for a in net.arcs if a.kind is ArcKind.NORMAL
+            and depth.get(a.target, 0) <= depth.get(a.source, 0)]
+    returns: dict[str, int] = {}
+    for a in back:
+        if a.target in net.place_index:
+            returns[a.target] = returns.get(a.target, 0) + 1
+    copies = 0
     for a in net.arcs:
         attrs = {}
+        target = a.target
         if a.weight != 1:
             attrs["label"] = str(a.weight)
         if a.kind is ArcKind.READ:
-            attrs.update(style="dashed", arrowhead="none")
-        g.edge(a.source, a.target, **attrs)
+            # a test is not a flow of tokens: it must not bend the layout
+            attrs.update(style="dashed", arrowhead="none", constraint="false")
+        elif a in back and returns.get(a.target, 0) >= COPY_RETURNS:
+            # many tokens going back to one place (a mutex freed by every
+            # ending): each arc goes to a copy of the place drawn beside its
+            # transition, as PNML's reference places do, instead of crossing
+            # the whole drawing
+            copies += 1
+            target = f"{a.target}~{copies}"
+            place = net.place_index[a.target]
+            g.node(target, place.label, shape="circle", fixedsize="true", style="dashed",
+                   width=f"{max(0.55, 0.07 * len(place.label) + 0.15):.2f}", fontsize="8")
+        elif a in back:
+            # a token going back (a primitive switched off): drawn, but the
+            # left-to-right order follows the forward flow
+            attrs.update(constraint="false", color="gray40")
+        g.edge(a.source, target, **attrs)
     if legend:
         with g.subgraph(name="cluster_legend") as k:
             k.attr(label="legend", fontsize="9", style="rounded", color="gray70")
@@ -92,6 +134,32 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             k.edge("legend_iface", "legend_timed", label="read arc", style="dashed",
                    arrowhead="none", fontsize="8")
     return g
+
+
+def flow_depth(net: Net) -> dict[str, int]:
+    """How far each node is from where the net starts, along the token flow.
+
+    Breadth-first from the input places (nothing writes to them: B and A, or
+    E and D) and from the marked places, over normal arcs only.
+    """
+    written = {a.target for a in net.arcs if a.target in net.place_index}
+    start = [p.id for p in net.places if p.id not in written] + \
+        [p for p in net.initial if p in written]
+    succ: dict[str, list[str]] = {}
+    for a in net.arcs:
+        if a.kind is ArcKind.NORMAL:
+            succ.setdefault(a.source, []).append(a.target)
+    depth = {n: 0 for n in start}
+    frontier = list(dict.fromkeys(start))
+    while frontier:
+        nxt = []
+        for n in frontier:
+            for m in succ.get(n, ()):
+                if m not in depth:
+                    depth[m] = depth[n] + 1
+                    nxt.append(m)
+        frontier = nxt
+    return depth
 
 
 def render(graph: graphviz.Digraph, path: str, fmt: str) -> None:

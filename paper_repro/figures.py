@@ -15,15 +15,17 @@ FIGURES = {
 
 
 def clusters(lib: Library, name: str) -> dict[str, list[str]]:
-    """The nodes each slot brought in: the primitive of a task, T1 and T2 of a structure."""
+    """What each slot brings in, its fusion places included: the primitive of
+    a task, T1 and T2 of a structure."""
     t = lib.get(name)
-    own = {n.id for n in (*t.net.places, *t.net.transitions)}
-    net = lib.composed(name)
-    nodes = [n.id for n in (*net.places, *net.transitions) if n.id not in own]
     if t.primitives:
-        return {("primitive " + p if p else "primitive"): [
-            n for n in nodes if (n.startswith(p + "_") if p else True)] for p in t.primitives}
-    return {slot: [n for n in nodes if n.startswith(slot + "_")] for slot in t.children}
+        prim = lib.primitive.net
+        return {("primitive " + slot if slot else "primitive"):
+                [f"{slot}_{n.id}" if slot else n.id for n in (*prim.places, *prim.transitions)]
+                for slot in t.primitives}
+    child = lib.reduced.net
+    return {slot: [f"{slot}_{n.id}" for n in (*child.places, *child.transitions)]
+            for slot in t.children}
 
 
 def draw_all(lib: Library, out: Path) -> list[Path]:

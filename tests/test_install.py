@@ -1,5 +1,6 @@
 """`pip install .` gives a working command from any directory, templates included."""
 import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -9,9 +10,12 @@ from conftest import ROOT
 
 
 def test_wheel_installs_the_command_and_the_templates(tmp_path):
-    wheel_dir, target = tmp_path / "wheel", tmp_path / "site"
+    wheel_dir, target, source = tmp_path / "wheel", tmp_path / "site", tmp_path / "src"
+    # build from a copy: setuptools' build/ directory may hold stale files
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        ".venv", ".git", "build", "out", "*.egg-info", "__pycache__", ".hypothesis"))
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
-                    "-w", str(wheel_dir), str(ROOT)], check=True, timeout=300)
+                    "-w", str(wheel_dir), str(source)], check=True, timeout=300)
     wheel = next(wheel_dir.glob("mcl2pnml-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
     templates = sorted(n for n in names if n.startswith("mcl2pnml/templates/"))

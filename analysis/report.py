@@ -1,0 +1,155 @@
+"""One analysis of a net, as the JSON of ``mcl2pnml analyze --json`` and as a readable report.
+
+The JSON object holds what ``shared/spec/cli.md`` lists (``places``,
+``transitions``, ``p_invariants``, ``siphons``, ``bounded``, ``safe``,
+``terminal_markings``, ``reusable``, ``deadlock_free``, ``states``) and more:
+``initial_marking``, ``t_invariants``, the minimal semi-positive invariants,
+``traps``, each siphon's control (Iordache and Antsaklis 2006), and the
+termination facts of :mod:`analysis.behaviour`.
+
+Structural results that could not be computed within their limits (the
+number of minimal siphons can grow exponentially with the net) are reported
+as ``null`` with the reason under ``"limits"``, never silently left out.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from mcl2pnml.net import Net
+
+from .behaviour import behaviour
+from .invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
+                         minimal_semipositive_t_invariants, p_invariant_basis,
+                         t_invariant_basis)
+from .matrix import structure
+from .siphons import minimal_siphons, minimal_traps, siphon_control
+from .statespace import Progress, explore
+
+#: Bounds on the exponential parts; past them the result says "limit reached".
+FARKAS_LIMIT = 20_000
+SIPHON_LIMIT = 20_000
+
+
+def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
+            max_states: int = 5_000_000, progress: Progress | None = None) -> dict[str, Any]:
+    """Everything we know how to prove about ``net``, as JSON-ready data."""
+    if initial is not None:
+        net = net.with_initial(initial)
+    s = structure(net)
+    space = explore(s, max_states=max_states, progress=progress)
+    b = behaviour(space)
+    result: dict[str, Any] = {
+        "net": net.name,
+        "states": space.states,
+        "bounded": space.bounded,
+        "safe": space.safe,
+        "terminal_markings": sorted(list(m) for m in b.terminal),
+    }
+    if state_space_only:
+        return result
+    limits: dict[str, str] = {}
+
+    def bounded_run(key: str, fn, *args):
+        try:
+            return fn(*args)
+        except AnalysisLimit as e:
+            limits[key] = e.message
+            return None
+
+    semi_p = bounded_run("semipositive_p_invariants", minimal_semipositive_p_invariants,
+                         s, FARKAS_LIMIT)
+    semi_t = bounded_run("semipositive_t_invariants", minimal_semipositive_t_invariants,
+                         s, FARKAS_LIMIT)
+    siphons = bounded_run("siphons", minimal_siphons, s, SIPHON_LIMIT)
+    traps = bounded_run("traps", minimal_traps, s, SIPHON_LIMIT)
+    control = (siphon_control(s, siphons, semi_p or [])
+               if siphons is not None else None)
+    result = {
+        "net": net.name,
+        "places": len(s.places),
+        "transitions": len(s.transitions),
+        "arcs": len(net.arcs),
+        "initial_marking": net.initial.format(),
+        "p_invariants": p_invariant_basis(s),
+        "t_invariants": t_invariant_basis(s),
+        "semipositive_p_invariants": semi_p,
+        "semipositive_t_invariants": semi_t,
+        "siphons": None if siphons is None else [s.names(x) for x in siphons],
+        "siphon_control": None if control is None else [
+            {"siphon": list(r.places), "marked": r.marked, "source": r.source,
+             "controlled": r.controlled, "controlled_by": r.controlled_by}
+            for r in control],
+        "traps": None if traps is None else [s.names(x) for x in traps],
+        **result,
+        "deadlock_free": b.deadlock_free,
+        "deadlocks": sorted(list(m) for m in b.improper),
+        "final_always_reachable": b.final_always_reachable,
+        "home_marking": b.home_marking,
+        "reusable": b.reusable,
+    }
+    if limits:
+        result["limits"] = limits
+    return result
+
+
+# ---------------------------------------------------------------------------
+# the readable report
+
+
+def _table(headers: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h)
+              for i, h in enumerate(headers)]
+    line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()
+    out = [line(headers), line(["-" * w for w in widths])]
+    out.extend(line(r) for r in rows)
+    return "\n".join(out)
+
+
+def _yes(flag) -> str:
+    return {True: "yes", False: "NO", None: "not computed"}[flag]
+
+
+def render_text(r: dict[str, Any]) -> str:
+    """The analysis as a report of short tables, for people."""
+    out = [f"Net {r['net']}: {r.get('places', '?')} places, {r.get('transitions', '?')} "
+           f"transitions; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
+    out.append(_table(["property", "holds"], [
+        ["bounded", _yes(r["bounded"])],
+        ["safe (1-bounded)", _yes(r["safe"])],
+        ["deadlock-free (every dead marking is a proper end)", _yes(r.get("deadlock_free"))],
+        ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],
+        ["reusable", _yes(r.get("reusable"))],
+        ["reachable markings" + (" (coverability nodes)" if not r["bounded"] else ""),
+         f"{r['states']:,}"],
+    ]))
+    out += ["", f"Terminal markings ({len(r['terminal_markings'])}):"]
+    out += [f"  {{{', '.join(m)}}}" for m in r["terminal_markings"]] or ["  none"]
+    if "p_invariants" in r:
+        out += ["", f"P-invariants (a basis of {len(r['p_invariants'])}):"]
+        rows = [[format_invariant(y), str(sum(c * _count(r, p) for p, c in y.items()))]
+                for y in r["p_invariants"]]
+        out.append(_table(["invariant", "value at M0"], rows) if rows else "  none")
+        if r.get("siphon_control") is not None:
+            out += ["", f"Minimal siphons ({len(r['siphon_control'])}):"]
+            rows = [["{" + ", ".join(c["siphon"]) + "}", _yes(c["marked"]),
+                     ("by " + format_invariant(c["controlled_by"])) if c["controlled_by"]
+                     else ("source places (marked from outside)" if c["source"] else "NO")]
+                    for c in r["siphon_control"]]
+            out.append(_table(["siphon", "marked at M0", "controlled"], rows))
+        if r.get("t_invariants") is not None:
+            out += ["", f"T-invariants (a basis of {len(r['t_invariants'])}):"]
+            out += [f"  {format_invariant(x)}" for x in r["t_invariants"]] or ["  none"]
+    if r.get("deadlocks"):
+        out += ["", "Dead markings that are not a proper end:"]
+        out += [f"  {{{', '.join(m)}}}" for m in r["deadlocks"]]
+    for key, why in r.get("limits", {}).items():
+        out += ["", f"{key}: not computed ({why})"]
+    return "\n".join(out)
+
+
+def _count(r: dict[str, Any], place: str) -> int:
+    for entry in r.get("initial_marking", []):
+        name, _, n = entry.partition("*")
+        if name == place:
+            return int(n) if n else 1
+    return 0

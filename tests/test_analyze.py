@@ -1,0 +1,106 @@
+"""`mcl2pnml analyze` and `mcl2pnml template`: the contract of cli.md, on our nets and others'."""
+import json
+import subprocess
+import sys
+
+import pytest
+
+from conftest import DATA
+
+SPEC_KEYS = {"places", "transitions", "p_invariants", "siphons", "bounded", "safe",
+             "terminal_markings", "reusable", "deadlock_free", "states"}
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def task_pnml(tmp_path_factory):
+    path = tmp_path_factory.mktemp("t") / "task.pnml"
+    out = run("template", "task", "-o", path)
+    assert out.returncode == 0, out.stderr
+    return path
+
+
+def test_template_list_names_every_template():
+    out = run("template", "--list")
+    assert out.returncode == 0
+    for name in ("primitive", "task", "task-reduced", "sequence", "parallel", "if-then-else",
+                 "while", "monitor"):
+        assert name in out.stdout
+
+
+def test_analyze_json_has_the_keys_of_the_spec(task_pnml):
+    out = run("analyze", task_pnml, "--json")
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    assert SPEC_KEYS <= set(r)
+    assert (r["places"], r["transitions"]) == (19, 19)
+    assert len(r["p_invariants"]) == 6
+    assert all(all(isinstance(c, int) and c for c in y.values()) for y in r["p_invariants"])
+    assert ["MTX", "EXE", "E_OK", "E_FAIL", "W_OK", "W_FAIL", "W_A"] in [
+        sorted(s, key=["MTX", "EXE", "E_OK", "E_FAIL", "W_OK", "W_FAIL", "W_A"].index)
+        for s in r["siphons"] if set(s) == {"MTX", "EXE", "E_OK", "E_FAIL", "W_OK", "W_FAIL", "W_A"}]
+    assert r["bounded"] and r["safe"] and r["reusable"] and r["deadlock_free"]
+    assert sorted(r["terminal_markings"]) == [
+        ["A", "C", "FAIL", "MTX", "OFF"], ["A", "C", "MTX", "OFF", "OK"],
+        ["ABORTED", "C", "MTX", "OFF"]]
+
+
+def test_initial_replaces_the_marking(task_pnml):
+    r = json.loads(run("analyze", task_pnml, "--json", "--initial", "B,MTX,OFF,C").stdout)
+    assert sorted(r["terminal_markings"]) == [["C", "FAIL", "MTX", "OFF"],
+                                              ["C", "MTX", "OFF", "OK"]]
+
+
+def test_state_space_only(task_pnml):
+    r = json.loads(run("analyze", task_pnml, "--state-space", "--json").stdout)
+    assert set(r) == {"net", "states", "bounded", "safe", "terminal_markings"}
+    assert r["states"] == 24
+
+
+def test_counts_above_one_and_omega_in_terminal_markings(tmp_path):
+    from mcl2pnml import NetBuilder, save_pnml
+    b = NetBuilder("two")
+    b.place("p", 2)
+    b.place("q")
+    b.transition("t")
+    b.arc("p", "t")
+    b.arc("t", "q")
+    path = save_pnml(b.build(), tmp_path / "two.pnml")
+    r = json.loads(run("analyze", path, "--json").stdout)
+    assert r["terminal_markings"] == [["q*2"]] and r["bounded"] and not r["safe"]
+
+
+def test_text_report_is_tables(task_pnml):
+    out = run("analyze", task_pnml)
+    assert out.returncode == 0
+    assert "P-invariants (a basis of 6)" in out.stdout
+    assert "Minimal siphons" in out.stdout and "Terminal markings (3)" in out.stdout
+
+
+def test_a_net_written_by_pm4py():
+    r = json.loads(run("analyze", DATA / "pnml" / "foreign" / "pm4py_order_process.pnml",
+                       "--json").stdout)
+    assert r["places"] == 6 and r["safe"]
+    assert r["terminal_markings"] == [["sink"]]
+    assert r["deadlock_free"] and r["reusable"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--initial", "B,NOPE"], "no place NOPE"),
+    (["--initial", "B*x"], "a count is a natural number"),
+    (["--max-states", "0"], "0"),
+])
+def test_bad_options_are_one_line(task_pnml, args, message):
+    out = run("analyze", task_pnml, *args)
+    assert out.returncode == 2 and message in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1 and "Traceback" not in out.stderr
+
+
+def test_unknown_template_lists_the_valid_ones():
+    out = run("template", "sequense", "-o", "x.pnml")
+    assert out.returncode == 2
+    assert "did you mean 'sequence'" in out.stderr and "Traceback" not in out.stderr
