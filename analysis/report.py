@@ -7,9 +7,11 @@ The JSON object holds what ``shared/spec/cli.md`` lists (``places``,
 ``traps``, each siphon's control (Iordache and Antsaklis 2006), and the
 termination facts of :mod:`analysis.behaviour`.
 
-Structural results that could not be computed within their limits (the
-number of minimal siphons can grow exponentially with the net) are reported
-as ``null`` with the reason under ``"limits"``, never silently left out.
+Results that could not be computed within their limits (a state space past
+``--max-states``; minimal siphons, whose number can grow exponentially) are
+reported as ``null`` with the reason under ``"limits"``, never silently left
+out; the structural results are still computed when the state space is too
+large.
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from .invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p
                          t_invariant_basis)
 from .matrix import structure
 from .siphons import minimal_siphons, minimal_traps, siphon_control
-from .statespace import Progress, explore
+from .statespace import ExplorationLimit, Progress, explore
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
@@ -36,18 +38,24 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     if initial is not None:
         net = net.with_initial(initial)
     s = structure(net)
-    space = explore(s, max_states=max_states, progress=progress)
-    b = behaviour(space)
+    limits: dict[str, str] = {}
+    try:
+        space = explore(s, max_states=max_states, progress=progress)
+    except ExplorationLimit as e:
+        if state_space_only:
+            raise
+        space = None
+        limits["states"] = e.message
+    b = behaviour(space) if space is not None else None
     result: dict[str, Any] = {
         "net": net.name,
-        "states": space.states,
-        "bounded": space.bounded,
-        "safe": space.safe,
-        "terminal_markings": sorted(list(m) for m in b.terminal),
+        "states": space.states if space else None,
+        "bounded": space.bounded if space else None,
+        "safe": space.safe if space else None,
+        "terminal_markings": sorted(list(m) for m in b.terminal) if b else None,
     }
     if state_space_only:
         return result
-    limits: dict[str, str] = {}
 
     def bounded_run(key: str, fn, *args):
         try:
@@ -81,11 +89,11 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
             for r in control],
         "traps": None if traps is None else [s.names(x) for x in traps],
         **result,
-        "deadlock_free": b.deadlock_free,
-        "deadlocks": sorted(list(m) for m in b.improper),
-        "final_always_reachable": b.final_always_reachable,
-        "home_marking": b.home_marking,
-        "reusable": b.reusable,
+        "deadlock_free": b.deadlock_free if b else None,
+        "deadlocks": sorted(list(m) for m in b.improper) if b else None,
+        "final_always_reachable": b.final_always_reachable if b else None,
+        "home_marking": b.home_marking if b else None,
+        "reusable": b.reusable if b else None,
     }
     if limits:
         result["limits"] = limits
@@ -119,11 +127,12 @@ def render_text(r: dict[str, Any]) -> str:
         ["deadlock-free (every dead marking is a proper end)", _yes(r.get("deadlock_free"))],
         ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],
         ["reusable", _yes(r.get("reusable"))],
-        ["reachable markings" + (" (coverability nodes)" if not r["bounded"] else ""),
-         f"{r['states']:,}"],
+        ["reachable markings" + (" (coverability nodes)" if r["bounded"] is False else ""),
+         "not computed" if r["states"] is None else f"{r['states']:,}"],
     ]))
-    out += ["", f"Terminal markings ({len(r['terminal_markings'])}):"]
-    out += [f"  {{{', '.join(m)}}}" for m in r["terminal_markings"]] or ["  none"]
+    if r["terminal_markings"] is not None:
+        out += ["", f"Terminal markings ({len(r['terminal_markings'])}):"]
+        out += [f"  {{{', '.join(m)}}}" for m in r["terminal_markings"]] or ["  none"]
     if "p_invariants" in r:
         out += ["", f"P-invariants (a basis of {len(r['p_invariants'])}):"]
         rows = [[format_invariant(y), str(sum(c * _count(r, p) for p, c in y.items()))]

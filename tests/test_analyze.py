@@ -104,3 +104,11 @@ def test_unknown_template_lists_the_valid_ones():
     out = run("template", "sequense", "-o", "x.pnml")
     assert out.returncode == 2
     assert "did you mean 'sequence'" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_a_state_space_too_large_still_gives_the_structure(task_pnml):
+    r = json.loads(run("analyze", task_pnml, "--json", "--max-states", "5").stdout)
+    assert r["states"] is None and r["reusable"] is None and "states" in r["limits"]
+    assert len(r["p_invariants"]) == 6 and r["siphons"]
+    out = run("analyze", task_pnml, "--state-space", "--max-states", "5")
+    assert out.returncode == 2 and "more than 5 markings" in out.stderr
