@@ -87,6 +87,10 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
             {"siphon": list(r.places), "marked": r.marked, "source": r.source,
              "controlled": r.controlled, "controlled_by": r.controlled_by}
             for r in control],
+        # Iordache and Antsaklis: every siphon marked and controlled (inputs
+        # from outside, which nothing inside writes to, need no control)
+        "siphons_controlled": None if control is None else all(
+            r.source or (r.marked and r.controlled) for r in control),
         "traps": None if traps is None else [s.names(x) for x in traps],
         **result,
         "deadlock_free": b.deadlock_free if b else None,
@@ -123,6 +127,7 @@ def render_text(r: dict[str, Any]) -> str:
            f"transitions; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
     out.append(_table(["property", "holds"], [
         ["bounded", _yes(r["bounded"])],
+        ["every siphon marked and controlled (inputs aside)", _yes(r.get("siphons_controlled"))],
         ["safe (1-bounded)", _yes(r["safe"])],
         ["deadlock-free (every dead marking is a proper end)", _yes(r.get("deadlock_free"))],
         ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],

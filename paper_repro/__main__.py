@@ -40,11 +40,17 @@ are rebuilt so that the computed analysis gives equations 1-26 exactly (the
 tables above). Each template file says, in comments, what it models.
 
 **Siphons the paper leaves out.** The paper lists only the siphons that
-matter. The other minimal siphons are the places that nothing inside the net
-writes to: E and D in the primitive alone (the task writes them), B and A in
-the task (the structure above writes them). They are empty at M0 by design
-and need no control: they are inputs, not resources. The table "Other minimal
-siphons" lists each one with the reason.
+matter. Of the others, some are places that nothing inside the net writes
+to: E and D in the primitive alone (the task writes them), B and A in the
+task (the structure above writes them); they are inputs, not resources, and
+need no control. The task has two more minimal siphons,
+{OFF, D, EXE, E_OK, E_FAIL} and {ON, E, S1, S2, MTX, E_OK, E_FAIL, W_OK,
+W_FAIL, W_A}; no semi-positive invariant controls them, but invariants with a
+negative coefficient do (found by an exact linear program): the first by
+equation 10 itself, the second by 8 + 12 + 13. So every siphon of the task is
+controlled in Iordache and Antsaklis' sense, which the paper claims but shows
+only for three. The table "Other minimal siphons" lists each one with its
+reason.
 
 **The abort problem (equations 17 and 18).** A task that is aborted may still
 end OK or FAIL, leaving its abort place A marked. Every control structure

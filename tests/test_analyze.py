@@ -44,6 +44,7 @@ def test_analyze_json_has_the_keys_of_the_spec(task_pnml):
         sorted(s, key=["MTX", "EXE", "E_OK", "E_FAIL", "W_OK", "W_FAIL", "W_A"].index)
         for s in r["siphons"] if set(s) == {"MTX", "EXE", "E_OK", "E_FAIL", "W_OK", "W_FAIL", "W_A"}]
     assert r["bounded"] and r["safe"] and r["reusable"] and r["deadlock_free"]
+    assert r["siphons_controlled"]
     assert sorted(r["terminal_markings"]) == [
         ["A", "C", "FAIL", "MTX", "OFF"], ["A", "C", "MTX", "OFF", "OK"],
         ["ABORTED", "C", "MTX", "OFF"]]
