@@ -18,6 +18,8 @@ from .errors import Mcl2PnmlError, did_you_mean
 
 EXAMPLES = """\b
 Examples:
+  mcl2pnml check examples/sauce.mcl
+  mcl2pnml functional examples/sauce.mcl
   mcl2pnml template --list
   mcl2pnml template task -o task.pnml
   mcl2pnml analyze task.pnml
@@ -62,6 +64,48 @@ def main() -> None:
 
     Nets are read and written as ISO/IEC 15909-2 PNML (P/T nets).
     """
+
+
+def _checked(file: Path):
+    from .mcl_checker import check as run_checks
+    from .mcl_parser import parse_file
+
+    return run_checks(parse_file(file))
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+def check(mission: Path) -> int:
+    """Parse and check MISSION (MCL): names, arities, patterns, recursion.
+
+    Every error of the file is reported at once, each with file:line:col.
+    """
+    checked = _checked(mission)
+    tasks, functions = len(checked.tasks), len(checked.functions)
+    click.echo(f"{mission}: ok ({len(checked.primitives)} primitives, {tasks} tasks, "
+               f"{functions} function{'s' * (functions != 1)}, {len(checked.consts)} consts)")
+    return 0
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--functions", "with_functions", is_flag=True,
+              help="Also print each function's body in functional form.")
+def functional(mission: Path, with_functions: bool) -> int:
+    """Print the functional form of MISSION (the paper's Algorithm 2).
+
+    Structures are written sequence, parallel, if-then-else, while and
+    monitor; an empty block or a missing else is NULL; functions stay calls.
+    """
+    from .functional import format_node, function_expression, mission_expression
+
+    checked = _checked(mission)
+    if with_functions:
+        for name in checked.function_order:
+            f = checked.functions[name]
+            click.echo(f"{name}({', '.join(f.params)}) = {format_node(function_expression(f))}")
+    click.echo(format_node(mission_expression(checked.mission)))
+    return 0
 
 
 @main.command(epilog=EXAMPLES)

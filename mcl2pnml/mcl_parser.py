@@ -1,0 +1,249 @@
+"""MCL text to the AST (lark, LALR), the first stage of the compiler.
+
+The grammar is ``shared/spec/mcl.md``'s: declarations in any order (const,
+primitive, task, function, mission), statements that are calls, blocks,
+``parallel``, ``monitor``, ``if``/``then``/``else`` and ``while``/``do``.
+Comments are ``// ...`` and ``/* ... */``.
+
+A syntax error is one :class:`Mcl2PnmlError` at the first fault, with the
+line, a caret, and what would have been valid there; input that is not
+UTF-8 text (or is binary) is refused the same way, at the first bad byte.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from lark import Lark, Token, Transformer, UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
+
+from . import mcl_ast as ast
+from .errors import Location, Mcl2PnmlError
+
+GRAMMAR = r"""
+start: declaration*
+
+?declaration: const | primitive | task | function | mission
+
+const: "const" NAME "=" value ";"
+primitive: "primitive" NAME "(" [names] ")" ";"
+task: "task" NAME "(" [names] ")" "=" NAME "(" primcall ("," primcall)* ")" [timeout] ";"
+timeout: "timeout" NUMBER
+primcall: NAME "(" [values] ")"
+function: "function" NAME "(" [names] ")" block
+mission: MISSION block
+
+names: NAME ("," NAME)*
+values: value ("," value)*
+
+?value: NUMBER    -> number
+      | STRING    -> string
+      | NAME      -> ref
+      | "(" values ")" -> tuple
+
+block: "{" statement* "}"
+
+?statement: call ";"
+          | parallel ";"
+          | monitor ";"
+          | if_
+          | while_
+          | block
+
+?structure: call | block | parallel | monitor
+
+call: NAME "(" [values] ")"
+parallel: "parallel" "(" structure ("," structure)+ ")"
+monitor: "monitor" "(" structure "," structure ")"
+if_: "if" "(" structure ")" ["then"] block ["else" block]
+while_: "while" "(" structure ")" ["do"] block
+
+MISSION: "mission"
+NAME: /[A-Za-z_][A-Za-z0-9_]*/
+NUMBER: /[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?/
+STRING: /"([^"\\\n]|\\.)*"/
+COMMENT: /\/\/[^\n]*/ | /\/\*(.|\n)*?\*\//
+
+%import common.WS
+%ignore WS
+%ignore COMMENT
+"""
+
+KEYWORDS = {"const", "primitive", "task", "function", "mission", "if", "then", "else",
+            "while", "do", "timeout", "parallel", "monitor"}
+
+_PARSER = Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+
+_READABLE = {"NAME": "a name", "NUMBER": "a number", "STRING": "a string",
+             "$END": "the end of the file"}
+
+
+def _describe(terminal: str) -> str:
+    if terminal in _READABLE:
+        return _READABLE[terminal]
+    try:
+        pattern = _PARSER.get_terminal(terminal).pattern
+    except KeyError:
+        return terminal.lower()
+    return f"'{pattern.value}'" if pattern.type == "str" else terminal.lower()
+
+
+def _pos(item) -> ast.Pos:
+    if isinstance(item, Token):
+        return ast.Pos(item.line, item.column)
+    meta = getattr(item, "meta", None)
+    return ast.Pos(getattr(meta, "line", 0), getattr(meta, "column", 0))
+
+
+class _Build(Transformer):
+    """Parse tree to AST nodes, each with the position of its first token."""
+
+    def __default_token__(self, token):
+        return token
+
+    def start(self, items):
+        return tuple(items)
+
+    def names(self, items):
+        return tuple(str(t) for t in items)
+
+    def values(self, items):
+        return tuple(items)
+
+    def number(self, items):
+        (tok,) = items
+        text = str(tok)
+        value = float(text) if any(c in text for c in ".eE") else int(text)
+        return ast.Number(value, text, _pos(tok))
+
+    def string(self, items):
+        (tok,) = items
+        raw = str(tok)[1:-1]
+        return ast.String(raw.encode("utf-8").decode("unicode_escape") if "\\" in raw else raw,
+                          _pos(tok))
+
+    def ref(self, items):
+        (tok,) = items
+        return ast.Ref(str(tok), _pos(tok))
+
+    def tuple(self, items):
+        (values,) = items
+        first = values[0].pos if values else ast.Pos(0, 0)
+        return ast.Tuple(tuple(values), ast.Pos(first.line, max(1, first.column - 1)))
+
+    def const(self, items):
+        name, value = items
+        return ast.Const(str(name), value, _pos(name))
+
+    def primitive(self, items):
+        name, params = items
+        return ast.Primitive(str(name), params or (), _pos(name))
+
+    def timeout(self, items):
+        return self.number(items)
+
+    def primcall(self, items):
+        name, args = items
+        return ast.PrimCall(str(name), args or (), _pos(name))
+
+    def task(self, items):
+        name, params, pattern, *rest = items
+        timeout = rest[-1] if rest and isinstance(rest[-1], ast.Number) else None
+        calls = tuple(c for c in rest if isinstance(c, ast.PrimCall))
+        return ast.Task(str(name), params or (), str(pattern), calls, timeout, _pos(name),
+                        _pos(pattern))
+
+    def function(self, items):
+        name, params, body = items
+        return ast.Function(str(name), params or (), body, _pos(name))
+
+    def mission(self, items):
+        keyword, body = items
+        return ast.Mission(body, _pos(keyword))
+
+    def block(self, items):
+        return ast.Block(tuple(items), ast.Pos(0, 0))
+
+    def call(self, items):
+        name, args = items
+        return ast.Call(str(name), args or (), _pos(name))
+
+    def parallel(self, items):
+        return ast.Parallel(tuple(items), items[0].pos if items else ast.Pos(0, 0))
+
+    def monitor(self, items):
+        return ast.Monitor(items[0], items[1], items[0].pos)
+
+    def if_(self, items):
+        cond, then, otherwise = items
+        return ast.If(cond, then, otherwise, cond.pos)
+
+    def while_(self, items):
+        cond, body = items
+        return ast.While(cond, body, cond.pos)
+
+
+def decode(data: bytes, filename: str) -> str:
+    """MCL source as text; not UTF-8, or binary, is an error at the first bad byte."""
+    def at(offset: int, message: str) -> Mcl2PnmlError:
+        before = data[:offset]
+        line = before.count(b"\n") + 1
+        start = before.rfind(b"\n") + 1
+        end = data.find(b"\n", offset)
+        text = data[start:end if end >= 0 else len(data)]
+        # the line as far as it can be shown: undecodable bytes as U+FFFD,
+        # control bytes as '?', so that the caret still lands under the fault
+        shown = "".join(c if c.isprintable() or c == "\t" else "?"
+                        for c in text.decode("utf-8", errors="replace"))
+        col = len(data[start:offset].decode("utf-8", errors="replace")) + 1
+        return Mcl2PnmlError(message, Location(filename, line, col, shown))
+    if b"\x00" in data:
+        raise at(data.index(b"\x00"), "this is not an MCL text file (a NUL byte: binary?)")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise at(e.start, f"not UTF-8 text: byte 0x{data[e.start]:02x} cannot start a "
+                          "character here") from None
+
+
+def parse(text: str, filename: str = "<mcl>") -> ast.Program:
+    """Parse MCL source into a :class:`~mcl2pnml.mcl_ast.Program` (no checks beyond syntax)."""
+    lines = text.splitlines()
+    try:
+        tree = _PARSER.parse(text)
+    except UnexpectedInput as e:
+        line, col = e.line, e.column
+        if isinstance(e, UnexpectedEOF) or line < 1:
+            line = max(1, len(lines))
+            col = len(lines[-1]) + 1 if lines else 1
+        src = lines[line - 1] if 0 < line <= len(lines) else None
+        expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
+                                                  or getattr(e, "allowed", None) or ())})
+        if isinstance(e, UnexpectedCharacters):
+            found = f"unexpected character {text[e.pos_in_stream]!r}"
+        elif isinstance(e, UnexpectedEOF):
+            found = "unexpected end of file"
+        elif e.token.type == "$END":
+            found = "unexpected end of file"
+        else:
+            tok = e.token
+            found = (f"'{tok}' is a keyword" if str(tok) in KEYWORDS and "a name" in expected
+                     else f"unexpected {_describe(tok.type) if tok.type != 'NAME' else repr(str(tok))}")
+        hint = f"; expected {', '.join(expected[:-1])} or {expected[-1]}" if len(expected) > 1 \
+            else (f"; expected {expected[0]}" if expected else "")
+        raise Mcl2PnmlError(f"syntax error: {found}{hint}",
+                            Location(filename, line, col, src)) from None
+    for tok in tree.scan_values(lambda v: isinstance(v, Token) and v.type == "NAME"):
+        if str(tok) in KEYWORDS:  # the contextual lexer lets a keyword through as a name
+            src = lines[tok.line - 1] if 0 < tok.line <= len(lines) else None
+            raise Mcl2PnmlError(f"'{tok}' is a keyword and cannot be used as a name",
+                                Location(filename, tok.line, tok.column, src))
+    declarations = _Build().transform(tree)
+    return ast.Program(declarations, filename, text)
+
+
+def parse_file(path: str | Path) -> ast.Program:
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as e:
+        raise Mcl2PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
+    return parse(decode(data, str(path)), str(path))
