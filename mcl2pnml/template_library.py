@@ -15,10 +15,9 @@ files may add templates or replace ours of the same name.
 * a structure: fused with one reduced task per slot, on its control places
   (the sequence of Fig. 4 with two reduced tasks).
 
-Subordinate nets enter at rest: their own start places (places nothing in
-them writes to, such as B and A, or E and D) unmarked, so that the composed
-net starts from the paper's M0 (``{B, A, MTX, T1_MTX, T2_MTX}`` for the
-sequence).
+Subordinate nets enter at rest: their start places B and A unmarked, so
+that the composed net starts from the paper's M0 (``{B, A, MTX, T1_MTX,
+T2_MTX}`` for the sequence).
 """
 from __future__ import annotations
 
@@ -43,10 +42,14 @@ def source_places(net: Net) -> frozenset[str]:
     return frozenset(p.id for p in net.places if p.id not in written)
 
 
+#: The control places a caller marks: the paper's M0 has them, a net at rest does not.
+START = ("B", "A")
+
+
 def at_rest(net: Net) -> Net:
-    """The net with its input places (B, A; or E, D) unmarked."""
-    inputs = source_places(net)
-    return net.with_initial({p: n for p, n in net.initial.items() if p not in inputs})
+    """The net with its start places B and A unmarked: ready to be called."""
+    start = {p.id for p in net.places if p.interface in START}
+    return net.with_initial({p: n for p, n in net.initial.items() if p not in start})
 
 
 def template_dirs() -> list[Path]:
