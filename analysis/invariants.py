@@ -1,25 +1,29 @@
-"""Place and transition invariants, exactly (Murata 1989, section VII).
+"""Place and transition invariants, exactly (Murata 1989).
 
-A P-invariant is an integer vector y with y^T C = 0: the weighted token
-count y . M is the same in every reachable marking (the paper's equations 1-3
-and 8-13). A T-invariant is x with C x = 0: firing each transition x_t times
-returns to the same marking.
+A *P-invariant* is an integer vector y with y^T C = 0, C the incidence matrix:
+the weighted token count y . M is then the same in every reachable marking
+(the paper's equations 1-3 and 8-13). A *T-invariant* is an x with C x = 0:
+firing each transition x_t times leads back to the marking it started from.
+Read arcs add nothing to C (they are self-loops), so they change no
+invariant.
 
 * :func:`p_invariant_basis`, :func:`t_invariant_basis`: an exact basis of the
-  invariant space, from the nullspace of C^T (or C) computed over the
-  rationals with sympy's *sparse* domain matrices (``DomainMatrix`` in SDM
-  form), never a dense ``Matrix``: compiled missions have thousands of
-  places and four or five arcs per transition. Each vector is scaled to
-  coprime integers with its first nonzero coefficient positive.
+  invariant space, the nullspace of C^T (or C) over the rationals, computed
+  with sympy's *sparse* domain matrices (``DomainMatrix`` in SDM form),
+  never a dense ``Matrix``: compiled missions have thousands of places and
+  about four arcs per transition, and the sparse elimination stays sparse on
+  them (``python -m bench.invariants_vs_nullspace`` measures it).
 * :func:`minimal_semipositive_p_invariants` and the T version: the
   invariants with nonnegative coefficients and minimal support, by the
   Farkas algorithm with the minimal-support pruning of Martinez and Silva
-  (1982). These are the ones that prove boundedness and control siphons.
+  (1982). These are the ones that prove boundedness and control siphons;
+  their number can grow exponentially, hence ``limit`` and
+  :class:`AnalysisLimit`.
 """
 from __future__ import annotations
 
-from fractions import Fraction
-from math import gcd
+import heapq
+from math import gcd, lcm
 from typing import Mapping, Sequence
 
 from sympy import QQ, ZZ
@@ -34,140 +38,242 @@ class AnalysisLimit(Mcl2PnmlError):
     """An exponential analysis reached its bound before it finished."""
 
 
-def _normalise(vec: Mapping[int, Fraction | int]) -> dict[int, int]:
-    """Coprime integers, first nonzero (lowest index) positive, zeros left out."""
-    items = sorted((k, Fraction(v)) for k, v in vec.items() if v)
-    if not items:
-        return {}
-    lcm = 1
-    for _, v in items:
-        lcm = lcm * v.denominator // gcd(lcm, v.denominator)
-    ints = [(k, int(v * lcm)) for k, v in items]
-    g = 0
-    for _, v in ints:
-        g = gcd(g, v)
-    sign = -1 if ints[0][1] < 0 else 1
-    return {k: sign * v // g for k, v in ints}
+def integer_multiple(vec: Mapping[int, object]) -> dict[int, int]:
+    """The positive multiple of a rational vector with coprime integer entries.
+
+    ``vec`` maps indices to rationals (ints, ``Fraction`` or sympy's ``QQ``
+    elements); zero entries are left out. Signs are kept, so a vector that
+    must stay positive on some places (a siphon's control) still does.
+    """
+    items = [(k, QQ.convert(v)) for k, v in vec.items() if v]
+    scale = lcm(*(int(QQ.denom(v)) for _, v in items))
+    ints = {k: int(QQ.numer(v)) * (scale // int(QQ.denom(v))) for k, v in items}
+    g = gcd(*ints.values())
+    return {k: v // g for k, v in ints.items()}
 
 
-def nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, int]]:
-    """An integer basis of {x : A x = 0} for a sparse A (a dict per row)."""
+def _canonical(vec: Mapping[int, object]) -> dict[int, int]:
+    """Coprime integers, the first nonzero (lowest index) positive, keys in order.
+
+    A basis vector's sign is arbitrary; fixing it makes the output one
+    function of the net, whatever the elimination did.
+    """
+    ints = integer_multiple(vec)
+    first = min(ints, default=None)
+    sign = -1 if first is not None and ints[first] < 0 else 1
+    return {k: sign * ints[k] for k in sorted(ints)}
+
+
+def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, int]]:
+    """A basis of {x : A x = 0} for a sparse integer A (row i of A = ``rows[i]``).
+
+    Gauss-Jordan elimination over QQ on the sparse representation: a row of
+    a net's C^T (or C) has a handful of entries, and sympy's sparse RREF only
+    ever touches nonzeros. The RREF is unique, so the basis is too: one vector
+    per free (non-pivot) column, ascending, with 1 at that column and minus
+    the pivot rows' entries there. Each is then made canonical
+    (:func:`_canonical`).
+    """
     data = {i: {j: ZZ(v) for j, v in row.items() if v} for i, row in enumerate(rows)}
-    data = {i: r for i, r in data.items() if r}
-    if not data:  # every vector is a solution
-        return [{j: 1} for j in range(ncols)]
-    a = DomainMatrix(data, (len(rows), ncols), ZZ).to_sparse().convert_to(QQ)
-    basis = a.nullspace()
-    out = []
-    for i, row in basis.to_sdm().items():
-        out.append(_normalise({j: Fraction(int(v.numerator), int(v.denominator))
-                               for j, v in row.items()}))
-    return sorted(out, key=lambda v: sorted(v))
+    a = DomainMatrix({i: r for i, r in data.items() if r}, (len(rows), ncols), ZZ)
+    # ZZ -> QQ: Gauss-Jordan divides by the pivots; over QQ it stays exact
+    rref, pivots = a.to_sparse().convert_to(QQ).rref()
+    basis = rref.nullspace_from_rref(pivots).to_sdm()
+    return [_canonical(basis[i]) for i in sorted(basis)]
 
 
 def p_invariant_basis(s: Structure) -> list[dict[str, int]]:
-    """A basis of the P-invariants, each as {place: coefficient}."""
-    basis = nullspace(s.incidence, len(s.places))  # y^T C = 0  <=>  C^T y = 0
+    """A basis of the P-invariants {y : y^T C = 0} (Murata 1989).
+
+    Exact, over the rationals, by sparse elimination (sympy ``DomainMatrix``):
+    the dimension is |P| - rank(C). Each vector is {place: coefficient} with
+    zero coefficients left out, coprime integers, the first nonzero one in
+    place order positive; the vectors come one per free place of the reduced
+    row echelon form of C^T, in place order, so the basis is a function of
+    the net and its place order alone.
+    """
+    # y^T C = 0  <=>  C^T y = 0: the rows of C^T are the columns of C
+    basis = _nullspace(s.incidence, len(s.places))
     return [{s.places[i]: c for i, c in v.items()} for v in basis]
 
 
 def t_invariant_basis(s: Structure) -> list[dict[str, int]]:
-    """A basis of the T-invariants, each as {transition: coefficient}."""
-    basis = nullspace(s.incidence_rows, len(s.transitions))
+    """A basis of the T-invariants {x : C x = 0} (Murata 1989).
+
+    The same construction as :func:`p_invariant_basis`, on C itself;
+    {transition: coefficient}, dimension |T| - rank(C).
+    """
+    basis = _nullspace(s.incidence_rows, len(s.transitions))
     return [{s.transitions[j]: c for j, c in v.items()} for v in basis]
+
+
+def is_p_invariant(s: Structure, y: Mapping[str, int]) -> bool:
+    """Whether ``y`` ({place: coefficient}) is a P-invariant: nonzero, y^T C = 0.
+
+    Checked column by column on the sparse incidence matrix (Murata 1989).
+    A name that is not a place of the net makes it False.
+    """
+    idx = s.place_index
+    if any(p not in idx for p in y) or not any(y.values()):
+        return False
+    vec = {idx[p]: c for p, c in y.items()}
+    return all(sum(vec.get(p, 0) * v for p, v in col.items()) == 0 for col in s.incidence)
+
+
+def invariant_value(s: Structure, y: Mapping[str, int], marking: Mapping[str, int]) -> int:
+    """y . M: the token count a P-invariant keeps constant (Murata 1989).
+
+    ``marking`` maps place names to tokens (a :class:`~mcl2pnml.net.Marking`,
+    or ``s.net.initial`` for M0); places it leaves out hold no token.
+    """
+    unknown = sorted(p for p in y if p not in s.place_index)
+    if unknown:
+        raise Mcl2PnmlError(f"not places of net '{s.net.name}': {', '.join(unknown)}")
+    return sum(c * marking.get(p, 0) for p, c in y.items())
 
 
 def format_invariant(y: Mapping[str, int], value: int | None = None) -> str:
     """``ON + OFF = 1``: an invariant as the paper writes it."""
-    text = ""
+    terms = []
     for p, c in y.items():
         mag = "" if abs(c) == 1 else f"{abs(c)} "
-        text += (" - " if c < 0 else " + ") + mag + p
-    text = text[3:] if text.startswith(" + ") else "-" + text[3:]
+        terms.append(("-" if c < 0 else "+", mag + p))
+    if not terms:
+        text = "0"
+    else:
+        text = ("-" if terms[0][0] == "-" else "") + terms[0][1]
+        text += "".join(f" {sign} {term}" for sign, term in terms[1:])
     return text if value is None else f"{text} = {value}"
 
 
-def is_p_invariant(s: Structure, y: Mapping[str, int]) -> bool:
-    idx = s.place_index
-    if any(p not in idx for p in y):
-        return False
-    return all(sum(y.get(s.places[p], 0) * v for p, v in col.items()) == 0
-               for col in s.incidence)
-
-
-def invariant_value(y: Mapping[str, int], marking: Mapping[str, int]) -> int:
-    """y . M: the constant the invariant keeps."""
-    return sum(c * marking.get(p, 0) for p, c in y.items())
-
-
 # ---------------------------------------------------------------------------
-# Farkas / Martinez-Silva
+# Farkas, with Martinez and Silva's minimal-support pruning
 
 
-def _farkas(columns_of: Sequence[Mapping[int, int]], n: int, ncols: int,
-            limit: int | None) -> list[dict[int, int]]:
-    """Minimal-support semi-positive solutions y >= 0 of y^T A = 0.
+def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
+            what: str) -> list[dict[int, int]]:
+    """The minimal-support semi-positive solutions y >= 0 of y^T A = 0.
 
-    ``columns_of[i]`` is row i of A as {column: value}; each working row is
-    (the remaining combination of A's row, the identity part y). Columns are
-    eliminated one at a time, cheapest first (fewest positive x negative
-    pairs); a new row is kept only if its support (the places of y) contains
-    no other row's support: Martinez and Silva's rule, which keeps exactly
-    the minimal supports and stops the rows from multiplying needlessly.
+    Row i of A is ``a_rows[i]`` ({column: value}). The working rows are those
+    of [A | I]: (what is left of a combination of A's rows, the combination
+    y). Columns are eliminated one at a time; rows that are zero in the
+    column stay, every positive row is combined with every negative one so
+    that the column cancels, and each new row is divided by the gcd of its
+    entries (Martinez and Silva 1982).
+
+    After each column the rows are exactly the extreme rays of the cone
+    {y >= 0 : y^T A = 0 on the columns done}, and an extreme ray is the
+    unique (up to scale) element of its support, which no other element's
+    support is inside of. So a new row whose support (the places of y)
+    contains another row's support is not one of them, and is dropped:
+    Martinez and Silva's rule. New rows are tried smallest support first,
+    so that the extreme rays are in place before the rows they rule out.
+
+    The column eliminated next is the one with the fewest pairs of a
+    positive and a negative row, the usual heuristic to keep the rows few;
+    ``limit`` bounds the rows held at any time, new ones included.
     """
-    rows: list[tuple[dict[int, int], dict[int, int]]] = [
-        (dict(columns_of[i]), {i: 1}) for i in range(n)]
+    # a row: (A part, y, the support of y as a bit mask, so that a subset
+    # test is two integer operations)
+    rows: dict[int, tuple[dict[int, int], dict[int, int], int]] = {}
+    users: list[set[int]] = [set() for _ in range(ncols)]  # column -> rows nonzero there
+    positive, negative = [0] * ncols, [0] * ncols
     remaining = set(range(ncols))
+    heap = [(0, j) for j in range(ncols)]     # (positive x negative, column), lazily updated
+    next_id = 0
+
+    def index(rid: int, a: Mapping[int, int], step: int) -> None:
+        for k, v in a.items():
+            if v > 0:
+                positive[k] += step
+            else:
+                negative[k] += step
+            (users[k].add if step > 0 else users[k].discard)(rid)
+            if k in remaining:
+                heapq.heappush(heap, (positive[k] * negative[k], k))
+
+    def add(a: dict[int, int], y: dict[int, int], mask: int) -> None:
+        nonlocal next_id
+        rows[next_id] = (a, y, mask)
+        index(next_id, a, 1)
+        next_id += 1
+
+    def remove(rid: int) -> tuple[dict[int, int], dict[int, int], int]:
+        row = rows.pop(rid)
+        index(rid, row[0], -1)
+        return row
+
+    def over_limit(size: int) -> None:
+        if limit is not None and size > limit:
+            raise AnalysisLimit(f"more than {limit:,} intermediate rows computing the minimal "
+                                f"semi-positive {what} (Farkas algorithm)")
+
+    for i, a_row in enumerate(a_rows):
+        add({k: v for k, v in a_row.items() if v}, {i: 1}, 1 << i)
+    over_limit(len(rows))
+
     while remaining:
-        def cost(j):
-            pos = sum(1 for a, _ in rows if a.get(j, 0) > 0)
-            neg = sum(1 for a, _ in rows if a.get(j, 0) < 0)
-            return pos * neg, j
-        j = min(remaining, key=cost)
+        # cheapest column first: it makes the fewest new rows
+        cost, j = heapq.heappop(heap)
+        if j not in remaining or cost != positive[j] * negative[j]:
+            continue  # a stale entry: the column's counts changed since
         remaining.discard(j)
-        keep = [r for r in rows if not r[0].get(j)]
-        pos = [r for r in rows if r[0].get(j, 0) > 0]
-        neg = [r for r in rows if r[0].get(j, 0) < 0]
-        supports = [frozenset(y) for _, y in keep]
-        new: list[tuple[dict[int, int], dict[int, int]]] = []
-        for a1, y1 in pos:
-            for a2, y2 in neg:
-                support = frozenset(y1) | frozenset(y2)
-                if any(s <= support for s in supports):
-                    continue
+        pos = [remove(r) for r in sorted(users[j]) if rows[r][0][j] > 0]
+        neg = [remove(r) for r in sorted(users[j])]  # what is left there is negative
+        # only the rows that stay with a support inside the places of pos and
+        # neg can be inside a new row's support; small first: they rule out most
+        zone = 0
+        for _, _, m in (*pos, *neg):
+            zone |= m
+        supports = sorted((m for _, _, m in rows.values() if m | zone == zone),
+                          key=int.bit_count)
+        new: list[tuple[int, dict[int, int], dict[int, int]]] = []
+        for a1, y1, m1 in pos:
+            for a2, y2, m2 in neg:
+                union = m1 | m2
+                if any(m & union == m for m in supports):
+                    continue  # contains a row that stays: not minimal
                 f1, f2 = -a2[j], a1[j]
-                a = {k: f1 * a1.get(k, 0) + f2 * a2.get(k, 0) for k in set(a1) | set(a2)}
-                y = {k: f1 * y1.get(k, 0) + f2 * y2.get(k, 0) for k in support}
+                a = {k: f1 * a1.get(k, 0) + f2 * a2.get(k, 0) for k in a1.keys() | a2.keys()}
                 a = {k: v for k, v in a.items() if v}
-                g = 0
-                for v in (*a.values(), *y.values()):
-                    g = gcd(g, v)
-                new.append(({k: v // g for k, v in a.items()}, {k: v // g for k, v in y.items()}))
-        # among the new rows, drop those whose support contains another's
-        new.sort(key=lambda r: len(r[1]))
-        for a, y in new:
-            support = frozenset(y)
-            if not any(s <= support for s in supports):
-                keep.append((a, y))
-                supports.append(support)
-        rows = keep
-        if limit is not None and len(rows) > limit:
-            raise AnalysisLimit(f"more than {limit:,} intermediate rows in the Farkas algorithm")
-    results = {frozenset(y): y for a, y in rows if not a and y}
-    minimal = [y for sup, y in results.items()
-               if not any(other < sup for other in results)]
-    return sorted(minimal, key=lambda y: (len(y), sorted(y)))
+                y = {k: f1 * y1.get(k, 0) + f2 * y2.get(k, 0) for k in y1.keys() | y2.keys()}
+                g = gcd(*a.values(), *y.values())
+                new.append((union, {k: v // g for k, v in a.items()},
+                            {k: v // g for k, v in y.items()}))
+                over_limit(len(rows) + len(new))
+        new.sort(key=lambda r: r[0].bit_count())  # stable: the pair order breaks ties
+        for union, a, y in new:
+            if not any(m & union == m for m in supports):
+                add(a, y, union)
+                supports.append(union)
+
+    # every column is eliminated: each row's A part is zero, y is an invariant
+    found = [y for _, y, _ in rows.values()]
+    return sorted(({k: y[k] for k in sorted(y)} for y in found),
+                  key=lambda y: (len(y), list(y)))
 
 
 def minimal_semipositive_p_invariants(s: Structure, limit: int | None = None
                                       ) -> list[dict[str, int]]:
-    """Minimal-support P-invariants with nonnegative coefficients."""
-    found = _farkas(s.incidence_rows, len(s.places), len(s.transitions), limit)
-    return [{s.places[i]: c for i, c in sorted(y.items())} for y in found]
+    """The minimal-support semi-positive P-invariants (Martinez and Silva 1982).
+
+    Every y >= 0, y != 0 with y^T C = 0 whose support contains no other such
+    vector's support, as {place: coefficient} with coprime coefficients;
+    every semi-positive P-invariant is a nonnegative combination of them.
+    Sorted by support size, then by place order. The Farkas algorithm can
+    need exponentially many rows: past ``limit`` intermediate rows it raises
+    :class:`AnalysisLimit`.
+    """
+    found = _farkas(s.incidence_rows, len(s.transitions), limit, "P-invariants")
+    return [{s.places[i]: c for i, c in y.items()} for y in found]
 
 
 def minimal_semipositive_t_invariants(s: Structure, limit: int | None = None
                                       ) -> list[dict[str, int]]:
-    """Minimal-support T-invariants with nonnegative coefficients."""
-    found = _farkas(s.incidence, len(s.transitions), len(s.places), limit)
-    return [{s.transitions[j]: c for j, c in sorted(y.items())} for y in found]
+    """The minimal-support semi-positive T-invariants (Martinez and Silva 1982).
+
+    As :func:`minimal_semipositive_p_invariants`, for C x = 0:
+    {transition: coefficient}, sorted by support size, then transition order.
+    """
+    found = _farkas(s.incidence, len(s.places), limit, "T-invariants")
+    return [{s.transitions[j]: c for j, c in x.items()} for x in found]

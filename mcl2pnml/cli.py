@@ -20,6 +20,8 @@ EXAMPLES = """\b
 Examples:
   mcl2pnml check examples/sauce.mcl
   mcl2pnml functional examples/sauce.mcl
+  mcl2pnml compile examples/sauce.mcl -o sauce.pnml
+  mcl2pnml compile examples/sauce.mcl --format dot -o sauce.dot
   mcl2pnml template --list
   mcl2pnml template task -o task.pnml
   mcl2pnml analyze task.pnml
@@ -105,6 +107,49 @@ def functional(mission: Path, with_functions: bool) -> int:
             f = checked.functions[name]
             click.echo(f"{name}({', '.join(f.params)}) = {format_node(function_expression(f))}")
     click.echo(format_node(mission_expression(checked.mission)))
+    return 0
+
+
+def compile_file(mission: Path):
+    from .compiler import compile_checked
+
+    return compile_checked(_checked(mission))
+
+
+FORMATS = ("pnml", "dot", "svg", "png")
+
+
+@main.command("compile", epilog=EXAMPLES)
+@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write here (default: MISSION with the format's suffix).")
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default="pnml", show_default=True,
+              help="PNML (ISO/IEC 15909-2), or a graphviz drawing: dot source, SVG or PNG.")
+def compile_(mission: Path, output: Path | None, fmt: str) -> int:
+    """Compile MISSION (MCL) to one composed Petri net.
+
+    One shared net per task and per function, entered from every call site;
+    time-outs and vehicle bindings travel in the PNML as toolspecific data.
+    The initial marking has mission.B and mission.MTX marked.
+    """
+    from .draw import render, to_dot
+    from .files import atomic_write_text
+    from .pnml.writer import save_pnml
+
+    net = compile_file(mission)
+    output = output or mission.with_suffix(f".{fmt}")
+    if fmt == "pnml":
+        save_pnml(net, output)
+    else:
+        clusters: dict[str, list[str]] = {}
+        for node in (*net.places, *net.transitions):
+            clusters.setdefault(node.id.rsplit(".", 1)[0], []).append(node.id)
+        graph = to_dot(net, clusters=clusters, title=f"{mission.name}", legend=True)
+        if fmt == "dot":
+            atomic_write_text(output, graph.source)
+        else:
+            render(graph, str(output), fmt)
+    click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 
 
@@ -194,9 +239,10 @@ def _parse_initial(text: str) -> dict[str, int]:
               help="Show progress of long explorations (default: when stderr is a terminal).")
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
             max_states: int, progress: bool | None) -> int:
-    """Analyse the P/T net in FILE (PNML): invariants, siphons, reachable markings.
+    """Analyse FILE: a P/T net (PNML) or a mission (MCL, compiled first).
 
-    Works on any P/T net, not only ours: PNML from TAPAAL, PIPE, pm4py...
+    Invariants, siphons, reachable markings. Works on any P/T net, not only
+    ours: PNML from TAPAAL, PIPE, pm4py...
     """
     import json
 
@@ -204,10 +250,7 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
 
     from .pnml.reader import load_pnml
 
-    if file.suffix == ".mcl":
-        raise click.UsageError("MCL input needs the compiler, which this version does not "
-                               "have yet; give a PNML file")
-    net = load_pnml(file)
+    net = compile_file(file) if file.suffix == ".mcl" else load_pnml(file)
     start = None
     if initial is not None:
         start = _parse_initial(initial)
