@@ -155,26 +155,48 @@ class Compiler:
 
     # -- expressions ---------------------------------------------------------------------
 
-    def instance(self, node: FNode, name: str, scope: str, params: tuple[str, ...]) -> None:
-        """Add the nets of ``node`` (children first), its control places named ``name.*``."""
-        if isinstance(node, FCall):
-            self.a.parts.append((name, self.call_site(node, name, params)))
-            target = node.name
-            self.a.groups += [[f"{target}.{p}", f"{name}.to.{p}"]
-                              for p in ("GATE", *CONTROL) if p != "MTX"]
-            task = self.c.tasks.get(target)
-            for prim in sorted({p.name for p in task.primitives}) if task else ():
-                self.a.groups.append([f"{prim}.LOCK", f"{name}.lock.{prim}"])
-            return
-        template = self.lib.get(STRUCTURE_TEMPLATE[node.kind])
-        for slot, child in zip(template.children, node.children):
-            kind = child.name if isinstance(child, FCall) else child.kind
-            child_name = self.a.name(scope, kind)
-            self.instance(child, child_name, scope, params)
-            self.a.groups += [[f"{child_name}.{p}", f"{name}.{slot}_{p}"] for p in CONTROL]
-        self.a.parts.append((name, at_rest(template.net)))
+    def instance(self, root: FNode, root_name: str, scope: str, params: tuple[str, ...]) -> None:
+        """Add the nets of ``root`` (children first), its control places named ``root_name.*``.
 
-    def call_site(self, call: FCall, name: str, params: tuple[str, ...]) -> Net:
+        Depth-first with an explicit stack, not recursion: a block of n
+        statements is n nested sequences, and missions of 10,000 calls are
+        real (long surveys).
+        """
+        # a frame: [node, its instance name, its template, next child, last child's name]
+        stack: list[list[Any]] = [[root, root_name, None, 0, None]]
+        while stack:
+            frame = stack[-1]
+            node, name, template, i, last = frame
+            if isinstance(node, FCall):
+                self.call(node, name, scope, params)
+                stack.pop()
+                continue
+            if template is None:
+                template = frame[2] = self.lib.get(STRUCTURE_TEMPLATE[node.kind])
+            if i:   # child i-1 is complete: fuse it into its slot
+                self.a.groups += [[f"{last}.{p}", f"{name}.{template.children[i - 1]}_{p}"]
+                                  for p in CONTROL]
+            if i < min(len(template.children), len(node.children)):
+                child = node.children[i]
+                kind = child.name if isinstance(child, FCall) else child.kind
+                child_name = self.a.name(scope, kind)
+                frame[3], frame[4] = i + 1, child_name
+                stack.append([child, child_name, None, 0, None])
+            else:
+                self.a.parts.append((name, at_rest(template.net)))
+                stack.pop()
+
+    def call(self, node: FCall, name: str, scope: str, params: tuple[str, ...]) -> None:
+        """A call site, fused with the callee's control places, gate and primitive locks."""
+        self.a.parts.append((name, self.call_site(node, name, scope, params)))
+        target = node.name
+        self.a.groups += [[f"{target}.{p}", f"{name}.to.{p}"]
+                          for p in ("GATE", *CONTROL) if p != "MTX"]
+        task = self.c.tasks.get(target)
+        for prim in sorted({p.name for p in task.primitives}) if task else ():
+            self.a.groups.append([f"{prim}.LOCK", f"{name}.lock.{prim}"])
+
+    def call_site(self, call: FCall, name: str, scope: str, params: tuple[str, ...]) -> Net:
         target = self.c.tasks.get(call.name) or self.c.functions[call.name]
         task = call.name in self.c.tasks
         locks = sorted({p.name for p in target.primitives}) if task else []
@@ -189,8 +211,10 @@ class Compiler:
         for prim in locks:
             b.place(f"lock.{prim}", interface=f"{prim}.LOCK")
         binding = {p: _expr(v, params, self.c.consts) for p, v in zip(target.params, call.args)}
+        # "scope" says where the arguments' parameters live: the function
+        # whose body holds this call, or the mission (no parameters)
         enter = b.transition("enter", payload={
-            "call": call.name, "bind": binding,
+            "call": call.name, "scope": scope or "mission", "bind": binding,
             "doc": f"the callee is free: enter {call.name} with these arguments"})
         for p in ("B", "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
             b.arc(p, enter)

@@ -74,10 +74,13 @@ def to_functional(stmt: ast.Statement) -> FNode:
 def _sequence(body: list[ast.Statement], pos: ast.Pos) -> FNode:
     if not body:
         return FStructure(NULL_KIND, (), pos)
-    first = to_functional(body[0])
-    if len(body) == 1:
-        return first
-    return FStructure("sequence", (first, _sequence(body[1:], pos)), first.pos)
+    # built from the end, in a loop: a block of 10,000 statements nests
+    # 10,000 sequences, far deeper than Python's recursion limit
+    items = [to_functional(s) for s in body]
+    node = items[-1]
+    for item in reversed(items[:-1]):
+        node = FStructure("sequence", (item, node), item.pos)
+    return node
 
 
 def format_value(v: ast.Value) -> str:
@@ -91,12 +94,25 @@ def format_value(v: ast.Value) -> str:
 
 
 def format_node(node: FNode) -> str:
-    """The functional code as the paper prints it."""
-    if isinstance(node, FCall):
-        return f"{node.name}({', '.join(format_value(a) for a in node.args)})"
-    if node.kind == NULL_KIND:
-        return NULL_KIND
-    return f"{node.kind}({', '.join(format_node(c) for c in node.children)})"
+    """The functional code as the paper prints it (iterative: sequences nest deep)."""
+    out: list[str] = []
+    stack: list[FNode | str] = [node]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            out.append(item)
+        elif isinstance(item, FCall):
+            out.append(f"{item.name}({', '.join(format_value(a) for a in item.args)})")
+        elif item.kind == NULL_KIND:
+            out.append(NULL_KIND)
+        else:
+            pieces: list[FNode | str] = [f"{item.kind}("]
+            for i, child in enumerate(item.children):
+                pieces += [", "] if i else []
+                pieces.append(child)
+            pieces.append(")")
+            stack.extend(reversed(pieces))
+    return "".join(out)
 
 
 def mission_expression(mission: ast.Mission) -> FNode:
