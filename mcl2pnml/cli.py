@@ -15,6 +15,7 @@ import click
 
 from . import __version__
 from .errors import Mcl2PnmlError, did_you_mean
+from .layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
 EXAMPLES = """\b
 Examples:
@@ -125,7 +126,11 @@ FORMATS = ("pnml", "dot", "svg", "png")
               help="Write here (default: MISSION with the format's suffix).")
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default="pnml", show_default=True,
               help="PNML (ISO/IEC 15909-2), or a graphviz drawing: dot source, SVG or PNG.")
-def compile_(mission: Path, output: Path | None, fmt: str) -> int:
+@click.option("--layout", "layout_engine", type=click.Choice(ENGINES), default="auto",
+              show_default=True,
+              help="Node positions in the PNML: graphviz dot, BFS layers, or none "
+                   f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,}).")
+def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -> int:
     """Compile MISSION (MCL) to one composed Petri net.
 
     One shared net per task and per function, entered from every call site;
@@ -139,7 +144,7 @@ def compile_(mission: Path, output: Path | None, fmt: str) -> int:
     net = compile_file(mission)
     output = output or mission.with_suffix(f".{fmt}")
     if fmt == "pnml":
-        save_pnml(net, output)
+        save_pnml(net, output, layout_engine)
     else:
         clusters: dict[str, list[str]] = {}
         for node in (*net.places, *net.transitions):

@@ -41,7 +41,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from . import mcl_ast as ast
-from .compose import fuse, prefixed, union
+from .compose import compose
+from .gcpause import without_gc
 from .errors import Mcl2PnmlError
 from .functional import FCall, FNode, FStructure, NULL_KIND, function_expression, mission_expression
 from .mcl_checker import Checked
@@ -93,6 +94,11 @@ class Compiler:
         self.a = _Assembly()
         self.used_primitives = sorted({p.name for t in checked.tasks.values()
                                        for p in t.primitives})
+        # One net per structure template and one call-site prototype per
+        # callee, shared by every instance: a long mission repeats them
+        # thousands of times, and nets are immutable.
+        self._structures: dict[str, Net] = {}
+        self._call_sites: dict[str, Net] = {}
 
     # -- shared nets ---------------------------------------------------------------------
 
@@ -183,39 +189,45 @@ class Compiler:
                 frame[3], frame[4] = i + 1, child_name
                 stack.append([child, child_name, None, 0, None])
             else:
-                self.a.parts.append((name, at_rest(template.net)))
+                net = self._structures.get(template.name)
+                if net is None:
+                    net = self._structures[template.name] = at_rest(template.net)
+                self.a.parts.append((name, net))
                 stack.pop()
 
     def call(self, node: FCall, name: str, scope: str, params: tuple[str, ...]) -> None:
         """A call site, fused with the callee's control places, gate and primitive locks."""
-        self.a.parts.append((name, self.call_site(node, name, scope, params)))
-        target = node.name
-        self.a.groups += [[f"{target}.{p}", f"{name}.to.{p}"]
+        target = self.c.tasks.get(node.name) or self.c.functions[node.name]
+        binding = {p: _expr(v, params, self.c.consts) for p, v in zip(target.params, node.args)}
+        # "scope" says where the arguments' parameters live: the function
+        # whose body holds this call, or the mission (no parameters)
+        enter = {"call": node.name, "scope": scope or "mission", "bind": binding,
+                 "doc": f"the callee is free: enter {node.name} with these arguments"}
+        proto = self._call_sites.get(node.name)
+        if proto is None:
+            proto = self._call_sites[node.name] = self.call_site(node.name)
+        self.a.parts.append((name, proto.with_payloads({"enter": enter})))
+        self.a.groups += [[f"{node.name}.{p}", f"{name}.to.{p}"]
                           for p in ("GATE", *CONTROL) if p != "MTX"]
-        task = self.c.tasks.get(target)
+        task = self.c.tasks.get(node.name)
         for prim in sorted({p.name for p in task.primitives}) if task else ():
             self.a.groups.append([f"{prim}.LOCK", f"{name}.lock.{prim}"])
 
-    def call_site(self, call: FCall, name: str, scope: str, params: tuple[str, ...]) -> Net:
-        target = self.c.tasks.get(call.name) or self.c.functions[call.name]
-        task = call.name in self.c.tasks
-        locks = sorted({p.name for p in target.primitives}) if task else []
-        b = NetBuilder(name)
+    def call_site(self, callee: str) -> Net:
+        """The call-site net of ``callee``; each call stamps its arguments on ``enter``."""
+        task = self.c.tasks.get(callee)
+        locks = sorted({p.name for p in task.primitives}) if task else []
+        b = NetBuilder(callee)
         for p in CONTROL:
             b.place(p, 1 if p == "MTX" else 0, interface=p)
-        b.place("IN", payload={"doc": f"inside {call.name}"})
-        b.place("ABT", payload={"doc": f"abort passed on to {call.name}"})
+        b.place("IN", payload={"doc": f"inside {callee}"})
+        b.place("ABT", payload={"doc": f"abort passed on to {callee}"})
         for p in ("GATE", *CONTROL):
             if p != "MTX":
-                b.place(f"to.{p}", interface=f"{call.name}.{p}")
+                b.place(f"to.{p}", interface=f"{callee}.{p}")
         for prim in locks:
             b.place(f"lock.{prim}", interface=f"{prim}.LOCK")
-        binding = {p: _expr(v, params, self.c.consts) for p, v in zip(target.params, call.args)}
-        # "scope" says where the arguments' parameters live: the function
-        # whose body holds this call, or the mission (no parameters)
-        enter = b.transition("enter", payload={
-            "call": call.name, "scope": scope or "mission", "bind": binding,
-            "doc": f"the callee is free: enter {call.name} with these arguments"})
+        enter = b.transition("enter")
         for p in ("B", "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
             b.arc(p, enter)
         b.arc(enter, "to.B")
@@ -224,7 +236,7 @@ class Compiler:
         b.arc("B", t)
         b.arc("A", t)
         b.arc(t, "ABORTED")
-        t = b.transition("abort", payload={"doc": f"pass the abort on to {call.name}"})
+        t = b.transition("abort", payload={"doc": f"pass the abort on to {callee}"})
         b.arc("IN", t)
         b.arc("A", t)
         b.arc(t, "to.A")
@@ -238,11 +250,11 @@ class Compiler:
                 b.arc(t, p)
 
         for r in ("OK", "FAIL"):
-            leave(f"return_{r}", ["IN", f"to.{r}"], r, f"{call.name} ended {r}")
-        leave("return_ABORTED", ["ABT", "to.ABORTED"], "ABORTED", f"{call.name} aborted")
+            leave(f"return_{r}", ["IN", f"to.{r}"], r, f"{callee} ended {r}")
+        leave("return_ABORTED", ["ABT", "to.ABORTED"], "ABORTED", f"{callee} aborted")
         for r in ("OK", "FAIL"):
             leave(f"drain_{r}", ["ABT", f"to.{r}", "to.A"], "ABORTED",
-                  f"{call.name} ended {r} before the abort reached it: drain its A")
+                  f"{callee} ended {r} before the abort reached it: drain its A")
         return b.build()
 
     # -- the whole mission -------------------------------------------------------------------
@@ -261,14 +273,18 @@ class Compiler:
             gate.place("GATE", 1, payload={"doc": "free: no call is inside"})
             self.a.parts.append((fname, gate.build()))
         self.instance(mission_expression(self.c.mission), "mission", "", ())
-        net = fuse(union(self.a.parts, "mission"), self.a.groups, name=self._name())
-        return net.with_initial({**net.initial, "mission.B": 1})
+        # the root is added last; its B is where the mission starts
+        prefix, root = self.a.parts[-1]
+        assert prefix == "mission"
+        self.a.parts[-1] = (prefix, root.with_initial({**root.initial, "B": 1}))
+        return compose(self.a.parts, self.a.groups, name=self._name())
 
     def _name(self) -> str:
         stem = self.c.program.file.rsplit("/", 1)[-1]
         return stem[:-4] if stem.endswith(".mcl") else stem or "mission"
 
 
+@without_gc
 def compile_checked(checked: Checked, library: Library | None = None) -> Net:
     """One composed P/T net for a checked MCL program (from ``mission.B``, ``mission.MTX``)."""
     return Compiler(checked, library).compile()

@@ -17,6 +17,7 @@ from lark import Lark, Token, Transformer, UnexpectedCharacters, UnexpectedEOF, 
 
 from . import mcl_ast as ast
 from .errors import Location, Mcl2PnmlError
+from .gcpause import without_gc
 
 GRAMMAR = r"""
 start: declaration*
@@ -204,6 +205,7 @@ def decode(data: bytes, filename: str) -> str:
                           "character here") from None
 
 
+@without_gc
 def parse(text: str, filename: str = "<mcl>") -> ast.Program:
     """Parse MCL source into a :class:`~mcl2pnml.mcl_ast.Program` (no checks beyond syntax)."""
     lines = text.splitlines()

@@ -29,7 +29,9 @@ import math
 import re
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, Iterable, Iterator, Mapping
+from itertools import chain, compress
+from operator import not_
+from typing import Any, Iterable, Iterator, Mapping, NamedTuple
 
 from .errors import NetError
 
@@ -113,6 +115,10 @@ class ArcKind(enum.Enum):
     """Place to transition only: the transition needs ``weight`` tokens in the
     place to fire and leaves them there (a test arc)."""
 
+    # Members are singletons, so identity hashing is exact, and it is done in
+    # C: a net of a million arcs hashes each arc's kind when it is checked.
+    __hash__ = object.__hash__
+
 
 @dataclass(frozen=True)
 class Timing:
@@ -164,6 +170,22 @@ class _Named:
     def label(self) -> str:
         return self.name if self.name is not None else self.id
 
+    def with_id(self, new_id: str):
+        """The same node under another id (what composition does to every node).
+
+        Built by copying the fields, without the dataclass machinery: they are
+        valid already, and a compiled mission renames hundreds of thousands of
+        nodes. Only the canonical name needs a look, since a name may equal
+        the new id; the id itself is checked by the :class:`Net` it goes into.
+        """
+        clone = object.__new__(type(self))
+        fields = clone.__dict__
+        fields.update(self.__dict__)
+        fields["id"] = new_id
+        if fields["name"] == new_id:
+            fields["name"] = None
+        return clone
+
 
 @dataclass(frozen=True)
 class Place(_Named):
@@ -189,9 +211,13 @@ class Transition(_Named):
 
 
 
-@dataclass(frozen=True)
-class Arc:
-    """An arc between a place and a transition (in either direction)."""
+class Arc(NamedTuple):
+    """An arc between a place and a transition (in either direction).
+
+    A named tuple rather than a dataclass: arcs are the bulk of a compiled
+    mission (a million of them for 10,000 calls), and a tuple is built and
+    hashed in C at half the cost.
+    """
 
     source: str
     target: str
@@ -270,8 +296,23 @@ class Marking(Mapping[str, int]):
 # The net
 
 _ID = re.compile(r"\S(?:.*\S)?\Z", re.S)
+
+
+def _valid_text(text: object) -> bool:
+    return isinstance(text, str) and not _NOT_XML.search(text)
+
+
+def is_valid_id(text: object) -> bool:
+    """A node id: a non-empty string without leading or trailing white space."""
+    return isinstance(text, str) and _ID.match(text) is not None
+
 # characters XML 1.0 cannot carry at all: names and labels must avoid them
 _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+_KINDS = frozenset(ArcKind)
+#: How many marked places :meth:`Net.summary` names before it counts the rest.
+SUMMARY_MARKED = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -303,6 +344,55 @@ class Net:
         self._check()
 
     def _check(self) -> None:
+        """Validate in a few passes that run in C; explain the first fault if any.
+
+        Each condition is a set operation over all ids or all arcs, so that a
+        net of a million arcs checks in a fraction of a second; only when one
+        fails does :meth:`_explain` walk the net to say where.
+        """
+        try:
+            ok = self._valid()
+        except (TypeError, AttributeError):  # an unhashable id, weight or kind; a stray object
+            ok = False
+        if not ok:
+            self._explain()
+            raise NetError(f"net '{self.name}' is malformed")  # _explain always raises first
+
+    def _valid(self) -> bool:
+        places, transitions, arcs = self.places, self.transitions, self.arcs
+        pids = {p.id for p in places}
+        tids = {t.id for t in transitions}
+        texts = ({p.name for p in places} | {p.interface for p in places}
+                 | {t.name for t in transitions})
+        texts.discard(None)
+        if not (_valid_text(self.name)
+                and len(pids) == len(places) and len(tids) == len(transitions)
+                and pids.isdisjoint(tids)
+                and all(map(_ID.match, chain(pids, tids)))
+                and all(map(_valid_text, texts))
+                and pids.issuperset(self.initial)):
+            return False
+        if not arcs:
+            return True
+        sources, targets, weights, kinds = zip(*arcs)
+        from_place = list(map(pids.__contains__, sources))
+        from_transition = list(map(not_, from_place))
+        return (tids.issuperset(compress(targets, from_place))
+                and tids.issuperset(compress(sources, from_transition))
+                and pids.issuperset(compress(targets, from_transition))
+                and set(kinds) <= _KINDS
+                and ArcKind.READ not in set(compress(kinds, from_transition))
+                and all(isinstance(w, int) and not isinstance(w, bool) and w >= 1
+                        for w in set(weights))
+                # one arc per ordered pair: no duplicates, and no transition
+                # that both reads and consumes a place
+                and len(set(zip(sources, targets))) == len(arcs))
+
+    def _explain(self) -> None:
+        """Walk the net node by node and arc by arc; raise on the first fault."""
+        if not _valid_text(self.name):
+            raise NetError(f"net name must be text without control characters, "
+                           f"not {self.name!r}")
         kinds: dict[str, str] = {}
         for node_kind, nodes in (("place", self.places), ("transition", self.transitions)):
             for node in nodes:
@@ -324,6 +414,9 @@ class Net:
         reads: set[tuple[str, str]] = set()
         for arc in self.arcs:
             where = f"arc {arc.source} -> {arc.target}"
+            if not isinstance(arc.kind, ArcKind):
+                raise NetError(f"{where}: kind must be one of "
+                               f"{', '.join(k.name for k in ArcKind)}, not {arc.kind!r}")
             for end in (arc.source, arc.target):
                 if end not in kinds:
                     raise NetError(f"{where}: no place or transition '{end}'")
@@ -405,19 +498,64 @@ class Net:
 
     # -- small conveniences ----------------------------------------------------
 
+    @classmethod
+    def _trusted(cls, name: str, places: tuple[Place, ...], transitions: tuple[Transition, ...],
+                 arcs: tuple[Arc, ...], initial: Marking) -> "Net":
+        """A net whose validity its builder has proved (see :func:`~mcl2pnml.compose.compose`)."""
+        net = object.__new__(cls)
+        for f, value in (("name", name), ("places", places), ("transitions", transitions),
+                         ("arcs", arcs), ("initial", initial)):
+            object.__setattr__(net, f, value)
+        return net
+
+    @cached_property
+    def columns(self) -> tuple[tuple, tuple, tuple, tuple]:
+        """The arcs as four columns: sources, targets, weights, kinds."""
+        if not self.arcs:
+            return ((), (), (), ())
+        return tuple(zip(*self.arcs))  # type: ignore[return-value]
+
+    def _derived(self, **changes: Any) -> "Net":
+        """A copy with fields changed in ways that cannot break what was checked."""
+        return Net._trusted(*(changes.get(f, getattr(self, f))
+                              for f in ("name", "places", "transitions", "arcs", "initial")))
+
     def with_initial(self, marking: Mapping[str, int] | Iterable[str]) -> "Net":
-        """The same net started from another marking."""
-        return Net(self.name, self.places, self.transitions, self.arcs, Marking(marking))
+        """The same net started from another marking (only the marking is checked)."""
+        marking = marking if isinstance(marking, Marking) else Marking(marking)
+        for place in marking:
+            if place not in self.place_index:
+                raise NetError(f"initial marking names '{place}', which is not a place")
+        return self._derived(initial=marking)
+
+    def with_payloads(self, payloads: Mapping[str, Any]) -> "Net":
+        """The same net with other payloads on some transitions (id -> JSON-like data).
+
+        The structure is untouched, so nothing is checked again: this is how
+        the compiler stamps each call site's arguments on a shared prototype.
+        """
+        unknown = set(payloads) - set(self.transition_index)
+        if unknown:
+            raise NetError(f"no transition '{sorted(unknown)[0]}' in net '{self.name}'")
+        transitions = tuple(
+            Transition(t.id, t.name, t.timing, freeze(payloads[t.id]), t.position)
+            if t.id in payloads else t for t in self.transitions)
+        return self._derived(transitions=transitions)
 
     def renamed(self, name: str) -> "Net":
-        return Net(name, self.places, self.transitions, self.arcs, self.initial)
+        if not _valid_text(name):
+            raise NetError(f"net name must be text without control characters, not {name!r}")
+        return self._derived(name=name)
 
     def summary(self) -> str:
         timed = sum(1 for t in self.transitions if t.timing is not None)
         reads = sum(1 for a in self.arcs if a.kind is ArcKind.READ)
-        return (f"{self.name}: {len(self.places)} places, {len(self.transitions)} "
-                f"transitions ({timed} timed), {len(self.arcs)} arcs ({reads} read), "
-                f"initial marking {{{', '.join(self.initial.format())}}}")
+        marked = self.initial.format()
+        if len(marked) > SUMMARY_MARKED:  # a long mission marks every call site's MTX
+            marked = [*marked[:SUMMARY_MARKED], f"... {len(marked) - SUMMARY_MARKED:,} more"]
+        return (f"{self.name}: {len(self.places):,} places, {len(self.transitions):,} "
+                f"transitions ({timed:,} timed), {len(self.arcs):,} arcs ({reads:,} read), "
+                f"initial marking {{{', '.join(marked)}}}")
 
 
 class NetBuilder:

@@ -4,7 +4,7 @@ import pytest
 
 from mcl2pnml.compose import compose, fuse, union
 from mcl2pnml.errors import NetError
-from mcl2pnml.net import Marking, NetBuilder
+from mcl2pnml.net import Marking, Net, NetBuilder
 
 from strategies import nets
 
@@ -125,3 +125,46 @@ def test_union_is_associative(a, b, c):
     assert len(left.arcs) == len(right.arcs)
     assert sum(left.initial.values()) == sum(right.initial.values())
     assert strip(left) == sorted(p.id for p in union({"a": a, "b": b, "c": c}).places)
+
+
+@st.composite
+def components_and_groups(draw):
+    parts = [(draw(st.sampled_from(["a", "b", "c"])) + str(i), draw(nets(max_places=4,
+                                                                       max_transitions=3)))
+             for i in range(draw(st.integers(1, 3)))]
+    qualified = [f"{prefix}.{p.id}" for prefix, net in parts for p in net.places]
+    groups = draw(st.lists(st.lists(st.sampled_from(qualified), min_size=1, max_size=3),
+                           max_size=4))
+    return parts, groups
+
+
+@settings(max_examples=150, deadline=None)
+@given(components_and_groups())
+def test_one_pass_composition_is_union_then_fusion_and_valid(case):
+    """compose() skips the full check of its result: the result must pass it anyway."""
+    parts, groups = case
+    try:
+        at_once = compose(parts, groups, name="m")
+    except NetError:
+        # then fusing the plain union must fail too (markings or read/consume clash)
+        with pytest.raises(NetError):
+            fuse(Net(*_fields(union(parts, "m"))), groups)
+        return
+    rebuilt = Net(*_fields(at_once))          # runs every check of the constructor
+    assert rebuilt == at_once
+    plain = union(parts, "m")
+    step_by_step, done = plain, []
+    for g in groups:                           # fusion one group at a time agrees
+        rep = _classes(plain, done)            # where earlier fusions put each member
+        step_by_step = fuse(step_by_step, [[rep.get(m, m) for m in g]])
+        done.append(g)
+    assert step_by_step == at_once
+
+
+def _fields(net):
+    return net.name, net.places, net.transitions, net.arcs, net.initial
+
+
+def test_composition_with_a_white_space_prefix_is_checked():
+    with pytest.raises(NetError, match="white space"):
+        compose([(" x", chain("a"))], [])

@@ -1,5 +1,6 @@
 """The net core: immutable nets, markings kept apart, rules checked at construction."""
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from mcl2pnml.errors import NetError
 from mcl2pnml.net import (Arc, ArcKind, FrozenDict, Marking, Net, NetBuilder, Place,
@@ -91,3 +92,62 @@ def test_builder_adds_up_parallel_arcs():
     assert b.build().arcs == (Arc("p", "t", 3),)
     with pytest.raises(NetError, match="duplicate"):
         b.place("t")
+
+
+# -- the fast validity check and the walk that explains its faults agree ------
+
+_node_ids = st.sampled_from(["p", "q", "t", "u", " p", "", "p "])
+_broken_arcs = st.builds(
+    Arc, _node_ids, _node_ids, st.sampled_from([1, 2, 0, -1, True, 1.5]),
+    st.sampled_from([ArcKind.NORMAL, ArcKind.READ, "read"]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_node_ids, max_size=3), st.lists(_node_ids, max_size=3),
+       st.lists(_broken_arcs, max_size=4),
+       st.dictionaries(_node_ids, st.integers(1, 2), max_size=2),
+       st.sampled_from(["n", "bad\x00name"]))
+def test_fast_check_accepts_exactly_what_the_walk_accepts(places, transitions, arcs,
+                                                          marking, name):
+    """Every fault the set-based check sees, the node-by-node walk names (and no other)."""
+    parts = (name, tuple(Place(p) for p in places), tuple(Transition(t) for t in transitions),
+             tuple(arcs), Marking(marking))
+    probe = Net._trusted(*parts)
+    try:
+        probe._explain()
+        explained = None
+    except NetError as e:
+        explained = str(e)
+    try:
+        Net(*parts)
+        accepted = True
+    except NetError as e:
+        accepted = False
+        assert str(e) == explained  # the message is the walk's
+    assert accepted == (explained is None)
+
+
+def test_derived_nets_check_only_what_changed():
+    b = NetBuilder("n")
+    b.place("p", 1)
+    b.transition("t", payload={"call": "Go"})
+    b.arc("p", "t")
+    net = b.build()
+    assert net.with_initial({"p": 2}).initial == Marking({"p": 2})
+    with pytest.raises(NetError, match="not a place"):
+        net.with_initial({"t": 1})
+    stamped = net.with_payloads({"t": {"call": "Go", "bind": {"wp": [1, 2]}}})
+    assert stamped.transition_index["t"].payload == {"call": "Go", "bind": {"wp": (1, 2)}}
+    assert net.transition_index["t"].payload == {"call": "Go"}  # the original is untouched
+    with pytest.raises(NetError, match="no transition 'x'"):
+        net.with_payloads({"x": None})
+    with pytest.raises(NetError, match="control characters"):
+        net.renamed("a\x01b")
+
+
+def test_summary_names_a_few_marked_places_and_counts_the_rest():
+    b = NetBuilder("big")
+    for i in range(40):
+        b.place(f"p{i:02}", 1)
+    text = b.build().summary()
+    assert "p00" in text and "p39" not in text and "... 28 more" in text

@@ -70,6 +70,32 @@ def test_one_flat_page_and_a_position_for_every_node():
     assert len(positions) == len(nodes), "two nodes drawn on the same spot"
 
 
+def test_without_layout_the_file_is_still_valid_and_exact(assert_valid):
+    data = to_pnml_bytes(everything(), layout_engine="none")
+    assert_valid(data)
+    assert b"<graphics>" not in data
+    back = parse_pnml(data)
+    assert back == everything() and all(p.position is None for p in back.places)
+
+
+def test_arc_numbers_never_clash_with_node_ids(assert_valid):
+    b = NetBuilder("clash")
+    b.place("a1", 1)
+    b.place("a_1")
+    b.transition("a2")
+    b.arc("a1", "a2")
+    b.arc("a2", "a_1")
+    data = to_pnml_bytes(b.build(), layout_engine="layers")
+    assert_valid(data)   # ids are xsd:ID: a clash would make the file invalid
+    assert parse_pnml(data) == b.build()
+
+
+def test_one_node_per_line_so_grep_finds_a_node_whole():
+    lines = to_pnml_bytes(everything(), layout_engine="layers").decode().splitlines()
+    t03 = [line for line in lines if 'id="t03"' in line]
+    assert len(t03) == 1 and 'latest="60"' in t03[0] and "</transition>" in t03[0]
+
+
 def test_read_arc_is_a_self_loop_for_other_tools():
     from lxml import etree
     doc = etree.fromstring(to_pnml_bytes(everything()))
