@@ -137,7 +137,7 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
     time-outs and vehicle bindings travel in the PNML as toolspecific data.
     The initial marking has mission.B and mission.MTX marked.
     """
-    from .draw import render, to_dot
+    from .draw import instance_clusters, render, to_dot
     from .files import atomic_write_text
     from .pnml.writer import save_pnml
 
@@ -146,10 +146,8 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
     if fmt == "pnml":
         save_pnml(net, output, layout_engine)
     else:
-        clusters: dict[str, list[str]] = {}
-        for node in (*net.places, *net.transitions):
-            clusters.setdefault(node.id.rsplit(".", 1)[0], []).append(node.id)
-        graph = to_dot(net, clusters=clusters, title=f"{mission.name}", legend=True)
+        graph = to_dot(net, clusters=instance_clusters(net), title=f"{mission.name}",
+                       legend=True)
         if fmt == "dot":
             atomic_write_text(output, graph.source)
         else:

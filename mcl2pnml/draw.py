@@ -21,6 +21,7 @@ import graphviz
 
 from .files import atomic_write_bytes
 from .net import ArcKind, Net
+from .layout import DOT_SPEED
 
 TOKEN = "\u25cf"
 #: A place that this many arcs return tokens to is drawn again beside each of them.
@@ -38,7 +39,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     marking = net.initial if marking is None else marking
     g = graphviz.Digraph(net.name, graph_attr={
         "rankdir": "LR", "nodesep": "0.35", "ranksep": "0.55", "fontname": "Helvetica",
-        "fontsize": "12", "label": title or "", "labelloc": "t"},
+        "fontsize": "12", "label": title or "", "labelloc": "t", **DOT_SPEED},
         node_attr={"fontname": "Helvetica", "fontsize": "10"},
         edge_attr={"arrowsize": "0.6"})
     clustered = {n for members in (clusters or {}).values() for n in members}
@@ -69,13 +70,11 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     for name, members in (clusters or {}).items():
         with g.subgraph(name=f"cluster_{name}") as c:
             c.attr(label=name, style="rounded,dashed", color="gray50", fontsize="11")
-            members = set(members)
-            for p in net.places:
-                if p.id in members:
-                    add_place(c, p)
-            for t in net.transitions:
-                if t.id in members:
-                    add_transition(c, t)
+            for m in members:   # net order within the cluster, as given
+                if m in net.place_index:
+                    add_place(c, net.place_index[m])
+                else:
+                    add_transition(c, net.transition_index[m])
     # where tokens come in on the left, where results come out on the right
     written = {a.target for a in net.arcs if a.target in net.place_index}
     read_or_taken = {a.source for a in net.arcs if a.source in net.place_index}
@@ -160,6 +159,21 @@ def flow_depth(net: Net) -> dict[str, int]:
                     nxt.append(m)
         frontier = nxt
     return depth
+
+
+def instance_clusters(net: Net) -> dict[str, list[str]]:
+    """Nodes grouped by instance: the part of their id before the last dot.
+
+    A compiled mission names every node after its component
+    (``mission.sequence-1.t2``), so this draws each task, structure and call
+    site in its own box. Ids without a dot, and groups of one, stay loose.
+    """
+    groups: dict[str, list[str]] = {}
+    for node in (*net.places, *net.transitions):
+        stem, dot, _ = node.id.rpartition(".")
+        if dot and stem:
+            groups.setdefault(stem, []).append(node.id)
+    return {k: v for k, v in groups.items() if len(v) > 1}
 
 
 def render(graph: graphviz.Digraph, path: str, fmt: str) -> None:

@@ -14,6 +14,12 @@ from dataclasses import dataclass
 from typing import Iterable, Sequence
 
 
+#: Source lines longer than this are shown as a window around the fault.
+EXCERPT_WIDTH = 100
+#: Error messages name at most this many of the valid choices.
+LISTED = 20
+
+
 @dataclass(frozen=True)
 class Location:
     """A position in a source file; line and column count from 1."""
@@ -36,6 +42,12 @@ class Location:
             return ""
         text = self.source_line.rstrip("\n").expandtabs(1)
         col = max(1, self.column or 1)
+        if len(text) > EXCERPT_WIDTH:  # a window around the fault, marked as cut
+            start = max(0, min(col - 1 - EXCERPT_WIDTH // 2, len(text) - EXCERPT_WIDTH))
+            left = "..." if start else ""
+            right = "..." if start + EXCERPT_WIDTH < len(text) else ""
+            text = left + text[start:start + EXCERPT_WIDTH] + right
+            col = col - start + len(left)
         return f"    {text}\n    {' ' * (col - 1)}^"
 
 
@@ -93,5 +105,7 @@ def did_you_mean(name: str, valid: Iterable[str], what: str) -> str:
     valid = sorted(set(valid))
     close = difflib.get_close_matches(name, valid, n=1)
     hint = f"; did you mean '{close[0]}'?" if close else ""
-    listing = ", ".join(valid) if valid else "none"
+    listing = ", ".join(valid[:LISTED]) if valid else "none"
+    if len(valid) > LISTED:
+        listing += f", ... ({len(valid) - LISTED:,} more)"
     return f"{hint} {what}: {listing}" if hint else f"; {what}: {listing}"

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from lark import Lark, Token, Transformer, UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
+from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharacters,
+                  UnexpectedEOF, UnexpectedInput)
 
 from . import mcl_ast as ast
 from .errors import Location, Mcl2PnmlError
@@ -94,7 +95,7 @@ def _pos(item) -> ast.Pos:
     return ast.Pos(getattr(meta, "line", 0), getattr(meta, "column", 0))
 
 
-class _Build(Transformer):
+class _Build(Transformer_NonRecursive):
     """Parse tree to AST nodes, each with the position of its first token."""
 
     def __default_token__(self, token):
@@ -233,13 +234,46 @@ def parse(text: str, filename: str = "<mcl>") -> ast.Program:
             else (f"; expected {expected[0]}" if expected else "")
         raise Mcl2PnmlError(f"syntax error: {found}{hint}",
                             Location(filename, line, col, src)) from None
-    for tok in tree.scan_values(lambda v: isinstance(v, Token) and v.type == "NAME"):
-        if str(tok) in KEYWORDS:  # the contextual lexer lets a keyword through as a name
-            src = lines[tok.line - 1] if 0 < tok.line <= len(lines) else None
-            raise Mcl2PnmlError(f"'{tok}' is a keyword and cannot be used as a name",
-                                Location(filename, tok.line, tok.column, src))
+    _check_nesting(tree, lines, filename)
     declarations = _Build().transform(tree)
     return ast.Program(declarations, filename, text)
+
+
+#: How deep blocks, structures, calls and tuples may nest. Missions people
+#: write nest a handful of levels; the limit keeps every later stage (some
+#: of which walk the program recursively) far from Python's stack limit.
+MAX_NESTING = 100
+_NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall", "tuple"}
+
+
+def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
+    """Refuse nesting deeper than :data:`MAX_NESTING`, and keywords used as names.
+
+    One walk in source order, with a stack rather than recursion (a file
+    nested 3,000 deep must get this message, not overflow Python's stack);
+    the first fault in the file is the one reported.
+    """
+    stack: list[tuple[Tree | Token, int]] = [(tree, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, Token):
+            if node.type == "NAME" and str(node) in KEYWORDS:
+                # the contextual lexer lets a keyword through as a name
+                src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
+                raise Mcl2PnmlError(f"'{node}' is a keyword and cannot be used as a name",
+                                    Location(filename, node.line, node.column, src))
+            continue
+        if node.data in _NESTING:
+            depth += 1
+            if depth > MAX_NESTING:
+                line, col = node.meta.line, node.meta.column
+                src = lines[line - 1] if 0 < line <= len(lines) else None
+                raise Mcl2PnmlError(
+                    f"nested too deeply: more than {MAX_NESTING} levels of blocks, "
+                    "structures, calls and tuples; split the mission into functions",
+                    Location(filename, line, col, src))
+        stack.extend((child, depth) for child in reversed(node.children)
+                     if isinstance(child, (Tree, Token)))
 
 
 def parse_file(path: str | Path) -> ast.Program:

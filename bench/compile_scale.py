@@ -1,0 +1,78 @@
+"""How compiling grows with the mission: MCL to PNML on disk, 100 to 10,000 calls.
+
+Run:  .venv/bin/python -m bench.compile_scale [CALLS...]   (default 100 1000 10000)
+
+Each size runs in a fresh interpreter (so that peak memory is the size's
+own), three times; the table shows the median time of each stage (read and
+parse, check, compile, write the PNML), the total, the peak resident memory,
+and the exponent of a least-squares fit of log(time) against log(calls):
+1 is linear. Missions come from :func:`bench.missions.survey`.
+"""
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+from bench.core_scale import slope
+
+CHILD = r"""
+import json, resource, sys, time
+from mcl2pnml.mcl_parser import parse_file
+from mcl2pnml.mcl_checker import check
+from mcl2pnml.compiler import compile_checked
+from mcl2pnml.pnml.writer import save_pnml
+source, target = sys.argv[1], sys.argv[2]
+t0 = time.perf_counter(); program = parse_file(source)
+t1 = time.perf_counter(); checked = check(program)
+t2 = time.perf_counter(); net = compile_checked(checked)
+t3 = time.perf_counter(); save_pnml(net, target)
+t4 = time.perf_counter()
+print(json.dumps({"parse": t1 - t0, "check": t2 - t1, "compile": t3 - t2, "write": t4 - t3,
+                  "total": t4 - t0, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "places": len(net.places), "transitions": len(net.transitions),
+                  "arcs": len(net.arcs)}))
+"""
+STAGES = ("parse", "check", "compile", "write", "total")
+
+
+def measure(calls: int, runs: int = 3) -> dict[str, float]:
+    from bench.missions import survey
+
+    with tempfile.TemporaryDirectory() as tmp:
+        source = os.path.join(tmp, f"survey{calls}.mcl")
+        with open(source, "w") as f:
+            f.write(survey(calls))
+        results = []
+        for _ in range(runs):
+            out = subprocess.run([sys.executable, "-c", CHILD, source,
+                                  os.path.join(tmp, "out.pnml")],
+                                 capture_output=True, text=True, check=True)
+            results.append(json.loads(out.stdout))
+            size_mb = os.path.getsize(os.path.join(tmp, "out.pnml")) / 1e6
+    row = {k: statistics.median(r[k] for r in results) for k in (*STAGES, "peak_mb")}
+    row.update({k: results[0][k] for k in ("places", "transitions", "arcs")}, pnml_mb=size_mb)
+    return row
+
+
+def main(argv: list[str]) -> None:
+    sizes = [int(a) for a in argv] or [100, 1_000, 10_000]
+    rows = {n: measure(n) for n in sizes}
+    print("| calls | places | transitions | arcs | " + " | ".join(f"{s} (s)" for s in STAGES)
+          + " | peak (MB) | PNML (MB) |")
+    print("|---:" * (6 + len(STAGES)) + "|")
+    for n, r in rows.items():
+        print(f"| {n:,} | {r['places']:,} | {r['transitions']:,} | {r['arcs']:,} | "
+              + " | ".join(f"{r[s]:.3f}" for s in STAGES)
+              + f" | {r['peak_mb']:.0f} | {r['pnml_mb']:.1f} |")
+    if len(sizes) > 1:
+        print()
+        print("exponent of time against calls: " + ", ".join(
+            f"{s} {slope(sizes, [rows[n][s] for n in sizes]):.2f}" for s in STAGES))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
