@@ -12,29 +12,38 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO, Iterator
 
+from .errors import Location, Mcl2PnmlError
+
 
 @contextmanager
 def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
     """A binary file that appears at ``path`` only if the block completes.
 
     For outputs written as a stream (a PNML of 200 MB is never held in memory
-    whole); on any exception the temporary file is removed.
+    whole); on any exception the temporary file is removed. A failure of the
+    file system (no such directory, no permission, disk full) is reported as
+    an :class:`~mcl2pnml.errors.Mcl2PnmlError` naming the file.
     """
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
-    directory.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    tmp = None
     try:
+        directory.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
         with os.fdopen(fd, "wb") as f:
             yield f
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
+    except BaseException as e:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except FileNotFoundError:
+                pass
+        if isinstance(e, OSError):
+            reason = e.strerror or str(e)
+            raise Mcl2PnmlError(f"cannot write: {reason}", Location(str(path))) from None
         raise
 
 

@@ -33,3 +33,15 @@ def assert_valid(grammar_dir):
         assert verdict.valid, "\n".join(str(e) for e in verdict.errors)
 
     return check
+
+
+@pytest.fixture(scope="session")
+def dot() -> str:
+    """graphviz's dot; its absence is a failure that says how to get it."""
+    import shutil
+
+    path = shutil.which("dot")
+    if path is None:
+        pytest.fail("graphviz 'dot' is needed to lay out and draw nets: `make setup` "
+                    "installs it with apt-get (or: apt-get install graphviz)")
+    return path

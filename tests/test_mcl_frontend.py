@@ -96,3 +96,26 @@ def test_garbage_gives_our_error_and_nothing_else(data):
         check(parse(decode(data, "fuzz.mcl"), "fuzz.mcl"))
     except Mcl2PnmlError as e:
         assert e.location is not None and e.location.file == "fuzz.mcl"
+
+
+def test_long_lines_and_long_listings_are_cut_to_what_helps():
+    from mcl2pnml.errors import EXCERPT_WIDTH, LISTED, Location, did_you_mean
+
+    line = "x" * 500 + "FAULT" + "y" * 500
+    shown = Location("m.mcl", 1, 501, line).excerpt().splitlines()
+    assert len(shown[0]) <= EXCERPT_WIDTH + 4 + 6          # indent and two "..."
+    assert shown[0].strip().startswith("...") and shown[0].endswith("...")
+    assert shown[0][shown[1].index("^"):].startswith("FAULT")  # the caret still lands on it
+    names = [f"Task{i}" for i in range(100)]
+    hint = did_you_mean("Task", names, "declared tasks")
+    assert hint.count(", ") == LISTED and f"({100 - LISTED} more)" in hint
+
+
+@pytest.mark.parametrize("nesting", ["{ " * 150 + "T();" + " }" * 150,
+                                     "T(" + "(" * 150 + "1" + ")" * 150 + ");",
+                                     "if (T()) { " * 80 + "T();" + " }" * 80])
+def test_deep_nesting_is_an_error_not_a_crash(nesting):
+    with pytest.raises(Mcl2PnmlError, match="nested too deeply") as info:
+        parse("primitive P(x);\ntask T(x) = AchieveGoal(P(x));\nmission { " + nesting + " }",
+              "deep.mcl")
+    assert info.value.location.line == 3

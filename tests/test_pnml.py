@@ -173,7 +173,7 @@ def test_save_is_atomic(tmp_path, monkeypatch):
     def broken(*_a, **_k):
         raise OSError("disk full")
     monkeypatch.setattr(files.os, "fsync", broken)
-    with pytest.raises(OSError):
+    with pytest.raises(Mcl2PnmlError, match="net.pnml: cannot write: disk full"):
         save_pnml(everything(), target)
     assert target.read_text() == "old"
     assert [p.name for p in tmp_path.iterdir()] == ["net.pnml"]

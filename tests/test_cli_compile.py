@@ -1,0 +1,90 @@
+"""`mcl2pnml compile`: MCL in, one composed net out, as cli.md says."""
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from mcl2pnml.pnml import load_pnml
+
+from conftest import DATA, ROOT
+from test_cli import run
+
+SAUCE = ROOT / "examples" / "sauce.mcl"
+
+
+def test_compile_writes_a_valid_pnml_of_the_mission(tmp_path, assert_valid):
+    out = run("compile", SAUCE, "-o", tmp_path / "sauce.pnml")
+    assert out.returncode == 0, out.stderr
+    assert out.stderr.startswith(f"wrote {tmp_path / 'sauce.pnml'}: sauce: 203 places")
+    data = (tmp_path / "sauce.pnml").read_bytes()
+    assert_valid(data)
+    net = load_pnml(tmp_path / "sauce.pnml")
+    # cli.md: the mission's own interface places, mission.B and mission.MTX marked
+    for p in ("B", "A", "MTX", "OK", "FAIL", "ABORTED"):
+        assert f"mission.{p}" in net.place_index
+    assert net.initial["mission.B"] == 1 and net.initial["mission.MTX"] == 1
+    assert "AchieveDepth.MTX" in net.place_index   # instance-prefixed paper names
+    assert b'<toolspecific tool="mcl2pnml"' in data
+
+
+def test_default_output_is_next_to_the_mission(tmp_path):
+    mission = tmp_path / "sauce.mcl"
+    shutil.copy(SAUCE, mission)
+    out = run("compile", mission)
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "sauce.pnml").exists()
+
+
+def test_dot_source_draws_each_instance_in_a_box(tmp_path):
+    out = run("compile", SAUCE, "--format", "dot", "-o", tmp_path / "sauce.dot")
+    assert out.returncode == 0, out.stderr
+    text = (tmp_path / "sauce.dot").read_text()
+    assert text.startswith("digraph")
+    for instance in ("AchieveDepth", "Survey", "KeepDepth"):  # a task, a function, a primitive
+        assert f"subgraph cluster_{instance} " in text
+
+
+@pytest.mark.parametrize("fmt, magic", [("svg", b"<svg"), ("png", b"\x89PNG")])
+def test_drawings(tmp_path, dot, fmt, magic):
+    out = run("compile", SAUCE, "--format", fmt, "-o", tmp_path / f"sauce.{fmt}")
+    assert out.returncode == 0, out.stderr
+    assert magic in (tmp_path / f"sauce.{fmt}").read_bytes()[:1000]
+
+
+@pytest.mark.parametrize("layout, graphics", [("none", False), ("layers", True), ("dot", True)])
+def test_layout_choice(tmp_path, dot, assert_valid, layout, graphics):
+    target = tmp_path / "m.pnml"
+    out = run("compile", SAUCE, "--layout", layout, "-o", target)
+    assert out.returncode == 0, out.stderr
+    data = target.read_bytes()
+    assert_valid(data)
+    assert (b"<graphics>" in data) == graphics
+
+
+@pytest.mark.parametrize("mission, where", [
+    (DATA / "mcl" / "invalid" / "several_errors.mcl", "several_errors.mcl:6:5:"),
+    (DATA / "mcl" / "invalid" / "too_deep.mcl", "too_deep.mcl:5:797:"),
+    (DATA / "mcl" / "invalid" / "binary.mcl", "binary.mcl:1:"),
+])
+def test_bad_missions_exit_2_and_write_nothing(tmp_path, mission, where):
+    target = tmp_path / "out.pnml"
+    out = run("compile", mission, "-o", target)
+    assert out.returncode == 2 and where in out.stderr and "^" in out.stderr
+    assert "Traceback" not in out.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unwritable_output_is_one_message(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    out = run("compile", SAUCE, "-o", blocker / "sub" / "out.pnml")
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert "cannot write" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+
+
+def test_bad_options(tmp_path):
+    out = run("compile", SAUCE, "--format", "gif")
+    assert out.returncode == 2 and "'gif' is not one of" in out.stderr
+    out = run("compile", SAUCE, "--layout", "circo")
+    assert out.returncode == 2 and "'circo' is not one of" in out.stderr
