@@ -47,12 +47,22 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         space = None
         limits["states"] = e.message
     b = behaviour(space) if space is not None else None
+    # what the state space says: also all of ``--state-space``
     result: dict[str, Any] = {
         "net": net.name,
+        "places": len(s.places),
+        "transitions": len(s.transitions),
+        "arcs": len(net.arcs),
+        "initial_marking": net.initial.format(),
         "states": space.states if space else None,
         "bounded": space.bounded if space else None,
         "safe": space.safe if space else None,
         "terminal_markings": sorted(list(m) for m in b.terminal) if b else None,
+        "deadlock_free": b.deadlock_free if b else None,
+        "deadlocks": sorted(list(m) for m in b.improper) if b else None,
+        "final_always_reachable": b.final_always_reachable if b else None,
+        "home_marking": b.home_marking if b else None,
+        "reusable": b.reusable if b else None,
     }
     if state_space_only:
         return result
@@ -72,12 +82,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     traps = bounded_run("traps", minimal_traps, s, SIPHON_LIMIT)
     control = (siphon_control(s, siphons, semi_p or [])
                if siphons is not None else None)
-    result = {
-        "net": net.name,
-        "places": len(s.places),
-        "transitions": len(s.transitions),
-        "arcs": len(net.arcs),
-        "initial_marking": net.initial.format(),
+    result.update({
         "p_invariants": p_invariant_basis(s),
         "t_invariants": t_invariant_basis(s),
         "semipositive_p_invariants": semi_p,
@@ -92,13 +97,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         "siphons_controlled": None if control is None else all(
             r.source or (r.marked and r.controlled) for r in control),
         "traps": None if traps is None else [s.names(x) for x in traps],
-        **result,
-        "deadlock_free": b.deadlock_free if b else None,
-        "deadlocks": sorted(list(m) for m in b.improper) if b else None,
-        "final_always_reachable": b.final_always_reachable if b else None,
-        "home_marking": b.home_marking if b else None,
-        "reusable": b.reusable if b else None,
-    }
+    })
     if limits:
         result["limits"] = limits
     return result
@@ -108,8 +107,14 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
 # the readable report
 
 
+#: A column grows to fit its cells up to this width; longer cells (the
+#: invariants of a compiled mission) overflow their row instead of widening
+#: every row of the table.
+COLUMN = 60
+
+
 def _table(headers: list[str], rows: list[list[str]]) -> str:
-    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h)
+    widths = [min(COLUMN, max(len(h), *(len(r[i]) for r in rows))) if rows else len(h)
               for i, h in enumerate(headers)]
     line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()
     out = [line(headers), line(["-" * w for w in widths])]
@@ -140,9 +145,9 @@ def render_text(r: dict[str, Any]) -> str:
         out += [f"  {{{', '.join(m)}}}" for m in r["terminal_markings"]] or ["  none"]
     if "p_invariants" in r:
         out += ["", f"P-invariants (a basis of {len(r['p_invariants'])}):"]
-        rows = [[format_invariant(y), str(sum(c * _count(r, p) for p, c in y.items()))]
+        rows = [[str(sum(c * _count(r, p) for p, c in y.items())), format_invariant(y)]
                 for y in r["p_invariants"]]
-        out.append(_table(["invariant", "value at M0"], rows) if rows else "  none")
+        out.append(_table(["value at M0", "invariant"], rows) if rows else "  none")
         if r.get("siphon_control") is not None:
             out += ["", f"Minimal siphons ({len(r['siphon_control'])}):"]
             rows = [["{" + ", ".join(c["siphon"]) + "}", _yes(c["marked"]),
