@@ -135,7 +135,8 @@ class Compiler:
                 if role == "E":
                     call = next(c for s, c in calls.items()
                                 if slot_places(s, tuple(interface)).get(arc.target) == "E")
-                    actions.append({"action": "enable", "primitive": prim,
+                    # "scope": the task whose parameters the arguments name
+                    actions.append({"action": "enable", "primitive": prim, "scope": task.name,
                                     "args": [_expr(v, task.params, self.c.consts)
                                              for v in call.args]})
                 elif role == "D":

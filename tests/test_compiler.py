@@ -160,8 +160,9 @@ def test_payloads_carry_what_the_vehicle_needs():
     payload = lambda tid: thaw(t[tid].payload)
     enables = [a for tr in net.transitions for a in (thaw(tr.payload) or {}).get("actions", [])
                if a["action"] == "enable"]
-    assert {"action": "enable", "primitive": "KeepDepth", "args": [{"param": "d"}]} in enables
-    assert {"action": "enable", "primitive": "GoToWayPoint",
+    assert {"action": "enable", "primitive": "KeepDepth", "scope": "Depth",
+            "args": [{"param": "d"}]} in enables
+    assert {"action": "enable", "primitive": "GoToWayPoint", "scope": "Goto",
             "args": [{"param": "wp"}]} in enables
     enters = {tid: payload(tid) for tid in t if tid.endswith(".enter")}
     # inside a function, arguments are the function's parameters
