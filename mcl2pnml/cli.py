@@ -23,6 +23,8 @@ Examples:
   mcl2pnml functional examples/sauce.mcl
   mcl2pnml compile examples/sauce.mcl -o sauce.pnml
   mcl2pnml compile examples/sauce.mcl --format dot -o sauce.dot
+  mcl2pnml run examples/sauce.mcl --vehicle script.json
+  mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
   mcl2pnml template --list
   mcl2pnml template task -o task.pnml
   mcl2pnml analyze task.pnml
@@ -153,6 +155,85 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
         else:
             render(graph, str(output), fmt)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
+    return 0
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
+              show_default=True,
+              help="petri: the executor plays the compiled net; reference: MCL interpreted "
+                   "directly. Both must give the same result.")
+@click.option("--vehicle", default="sim", show_default=True, metavar="sim|SCRIPT.json",
+              help="The kinematic AUV simulator, or a vehicle script "
+                   '({"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}).')
+@click.option("--json", "as_json", is_flag=True,
+              help="Print only the result: {outcome, time, trace}.")
+@click.option("--log", "log_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Also write every action, event and fired transition as JSON lines here.")
+@click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
+@click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
+              show_default=True, help="Stop a mission still running at this virtual time.")
+def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path | None,
+        transitions: bool, max_time: float) -> int:
+    """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
+
+    Time is virtual: a mission of hours runs in a moment. The live log shows
+    each action and event as it happens; at the end, the outcome (OK, FAIL,
+    ABORTED, or STALLED with what the mission still waits for).
+    """
+    import io
+    import json
+
+    from .aal import ScriptedVehicle
+    from .engine import run as drive
+    from .files import atomic_write_text
+    from .runlog import RunLog
+
+    if vehicle == "sim":
+        raise click.BadParameter("the kinematic simulator is not available in this build; "
+                                 "give a vehicle script (SCRIPT.json)", param_hint="--vehicle")
+    car = ScriptedVehicle.load(vehicle)
+    if mission.suffix == ".mcl":
+        checked = _checked(mission)
+        if engine == "reference":
+            from .reference import ReferenceEngine
+            eng = ReferenceEngine(checked)
+        else:
+            from .compiler import compile_checked
+            from .executor import PetriEngine
+            eng = PetriEngine(compile_checked(checked))
+    else:
+        if engine == "reference":
+            raise click.BadParameter("the reference engine reads MCL, not a net; give the "
+                                     ".mcl file", param_hint="--engine")
+        from .executor import PetriEngine
+        from .pnml.reader import load_pnml
+        eng = PetriEngine(load_pnml(mission))
+    jsonl = io.StringIO() if log_path else None
+    log = RunLog(None if as_json else sys.stdout, jsonl, transitions)
+    if hasattr(eng, "on_fire"):
+        eng.on_fire = log.fired
+    seen = 0
+
+    def listener(entry) -> None:
+        nonlocal seen
+        log.entry(entry)
+        for event, reason in eng.ignored[seen:]:
+            log.ignored(event, reason)
+        seen = len(eng.ignored)
+
+    result = drive(eng, car, listener=listener, max_time=max_time)
+    for event, reason in result.ignored[seen:]:
+        log.ignored(event, reason)
+    if log_path is not None:
+        atomic_write_text(log_path, jsonl.getvalue())
+    if as_json:
+        click.echo(json.dumps(result.as_json()))
+    else:
+        click.echo(f"outcome {result.outcome.value} at t={result.time:g} s")
+        for line in result.waiting:
+            click.echo(f"  {line}")
     return 0
 
 

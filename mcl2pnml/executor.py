@@ -25,7 +25,7 @@ mission of ten tasks or of ten thousand.
 from __future__ import annotations
 
 import heapq
-from typing import Any
+from typing import Any, Callable
 
 from .aal import Action, ActionKind, Event, EventKind
 from .engine import Engine, Outcome
@@ -85,7 +85,8 @@ class PetriEngine(Engine):
         self.now = 0.0
         self.outcome: Outcome | None = None
         self.ignored: list[tuple[Event, str]] = []
-        self.fired: list[tuple[float, str]] = []    # (time, transition id), for the log
+        #: called with (time, transition id) at each firing: the live log
+        self.on_fire: Callable[[float, str], None] | None = None
 
     # -- enabling ------------------------------------------------------------------
 
@@ -116,7 +117,8 @@ class PetriEngine(Engine):
         for p, w in self.post[i]:
             m[p] += w
         self.step += 1
-        self.fired.append((self.now, self.transitions[i]))
+        if self.on_fire is not None:
+            self.on_fire(self.now, self.transitions[i])
         touched = {p for p, _ in self.pre[i]} | {p for p, _ in self.post[i]}
         for p in sorted(touched):
             for j in self.watchers[p]:

@@ -78,6 +78,7 @@ class ReferenceEngine(Engine):
         self.timers: list[tuple[float, str, int]] = []
         self.timer_owner: dict[int, "_TaskRun"] = {}
         self.timer_ids = 0
+        self.step = 0                              # steps done so far: the age of a wait
         self.ordinals = self._call_ordinals()
 
     # -- program order of calls: who enters first when several wait -----------------
@@ -118,6 +119,7 @@ class ReferenceEngine(Engine):
     def _settle(self) -> list[Action]:
         done = 0
         while self.steps and self.outcome is None:
+            self.step += 1
             self.steps.popleft()()
             done += 1
             if done > ZENO_LIMIT:
@@ -133,21 +135,48 @@ class ReferenceEngine(Engine):
     # -- resources: one call inside a task or function, one task on a primitive --------
 
     def request(self, call: "_Call") -> None:
+        free = not (set(call.needs) & self.busy)
+        if free and not any(c.ready_at is not None for c in self.waiting_calls):
+            # nobody is before it: it enters now, as the executor fires an
+            # enter transition as soon as it is enabled
+            self.busy.update(call.needs)
+            call.enter()
+            return
         self.waiting_calls.append(call)
-        self.waiting_calls.sort(key=lambda c: c.rank)
+        self._ready()
         self.later(self.grant)
 
     def release(self, names: list[str]) -> None:
         self.busy.difference_update(names)
+        self._ready()
         self.later(self.grant)
 
+    def _ready(self) -> None:
+        """Note when each waiting call's callee and primitives became free (or busy again).
+
+        The executor fires the call site enabled longest first, and those
+        enabled by one firing in program order; this is that rule: first
+        come, first served, and calls that could enter at the same moment
+        enter in program order.
+        """
+        for call in self.waiting_calls:
+            free = not (set(call.needs) & self.busy)
+            if not free:
+                call.ready_at = None
+            elif call.ready_at is None:
+                call.ready_at = self.step
+
     def grant(self) -> None:
-        for call in list(self.waiting_calls):
-            if not (set(call.needs) & self.busy):
-                self.busy.update(call.needs)
-                self.waiting_calls.remove(call)
-                self.later(call.enter)
-                return   # one at a time: the next grant sees what this one took
+        ready = [c for c in self.waiting_calls if c.ready_at is not None]
+        if not ready:
+            return
+        call = min(ready, key=lambda c: (c.ready_at, c.rank))
+        # taking the callee and its primitives and entering are one step, as
+        # the call site's enter transition is
+        self.busy.update(call.needs)
+        self.waiting_calls.remove(call)
+        self._ready()
+        call.enter()
 
     # -- the engine interface ------------------------------------------------------------
 
@@ -264,12 +293,24 @@ class _Node:
 
 def _statement(engine: ReferenceEngine, stmt: ast.Statement, env: dict[str, Any],
                done: Done) -> _Node:
+    """The running form of a statement, nested as mcl.md's functional form nests it.
+
+    A block of one statement is that statement, an empty one NULL, a longer
+    one its first statement followed by the rest; ``parallel`` of three is
+    ``parallel`` of one and the ``parallel`` of two. The same nesting as the
+    compiled net's gives the same order of steps at one instant.
+    """
     if isinstance(stmt, ast.Call):
         return _Call(engine, stmt, env, done)
     if isinstance(stmt, ast.Block):
-        return _Sequence(engine, list(stmt.body), env, done)
+        if not stmt.body:
+            return _Null(engine, env, done)
+        if len(stmt.body) == 1:
+            return _statement(engine, stmt.body[0], env, done)
+        return _Sequence(engine, stmt.body[0], ast.Block(stmt.body[1:], stmt.pos), env, done)
     if isinstance(stmt, ast.Parallel):
-        return _Parallel(engine, list(stmt.items), env, done)
+        rest = stmt.items[1] if len(stmt.items) == 2 else ast.Parallel(stmt.items[1:], stmt.pos)
+        return _Parallel(engine, [stmt.items[0], rest], env, done)
     if isinstance(stmt, ast.Monitor):
         return _Monitor(engine, stmt, env, done)
     if isinstance(stmt, ast.If):
@@ -285,12 +326,22 @@ def _value(v: ast.Value, env: dict[str, Any], consts: dict[str, Any]) -> Any:
     return env[v.name] if v.name in env else consts[v.name]
 
 
-class _Sequence(_Node):
-    """A block: statements in order; the first result that is not OK ends it; empty is NULL."""
+class _Null(_Node):
+    """NULL, an empty block: ends OK at once (ABORTED if aborted before it started)."""
 
-    def __init__(self, engine, body, env, done):
+    def start(self) -> None:
+        self.done(ABORTED if self.aborted else OK)
+
+    def abort(self) -> None:
+        self.aborted = True
+
+
+class _Sequence(_Node):
+    """A statement, then the rest of its block; the first result that is not OK ends it."""
+
+    def __init__(self, engine, first, rest, env, done):
         super().__init__(engine, env, done)
-        self.body, self.i, self.child = body, 0, None
+        self.parts, self.i, self.child = [first, rest], 0, None
 
     def start(self) -> None:
         if self.aborted:
@@ -298,9 +349,7 @@ class _Sequence(_Node):
         self.next()
 
     def next(self) -> None:
-        if self.i == len(self.body):
-            return self.done(OK)
-        stmt = self.body[self.i]
+        stmt = self.parts[self.i]
         self.i += 1
         self.child = _statement(self.e, stmt, self.env, self.child_done)
         self.e.later(self.child.start)
@@ -308,10 +357,11 @@ class _Sequence(_Node):
     def child_done(self, result: str) -> None:
         if self.aborted:
             return self.done(ABORTED)
-        if result == OK:
-            self.e.later(self.next)
-        else:
-            self.done(result)
+        if result != OK:
+            return self.done(result)
+        if self.i == len(self.parts):
+            return self.done(OK)
+        self.e.later(self.next)
 
     def abort(self) -> None:
         if self.ended or self.aborted:
@@ -483,6 +533,7 @@ class _Call(_Node):
         self.needs = [call.name, *prims]
         self.inner: _Node | None = None
         self.state = "new"
+        self.ready_at: int | None = None   # the step since which it could enter
 
     def start(self) -> None:
         if self.aborted:
@@ -512,6 +563,7 @@ class _Call(_Node):
             self.e.waiting_calls.remove(self)
             self.state = "done"
             self.done(ABORTED)    # it never started
+            self.e._ready()
         elif self.state == "inside":
             inner = self.inner
             self.e.later(inner.abort)
@@ -531,6 +583,8 @@ class _TaskRun(_Node):
         self.abort_pending = False
 
     def start(self) -> None:
+        if self.abort_pending:       # aborted before it started (the net's t11)
+            return self.done(ABORTED)
         self.state = "running"
         for call, prim in zip(self.task.primitives, self.prims):
             prim.user = self
@@ -581,6 +635,9 @@ class _TaskRun(_Node):
             self.e.act(ActionKind.DISABLE, prim.name)
 
     def abort(self) -> None:
+        if self.state == "new":
+            self.abort_pending = True
+            return
         if self.state != "running":
             return    # stopping already: the result stands (the call reports ABORTED)
         if self.all_on():

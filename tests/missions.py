@@ -1,0 +1,64 @@
+"""Hypothesis strategies for whole MCL missions and vehicle scripts, to run both engines on."""
+from __future__ import annotations
+
+from hypothesis import strategies as st
+
+PRIMITIVES = ["Pa", "Pb", "Pc"]
+
+
+@st.composite
+def task_decl(draw, name: str) -> str:
+    kind = draw(st.sampled_from(["AchieveGoal", "AchieveGoal", "KeepGoal", "KeepTwoGoals"]))
+    timeout = draw(st.sampled_from(["", " timeout 3", " timeout 10", " timeout 20"]))
+    if kind == "KeepTwoGoals":
+        a, b = draw(st.permutations(PRIMITIVES))[:2]
+        body = f"KeepTwoGoals({a}(x), {b}(1))"
+        timeout = timeout or " timeout 10"
+    else:
+        body = f"{kind}({draw(st.sampled_from(PRIMITIVES))}(x))"
+        if kind == "KeepGoal":
+            timeout = timeout or " timeout 10"
+    return f"task {name}(x) = {body}{timeout};"
+
+
+def statement(depth: int, callees: list[str]):
+    call = st.builds(lambda n, a: f"{n}({a});", st.sampled_from(callees),
+                     st.sampled_from(["1", "2.5", "(1, 2)", "K"]))
+    if depth == 0:
+        return call
+    inner = statement(depth - 1, callees)
+    block = st.lists(inner, min_size=0, max_size=3).map(lambda b: "{ " + " ".join(b) + " }")
+    nonempty = st.lists(inner, min_size=1, max_size=3).map(lambda b: "{ " + " ".join(b) + " }")
+    structure = st.one_of(call.map(lambda c: c[:-1]), nonempty)
+    return st.one_of(
+        call, call,
+        block,
+        st.lists(structure, min_size=2, max_size=3).map(lambda s: f"parallel({', '.join(s)});"),
+        st.tuples(structure, structure).map(lambda s: f"monitor({s[0]}, {s[1]});"),
+        st.tuples(structure, nonempty, st.none() | block).map(
+            lambda s: f"if ({s[0]}) then {s[1]}" + (f" else {s[2]}" if s[2] else "")),
+        # a loop's condition is a call, so that no loop runs without time passing
+        st.tuples(call.map(lambda c: c[:-1]), nonempty).map(lambda s: f"while ({s[0]}) {s[1]}"),
+    )
+
+
+@st.composite
+def missions(draw) -> str:
+    lines = ["const K = (0.5, -1);"]
+    lines += [f"primitive {p}(v);" for p in PRIMITIVES]
+    tasks = [f"T{i}" for i in range(draw(st.integers(1, 3)))]
+    lines += [draw(task_decl(t)) for t in tasks]
+    callees = list(tasks)
+    for k in range(draw(st.integers(0, 2))):
+        body = draw(st.lists(statement(1, callees), min_size=1, max_size=3))
+        lines.append(f"function F{k}(x) {{ {' '.join(body)} }}")
+        callees.append(f"F{k}")
+    body = draw(st.lists(statement(2, callees), min_size=1, max_size=3))
+    lines.append("mission { " + " ".join(body) + " }")
+    return "\n".join(lines) + "\n"
+
+
+replies = st.one_of(st.sampled_from(["never"]),
+                    st.builds(lambda k, d: f"{k}@{d}", st.sampled_from(["ok", "fail"]),
+                              st.sampled_from([0, 1, 2, 5, 10])))
+scripts = st.fixed_dictionaries({p: st.lists(replies, max_size=6) for p in PRIMITIVES})
