@@ -171,11 +171,14 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
               help="Print only the result: {outcome, time, trace}.")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False, path_type=Path),
               help="Also write every action, event and fired transition as JSON lines here.")
+@click.option("--world", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="The simulator's world as JSON: tank, start, cross (null: none), noise, "
+                   "seed, limits. Default: the paper's 16 x 8 x 5 m tank, a cross at (10, 4).")
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
               show_default=True, help="Stop a mission still running at this virtual time.")
 def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path | None,
-        transitions: bool, max_time: float) -> int:
+        world: Path | None, transitions: bool, max_time: float) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows
@@ -191,9 +194,13 @@ def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path 
     from .runlog import RunLog
 
     if vehicle == "sim":
-        raise click.BadParameter("the kinematic simulator is not available in this build; "
-                                 "give a vehicle script (SCRIPT.json)", param_hint="--vehicle")
-    car = ScriptedVehicle.load(vehicle)
+        from .simulator import AUVSimulator, World
+        car = AUVSimulator(World.load(world) if world else World())
+    else:
+        if world:
+            raise click.BadParameter("a world is for the simulator (--vehicle sim)",
+                                     param_hint="--world")
+        car = ScriptedVehicle.load(vehicle)
     if mission.suffix == ".mcl":
         checked = _checked(mission)
         if engine == "reference":
@@ -210,6 +217,13 @@ def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path 
         from .executor import PetriEngine
         from .pnml.reader import load_pnml
         eng = PetriEngine(load_pnml(mission))
+    offered = car.primitives
+    needed = getattr(eng, "primitives_used", lambda: set())()
+    if offered is not None and needed - offered:
+        missing = sorted(needed - offered)[0]
+        raise click.BadParameter(f"the mission uses '{missing}', which this vehicle does not "
+                                 f"offer; it offers {', '.join(sorted(offered))}",
+                                 param_hint="--vehicle")
     jsonl = io.StringIO() if log_path else None
     log = RunLog(None if as_json else sys.stdout, jsonl, transitions)
     if hasattr(eng, "on_fire"):

@@ -22,7 +22,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from .aal import Action, Event, Vehicle, canonical_trace
+from .aal import Action, Event, Vehicle, _time, canonical_trace
 
 
 class Outcome(enum.Enum):
@@ -88,8 +88,7 @@ class Run:
 
     def as_json(self) -> dict[str, Any]:
         """The object of ``mcl2pnml run --json`` (cli.md)."""
-        t = self.time
-        return {"outcome": self.outcome.value, "time": int(t) if float(t).is_integer() else t,
+        return {"outcome": self.outcome.value, "time": _time(self.time),
                 "trace": canonical_trace(self.entries)}
 
 

@@ -204,6 +204,10 @@ class PetriEngine(Engine):
         actions = self._fire(i)
         return actions + self._settle()
 
+    def primitives_used(self) -> set[str]:
+        """The primitives the mission enables (the vehicle must offer them)."""
+        return {p for p, _ in self.by_event}
+
     def waiting(self) -> list[str]:
         out = []
         for (prim, kind), ts in sorted(self.by_event.items(), key=lambda kv: (kv[0][0],

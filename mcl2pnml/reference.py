@@ -167,16 +167,22 @@ class ReferenceEngine(Engine):
                 call.ready_at = self.step
 
     def grant(self) -> None:
-        ready = [c for c in self.waiting_calls if c.ready_at is not None]
-        if not ready:
-            return
-        call = min(ready, key=lambda c: (c.ready_at, c.rank))
-        # taking the callee and its primitives and entering are one step, as
-        # the call site's enter transition is
-        self.busy.update(call.needs)
-        self.waiting_calls.remove(call)
-        self._ready()
-        call.enter()
+        """Let in every waiting call that can enter, oldest wait first, then program order.
+
+        Calls that need different things all enter now, as their enter
+        transitions, enabled together, all fire before anything enabled later.
+        """
+        while True:
+            ready = [c for c in self.waiting_calls if c.ready_at is not None]
+            if not ready:
+                return
+            call = min(ready, key=lambda c: (c.ready_at, c.rank))
+            # taking the callee and its primitives and entering are one step,
+            # as the call site's enter transition is
+            self.busy.update(call.needs)
+            self.waiting_calls.remove(call)
+            self._ready()
+            call.enter()
 
     # -- the engine interface ------------------------------------------------------------
 
@@ -250,6 +256,10 @@ class ReferenceEngine(Engine):
         task = self.timer_owner.pop(ident)
         self.later(task.timed_out)
         return self._settle()
+
+    def primitives_used(self) -> set[str]:
+        """The primitives the mission enables (the vehicle must offer them)."""
+        return self._used()
 
     def waiting(self) -> list[str]:
         out = []
