@@ -37,6 +37,7 @@ demo: setup
 	$(BIN)/mcl2pnml compile examples/sauce.mcl -o $(OUT)/sauce.pnml
 	$(BIN)/mcl2pnml compile examples/sauce.mcl --format svg -o $(OUT)/sauce.svg
 	$(BIN)/mcl2pnml analyze $(OUT)/sauce.pnml --state-space
+	$(BIN)/mcl2pnml run examples/sauce.mcl
 	@echo
 	@echo "outputs:"
 	@echo "  $(OUT)/task.pnml                 the task of Fig. 2 with its primitive, as PNML"
@@ -44,6 +45,7 @@ demo: setup
 	@echo "  paper_repro/out/report.md        equations 1-26: the paper vs what the analysis computes"
 	@echo "  paper_repro/out/report.json      the same, for tools"
 	@echo "  paper_repro/out/fig1-4.svg/.png  Figs. 1 to 4 redrawn from the templates"
+	@echo "  paper_repro/out/fig5.png         Fig. 5: the mission on the simulated AUV, with and without the cross"
 
 test: setup
 	$(PY) -m pytest

@@ -14,7 +14,7 @@ from mcl2pnml.errors import Mcl2PnmlError
 from mcl2pnml.files import atomic_write_text
 from mcl2pnml.template_library import default_library
 
-from . import checks, figures
+from . import checks, experiment, figures
 
 OUT = Path(__file__).resolve().parent / "out"
 
@@ -101,8 +101,11 @@ def main() -> int:
         "Structures and patterns": checks.structures(lib),
         "Called again (the mutex and the abort problem)": checks.recall(lib),
     }
+    runs = experiment.trials()
+    extra["The experiment (section 3, Fig. 5), on the simulated AUV"] = experiment.checks(runs)
     OUT.mkdir(parents=True, exist_ok=True)
     written = figures.draw_all(lib, OUT)
+    written.append(experiment.plot(runs, OUT / "fig5.png"))
     matched = sum(r.match for r in rows)
     extra_ok = all(r.match for group in extra.values() for r in group)
     md = [
@@ -116,7 +119,8 @@ def main() -> int:
     for title, group in extra.items():
         md += [f"## {title}", "", *_md_table(group, numbered=False), ""]
     md += [DISCUSSION, "## Figures", ""]
-    md += [f"![{p.stem}]({p.name})" for p in written if p.suffix == ".svg"]
+    md += [f"![{p.stem}]({p.name})" for p in written
+           if p.suffix == ".svg" or p.name == "fig5.png"]
     report = {
         "equations": {str(r.number): {"net": r.net, "paper": r.paper, "computed": r.computed,
                                       "match": r.match, **({"reading": r.reading}
