@@ -11,8 +11,12 @@ How it fires:
 
 * **immediate transitions** fire as soon as they are enabled, the one
   enabled longest first; transitions enabled by the same firing go in the
-  order of the net (the documented conflict rule). A call waiting for a
-  busy task therefore enters before a call that came after it;
+  order of the net (the documented conflict rule);
+* **call entries** (a call site's ``enter``, which takes a shared task or
+  function) fire last: only when nothing else can fire at this instant,
+  and then the first in program order (the order of the call sites in the
+  net). So when a task is free, of all the calls waiting for it at that
+  instant, the one written first gets it, however the instant unfolded;
 * **event transitions** fire only when their primitive reports that event;
   an event that no enabled transition waits for is ignored, with a reason;
 * **timed transitions** fire when they have been enabled, without a break,
@@ -89,6 +93,8 @@ class PetriEngine(Engine):
         self.marking = [net.initial[p] for p in self.places]
         self.env: dict[str, dict[str, Any]] = {"mission": {}}
         self.ready: list[tuple[int, int, int]] = []  # (step enabled, index, version)
+        self.entries: list[tuple[int, int]] = []     # call entries: (index, version)
+        self.entry = [("call" in p) for p in self.payload]
         self.timers: list[tuple[float, str, int, int]] = []  # (due, task, index, version)
         self.version = [0] * n
         self.enabled = [False] * n
@@ -124,7 +130,9 @@ class PetriEngine(Engine):
         self.version[i] += 1          # a timer set before a break no longer counts
         if not now or i in self.event_driven:
             return
-        if self.delay[i] is None:
+        if self.entry[i]:
+            heapq.heappush(self.entries, (i, self.version[i]))
+        elif self.delay[i] is None:
             heapq.heappush(self.ready, (self.step, i, self.version[i]))
         else:
             task = self.transitions[i].rsplit(".", 1)[0]
@@ -179,8 +187,11 @@ class PetriEngine(Engine):
         """Fire immediate transitions, the one enabled longest first, until none is."""
         actions: list[Action] = []
         fired = 0
-        while self.ready and self.outcome is None:
-            _, i, version = heapq.heappop(self.ready)
+        while (self.ready or self.entries) and self.outcome is None:
+            if self.ready:
+                _, i, version = heapq.heappop(self.ready)
+            else:   # nothing else can fire: the first waiting call in program order
+                i, version = heapq.heappop(self.entries)
             if version != self.version[i] or not self.enabled[i]:
                 continue   # disabled since, or queued again later
             actions += self._fire(i)

@@ -6,10 +6,11 @@ trace. It reads the checked program, not the compiled net, and keeps one
 small state machine per running statement:
 
 * a **call** waits until its task or function is free, and a task also
-  until its primitives are (all at once; waiting calls enter in program
-  order), then runs it with the call's arguments; aborted while waiting it
-  ends ABORTED without starting, aborted later it ends ABORTED once its
-  callee has stopped;
+  until its primitives are (all at once), then runs it with the call's
+  arguments; calls enter only when nothing else is left to do at the
+  instant, the first in program order first; aborted while waiting it ends
+  ABORTED without starting, aborted later it ends ABORTED once its callee
+  has stopped;
 * a **task** enables its primitives, starts its time-out when they are all
   on, and ends when its pattern says so, after it has disabled them and
   they are off (mcl.md, "Results");
@@ -78,7 +79,6 @@ class ReferenceEngine(Engine):
         self.timers: list[tuple[float, str, int]] = []
         self.timer_owner: dict[int, "_TaskRun"] = {}
         self.timer_ids = 0
-        self.step = 0                              # steps done so far: the age of a wait
         self.ordinals = self._call_ordinals()
 
     # -- program order of calls: who enters first when several wait -----------------
@@ -118,9 +118,11 @@ class ReferenceEngine(Engine):
 
     def _settle(self) -> list[Action]:
         done = 0
-        while self.steps and self.outcome is None:
-            self.step += 1
-            self.steps.popleft()()
+        while self.outcome is None:
+            if self.steps:
+                self.steps.popleft()()
+            elif not self.grant():
+                break
             done += 1
             if done > ZENO_LIMIT:
                 raise Mcl2PnmlError(
@@ -135,54 +137,27 @@ class ReferenceEngine(Engine):
     # -- resources: one call inside a task or function, one task on a primitive --------
 
     def request(self, call: "_Call") -> None:
-        free = not (set(call.needs) & self.busy)
-        if free and not any(c.ready_at is not None for c in self.waiting_calls):
-            # nobody is before it: it enters now, as the executor fires an
-            # enter transition as soon as it is enabled
-            self.busy.update(call.needs)
-            call.enter()
-            return
         self.waiting_calls.append(call)
-        self._ready()
-        self.later(self.grant)
 
     def release(self, names: list[str]) -> None:
         self.busy.difference_update(names)
-        self._ready()
-        self.later(self.grant)
 
-    def _ready(self) -> None:
-        """Note when each waiting call's callee and primitives became free (or busy again).
+    def grant(self) -> bool:
+        """At quiescence: let the first waiting call (program order) that can enter in.
 
-        The executor fires the call site enabled longest first, and those
-        enabled by one firing in program order; this is that rule: first
-        come, first served, and calls that could enter at the same moment
-        enter in program order.
+        As the executor fires call entries only when nothing else can fire,
+        and the first in program order: whatever order the instant unfolded
+        in, the call written first gets a free task.
         """
-        for call in self.waiting_calls:
-            free = not (set(call.needs) & self.busy)
-            if not free:
-                call.ready_at = None
-            elif call.ready_at is None:
-                call.ready_at = self.step
-
-    def grant(self) -> None:
-        """Let in every waiting call that can enter, oldest wait first, then program order.
-
-        Calls that need different things all enter now, as their enter
-        transitions, enabled together, all fire before anything enabled later.
-        """
-        while True:
-            ready = [c for c in self.waiting_calls if c.ready_at is not None]
-            if not ready:
-                return
-            call = min(ready, key=lambda c: (c.ready_at, c.rank))
-            # taking the callee and its primitives and entering are one step,
-            # as the call site's enter transition is
-            self.busy.update(call.needs)
-            self.waiting_calls.remove(call)
-            self._ready()
-            call.enter()
+        for call in sorted(self.waiting_calls, key=lambda c: c.rank):
+            if not (set(call.needs) & self.busy):
+                # taking the callee and its primitives and entering are one
+                # step, as the call site's enter transition is
+                self.busy.update(call.needs)
+                self.waiting_calls.remove(call)
+                call.enter()
+                return True
+        return False
 
     # -- the engine interface ------------------------------------------------------------
 
@@ -543,7 +518,6 @@ class _Call(_Node):
         self.needs = [call.name, *prims]
         self.inner: _Node | None = None
         self.state = "new"
-        self.ready_at: int | None = None   # the step since which it could enter
 
     def start(self) -> None:
         if self.aborted:
@@ -573,7 +547,6 @@ class _Call(_Node):
             self.e.waiting_calls.remove(self)
             self.state = "done"
             self.done(ABORTED)    # it never started
-            self.e._ready()
         elif self.state == "inside":
             inner = self.inner
             self.e.later(inner.abort)
