@@ -19,11 +19,12 @@ import enum
 import json
 import math
 from abc import ABC, abstractmethod
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from .errors import Location, Mcl2PnmlError
+from .files import read_text
 
 
 class ActionKind(enum.Enum):
@@ -202,13 +203,7 @@ class ScriptedVehicle(Vehicle):
 
     @classmethod
     def load(cls, path: str | Path) -> "ScriptedVehicle":
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as e:
-            reason = getattr(e, "strerror", None) or str(e)
-            raise Mcl2PnmlError(f"cannot read the vehicle script: {reason}",
-                                Location(str(path))) from None
-        return cls.from_json(text, str(path))
+        return cls.from_json(read_text(path, "vehicle script"), str(path))
 
     def act(self, action: Action) -> None:
         name = action.primitive

@@ -164,9 +164,13 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
               show_default=True,
               help="petri: the executor plays the compiled net; reference: MCL interpreted "
                    "directly. Both must give the same result.")
-@click.option("--vehicle", default="sim", show_default=True, metavar="sim|SCRIPT.json",
-              help="The kinematic AUV simulator, or a vehicle script "
-                   '({"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}).')
+@click.option("--vehicle", default="sim", show_default=True,
+              metavar="sim|SCRIPT.json|bridge:MAPPING.json",
+              help="The kinematic AUV simulator, a vehicle script "
+                   '({"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}), or a real vehicle '
+                   "through a mapping file and a bridge (real time; see --connect).")
+@click.option("--connect", metavar="HOST:PORT",
+              help="The vehicle's bridge server, for --vehicle bridge:MAPPING.json.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print only the result: {outcome, time, trace}.")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -177,8 +181,8 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
               show_default=True, help="Stop a mission still running at this virtual time.")
-def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path | None,
-        world: Path | None, transitions: bool, max_time: float) -> int:
+def run(mission: Path, engine: str, vehicle: str, connect: str | None, as_json: bool,
+        log_path: Path | None, world: Path | None, transitions: bool, max_time: float) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows
@@ -193,13 +197,21 @@ def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path 
     from .files import atomic_write_text
     from .runlog import RunLog
 
+    realtime = vehicle.startswith("bridge:")
+    if world and vehicle != "sim":
+        raise click.BadParameter("a world is for the simulator (--vehicle sim)",
+                                 param_hint="--world")
     if vehicle == "sim":
         from .simulator import AUVSimulator, World
         car = AUVSimulator(World.load(world) if world else World())
+    elif realtime:
+        from .bridge import MappedVehicle, TcpTransport, VehicleMapping
+        if connect is None:
+            raise click.BadParameter("a bridge needs --connect HOST:PORT (the bridge server "
+                                     "on the vehicle)", param_hint="--connect")
+        car = MappedVehicle(VehicleMapping.load(vehicle[len("bridge:"):]),
+                            TcpTransport(connect))
     else:
-        if world:
-            raise click.BadParameter("a world is for the simulator (--vehicle sim)",
-                                     param_hint="--world")
         car = ScriptedVehicle.load(vehicle)
     if mission.suffix == ".mcl":
         checked = _checked(mission)
@@ -237,7 +249,11 @@ def run(mission: Path, engine: str, vehicle: str, as_json: bool, log_path: Path 
             log.ignored(event, reason)
         seen = len(eng.ignored)
 
-    result = drive(eng, car, listener=listener, max_time=max_time)
+    if realtime:
+        from .engine import run_realtime
+        result = run_realtime(eng, car, listener=listener, max_time=max_time)
+    else:
+        result = drive(eng, car, listener=listener, max_time=max_time)
     for event, reason in result.ignored[seen:]:
         log.ignored(event, reason)
     if log_path is not None:

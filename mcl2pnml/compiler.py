@@ -42,11 +42,10 @@ from typing import Any
 
 from . import mcl_ast as ast
 from .compose import compose
+from .functional import FCall, FNode, NULL_KIND, function_expression, mission_expression
 from .gcpause import without_gc
-from .errors import Mcl2PnmlError
-from .functional import FCall, FNode, FStructure, NULL_KIND, function_expression, mission_expression
 from .mcl_checker import Checked
-from .net import Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing, Transition, freeze
+from .net import Marking, Net, NetBuilder, Place, Timing, Transition, freeze
 from .template_library import Library, at_rest, default_library
 from .template_parser import CONTROL, slot_places
 

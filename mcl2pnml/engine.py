@@ -95,6 +95,17 @@ class Run:
 Listener = Callable[[Action | Event], None]
 
 
+def _deliverer(entries: list, vehicle, listener: Listener | None) -> Callable[[list], None]:
+    """Send actions to the vehicle, recording them and showing them to the listener."""
+    def deliver(actions: list[Action]) -> None:
+        for action in actions:
+            entries.append(action)
+            if listener:
+                listener(action)
+            vehicle.act(action)
+    return deliver
+
+
 def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
         max_time: float | None = None) -> Run:
     """Drive ``engine`` against ``vehicle`` in virtual time until a result or a stall.
@@ -104,14 +115,7 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
     vehicle keeps answering) with the outcome STALLED.
     """
     entries: list[Action | Event] = []
-
-    def deliver(actions: list[Action]) -> None:
-        for action in actions:
-            entries.append(action)
-            if listener:
-                listener(action)
-            vehicle.act(action)
-
+    deliver = _deliverer(entries, vehicle, listener)
     t = 0.0
     deliver(engine.start(t))
     while engine.outcome is None:
@@ -133,3 +137,39 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
         else:
             deliver(engine.fire_timer(t, timer[1]))
     return Run(engine.outcome, t, entries, list(engine.ignored))
+
+
+def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None = None,
+                 listener: Listener | None = None, max_time: float | None = None) -> Run:
+    """Drive ``engine`` against a real vehicle (a :class:`~mcl2pnml.bridge.MappedVehicle`).
+
+    Time is the wall clock from the start; time-outs fire when it reaches
+    them, and events count from when they arrive. A real vehicle can always
+    still answer, so a run ends with a result, at ``max_time`` (STALLED), or
+    when the operator interrupts it.
+    """
+    import time
+
+    clock = clock or time.monotonic
+    start = clock()
+    now = lambda: clock() - start    # noqa: E731
+    entries: list[Action | Event] = []
+    deliver = _deliverer(entries, vehicle, listener)
+    deliver(engine.start(0.0))
+    while engine.outcome is None:
+        timer = engine.next_timer()
+        limit = [x for x in (timer[0] if timer else None, max_time) if x is not None]
+        wait = max(0.0, min(limit) - now()) if limit else None
+        event = vehicle.wait_event(wait, now)
+        if event is not None:
+            entries.append(event)
+            if listener:
+                listener(event)
+            deliver(engine.on_event(event))
+            continue
+        if timer is not None and now() >= timer[0]:
+            deliver(engine.fire_timer(timer[0], timer[1]))
+        elif max_time is not None and now() >= max_time:
+            return Run(Outcome.STALLED, now(), entries, list(engine.ignored),
+                       [f"stopped at the time limit of {max_time:g} s"] + engine.waiting())
+    return Run(engine.outcome, now(), entries, list(engine.ignored))

@@ -55,3 +55,12 @@ def atomic_write_bytes(path: str | Path, data: bytes) -> Path:
 
 def atomic_write_text(path: str | Path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def read_text(path: str | Path, what: str) -> str:
+    """A UTF-8 text file, or one error naming it: "FILE: cannot read the WHAT: why"."""
+    try:
+        return Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        reason = getattr(e, "strerror", None) or str(e)
+        raise Mcl2PnmlError(f"cannot read the {what}: {reason}", Location(str(path))) from None

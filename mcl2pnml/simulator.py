@@ -33,6 +33,7 @@ from typing import Any
 
 from .aal import Action, ActionKind, Event, EventKind, Vehicle
 from .errors import Location, Mcl2PnmlError
+from .files import read_text
 
 PRIMITIVES = ("GoToWayPoint", "KeepDepth", "KeepHeading", "DetectCross", "ReleaseMarker")
 
@@ -89,12 +90,7 @@ class World:
 
     @classmethod
     def load(cls, path: str | Path) -> "World":
-        try:
-            return cls.from_json(Path(path).read_text(encoding="utf-8"), str(path))
-        except (OSError, UnicodeDecodeError) as e:
-            reason = getattr(e, "strerror", None) or str(e)
-            raise Mcl2PnmlError(f"cannot read the world file: {reason}",
-                                Location(str(path))) from None
+        return cls.from_json(read_text(path, "world file"), str(path))
 
 
 @dataclass

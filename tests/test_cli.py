@@ -1,7 +1,6 @@
 """The command line: one clear line and exit 2 on bad input, never a traceback."""
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 

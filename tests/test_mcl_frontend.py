@@ -1,7 +1,6 @@
 """The MCL front end: parser, checker, functional form (golden files, sqlglot style)."""
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 from hypothesis import given, settings, strategies as st

@@ -7,7 +7,7 @@ import pytest
 
 from mcl2pnml.net import Net
 from mcl2pnml.template_library import Library, default_library
-from paper_repro import checks, paper
+from paper_repro import checks
 
 from conftest import ROOT
 

@@ -1,5 +1,4 @@
 """PNML out and in: round trips, the official grammar, real tools' files, bad files."""
-from pathlib import Path
 
 import pytest
 from hypothesis import given, settings

@@ -295,3 +295,55 @@ def test_run_a_pnml_with_the_reference_engine_is_refused(tmp_path):
     assert out.returncode == 2 and "reads MCL" in out.stderr
     out = cli("run", pnml, "--json")
     assert out.returncode == 0 and json.loads(out.stdout)["outcome"] == "OK"
+
+
+# -- a real vehicle through a mapping file and a bridge (in real time) ------------------
+
+BRIDGES = ROOT / "examples" / "bridges"
+
+
+def test_mapping_files_say_what_is_wrong(tmp_path):
+    from mcl2pnml.bridge import VehicleMapping
+    for text, message in [
+        ('{"primitives": {"P": {"enable": {"command": "go"}}}}', '"disable" must be an object'),
+        ('{"primitives": {"P": {"enable": {"command": "go"}, "disable": {"command": "s"}, '
+         '"events": {"arrived": {"m": 1}}}}}', "unknown event 'arrived'; valid: on, achieved"),
+        ('{"primitives": {"P": {"enable": {"command": "go", "x": "$x"}, '
+         '"disable": {"command": "s"}}}}', r"'\$x' is not an argument"),
+        ('{"vehicle": "v"}', 'with "primitives"'),
+    ]:
+        with pytest.raises(Mcl2PnmlError, match=message):
+            VehicleMapping.from_json(text, "m.json")
+
+
+def test_the_mapping_turns_actions_into_commands_and_messages_into_events():
+    from mcl2pnml.bridge import VehicleMapping
+    m = VehicleMapping.load(BRIDGES / "sim_mapping.json")
+    cmd = m.command(Action(0, ActionKind.ENABLE, "GoToWayPoint", ((10.0, 0.0, 2.0),)))
+    assert cmd == {"command": "start_GoToWayPoint", "args": {"x": 10.0, "y": 0.0, "z": 2.0}}
+    assert m.command(Action(0, ActionKind.DISABLE, "KeepDepth")) == {"command": "stop_KeepDepth"}
+    event = m.event({"message": "status", "primitive": "KeepDepth", "status": "done"}, 3.0)
+    assert event == Event(3.0, EventKind.ACHIEVED, "KeepDepth")
+    assert m.event({"message": "battery", "level": 80}, 3.0) is None
+
+
+def test_a_mission_runs_in_real_time_through_the_bridge():
+    import importlib.util
+    import sys
+    sys.path.insert(0, str(BRIDGES))
+    spec = importlib.util.spec_from_file_location("bridge_server", BRIDGES / "bridge_server.py")
+    server_module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(server_module)
+    server = server_module.serve(0, "fake", delay=0.02)
+    try:
+        port = server.server_address[1]
+        out = cli("run", SAUCE, "--vehicle", f"bridge:{BRIDGES / 'sim_mapping.json'}",
+                  "--connect", f"127.0.0.1:{port}", "--json", "--max-time", "30")
+        assert out.returncode == 0, out.stderr
+        result = json.loads(out.stdout)
+        # the fake vehicle does everything at once: the camera sees the cross first
+        assert result["outcome"] == "OK" and result["time"] < 5
+        assert [e["primitive"] for e in result["trace"] if e.get("action") == "enable"][-2:] \
+            == ["ReleaseMarker", "KeepDepth"]
+    finally:
+        server.shutdown()

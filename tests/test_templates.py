@@ -6,8 +6,6 @@ abort place A: every place 1-bounded; from every reachable marking a final
 marking can still be reached; every final marking is the rest marking plus
 exactly one of OK, FAIL, ABORTED, with no abort token left inside.
 """
-import os
-from pathlib import Path
 
 import pytest
 
@@ -18,7 +16,7 @@ from mcl2pnml.pnml import parse_pnml, to_pnml_bytes
 from mcl2pnml.template_library import Library, default_library, source_places
 from mcl2pnml.template_parser import CONTROL, TemplateKind, parse_template
 
-from conftest import DATA, ROOT
+from conftest import DATA
 from paper_repro import nets
 
 LIB = default_library()
