@@ -39,7 +39,7 @@ from typing import Any, Callable
 from .aal import Action, ActionKind, Event, EventKind
 from .engine import Engine, Outcome
 from .errors import Mcl2PnmlError
-from .net import ArcKind, Net, thaw
+from .net import SUMMARY_MARKED, ArcKind, Net, thaw
 
 RESULTS = {"mission.OK": Outcome.OK, "mission.FAIL": Outcome.FAIL,
            "mission.ABORTED": Outcome.ABORTED}
@@ -255,5 +255,7 @@ class PetriEngine(Engine):
                 out.append(f"{prim}: waits for the vehicle's '{kind.value}'")
         marked = [f"{p}" + (f"*{n}" if n > 1 else "")
                   for p, n in zip(self.places, self.marking) if n]
-        out.append("marked: " + ", ".join(marked))
+        shown = marked[:SUMMARY_MARKED] + ([f"... {len(marked) - SUMMARY_MARKED:,} more"]
+                                           if len(marked) > SUMMARY_MARKED else [])
+        out.append(f"marked ({len(marked)} places): " + ", ".join(shown))
         return out

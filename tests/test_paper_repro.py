@@ -71,3 +71,16 @@ def test_python_m_paper_repro_writes_the_report_and_exits_0():
     for n in range(1, 5):
         for fmt in ("svg", "png"):
             assert (ROOT / "paper_repro" / "out" / f"fig{n}.{fmt}").stat().st_size > 1000
+    # the experiment of section 3 and its Fig. 5
+    assert (ROOT / "paper_repro" / "out" / "fig5.png").stat().st_size > 10_000
+    experiment = report["checks"]["The experiment (section 3, Fig. 5), on the simulated AUV"]
+    assert len(experiment) == 2 and all(r["holds"] for r in experiment)
+
+
+def test_the_experiment_behaves_as_the_paper_says():
+    from paper_repro import experiment
+    found, missed = experiment.trials()
+    rows = experiment.checks([found, missed])
+    assert all(r.match for r in rows), [r.computed for r in rows]
+    # the survey was cut short by the cross: the second waypoint was never reached
+    assert found.time < missed.time + 10 and found.markers and not missed.markers
