@@ -134,6 +134,25 @@ class Vehicle(ABC):
         """Let the vehicle's own time reach ``t`` (simulators move; others need not)."""
 
 
+class LiveVehicle(ABC):
+    """A vehicle in real time: its events come when they come (see :mod:`mcl2pnml.bridge`).
+
+    The same actions and events as :class:`Vehicle`; only the clock differs,
+    so the engine waits for an event (or for its next timer) instead of
+    asking when the next one is due.
+    """
+
+    primitives: frozenset[str] | None = None
+
+    @abstractmethod
+    def act(self, action: Action) -> None:
+        """Send an action to the vehicle."""
+
+    @abstractmethod
+    def wait_event(self, timeout: float | None, clock) -> Event | None:
+        """The next event, stamped ``clock()`` on arrival; None after ``timeout`` seconds."""
+
+
 # ---------------------------------------------------------------------------
 # The scripted vehicle of cli.md
 

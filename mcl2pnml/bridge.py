@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from .aal import Action, ActionKind, Event, EventKind
+from .aal import Action, ActionKind, Event, EventKind, LiveVehicle
 from .errors import Location, Mcl2PnmlError
 from .files import read_text
 
@@ -214,7 +214,7 @@ class TcpTransport(QueueTransport):
         self.file.flush()
 
 
-class MappedVehicle:
+class MappedVehicle(LiveVehicle):
     """A real vehicle behind a mapping file and a transport, in real time.
 
     Not a virtual-time :class:`~mcl2pnml.aal.Vehicle`: its events come when

@@ -253,6 +253,9 @@ class PetriEngine(Engine):
                                                                            kv[0][1].value)):
             if any(self.enabled[i] for i in ts):
                 out.append(f"{prim}: waits for the vehicle's '{kind.value}'")
+        for due, task, i, version in sorted(self.timers):
+            if version == self.version[i] and self.enabled[i]:
+                out.append(f"{self.transitions[i]}: the time-out of {task} at t={due:g} s")
         marked = [f"{p}" + (f"*{n}" if n > 1 else "")
                   for p, n in zip(self.places, self.marking) if n]
         shown = marked[:SUMMARY_MARKED] + ([f"... {len(marked) - SUMMARY_MARKED:,} more"]

@@ -244,6 +244,9 @@ class ReferenceEngine(Engine):
                 wanted = ("on" if p.request is ActionKind.ENABLE else
                           "off" if p.request is ActionKind.DISABLE else "achieved' or 'failed")
                 out.append(f"{name}: waits for the vehicle's '{wanted}'")
+        for due, task, ident in sorted(self.timers):
+            if ident in self.timer_owner:
+                out.append(f"{task}: its time-out at t={due:g} s")
         if self.waiting_calls:
             out.append("calls waiting to enter: " + ", ".join(c.call.name
                                                               for c in self.waiting_calls))

@@ -347,3 +347,19 @@ def test_a_mission_runs_in_real_time_through_the_bridge():
             == ["ReleaseMarker", "KeepDepth"]
     finally:
         server.shutdown()
+
+
+def test_a_run_stopped_at_its_time_limit_names_the_timers_it_waits_for():
+    c = checked("primitive P(x);\ntask T(x) = AchieveGoal(P(x)) timeout 500;\n"
+                "mission { T(1); }\n")
+    for engine in engines(c):
+        result = run(engine, scripted({"P": ["never"]}), max_time=100)
+        assert result.outcome is Outcome.STALLED
+        assert any("time-out" in w and "t=500 s" in w for w in result.waiting), result.waiting
+
+
+def test_heading_is_held():
+    sim = AUVSimulator()
+    events = _drive(sim, "KeepHeading", 90.0)
+    assert events[-1].kind is EventKind.ACHIEVED
+    assert abs(sim.state.yaw - 3.14159265 / 2) <= sim.world.heading_band
