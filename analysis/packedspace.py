@@ -114,44 +114,51 @@ def _unseen(keys: np.ndarray, seen: np.ndarray) -> np.ndarray:
     return keys[~old]
 
 
-def _level_one_word(frontier, seen, need, take, give) -> np.ndarray:
-    """The next breadth-first level, for markings of one word: sorted, new, distinct.
+#: How many (marking, transition) pairs one vectorized step handles at most:
+#: frontiers are cut in chunks so that memory stays bounded.
+PAIRS = 1 << 21
 
-    Each transition's successors are merged into the level as they come, so
-    memory follows the size of a level, not the number of firings out of it.
-    """
-    level = np.zeros(0, dtype=np.uint64)
-    for t in range(len(need)):
-        sel = frontier[(frontier & need[t]) == need[t]]
-        if not len(sel):
+
+def _chunks(n: int, transitions: int):
+    step = max(1, PAIRS // max(1, transitions))
+    for start in range(0, n, step):
+        yield slice(start, min(n, start + step))
+
+
+def _fire(rows: np.ndarray, need, take, give) -> np.ndarray:
+    """Every successor of ``rows`` (one or several words), all transitions at once."""
+    out = []
+    one_word = rows.ndim == 1
+    for part in _chunks(len(rows), len(need)):
+        f = rows[part]
+        if one_word:
+            enabled = (f[:, None] & need[None, :]) == need[None, :]
+        else:
+            enabled = np.all((f[:, None, :] & need[None]) == need[None], axis=2)
+        r, t = np.nonzero(enabled)
+        if not len(r):
             continue
-        rest = sel & ~take[t]
+        rest = f[r] & ~take[t]
         if np.any(rest & give[t]):
             raise NotSafe
-        succ = rest | give[t]
-        succ.sort()
-        succ = _unseen(succ, seen)
-        if len(succ):
-            level = np.concatenate([level, succ])
-            level.sort(kind="stable")
-            level = _unseen(level, np.zeros(0, dtype=np.uint64))
-    return level
+        out.append(rest | give[t])
+    if not out:
+        return rows[:0]
+    return np.concatenate(out)
+
+
+def _level_one_word(frontier, seen, need, take, give) -> np.ndarray:
+    """The next breadth-first level, for markings of one word: sorted, new, distinct."""
+    succ = _fire(frontier, need, take, give)
+    succ.sort()
+    return _unseen(succ, seen)
 
 
 def _level_rows(frontier, seen, need, take, give) -> tuple[np.ndarray, np.ndarray]:
     """The next level for markings of several words: (new keys, new rows), sorted."""
-    successors = []
-    for t in range(len(need)):
-        ok = _all(frontier, need[t])
-        if not ok.any():
-            continue
-        rest = frontier[ok] & ~take[t]
-        if np.any(rest & give[t]):
-            raise NotSafe
-        successors.append(rest | give[t])
-    if not successors:
+    cand = _fire(frontier, need, take, give)
+    if not len(cand):
         return np.zeros(0, dtype=seen.dtype), frontier[:0]
-    cand = np.concatenate(successors)
     keys = _keys(cand)
     order = np.argsort(keys, kind="stable")
     keys, cand = keys[order], cand[order]
@@ -280,26 +287,44 @@ class PackedStateSpace(StateSpace):
     def can_reach(self, targets: Sequence[int]) -> list[bool]:
         """For every node, whether one of ``targets`` is reachable from it."""
         seen = np.zeros(self.states, dtype=bool)       # by sorted position
-        frontier = np.unique(self.position(np.asarray(list(targets), dtype=np.int64)))
+        frontier = _distinct(np.sort(self.position(np.asarray(list(targets), dtype=np.int64))))
         seen[frontier] = True
         while len(frontier):
-            after = self.packed[frontier]
-            found = []
-            for t in range(len(self.need)):
-                take, give, need = self.take[t], self.give[t], self.need[t]
-                marked = _all(after, give)
-                if not marked.any():
-                    continue
-                later = after[marked]
-                before = (later & ~give) | take      # the only marking t could come from
-                ok = _all(before, need) & np.all(((before & ~take) | give) == later, axis=1)
-                if not ok.any():
-                    continue
-                at = self._lookup(before[ok])
-                found.append(at[at >= 0])
-            if not found:
-                break
-            nxt = np.unique(np.concatenate(found))
+            nxt = self._predecessors(frontier)
+            nxt.sort()
+            nxt = _distinct(nxt)
             frontier = nxt[~seen[nxt]]
             seen[frontier] = True
         return seen[self.position(np.arange(self.states))].tolist()
+
+    def _predecessors(self, frontier: np.ndarray) -> np.ndarray:
+        """Positions of the markings one firing before those at ``frontier``: unfire all."""
+        one_word = self.packed.shape[1] == 1
+        need, take, give = ((m[:, 0] for m in (self.need, self.take, self.give)) if one_word
+                            else (self.need, self.take, self.give))
+        after_all = self.keys[frontier] if one_word else self.packed[frontier]
+        found = []
+        for part in _chunks(len(after_all), len(need)):
+            after = after_all[part]
+            if one_word:
+                marked = (after[:, None] & give[None, :]) == give[None, :]
+            else:
+                marked = np.all((after[:, None, :] & give[None]) == give[None], axis=2)
+            r, t = np.nonzero(marked)
+            later = after[r]
+            before = (later & ~give[t]) | take[t]    # the only marking t could come from
+            if one_word:
+                ok = ((before & need[t]) == need[t]) & (((before & ~take[t]) | give[t]) == later)
+            else:
+                ok = (np.all((before & need[t]) == need[t], axis=1)
+                      & np.all(((before & ~take[t]) | give[t]) == later, axis=1))
+            if ok.any():
+                at = self._lookup(before[ok].reshape(-1, 1) if one_word else before[ok])
+                found.append(at[at >= 0])
+        return np.concatenate(found) if found else np.zeros(0, dtype=np.int64)
+
+
+def _distinct(sorted_values: np.ndarray) -> np.ndarray:
+    if len(sorted_values) < 2:
+        return sorted_values
+    return sorted_values[np.concatenate(([True], sorted_values[1:] != sorted_values[:-1]))]

@@ -36,6 +36,7 @@ from functools import cached_property
 from typing import Callable, Sequence
 
 import networkx as nx
+import numpy  # noqa: F401 - imported with the module: the packed explorer needs it at once
 
 from mcl2pnml.errors import Mcl2PnmlError
 

@@ -1,0 +1,103 @@
+"""State spaces: our explorer against SNAKES and pm4py, on the same PNML files.
+
+Run:  .venv/bin/python -m bench.statespace_peers
+
+Every exploration runs in a fresh interpreter (so that peak memory is its
+own) on a PNML file written by us: ours is what ``mcl2pnml analyze FILE
+--state-space`` computes (the markings, terminal markings, deadlock freedom
+and reusability); SNAKES builds its ``StateGraph``; pm4py its reachability
+graph. Loading the file is not timed; the exploration is. A run that does
+not finish within :data:`TIMEOUT` seconds is reported as such. Each figure
+is the median of :data:`RUNS` runs when a run takes under 5 s, else one run.
+"""
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from mcl2pnml.pnml import save_pnml
+
+from . import nets
+
+TIMEOUT = 120.0
+RUNS = 3
+
+CHILD = r"""
+import json, resource, sys, time, warnings
+warnings.simplefilter("ignore")
+engine, path = sys.argv[1], sys.argv[2]
+def rss():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+if engine == "ours":
+    from mcl2pnml.pnml import load_pnml
+    from analysis.report import analyze
+    net = load_pnml(path)
+    before = rss(); t0 = time.perf_counter()
+    states = analyze(net, state_space_only=True, max_states=50_000_000)["states"]
+elif engine == "snakes":
+    import snakes.pnml
+    from snakes.nets import StateGraph
+    net = snakes.pnml.loads(open(path).read())
+    before = rss(); t0 = time.perf_counter()
+    graph = StateGraph(net); graph.build(); states = len(graph)
+else:
+    import pm4py
+    from pm4py.objects.petri_net.utils.reachability_graph import construct_reachability_graph
+    pn, im, _ = pm4py.read_pnml(path)
+    before = rss(); t0 = time.perf_counter()
+    states = len(construct_reachability_graph(pn, im).states)
+seconds = time.perf_counter() - t0
+print(json.dumps({"states": states, "seconds": seconds, "bytes": max(0, rss() - before)}))
+"""
+
+
+def measure(engine: str, path: Path) -> dict | None:
+    """One engine on one file: median of a few runs, or None if it timed out."""
+    results = []
+    for _ in range(RUNS):
+        try:
+            out = subprocess.run([sys.executable, "-c", CHILD, engine, str(path)],
+                                 capture_output=True, text=True, timeout=TIMEOUT, check=True)
+        except subprocess.TimeoutExpired:
+            return None
+        results.append(json.loads(out.stdout.strip().splitlines()[-1]))
+        if results[-1]["seconds"] > 5:
+            break
+    return {"states": results[0]["states"],
+            "seconds": statistics.median(r["seconds"] for r in results),
+            "bytes": statistics.median(r["bytes"] for r in results)}
+
+
+CASES = ([("cycles", k, nets.cycles) for k in range(6, 12)]
+         + [("philosophers", n, nets.philosophers) for n in (8, 10, 12)]
+         + [("token ring", n, nets.token_ring) for n in (8, 10, 12)]
+         + [("shared memory", n, nets.shared_memory) for n in (6, 8, 10)]
+         + [("mission, parallel width", w, nets.mission) for w in (2, 3, 4)])
+
+
+def run(cases=CASES, peers=("snakes", "pm4py"), log=print) -> list[dict]:
+    rows = []
+    gave_up: set[tuple[str, str]] = set()   # (family, peer): it timed out on a smaller one
+    with tempfile.TemporaryDirectory() as tmp:
+        for family, size, make in cases:
+            path = save_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"),
+                             layout_engine="none")
+            row = {"family": family, "size": size, "ours": measure("ours", path)}
+            for peer in peers:
+                row[peer] = None if (family, peer) in gave_up else measure(peer, path)
+                if row[peer] is None:
+                    gave_up.add((family, peer))
+            rows.append(row)
+            log(f"  {family} {size}: " + ", ".join(
+                f"{k} {v['seconds']:.3f}s" if v else f"{k} -" for k, v in row.items()
+                if k not in ("family", "size")))
+    return rows
+
+
+if __name__ == "__main__":
+    for r in run():
+        print(json.dumps(r))
