@@ -8,7 +8,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 OUT    := out
 
-.PHONY: setup system-deps demo test test-slow clean
+.PHONY: setup system-deps demo test test-slow bench clean
 
 # graphviz's `dot` lays out PNML drawings and renders figures: from Debian's
 # packages where missing (machines here run as root).
@@ -52,6 +52,9 @@ test: setup
 
 test-slow: setup
 	$(PY) -m pytest -m slow
+
+bench: setup
+	$(PY) -m bench.suite
 
 clean:
 	rm -rf $(VENV) $(OUT) paper_repro/out .pytest_cache .hypothesis *.egg-info

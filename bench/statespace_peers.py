@@ -23,7 +23,7 @@ from mcl2pnml.pnml import save_pnml
 
 from . import nets
 
-TIMEOUT = 120.0
+TIMEOUT = 60.0
 RUNS = 3
 
 CHILD = r"""

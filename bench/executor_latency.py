@@ -1,0 +1,56 @@
+"""The executor's reaction time: from a vehicle event to the actions it causes.
+
+Run:  .venv/bin/python -m bench.executor_latency [TASKS...]   (default 10 100 1000 10000)
+
+Surveys of N task calls (:func:`bench.missions.survey`) run against a
+scripted vehicle that achieves every goal after one second; every event's
+handling (the executor firing what it enables, up to the actions it emits)
+is timed. The median and the 99th percentile are reported; the last event,
+which closes the mission's N nested sequences at once, is the maximum and
+is left out of neither.
+"""
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+import time
+
+from mcl2pnml.aal import ScriptedVehicle
+from mcl2pnml.compiler import compile_checked
+from mcl2pnml.engine import run
+from mcl2pnml.executor import PetriEngine
+from mcl2pnml.mcl_checker import check
+from mcl2pnml.mcl_parser import parse
+
+from .missions import survey
+
+
+def measure(tasks: int) -> dict[str, float]:
+    engine = PetriEngine(compile_checked(check(parse(survey(tasks), f"survey{tasks}.mcl"))))
+    vehicle = ScriptedVehicle.from_json(json.dumps(
+        {"KeepDepth": ["ok@1"] * tasks, "GoToWayPoint": ["ok@1"] * tasks}))
+    times: list[float] = []
+    handle = engine.on_event
+
+    def timed(event):
+        t0 = time.perf_counter()
+        actions = handle(event)
+        times.append(time.perf_counter() - t0)
+        return actions
+    engine.on_event = timed
+    result = run(engine, vehicle)
+    assert result.outcome.value == "OK", result.outcome
+    times.sort()
+    return {"tasks": tasks, "events": len(times), "median_us": statistics.median(times) * 1e6,
+            "p99_us": times[min(len(times) - 1, int(0.99 * len(times)))] * 1e6,
+            "max_us": times[-1] * 1e6}
+
+
+def main(argv: list[str]) -> None:
+    for n in [int(a) for a in argv] or [10, 100, 1000, 10_000]:
+        print(json.dumps(measure(n)))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

@@ -1,0 +1,208 @@
+"""``make bench``: every benchmark, against its peers, into ``bench/RESULTS.md``.
+
+Run:  .venv/bin/python -m bench.suite [--quick]
+
+Measures, on this machine, in one run (about fifteen minutes on 2 cores):
+
+* state spaces: ours against SNAKES and pm4py on the same PNML files
+  (:mod:`bench.statespace_peers`): states per second, peak memory, bytes
+  per state, and our speed as a ratio to each peer;
+* invariants: the exact P-invariant basis of compiled missions of 100 to
+  5,000 places against plain ``sympy.Matrix.nullspace``
+  (:mod:`bench.invariants_vs_nullspace`);
+* compiling: surveys of 100 to 100,000 calls, MCL to PNML on disk, with
+  the fitted exponent of time against size (:mod:`bench.compile_scale`);
+* the executor: median and 99th-percentile time per vehicle event, on
+  missions of 10 to 10,000 tasks (:mod:`bench.executor_latency`).
+
+Each section ends with the targets the project set itself and whether they
+hold. ``--quick`` runs small sizes only (a smoke test of the suite).
+"""
+from __future__ import annotations
+
+import datetime
+import os
+import platform
+import sys
+from pathlib import Path
+
+import numpy
+
+from mcl2pnml.files import atomic_write_text
+
+from . import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
+from . import statespace_peers as peers
+from .core_scale import slope
+from .missions import survey
+
+OUT = Path(__file__).resolve().parent / "RESULTS.md"
+
+
+def machine() -> list[str]:
+    cpu = platform.processor() or "?"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return [f"- date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
+            f"- machine: {os.cpu_count()} cores, {cpu}, {platform.system()} "
+            f"{platform.release()}",
+            f"- Python {platform.python_version()}, numpy {numpy.__version__}"]
+
+
+def holds(flag: bool) -> str:
+    return "**holds**" if flag else "**missed**"
+
+
+def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    cases = peers.CASES if not quick else [("cycles", 6, nets.cycles),
+                                           ("philosophers", 8, nets.philosophers)]
+    rows = peers.run(cases, log=log)
+    lines = ["## State spaces: ours, SNAKES, pm4py", "",
+             "Full exploration of the reachable markings of the same PNML file; seconds, "
+             "states per second, bytes per state (peak resident memory during the "
+             "exploration, over the number of states); our speed as a ratio to each peer. "
+             "`-`: did not finish within "
+             f"{peers.TIMEOUT:.0f} s (or a smaller net of the family did not).", "",
+             "| net | states | ours (s) | ours (states/s) | ours (B/state) | SNAKES (s) "
+             "| pm4py (s) | vs SNAKES | vs pm4py |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    worst = {}
+    for r in rows:
+        o = r["ours"]
+        cells = [f"{r['family']} {r['size']}", f"{o['states']:,}", f"{o['seconds']:.3f}",
+                 f"{o['states'] / o['seconds']:,.0f}", f"{o['bytes'] / o['states']:.0f}"]
+        for peer in ("snakes", "pm4py"):
+            p = r.get(peer)
+            cells.append(f"{p['seconds']:.3f}" if p else "-")
+        for peer in ("snakes", "pm4py"):
+            p = r.get(peer)
+            if p:
+                ratio = p["seconds"] / o["seconds"]
+                worst[peer] = min(worst.get(peer, ratio), ratio)
+                cells.append(f"{ratio:,.0f}x")
+            else:
+                cells.append("-")
+        lines.append("| " + " | ".join(cells) + " |")
+    big = next((r for r in rows if r["family"] == "cycles" and r["size"] == 10), None)
+    targets = [("state space: 100x SNAKES on every net both finish",
+                worst.get("snakes", 0) >= 100, f"worst ratio {worst.get('snakes', 0):,.0f}x"),
+               ("state space: 100x pm4py on every net both finish",
+                worst.get("pm4py", 0) >= 100, f"worst ratio {worst.get('pm4py', 0):,.0f}x")]
+    if big:
+        rate = big["ours"]["states"] / big["ours"]["seconds"]
+        per = big["ours"]["bytes"] / big["ours"]["states"]
+        targets += [("state space: 300,000 states/s on cycles 10", rate >= 300_000,
+                     f"{rate:,.0f} states/s"),
+                    ("state space: under 64 bytes per state on cycles 10", per < 64,
+                     f"{per:.0f} B/state")]
+    return lines, targets
+
+
+def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    from analysis.invariants import p_invariant_basis
+    from analysis.matrix import structure
+    from mcl2pnml.compiler import compile_checked
+    from mcl2pnml.mcl_checker import check
+    from mcl2pnml.mcl_parser import parse
+
+    lines = ["## Invariants: the exact P-invariant basis of compiled missions", "",
+             "Surveys compiled from MCL; ours (sparse, exact) against plain "
+             "`sympy.Matrix(C).T.nullspace()` where it finishes within "
+             f"{inv.PLAIN_LIMIT:.0f} s. Median of 3 runs for ours.", "",
+             "| calls | places | transitions | basis | ours (s) | plain sympy (s) | ratio |",
+             "|---:|---:|---:|---:|---:|---:|---:|"]
+    plain_ok, at_5000 = True, None
+    for calls in ([5, 15] if quick else [5, 15, 55, 110, 275]):
+        net = compile_checked(check(parse(survey(calls), f"survey{calls}.mcl")))
+        s = structure(net)
+        ours, basis = inv.median_time(lambda: p_invariant_basis(s))
+        plain_cell, ratio = "-", "-"
+        if plain_ok:
+            plain = inv.plain_nullspace(s)
+            if plain is None:
+                plain_ok = False
+                plain_cell = f"> {inv.PLAIN_LIMIT:.0f}"
+            else:
+                plain_cell, ratio = f"{plain[0]:.2f}", f"{plain[0] / ours:,.0f}x"
+        if len(s.places) >= 4500:
+            at_5000 = (len(s.places), ours)
+        lines.append(f"| {calls} | {len(s.places):,} | {len(s.transitions):,} | {len(basis):,} "
+                     f"| {ours:.3f} | {plain_cell} | {ratio} |")
+        log(f"  invariants {len(s.places)} places: {ours:.3f} s")
+    targets = []
+    if at_5000:
+        targets.append(("invariants: a 5,000-place mission's basis under 5 s",
+                        at_5000[1] < 5, f"{at_5000[0]:,} places in {at_5000[1]:.2f} s"))
+    return lines, targets
+
+
+def compile_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    sizes = [100, 1_000] if quick else [100, 1_000, 10_000, 100_000]
+    rows = {}
+    for n in sizes:
+        rows[n] = compile_scale.measure(n, runs=1 if n >= 100_000 else 3)
+        log(f"  compile {n}: {rows[n]['total']:.2f} s")
+    lines = ["## Compiling: MCL to PNML on disk", "",
+             "Generated surveys, each size in a fresh interpreter; median of 3 runs "
+             "(one at 100,000).", "",
+             "| calls | arcs | parse (s) | check (s) | compile (s) | write (s) | total (s) "
+             "| peak (MB) | PNML (MB) |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for n, r in rows.items():
+        lines.append(f"| {n:,} | {r['arcs']:,} | {r['parse']:.3f} | {r['check']:.3f} | "
+                     f"{r['compile']:.3f} | {r['write']:.3f} | {r['total']:.3f} | "
+                     f"{r['peak_mb']:.0f} | {r['pnml_mb']:.1f} |")
+    exponent = slope(list(rows), [r["total"] for r in rows.values()])
+    lines += ["", f"Fitted exponent of total time against calls: {exponent:.2f}."]
+    targets = [("compile: exponent at most 1.1", exponent <= 1.1, f"{exponent:.2f}")]
+    if 10_000 in rows:
+        targets.insert(0, ("compile: 10,000 calls under 2 s", rows[10_000]["total"] < 2,
+                           f"{rows[10_000]['total']:.2f} s"))
+    return lines, targets
+
+
+def executor_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    sizes = [10, 100] if quick else [10, 100, 1_000, 10_000]
+    rows = {n: executor_latency.measure(n) for n in sizes}
+    lines = ["## The executor: time per vehicle event", "",
+             "From the event to the actions it causes, on surveys of N tasks "
+             "(scripted vehicle).", "",
+             "| tasks | events | median (us) | p99 (us) | max (us) |", "|---:|---:|---:|---:|---:|"]
+    for n, r in rows.items():
+        lines.append(f"| {n:,} | {r['events']:,} | {r['median_us']:.1f} | {r['p99_us']:.1f} "
+                     f"| {r['max_us']:,.0f} |")
+        log(f"  executor {n}: median {r['median_us']:.1f} us")
+    small, large = rows[sizes[0]], rows[sizes[-1]]
+    targets = [("executor: median under 50 us per event",
+                max(r["median_us"] for r in rows.values()) < 50,
+                f"at most {max(r['median_us'] for r in rows.values()):.1f} us"),
+               (f"executor: {sizes[-1]:,} tasks no more than twice {sizes[0]} tasks (median)",
+                large["median_us"] <= 2 * small["median_us"],
+                f"{large['median_us']:.1f} vs {small['median_us']:.1f} us")]
+    return lines, targets
+
+
+def main(argv: list[str]) -> int:
+    quick = "--quick" in argv
+    log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
+    sections, targets = [], []
+    for name, section in (("state spaces", statespace_section), ("invariants", invariants_section),
+                          ("compile", compile_section), ("executor", executor_section)):
+        log(f"{name}...")
+        lines, found = section(quick, log)
+        sections += [*lines, ""]
+        targets += found
+    md = ["# Benchmarks", "", "Written by `make bench` (`python -m bench.suite`); every figure "
+          "was measured in this run, on this machine.", "", *machine(), "",
+          "## Targets", "", "| target | result | measured |", "|---|---|---|",
+          *[f"| {name} | {holds(ok)} | {what} |" for name, ok, what in targets], "",
+          *sections]
+    atomic_write_text(OUT, "\n".join(md) + "\n")
+    print(f"wrote {OUT}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
