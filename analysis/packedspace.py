@@ -4,8 +4,11 @@ For a 1-safe net with unit weights (every net this project compiles), a
 marking is a row of bits, one per place, packed into 64-bit words, and
 firing a transition is three bit operations. Instead of one marking at a
 time, this explorer applies each transition to the whole breadth-first
-frontier at once, in numpy, and keeps only the markings: sorted, packed
-(8 bytes each up to 64 places), decoded when asked for.
+frontier at once, in numpy, and keeps only the markings: packed (8 bytes
+each up to 64 places), sorted by a 64-bit key (the marking itself up to 64
+places, a hash of its words beyond, checked for collisions), decoded when
+asked for. Transitions are grouped by the words their places lie in, so
+that testing them costs a few operations per group, not per transition.
 
 Edges are not stored. What the analysis asks of them is answered by firing
 again, a whole array at a time: a marking is terminal when no transition is
@@ -22,7 +25,7 @@ times that.
 from __future__ import annotations
 
 from functools import cached_property
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 
@@ -32,34 +35,119 @@ from .statespace import StateSpace
 
 def _masks(s: Structure, words: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per transition: the places it needs (consumed or read), consumes, and marks."""
-    need = np.zeros((len(s.transitions), words), dtype=np.uint64)
-    take = np.zeros_like(need)
-    give = np.zeros_like(need)
-    for t, (pre, read, post) in enumerate(zip(s.pre, s.read, s.post)):
-        for p in pre:
-            take[t, p // 64] |= np.uint64(1 << (p % 64))
-        for p in read:
-            need[t, p // 64] |= np.uint64(1 << (p % 64))
-        for p in post:
-            give[t, p // 64] |= np.uint64(1 << (p % 64))
-    need |= take
+    take = _masks_of(s.pre, words)
+    need = _masks_of([{*pre, *read} for pre, read in zip(s.pre, s.read)], words)
+    give = _masks_of(s.post, words)
     return need, take, give
 
 
+def _masks_of(place_sets, words: int) -> np.ndarray:
+    """One row of ``words`` 64-bit words per set of place indices."""
+    bits = [sum(1 << p for p in places) for places in place_sets]
+    return np.array([[(b >> (64 * w)) & 0xFFFF_FFFF_FFFF_FFFF for w in range(words)]
+                     for b in bits], dtype=np.uint64).reshape(len(bits), words)
+
+
+class _Firing(NamedTuple):
+    """The transitions' masks in an order where those that test the same words are adjacent.
+
+    ``groups`` lists, for each run of transitions (a slice of the arrays),
+    the words its ``test`` masks have bits in: a transition's places are
+    few and numbered close together, so most test one word, and testing a
+    group is a few operations on a slice instead of one per word and
+    transition.
+    """
+
+    test: np.ndarray       # what must be marked: needed places (firing), or given ones (unfiring)
+    need: np.ndarray
+    keep: np.ndarray       # the complement of the places a transition consumes
+    take: np.ndarray
+    give: np.ndarray
+    ids: np.ndarray        # the transition (its index in the net) of each row
+    groups: tuple[tuple[int, int, tuple[int, ...]], ...]
+
+    @classmethod
+    def by(cls, test: np.ndarray, need: np.ndarray, take: np.ndarray,
+           give: np.ndarray) -> "_Firing":
+        # the words a mask has bits in, as a number (bit w: word w), to sort by
+        signature = (test != 0).astype(np.int64) @ (np.int64(1) << np.arange(test.shape[1]))
+        pick = np.argsort(signature, kind="stable")
+        signature = signature[pick]
+        cuts = [0, *(np.flatnonzero(signature[1:] != signature[:-1]) + 1).tolist(), len(test)]
+        groups = [(a, b, tuple(w for w in range(test.shape[1]) if signature[a] >> w & 1))
+                  for a, b in zip(cuts, cuts[1:]) if b > a]
+        return cls(test[pick], need[pick], ~take[pick], take[pick], give[pick], pick,
+                   tuple(groups))
+
+    def tested(self, rows: np.ndarray) -> np.ndarray:
+        """(rows, transitions) table: whether each row has every bit of each test mask."""
+        out = np.empty((len(rows), len(self.test)), dtype=bool)
+        for a, b, words in self.groups:
+            if not words:
+                out[:, a:b] = True
+                continue
+            m = self.test[a:b, words[0]]
+            np.equal(rows[:, words[0], None] & m, m, out=out[:, a:b])
+            for w in words[1:]:
+                m = self.test[a:b, w]
+                out[:, a:b] &= (rows[:, w, None] & m) == m
+        return out
+
+
+#: An odd 64-bit multiplier (the golden ratio's), for the key of a marking of several words.
+_MIX = np.uint64(0x9E3779B97F4A7C15)
+
+
 def _keys(rows: np.ndarray) -> np.ndarray:
-    """Rows of words as sortable scalars: the word itself, or raw bytes for several words."""
+    """Rows of words as sortable 64-bit keys: the word itself, or a hash of several.
+
+    A hash sorts and searches as fast as a single word does, where raw bytes
+    (numpy's void type) compare byte by byte, ten times slower. Two markings
+    may then share a key; :func:`_check_distinct` makes sure none ever do in
+    one state space, so that a key still names one marking exactly.
+    """
     if rows.shape[1] == 1:
         return rows[:, 0]
-    # big-endian words compare, byte by byte, like the integers they form
-    return np.ascontiguousarray(rows.byteswap()).view(
-        np.dtype((np.void, 8 * rows.shape[1]))).ravel()
+    h = rows[:, 0].copy()
+    with np.errstate(over="ignore"):
+        for w in range(rows.shape[1]):
+            if w:
+                h ^= rows[:, w]
+            # multiply and xor-shift: each step a bijection, so that markings
+            # that differ in one word never share a key
+            h *= _MIX
+            h ^= h >> np.uint64(29)
+    return h
 
 
-def _all(rows: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Which rows contain every bit of ``mask``."""
-    if rows.shape[1] == 1:
-        return (rows[:, 0] & mask[0]) == mask[0]
-    return np.all((rows & mask) == mask, axis=1)
+class KeyCollision(Exception):
+    """Two reachable markings of several words share a key (once in 2^64 pairs)."""
+
+
+def _check_distinct(a: np.ndarray, b: np.ndarray) -> None:
+    """Rows ``a`` and ``b`` have equal keys, pairwise: they must be the same markings."""
+    if len(a) and not np.all(_same(a, b)):
+        raise KeyCollision
+
+
+def _covers(rows: np.ndarray, masks: np.ndarray) -> np.ndarray:
+    """Whether rows contain every bit of masks (word axis last; the others broadcast).
+
+    A loop over the few words rather than ``np.all(..., axis=-1)``: numpy
+    reduces a short last axis several times slower than it ANDs whole arrays.
+    """
+    out = (rows[..., 0] & masks[..., 0]) == masks[..., 0]
+    for w in range(1, rows.shape[-1]):
+        out &= (rows[..., w] & masks[..., w]) == masks[..., w]
+    return out
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row by row equality of two arrays of words (word axis last)."""
+    out = a[..., 0] == b[..., 0]
+    for w in range(1, a.shape[-1]):
+        out &= a[..., w] == b[..., w]
+    return out
 
 
 class NotSafe(Exception):
@@ -71,36 +159,49 @@ def explore_packed(s: Structure, m0: Sequence[int], max_states: int, limit_error
     """Breadth-first, a frontier at a time; raises :class:`NotSafe` at a second token."""
     words = max(1, (len(s.places) + 63) // 64)
     need, take, give = _masks(s, words)
-    start = np.zeros((1, words), dtype=np.uint64)
-    for p, k in enumerate(m0):
-        if k:
-            start[0, p // 64] |= np.uint64(1 << (p % 64))
+    firing = _Firing.by(need, need, take, give)
+    start = _masks_of([[p for p, k in enumerate(m0) if k]], words)
     seen_keys = _keys(start).copy()
-    rows = [start]              # kept only when a key is not the row itself
-    frontier = start
-    while len(frontier):
-        if words == 1:
-            fresh = _level_one_word(frontier[:, 0], seen_keys, need[:, 0], take[:, 0],
-                                    give[:, 0])
-            frontier = fresh.reshape(-1, 1)
-        else:
-            fresh, frontier = _level_rows(frontier, seen_keys, need, take, give)
-        if not len(fresh):
-            break
-        if len(seen_keys) + len(fresh) > max_states:
-            raise limit_error
-        seen_keys = np.concatenate([seen_keys, fresh])
-        seen_keys.sort(kind="stable")   # in place: two sorted runs, merged
-        if words > 1:
-            rows.append(frontier)
-        if progress:
-            progress(len(seen_keys), len(frontier))
     if words == 1:
+        frontier = start
+        while len(frontier):
+            fresh = _level_one_word(frontier, seen_keys, firing)
+            if not len(fresh):
+                break
+            if len(seen_keys) + len(fresh) > max_states:
+                raise limit_error
+            seen_keys = _merge(seen_keys, fresh)
+            frontier = fresh.reshape(-1, 1)
+            if progress:
+                progress(len(seen_keys), len(frontier))
         packed = seen_keys.reshape(-1, 1)
     else:
-        packed = np.concatenate(rows)
-        packed = packed[np.argsort(_keys(packed), kind="stable")]
-    return PackedStateSpace(s, packed, _keys(start)[0], need, take, give)
+        # the rows in the order found (a buffer that doubles), and for every
+        # sorted key the index of its row there
+        found = np.zeros((1024, words), dtype=np.uint64)
+        found[0] = start[0]
+        count = 1
+        seen_order = np.zeros(1, dtype=np.int64)
+        frontier = start
+        while len(frontier):
+            keys, frontier = _level_rows(frontier, seen_keys, seen_order, found, firing)
+            if not len(keys):
+                break
+            if count + len(keys) > max_states:
+                raise limit_error
+            if count + len(keys) > len(found):
+                grown = np.zeros((2 * (count + len(keys)), words), dtype=np.uint64)
+                grown[:count] = found[:count]
+                found = grown
+            found[count:count + len(keys)] = frontier
+            at = np.searchsorted(seen_keys, keys)
+            seen_keys = _merge(seen_keys, keys, at)
+            seen_order = _merge(seen_order, np.arange(count, count + len(keys)), at)
+            count += len(keys)
+            if progress:
+                progress(count, len(frontier))
+        packed = found[seen_order]
+    return PackedStateSpace(s, packed, seen_keys, _keys(start)[0], firing)
 
 
 def _unseen(keys: np.ndarray, seen: np.ndarray) -> np.ndarray:
@@ -125,51 +226,67 @@ def _chunks(n: int, transitions: int):
         yield slice(start, min(n, start + step))
 
 
-def _fire(rows: np.ndarray, need, take, give) -> np.ndarray:
-    """Every successor of ``rows`` (one or several words), all transitions at once."""
+def _fire(rows: np.ndarray, firing: _Firing) -> np.ndarray:
+    """Every successor of ``rows`` (markings of one or several words), all transitions at once."""
     out = []
-    one_word = rows.ndim == 1
-    for part in _chunks(len(rows), len(need)):
+    for part in _chunks(len(rows), len(firing.test)):
         f = rows[part]
-        if one_word:
-            enabled = (f[:, None] & need[None, :]) == need[None, :]
-        else:
-            enabled = np.all((f[:, None, :] & need[None]) == need[None], axis=2)
-        r, t = np.nonzero(enabled)
+        r, t = np.nonzero(firing.tested(f))
         if not len(r):
             continue
-        rest = f[r] & ~take[t]
-        if np.any(rest & give[t]):
+        succ = f[r]
+        succ &= firing.keep[t]
+        given = firing.give[t]
+        if np.any(succ & given):
             raise NotSafe
-        out.append(rest | give[t])
+        succ |= given
+        out.append(succ)
     if not out:
         return rows[:0]
-    return np.concatenate(out)
+    return np.concatenate(out) if len(out) > 1 else out[0]
 
 
-def _level_one_word(frontier, seen, need, take, give) -> np.ndarray:
-    """The next breadth-first level, for markings of one word: sorted, new, distinct."""
-    succ = _fire(frontier, need, take, give)
+def _level_one_word(frontier, seen, firing: _Firing) -> np.ndarray:
+    """The next breadth-first level, for markings of one word: sorted, new, distinct keys."""
+    succ = _fire(frontier, firing).ravel()
     succ.sort()
     return _unseen(succ, seen)
 
 
-def _level_rows(frontier, seen, need, take, give) -> tuple[np.ndarray, np.ndarray]:
-    """The next level for markings of several words: (new keys, new rows), sorted."""
-    cand = _fire(frontier, need, take, give)
+def _level_rows(frontier, seen, seen_order, found, firing: _Firing):
+    """The next level for markings of several words: (new keys, new rows), sorted by key."""
+    cand = _fire(frontier, firing)
     if not len(cand):
-        return np.zeros(0, dtype=seen.dtype), frontier[:0]
+        return np.zeros(0, dtype=np.uint64), frontier[:0]
     keys = _keys(cand)
-    order = np.argsort(keys, kind="stable")
+    order = np.argsort(keys)
     keys, cand = keys[order], cand[order]
-    first = np.ones(len(keys), dtype=bool)
-    first[1:] = keys[1:] != keys[:-1]
-    keys, cand = keys[first], cand[first]
+    again = keys[1:] == keys[:-1]
+    if again.any():
+        _check_distinct(cand[1:][again], cand[:-1][again])
+        first = np.concatenate(([True], ~again))
+        keys, cand = keys[first], cand[first]
     at = np.searchsorted(seen, keys)
     old = np.zeros(len(keys), dtype=bool)
     inside = at < len(seen)
     old[inside] = seen[at[inside]] == keys[inside]
-    return keys[~old], cand[~old]
+    if old.any():
+        _check_distinct(cand[old], found[seen_order[at[old]]])
+        return keys[~old], cand[~old]
+    return keys, cand
+
+
+def _merge(seen: np.ndarray, fresh: np.ndarray, at: np.ndarray | None = None) -> np.ndarray:
+    """``fresh`` inserted into ``seen`` before positions ``at`` (where it sorts), in linear time."""
+    if at is None:
+        at = np.searchsorted(seen, fresh)
+    out = np.empty(len(seen) + len(fresh), dtype=seen.dtype)
+    slots = at + np.arange(len(fresh))
+    rest = np.ones(len(out), dtype=bool)
+    rest[slots] = False
+    out[slots] = fresh
+    out[rest] = seen
+    return out
 
 
 class PackedMarkings(Sequence):
@@ -195,15 +312,15 @@ class PackedStateSpace(StateSpace):
     """A reachability graph kept as its sorted, packed markings (see the module's documentation).
 
     Node 0 is the initial marking, as in every :class:`StateSpace`; the
-    others are numbered in the sorted order of the markings.
+    others are numbered in the sorted order of their keys.
     """
 
-    def __init__(self, structure: Structure, packed: np.ndarray, start_key,
-                 need: np.ndarray, take: np.ndarray, give: np.ndarray):
+    def __init__(self, structure: Structure, packed: np.ndarray, keys: np.ndarray, start_key,
+                 firing: _Firing):
         self.structure = structure
-        self.packed = packed          # (markings, words) uint64, sorted
-        self.keys = _keys(packed)     # the same memory when one word is enough
-        self.need, self.take, self.give = need, take, give
+        self.packed = packed          # (markings, words) uint64, in the order of their keys
+        self.keys = keys              # sorted, distinct; the same memory when one word is enough
+        self.firing = firing
         self.coverability = False
         self.start = int(np.searchsorted(self.keys, start_key))
 
@@ -236,15 +353,25 @@ class PackedStateSpace(StateSpace):
         inside = at < len(self.keys)
         found = np.zeros(len(keys), dtype=bool)
         found[inside] = self.keys[at[inside]] == keys[inside]
+        if rows.shape[1] > 1:
+            # a key names one reachable marking; another marking may share it
+            hit = np.flatnonzero(found)
+            found[hit] = _same(rows[hit], self.packed[at[hit]])
         return np.where(found, at, -1)
 
     # -- successors, counted or listed -----------------------------------------------
 
+    def _enabled(self):
+        """(sorted positions, rows of :attr:`firing`) of every enabled pair, a chunk at a time."""
+        for part in _chunks(self.states, len(self.firing.test)):
+            r, j = np.nonzero(self.firing.tested(self.packed[part]))
+            yield r + part.start, j
+
     @cached_property
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
         degree = np.zeros(self.states, dtype=np.int32)
-        for t in range(len(self.need)):
-            degree += _all(self.packed, self.need[t])
+        for r, _ in self._enabled():
+            degree += np.bincount(r, minlength=self.states).astype(np.int32)
         return degree[self.position(np.arange(self.states))]
 
     @cached_property
@@ -254,15 +381,13 @@ class PackedStateSpace(StateSpace):
     @cached_property
     def _edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The explicit edge list, in node order, built only when asked for."""
+        f = self.firing
         src, trans, dst = [], [], []
-        for t in range(len(self.need)):
-            ok = np.nonzero(_all(self.packed, self.need[t]))[0]
-            if not len(ok):
-                continue
-            after = self._lookup((self.packed[ok] & ~self.take[t]) | self.give[t])
-            src.append(self.node_of(ok))
+        for r, j in self._enabled():
+            after = self._lookup((self.packed[r] & f.keep[j]) | f.give[j])
+            src.append(self.node_of(r))
             dst.append(self.node_of(after))
-            trans.append(np.full(len(ok), t))
+            trans.append(f.ids[j])
         if not src:
             empty = np.zeros(0, dtype=np.int32)
             return empty, empty, empty
@@ -297,29 +422,25 @@ class PackedStateSpace(StateSpace):
             seen[frontier] = True
         return seen[self.position(np.arange(self.states))].tolist()
 
+    @cached_property
+    def _unfiring(self) -> _Firing:
+        """The transitions grouped by the places they mark: what unfiring tests first."""
+        f = self.firing
+        return _Firing.by(f.give, f.need, f.take, f.give)
+
     def _predecessors(self, frontier: np.ndarray) -> np.ndarray:
         """Positions of the markings one firing before those at ``frontier``: unfire all."""
-        one_word = self.packed.shape[1] == 1
-        need, take, give = ((m[:, 0] for m in (self.need, self.take, self.give)) if one_word
-                            else (self.need, self.take, self.give))
-        after_all = self.keys[frontier] if one_word else self.packed[frontier]
+        u = self._unfiring
+        after_all = self.packed[frontier]
         found = []
-        for part in _chunks(len(after_all), len(need)):
+        for part in _chunks(len(after_all), len(u.test)):
             after = after_all[part]
-            if one_word:
-                marked = (after[:, None] & give[None, :]) == give[None, :]
-            else:
-                marked = np.all((after[:, None, :] & give[None]) == give[None], axis=2)
-            r, t = np.nonzero(marked)
+            r, t = np.nonzero(u.tested(after))
             later = after[r]
-            before = (later & ~give[t]) | take[t]    # the only marking t could come from
-            if one_word:
-                ok = ((before & need[t]) == need[t]) & (((before & ~take[t]) | give[t]) == later)
-            else:
-                ok = (np.all((before & need[t]) == need[t], axis=1)
-                      & np.all(((before & ~take[t]) | give[t]) == later, axis=1))
+            before = (later & ~u.give[t]) | u.take[t]    # the only marking t could come from
+            ok = _covers(before, u.need[t]) & _same((before & u.keep[t]) | u.give[t], later)
             if ok.any():
-                at = self._lookup(before[ok].reshape(-1, 1) if one_word else before[ok])
+                at = self._lookup(before[ok])
                 found.append(at[at >= 0])
         return np.concatenate(found) if found else np.zeros(0, dtype=np.int64)
 

@@ -187,11 +187,11 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
         m0 = tuple(initial.get(p, 0) for p in s.places)
     unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
     if unit and all(n <= 1 for n in m0):
-        from .packedspace import NotSafe, explore_packed   # it builds on StateSpace
+        from .packedspace import KeyCollision, NotSafe, explore_packed   # builds on StateSpace
         try:
             return explore_packed(s, m0, max_states, _limit(max_states), progress)
-        except NotSafe:
-            pass
+        except (NotSafe, KeyCollision):
+            pass   # not safe after all, or (once in 2^64) two markings share a key
     return _explore_general(s, m0, max_states, progress)
 
 

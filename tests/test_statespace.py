@@ -1,11 +1,11 @@
 """Reachability and coverability graphs, on nets whose answers are known by hand."""
 import pytest
-from hypothesis import given, settings
+from hypothesis import given, settings, strategies as st
 
-from analysis import statespace
+from analysis import packedspace, statespace
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, explore
-from mcl2pnml.net import NetBuilder
+from mcl2pnml.net import ArcKind, NetBuilder
 
 from strategies import nets
 
@@ -154,3 +154,81 @@ def test_reduced_model_check_compares_projected_finals():
     b.place("B", 1)
     b.place("OK")
     assert not final_markings_agree(task(True), b.build(), ["B", "OK"]).equal
+
+
+@st.composite
+def spread_safe_nets(draw):
+    """Safe-looking unit nets whose few places sit far apart among unconnected ones.
+
+    So that markings take two or three 64-bit words and transitions test
+    places in different words: the packed explorer's several-word path.
+    """
+    real = draw(st.integers(2, 8))
+    fillers = draw(st.integers(60, 150))
+    spots = sorted(draw(st.lists(st.integers(0, fillers), min_size=real, max_size=real)))
+    b = NetBuilder("spread")
+    names, k = [], 0
+    for i in range(fillers + 1):
+        while k < real and spots[k] == i:
+            names.append(f"p{k}")
+            b.place(f"p{k}", draw(st.integers(0, 1)))
+            k += 1
+        if i < fillers:
+            b.place(f"f{i}", 0)
+    for t in range(draw(st.integers(1, 6))):
+        b.transition(f"t{t}")
+        pre = draw(st.sets(st.sampled_from(names), max_size=2))
+        for p in pre:
+            b.arc(p, f"t{t}")
+        for p in draw(st.sets(st.sampled_from(names), max_size=2)):
+            b.arc(f"t{t}", p)
+        for p in draw(st.sets(st.sampled_from(names), max_size=1)) - pre:
+            b.arc(p, f"t{t}", kind=ArcKind.READ)
+    return b.build()
+
+
+def _same_space(fast, slow):
+    assert set(fast.markings) == set(slow.markings)
+    assert fast.markings[0] == slow.markings[0]
+    assert fast.states == slow.states
+    edges = lambda sp: {(sp.markings[a], t, sp.markings[b])
+                        for a, t, b in zip(sp.src, sp.trans, sp.dst)}
+    assert edges(fast) == edges(slow)
+    assert {fast.markings[n] for n in fast.terminal} == {slow.markings[n] for n in slow.terminal}
+    goal = slow.terminal or [0]
+    reach_slow = dict(zip(slow.markings, slow.can_reach(goal)))
+    goal_fast = [fast.markings.index(slow.markings[n]) for n in goal]
+    assert dict(zip(fast.markings, fast.can_reach(goal_fast))) == reach_slow
+
+
+@settings(max_examples=120, deadline=None)
+@given(spread_safe_nets())
+def test_the_packed_explorer_on_markings_of_several_words(net):
+    fast = explore(net, max_states=5000)
+    slow = statespace._explore_general(fast.structure, tuple(fast.markings[0]), 5000, None)
+    if fast.bounded and max(max(m) for m in slow.markings) <= 1:
+        assert type(fast).__name__ == "PackedStateSpace"
+    _same_space(fast, slow)
+
+
+def test_markings_that_share_a_key_fall_back_to_exact_exploration(monkeypatch):
+    """A key collision (once in 2^64 pairs) must never merge two markings.
+
+    A key made of the first word only collides whenever two markings differ
+    in the second word alone; the explorer has to notice and answer right.
+    """
+    b = NetBuilder("two words")
+    for i in range(130):
+        b.place(f"p{i}", 1 if i in (0, 100) else 0)
+    for t, before, after in (("low", "p0", "p1"), ("high", "p100", "p101")):
+        b.transition(t)
+        b.arc(before, t)
+        b.arc(t, after)
+    net = b.build()
+    assert type(explore(net)).__name__ == "PackedStateSpace" and explore(net).states == 4
+    monkeypatch.setattr(packedspace, "_keys",
+                        lambda rows: rows[:, 0].copy() if rows.shape[1] > 1 else rows[:, 0])
+    fooled = explore(net)
+    assert fooled.states == 4
+    _same_space(fooled, statespace._explore_general(fooled.structure,
+                                                    tuple(fooled.markings[0]), 100, None))
