@@ -43,12 +43,14 @@ if engine == "ours":
     from analysis.statespace import explore
     import analysis.packedspace   # loaded on first use otherwise: loading is not exploring
     s = structure(load_pnml(path))
+    levels = []   # the explorer reports once per breadth-first level
     before = rss(); t0 = time.perf_counter()
-    space = explore(s, max_states=50_000_000)
+    space = explore(s, max_states=50_000_000, progress=lambda *_: levels.append(1))
     states = space.states
     seconds, size = time.perf_counter() - t0, max(0, rss() - before)
     t1 = time.perf_counter(); verdict = behaviour(space)
-    extra = {"analysis_seconds": time.perf_counter() - t1, "reusable": verdict.reusable}
+    extra = {"analysis_seconds": time.perf_counter() - t1, "reusable": verdict.reusable,
+             "levels": len(levels) + 1}
 elif engine == "snakes":
     import snakes.pnml
     from snakes.nets import StateGraph
@@ -84,6 +86,7 @@ def measure(engine: str, path: Path) -> dict | None:
                "bytes": statistics.median(r["bytes"] for r in results)}
     if "analysis_seconds" in results[0]:
         summary["analysis_seconds"] = statistics.median(r["analysis_seconds"] for r in results)
+        summary["levels"] = results[0]["levels"]
     return summary
 
 
