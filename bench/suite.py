@@ -165,6 +165,7 @@ def compile_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, 
     rows = {}
     for n in sizes:
         rows[n] = compile_scale.measure(n, runs=1 if n >= 100_000 else 3)
+        rows[n]["calls"] = n
         log(f"  compile {n}: {rows[n]['total']:.2f} s")
     lines = ["## Compiling: MCL to PNML on disk", "",
              "Generated surveys, each size in a fresh interpreter; median of 3 runs "
@@ -177,6 +178,21 @@ def compile_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, 
                      f"{r['peak_mb']:.0f} | {r['pnml_mb']:.1f} |")
     exponent = slope(list(rows), [r["total"] for r in rows.values()])
     lines += ["", f"Fitted exponent of total time against calls: {exponent:.2f}."]
+    at = rows.get(10_000)
+    if at and at["total"] >= 2:
+        elements = at["places"] + at["transitions"] + at["arcs"]
+        lines += ["", "Where the 10,000-call time goes: the net is "
+                  f"{elements:,} elements ({at['places']:,} places, {at['transitions']:,} "
+                  f"transitions, {at['arcs']:,} arcs), and every stage is linear in it. "
+                  f"Parsing is lark's LALR parser ({1e6 * at['parse'] / at['calls']:.0f} us "
+                  f"a call, {at['parse']:.2f} s); compiling builds each element once as an "
+                  f"immutable Python object ({1e6 * at['compile'] / elements:.2f} us an "
+                  f"element, {at['compile']:.2f} s); writing formats one line of PNML per "
+                  f"element ({at['pnml_mb'] / at['write']:.0f} MB/s, {at['write']:.2f} s for "
+                  f"{at['pnml_mb']:.0f} MB). Each is within a small factor of what CPython "
+                  "does per object or per formatted line; under 2 s would take a compiled "
+                  "core, or not building one object per element (PNML written straight "
+                  "from the call sites' templates)."]
     targets = [("compile: exponent at most 1.1", exponent <= 1.1, f"{exponent:.2f}")]
     if 10_000 in rows:
         targets.insert(0, ("compile: 10,000 calls under 2 s", rows[10_000]["total"] < 2,
