@@ -19,8 +19,15 @@ import tempfile
 
 from bench.core_scale import slope
 
+# Peak memory is the process's VmHWM: getrusage's ru_maxrss would also count
+# the parent's pages at the fork before exec (Linux keeps that high-water mark
+# across execve), so a child of a big parent would report the parent's peak.
 CHILD = r"""
-import json, resource, sys, time
+import json, sys, time
+def peak_mb():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
 from mcl2pnml.mcl_parser import parse_file
 from mcl2pnml.mcl_checker import check
 from mcl2pnml.compiler import compile_checked
@@ -32,7 +39,7 @@ t2 = time.perf_counter(); net = compile_checked(checked)
 t3 = time.perf_counter(); save_pnml(net, target)
 t4 = time.perf_counter()
 print(json.dumps({"parse": t1 - t0, "check": t2 - t1, "compile": t3 - t2, "write": t4 - t3,
-                  "total": t4 - t0, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                  "total": t4 - t0, "peak_mb": peak_mb(),
                   "places": len(net.places), "transitions": len(net.transitions),
                   "arcs": len(net.arcs)}))
 """

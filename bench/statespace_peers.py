@@ -30,11 +30,15 @@ TIMEOUT = 60.0
 RUNS = 3
 
 CHILD = r"""
-import json, resource, sys, time, warnings
+import json, sys, time, warnings
 warnings.simplefilter("ignore")
 engine, path = sys.argv[1], sys.argv[2]
 def rss():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    # the peak resident memory of this process (VmHWM), in bytes; getrusage's
+    # ru_maxrss would include the parent's pages at the fork before exec
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) * 1024
 extra = {}
 if engine == "ours":
     from mcl2pnml.pnml import load_pnml
