@@ -39,5 +39,15 @@ def encode(node_id: str) -> str:
     return "".join(out)
 
 
+def all_plain(node_ids: list[str]) -> bool:
+    """Whether :func:`encode` leaves every one of ``node_ids`` as it is.
+
+    The same test as :func:`encode`'s first line, over all ids at once (a
+    regex match per id from C, and one search of their join for ``_x``), so
+    that a writer can skip encoding a net of 400,000 nodes id by id.
+    """
+    return all(map(_PLAIN.match, node_ids)) and "_x" not in "\n".join(node_ids)
+
+
 def decode(xml_id: str) -> str:
     return _ESCAPE.sub(lambda m: chr(int(m.group(1), 16)), xml_id)

@@ -30,14 +30,15 @@ import io
 import json
 import re
 from functools import lru_cache
+from operator import attrgetter
 from pathlib import Path
-from typing import BinaryIO, Iterator
+from typing import Any, BinaryIO, Callable, Iterator
 from xml.sax.saxutils import escape
 
 from .. import __version__
 from ..files import atomic_writer
 from ..gcpause import without_gc
-from ..net import ArcKind, FrozenDict, Net, Place, Transition
+from ..net import ArcKind, FrozenDict, Net, Place, Timing, Transition
 from ..layout import layout
 from . import ids
 
@@ -75,24 +76,38 @@ def _fmt(x: float) -> str:
 
 
 class _Ids:
-    """Hands out XML ids: encoded node ids first, then fresh ones that clash with none."""
+    """Hands out XML ids: encoded node ids first, then fresh ones that clash with none.
+
+    ``node`` maps node ids to XML ids, or is ``None`` when every node id is
+    its own encoding (the compiler's always are): then ids are written as
+    they are, with no lookup per arc end.
+    """
 
     def __init__(self, net: Net):
-        self.node = {n.id: ids.encode(n.id) for n in (*net.places, *net.transitions)}
-        self.taken = set(self.node.values())
+        node_ids = [n.id for n in net.places]
+        node_ids += [n.id for n in net.transitions]
+        if ids.all_plain(node_ids):
+            self.node: dict[str, str] | None = None
+        else:
+            self.node = {i: ids.encode(i) for i in node_ids}
+            node_ids = list(self.node.values())
+        # XML ids are names, so none holds a line break: joined one to a
+        # line, they answer "is this id taken" and "which ids start so" by a
+        # string search, without a set of 400,000 ids built for two questions
+        self._taken = "\n" + "\n".join(node_ids) + "\n"
 
     def numbering(self, stem: str) -> str:
         """A stem such that ``stem`` + digits is no id handed out so far."""
-        while any(i.startswith(stem) and i[len(stem):].isdigit() for i in self.taken):
+        while any(rest.isdigit() for rest in re.findall(f"\n{re.escape(stem)}(.*)", self._taken)):
             stem += "_"
         return stem
 
     def fresh(self, stem: str) -> str:
         candidate, i = stem, 0
-        while candidate in self.taken:
+        while f"\n{candidate}\n" in self._taken:
             i += 1
             candidate = f"{stem}{i}"
-        self.taken.add(candidate)
+        self._taken += candidate + "\n"
         return candidate
 
 
@@ -103,90 +118,132 @@ _READ = f"{_TOOL_OPEN}<read/></toolspecific>"
 def _plain(value):
     """What ``json`` cannot serialise itself: the frozen mappings of payloads."""
     if isinstance(value, FrozenDict):
-        return dict(value)
+        # its own dict, not a copy: json only reads it, and copying a
+        # mapping through its Python methods cost more than the encoding
+        return value._data
     raise TypeError(f"payload holds a {type(value).__name__}")
 
 
-class _Payloads:
-    """``<payload>`` elements, each serialised once: nodes of one template share them."""
-
-    def __init__(self) -> None:
-        self._done: dict[int, tuple[object, str]] = {}
-
-    def __call__(self, payload) -> str:
-        if payload is None:
-            return ""
-        hit = self._done.get(id(payload))
-        if hit is not None and hit[0] is payload:
-            return hit[1]
-        data = json.dumps(payload, default=_plain, sort_keys=True, separators=(",", ":"))
-        text = f"<payload>{_text(data)}</payload>"
-        self._done[id(payload)] = (payload, text)  # the payload is kept alive: ids stay unique
-        return text
+def _payload(payload) -> str:
+    if payload is None:
+        return ""
+    data = json.dumps(payload, default=_plain, sort_keys=True, separators=(",", ":"))
+    return f"<payload>{_text(data)}</payload>"
 
 
-def _lines(net: Net, xid: _Ids, layout_engine: str) -> Iterator[str]:
-    """The lines of the page: one per place, transition and arc."""
+def _tool(labels: str) -> str:
+    return f"{_TOOL_OPEN}{labels}</toolspecific>" if labels else ""
+
+
+def _place_tail(tokens: int, interface: str | None, payload) -> str:
+    """What follows a place's name and position: its marking, our labels, the end tag."""
+    marking = f"<initialMarking><text>{tokens}</text></initialMarking>" if tokens else ""
+    labels = "" if interface is None else f'<interface label="{_attr(interface)}"/>'
+    return f"{marking}{_tool(labels + _payload(payload))}</place>\n"
+
+
+def _transition_tail(timing: Timing | None, payload) -> str:
+    """What follows a transition's name and position: our labels, the end tag."""
+    labels = ""
+    if timing is not None:
+        latest = "" if timing.latest is None else f' latest="{_fmt(timing.latest)}"'
+        labels = f'<timing earliest="{_fmt(timing.earliest)}"{latest}/>'
+    return f"{_tool(labels + _payload(payload))}</transition>\n"
+
+
+def _node_lines(tag: str, nodes: tuple[Place, ...] | tuple[Transition, ...], keys: list,
+                tail: Callable[[Any], str], node: dict[str, str] | None,
+                pos: dict[str, tuple[float, float]]) -> Iterator[str]:
+    """The lines of ``nodes`` in chunks; ``keys[i]`` says what ends node i's line.
+
+    Nodes made from one template differ in their ids only, so the end of a
+    line (marking, labels, payload) is formatted once per distinct key, from
+    the first node that has it. The lines are then put together column by
+    column, each column built by ``map`` or a comprehension: a compiled
+    mission has 400,000 nodes, and a Python step per node per attribute is
+    what writing them used to cost.
+    """
+    first = dict(zip(reversed(keys), reversed(nodes)))   # reversed: the first one wins
+    ends = {k: tail(n) for k, n in first.items()}
+    ends_ = list(map(ends.__getitem__, keys))
+    ids_ = list(map(_ID, nodes))
+    names = list(map(_NAME, nodes))
+    if node is None:   # plain ids: no escaping, as ids or as labels
+        xml = ids_
+        labels = (ids_ if names.count(None) == len(names) else
+                  [i if name is None else _text(name) for i, name in zip(ids_, names)])
+    else:
+        xml = list(map(node.__getitem__, ids_))
+        labels = [_text(i if name is None else name) for i, name in zip(ids_, names)]
+    if pos:
+        ends_ = [ends_[k] if i not in pos else _graphics(*pos[i]) + ends_[k]
+                 for k, i in enumerate(ids_)]
+    for start in range(0, len(nodes), CHUNK):
+        stop = start + CHUNK
+        yield "".join([f'<{tag} id="{x}"><name><text>{label}</text></name>{end}'
+                       for x, label, end in zip(xml[start:stop], labels[start:stop],
+                                                ends_[start:stop])])
+
+
+_ID, _NAME, _PAYLOAD = attrgetter("id"), attrgetter("name"), attrgetter("payload")
+
+
+def _chunks(net: Net, xid: _Ids, layout_engine: str) -> Iterator[str]:
+    """The page, one line per place, transition and arc, in chunks of :data:`CHUNK` lines."""
     positioned = all(n.position is not None for n in (*net.places, *net.transitions))
     pos = ({n.id: n.position for n in (*net.places, *net.transitions)} if positioned
            else layout(net, layout_engine))
-    payload = _Payloads()
-
-    def line(tag: str, n: Place | Transition, standard: str, tool: str) -> str:
-        """One node: its name and position, then PNML's own labels, then ours."""
-        tool += payload(n.payload)
-        tool = f"{_TOOL_OPEN}{tool}</toolspecific>" if tool else ""
-        at = pos.get(n.id)
-        graphics = "" if at is None else _graphics(*at)
-        label = _text(n.id if n.name is None else n.name)
-        return (f'<{tag} id="{xid.node[n.id]}"><name><text>{label}</text></name>'
-                f"{graphics}{standard}{tool}</{tag}>\n")
-
-    initial = net.initial
-    for p in net.places:
-        tokens = initial[p.id]
-        yield line("place", p,
-                   f"<initialMarking><text>{tokens}</text></initialMarking>" if tokens else "",
-                   "" if p.interface is None else f'<interface label="{_attr(p.interface)}"/>')
-    for t in net.transitions:
-        timing = ""
-        if t.timing is not None:
-            latest = "" if t.timing.latest is None else f' latest="{_fmt(t.timing.latest)}"'
-            timing = f'<timing earliest="{_fmt(t.timing.earliest)}"{latest}/>'
-        yield line("transition", t, "", timing)
+    node = xid.node
+    tokens = dict(net.initial.items())
+    # Payloads are keyed by identity: call sites share their prototype's
+    # payload objects, and the net keeps every payload alive (so every id
+    # distinct) while it is written.
+    places, transitions = net.places, net.transitions
+    yield from _node_lines(
+        "place", places,
+        list(zip(map(tokens.get, map(_ID, places)), map(attrgetter("interface"), places),
+                 map(id, map(_PAYLOAD, places)))),
+        lambda p: _place_tail(tokens.get(p.id, 0), p.interface, p.payload), node, pos)
+    yield from _node_lines(
+        "transition", transitions,
+        list(zip(map(attrgetter("timing"), transitions), map(id, map(_PAYLOAD, transitions)))),
+        lambda t: _transition_tail(t.timing, t.payload), node, pos)
     # Arcs are numbered (a1, a2 ...): the line shows their ends anyway, and a
     # counter is cheaper than building and checking a name per arc. Nearly
     # every arc is a plain arc of weight 1: a run of those is formatted in one
-    # comprehension, a chunk at a time, instead of one generator step per arc.
-    node, stem = xid.node, xid.numbering("a")
+    # comprehension, a chunk at a time, instead of one step per arc.
+    stem = xid.numbering("a")
     sources, targets, weights, kinds = net.columns
+    if node is not None:
+        sources, targets = [node[s] for s in sources], [node[t] for t in targets]
     number = 0
     for start in range(0, len(sources), CHUNK):
         stop = min(start + CHUNK, len(sources))
         if (weights[start:stop].count(1) == stop - start
                 and kinds[start:stop].count(ArcKind.NORMAL) == stop - start):
-            yield "".join([f'<arc id="{stem}{k}" source="{node[a]}" target="{node[b]}"/>\n'
+            yield "".join([f'<arc id="{stem}{k}" source="{a}" target="{b}"/>\n'
                            for k, a, b in zip(range(number + 1, number + 1 + stop - start),
                                               sources[start:stop], targets[start:stop])])
             number += stop - start
             continue
-        for source, target, weight, kind in zip(sources[start:stop], targets[start:stop],
-                                                weights[start:stop], kinds[start:stop]):
-            src, dst = node[source], node[target]
+        chunk = []
+        for src, dst, weight, kind in zip(sources[start:stop], targets[start:stop],
+                                          weights[start:stop], kinds[start:stop]):
             number += 1
             inscription = (f"<inscription><text>{weight}</text></inscription>"
                            if weight != 1 else "")
             if kind is ArcKind.NORMAL:
-                yield (f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
-                       f"{inscription}</arc>\n" if inscription else
-                       f'<arc id="{stem}{number}" source="{src}" target="{dst}"/>\n')
+                chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
+                             f"{inscription}</arc>\n" if inscription else
+                             f'<arc id="{stem}{number}" source="{src}" target="{dst}"/>\n')
             else:
                 # a read arc is a self-loop to P/T tools, each half marked as read
-                yield (f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
-                       f"{inscription}{_READ}</arc>\n")
+                chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
+                             f"{inscription}{_READ}</arc>\n")
                 number += 1
-                yield (f'<arc id="{stem}{number}" source="{dst}" target="{src}">'
-                       f"{inscription}{_READ}</arc>\n")
+                chunk.append(f'<arc id="{stem}{number}" source="{dst}" target="{src}">'
+                             f"{inscription}{_READ}</arc>\n")
+        yield "".join(chunk)
 
 
 @without_gc
@@ -200,13 +257,8 @@ def write_pnml(net: Net, out: BinaryIO, layout_engine: str = "auto") -> None:
                f'<net id="{net_id}" type="{PTNET}">\n'
                f"<name><text>{_text(net.name or 'net')}</text></name>\n"
                f'<page id="{page_id}">\n').encode())
-    chunk: list[str] = []
-    for line in _lines(net, xid, layout_engine):
-        chunk.append(line)
-        if len(chunk) >= CHUNK:
-            out.write("".join(chunk).encode())
-            chunk.clear()
-    out.write("".join(chunk).encode())
+    for chunk in _chunks(net, xid, layout_engine):
+        out.write(chunk.encode())
     out.write(("</page>\n"
                f'{_TOOL_OPEN}<ids encoding="xml-name-escapes"/></toolspecific>\n'
                "</net>\n</pnml>\n").encode())
