@@ -51,6 +51,20 @@ class Location:
         return f"    {text}\n    {' ' * (col - 1)}^"
 
 
+def source_lines(text: str) -> list[str]:
+    """The lines of a source as lark and libxml2 number them: cut at ``\n`` only.
+
+    ``str.splitlines`` also cuts at form feeds, ``\r``, ``\x85``, U+2028 and
+    more, so that its line n is not the parser's line n and an excerpt would
+    show the wrong line. A final newline opens no line; a ``\r`` before a
+    newline is dropped, so that an excerpt cannot return the cursor.
+    """
+    lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    return [line[:-1] if line.endswith("\r") else line for line in lines]
+
+
 class Mcl2PnmlError(Exception):
     """A user-facing error: bad MCL, bad PNML, a bad net, a bad argument.
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable
 
 from . import mcl_ast as ast
-from .errors import Location, Mcl2PnmlError, did_you_mean, raise_all
+from .errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
 from .template_library import Library, default_library
 from .template_parser import Template, TemplateKind
 
@@ -40,7 +40,7 @@ class _Checker:
     def __init__(self, program: ast.Program, library: Library):
         self.p = program
         self.lib = library
-        self.lines = program.source.splitlines()
+        self.lines = source_lines(program.source)
         self.errors: list[Mcl2PnmlError] = []
         self.names: dict[str, Any] = {}
 

@@ -17,7 +17,7 @@ from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharact
                   UnexpectedEOF, UnexpectedInput)
 
 from . import mcl_ast as ast
-from .errors import Location, Mcl2PnmlError
+from .errors import Location, Mcl2PnmlError, source_lines
 from .gcpause import without_gc
 
 GRAMMAR = r"""
@@ -209,7 +209,7 @@ def decode(data: bytes, filename: str) -> str:
 @without_gc
 def parse(text: str, filename: str = "<mcl>") -> ast.Program:
     """Parse MCL source into a :class:`~mcl2pnml.mcl_ast.Program` (no checks beyond syntax)."""
-    lines = text.splitlines()
+    lines = source_lines(text)
     try:
         tree = _PARSER.parse(text)
     except UnexpectedInput as e:

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from ..errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all
+from ..errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all, source_lines
 from ..net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
 from . import ids
 from .writer import TOOL
@@ -64,12 +64,19 @@ class _Source:
 
     def __init__(self, filename: str, data: bytes):
         self.filename = filename
-        self.lines = data.decode("utf-8", errors="replace").splitlines()
+        self.lines = source_lines(data.decode("utf-8", errors="replace"))
 
     def at(self, line: int | None, column: int | None = None) -> Location:
-        if not line or not 0 < line <= len(self.lines):
+        if not line or line < 1 or not self.lines:
             return Location(self.filename)
-        return Location(self.filename, line, column, self.lines[line - 1])
+        if line > len(self.lines):
+            # libxml2 puts "premature end of data" on the line after a final
+            # newline: shown at the end of the last line, where the file stops
+            line = len(self.lines)
+            column = len(self.lines[-1]) + 1
+        text = self.lines[line - 1]
+        column = min(max(1, column or 1), len(text) + 1)
+        return Location(self.filename, line, column, text)
 
     def locate(self, el) -> Location:
         line = el.sourceline
