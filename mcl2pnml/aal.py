@@ -18,6 +18,7 @@ from __future__ import annotations
 import enum
 import json
 import math
+import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,6 +66,33 @@ class Action:
     def as_json(self) -> dict[str, Any]:
         return {"t": _time(self.t), "action": self.kind.value, "primitive": self.primitive,
                 "args": _plain(self.args)}
+
+
+@dataclass(frozen=True)
+class SafeStop(Action):
+    """A ``disable`` sent by the run loop, not by the mission, when the run ends.
+
+    Every ending (a result, a stall, the time limit, a failing vehicle, a
+    lost link, an interrupt) disables the primitives still enabled, so that
+    the vehicle does not go on driving for a mission that has stopped
+    (docs/faults.md). Logged apart from the mission's own trace.
+    """
+
+    def as_json(self) -> dict[str, Any]:
+        return {**super().as_json(), "safe_stop": True}
+
+
+class VehicleInputError(Mcl2PnmlError):
+    """Bad input from the vehicle's side (an unknown primitive or event, a garbled line).
+
+    One message naming where it came from (the script's file:line:col, or
+    the line received on a live link); the run ends with it, after its safe
+    stop.
+    """
+
+
+class LinkLost(Exception):
+    """The link to the vehicle closed or broke: nothing more can be sent or received."""
 
 
 @dataclass(frozen=True)
@@ -197,28 +225,49 @@ class ScriptedVehicle(Vehicle):
         self.used: dict[str, int] = {}
         self.pending: dict[str, list[Event]] = {}   # primitive -> events in time order
         self.enabled: set[str] = set()
+        self.where: dict[str, Location] = {}         # where the script names each primitive
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<script>") -> "ScriptedVehicle":
         def fail(message: str, line: int | None = None, column: int | None = None):
-            return Mcl2PnmlError(message, Location(filename, line, column))
+            source = text.splitlines()[line - 1] if line else None
+            return VehicleInputError(message, Location(filename, line, column, source))
         try:
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_no_duplicates)
         except json.JSONDecodeError as e:
             raise fail(f"not a vehicle script: {e.msg}", e.lineno, e.colno) from None
+        except _Duplicate as e:
+            raise fail(f"'{e.args[0]}' is scripted twice", *_string_at(text, e.args[0], 2)) \
+                from None
         if not isinstance(data, dict):
             raise fail("a vehicle script is a JSON object: "
-                       '{"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}')
-        script = {}
+                       '{"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}', 1, 1)
+        script, where = {}, {}
+        strings = iter(_strings(text))   # the script's strings in order: a name, its replies...
         for name, replies in data.items():
+            at = next(strings, (None, None, None))[1:]
+            where[name] = at
             if not isinstance(replies, list) or not all(isinstance(r, str) for r in replies):
-                raise fail(f"'{name}': a list of replies such as [\"ok@5\", \"never\"]")
-            try:
-                script[name] = [Reply.parse(r, f"'{name}' reply {i + 1}")
-                                for i, r in enumerate(replies)]
-            except ValueError as e:
-                raise fail(str(e)) from None
-        return cls(script)
+                raise fail(f"'{name}': a list of replies such as [\"ok@5\", \"never\"]", *at)
+            script[name] = []
+            for i, r in enumerate(replies):
+                at = next(strings, (None, None, None))[1:]
+                try:
+                    script[name].append(Reply.parse(r, f"'{name}' reply {i + 1}"))
+                except ValueError as e:
+                    raise fail(str(e), *at) from None
+        vehicle = cls(script)
+        vehicle.where = {name: Location(filename, line, col, text.splitlines()[line - 1])
+                         for name, (line, col) in where.items() if line}
+        return vehicle
+
+    def check_primitives(self, used: set[str]) -> None:
+        """Refuse a script that scripts a primitive the mission does not use (a typo)."""
+        for name in self.replies:
+            if name not in used:
+                raise VehicleInputError(
+                    f"the script scripts '{name}', which the mission does not use; it uses "
+                    + ", ".join(sorted(used)), self.where.get(name))
 
     @classmethod
     def load(cls, path: str | Path) -> "ScriptedVehicle":
@@ -253,3 +302,31 @@ class ScriptedVehicle(Vehicle):
         nxt = self._next()
         assert nxt is not None, "no event is pending"
         return self.pending[nxt[1]].pop(0)
+
+
+class _Duplicate(Exception):
+    pass
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    seen: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in seen:
+            raise _Duplicate(k)
+        seen[k] = v
+    return seen
+
+
+_STRING = re.compile(r'"(?:[^"\\]|\\.)*"')
+
+
+def _strings(text: str) -> Iterable[tuple[str, int, int]]:
+    """Each JSON string of ``text`` with its line and column (from 1), in order."""
+    for m in _STRING.finditer(text):
+        line = text.count("\n", 0, m.start()) + 1
+        yield json.loads(m.group()), line, m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
+
+
+def _string_at(text: str, value: str, nth: int) -> tuple[int | None, int | None]:
+    found = [(line, col) for s, line, col in _strings(text) if s == value]
+    return found[nth - 1] if len(found) >= nth else (None, None)

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from .aal import Action, ActionKind, Event, EventKind, LiveVehicle
+from .aal import Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle, VehicleInputError
 from .errors import Location, Mcl2PnmlError
 from .files import read_text
 
@@ -169,21 +169,45 @@ class Transport:
         raise NotImplementedError
 
 
+class _Closed:
+    """Put in the inbox when the link closes: what follows it can never come."""
+
+
 class QueueTransport(Transport):
-    """In memory: a bridge (or a test) reads ``sent`` and puts messages in ``inbox``."""
+    """In memory: a bridge (or a test) reads ``sent`` and puts messages in ``inbox``.
+
+    :meth:`close` (or a :class:`LinkLost`, or a line that is not a JSON object,
+    put in the inbox) is how the other side's faults reach :meth:`receive`.
+    """
 
     def __init__(self) -> None:
         self.sent: queue.Queue[dict[str, Any]] = queue.Queue()
-        self.inbox: queue.Queue[dict[str, Any]] = queue.Queue()
+        self.inbox: queue.Queue[Any] = queue.Queue()
+        self.closed = False
 
     def send(self, obj: Mapping[str, Any]) -> None:
+        if self.closed:
+            raise LinkLost("the link is closed")
         self.sent.put(dict(obj))
+
+    def close(self) -> None:
+        """The other side hung up: pending messages are still read, then the link is lost."""
+        self.inbox.put(_Closed())
 
     def receive(self, timeout: float | None) -> dict[str, Any] | None:
         try:
-            return self.inbox.get(timeout=timeout)
+            item = self.inbox.get(timeout=timeout)
         except queue.Empty:
             return None
+        if isinstance(item, _Closed):
+            self.closed = True
+            self.inbox.put(item)     # and for every later call
+            raise LinkLost("the vehicle's bridge closed the link")
+        if isinstance(item, (bytes, str)):   # a line received that is no message
+            text = item.decode(errors="replace") if isinstance(item, bytes) else item
+            raise VehicleInputError(f"the vehicle's bridge sent a line that is not a JSON "
+                                    f"object: {text.rstrip()!r}")
+        return item
 
 
 class TcpTransport(QueueTransport):
@@ -197,21 +221,31 @@ class TcpTransport(QueueTransport):
         except (OSError, ValueError) as e:
             raise Mcl2PnmlError(f"cannot connect to the vehicle's bridge at {address}: {e}") \
                 from None
+        self.sock.settimeout(None)    # the reader blocks until a line or the end
         self.file = self.sock.makefile("rwb")
         threading.Thread(target=self._read, daemon=True).start()
 
     def _read(self) -> None:
-        for line in self.file:
-            try:
-                obj = json.loads(line)
-            except json.JSONDecodeError:
-                continue   # not a message: the live log shows nothing came of it
-            if isinstance(obj, dict):
-                self.inbox.put(obj)
+        try:
+            for line in self.file:
+                try:
+                    obj = json.loads(line)
+                except (json.JSONDecodeError, UnicodeDecodeError):
+                    obj = None
+                self.inbox.put(obj if isinstance(obj, dict) else line)
+        except OSError:
+            pass          # reset by the peer: the same as a close
+        self.close()
 
     def send(self, obj: Mapping[str, Any]) -> None:
-        self.file.write(json.dumps(dict(obj)).encode() + b"\n")
-        self.file.flush()
+        if self.closed:
+            raise LinkLost("the link is closed")
+        try:
+            self.file.write(json.dumps(dict(obj)).encode() + b"\n")
+            self.file.flush()
+        except OSError as e:
+            self.closed = True
+            raise LinkLost(f"cannot send to the vehicle's bridge: {e.strerror or e}") from None
 
 
 class MappedVehicle(LiveVehicle):

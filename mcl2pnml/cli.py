@@ -236,6 +236,8 @@ def run(mission: Path, engine: str, vehicle: str, connect: str | None, as_json: 
         raise click.BadParameter(f"the mission uses '{missing}', which this vehicle does not "
                                  f"offer; it offers {', '.join(sorted(offered))}",
                                  param_hint="--vehicle")
+    if isinstance(car, ScriptedVehicle):
+        car.check_primitives(needed)
     jsonl = io.StringIO() if log_path else None
     log = RunLog(None if as_json else sys.stdout, jsonl, transitions)
     if hasattr(eng, "on_fire"):
@@ -264,6 +266,9 @@ def run(mission: Path, engine: str, vehicle: str, connect: str | None, as_json: 
         click.echo(f"outcome {result.outcome.value} at t={result.time:g} s")
         for line in result.waiting:
             click.echo(f"  {line}")
+        if result.safe_stop:
+            click.echo("  safe stop: disabled " + ", ".join(a.primitive
+                                                            for a in result.safe_stop))
     return 0
 
 

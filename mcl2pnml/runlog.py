@@ -10,14 +10,17 @@ happens, in virtual time::
 The JSON-lines log has the same entries as objects (``{"t": 30, "event":
 "achieved", "primitive": "GoToWayPoint"}``, ``{"t": 30, "fire": "..."}``,
 ``{"t": 30, "ignored": {...}, "reason": "..."}``), one per line, so that a
-tool can follow a run while it happens or replay it after.
+tool can follow a run while it happens or replay it after. The safe stop
+at the end of a run (docs/faults.md) is logged as ``safe-stop`` lines
+(``"safe_stop": true`` in JSON). With ``flush``, each JSON line is flushed
+as it is written: the journal of :mod:`mcl2pnml.journal` is this log.
 """
 from __future__ import annotations
 
 import json
 from typing import IO, Any
 
-from .aal import Action, Event
+from .aal import Action, Event, SafeStop, _time
 
 
 def _args(args: tuple) -> str:
@@ -29,18 +32,28 @@ class RunLog:
     """Writes the live log (``text``) and the JSON-lines log (``jsonl``), either or both."""
 
     def __init__(self, text: IO[str] | None = None, jsonl: IO[str] | None = None,
-                 transitions: bool = False):
+                 transitions: bool = False, flush: bool = False):
         self.text, self.jsonl, self.transitions = text, jsonl, transitions
+        self.flush = flush
+
+    def _json(self, obj: dict[str, Any]) -> None:
+        assert self.jsonl is not None
+        self.jsonl.write(json.dumps(obj) + "\n")
+        if self.flush:
+            self.jsonl.flush()
 
     def _line(self, t: float, kind: str, what: str, obj: dict[str, Any]) -> None:
         if self.text is not None:
             self.text.write(f"t={t:9.3f}  {kind:<8}  {what}\n")
             self.text.flush()
         if self.jsonl is not None:
-            self.jsonl.write(json.dumps(obj) + "\n")
+            self._json(obj)
 
     def entry(self, entry: Action | Event) -> None:
-        if isinstance(entry, Action):
+        if isinstance(entry, SafeStop):    # the run loop's, not the mission's: say so
+            self._line(entry.t, "safe-stop", f"{entry.kind.value:<9} {entry.primitive}",
+                       entry.as_json())
+        elif isinstance(entry, Action):
             what = f"{entry.kind.value:<9} {entry.primitive}"
             if entry.args:
                 what += f"({_args(entry.args)})"
@@ -54,8 +67,8 @@ class RunLog:
             if self.text is not None and self.transitions:
                 self.text.write(f"t={t:9.3f}  {'fire':<8}  {transition}\n")
             if self.jsonl is not None:
-                self.jsonl.write(json.dumps({"t": t, "fire": transition}) + "\n")
+                self._json({"t": _time(t), "fire": transition})
 
     def ignored(self, event: Event, reason: str) -> None:
         self._line(event.t, "ignored", f"{event.kind.value} from {event.primitive}: {reason}",
-                   {"t": event.t, "ignored": event.as_json(), "reason": reason})
+                   {"t": _time(event.t), "ignored": event.as_json(), "reason": reason})

@@ -1,0 +1,301 @@
+"""Faults from the vehicle's side: each ends in a result or a diagnosed stall, with a safe stop.
+
+docs/faults.md lists the outcome of each fault; every test here runs the
+same faulty vehicle against both engines, which must agree, and checks
+that no primitive is left enabled on the vehicle at the end.
+"""
+from __future__ import annotations
+
+import heapq
+import json
+
+import pytest
+
+from mcl2pnml.aal import (Action, ActionKind, Event, EventKind, SafeStop, ScriptedVehicle,
+                          Vehicle, VehicleInputError)
+from mcl2pnml.bridge import MappedVehicle, QueueTransport, VehicleMapping
+from mcl2pnml.compiler import compile_checked
+from mcl2pnml.engine import Outcome, run, run_realtime
+from mcl2pnml.executor import PetriEngine
+from mcl2pnml.mcl_checker import check
+from mcl2pnml.mcl_parser import parse
+from mcl2pnml.reference import ReferenceEngine
+
+from test_cli import run as cli
+
+MISSION = """\
+primitive P(x);
+primitive Q(x);
+task T(x) = AchieveGoal(P(x)) timeout 10;
+task U(x) = AchieveGoal(Q(x));
+mission {
+    if (T(1)) then { U(1); }
+    U(2);
+}
+"""
+SCRIPT = {"P": ["ok@5"], "Q": ["ok@5", "ok@5"]}
+ACHIEVED, ON = EventKind.ACHIEVED, EventKind.ON
+
+
+class Faulty(Vehicle):
+    """A scripted vehicle with faults injected between it and the engine.
+
+    Rules name an event by (primitive, kind, n): the n-th such event the
+    script sends. ``drop`` loses it, ``duplicate`` sends it again that many
+    seconds later, ``delay`` sends it that many seconds late (a disable no
+    longer cancels it: a late event); ``inject`` adds events of its own
+    (sent before the script's at the same instant); ``fail_act`` makes
+    :meth:`act` raise on the n-th action of that kind to that primitive;
+    ``interrupt_at`` raises KeyboardInterrupt when the first event at or
+    after that time is taken.
+    """
+
+    def __init__(self, script: dict, *, drop=(), duplicate=None, delay=None, inject=(),
+                 fail_act=None, interrupt_at=None):
+        self.inner = ScriptedVehicle.from_json(json.dumps(script))
+        self.drop, self.duplicate, self.delay = set(drop), duplicate or {}, delay or {}
+        self.queue: list[tuple[float, int, str, int, Event]] = []
+        self.seq = 0
+        for event in inject:
+            self._push(event)
+        self.seen: dict[tuple[str, EventKind], int] = {}
+        self.acted: dict[tuple[ActionKind, str], int] = {}
+        self.fail_act, self.interrupt_at = fail_act, interrupt_at
+
+    def _push(self, event: Event) -> None:
+        self.seq += 1
+        heapq.heappush(self.queue, (event.t, 0, event.primitive, self.seq, event))
+
+    def _rule(self, event: Event):
+        n = self.seen.get((event.primitive, event.kind), 0) + 1
+        key = (event.primitive, event.kind, n)
+        return key in self.drop or key in self.duplicate or key in self.delay, key
+
+    def _pull(self) -> None:
+        """Take the script's next event into the queue if a rule is about it."""
+        while (nxt := self.inner._next()) is not None:
+            event = self.inner.pending[nxt[1]][0]
+            faulted, key = self._rule(event)
+            if not faulted:
+                return
+            self.inner.take_event()
+            self.seen[key[:2]] = key[2]
+            if key in self.duplicate:
+                self._push(event)
+                self._push(Event(event.t + self.duplicate[key], event.kind, event.primitive))
+            elif key in self.delay:
+                self._push(Event(event.t + self.delay[key], event.kind, event.primitive))
+
+    def next_event_time(self):
+        self._pull()
+        times = [t for t in (self.inner.next_event_time(),
+                             self.queue[0][0] if self.queue else None) if t is not None]
+        return min(times) if times else None
+
+    def take_event(self) -> Event:
+        self._pull()
+        t = self.inner.next_event_time()
+        if self.queue and (t is None or self.queue[0][0] <= t):
+            event = heapq.heappop(self.queue)[-1]
+        else:
+            event = self.inner.take_event()
+            self.seen[(event.primitive, event.kind)] = self._rule(event)[1][2]
+        if self.interrupt_at is not None and event.t >= self.interrupt_at:
+            raise KeyboardInterrupt
+        return event
+
+    def act(self, action: Action) -> None:
+        key = (action.kind, action.primitive)
+        self.acted[key] = self.acted.get(key, 0) + 1
+        if self.fail_act == (action.kind, action.primitive, self.acted[key]):
+            raise RuntimeError("thruster driver: CAN bus timeout")
+        self.inner.act(action)
+
+
+def engines():
+    c = check(parse(MISSION, "faults.mcl"))
+    return [PetriEngine(compile_checked(c)), ReferenceEngine(c)]
+
+
+def both(make_vehicle, **kw):
+    """Run both engines, each with a fresh faulty vehicle; they must agree on everything."""
+    results, vehicles = [], []
+    for engine in engines():
+        vehicles.append(make_vehicle())
+        results.append(run(engine, vehicles[-1], **kw))
+    a, b = results
+    assert a.as_json() == b.as_json()
+    assert [(e, r) for e, r in a.ignored] == [(e, r) for e, r in b.ignored]
+    for v in vehicles:      # no primitive left enabled, whatever happened
+        assert v.inner.enabled == set(), v.inner.enabled
+    return a
+
+
+CLEAN = None
+
+
+def clean():
+    global CLEAN
+    CLEAN = CLEAN or both(lambda: Faulty(SCRIPT))
+    return CLEAN
+
+
+def without(r, ignored) -> dict:
+    """The run's object with the ignored events taken out of its trace (they are traced)."""
+    out = r.as_json()
+    drop = [e.as_json() for e, _ in ignored]
+    out["trace"] = [e for e in out["trace"] if e not in drop]
+    return out
+
+
+def test_the_clean_run():
+    r = clean()
+    assert r.outcome is Outcome.OK and r.time == 15 and not r.safe_stop and not r.ignored
+
+
+def test_a_lost_reply_with_no_time_out_stalls_and_is_safely_stopped():
+    r = both(lambda: Faulty(SCRIPT, drop={("Q", ACHIEVED, 1)}))
+    assert r.outcome is Outcome.STALLED and r.time == 5
+    assert any("Q: waits for the vehicle's 'achieved'" in w for w in r.waiting), r.waiting
+    assert r.safe_stop == [SafeStop(5, ActionKind.DISABLE, "Q")]
+    assert r.as_json()["safe_stop"] == [{"t": 5, "action": "disable", "primitive": "Q",
+                                         "args": [], "safe_stop": True}]
+
+
+def test_a_lost_reply_under_a_time_out_fails_the_task_and_the_mission_goes_on():
+    r = both(lambda: Faulty(SCRIPT, drop={("P", ACHIEVED, 1)}))
+    assert r.outcome is Outcome.OK and r.time == 15 and not r.safe_stop
+    assert {"t": 10, "action": "disable", "primitive": "P", "args": []} in r.as_json()["trace"]
+    # the time-out failed T: U(1) was skipped, U(2) ran from t=10
+    enables = [e for e in r.as_json()["trace"] if e.get("action") == "enable"]
+    assert [(e["t"], e["primitive"], e["args"]) for e in enables] == [(0, "P", [1]),
+                                                                      (10, "Q", [2])]
+
+
+def test_a_lost_acknowledgement_stalls_naming_it():
+    r = both(lambda: Faulty(SCRIPT, drop={("P", ON, 1)}))
+    # the time-out counts from 'on' (mcl.md): it never starts; the goal comes while P is off
+    assert r.outcome is Outcome.STALLED and r.time == 5
+    assert [(e.t, e.kind) for e, _ in r.ignored] == [(5, ACHIEVED)]
+    assert any("P: waits for the vehicle's 'on'" in w for w in r.waiting), r.waiting
+    assert [a.primitive for a in r.safe_stop] == ["P"]
+
+
+def test_a_duplicated_event_is_ignored():
+    r = both(lambda: Faulty(SCRIPT, duplicate={("P", ACHIEVED, 1): 0.5}))
+    assert without(r, r.ignored) == clean().as_json()
+    assert [(e.t, e.primitive, e.kind) for e, _ in r.ignored] == [(5.5, "P", ACHIEVED)]
+    assert r.ignored[0][1] == "nothing waits for 'achieved' from 'P' now"
+
+
+def test_a_late_event_after_the_time_out_is_ignored():
+    r = both(lambda: Faulty(SCRIPT, delay={("P", ACHIEVED, 1): 7}))
+    assert r.outcome is Outcome.OK and r.time == 15
+    assert [(e.t, e.primitive) for e, _ in r.ignored] == [(12, "P")]
+    assert {"t": 10, "action": "disable", "primitive": "P", "args": []} in r.as_json()["trace"]
+
+
+def test_events_out_of_order_or_for_another_primitive_are_ignored():
+    r = both(lambda: Faulty(SCRIPT, inject=[Event(0, ACHIEVED, "P"),      # before 'on'
+                                            Event(3, ACHIEVED, "Q"),      # Q not enabled
+                                            Event(4, EventKind.OFF, "P"),  # off, no disable
+                                            Event(6, ACHIEVED, "Thruster")]))
+    assert without(r, r.ignored) == clean().as_json()
+    assert [r for _, r in r.ignored] == [
+        "nothing waits for 'achieved' from 'P' now", "nothing waits for 'achieved' from 'Q' now",
+        "nothing waits for 'off' from 'P' now", "no primitive 'Thruster' in this mission"]
+
+
+def test_an_adapter_that_raises_stalls_the_run_saying_so():
+    r = both(lambda: Faulty(SCRIPT, fail_act=(ActionKind.ENABLE, "Q", 1)))
+    assert r.outcome is Outcome.STALLED and r.time == 5
+    assert r.waiting[0] == ("the vehicle failed to carry out enable Q at t=5 s: "
+                            "RuntimeError: thruster driver: CAN bus timeout")
+    assert [a.primitive for a in r.safe_stop] == ["Q"]   # it may have half-started
+
+
+def test_the_time_limit_stops_the_vehicle():
+    r = both(lambda: Faulty(SCRIPT), max_time=3)
+    assert r.outcome is Outcome.STALLED and r.time == 0
+    assert r.waiting[0] == "stopped at the time limit of 3 s"
+    assert [a.primitive for a in r.safe_stop] == ["P"]
+
+
+def test_an_interrupt_stops_the_vehicle_before_it_is_passed_on():
+    for engine in engines():
+        vehicle = Faulty(SCRIPT, interrupt_at=6)
+        seen = []
+        with pytest.raises(KeyboardInterrupt):
+            run(engine, vehicle, listener=seen.append)
+        assert vehicle.inner.enabled == set()
+        assert seen[-1] == SafeStop(10, ActionKind.DISABLE, "Q")   # the time reached
+
+
+# -- unknown events: bad input, one message naming where it came from ------------------
+
+def test_a_script_naming_an_unknown_kind_or_primitive_names_file_line_and_column(tmp_path):
+    with pytest.raises(VehicleInputError) as e:
+        ScriptedVehicle.from_json('{"P": ["ok@5",\n      "arrived@3"]}', "v.json")
+    assert str(e.value).startswith("v.json:2:7: 'P' reply 2: 'arrived@3' is not a reply")
+    script = tmp_path / "v.json"
+    script.write_text('{"P": ["ok@5"],\n "Thruster": ["ok@1"]}')
+    mission = tmp_path / "m.mcl"
+    mission.write_text(MISSION)
+    out = cli("run", mission, "--vehicle", script)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert out.stderr.startswith(f"{script}:2:2: the script scripts 'Thruster', which the "
+                                 "mission does not use; it uses P, Q"), out.stderr
+
+
+# -- a live link: garbled lines and a dropped link ---------------------------------------
+
+MAPPING = VehicleMapping.from_json(json.dumps({"primitives": {
+    name: {"enable": {"command": f"start_{name}", "x": "$1"},
+           "disable": {"command": f"stop_{name}"},
+           "events": {"achieved": {"primitive": name, "status": "done"}}}
+    for name in ("P", "Q")}}))
+
+
+def live(engine, *messages):
+    """A real-time run against a link whose other side sends ``messages`` then whatever follows."""
+    transport = QueueTransport()
+    for m in messages:
+        transport.inbox.put(m)
+    # the clock stands still: only the link's messages (all queued already) make things happen
+    result = run_realtime(engine, MappedVehicle(MAPPING, transport), clock=lambda: 0.0)
+    return result, transport
+
+
+def sent(transport) -> list[dict]:
+    out = []
+    while not transport.sent.empty():
+        out.append(transport.sent.get_nowait())
+    return out
+
+
+def test_a_garbled_line_on_the_link_is_one_message_quoting_it_after_a_safe_stop():
+    for engine in engines():
+        transport = QueueTransport()
+        transport.inbox.put(b'{"primitive": "P", "sta\n')
+        with pytest.raises(VehicleInputError, match=r"""not a JSON object: '{"primitive": "P", "sta'"""):
+            run_realtime(engine, MappedVehicle(MAPPING, transport), clock=lambda: 0.0)
+        assert sent(transport) == [{"command": "start_P", "x": 1}, {"command": "stop_P"}]
+
+
+def test_a_dropped_link_stalls_the_run_saying_so():
+    results = []
+    for engine in engines():
+        transport = QueueTransport()
+        transport.inbox.put({"primitive": "P", "status": "done"})
+        transport.close()
+        results.append(run_realtime(engine, MappedVehicle(MAPPING, transport),
+                                    clock=lambda: 0.0))
+        # the disable of P (T's own) and the enable of Q(1) went out before the link closed
+        assert sent(transport) == [{"command": "start_P", "x": 1}, {"command": "stop_P"},
+                                   {"command": "start_Q", "x": 1}]
+    a, b = results
+    assert a.as_json() == b.as_json() and a.outcome is Outcome.STALLED
+    assert a.waiting[0] == ("the link to the vehicle was lost (waiting): the vehicle's bridge "
+                            "closed the link")
+    assert [s.primitive for s in a.safe_stop] == ["Q"]
+    assert "safe stop: could not disable Q: LinkLost: the link is closed" in a.waiting
