@@ -1,7 +1,19 @@
-"""Hypothesis strategies for whole MCL missions and vehicle scripts, to run both engines on."""
+"""Hypothesis strategies for whole MCL missions and vehicle scripts, to run both engines on,
+and :func:`both`, which runs one mission on both engines."""
 from __future__ import annotations
 
+import json
+
 from hypothesis import strategies as st
+
+from mcl2pnml.aal import ScriptedVehicle
+from mcl2pnml.compiler import compile_checked
+from mcl2pnml.engine import run
+from mcl2pnml.errors import Mcl2PnmlError
+from mcl2pnml.executor import PetriEngine
+from mcl2pnml.reference import ReferenceEngine
+
+MAX_TIME = 2_000.0
 
 PRIMITIVES = ["Pa", "Pb", "Pc"]
 
@@ -21,19 +33,20 @@ def task_decl(draw, name: str) -> str:
     return f"task {name}(x) = {body}{timeout};"
 
 
-def statement(depth: int, callees: list[str]):
+def statement(depth: int, callees: list[str], width: int = 3):
+    """Statements nested ``depth`` structures deep, blocks and branches at most ``width`` long."""
     call = st.builds(lambda n, a: f"{n}({a});", st.sampled_from(callees),
                      st.sampled_from(["1", "2.5", "(1, 2)", "K"]))
     if depth == 0:
         return call
-    inner = statement(depth - 1, callees)
-    block = st.lists(inner, min_size=0, max_size=3).map(lambda b: "{ " + " ".join(b) + " }")
-    nonempty = st.lists(inner, min_size=1, max_size=3).map(lambda b: "{ " + " ".join(b) + " }")
+    inner = statement(depth - 1, callees, width)
+    block = st.lists(inner, min_size=0, max_size=width).map(lambda b: "{ " + " ".join(b) + " }")
+    nonempty = st.lists(inner, min_size=1, max_size=width).map(lambda b: "{ " + " ".join(b) + " }")
     structure = st.one_of(call.map(lambda c: c[:-1]), nonempty)
     return st.one_of(
         call, call,
         block,
-        st.lists(structure, min_size=2, max_size=3).map(lambda s: f"parallel({', '.join(s)});"),
+        st.lists(structure, min_size=2, max_size=max(2, width)).map(lambda s: f"parallel({', '.join(s)});"),
         st.tuples(structure, structure).map(lambda s: f"monitor({s[0]}, {s[1]});"),
         st.tuples(structure, nonempty, st.none() | block).map(
             lambda s: f"if ({s[0]}) then {s[1]}" + (f" else {s[2]}" if s[2] else "")),
@@ -43,17 +56,26 @@ def statement(depth: int, callees: list[str]):
 
 
 @st.composite
-def missions(draw) -> str:
+def missions(draw, depth: int = 2, width: int = 3, function_depth: int | None = None) -> str:
+    """A whole mission: up to three tasks, up to two functions (a later one may
+    call an earlier one), and a mission body ``depth`` structures deep.
+
+    Functions nest ``function_depth`` structures deep (by default one level
+    less than the mission, so that a call of a function inside a structure
+    reaches as deep as the mission's own structures). ``width`` bounds blocks and parallel branches: the state
+    space grows with it far faster than with ``depth``.
+    """
     lines = ["const K = (0.5, -1);"]
     lines += [f"primitive {p}(v);" for p in PRIMITIVES]
     tasks = [f"T{i}" for i in range(draw(st.integers(1, 3)))]
     lines += [draw(task_decl(t)) for t in tasks]
     callees = list(tasks)
+    fdepth = depth - 1 if function_depth is None else function_depth
     for k in range(draw(st.integers(0, 2))):
-        body = draw(st.lists(statement(1, callees), min_size=1, max_size=3))
+        body = draw(st.lists(statement(fdepth, callees, width), min_size=1, max_size=width))
         lines.append(f"function F{k}(x) {{ {' '.join(body)} }}")
         callees.append(f"F{k}")
-    body = draw(st.lists(statement(2, callees), min_size=1, max_size=3))
+    body = draw(st.lists(statement(depth, callees, width), min_size=1, max_size=width))
     lines.append("mission { " + " ".join(body) + " }")
     return "\n".join(lines) + "\n"
 
@@ -62,3 +84,19 @@ replies = st.one_of(st.sampled_from(["never"]),
                     st.builds(lambda k, d: f"{k}@{d}", st.sampled_from(["ok", "fail"]),
                               st.sampled_from([0, 1, 2, 5, 10])))
 scripts = st.fixed_dictionaries({p: st.lists(replies, max_size=6) for p in PRIMITIVES})
+
+
+def both(checked, script: dict, net=None) -> tuple[dict, dict]:
+    """The ``--json`` run of the executor and of the reference engine, with one script.
+
+    ``net`` is the compiled mission when the caller has it already.
+    """
+    text = json.dumps(script)
+    out = []
+    for engine in (PetriEngine(net or compile_checked(checked)), ReferenceEngine(checked)):
+        try:
+            out.append(run(engine, ScriptedVehicle.from_json(text),
+                           max_time=MAX_TIME).as_json())
+        except Mcl2PnmlError as e:   # a zero-time loop: both must say so
+            out.append({"error": e.message})
+    return out[0], out[1]

@@ -7,37 +7,16 @@ the same outcome, time and trace (cli.md's ``--json`` object).
 """
 from __future__ import annotations
 
-import json
-
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mcl2pnml.aal import ScriptedVehicle
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.engine import run
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.executor import PetriEngine
 from mcl2pnml.mcl_checker import check
 from mcl2pnml.mcl_parser import parse, parse_file
-from mcl2pnml.reference import ReferenceEngine
 
 from conftest import ROOT
-from missions import missions, scripts
+from missions import both, missions, scripts
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
-MAX_TIME = 2_000.0
-
-
-def both(checked, script: dict) -> tuple[dict, dict]:
-    text = json.dumps(script)
-    out = []
-    for engine in (PetriEngine(compile_checked(checked)), ReferenceEngine(checked)):
-        try:
-            out.append(run(engine, ScriptedVehicle.from_json(text),
-                           max_time=MAX_TIME).as_json())
-        except Mcl2PnmlError as e:   # a zero-time loop: both must say so
-            out.append({"error": e.message})
-    return out[0], out[1]
 
 
 def example_scripts(checked) -> list[dict]:
