@@ -25,6 +25,7 @@ from pathlib import Path
 from lxml import etree
 
 from ..errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all, source_lines
+from ..gcpause import without_gc
 from ..net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
 from . import ids
 from .writer import TOOL
@@ -115,7 +116,7 @@ class _Raw:
     marking: dict = field(default_factory=dict)
     refs: dict = field(default_factory=dict)          # reference id -> (target id, element)
     arcs: list = field(default_factory=list)          # (element, source, target, weight, read)
-    seen: dict = field(default_factory=dict)          # xml id -> element
+    seen: dict = field(default_factory=dict)          # xml id -> line it is first used on
     errors: list = field(default_factory=list)
 
 
@@ -190,10 +191,12 @@ class _Reader:
             self.error(el, f"<{_local(el)}> has no id")
             return None
         if xml_id in self.raw.seen:
-            first = self.raw.seen[xml_id].sourceline
+            first = self.raw.seen[xml_id]
             self.error(el, f"duplicate id '{xml_id}' (first used on line {first})")
             return None
-        self.raw.seen[xml_id] = el
+        # the line, not the element: a proxy kept per node would keep a
+        # million of them alive in a large file
+        self.raw.seen[xml_id] = el.sourceline
         return xml_id
 
     def place(self, el) -> None:
@@ -320,6 +323,13 @@ class _Reader:
                    tuple(arcs), Marking(raw.marking))
 
 
+def _doctype_refused(src: _Source) -> XmlError:
+    line = next((i for i, text in enumerate(src.lines, 1) if "<!DOCTYPE" in text), 1)
+    col = src.lines[line - 1].find("<!DOCTYPE") + 1 if src.lines else 1
+    return XmlError("document type declarations are refused: PNML needs none, and "
+                    "entities are never expanded or fetched", src.at(line, max(col, 1)))
+
+
 def _parse_xml(data: bytes, src: _Source):
     parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
                              dtd_validation=False, huge_tree=False, remove_comments=True,
@@ -327,19 +337,22 @@ def _parse_xml(data: bytes, src: _Source):
     try:
         tree = etree.fromstring(data, parser).getroottree()
     except etree.XMLSyntaxError as e:
+        if b"<!DOCTYPE" in data:
+            # libxml2 still weighs the declared entities (a bomb fails with
+            # "maximum entity amplification" at line 1): the declaration is
+            # the fault to name, where it is
+            raise _doctype_refused(src) from None
         line, col = getattr(e, "position", (e.lineno, None))
         msg = str(e.msg).split(f", line {line}")[0]
         raise XmlError(f"not well-formed XML: {msg}", src.at(line, col)) from None
     except ValueError as e:  # e.g. a str with an encoding declaration
         raise XmlError(f"cannot parse as XML: {e}", src.at(None)) from None
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
-        line = next((i for i, text in enumerate(src.lines, 1) if "<!DOCTYPE" in text), 1)
-        col = src.lines[line - 1].find("<!DOCTYPE") + 1 if src.lines else 1
-        raise XmlError("document type declarations are refused: PNML needs none, and "
-                       "entities are never expanded or fetched", src.at(line, max(col, 1)))
+        raise _doctype_refused(src)
     return tree
 
 
+@without_gc  # a large file is millions of small objects, all alive (see gcpause)
 def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None) -> Net:
     """Read one P/T net from PNML bytes. Raises :class:`PnmlError` (or several)."""
     src = _Source(filename, data)
