@@ -202,7 +202,9 @@ def assert_located(error: Mcl2PnmlError, filename: str, data: bytes) -> None:
     """Every error (each of a list) names the file and, where there are lines, a line
     and column; its excerpt is that line of the input (parsers count lines at ``\\n``)."""
     try:
-        lines = data.decode("utf-8").replace("\r\n", "\n").split("\n")
+        # a "\r" ending a line is left out of excerpts: it would return the cursor
+        lines = [line[:-1] if line.endswith("\r") else line
+                 for line in data.decode("utf-8").split("\n")]
     except UnicodeDecodeError:
         lines = None  # the excerpt shows what can be shown of undecodable bytes
     if b"\x00" in data:

@@ -199,8 +199,18 @@ class _Reader:
         self.raw.seen[xml_id] = el.sourceline
         return xml_id
 
-    def place(self, el) -> None:
+    def _node_id(self, el) -> str | None:
+        """A place's or transition's id, checked here so that the error has its line
+        (the core would refuse it too, but knows no line)."""
         xml_id = self._id(el)
+        if xml_id is not None and (not xml_id or xml_id != xml_id.strip()):
+            self.error(el, f"{_local(el)} id {xml_id!r} must be a non-empty string without "
+                           "leading or trailing white space")
+            return None
+        return xml_id
+
+    def place(self, el) -> None:
+        xml_id = self._node_id(el)
         if xml_id is None:
             return
         node_id = self.decode(xml_id)
@@ -216,7 +226,7 @@ class _Reader:
             self.raw.marking[node_id] = tokens
 
     def transition(self, el) -> None:
-        xml_id = self._id(el)
+        xml_id = self._node_id(el)
         if xml_id is None:
             return
         timing = None
