@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 
 from . import __version__
-from .errors import Mcl2PnmlError, did_you_mean
+from .errors import Location, Mcl2PnmlError, did_you_mean
 from .layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
 EXAMPLES = """\b
@@ -25,6 +25,8 @@ Examples:
   mcl2pnml compile examples/sauce.mcl --format dot -o sauce.dot
   mcl2pnml run examples/sauce.mcl --vehicle script.json
   mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
+  mcl2pnml run examples/sauce.mcl --vehicle script.json --journal run.journal
+  mcl2pnml run examples/sauce.mcl --resume run.journal
   mcl2pnml template --list
   mcl2pnml template task -o task.pnml
   mcl2pnml analyze task.pnml
@@ -181,22 +183,58 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
               show_default=True, help="Stop a mission still running at this virtual time.")
-def run(mission: Path, engine: str, vehicle: str, connect: str | None, as_json: bool,
-        log_path: Path | None, world: Path | None, transitions: bool, max_time: float) -> int:
+@click.option("--journal", "journal_path", type=click.Path(dir_okay=False, path_type=Path),
+              help="Journal the run here as it happens (JSON lines, each flushed; a new "
+                   "file), so that a killed run can be resumed.")
+@click.option("--resume", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Continue the killed run of this journal: replay it, check it, go on "
+                   "and append to it (its engine, vehicle, world and time limit are reused).")
+@click.pass_context
+def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: str | None,
+        as_json: bool, log_path: Path | None, world: Path | None, transitions: bool,
+        max_time: float, journal_path: Path | None, resume: Path | None) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows
     each action and event as it happens; at the end, the outcome (OK, FAIL,
-    ABORTED, or STALLED with what the mission still waits for).
+    ABORTED, or STALLED with what the mission still waits for), and the
+    safe stop: every primitive still enabled is disabled, however the run
+    ends (docs/faults.md). --journal writes the run down as it goes;
+    --resume JOURNAL continues it after a crash, with no step lost or
+    repeated.
     """
     import io
     import json
 
+    from . import journal as journals
     from .aal import ScriptedVehicle
     from .engine import run as drive
     from .files import atomic_write_text
     from .runlog import RunLog
 
+    replay = header = None
+    if resume is not None:
+        if journal_path is not None:
+            raise click.BadParameter("--resume appends to its own journal; leave out --journal",
+                                     param_hint="--journal")
+        loaded = journals.load(resume)
+        header = loaded.header
+        given = {"engine": engine, "vehicle": vehicle, "world": world and str(world),
+                 "max_time": max_time}
+        for key, value in given.items():
+            explicit = ctx.get_parameter_source(key) is click.core.ParameterSource.COMMANDLINE
+            if explicit and value != header.get(key):
+                raise Mcl2PnmlError(f"the journal's run has --{key.replace('_', '-')} "
+                                    f"{header.get(key)}, not {value}",
+                                    Location(str(resume), 1, 1))
+        engine, vehicle, max_time = header["engine"], header["vehicle"], header["max_time"]
+        world = Path(header["world"]) if header.get("world") else None
+        if loaded.torn:
+            click.echo(loaded.torn, err=True)
+    if vehicle.startswith("bridge:") and (resume or journal_path):
+        raise click.BadParameter("a journal replays a vehicle of its own (sim or a script); "
+                                 "a real vehicle's run cannot be replayed",
+                                 param_hint="--resume" if resume else "--journal")
     realtime = vehicle.startswith("bridge:")
     if world and vehicle != "sim":
         raise click.BadParameter("a world is for the simulator (--vehicle sim)",
@@ -238,8 +276,25 @@ def run(mission: Path, engine: str, vehicle: str, connect: str | None, as_json: 
                                  param_hint="--vehicle")
     if isinstance(car, ScriptedVehicle):
         car.check_primitives(needed)
+    if resume or journal_path:   # the files the run depends on, as they are now
+        files = {"mission": mission, "vehicle": None if vehicle == "sim" else Path(vehicle),
+                 "world": world}
+        digests = {f"{k}_sha256": journals.digest(f) for k, f in files.items() if f}
+        for key, value in digests.items():
+            if header is not None and header.get(key) != value:
+                raise Mcl2PnmlError(f"{files[key[:-7]]} has changed since this journal was "
+                                    "written: its run cannot be resumed",
+                                    Location(str(resume), 1, 1))
     jsonl = io.StringIO() if log_path else None
-    log = RunLog(None if as_json else sys.stdout, jsonl, transitions)
+    if resume is not None:
+        replay = sink = journals.Replay(loaded)
+    elif journal_path is not None:
+        sink = journals.create(journal_path, {
+            "mission": str(mission), "engine": engine, "vehicle": vehicle,
+            "world": world and str(world), "max_time": max_time, **digests})
+    else:
+        sink = None
+    log = RunLog(None if as_json else sys.stdout, jsonl, transitions, sink)
     if hasattr(eng, "on_fire"):
         eng.on_fire = log.fired
     seen = 0
@@ -258,6 +313,9 @@ def run(mission: Path, engine: str, vehicle: str, connect: str | None, as_json: 
         result = drive(eng, car, listener=listener, max_time=max_time)
     for event, reason in result.ignored[seen:]:
         log.ignored(event, reason)
+    log.end(result.time, result.outcome.value)
+    if replay is not None:
+        replay.finish()
     if log_path is not None:
         atomic_write_text(log_path, jsonl.getvalue())
     if as_json:

@@ -167,12 +167,13 @@ class _Driver:
             action = SafeStop(t, ActionKind.DISABLE, name)
             del self.enabled[name]
             stopped.append(action)
-            if self.listener:
-                self.listener(action)
             try:
                 self.vehicle.act(action)
             except Exception as e:   # the link is gone, or the adapter fails again
                 failed.append(f"safe stop: could not disable {name}: {type(e).__name__}: {e}")
+        for action in stopped:      # logged after: a failing log must not keep the vehicle going
+            if self.listener:
+                self.listener(action)
         return stopped, failed
 
 

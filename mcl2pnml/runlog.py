@@ -12,8 +12,9 @@ The JSON-lines log has the same entries as objects (``{"t": 30, "event":
 ``{"t": 30, "ignored": {...}, "reason": "..."}``), one per line, so that a
 tool can follow a run while it happens or replay it after. The safe stop
 at the end of a run (docs/faults.md) is logged as ``safe-stop`` lines
-(``"safe_stop": true`` in JSON). With ``flush``, each JSON line is flushed
-as it is written: the journal of :mod:`mcl2pnml.journal` is this log.
+(``"safe_stop": true`` in JSON), and the run's end as ``{"t": ...,
+"outcome": ...}``. The journal of :mod:`mcl2pnml.journal` is this log,
+written a flushed line at a time.
 """
 from __future__ import annotations
 
@@ -32,22 +33,22 @@ class RunLog:
     """Writes the live log (``text``) and the JSON-lines log (``jsonl``), either or both."""
 
     def __init__(self, text: IO[str] | None = None, jsonl: IO[str] | None = None,
-                 transitions: bool = False, flush: bool = False):
+                 transitions: bool = False, journal: Any = None):
         self.text, self.jsonl, self.transitions = text, jsonl, transitions
-        self.flush = flush
+        self.journal = journal     # mcl2pnml.journal's writer: one whole line per write
 
     def _json(self, obj: dict[str, Any]) -> None:
-        assert self.jsonl is not None
-        self.jsonl.write(json.dumps(obj) + "\n")
-        if self.flush:
-            self.jsonl.flush()
+        line = json.dumps(obj) + "\n"
+        if self.jsonl is not None:
+            self.jsonl.write(line)
+        if self.journal is not None:
+            self.journal.write(line)
 
     def _line(self, t: float, kind: str, what: str, obj: dict[str, Any]) -> None:
         if self.text is not None:
             self.text.write(f"t={t:9.3f}  {kind:<8}  {what}\n")
             self.text.flush()
-        if self.jsonl is not None:
-            self._json(obj)
+        self._json(obj)
 
     def entry(self, entry: Action | Event) -> None:
         if isinstance(entry, SafeStop):    # the run loop's, not the mission's: say so
@@ -63,12 +64,14 @@ class RunLog:
                        entry.as_json())
 
     def fired(self, t: float, transition: str) -> None:
-        if self.transitions or self.jsonl is not None:
-            if self.text is not None and self.transitions:
-                self.text.write(f"t={t:9.3f}  {'fire':<8}  {transition}\n")
-            if self.jsonl is not None:
-                self._json({"t": _time(t), "fire": transition})
+        if self.text is not None and self.transitions:
+            self.text.write(f"t={t:9.3f}  {'fire':<8}  {transition}\n")
+        self._json({"t": _time(t), "fire": transition})
 
     def ignored(self, event: Event, reason: str) -> None:
         self._line(event.t, "ignored", f"{event.kind.value} from {event.primitive}: {reason}",
                    {"t": _time(event.t), "ignored": event.as_json(), "reason": reason})
+
+    def end(self, t: float, outcome: str) -> None:
+        """The last line: the run is over (a resumed run has nothing left to do)."""
+        self._json({"t": _time(t), "outcome": outcome})
