@@ -3,6 +3,17 @@
 Every output goes to a temporary file in the target's directory and is moved
 into place with ``os.replace`` (atomic on POSIX) only once it is complete, so
 an error or a kill half-way never leaves a half-written PNML, report or log.
+
+Every file the command writes goes through here: ``compile -o`` (PNML by
+a stream, dot as text, SVG and PNG as graphviz's bytes), ``template -o``,
+``run --log`` (written once the run is over: a run that ends in an error
+leaves none). Two outputs do not, by their nature: ``run --journal``,
+which is appended to a flushed line at a time so that a killed run can be
+resumed (:mod:`mcl2pnml.journal`; a torn last line is dropped on resume),
+and what goes to standard output (``--json``, ``template`` without
+``-o``), which is the shell's to redirect. tests/test_resume.py fills
+the disk at the last moment and fails a PNML half-way: the old file
+stays, and no partial or temporary file is left.
 """
 from __future__ import annotations
 

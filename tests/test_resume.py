@@ -134,3 +134,56 @@ def test_many_random_kill_points(tmp_path, script, engine, vehicle):
         result, journal = killed_and_resumed(tmp_path, vehicle, engine, kills)
         assert result == whole, kills
         assert journal.splitlines()[1:] == whole_journal.splitlines()[1:], kills
+
+
+# -- every other output is written whole or not at all ----------------------------------
+# (the journal is the one file appended to, by design: see mcl2pnml/journal.py)
+
+def _cli_in_process(args):
+    from click.testing import CliRunner
+
+    from mcl2pnml.cli import main
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+OUTPUTS = [
+    ("compile", ["compile", SAUCE, "--layout", "none", "-o"]),
+    ("compile-dot", ["compile", SAUCE, "--format", "dot", "-o"]),
+    ("template", ["template", "task", "-o"]),
+    ("run-log", ["run", SAUCE, "--json", "--log"]),
+]
+
+
+@pytest.mark.parametrize("name, args", OUTPUTS, ids=[n for n, _ in OUTPUTS])
+def test_a_full_disk_leaves_no_partial_file_and_keeps_the_old_one(tmp_path, monkeypatch,
+                                                                 name, args):
+    """The disk fills up at the last moment (the fsync): the old file stays, no temp is left."""
+    import errno
+
+    import mcl2pnml.files
+
+    target = tmp_path / f"{name}.out"
+    target.write_text("the previous version\n")
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    monkeypatch.setattr(mcl2pnml.files.os, "fsync", full)
+    out = _cli_in_process(args + [target])
+    assert out.exit_code == 2, out.output
+    assert f"{target}: cannot write: No space left on device" in out.output
+    assert target.read_text() == "the previous version\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [target.name]
+
+
+def test_a_write_that_fails_half_way_leaves_no_file(tmp_path, monkeypatch):
+    """A PNML streamed out fails after its first bytes: nothing appears at the target."""
+    import mcl2pnml.pnml.writer as writer
+
+    def half(net, out, layout_engine="auto"):
+        out.write(b"<?xml version='1.0'?>\n<pnml")
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(writer, "write_pnml", half)
+    target = tmp_path / "sauce.pnml"
+    out = _cli_in_process(["compile", SAUCE, "--layout", "none", "-o", target])
+    assert out.exit_code == 2 and "cannot write: No space left on device" in out.output
+    assert list(tmp_path.iterdir()) == []
