@@ -299,3 +299,10 @@ def test_a_dropped_link_stalls_the_run_saying_so():
                             "closed the link")
     assert [s.primitive for s in a.safe_stop] == ["Q"]
     assert "safe stop: could not disable Q: LinkLost: the link is closed" in a.waiting
+
+
+def test_a_lost_off_stalls_the_task_that_waits_for_it():
+    r = both(lambda: Faulty(SCRIPT, drop={("P", EventKind.OFF, 1)}))
+    assert r.outcome is Outcome.STALLED and r.time == 5
+    assert "P: waits for the vehicle's 'off'" in r.waiting
+    assert r.safe_stop == []     # the disable was sent already; only its answer was lost
