@@ -22,11 +22,12 @@ the number of places merged away.
 from __future__ import annotations
 
 from functools import partial
-from itertools import chain
+from itertools import chain, compress, islice
+from operator import attrgetter
 from typing import Callable, Iterable, Mapping, Sequence
 
 from .errors import NetError
-from .net import Arc, Marking, Net, Place, Transition, is_valid_id
+from .net import Arc, ArcKind, Marking, Net, Place, Transition, is_valid_id
 
 
 def compose(components: Mapping[str, Net] | Iterable[tuple[str, Net]],
@@ -35,132 +36,200 @@ def compose(components: Mapping[str, Net] | Iterable[tuple[str, Net]],
     """Union of the components, then fusion of the groups (qualified ids), in one pass.
 
     The result is ``fuse(union(components, name), groups)``, built without the
-    intermediate net: every node is renamed once and every arc rewritten once
-    (in C, through the components' arc columns), which is what lets a mission
-    of 10,000 calls, a million arcs, compile in linear time.
+    intermediate net: every node is renamed once and every arc rewritten once,
+    which is what lets a mission of 10,000 calls, a million arcs, compile in
+    linear time. Components made from one prototype (a compiled mission has
+    thousands of call sites of one task, and of sequences) share a
+    :class:`_Shape`, their ids and arcs by position, worked out once; places
+    are then numbered in union order and fused by number, so that renaming
+    a component is a few passes in C over its columns.
 
     The components are valid nets, so the result is valid by construction
     except in three ways, which are checked here instead of checking the
     whole net again: two qualified ids may clash, a prefix may start with
     white space, and a transition may come to both read and consume a fused
-    place. Transitions are never fused, so two arcs can only come to join the
-    same ends inside one component, when two of its own places are fused;
-    only such components pay for merging arc weights.
+    place. Ids of one component cannot clash, and those of two components
+    can only when one's prefix and separator start the other's, which is
+    checked on the prefixes. Transitions are never fused, so two arcs can
+    only come to join the same ends inside one component, when two of its
+    own places are fused; only such components pay for merging arc weights.
     """
     items = list(components.items() if isinstance(components, Mapping) else components)
-    tables: list[dict[str, str]] = []   # per component: local id -> qualified id
+    shapes: dict[tuple, _Shape] = {}
+    parts: list[tuple[str, Net, _Shape, list[str], int]] = []
     order: dict[str, int] = {}          # qualified place id -> position in the union
     doubtful = False                    # whether the result needs a full check
-    n_transitions = 0
     for prefix, net in items:
+        shape = _Shape.of(net, shapes)
         if prefix:
             stem = prefix + separator
             doubtful = doubtful or not is_valid_id(stem + "x")
-            table = {n.id: stem + n.id for n in net.places}
-            table.update((t.id, stem + t.id) for t in net.transitions)
+            qualified = list(map(stem.__add__, shape.ids))
         else:
-            table = {n.id: n.id for n in net.places}
-            table.update((t.id, t.id) for t in net.transitions)
-        tables.append(table)
-        n_transitions += len(net.transitions)
-        for p in net.places:
-            q = table[p.id]
-            if q in order:
-                raise NetError(f"duplicate id '{q}' in the union '{name}'; ids must be "
-                               "unique across places and transitions")
-            order[q] = len(order)
+            qualified = shape.ids
+        first = len(order)
+        parts.append((prefix, net, shape, qualified, first))
+        order.update(zip(qualified[:shape.n_places], range(first, first + shape.n_places)))
+        if len(order) < first + shape.n_places:
+            _duplicate(chain.from_iterable(q[:s.n_places] for _, _, s, q, _ in parts), name)
+    # sorted, a stem that starts others comes right before the first of them
+    stems = sorted(prefix + separator for prefix, *_ in parts)
+    doubtful = (doubtful or not all(prefix for prefix, *_ in parts)
+                or any(b.startswith(a) for a, b in zip(stems, stems[1:])))
 
     def what(p: str) -> str:  # for an error message only: not a place, but a node?
-        node = any(p in set(table.values()) for table in tables)
+        node = any(p in qualified for _, _, _, qualified, _ in parts)
         return "a transition" if node else "no place"
 
-    rep = _representatives(order, groups, name, what)
+    root = _roots(order, groups, name, what)
+    place_ids = list(order)
+    fused = list(map(place_ids.__getitem__, root))   # place number -> id it is fused into
 
     places: list[Place] = []
     transitions: list[Transition] = []
-    arcs: list[Arc] = []
+    sources: list[str] = []
+    targets: list[str] = []
+    weights: list[int] = []
+    kinds: list[ArcKind] = []
     tokens: dict[str, int] = {}
     marked_by: dict[str, str] = {}
-    for (prefix, net), table in zip(items, tables):
-        final = table
-        if rep and not rep.keys().isdisjoint(table.values()):
-            final = {local: rep.get(q, q) for local, q in table.items()}
-            places.extend(p.with_id(table[p.id]) if prefix else p
-                          for p in net.places if final[p.id] == table[p.id])
-        elif prefix:
-            places.extend(p.with_id(table[p.id]) for p in net.places)
+    for prefix, net, shape, qualified, first in parts:
+        n = shape.n_places
+        numbers = range(first, first + n)
+        roots = root[first:first + n]
+        final = fused[first:first + n] + qualified[n:]
+        within = False   # whether two of the component's own places are now one
+        if roots == list(numbers):   # no place of the component is fused away
+            places.extend(map(Place.with_id, net.places, qualified) if prefix else net.places)
         else:
-            places.extend(net.places)
-        transitions.extend([t.with_id(table[t.id]) for t in net.transitions] if prefix
+            within = len(set(roots)) < n
+            kept = list(map(int.__eq__, roots, numbers))
+            places.extend(map(Place.with_id, compress(net.places, kept), compress(qualified, kept))
+                          if prefix else compress(net.places, kept))
+        transitions.extend(map(Transition.with_id, net.transitions, qualified[n:]) if prefix
                            else net.transitions)
-        for p, n in net.initial.items():
-            r = final[p]
-            if r in tokens and tokens[r] != n:
+        for p, count in net.initial.items():
+            i = shape.index[p]
+            r = final[i]
+            if r in tokens and tokens[r] != count:
                 raise NetError(
                     f"cannot fuse '{marked_by[r]}' ({tokens[r]} tokens) with "
-                    f"'{table[p]}' ({n} tokens): fused places must start with the "
+                    f"'{qualified[i]}' ({count} tokens): fused places must start with the "
                     "same marking")
-            tokens[r] = n
-            marked_by.setdefault(r, table[p])
-        if final is not table and _fuses_within(net, final):
-            weights: dict[tuple, int] = {}
-            for a in net.arcs:
-                key = (final[a.source], final[a.target], a.kind)
-                weights[key] = weights.get(key, 0) + a.weight
-            merged = [Arc(s, t, w, k) for (s, t, k), w in weights.items()]
-            doubtful = doubtful or len({(a.source, a.target) for a in merged}) < len(merged)
-            arcs.extend(merged)
-        elif prefix or final is not table:
-            sources, targets, weights_, kinds = net.columns
-            arcs.extend(map(_make_arc, zip(map(final.__getitem__, sources),
-                                           map(final.__getitem__, targets), weights_, kinds)))
+            tokens[r] = count
+            marked_by.setdefault(r, qualified[i])
+        ends = (list(map(final.__getitem__, shape.sources)),
+                list(map(final.__getitem__, shape.targets)))
+        if within:
+            # the component's arcs may come to join the same ends, and then
+            # add up their weights
+            merged: dict[tuple, int] = {}
+            for s, t, w, k in zip(*ends, shape.weights, shape.kinds):
+                merged[s, t, k] = merged.get((s, t, k), 0) + w
+            doubtful = doubtful or len({(s, t) for s, t, _ in merged}) < len(merged)
+            ends = ([s for s, _, _ in merged], [t for _, t, _ in merged])
+            weights.extend(merged.values())
+            kinds.extend(k for _, _, k in merged)
         else:
-            arcs.extend(net.arcs)
-    ids = len(order) + n_transitions
-    doubtful = doubtful or len(set(chain(order, (t.id for t in transitions)))) < ids
-    build = Net if doubtful else Net._trusted
-    return build(name, tuple(places), tuple(transitions), tuple(arcs), Marking(tokens))
+            weights.extend(shape.weights)
+            kinds.extend(shape.kinds)
+        sources.extend(ends[0])
+        targets.extend(ends[1])
+    columns = (tuple(sources), tuple(targets), tuple(weights), tuple(kinds))
+    arcs = tuple(map(_make_arc, zip(*columns)))
+    if doubtful:
+        return Net(name, tuple(places), tuple(transitions), arcs, Marking(tokens))
+    return Net._trusted(name, tuple(places), tuple(transitions), arcs, Marking(tokens), columns)
 
 
 _make_arc = partial(tuple.__new__, Arc)   # Arc from a 4-tuple, called from C
+_ID = attrgetter("id")
 
 
-def _fuses_within(net: Net, table: Mapping[str, str]) -> bool:
-    """Whether two places of ``net`` end up as one (so its arcs may collide)."""
-    return len({table[p.id] for p in net.places}) < len(net.places)
+class _Shape:
+    """A component's ids and arcs by position, shared by the components of one prototype.
 
-
-def _representatives(order: Mapping[str, int], groups: Iterable[Sequence[str]],
-                     name: str, what: Callable[[str], str]) -> dict[str, str]:
-    """Place -> the place it is fused into: the member of its class first in ``order``.
-
-    Groups that share a place are merged together, so the result depends only
-    on which places end up together, not on how the groups were written: that
-    makes fusion associative and the order of groups irrelevant.
+    ``ids`` are the local ids, places first; ``index`` maps them back to
+    positions; ``sources`` and ``targets`` are the arcs' ends as positions
+    in ``ids``, next to their ``weights`` and ``kinds``.
     """
-    parent: dict[str, str] = {}
 
-    def find(p: str) -> str:
-        root = p
-        while parent[root] != root:
-            root = parent[root]
-        while parent[p] != root:  # path compression keeps this near-linear
-            parent[p], p = root, parent[p]
-        return root
+    __slots__ = ("ids", "n_places", "index", "sources", "targets", "weights", "kinds")
 
-    for group in groups:
-        group = list(group)
-        for p in group:
-            if p not in order:
-                raise NetError(f"cannot fuse '{p}': {what(p)} of that name in net '{name}'")
-            parent.setdefault(p, p)
-        for p in group[1:]:
-            a, b = find(group[0]), find(p)
-            if a != b:
-                if order[b] < order[a]:
-                    a, b = b, a
+    @classmethod
+    def of(cls, net: Net, shapes: dict[tuple, "_Shape"]) -> "_Shape":
+        """The shape of ``net``, from ``shapes`` when a net of the same shape was seen.
+
+        Keyed by the identity of the places and arcs (nets derived from
+        one prototype share those tuples, and every component is alive
+        while composing, so identities are not reused) and by the
+        transitions' ids, which are all that a call site's payload
+        stamping leaves alike.
+        """
+        tids = tuple(map(_ID, net.transitions))
+        key = (id(net.places), id(net.arcs), tids)
+        shape = shapes.get(key)
+        if shape is None:
+            shape = shapes[key] = cls()
+            shape.ids = [p.id for p in net.places] + list(tids)
+            shape.n_places = len(net.places)
+            shape.index = {i: k for k, i in enumerate(shape.ids)}
+            sources, targets, weights, kinds = net.columns
+            shape.sources = list(map(shape.index.__getitem__, sources))
+            shape.targets = list(map(shape.index.__getitem__, targets))
+            shape.weights, shape.kinds = weights, kinds
+        return shape
+
+
+def _duplicate(ids: Iterable[str], name: str) -> None:
+    """Raise on the first place id that an earlier one has."""
+    seen: set[str] = set()
+    for q in ids:
+        if q in seen:
+            raise NetError(f"duplicate id '{q}' in the union '{name}'; ids must be "
+                           "unique across places and transitions")
+        seen.add(q)
+
+
+def _roots(order: Mapping[str, int], groups: Iterable[Sequence[str]],
+           name: str, what: Callable[[str], str]) -> list[int]:
+    """Place number (its position in ``order``) -> the number of the place it is fused into.
+
+    That is the member of its class first in ``order``. Groups that share a
+    place are merged together, so the result depends only on which places
+    end up together, not on how the groups were written: that makes fusion
+    associative and the order of groups irrelevant. Union-find on numbers,
+    where a class's root is its smallest member, so that every place's
+    number is at least its parent's: one pass in increasing order then
+    takes every place to its root.
+    """
+    groups = list(groups)
+    numbers = list(map(order.get, chain.from_iterable(groups)))
+    if None in numbers:
+        p = next(p for p in chain.from_iterable(groups) if p not in order)
+        raise NetError(f"cannot fuse '{p}': {what(p)} of that name in net '{name}'")
+    parent = list(range(len(order)))
+    it = iter(numbers)
+    for size in map(len, groups):
+        if not size:
+            continue
+        a = next(it)
+        while parent[a] != a:
+            a = parent[a]
+        for b in islice(it, size - 1):
+            x = b
+            while parent[b] != b:
+                b = parent[b]
+            while parent[x] != b:   # path compression keeps this near-linear
+                parent[x], x = b, parent[x]
+            if a < b:
                 parent[b] = a
-    return {p: find(p) for p in parent}
+            elif b < a:
+                parent[a] = b
+                a = b
+    for k, p in enumerate(parent):
+        parent[k] = parent[p]
+    return parent
 
 
 def union(components: Mapping[str, Net] | Iterable[tuple[str, Net]], name: str = "net",

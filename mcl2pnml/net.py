@@ -500,12 +500,19 @@ class Net:
 
     @classmethod
     def _trusted(cls, name: str, places: tuple[Place, ...], transitions: tuple[Transition, ...],
-                 arcs: tuple[Arc, ...], initial: Marking) -> "Net":
-        """A net whose validity its builder has proved (see :func:`~mcl2pnml.compose.compose`)."""
+                 arcs: tuple[Arc, ...], initial: Marking,
+                 columns: tuple[tuple, tuple, tuple, tuple] | None = None) -> "Net":
+        """A net whose validity its builder has proved (see :func:`~mcl2pnml.compose.compose`).
+
+        A builder that made the arcs from columns hands those over too, as
+        :attr:`columns`, which then need not be taken apart again.
+        """
         net = object.__new__(cls)
         for f, value in (("name", name), ("places", places), ("transitions", transitions),
                          ("arcs", arcs), ("initial", initial)):
             object.__setattr__(net, f, value)
+        if columns is not None and arcs:
+            net.__dict__["columns"] = columns
         return net
 
     @cached_property
