@@ -11,6 +11,7 @@ UTF-8 text (or is binary) is refused the same way, at the first bad byte.
 """
 from __future__ import annotations
 
+from functools import lru_cache
 from pathlib import Path
 
 from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharacters,
@@ -72,8 +73,6 @@ COMMENT: /\/\/[^\n]*/ | /\/\*(.|\n)*?\*\//
 KEYWORDS = {"const", "primitive", "task", "function", "mission", "if", "then", "else",
             "while", "do", "timeout", "parallel", "monitor"}
 
-_PARSER = Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
-
 _READABLE = {"NAME": "a name", "NUMBER": "a number", "STRING": "a string",
              "$END": "the end of the file"}
 
@@ -82,7 +81,7 @@ def _describe(terminal: str) -> str:
     if terminal in _READABLE:
         return _READABLE[terminal]
     try:
-        pattern = _PARSER.get_terminal(terminal).pattern
+        pattern = _tree_parser().get_terminal(terminal).pattern
     except KeyError:
         return terminal.lower()
     return f"'{pattern.value}'" if pattern.type == "str" else terminal.lower()
@@ -206,12 +205,50 @@ def decode(data: bytes, filename: str) -> str:
                           "character here") from None
 
 
+class _Suspect(Exception):
+    """Raised while parsing straight to the AST at what the checks on the tree must judge."""
+
+
+def _name(token: Token) -> Token:
+    """The lexer's check of every name: a keyword lets the tree's checks say what is wrong."""
+    if token in KEYWORDS:
+        raise _Suspect
+    return token
+
+
+#: Parses straight to the AST: :class:`_Build`'s methods run as the rules are
+#: reduced, so no tree is built, nor walked again to transform it and to
+#: check it (a 10,000-call mission parsed in half the time). Whatever is in
+#: doubt, from a syntax error to a keyword used as a name, is parsed again
+#: by :func:`_parse_tree`, as every file was before, so that errors are
+#: found and reported exactly as they were.
+_PARSER = Lark(GRAMMAR, parser="lalr", maybe_placeholders=True, transformer=_Build(),
+               lexer_callbacks={"NAME": _name})
+
+
+@lru_cache(maxsize=None)
+def _tree_parser() -> Lark:
+    """The parser that builds a tree with positions, for the checks and the error messages."""
+    return Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+
+
 @without_gc
 def parse(text: str, filename: str = "<mcl>") -> ast.Program:
     """Parse MCL source into a :class:`~mcl2pnml.mcl_ast.Program` (no checks beyond syntax)."""
+    try:
+        declarations = _PARSER.parse(text)
+    except Exception:   # any fault, or doubt: the tree says which, and where
+        declarations = None
+    if declarations is None or _deepest(declarations) > MAX_NESTING:
+        declarations = _parse_tree(text, filename)
+    return ast.Program(declarations, filename, text)
+
+
+def _parse_tree(text: str, filename: str) -> tuple[ast.Declaration, ...]:
+    """Parse to a tree, check it, then build the AST: the slow way, that locates every error."""
     lines = source_lines(text)
     try:
-        tree = _PARSER.parse(text)
+        tree = _tree_parser().parse(text)
     except UnexpectedInput as e:
         line, col = e.line, e.column
         if isinstance(e, UnexpectedEOF) or line < 1:
@@ -235,8 +272,7 @@ def parse(text: str, filename: str = "<mcl>") -> ast.Program:
         raise Mcl2PnmlError(f"syntax error: {found}{hint}",
                             Location(filename, line, col, src)) from None
     _check_nesting(tree, lines, filename)
-    declarations = _Build().transform(tree)
-    return ast.Program(declarations, filename, text)
+    return _Build().transform(tree)
 
 
 #: How deep blocks, structures, calls and tuples may nest. Missions people
@@ -274,6 +310,40 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
                     Location(filename, line, col, src))
         stack.extend((child, depth) for child in reversed(node.children)
                      if isinstance(child, (Tree, Token)))
+
+
+def _deepest(declarations: tuple[ast.Declaration, ...]) -> int:
+    """How deep the AST's blocks, structures, calls and tuples nest: the tree's depth.
+
+    Each of those rules builds one AST node, which holds what the rule's
+    tree node holds, so the depths are the same; this walk is what the
+    fast path pays to know that :func:`_check_nesting` has nothing to say.
+    """
+    deepest = 0
+    stack: list[tuple[object, int]] = [(d, 0) for d in declarations]
+    while stack:
+        node, depth = stack.pop()
+        children = _CHILDREN.get(type(node))
+        if children is None:
+            continue
+        if type(node) in _NESTED:
+            depth += 1
+            deepest = max(deepest, depth)
+        stack.extend((child, depth) for child in children(node) if child is not None)
+    return deepest
+
+
+_NESTED = {ast.Block, ast.Parallel, ast.Monitor, ast.If, ast.While, ast.Call, ast.PrimCall,
+           ast.Tuple}
+_CHILDREN = {
+    ast.Const: lambda n: (n.value,), ast.Task: lambda n: n.primitives,
+    ast.PrimCall: lambda n: n.args, ast.Function: lambda n: (n.body,),
+    ast.Mission: lambda n: (n.body,), ast.Block: lambda n: n.body,
+    ast.Parallel: lambda n: n.items, ast.Monitor: lambda n: (n.watched, n.watcher),
+    ast.If: lambda n: (n.condition, n.then, n.otherwise),
+    ast.While: lambda n: (n.condition, n.body), ast.Call: lambda n: n.args,
+    ast.Tuple: lambda n: n.items,
+}
 
 
 def parse_file(path: str | Path) -> ast.Program:
