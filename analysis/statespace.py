@@ -13,16 +13,26 @@ Transitions are explored untimed: a timed transition (the task's time-out
 ``t03``) may fire in any order with the others, which is what equations.md
 asks for the coverability analysis ("any order of firing").
 
-Two explorers share one interface:
+Three explorers (:data:`BACKENDS`) share one interface and one test suite:
 
-* for safe nets, :mod:`analysis.packedspace`: markings as packed bits, a
-  whole breadth-first frontier fired at once in numpy, edges recomputed
-  when needed rather than stored (a million markings in about a second, in
-  35 bytes each). It is tried first when every weight is 1 and M0 is 0/1;
-  the first firing that would put a second token in a place hands over to
-* the general explorer, with markings as tuples of counts, edges in flat
-  integer arrays (source, transition, target), and the Karp-Miller
+* ``"compiled"``, :mod:`analysis.compiledspace`, for safe nets: markings as
+  packed bits, the textbook queue-and-hash-set loop compiled by numba (a
+  few nanoseconds a firing; three million markings a second);
+* ``"packed"``, :mod:`analysis.packedspace`, for safe nets: the same packed
+  markings, a whole breadth-first frontier fired at once in numpy. Both
+  give the same :class:`~analysis.packedspace.PackedStateSpace`, whose edges
+  are recomputed when needed rather than stored;
+* ``"general"``, for every net: markings as tuples of counts, edges in
+  flat integer arrays (source, transition, target), and the Karp-Miller
   acceleration along the first-discovery path.
+
+The safe-net explorers are tried when every weight is 1 and M0 is 0/1; the
+first firing that would put a second token in a place hands over to the
+general one. ``"auto"`` (the default) takes the compiled explorer when its
+machine code is loaded in this process, and otherwise the numpy one, which
+hands over to the compiled one past :data:`HANDOVER` markings: loading the
+compiled code takes most of a second in a fresh process (importing numba,
+reading its cache), more than a small state space takes to explore.
 
 :meth:`StateSpace.graph` turns either into a networkx graph on demand.
 """
@@ -173,9 +183,27 @@ class StateSpace:
 # exploration
 
 
+BACKENDS = ("auto", "compiled", "packed", "general")
+"""The explorers :func:`explore` can be asked for (see the module's documentation)."""
+
+HANDOVER = 500_000
+"""Markings after which ``"auto"`` leaves the numpy explorer for the compiled one."""
+
+
+class _HandOver(Exception):
+    """The numpy explorer passed :data:`HANDOVER` markings: the compiled one starts again."""
+
+
 def explore(net_or_structure, initial: dict[str, int] | None = None, *,
-            max_states: int = 5_000_000, progress: Progress | None = None) -> StateSpace:
-    """Explore the markings reachable from ``initial`` (default: the net's M0)."""
+            max_states: int = 5_000_000, progress: Progress | None = None,
+            backend: str = "auto") -> StateSpace:
+    """Explore the markings reachable from ``initial`` (default: the net's M0).
+
+    ``backend`` is one of :data:`BACKENDS`; a safe-net explorer asked for a
+    net that is not safe hands over to ``"general"``, as ``"auto"`` does.
+    """
+    if backend not in BACKENDS:
+        raise Mcl2PnmlError(f"unknown explorer '{backend}'; known: {', '.join(BACKENDS)}")
     s = (net_or_structure if isinstance(net_or_structure, Structure)
          else make_structure(net_or_structure))
     if initial is None:
@@ -186,9 +214,24 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
             raise Mcl2PnmlError(f"initial marking names unknown places: {', '.join(unknown)}")
         m0 = tuple(initial.get(p, 0) for p in s.places)
     unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
-    if unit and all(n <= 1 for n in m0):
-        from .packedspace import KeyCollision, NotSafe, explore_packed   # builds on StateSpace
+    if backend != "general" and unit and all(n <= 1 for n in m0):
+        from . import compiledspace   # they build on StateSpace: imported here, not above
+        from .packedspace import KeyCollision, NotSafe, explore_packed
         try:
+            if backend == "auto":
+                if compiledspace.loaded():
+                    backend = "compiled"
+                elif compiledspace.available() and max_states > HANDOVER:
+                    try:
+                        return explore_packed(s, m0, HANDOVER, _HandOver(), progress)
+                    except _HandOver:
+                        backend = "compiled"
+            if backend == "compiled":
+                if not compiledspace.available():
+                    raise Mcl2PnmlError("the compiled explorer needs numba, which is not "
+                                        "installed; known explorers: " + ", ".join(BACKENDS))
+                return compiledspace.explore_compiled(s, m0, max_states, _limit(max_states),
+                                                      progress)
             return explore_packed(s, m0, max_states, _limit(max_states), progress)
         except (NotSafe, KeyCollision):
             pass   # not safe after all, or (once in 2^64) two markings share a key

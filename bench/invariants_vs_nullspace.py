@@ -16,7 +16,7 @@ places.
 
 Both must find the same space. Ours is checked on its own at every size:
 every vector satisfies y^T C = 0 (exactly, on the sparse columns); the
-vectors are independent (their last places differ: each comes from another
+vectors are independent (their first places differ: each comes from another
 free column of the echelon form); and there are |P| - rank(C) of them, rank
 certified by the rank of C modulo a prime (python-flint's ``nmod_mat``),
 which is at most the rank over QQ: together with the independent
@@ -106,7 +106,7 @@ def certified(s: Structure, basis: list[dict[str, int]]) -> bool:
                 total[j] = total.get(j, 0) + c * v
         if any(total.values()):
             return False
-    if len({max(y) for y in vectors}) != len(vectors):
+    if len({min(y) for y in vectors}) != len(vectors):
         return False
     c = flint.nmod_mat(len(s.transitions), len(s.places), PRIME)
     for j, col in enumerate(s.incidence):

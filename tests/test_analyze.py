@@ -93,10 +93,19 @@ def test_a_net_written_by_pm4py():
     assert r["deadlock_free"] and r["reusable"]
 
 
+def test_every_explorer_gives_the_same_answer(task_pnml):
+    answers = {e: json.loads(run("analyze", task_pnml, "--state-space", "--json", "--initial",
+                                 "B,MTX,OFF,C", "--explorer", e).stdout)
+               for e in ("auto", "compiled", "packed", "general")}
+    assert answers["general"]["states"] > 1
+    assert all(a == answers["general"] for a in answers.values())
+
+
 @pytest.mark.parametrize("args, message", [
     (["--initial", "B,NOPE"], "no place NOPE"),
     (["--initial", "B*x"], "a count is a natural number"),
     (["--max-states", "0"], "0"),
+    (["--explorer", "fast"], "'fast' is not one of 'auto', 'compiled', 'packed', 'general'"),
 ])
 def test_bad_options_are_one_line(task_pnml, args, message):
     out = run("analyze", task_pnml, *args)

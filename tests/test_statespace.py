@@ -1,8 +1,14 @@
-"""Reachability and coverability graphs, on nets whose answers are known by hand."""
+"""Reachability and coverability graphs, on nets whose answers are known by hand.
+
+One suite for every explorer: the tests take the ``backend`` fixture, so
+each runs against the compiled, the numpy and the general explorer (the
+safe-net ones hand over to the general one on nets that are not safe,
+which these tests cover too).
+"""
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from analysis import packedspace, statespace
+from analysis import compiledspace, packedspace, statespace
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, explore
 from mcl2pnml.net import ArcKind, NetBuilder
@@ -23,14 +29,22 @@ def cycle(k: int = 1):
     return b.build()
 
 
-def test_independent_cycles_have_4_to_the_k_markings():
+SAFE_BACKENDS = ("compiled", "packed")
+
+
+@pytest.fixture(params=[b for b in statespace.BACKENDS if b != "auto"])
+def backend(request):
+    return request.param
+
+
+def test_independent_cycles_have_4_to_the_k_markings(backend):
     for k in (1, 2, 3):
-        space = explore(cycle(k))
+        space = explore(cycle(k), backend=backend)
         assert space.states == 4 ** k and space.safe and not space.terminal
         assert behaviour(space).home_marking and behaviour(space).reusable
 
 
-def test_a_producer_is_unbounded_and_gets_omega():
+def test_a_producer_is_unbounded_and_gets_omega(backend):
     b = NetBuilder("producer")
     b.place("ready", 1)
     b.place("buffer")
@@ -38,26 +52,26 @@ def test_a_producer_is_unbounded_and_gets_omega():
     b.arc("ready", "produce")
     b.arc("produce", "ready")
     b.arc("produce", "buffer")
-    space = explore(b.build())
+    space = explore(b.build(), backend=backend)
     assert not space.bounded and space.coverability
     assert any(m[1] == OMEGA for m in space.markings)
     assert ["buffer*w", "ready"] in [space.format(n) for n in range(space.states)]
     assert not behaviour(space).reusable
 
 
-def test_a_bounded_net_with_two_tokens():
+def test_a_bounded_net_with_two_tokens(backend):
     b = NetBuilder("two")
     b.place("p", 2)
     b.place("q")
     b.transition("t")
     b.arc("p", "t")
     b.arc("t", "q")
-    space = explore(b.build())
+    space = explore(b.build(), backend=backend)
     assert space.bounded and not space.safe and space.bound == 2
     assert [space.format(n) for n in space.terminal] == [["q*2"]]
 
 
-def test_read_arcs_test_without_consuming():
+def test_read_arcs_test_without_consuming(backend):
     b = NetBuilder("read")
     b.place("guard", 1)
     b.place("p", 1)
@@ -66,22 +80,22 @@ def test_read_arcs_test_without_consuming():
     b.read("guard", "t")
     b.arc("p", "t")
     b.arc("t", "q")
-    space = explore(b.build())
+    space = explore(b.build(), backend=backend)
     assert [space.format(n) for n in space.terminal] == [["guard", "q"]]
 
 
-def test_weights():
+def test_weights(backend):
     b = NetBuilder("weights")
     b.place("p", 3)
     b.place("q")
     b.transition("t")
     b.arc("p", "t", 2)
     b.arc("t", "q", 3)
-    space = explore(b.build())
+    space = explore(b.build(), backend=backend)
     assert sorted(space.format(n) for n in range(space.states)) == [["p", "q*3"], ["p*3"]]
 
 
-def test_deadlock_is_reported_as_improper():
+def test_deadlock_is_reported_as_improper(backend):
     b = NetBuilder("stuck")
     b.place("B", 1)
     b.place("X")
@@ -94,36 +108,37 @@ def test_deadlock_is_reported_as_improper():
     b.arc("X", "finish")
     b.arc("Y", "finish")  # Y is never marked: X is a dead end
     b.arc("finish", "OK")
-    space = explore(b.build())
+    space = explore(b.build(), backend=backend)
     result = behaviour(space)
     assert not result.deadlock_free and result.improper == (("X",),)
 
 
-def test_limit_and_progress():
+def test_limit_and_progress(backend):
     calls = []
     old = statespace.PROGRESS_EVERY
     statespace.PROGRESS_EVERY = 10
     try:
-        explore(cycle(3), progress=lambda n, f: calls.append(n))
+        explore(cycle(3), backend=backend, progress=lambda n, f: calls.append(n))
     finally:
         statespace.PROGRESS_EVERY = old
     assert calls and calls == sorted(calls)
     with pytest.raises(ExplorationLimit, match="more than 10 markings"):
-        explore(cycle(3), max_states=10)
+        explore(cycle(3), max_states=10, backend=backend)
 
 
-def test_graph_and_paths():
-    space = explore(cycle(1))
+def test_graph_and_paths(backend):
+    space = explore(cycle(1), backend=backend)
     g = space.graph()
     assert g.number_of_nodes() == 4 and g.number_of_edges() == 4
     assert space.path_to(2) == ["c0t0", "c0t1"]
 
 
+@pytest.mark.parametrize("backend", SAFE_BACKENDS)
 @settings(max_examples=80, deadline=None)
 @given(nets(max_places=5, max_transitions=4))
-def test_the_bitset_explorer_agrees_with_the_general_one(net):
+def test_the_bitset_explorers_agree_with_the_general_one(backend, net):
     try:
-        fast = explore(net, max_states=2000)
+        fast = explore(net, max_states=2000, backend=backend)
         slow = statespace._explore_general(fast.structure, tuple(fast.markings[0]), 2000, None)
     except ExplorationLimit:
         return
@@ -201,17 +216,19 @@ def _same_space(fast, slow):
     assert dict(zip(fast.markings, fast.can_reach(goal_fast))) == reach_slow
 
 
+@pytest.mark.parametrize("backend", SAFE_BACKENDS)
 @settings(max_examples=120, deadline=None)
 @given(spread_safe_nets())
-def test_the_packed_explorer_on_markings_of_several_words(net):
-    fast = explore(net, max_states=5000)
+def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
+    fast = explore(net, max_states=5000, backend=backend)
     slow = statespace._explore_general(fast.structure, tuple(fast.markings[0]), 5000, None)
     if fast.bounded and max(max(m) for m in slow.markings) <= 1:
         assert type(fast).__name__ == "PackedStateSpace"
     _same_space(fast, slow)
 
 
-def test_markings_that_share_a_key_fall_back_to_exact_exploration(monkeypatch):
+@pytest.mark.parametrize("backend", SAFE_BACKENDS)
+def test_markings_that_share_a_key_fall_back_to_exact_exploration(backend, monkeypatch):
     """A key collision (once in 2^64 pairs) must never merge two markings.
 
     A key made of the first word only collides whenever two markings differ
@@ -225,10 +242,49 @@ def test_markings_that_share_a_key_fall_back_to_exact_exploration(monkeypatch):
         b.arc(before, t)
         b.arc(t, after)
     net = b.build()
-    assert type(explore(net)).__name__ == "PackedStateSpace" and explore(net).states == 4
-    monkeypatch.setattr(packedspace, "_keys",
-                        lambda rows: rows[:, 0].copy() if rows.shape[1] > 1 else rows[:, 0])
-    fooled = explore(net)
+    space = explore(net, backend=backend)
+    assert type(space).__name__ == "PackedStateSpace" and space.states == 4
+    first_word = lambda rows: rows[:, 0].copy() if rows.shape[1] > 1 else rows[:, 0]
+    monkeypatch.setattr(packedspace, "_keys", first_word)
+    monkeypatch.setattr(compiledspace, "_keys", first_word)
+    fooled = explore(net, backend=backend)
     assert fooled.states == 4
     _same_space(fooled, statespace._explore_general(fooled.structure,
                                                     tuple(fooled.markings[0]), 100, None))
+
+
+@pytest.mark.parametrize("backend", SAFE_BACKENDS)
+def test_a_second_token_hands_over_to_the_general_explorer(backend):
+    b = NetBuilder("two tokens later")
+    b.place("p", 1)
+    b.place("q")
+    b.transition("t")
+    b.arc("p", "t")
+    b.arc("t", "q")
+    b.arc("t", "p")   # p stays marked, and q gets a second token at the second firing
+    space = explore(b.build(), backend=backend)
+    assert type(space) is statespace.StateSpace and not space.bounded
+
+
+def test_the_compiled_explorer_reports_progress_between_slices(monkeypatch):
+    monkeypatch.setattr(compiledspace, "SLICE", 4)
+    calls = []
+    space = explore(cycle(3), backend="compiled", progress=lambda n, f: calls.append((n, f)))
+    assert space.states == 64 and len(calls) >= 64 // 4
+    assert [n for n, _ in calls] == sorted(n for n, _ in calls) and calls[-1] == (64, 0)
+
+
+def test_auto_leaves_the_numpy_explorer_for_the_compiled_one_past_the_handover(monkeypatch):
+    monkeypatch.setattr(compiledspace, "_ran", False)   # as in a fresh process
+    monkeypatch.setattr(statespace, "HANDOVER", 10)
+    used = []
+    monkeypatch.setattr(compiledspace, "explore_compiled",
+                        lambda *a, _real=compiledspace.explore_compiled: used.append(1) or _real(*a))
+    assert explore(cycle(1)).states == 4 and not used             # small: numpy alone
+    assert explore(cycle(2)).states == 16 and used == [1]           # past 10: compiled
+
+
+def test_an_unknown_explorer_is_named_with_the_known_ones():
+    with pytest.raises(statespace.Mcl2PnmlError, match="unknown explorer 'fast'; known: auto, "
+                       "compiled, packed, general"):
+        explore(cycle(1), backend="fast")
