@@ -4,11 +4,13 @@ Run:  .venv/bin/python -m bench.statespace_peers
 
 Every exploration runs in a fresh interpreter (so that peak memory is its
 own) on a PNML file written by us. Ours explores the reachable markings
-(:func:`analysis.statespace.explore`), and then, timed apart, finds what
-``mcl2pnml analyze FILE --state-space`` adds to them (terminal markings,
-deadlock freedom, reusability); SNAKES builds its ``StateGraph``; pm4py its
-reachability graph. Loading the file and the code is not timed; the
-exploration is. (The peers also store the edges; ours derives them when
+(:func:`analysis.statespace.explore`) with the compiled explorer, and then,
+timed apart, finds what ``mcl2pnml analyze FILE --state-space`` adds to
+them (terminal markings, deadlock freedom, reusability); "numpy" is our
+numpy explorer on the same file; SNAKES builds its ``StateGraph``; pm4py
+its reachability graph. Loading the file and the code is not timed (for
+the compiled explorer, loading its machine code from numba's cache, which
+is timed apart as ``load_seconds``); the exploration is. (The peers also store the edges; ours derives them when
 asked, which the second, analysis time includes where it needs them.) A run that does
 not finish within :data:`TIMEOUT` seconds is reported as such. Each figure
 is the median of :data:`RUNS` runs when a run takes under 5 s, else one run.
@@ -40,21 +42,25 @@ def rss():
         if line.startswith("VmHWM:"):
             return int(line.split()[1]) * 1024
 extra = {}
-if engine == "ours":
+if engine in ("ours", "numpy"):
     from mcl2pnml.pnml import load_pnml
+    from analysis import compiledspace
     from analysis.behaviour import behaviour
     from analysis.matrix import structure
     from analysis.statespace import explore
     import analysis.packedspace   # loaded on first use otherwise: loading is not exploring
     s = structure(load_pnml(path))
-    levels = []   # the explorer reports once per breadth-first level
+    if engine == "ours":
+        t0 = time.perf_counter(); compiledspace.warm_up()   # numba's code, from its cache
+        extra["load_seconds"] = time.perf_counter() - t0
     before = rss(); t0 = time.perf_counter()
-    space = explore(s, max_states=50_000_000, progress=lambda *_: levels.append(1))
+    space = explore(s, max_states=50_000_000,
+                    backend="compiled" if engine == "ours" else "packed")
     states = space.states
     seconds, size = time.perf_counter() - t0, max(0, rss() - before)
-    t1 = time.perf_counter(); verdict = behaviour(space)
-    extra = {"analysis_seconds": time.perf_counter() - t1, "reusable": verdict.reusable,
-             "levels": len(levels) + 1}
+    if engine == "ours":
+        t1 = time.perf_counter(); verdict = behaviour(space)
+        extra.update(analysis_seconds=time.perf_counter() - t1, reusable=verdict.reusable)
 elif engine == "snakes":
     import snakes.pnml
     from snakes.nets import StateGraph
@@ -88,9 +94,9 @@ def measure(engine: str, path: Path) -> dict | None:
     summary = {"states": results[0]["states"],
                "seconds": statistics.median(r["seconds"] for r in results),
                "bytes": statistics.median(r["bytes"] for r in results)}
-    if "analysis_seconds" in results[0]:
-        summary["analysis_seconds"] = statistics.median(r["analysis_seconds"] for r in results)
-        summary["levels"] = results[0]["levels"]
+    for extra in ("analysis_seconds", "load_seconds"):
+        if extra in results[0]:
+            summary[extra] = statistics.median(r[extra] for r in results)
     return summary
 
 
@@ -108,7 +114,8 @@ def run(cases=CASES, peers=("snakes", "pm4py"), log=print) -> list[dict]:
         for family, size, make in cases:
             path = save_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"),
                              layout_engine="none")
-            row = {"family": family, "size": size, "ours": measure("ours", path)}
+            row = {"family": family, "size": size, "ours": measure("ours", path),
+                   "numpy": measure("numpy", path)}
             for peer in peers:
                 row[peer] = None if (family, peer) in gave_up else measure(peer, path)
                 if row[peer] is None:

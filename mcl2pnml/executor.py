@@ -90,6 +90,20 @@ class PetriEngine(Engine):
                 self.by_event.setdefault(key, []).append(i)
         self.event_driven = {i for ts in self.by_event.values() for i in ts}
         self.result_places = {pindex[p]: o for p, o in RESULTS.items()}
+        # what each firing changes, worked out once: the places whose count
+        # falls or rises (True: falls), in place order, and the result places
+        # among those that rise
+        self.changes: list[tuple[tuple[int, bool], ...]] = []
+        self.results_marked: list[tuple[int, ...]] = []
+        for i in range(n):
+            change: dict[int, int] = {}
+            for p, w in self.pre[i]:
+                change[p] = change.get(p, 0) - w
+            for p, w in self.post[i]:
+                change[p] = change.get(p, 0) + w
+            self.changes.append(tuple((p, change[p] < 0) for p in sorted(change) if change[p]))
+            self.results_marked.append(tuple(p for p in sorted(change)
+                                             if change[p] > 0 and p in self.result_places))
         self.marking = [net.initial[p] for p in self.places]
         self.env: dict[str, dict[str, Any]] = {"mission": {}}
         self.ready: list[tuple[int, int, int]] = []  # (step enabled, index, version)
@@ -110,7 +124,11 @@ class PetriEngine(Engine):
     def _update(self, i: int) -> None:
         """Re-examine transition ``i`` after a change of its input places."""
         m = self.marking
-        lacking = next((p for p, w in self.inputs[i] if m[p] < w), None)
+        lacking = None
+        for p, w in self.inputs[i]:
+            if m[p] < w:
+                lacking = p
+                break
         now = lacking is None
         if not now:   # watch the first input that lacks tokens
             old = self.watching[i]
@@ -147,20 +165,16 @@ class PetriEngine(Engine):
         self.step += 1
         if self.on_fire is not None:
             self.on_fire(self.now, self.transitions[i])
-        change: dict[int, int] = {}
-        for p, w in self.pre[i]:
-            change[p] = change.get(p, 0) - w
-        for p, w in self.post[i]:
-            change[p] = change.get(p, 0) + w
-        for p in sorted(change):
-            if change[p] < 0:       # enabled ones may lose an input
+        update = self._update
+        for p, falls in self.changes[i]:
+            if falls:       # enabled ones may lose an input
                 for j in sorted(self.enabled_on[p]):
-                    self._update(j)
-            elif change[p] > 0:     # the ones waiting on p may now be enabled
+                    update(j)
+            else:           # the ones waiting on p may now be enabled
                 for j in sorted(self.watch[p]):
-                    self._update(j)
-        for p in change:
-            if m[p] and p in self.result_places:
+                    update(j)
+        for p in self.results_marked[i]:
+            if m[p]:
                 self.outcome = self.result_places[p]
         return self._effects(i)
 
