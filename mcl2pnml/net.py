@@ -71,8 +71,25 @@ class FrozenDict(Mapping[str, Any]):
         return f"FrozenDict({self._data!r})"
 
 
+_SCALARS = frozenset({str, bool, int, type(None)})
+
+
 def freeze(value: Any) -> Any:
     """Turn JSON-like data into hashable, immutable data (dicts, lists -> tuples)."""
+    kind = type(value)
+    # exact types first: an isinstance test against the Mapping ABC costs
+    # microseconds, and the compiler freezes each call's bindings
+    if kind in _SCALARS or kind is FrozenDict:
+        return value
+    if kind is dict:
+        out = {}
+        for key, item in value.items():
+            if type(key) is not str:
+                raise NetError(f"payload keys must be strings, not {key!r}")
+            out[key] = freeze(item)
+        return FrozenDict(out)
+    if kind is list or kind is tuple:
+        return tuple(freeze(item) for item in value)
     if isinstance(value, Mapping):
         out = {}
         for key, item in value.items():
