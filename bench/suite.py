@@ -73,7 +73,8 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
              "further time ours takes to find the terminal markings and decide deadlock "
              "freedom and reusability (what `analyze --state-space` adds; the peers do not "
              "do it). `-`: did not finish within "
-             f"{peers.TIMEOUT:.0f} s (or a smaller net of the family did not).", "",
+             f"{peers.TIMEOUT:.0f} s, or was not run: a smaller net of the family did not "
+             "finish, or its time per marking there says this one would not.", "",
              "| net | states | ours (s) | ours (states/s) | ours (B/state) | numpy (s) "
              "| + analysis (s) | SNAKES (s) | pm4py (s) | vs SNAKES | vs pm4py |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]

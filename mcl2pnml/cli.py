@@ -121,7 +121,10 @@ def compile_file(mission: Path):
     return compile_checked(_checked(mission))
 
 
-FORMATS = ("pnml", "dot", "svg", "png")
+FORMATS = ("pnml", "tina", "lola", "dot", "svg", "png")
+#: The suffix each format's file gets by default.
+SUFFIX = {"pnml": ".pnml", "tina": ".net", "lola": ".lola", "dot": ".dot", "svg": ".svg",
+          "png": ".png"}
 
 
 @main.command("compile", epilog=EXAMPLES)
@@ -129,7 +132,9 @@ FORMATS = ("pnml", "dot", "svg", "png")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
               help="Write here (default: MISSION with the format's suffix).")
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default="pnml", show_default=True,
-              help="PNML (ISO/IEC 15909-2), or a graphviz drawing: dot source, SVG or PNG.")
+              help="PNML (ISO/IEC 15909-2); TINA's .net (a time Petri net: time-outs as "
+                   "intervals); LoLA's net format; or a graphviz drawing: dot source, SVG or "
+                   "PNG.")
 @click.option("--layout", "layout_engine", type=click.Choice(ENGINES), default="auto",
               show_default=True,
               help="Node positions in the PNML: graphviz dot, BFS layers, or none "
@@ -143,12 +148,18 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
     """
     from .draw import instance_clusters, render, to_dot
     from .files import atomic_write_text
+    from .formats.lola import save_lola
+    from .formats.tina import save_tina
     from .pnml.writer import save_pnml
 
     net = compile_file(mission)
-    output = output or mission.with_suffix(f".{fmt}")
+    output = output or mission.with_suffix(SUFFIX[fmt])
     if fmt == "pnml":
         save_pnml(net, output, layout_engine)
+    elif fmt == "tina":
+        save_tina(net, output, urgent=True)
+    elif fmt == "lola":
+        save_lola(net, output)
     else:
         graph = to_dot(net, clusters=instance_clusters(net), title=f"{mission.name}",
                        legend=True)
@@ -422,18 +433,19 @@ def _parse_initial(text: str) -> dict[str, int]:
                    "500,000 markings.")
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
             max_states: int, progress: bool | None, explorer: str) -> int:
-    """Analyse FILE: a P/T net (PNML) or a mission (MCL, compiled first).
+    """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings. Works on any P/T net, not only
-    ours: PNML from TAPAAL, PIPE, pm4py...
+    ours: PNML from TAPAAL, PIPE, pm4py..., and the text formats of TINA
+    and LoLA (told apart by the file's suffix: .pnml or .xml, .net, .lola).
     """
     import json
 
     from analysis.report import analyze as run, render_text
 
-    from .pnml.reader import load_pnml
+    from .formats import load_net
 
-    net = compile_file(file) if file.suffix == ".mcl" else load_pnml(file)
+    net = compile_file(file) if file.suffix == ".mcl" else load_net(file)
     start = None
     if initial is not None:
         start = _parse_initial(initial)

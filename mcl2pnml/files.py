@@ -75,3 +75,36 @@ def read_text(path: str | Path, what: str) -> str:
     except (OSError, UnicodeDecodeError) as e:
         reason = getattr(e, "strerror", None) or str(e)
         raise Mcl2PnmlError(f"cannot read the {what}: {reason}", Location(str(path))) from None
+
+
+def read_bytes(path: str | Path) -> bytes:
+    """A file's bytes; a file that cannot be read is one error naming it."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as e:
+        raise Mcl2PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
+
+
+def decode_text(data: bytes, filename: str, what: str) -> str:
+    """A source as text; not UTF-8, or binary, is an error located at the first bad
+    byte, with the line shown as far as it can be. ``what`` names the kind of
+    file with its article: "an MCL", "a TINA"."""
+    def at(offset: int, message: str) -> Mcl2PnmlError:
+        before = data[:offset]
+        line = before.count(b"\n") + 1
+        start = before.rfind(b"\n") + 1
+        end = data.find(b"\n", offset)
+        text = data[start:end if end >= 0 else len(data)]
+        # the line as far as it can be shown: undecodable bytes as U+FFFD,
+        # control bytes as '?', so that the caret still lands under the fault
+        shown = "".join(c if c.isprintable() or c == "\t" else "?"
+                        for c in text.decode("utf-8", errors="replace"))
+        col = len(data[start:offset].decode("utf-8", errors="replace")) + 1
+        return Mcl2PnmlError(message, Location(filename, line, col, shown))
+    if b"\x00" in data:
+        raise at(data.index(b"\x00"), f"this is not {what} text file (a NUL byte: binary?)")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise at(e.start, f"not UTF-8 text: byte 0x{data[e.start]:02x} cannot start a "
+                          "character here") from None

@@ -19,6 +19,7 @@ from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharact
 
 from . import mcl_ast as ast
 from .errors import Location, Mcl2PnmlError, source_lines
+from .files import decode_text, read_bytes
 from .gcpause import without_gc
 
 GRAMMAR = r"""
@@ -184,25 +185,7 @@ class _Build(Transformer_NonRecursive):
 
 def decode(data: bytes, filename: str) -> str:
     """MCL source as text; not UTF-8, or binary, is an error at the first bad byte."""
-    def at(offset: int, message: str) -> Mcl2PnmlError:
-        before = data[:offset]
-        line = before.count(b"\n") + 1
-        start = before.rfind(b"\n") + 1
-        end = data.find(b"\n", offset)
-        text = data[start:end if end >= 0 else len(data)]
-        # the line as far as it can be shown: undecodable bytes as U+FFFD,
-        # control bytes as '?', so that the caret still lands under the fault
-        shown = "".join(c if c.isprintable() or c == "\t" else "?"
-                        for c in text.decode("utf-8", errors="replace"))
-        col = len(data[start:offset].decode("utf-8", errors="replace")) + 1
-        return Mcl2PnmlError(message, Location(filename, line, col, shown))
-    if b"\x00" in data:
-        raise at(data.index(b"\x00"), "this is not an MCL text file (a NUL byte: binary?)")
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        raise at(e.start, f"not UTF-8 text: byte 0x{data[e.start]:02x} cannot start a "
-                          "character here") from None
+    return decode_text(data, filename, "an MCL")
 
 
 class _Suspect(Exception):
@@ -348,8 +331,4 @@ _CHILDREN = {
 
 def parse_file(path: str | Path) -> ast.Program:
     path = Path(path)
-    try:
-        data = path.read_bytes()
-    except OSError as e:
-        raise Mcl2PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
-    return parse(decode(data, str(path)), str(path))
+    return parse(decode(read_bytes(path), str(path)), str(path))
