@@ -152,7 +152,7 @@ net: "net" name
 tr: "tr" name label? INTERVAL? arcs?
 pl: "pl" name label? marking? arcs?
 lb: "lb" name name
-nt: "nt" name NUMBER name
+nt: "nt" name name name    // the middle one is 0 or 1: a name here, as names may be digits
 pr: "pr" name+ (LT | GT) name+
 label: ":" name
 marking: "(" NUMBER ")"
@@ -367,7 +367,7 @@ def _syntax_error(e: UnexpectedInput, text: str, reader: _Reader) -> Mcl2PnmlErr
                        (getattr(e, "expected", None) or getattr(e, "allowed", None) or ())})
     token = getattr(e, "token", None)
     if token is not None and token.type != "$END":
-        found = f"unexpected {_READABLE.get(token.type, repr(str(token)))} {str(token)!r}"
+        found = f"unexpected {str(token)!r}"
     elif token is not None:
         found = "unexpected end of file"
     else:

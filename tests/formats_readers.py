@@ -1,0 +1,171 @@
+"""Small readers of TINA's .net and LoLA's formats, written for the tests from the
+formats' published descriptions, independently of ``mcl2pnml.formats``.
+
+They read what a tool would, into one plain shape to compare nets by:
+``{"places": {id: tokens}, "transitions": {id: (interval or None)},
+"arcs": {(source, target, kind): weight}}``, where kind is ``"normal"`` or
+``"test"``, and an interval is ``(low, high or None)`` in the file's units.
+"""
+from __future__ import annotations
+
+import re
+
+# -- TINA: "formats(n)", The .net format -------------------------------------------------
+#
+# Declarations: net N | tr T [: L] [interval] {place[arc]} -> {place[arc]}
+# | pl P [: L] [(marking)] {t[arc]} -> {t[arc]} | lb N L | nt N 0|1 A | pr ...
+# Names: [A-Za-z0-9_']+ or {...} with \{ \} \\ escaped. '#' comments.
+# Arcs: *k (weight), ?k (test), ?-k (inhibitor), !k, !-k (stopwatch).
+
+_TINA_TOKEN = re.compile(r"""
+    (?P<ws>\s+) | (?P<comment>\#[^\n]*)
+  | (?P<interval>[\[\]]\s*\d+\s*,\s*(?:\d+|w)\s*[\[\]])
+  | (?P<qname>\{(?:[^{}\\]|\\.)*\}) | (?P<arrow>->)
+  | (?P<op>\?-|!-|\*|\?|!) | (?P<punct>[:()<>])
+  | (?P<aname>[A-Za-z0-9_']+)
+""", re.X | re.S)
+KEYWORDS = {"net", "tr", "pl", "lb", "nt", "pr"}
+
+
+def tina_tokens(text: str) -> list[tuple[str, str]]:
+    out, pos = [], 0
+    while pos < len(text):
+        m = _TINA_TOKEN.match(text, pos)
+        assert m, f"TINA: cannot read {text[pos:pos + 20]!r}"
+        pos = m.end()
+        kind = m.lastgroup
+        if kind in ("ws", "comment"):
+            continue
+        value = m.group()
+        if kind == "qname":
+            kind, value = "name", re.sub(r"\\(.)", r"\1", value[1:-1], flags=re.S)
+        elif kind == "aname":
+            kind = "keyword" if value in KEYWORDS else "name"
+        out.append((kind, value))
+    return out
+
+
+def _weight(text: str) -> int:
+    return int(text[:-1]) * {"K": 1000, "M": 1000000}[text[-1]] if text[-1] in "KM" \
+        else int(text)
+
+
+def read_tina(text: str) -> dict:
+    tokens = tina_tokens(text) + [("end", "")]
+    net = {"name": None, "places": {}, "transitions": {}, "arcs": {}}
+    i = 0
+
+    def arcs_of(node: str, is_transition: bool) -> None:
+        nonlocal i
+        side = "in"
+        while tokens[i][0] in ("name", "arrow"):
+            if tokens[i][0] == "arrow":
+                side = "out"
+                i += 1
+                continue
+            other = tokens[i][1]
+            i += 1
+            kind, weight = "normal", 1
+            if tokens[i][0] == "op":
+                op = tokens[i][1]
+                weight = _weight(tokens[i + 1][1])
+                i += 2
+                assert op in ("*", "?"), f"TINA: arc kind {op} in a test file"
+                kind = "test" if op == "?" else "normal"
+            place, trans = (other, node) if is_transition else (node, other)
+            (net["places"] if is_transition else net["transitions"]).setdefault(
+                other, 0 if is_transition else None)
+            key = (place, trans, kind) if (side == "in") == is_transition else (trans, place,
+                                                                                 kind)
+            net["arcs"][key] = net["arcs"].get(key, 0) + weight
+
+    while tokens[i][0] != "end":
+        kind, word = tokens[i]
+        assert kind == "keyword", f"TINA: a declaration starts with a keyword, not {word!r}"
+        i += 1
+        if word == "net":
+            net["name"] = tokens[i][1]
+            i += 1
+        elif word in ("tr", "pl"):
+            node = tokens[i][1]
+            i += 1
+            if tokens[i] == ("punct", ":"):
+                i += 2
+            if word == "tr":
+                interval = None
+                if tokens[i][0] == "interval":
+                    text_ = re.sub(r"\s", "", tokens[i][1])
+                    low, high = text_[1:-1].split(",")
+                    interval = (int(low), None if high == "w" else int(high))
+                    i += 1
+                net["transitions"][node] = interval
+            else:
+                marking = 0
+                if tokens[i] == ("punct", "("):
+                    marking = _weight(tokens[i + 1][1])
+                    i += 3
+                net["places"][node] = max(marking, net["places"].get(node, 0))
+            arcs_of(node, word == "tr")
+        else:
+            raise AssertionError(f"TINA: '{word}' in a test file")
+    return net
+
+
+# -- LoLA: PLACE list; MARKING p: n, ...; TRANSITION t CONSUME p: n, ...; PRODUCE ...; --
+#
+# Names: any characters but white space and , ; : ( ) { }. Comments { ... }.
+
+_LOLA_TOKEN = re.compile(r"(?P<ws>\s+)|(?P<comment>\{[^}]*\})|(?P<punct>[,;:])"
+                         r"|(?P<word>[^,;:(){}\s]+)")
+
+
+def read_lola(text: str, decode=lambda s: s) -> dict:
+    tokens = []
+    for m in _LOLA_TOKEN.finditer(text):
+        if m.lastgroup in ("punct", "word"):
+            tokens.append(m.group())
+    net = {"places": {}, "transitions": {}, "arcs": {}}
+    i = 0
+
+    def expect(word: str) -> None:
+        nonlocal i
+        assert tokens[i] == word, f"LoLA: expected {word}, found {tokens[i]!r}"
+        i += 1
+
+    def pairs() -> list[tuple[str, int]]:
+        nonlocal i
+        out = []
+        while tokens[i] != ";":
+            name = decode(tokens[i])
+            i += 1
+            count = 1
+            if tokens[i] == ":":
+                count = int(tokens[i + 1])
+                i += 2
+            out.append((name, count))
+            if tokens[i] == ",":
+                i += 1
+        i += 1
+        return out
+
+    expect("PLACE")
+    while tokens[i] != "MARKING":
+        net["places"][decode(tokens[i])] = 0
+        i += 1
+        if tokens[i] in (",", ";"):
+            i += 1
+    expect("MARKING")
+    for p, n in pairs():
+        net["places"][p] += n
+    while i < len(tokens):
+        expect("TRANSITION")
+        t = decode(tokens[i])
+        i += 1
+        net["transitions"][t] = None
+        expect("CONSUME")
+        for p, n in pairs():
+            net["arcs"][p, t, "normal"] = net["arcs"].get((p, t, "normal"), 0) + n
+        expect("PRODUCE")
+        for p, n in pairs():
+            net["arcs"][t, p, "normal"] = net["arcs"].get((t, p, "normal"), 0) + n
+    return net

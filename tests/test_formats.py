@@ -1,0 +1,190 @@
+"""TINA's .net and LoLA's format: what we write, read back by readers written from
+the formats' descriptions (tests/formats_readers.py) and by our own; bad files."""
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+
+from mcl2pnml.cli import compile_file
+from mcl2pnml.errors import Mcl2PnmlError
+from mcl2pnml.formats import load_net
+from mcl2pnml.formats.lola import parse_lola, to_lola
+from mcl2pnml.formats.tina import parse_tina, to_tina
+from mcl2pnml.net import ArcKind, NetBuilder, Timing
+from mcl2pnml.pnml import ids
+from mcl2pnml.template_library import default_library
+
+from conftest import DATA, ROOT
+from formats_readers import read_lola, read_tina
+from strategies import nets
+
+EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
+TEMPLATES = ["primitive", "task", "KeepGoal", "sequence", "parallel", "monitor"]
+INVALID = sorted(p for p in (DATA / "formats" / "invalid").iterdir() if p.suffix != ".expected")
+
+
+def missions():
+    return [(p.stem, compile_file(p)) for p in EXAMPLES]
+
+
+def templates():
+    lib = default_library()
+    return [(name, lib.composed(name)) for name in TEMPLATES]
+
+
+def plain(net, *, read_as: str) -> dict:
+    """The net in the readers' shape; read arcs as test arcs, or as a self-loop pair."""
+    arcs: dict = {}
+    for a in net.arcs:
+        if a.kind is ArcKind.READ and read_as == "loop":
+            for key in ((a.source, a.target, "normal"), (a.target, a.source, "normal")):
+                arcs[key] = arcs.get(key, 0) + a.weight
+        else:
+            key = (a.source, a.target, "test" if a.kind is ArcKind.READ else "normal")
+            arcs[key] = arcs.get(key, 0) + a.weight
+    return {"places": {p.id: net.initial[p.id] for p in net.places},
+            "transitions": {t.id for t in net.transitions}, "arcs": arcs}
+
+
+def unit_of(text: str) -> int:
+    """10^d where the file says its time unit is 10^-d s."""
+    m = re.search(r"# time unit: (?:1/(\d+)|1) s", text)
+    assert m, "a TINA file we write states its time unit"
+    return int(m.group(1) or 1)
+
+
+@pytest.mark.parametrize("name, net", missions() + templates(), ids=lambda x: x
+                         if isinstance(x, str) else "")
+def test_tina_as_tina_reads_it(name, net):
+    text = to_tina(net, urgent=True)
+    seen = read_tina(text)
+    want = plain(net, read_as="test")
+    assert seen["places"] == want["places"]
+    assert set(seen["transitions"]) == want["transitions"]
+    assert seen["arcs"] == want["arcs"]
+    scale = unit_of(text)
+    for t in net.transitions:
+        payload = t.payload or {}
+        if t.timing is not None:     # a time-out: its delay, as a static interval
+            hi = None if t.timing.latest is None else round(t.timing.latest * scale)
+            expected = (round(t.timing.earliest * scale), hi)
+        elif "event" in payload:     # the vehicle fires it, whenever it reports
+            expected = None
+        else:                        # immediate: fires before time passes
+            expected = (0, 0)
+        assert seen["transitions"][t.id] == expected, t.id
+
+
+@pytest.mark.parametrize("name, net", missions() + templates(), ids=lambda x: x
+                         if isinstance(x, str) else "")
+def test_lola_as_lola_reads_it(name, net):
+    text = to_lola(net)
+    decode = ids.decode if "{ ids: xml-name-escapes }" in text else (lambda s: s)
+    seen = read_lola(text, decode)
+    want = plain(net, read_as="loop")
+    assert seen["places"] == want["places"]
+    assert set(seen["transitions"]) == want["transitions"]
+    assert seen["arcs"] == want["arcs"]
+
+
+def same_structure(a, b, *, read_as_loop: bool = False) -> None:
+    """Same places, transitions, arcs and marking; names and timings compared apart."""
+    mode = "loop" if read_as_loop else "test"
+    assert plain(a, read_as=mode) == plain(b, read_as=mode)
+
+
+@settings(max_examples=150, deadline=None)
+@given(nets())
+def test_any_net_survives_tina_and_lola_through_our_readers(net):
+    back = parse_tina(to_tina(net), "random.net")
+    same_structure(net, back)
+    assert back.name == net.name
+    for t in net.transitions:
+        mine = back.transition_index[t.id].timing
+        untimed = t.timing is None or (t.timing.earliest == 0 and t.timing.latest is None)
+        assert (mine is None) if untimed else (mine == t.timing)
+    for p in net.places:
+        assert back.place_index[p.id].name == p.name
+    same_structure(net, parse_lola(to_lola(net), "random.lola"), read_as_loop=True)
+    # and the test readers agree on the odd ids (spaces, braces, keywords, unicode)
+    assert set(read_tina(to_tina(net))["places"]) == {p.id for p in net.places}
+
+
+def test_delays_that_are_not_whole_seconds_take_a_finer_unit():
+    b = NetBuilder("fine")
+    b.place("p", 1)
+    b.transition("t", timing=Timing.delay(2.5))
+    b.transition("u", timing=Timing(0.25, None))
+    b.arc("p", "t")
+    b.arc("p", "u")
+    text = to_tina(b.build())
+    assert "# time unit: 1/100 s" in text
+    assert read_tina(text)["transitions"] == {"t": (250, 250), "u": (25, None)}
+    back = parse_tina(text, "fine.net")
+    assert back.transition_index["t"].timing == Timing(2.5, 2.5)
+    assert back.transition_index["u"].timing == Timing(0.25, None)
+
+
+def test_a_net_written_by_hand_for_tina():
+    """What TINA's users write: K and M counts, labels, notes, place-side arcs, [0,w[."""
+    net = load_net(DATA / "formats" / "foreign" / "buffer.net")
+    assert net.name == "buffer"
+    assert net.initial == {"idle": 2, "slots": 2000, "power": 1}
+    assert net.place_index["idle"].name == "waiting"                # from 'lb'
+
+    assert net.transition_index["put"].name == "put an item"
+    assert net.transition_index["put"].timing is None          # [0,w[ is untimed
+    assert net.transition_index["get"].timing == Timing(1, 3)
+    arcs = {(a.source, a.target): (a.weight, a.kind) for a in net.arcs}
+    assert arcs[("slots", "put")] == (1, ArcKind.NORMAL)
+    assert arcs[("put", "items")] == (1, ArcKind.NORMAL)       # declared on the place
+    assert arcs[("items", "get")] == (2, ArcKind.NORMAL)
+    assert arcs[("power", "get")] == (1, ArcKind.READ)
+
+
+def test_a_net_written_by_hand_for_lola():
+    net = load_net(DATA / "formats" / "foreign" / "mutex.lola")
+    assert net.initial == {"idle1": 1, "idle2": 1, "free": 1}
+    assert len(net.transitions) == 4 and len(net.arcs) == 12
+
+
+@pytest.mark.parametrize("path", INVALID, ids=lambda p: p.name)
+def test_bad_files_give_the_expected_message(path):
+    """Golden messages: file:line:col, the line, a caret."""
+    expected = path.with_suffix(".expected").read_text()
+    with pytest.raises(Mcl2PnmlError) as info:
+        load_net(path.relative_to(ROOT))
+    assert str(info.value) + "\n" == expected
+
+
+def run(*args):
+    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
+                          capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("fmt, suffix", [("tina", ".net"), ("lola", ".lola")])
+def test_compile_then_analyze_through_the_format(tmp_path, fmt, suffix):
+    mission = tmp_path / "sauce.mcl"
+    mission.write_text((ROOT / "examples" / "sauce.mcl").read_text())
+    out = run("compile", mission, "--format", fmt)
+    assert out.returncode == 0, out.stderr
+    written = mission.with_suffix(suffix)
+    assert written.exists()
+    via = json.loads(run("analyze", written, "--state-space", "--json").stdout)
+    direct = json.loads(run("analyze", mission, "--state-space", "--json").stdout)
+    for key in ("states", "safe", "deadlock_free", "reusable", "terminal_markings"):
+        assert via[key] == direct[key], key
+
+
+def test_an_unknown_suffix_lists_the_known_formats(tmp_path):
+    path = tmp_path / "net.txt"
+    path.write_text("PLACE a; MARKING a: 1;")
+    out = run("analyze", path)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert ".net (TINA)" in out.stderr and ".lola (LoLA)" in out.stderr
