@@ -9,12 +9,18 @@ Conventions of the drawings (a legend is part of every figure):
 * arcs run left to right, the way tokens flow; a read arc (the transition
   tests the place and leaves its token) is dashed and has no arrow head;
 * ``clusters`` group the nodes of one component (the primitive in the task,
-  each subordinate structure in a control structure);
+  each subordinate structure in a control structure, each task, structure
+  and call site of a mission), named inside their box without the box's
+  name; the places where boxes meet (fusion places) are drawn outside
+  every box, between the boxes they join;
+* every node has a ``class`` (``place``, ``transition``, ``copy``,
+  ``legend``), which SVG keeps, so that a page or a script can find them;
 * a place that many transitions give tokens back to (a mutex) is drawn again,
   dashed and small, beside each of them, like PNML's reference places.
 """
 from __future__ import annotations
 
+import contextlib
 from typing import Mapping, Sequence
 
 import graphviz
@@ -42,20 +48,24 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         "fontsize": "12", "label": title or "", "labelloc": "t", **DOT_SPEED},
         node_attr={"fontname": "Helvetica", "fontsize": "10"},
         edge_attr={"arrowsize": "0.6"})
-    clustered = {n for members in (clusters or {}).values() for n in members}
+    clusters = border_out(net, clusters or {})
+    box = {n: name for name, members in clusters.items() for n in members}
+    clustered = set(box)
 
-    def add_place(target, p) -> None:
+    def add_place(target, p, box_name: str | None = None) -> None:
         tokens = marking.get(p.id, 0)
-        label = p.label + (f"\n{_tokens(tokens)}" if tokens else "")
+        shown = _inside(p.label, box_name)
+        label = shown + (f"\n{_tokens(tokens)}" if tokens else "")
         # circles all of one size read best; long names get a larger one
-        width = max(0.75, 0.085 * len(p.label) + 0.15)
+        width = max(0.75, 0.085 * len(shown) + 0.15)
         target.node(p.id, label, shape="circle", width=f"{width:.2f}", fixedsize="true",
-                    peripheries="2" if p.interface is not None else "1")
+                    peripheries="2" if p.interface is not None else "1",
+                    **{"class": "place"})
 
-    def add_transition(target, t) -> None:
-        label = t.label
+    def add_transition(target, t, box_name: str | None = None) -> None:
+        label = _inside(t.label, box_name)
         attrs = {"shape": "box", "height": "0.5", "width": "0.12", "style": "filled",
-                 "fillcolor": "white", "xlabel": label, "label": ""}
+                 "fillcolor": "white", "xlabel": label, "label": "", "class": "transition"}
         if t.timing is not None or (t.payload and t.payload.get("timeout")):
             delay = f" {t.timing}" if t.timing is not None else " (time-out)"
             attrs.update(fillcolor="gray35", xlabel=label + delay)
@@ -67,14 +77,14 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     for t in net.transitions:
         if t.id not in clustered:
             add_transition(g, t)
-    for name, members in (clusters or {}).items():
+    for name, members in clusters.items():
         with g.subgraph(name=f"cluster_{name}") as c:
             c.attr(label=name, style="rounded,dashed", color="gray50", fontsize="11")
             for m in members:   # net order within the cluster, as given
                 if m in net.place_index:
-                    add_place(c, net.place_index[m])
+                    add_place(c, net.place_index[m], name)
                 else:
-                    add_transition(c, net.transition_index[m])
+                    add_transition(c, net.transition_index[m], name)
     # where tokens come in on the left, where results come out on the right
     written = {a.target for a in net.arcs if a.target in net.place_index}
     read_or_taken = {a.source for a in net.arcs if a.source in net.place_index}
@@ -88,8 +98,8 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
                 for m in members:
                     r.node(m)
     depth = flow_depth(net)
-    back = [a for a in net.arcs if a.kind is ArcKind.NORMAL
-            and depth.get(a.target, 0) <= depth.get(a.source, 0)]
+    back = {a for a in net.arcs if a.kind is ArcKind.NORMAL
+            and depth.get(a.target, 0) <= depth.get(a.source, 0)}
     returns: dict[str, int] = {}
     for a in back:
         if a.target in net.place_index:
@@ -111,8 +121,13 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             copies += 1
             target = f"{a.target}~{copies}"
             place = net.place_index[a.target]
-            g.node(target, place.label, shape="circle", fixedsize="true", style="dashed",
-                   width=f"{max(0.55, 0.07 * len(place.label) + 0.15):.2f}", fontsize="8")
+            name = box.get(a.source)   # in its transition's box, if it has one
+            where = g.subgraph(name=f"cluster_{name}") if name else contextlib.nullcontext(g)
+            shown = _inside(place.label, name)
+            with where as c:
+                c.node(target, shown, shape="circle", fixedsize="true", style="dashed",
+                       width=f"{max(0.55, 0.07 * len(shown) + 0.15):.2f}", fontsize="8",
+                       **{"class": "copy"})
         elif a in back:
             # a token going back (a primitive switched off): drawn, but the
             # left-to-right order follows the forward flow
@@ -121,6 +136,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     if legend:
         with g.subgraph(name="cluster_legend") as k:
             k.attr(label="legend", fontsize="9", style="rounded", color="gray70")
+            k.attr("node", **{"class": "legend"})
             k.node("legend_place", f"place\n{TOKEN} token", shape="circle", width="0.6",
                    fixedsize="true", fontsize="8")
             k.node("legend_iface", "fusion\nplace", shape="circle", width="0.6",
@@ -159,6 +175,31 @@ def flow_depth(net: Net) -> dict[str, int]:
                     nxt.append(m)
         frontier = nxt
     return depth
+
+
+def _inside(label: str, box_name: str | None) -> str:
+    """A node's label inside its box: without the box's name, which the box shows."""
+    prefix = f"{box_name}." if box_name else None
+    return label[len(prefix):] if prefix and label.startswith(prefix) else label
+
+
+def border_out(net: Net, clusters: Mapping[str, Sequence[str]]) -> dict[str, list[str]]:
+    """The clusters without their border places: those joined to other boxes.
+
+    A place that transitions of two boxes (or of a box and the loose nodes)
+    put tokens in or take them from is where the boxes meet, a fusion place
+    of the composition; drawn outside every box, it sits between the boxes
+    it joins, on their borders, and its arcs show which.
+    """
+    box = {n: name for name, members in clusters.items() for n in members}
+    touches: dict[str, set] = {}
+    for a in net.arcs:
+        place, transition = ((a.source, a.target) if a.source in net.place_index
+                             else (a.target, a.source))
+        touches.setdefault(place, set()).add(box.get(transition))
+    border = {p for p, boxes in touches.items() if len(boxes) > 1}
+    kept = {name: [n for n in members if n not in border] for name, members in clusters.items()}
+    return {name: members for name, members in kept.items() if members}
 
 
 def instance_clusters(net: Net) -> dict[str, list[str]]:

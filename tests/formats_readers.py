@@ -169,3 +169,120 @@ def read_lola(text: str, decode=lambda s: s) -> dict:
         for p, n in pairs():
             net["arcs"][t, p, "normal"] = net["arcs"].get((t, p, "normal"), 0) + n
     return net
+
+
+# -- DOT: graphviz's language ("The DOT Language", graphviz.org/doc/info/lang.html) -------
+#
+# graph: [strict] (graph|digraph) [ID] '{' stmt_list '}'; a statement is a node
+# (ID [attrs]), an edge (ID -> ID ... [attrs]), defaults (node|edge|graph [attrs]),
+# ID = ID, or a subgraph ([subgraph [ID]] '{' ... '}'). An ID is a name, a numeral,
+# a "quoted string" (\" escapes a quote) or an <HTML string>. Comments: // /* */ #.
+
+_DOT_TOKEN = re.compile(r"""
+    (?P<ws>\s+) | (?P<comment>//[^\n]*|/\*.*?\*/|^\#[^\n]*)
+  | (?P<quoted>"(?:[^"\\]|\\.)*") | (?P<html><[^>]*>)
+  | (?P<edgeop>->|--) | (?P<punct>[{}\[\];,=:])
+  | (?P<id>[A-Za-z_\x80-\uffff][A-Za-z_0-9\x80-\uffff]*|-?(?:\.\d+|\d+(?:\.\d*)?))
+""", re.X | re.S | re.M)
+
+
+def dot_tokens(text: str) -> list[tuple[str, str]]:
+    out, pos = [], 0
+    while pos < len(text):
+        m = _DOT_TOKEN.match(text, pos)
+        assert m, f"DOT: cannot read {text[pos:pos + 20]!r}"
+        pos = m.end()
+        if m.lastgroup in ("ws", "comment"):
+            continue
+        value = m.group()
+        if m.lastgroup == "quoted":
+            out.append(("id", value[1:-1].replace('\\"', '"')))
+        elif m.lastgroup in ("id", "html"):
+            out.append(("id", value))
+        else:
+            out.append((m.lastgroup, value))
+    return out
+
+
+def read_dot(text: str) -> dict:
+    """{"nodes": {id: attrs}, "edges": [(a, b, attrs)], "clusters": {name: [ids]}}."""
+    tokens = dot_tokens(text) + [("end", "")]
+    nodes: dict[str, dict] = {}
+    edges: list = []
+    clusters: dict[str, list] = {}
+    i = 0
+
+    def attrs() -> dict:
+        nonlocal i
+        out = {}
+        while tokens[i] == ("punct", "["):
+            i += 1
+            while tokens[i] != ("punct", "]"):
+                key = tokens[i][1]
+                assert tokens[i + 1] == ("punct", "="), f"DOT: {key} without a value"
+                out[key] = tokens[i + 2][1]
+                i += 3
+                if tokens[i] in (("punct", ","), ("punct", ";")):
+                    i += 1
+            i += 1
+        return out
+
+    def statements(defaults: dict, inside: list[str]) -> None:
+        nonlocal i
+        defaults = {k: dict(v) for k, v in defaults.items()}   # a subgraph scopes them
+        while tokens[i] != ("punct", "}"):
+            kind, word = tokens[i]
+            if kind == "punct" and word == ";":
+                i += 1
+                continue
+            if kind == "id" and word.lower() in ("node", "edge", "graph") \
+                    and tokens[i + 1] == ("punct", "["):
+                i += 1
+                defaults[word.lower()].update(attrs())
+                continue
+            if kind == "id" and word.lower() == "subgraph" or kind == "punct" and word == "{":
+                name = None
+                if word.lower() == "subgraph":
+                    i += 1
+                    if tokens[i][0] == "id":
+                        name = tokens[i][1]
+                        i += 1
+                assert tokens[i] == ("punct", "{")
+                i += 1
+                members: list[str] = []
+                statements(defaults, members)
+                i += 1
+                if name and name.startswith("cluster"):
+                    clusters.setdefault(name[len("cluster_"):], []).extend(members)
+                inside.extend(members)
+                continue
+            if kind == "id" and tokens[i + 1] == ("punct", "="):
+                i += 3          # ID = ID: a graph attribute
+                continue
+            chain = [word]
+            i += 1
+            while tokens[i][0] == "edgeop":
+                chain.append(tokens[i + 1][1])
+                i += 2
+            given = attrs()
+            if len(chain) == 1:
+                node = chain[0]
+                if node not in nodes:
+                    nodes[node] = dict(defaults["node"])
+                    inside.append(node)
+                nodes[node].update(given)
+            else:
+                for a, b in zip(chain, chain[1:]):
+                    for n in (a, b):
+                        if n not in nodes:
+                            nodes[n] = dict(defaults["node"])
+                            inside.append(n)
+                    edges.append((a, b, {**defaults["edge"], **given}))
+
+    while tokens[i][1].lower() in ("strict", "digraph", "graph") or tokens[i][0] == "id" \
+            and tokens[i + 1] == ("punct", "{"):
+        i += 1
+    assert tokens[i] == ("punct", "{"), "DOT: a graph's body is in braces"
+    i += 1
+    statements({"node": {}, "edge": {}, "graph": {}}, [])
+    return {"nodes": nodes, "edges": edges, "clusters": clusters}

@@ -21,7 +21,7 @@ from mcl2pnml.pnml import ids
 from mcl2pnml.template_library import default_library
 
 from conftest import DATA, ROOT
-from formats_readers import read_lola, read_tina
+from formats_readers import read_dot, read_lola, read_tina
 from strategies import nets
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
@@ -188,3 +188,77 @@ def test_an_unknown_suffix_lists_the_known_formats(tmp_path):
     out = run("analyze", path)
     assert out.returncode == 2 and "Traceback" not in out.stderr
     assert ".net (TINA)" in out.stderr and ".lola (LoLA)" in out.stderr
+
+
+# -- DOT: the drawing, read back as a net ------------------------------------------------
+
+def net_from_dot(text: str) -> tuple[dict, dict]:
+    """The net a DOT drawing of ours shows, in the readers' shape, and its clusters."""
+    from mcl2pnml.draw import TOKEN
+
+    dot = read_dot(text)
+    kinds = {n: a.get("class") for n, a in dot["nodes"].items()}
+    original = {n: (n.rpartition("~")[0] if kinds[n] == "copy" else n) for n in kinds}
+    places, transitions, arcs = {}, {}, {}
+    for n, a in dot["nodes"].items():
+        if kinds[n] == "place":
+            last = a.get("label", "").split("\n")[-1]
+            places[n] = (last.count(TOKEN) if set(last) == {TOKEN}
+                         else int(last[:-1]) if last.endswith(TOKEN) else 0)
+        elif kinds[n] == "transition":
+            m = re.search(r" \[([\d.]+), ([\d.]+|inf)\]$", a.get("xlabel", ""))
+            transitions[n] = m and (float(m.group(1)),
+                                    None if m.group(2) == "inf" else float(m.group(2)))
+    for a, b, attrs in dot["edges"]:
+        if "legend" in (kinds[a], kinds[b]):
+            continue
+        read = attrs.get("style") == "dashed" and attrs.get("arrowhead") == "none"
+        key = (original[a], original[b], "test" if read else "normal")
+        arcs[key] = arcs.get(key, 0) + int(attrs.get("label", 1))
+    boxes = {b: m for b, m in dot["clusters"].items() if b != "legend"}
+    return {"places": places, "transitions": transitions, "arcs": arcs}, boxes
+
+
+@pytest.mark.parametrize("name, net", missions() + templates(), ids=lambda x: x
+                         if isinstance(x, str) else "")
+def test_dot_shows_the_net_and_its_instances(name, net):
+    from mcl2pnml.draw import instance_clusters, to_dot
+
+    boxes = instance_clusters(net)
+    source = to_dot(net, clusters=boxes).source
+    seen, clusters = net_from_dot(source)
+    marked_by = {b: a for a, b, _ in read_dot(source)["edges"]}
+    want = plain(net, read_as="test")
+    assert seen["places"] == want["places"]
+    assert set(seen["transitions"]) == want["transitions"]
+    assert seen["arcs"] == want["arcs"]
+    for t in net.transitions:
+        if t.timing is not None:
+            assert seen["transitions"][t.id] == (t.timing.earliest, t.timing.latest)
+    # one box per instance, each node in its own instance's box, and the places
+    # where boxes meet (fused) on no box
+    assert set(clusters) == {b for b in boxes if any(m in clusters.get(b, ()) for m in
+                                                     boxes[b])}
+    box_of = {m: b for b, members in clusters.items() for m in members}
+    for box, members in clusters.items():
+        for m in members:
+            if "~" in m and m.rpartition("~")[0] in net.place_index:
+                # a copy of a place is drawn beside the transition that marks it
+                assert box_of[marked_by[m]] == box, m
+            else:
+                assert m.startswith(box + "."), (box, m)
+    assert not boxes or clusters, "a net drawn in boxes has nodes inside them"
+
+
+def test_fusion_places_sit_between_the_boxes_they_join():
+    from mcl2pnml.draw import instance_clusters, to_dot
+
+    net = compile_file(ROOT / "examples" / "sauce.mcl")
+    _, clusters = net_from_dot(to_dot(net, clusters=instance_clusters(net)).source)
+    inside = {m for members in clusters.values() for m in members}
+    box_of = {m: b for b, members in clusters.items() for m in members}
+    for p in net.places:
+        neighbours = {a.target if a.source == p.id else a.source
+                      for a in net.arcs if p.id in (a.source, a.target)}
+        boxes = {box_of.get(t) for t in neighbours}
+        assert (p.id in inside) == (len(boxes) == 1), (p.id, boxes)
