@@ -10,13 +10,18 @@ OUT    := out
 
 .PHONY: setup system-deps demo test test-slow bench clean
 
-# graphviz's `dot` lays out PNML drawings and renders figures: from Debian's
+# graphviz's `dot` lays out PNML drawings and renders figures; Chromium plays the
+# token game page of `mcl2pnml show` in the browser tests. Both from Debian's
 # packages where missing (machines here run as root).
+APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium)
+
 system-deps:
-	@command -v dot >/dev/null 2>&1 || { \
-	  echo "installing graphviz (dot) with apt-get"; \
-	  (apt-get update -qq && apt-get install -y -qq graphviz >/dev/null) \
-	  || echo "warning: could not install graphviz; tests that need dot will say so"; }
+	@if [ -n "$(strip $(APT_PACKAGES))" ]; then \
+	  echo "installing$(APT_PACKAGES) with apt-get"; \
+	  (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+	     $(APT_PACKAGES) >/dev/null) \
+	  || echo "warning: could not install$(APT_PACKAGES); the tests that need them will say so"; \
+	fi
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)

@@ -31,6 +31,8 @@ Examples:
   mcl2pnml template task -o task.pnml
   mcl2pnml analyze task.pnml
   mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
+  mcl2pnml show task -o task.html
+  mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
 """
 
@@ -400,6 +402,62 @@ def template(name: str | None, list_: bool, output: Path | None) -> int:
     else:
         save_pnml(net, output)
         click.echo(f"wrote {output}: {net.summary()}", err=True)
+    return 0
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write the page here (default: the mission's, net's or template's name "
+                   "with .html, in the current directory).")
+@click.option("--run", "run_log", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="A run to follow step by step: the JSON-lines log of `mcl2pnml run --log`.")
+def show(what: str, output: Path | None, run_log: Path | None) -> int:
+    """Write one self-contained HTML page to play the token game on a net.
+
+    WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
+    template's name (see `template --list`). Click an enabled transition to
+    fire it; step back, reset; the marking and every P-invariant are shown
+    at each step. A mission or a task can be switched to its reduced model
+    (Fig. 3 of the paper); a recorded run can be followed step by step.
+    The page needs no server and fetches nothing.
+    """
+    from .compiler import compile_checked
+    from .formats import SUFFIXES, load_net
+    from .show import check_run, read_run, save_page, variant
+    from .template_library import TemplateKind, default_library
+
+    path = Path(what)
+    if path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES:
+        if not path.is_file():
+            raise click.BadParameter(f"no file '{what}'", param_hint="MISSION.mcl|NET|TEMPLATE")
+        title = path.stem
+        if path.suffix == ".mcl":
+            checked = _checked(path)
+            nets = [(compile_checked(checked), "the mission"),
+                    (compile_checked(checked, reduced=True),
+                     "the mission, every task reduced (Fig. 3)")]
+        else:
+            nets = [(load_net(path), "the net")]
+    else:
+        lib = default_library()
+        template = lib.get(what)   # unknown: the error lists the templates
+        title = what
+        nets = [(lib.composed(what), f"{what}, as the paper analyses it")]
+        if template.kind is TemplateKind.PATTERN:
+            nets[0] = (nets[0][0], f"{what} with its primitive (Fig. 2)")
+            nets.append((lib.composed(lib.reduced.name), "its reduced model (Fig. 3)"))
+    if run_log is not None and len(nets) == 1 and path.suffix != ".mcl" \
+            and path.suffix.lower() not in SUFFIXES:
+        raise click.BadParameter("a run is of a mission: give the mission's .mcl or its "
+                                 "compiled net", param_hint="--run")
+    run_entries = None
+    if run_log is not None:
+        run_entries = read_run(run_log)
+        check_run(nets[0][0], run_entries, str(run_log))
+    output = output or Path(f"{title}.html")
+    save_page(output, title, [variant(net, label) for net, label in nets], run_entries)
+    click.echo(f"wrote {output}: {nets[0][0].summary()}", err=True)
     return 0
 
 

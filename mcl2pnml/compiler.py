@@ -6,6 +6,9 @@ from each call site with that call's parameters.
 
 Components, each prefixed by its instance name (``AchieveDepth.MTX``):
 
+(With ``reduced=True`` each task is the reduced model of Fig. 3 and there
+are no primitives or locks: the mission's control flow alone.)
+
 * one **primitive** net per vehicle primitive a task uses (``KeepDepth.ON``),
   with a lock ``KeepDepth.LOCK``: the analysis of the templates shows that
   OFF alone does not keep two tasks from enabling one primitive at once;
@@ -87,12 +90,15 @@ class _Assembly:
 
 
 class Compiler:
-    def __init__(self, checked: Checked, library: Library | None = None):
+    def __init__(self, checked: Checked, library: Library | None = None,
+                 reduced: bool = False):
         self.c = checked
         self.lib = library or default_library()
         self.a = _Assembly()
-        self.used_primitives = sorted({p.name for t in checked.tasks.values()
-                                       for p in t.primitives})
+        #: every task as the paper's reduced model (Fig. 3), and no primitives
+        self.reduced = reduced
+        self.used_primitives = [] if reduced else sorted(
+            {p.name for t in checked.tasks.values() for p in t.primitives})
         # One net per structure template and one call-site prototype per
         # callee, shared by every instance: a long mission repeats them
         # thousands of times, and nets are immutable.
@@ -117,6 +123,12 @@ class Compiler:
         return b.build()
 
     def task_net(self, task: ast.Task) -> tuple[Net, list[list[str]]]:
+        if self.reduced:
+            net = at_rest(self.lib.reduced.net)
+            gate = Place("GATE", payload=freeze({"doc": "free: no call is inside"}))
+            own = Net(task.name, (*net.places, gate), net.transitions, net.arcs,
+                      Marking({**net.initial, "GATE": 1}))
+            return own, []
         template = self.c.patterns[task.name]
         net = at_rest(template.net)
         interface = [p.id for p in self.lib.primitive.net.places if p.interface is not None]
@@ -209,14 +221,17 @@ class Compiler:
         self.a.parts.append((name, proto.with_payloads({"enter": enter})))
         self.a.groups += [[f"{node.name}.{p}", f"{name}.to.{p}"]
                           for p in ("GATE", *CONTROL) if p != "MTX"]
-        task = self.c.tasks.get(node.name)
-        for prim in sorted({p.name for p in task.primitives}) if task else ():
+        for prim in self._locks(node.name):
             self.a.groups.append([f"{prim}.LOCK", f"{name}.lock.{prim}"])
+
+    def _locks(self, callee: str) -> list[str]:
+        """The primitives whose locks a call of ``callee`` takes (a task's, and none reduced)."""
+        task = self.c.tasks.get(callee)
+        return sorted({p.name for p in task.primitives}) if task and not self.reduced else []
 
     def call_site(self, callee: str) -> Net:
         """The call-site net of ``callee``; each call stamps its arguments on ``enter``."""
-        task = self.c.tasks.get(callee)
-        locks = sorted({p.name for p in task.primitives}) if task else []
+        locks = self._locks(callee)
         b = NetBuilder(callee)
         for p in CONTROL:
             b.place(p, 1 if p == "MTX" else 0, interface=p)
@@ -285,6 +300,13 @@ class Compiler:
 
 
 @without_gc
-def compile_checked(checked: Checked, library: Library | None = None) -> Net:
-    """One composed P/T net for a checked MCL program (from ``mission.B``, ``mission.MTX``)."""
-    return Compiler(checked, library).compile()
+def compile_checked(checked: Checked, library: Library | None = None, *,
+                    reduced: bool = False) -> Net:
+    """One composed P/T net for a checked MCL program (from ``mission.B``, ``mission.MTX``).
+
+    ``reduced``: every task is the paper's reduced model (Fig. 3, section
+    2.3: started by B, ends in OK, FAIL or ABORTED, no primitive), the way
+    the paper analyses structures; the mission's control flow alone, for
+    teaching and for a smaller state space. It cannot be run on a vehicle.
+    """
+    return Compiler(checked, library, reduced).compile()

@@ -212,3 +212,25 @@ def test_ten_thousand_calls_compile_and_grow_exactly_linearly(tmp_path):
     per_call = [(b - a) / 100 for a, b in zip(sizes[100], sizes[200])]
     predicted = tuple(round(a + 9_900 * d) for a, d in zip(sizes[100], per_call))
     assert sizes[10_000] == predicted
+
+
+@pytest.mark.parametrize("mission", [
+    pytest.param(m, marks=pytest.mark.slow) if m.stem == "dam_inspection" else m
+    for m in EXAMPLES], ids=lambda p: p.stem)
+def test_every_task_reduced_ends_the_mission_alike(mission: Path):
+    """Section 2.3's reduced-model argument, on whole missions: with each task replaced
+    by its reduced model (Fig. 3), the mission's own places end the same ways, from
+    mission.B and with an abort pending (dam inspection, whose full state space takes
+    minutes with an abort pending, under the slow marker)."""
+    from analysis.behaviour import final_markings_agree
+    from mcl2pnml.compiler import compile_checked as compile_
+
+    checked = check(parse_file(mission))
+    full, reduced = compile_(checked), compile_(checked, reduced=True)
+    assert not any(p.id.endswith(".LOCK") or ".S1" in p.id for p in reduced.places)
+    assert len(reduced.places) < len(full.places)
+    ends = ["mission.OK", "mission.FAIL", "mission.ABORTED", "mission.MTX", "mission.A"]
+    for extra in ({}, {"mission.A": 1}):
+        agree = final_markings_agree(full, reduced, ends, {**full.initial, **extra},
+                                     {**reduced.initial, **extra})
+        assert agree.equal, (extra, agree.finals_a, agree.finals_b)

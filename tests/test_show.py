@@ -1,0 +1,170 @@
+"""`mcl2pnml show`: the token game page, played in a real browser (headless Chromium).
+
+Chromium comes from Debian (`make setup` installs it where missing) and is
+driven by Playwright, pointed at /usr/bin/chromium; nothing is downloaded.
+Screenshots go to out/screenshots/, for people to look at.
+"""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import ROOT
+
+SHOTS = ROOT / "out" / "screenshots"
+CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update",
+                  "--disable-sync"]
+TWO_TASKS = """\
+primitive GoToWayPoint(wp);
+primitive KeepDepth(d);
+task Goto(wp) = AchieveGoal(GoToWayPoint(wp)) timeout 100;
+task Depth(d) = AchieveGoal(KeepDepth(d)) timeout 60;
+mission {
+    Depth(2.0);
+    Goto((10.0, 5.0, 5.0));
+}
+"""
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
+                          capture_output=True, text=True, timeout=300, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium; its absence is a failure that says how to get it."""
+    executable = shutil.which("chromium") or shutil.which("chromium-browser")
+    if executable is None:
+        pytest.fail("Chromium is needed to test the token game page: `make setup` installs "
+                    "it with apt-get (or: apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.fail("Playwright is needed to drive Chromium: `make setup` installs the test "
+                    "dependencies (pip install -e '.[test]')")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=executable, headless=True, args=CHROMIUM_FLAGS)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page_of(browser):
+    """Opens a page file; afterwards, no request but the file itself, and no script error."""
+    pages = []
+
+    def open_(path: Path):
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        requests, errors = [], []
+        page.on("request", lambda r: requests.append(r.url))
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        page.goto(path.resolve().as_uri())
+        pages.append((page, requests, errors, path))
+        return page
+
+    yield open_
+    for page, requests, errors, path in pages:
+        assert requests == [path.resolve().as_uri()], f"the page fetched {requests[1:]}"
+        assert not errors, errors
+        page.close()
+
+
+def marking(page) -> list[str]:
+    return page.text_content("#marking").split(", ")
+
+
+def test_the_task_played_by_clicking(tmp_path, page_of):
+    out = run("show", "task", "-o", tmp_path / "task.html")
+    assert out.returncode == 0, out.stderr
+    page = page_of(tmp_path / "task.html")
+    assert page.title().startswith("task")
+    assert marking(page) == ["A", "B", "C", "MTX", "OFF"]
+    assert page.text_content("#invariants-status") == "6 of 6 invariants hold"
+    # only t01 and t11 can start (B with MTX, or B with A): click t01's bar in the drawing
+    assert sorted(page.locator("#enabled button").all_text_contents()) == ["t01", "t11"]
+    page.click('#net g.transition[data-id="t01"]')
+    assert marking(page) == ["A", "C", "E", "EXE", "OFF"]
+    assert page.text_content("#invariants-status") == "6 of 6 invariants hold"
+    page.click('#net g.transition[data-id="on"]')           # the vehicle: enabled
+    page.click('#net g.transition[data-id="t07"]')          # the abort: disable it
+    assert marking(page) == ["C", "D", "ON", "W_A"]
+    page.click('#net g.transition[data-id="t02"]')          # not enabled: nothing happens
+    assert marking(page) == ["C", "D", "ON", "W_A"]
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "show_task.png"))
+    page.click("#back")
+    assert marking(page) == ["A", "C", "EXE", "ON"]          # t07 undone
+    page.click("#reset")
+    assert marking(page) == ["A", "B", "C", "MTX", "OFF"]
+    assert page.text_content("#history") == ""
+    # the reduced model of Fig. 3: B, A and MTX, and t5 aborts before the start
+    page.select_option("#variant", "1")
+    assert marking(page) == ["A", "B", "MTX"]
+    page.click('#net g.transition[data-id="t5"]')
+    assert marking(page) == ["ABORTED", "MTX"]
+    assert page.text_content("#enabled") == "none: a dead marking"
+
+
+def test_a_recorded_run_followed_step_by_step(tmp_path, page_of):
+    mission = tmp_path / "two.mcl"
+    mission.write_text(TWO_TASKS)
+    script = tmp_path / "vehicle.json"
+    script.write_text(json.dumps({"KeepDepth": ["ok@5"], "GoToWayPoint": ["ok@20"]}))
+    log = tmp_path / "run.jsonl"
+    done = run("run", mission, "--vehicle", script, "--log", log)
+    assert done.returncode == 0, done.stderr
+    fired = [json.loads(line)["fire"] for line in log.read_text().splitlines()
+             if '"fire"' in line]
+    out = run("show", mission, "--run", log, "-o", tmp_path / "two.html")
+    assert out.returncode == 0, out.stderr
+    page = page_of(tmp_path / "two.html")
+    assert "mission.B" in marking(page)
+    page.click("#run-next")                                 # up to the first firing
+    assert page.text_content("#history") == fired[0]
+    for _ in fired[1:]:
+        page.click("#run-next")
+    assert page.locator("#history li").all_text_contents() == fired
+    assert "mission.OK" in marking(page) and "mission.B" not in marking(page)
+    page.click("#run-next")                                 # the outcome: nothing fires
+    assert page.locator("#history li").count() == len(fired)
+    assert re.fullmatch(r"step (\d+) of \1", page.text_content("#run-position"))
+    status = page.text_content("#invariants-status")
+    n = int(status.split()[0])
+    assert status == f"{n} of {n} invariants hold" and n > 10
+    page.click("#run-back")
+    assert page.locator("#history li").all_text_contents() == fired[:-1]
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "show_run.png"))
+
+
+def test_the_page_is_one_file_that_fetches_nothing(tmp_path):
+    out = run("show", "sequence", "-o", tmp_path / "seq.html")
+    assert out.returncode == 0, out.stderr
+    html = (tmp_path / "seq.html").read_text()
+    assert "default-src 'none'" in html                    # the browser enforces it
+    assert not re.search(r"""(src|href)\s*=\s*["']?(https?:)?//""", html)
+
+
+def test_bad_arguments_are_one_message(tmp_path):
+    out = run("show", "sequense")
+    assert out.returncode == 2 and "did you mean 'sequence'" in out.stderr
+    other = tmp_path / "other.jsonl"
+    other.write_text('{"t": 0, "fire": "nowhere.t1"}\n')
+    mission = tmp_path / "two.mcl"
+    mission.write_text(TWO_TASKS)
+    out = run("show", mission, "--run", other, "-o", tmp_path / "x.html")
+    assert out.returncode == 2 and "'nowhere.t1', which is no transition" in out.stderr
+    assert not (tmp_path / "x.html").exists()
+    broken = tmp_path / "broken.jsonl"
+    broken.write_text('{"t": 0, "fire": "mission.t1"}\n{"t": 1,\n')
+    out = run("show", mission, "--run", broken, "-o", tmp_path / "x.html")
+    assert out.returncode == 2 and f"{broken}:2:" in out.stderr and "Traceback" not in out.stderr
