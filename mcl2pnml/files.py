@@ -44,6 +44,9 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
         with os.fdopen(fd, "wb") as f:
             yield f
             f.flush()
+            # mkstemp makes the file private (0600): give it the mode a plain
+            # open() would, or the one of the file it replaces
+            os.fchmod(f.fileno(), _mode_for(path))
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException as e:
@@ -56,6 +59,16 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
             reason = e.strerror or str(e)
             raise Mcl2PnmlError(f"cannot write: {reason}", Location(str(path))) from None
         raise
+
+
+def _mode_for(path: Path) -> int:
+    """The permissions of the file at ``path``, or those of a new file under the umask."""
+    try:
+        return path.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def atomic_write_bytes(path: str | Path, data: bytes) -> Path:

@@ -88,3 +88,21 @@ def test_bad_options(tmp_path):
     assert out.returncode == 2 and "'gif' is not one of" in out.stderr
     out = run("compile", SAUCE, "--layout", "circo")
     assert out.returncode == 2 and "'circo' is not one of" in out.stderr
+
+
+def test_outputs_get_the_permissions_of_a_plain_file(tmp_path):
+    """Written through a private temporary file, an output still ends up as open() would
+    make it (under the umask), or as the file it replaces was."""
+    import os
+    import stat
+
+    umask = os.umask(0o022)
+    try:
+        out = run("compile", SAUCE, "-o", tmp_path / "sauce.pnml")
+        assert out.returncode == 0, out.stderr
+        assert stat.S_IMODE((tmp_path / "sauce.pnml").stat().st_mode) == 0o644
+        (tmp_path / "sauce.pnml").chmod(0o640)
+        assert run("compile", SAUCE, "-o", tmp_path / "sauce.pnml").returncode == 0
+        assert stat.S_IMODE((tmp_path / "sauce.pnml").stat().st_mode) == 0o640
+    finally:
+        os.umask(umask)
