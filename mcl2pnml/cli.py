@@ -129,6 +129,34 @@ SUFFIX = {"pnml": ".pnml", "tina": ".net", "lola": ".lola", "dot": ".dot", "svg"
           "png": ".png"}
 
 
+def write_net(net, output: Path, fmt: str, layout_engine: str = "auto",
+              title: str | None = None, mission: bool = False) -> None:
+    """``net`` to ``output`` in one of :data:`FORMATS` (drawings boxed by instance).
+
+    ``mission``: a compiled mission, whose TINA file follows the executor's
+    timing (what the vehicle does not fire fires at once, [0,0]).
+    """
+    from .draw import instance_clusters, render, to_dot
+    from .files import atomic_write_text
+    from .formats.lola import save_lola
+    from .formats.tina import save_tina
+    from .pnml.writer import save_pnml
+
+    if fmt == "pnml":
+        save_pnml(net, output, layout_engine)
+    elif fmt == "tina":
+        save_tina(net, output, urgent=mission)
+    elif fmt == "lola":
+        save_lola(net, output)
+    else:
+        graph = to_dot(net, clusters=instance_clusters(net), title=title or net.name,
+                       legend=True)
+        if fmt == "dot":
+            atomic_write_text(output, graph.source)
+        else:
+            render(graph, str(output), fmt)
+
+
 @main.command("compile", epilog=EXAMPLES)
 @click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
@@ -148,27 +176,9 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
     time-outs and vehicle bindings travel in the PNML as toolspecific data.
     The initial marking has mission.B and mission.MTX marked.
     """
-    from .draw import instance_clusters, render, to_dot
-    from .files import atomic_write_text
-    from .formats.lola import save_lola
-    from .formats.tina import save_tina
-    from .pnml.writer import save_pnml
-
     net = compile_file(mission)
     output = output or mission.with_suffix(SUFFIX[fmt])
-    if fmt == "pnml":
-        save_pnml(net, output, layout_engine)
-    elif fmt == "tina":
-        save_tina(net, output, urgent=True)
-    elif fmt == "lola":
-        save_lola(net, output)
-    else:
-        graph = to_dot(net, clusters=instance_clusters(net), title=f"{mission.name}",
-                       legend=True)
-        if fmt == "dot":
-            atomic_write_text(output, graph.source)
-        else:
-            render(graph, str(output), fmt)
+    write_net(net, output, fmt, layout_engine, title=mission.name, mission=True)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 
@@ -377,14 +387,16 @@ def validate(file: Path, grammar: Path | None) -> int:
 @click.argument("name", required=False)
 @click.option("--list", "list_", is_flag=True, help="List the template nets and exit.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
-              help="Write the PNML here (default: standard output).")
-def template(name: str | None, list_: bool, output: Path | None) -> int:
-    """Write the paper's net NAME as PNML, from the paper's initial marking M0.
+              help="Write here (default: PNML to standard output).")
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default="pnml", show_default=True,
+              help="As for compile: PNML, TINA, LoLA, or a drawing (dot, SVG, PNG).")
+def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> int:
+    """Write the paper's net NAME, from the paper's initial marking M0.
 
     A pattern (task) comes fused with its primitive, a structure with
     reduced tasks in its slots: the nets the paper analyses.
     """
-    from .pnml.writer import save_pnml, to_pnml_bytes
+    from .pnml.writer import to_pnml_bytes
     from .template_library import default_library
 
     lib = default_library()
@@ -397,11 +409,12 @@ def template(name: str | None, list_: bool, output: Path | None) -> int:
     if name is None:
         raise click.UsageError("give a template NAME, or --list")
     net = lib.composed(name)
-    if output is None:
+    if output is None and fmt == "pnml":
         click.echo(to_pnml_bytes(net).decode(), nl=False)
-    else:
-        save_pnml(net, output)
-        click.echo(f"wrote {output}: {net.summary()}", err=True)
+        return 0
+    output = output or Path(name + SUFFIX[fmt])
+    write_net(net, output, fmt)
+    click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 
 

@@ -262,3 +262,16 @@ def test_fusion_places_sit_between_the_boxes_they_join():
                       for a in net.arcs if p.id in (a.source, a.target)}
         boxes = {box_of.get(t) for t in neighbours}
         assert (p.id in inside) == (len(boxes) == 1), (p.id, boxes)
+
+
+def test_templates_in_every_format(tmp_path):
+    """A template is a plain net: in TINA, no interval it does not have; a mission's
+    immediate transitions are [0,0] (checked above on compiled missions)."""
+    for fmt, suffix in (("tina", ".net"), ("lola", ".lola"), ("dot", ".dot"), ("png", ".png")):
+        out = run("template", "sequence", "--format", fmt, "-o", tmp_path / f"seq{suffix}")
+        assert out.returncode == 0, out.stderr
+    seen = read_tina((tmp_path / "seq.net").read_text())
+    assert set(seen["transitions"].values()) == {None}
+    assert (tmp_path / "seq.png").read_bytes().startswith(b"\x89PNG")
+    assert load_net(tmp_path / "seq.lola").initial == default_library().composed(
+        "sequence").initial
