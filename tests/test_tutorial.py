@@ -1,5 +1,6 @@
-"""docs/tutorial.md is true: every command in it prints what it shows, and every
-picture it shows is there (python tests/tutorial.py --update rewrites both)."""
+"""docs/tutorial.md and docs/interop.md are true: every command in them prints what
+they show, and every picture is there (python tests/tutorial.py --update rewrites
+the outputs and the tutorial's pictures)."""
 import re
 
 from conftest import ROOT
@@ -8,7 +9,7 @@ from tutorial import DOC, main
 
 def test_every_command_prints_what_the_tutorial_shows(capsys):
     stale = main([])
-    assert stale == 0, ("docs/tutorial.md no longer matches what its commands print "
+    assert stale == 0, ("the docs no longer match what their commands print "
                         "(python tests/tutorial.py --update):\n" + capsys.readouterr().out)
 
 

@@ -1,4 +1,5 @@
-"""docs/tutorial.md, run: every command of its console blocks, and what it prints.
+"""docs/tutorial.md and docs/interop.md, run: every command of their console blocks,
+and what it prints.
 
 The tutorial's blocks are golden files: each ``$ command`` is followed by
 what it prints (standard output and standard error, as a terminal shows
@@ -6,7 +7,7 @@ them). A block preceded by ``<!-- lines: N -->`` keeps the first N lines and
 then ``...``. The commands run in order, in one scratch directory holding a
 copy of ``examples/``, so that a later step uses what an earlier one wrote.
 
-    python tests/tutorial.py            # check: exit 1 and a diff if it is stale
+    python tests/tutorial.py            # check: exit 1 and a diff if one is stale
     python tests/tutorial.py --update   # rewrite the outputs, and the pictures in
                                         # docs/tutorial/ (the PNG files the commands write)
 """
@@ -24,6 +25,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "tutorial.md"
+#: The documents whose ``console`` blocks are checked (other tools' commands,
+#: which cannot run here, are in ``sh`` blocks).
+DOCS = (DOC, ROOT / "docs" / "interop.md")
 PICTURES = ROOT / "docs" / "tutorial"
 BLOCK = re.compile(r"(?:<!-- lines: (\d+) -->\n)?```console\n(.*?)```", re.S)
 
@@ -58,22 +62,27 @@ def render(text: str, cwd: Path) -> str:
 
 def main(argv: list[str]) -> int:
     update = "--update" in argv
-    text = DOC.read_text()
-    with tempfile.TemporaryDirectory() as tmp:
-        work = Path(tmp)
-        shutil.copytree(ROOT / "examples", work / "examples")
-        fresh = render(text, work)
-        if update:
-            DOC.write_text(fresh)
-            PICTURES.mkdir(exist_ok=True)
-            for png in work.glob("*.png"):
-                shutil.copy(png, PICTURES / png.name)
-            return 0
-    if fresh != text:
-        sys.stdout.writelines(difflib.unified_diff(text.splitlines(True), fresh.splitlines(True),
-                                                   "docs/tutorial.md", "as run now"))
-        return 1
-    return 0
+    stale = 0
+    for doc in DOCS:
+        text = doc.read_text()
+        with tempfile.TemporaryDirectory() as tmp:
+            work = Path(tmp)
+            shutil.copytree(ROOT / "examples", work / "examples")
+            fresh = render(text, work)
+            if update:
+                doc.write_text(fresh)
+                if doc == DOC:
+                    PICTURES.mkdir(exist_ok=True)
+                    for png in work.glob("*.png"):
+                        shutil.copy(png, PICTURES / png.name)
+                continue
+        if fresh != text:
+            name = str(doc.relative_to(ROOT))
+            sys.stdout.writelines(difflib.unified_diff(text.splitlines(True),
+                                                       fresh.splitlines(True), name,
+                                                       "as run now"))
+            stale = 1
+    return stale
 
 
 if __name__ == "__main__":
