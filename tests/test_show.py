@@ -2,7 +2,8 @@
 
 Chromium comes from Debian (`make setup` installs it where missing) and is
 driven by Playwright, pointed at /usr/bin/chromium; nothing is downloaded.
-Screenshots go to out/screenshots/, for people to look at.
+Screenshots go to out/screenshots/, for people to look at (the tutorial's
+pictures of the page, docs/tutorial/show_*.png, are copies of them).
 """
 from __future__ import annotations
 
@@ -168,3 +169,27 @@ def test_bad_arguments_are_one_message(tmp_path):
     broken.write_text('{"t": 0, "fire": "mission.t1"}\n{"t": 1,\n')
     out = run("show", mission, "--run", broken, "-o", tmp_path / "x.html")
     assert out.returncode == 2 and f"{broken}:2:" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_the_paper_mission_followed_to_its_end(tmp_path, page_of):
+    """The SAUC-E mission on the simulated AUV, replayed on its net: the tutorial's
+    pictures (out/screenshots/show_sauce*.png)."""
+    log = tmp_path / "sauce.jsonl"
+    done = run("run", ROOT / "examples" / "sauce.mcl", "--log", log)
+    assert done.returncode == 0, done.stderr
+    out = run("show", ROOT / "examples" / "sauce.mcl", "--run", log, "-o",
+              tmp_path / "sauce.html")
+    assert out.returncode == 0, out.stderr
+    page = page_of(tmp_path / "sauce.html")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "show_sauce.png"))
+    page.click("#run-end")
+    assert "mission.OK" in marking(page)
+    assert page.text_content("#run-message") == ""
+    fired = sum('"fire"' in line for line in log.read_text().splitlines())
+    assert page.locator("#history li").count() == fired
+    page.screenshot(path=str(SHOTS / "show_sauce_run.png"))
+    # the reduced mission: every task is Fig. 3's, and the run does not apply
+    page.select_option("#variant", "1")
+    assert "mission.B" in marking(page)
+    assert "full model" in page.text_content("#run-position")
