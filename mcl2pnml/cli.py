@@ -441,29 +441,30 @@ def show(what: str, output: Path | None, run_log: Path | None) -> int:
     from .template_library import TemplateKind, default_library
 
     path = Path(what)
-    if path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES:
-        if not path.is_file():
-            raise click.BadParameter(f"no file '{what}'", param_hint="MISSION.mcl|NET|TEMPLATE")
+    is_file = path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES
+    if is_file and not path.is_file():
+        raise click.BadParameter(f"no file '{what}'", param_hint="MISSION.mcl|NET|TEMPLATE")
+    if not is_file and run_log is not None:
+        raise click.BadParameter("a run is of a mission: give the mission's .mcl or its "
+                                 "compiled net, not a template", param_hint="--run")
+    if path.suffix == ".mcl":
         title = path.stem
-        if path.suffix == ".mcl":
-            checked = _checked(path)
-            nets = [(compile_checked(checked), "the mission"),
-                    (compile_checked(checked, reduced=True),
-                     "the mission, every task reduced (Fig. 3)")]
-        else:
-            nets = [(load_net(path), "the net")]
+        checked = _checked(path)
+        nets = [(compile_checked(checked), "the mission"),
+                (compile_checked(checked, reduced=True),
+                 "the mission, every task reduced (Fig. 3)")]
+    elif is_file:
+        title = path.stem
+        nets = [(load_net(path), "the net")]
     else:
         lib = default_library()
         template = lib.get(what)   # unknown: the error lists the templates
         title = what
-        nets = [(lib.composed(what), f"{what}, as the paper analyses it")]
         if template.kind is TemplateKind.PATTERN:
-            nets[0] = (nets[0][0], f"{what} with its primitive (Fig. 2)")
-            nets.append((lib.composed(lib.reduced.name), "its reduced model (Fig. 3)"))
-    if run_log is not None and len(nets) == 1 and path.suffix != ".mcl" \
-            and path.suffix.lower() not in SUFFIXES:
-        raise click.BadParameter("a run is of a mission: give the mission's .mcl or its "
-                                 "compiled net", param_hint="--run")
+            nets = [(lib.composed(what), f"{what} with its primitive (Fig. 2)"),
+                    (lib.composed(lib.reduced.name), "its reduced model (Fig. 3)")]
+        else:
+            nets = [(lib.composed(what), f"{what}, as the paper analyses it")]
     run_entries = None
     if run_log is not None:
         run_entries = read_run(run_log)

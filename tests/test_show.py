@@ -193,3 +193,12 @@ def test_the_paper_mission_followed_to_its_end(tmp_path, page_of):
     page.select_option("#variant", "1")
     assert "mission.B" in marking(page)
     assert "full model" in page.text_content("#run-position")
+
+
+def test_a_run_needs_a_mission(tmp_path):
+    log = tmp_path / "run.jsonl"
+    log.write_text('{"t": 0, "fire": "t01"}\n')
+    out = run("show", "task", "--run", log, "-o", tmp_path / "x.html")
+    assert out.returncode == 2 and "a run is of a mission" in out.stderr
+    out = run("show", tmp_path / "missing.mcl")
+    assert out.returncode == 2 and "no file" in out.stderr and "Traceback" not in out.stderr
