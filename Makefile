@@ -42,11 +42,13 @@ demo: setup
 	$(BIN)/mcl2pnml compile examples/sauce.mcl -o $(OUT)/sauce.pnml
 	$(BIN)/mcl2pnml compile examples/sauce.mcl --format svg -o $(OUT)/sauce.svg
 	$(BIN)/mcl2pnml analyze $(OUT)/sauce.pnml --state-space
-	$(BIN)/mcl2pnml run examples/sauce.mcl
+	$(BIN)/mcl2pnml run examples/sauce.mcl --log $(OUT)/sauce-run.jsonl
+	$(BIN)/mcl2pnml show examples/sauce.mcl --run $(OUT)/sauce-run.jsonl -o $(OUT)/sauce.html
 	@echo
 	@echo "outputs:"
 	@echo "  $(OUT)/task.pnml                 the task of Fig. 2 with its primitive, as PNML"
 	@echo "  $(OUT)/sauce.pnml, sauce.svg     the paper's mission (Algorithm 1) compiled to one net"
+	@echo "  $(OUT)/sauce.html                the token game on it, with the run above: open it in a browser"
 	@echo "  paper_repro/out/report.md        equations 1-26: the paper vs what the analysis computes"
 	@echo "  paper_repro/out/report.json      the same, for tools"
 	@echo "  paper_repro/out/fig1-4.svg/.png  Figs. 1 to 4 redrawn from the templates"
