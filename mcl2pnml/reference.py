@@ -337,6 +337,8 @@ class _Sequence(_Node):
         self.next()
 
     def next(self) -> None:
+        if self.aborted:   # aborted between one statement's end and the next one's start
+            return self.done(ABORTED)
         stmt = self.parts[self.i]
         self.i += 1
         self.child = _statement(self.e, stmt, self.env, self.child_done)
@@ -479,6 +481,8 @@ class _While(_Node):
         self.test()
 
     def test(self) -> None:
+        if self.aborted:   # aborted between the body's end and the next test
+            return self.done(ABORTED)
         self.child = _statement(self.e, self.stmt.condition, self.env, self.condition_done)
         self.e.later(self.child.start)
 

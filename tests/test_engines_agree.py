@@ -71,3 +71,21 @@ def test_many_generated_missions_run_the_same_on_both_engines(source, script):
     checked = check(parse(source, "generated.mcl"))
     petri, reference = both(checked, script)
     assert petri == reference, source
+
+
+@pytest.mark.parametrize("body", [
+    # found by the 10,000-mission campaign: the watcher (an empty block) ends at once
+    # and aborts the watched sequence between its first statement's end and the
+    # call that follows; the call must end ABORTED without starting
+    "monitor({ {  } T0(1); }, { {  } });",
+    # the same race between a loop's body and its next test
+    "monitor({ while (T0(1)) { {  } } }, { {  } });",
+    "monitor({ while (T0(1)) { {  } } T0(2); }, { { } });",
+])
+def test_an_abort_between_two_steps_of_a_structure(body):
+    source = ("primitive Pa(v);\ntask T0(x) = AchieveGoal(Pa(x));\n"
+              f"mission {{ {body} }}\n")
+    checked = check(parse(source, "race.mcl"))
+    for script in ({"Pa": []}, {"Pa": ["ok@0"] * 3}, {"Pa": ["fail@0"]}):
+        petri, reference = both(checked, script)
+        assert petri == reference, (body, script)
