@@ -25,7 +25,7 @@ from typing import Any, Iterable
 
 from .draw import border_out, instance_clusters
 from .errors import Location, Mcl2PnmlError
-from .files import atomic_write_text
+from .files import atomic_write_text, read_text
 from .layout import layout
 from .net import Net, thaw
 
@@ -49,8 +49,8 @@ def variant(net: Net, label: str) -> dict[str, Any]:
     kept = border_out(net, boxes)
     box_of = {n: name for name, members in kept.items() for n in members}
     index = {p.id: k for k, p in enumerate(net.places)}
-    border = {p.id for p in net.places if p.id not in box_of
-              and any(p.id in members for members in boxes.values())}
+    # the places a box had and border_out took out: where boxes meet
+    border = {n for members in boxes.values() for n in members} - set(box_of)
     places = [{"id": p.id, "label": p.label, "x": pos[p.id][0], "y": pos[p.id][1],
                "tokens": net.initial[p.id], "interface": p.interface,
                "fusion": p.id in border, "group": box_of.get(p.id),
@@ -86,10 +86,7 @@ def _payload(payload) -> dict[str, Any]:
 def read_run(path: str | Path) -> list[dict[str, Any]]:
     """The entries of a JSON-lines run log (``mcl2pnml run --log``); bad lines are errors."""
     entries = []
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        raise Mcl2PnmlError(f"cannot read the run log: {e}", Location(str(path))) from None
+    text = read_text(path, "run log")
     for n, line in enumerate(text.split("\n"), 1):
         if not line.strip():
             continue

@@ -27,16 +27,21 @@ _TINA_TOKEN = re.compile(r"""
 KEYWORDS = {"net", "tr", "pl", "lb", "nt", "pr"}
 
 
-def tina_tokens(text: str) -> list[tuple[str, str]]:
-    out, pos = [], 0
+def scan(pattern: re.Pattern, text: str, what: str):
+    """The matches of ``pattern`` that cover ``text``, white space and comments left out."""
+    pos = 0
     while pos < len(text):
-        m = _TINA_TOKEN.match(text, pos)
-        assert m, f"TINA: cannot read {text[pos:pos + 20]!r}"
+        m = pattern.match(text, pos)
+        assert m, f"{what}: cannot read {text[pos:pos + 20]!r}"
         pos = m.end()
-        kind = m.lastgroup
-        if kind in ("ws", "comment"):
-            continue
-        value = m.group()
+        if m.lastgroup not in ("ws", "comment"):
+            yield m
+
+
+def tina_tokens(text: str) -> list[tuple[str, str]]:
+    out = []
+    for m in scan(_TINA_TOKEN, text, "TINA"):
+        kind, value = m.lastgroup, m.group()
         if kind == "qname":
             kind, value = "name", re.sub(r"\\(.)", r"\1", value[1:-1], flags=re.S)
         elif kind == "aname":
@@ -187,13 +192,8 @@ _DOT_TOKEN = re.compile(r"""
 
 
 def dot_tokens(text: str) -> list[tuple[str, str]]:
-    out, pos = [], 0
-    while pos < len(text):
-        m = _DOT_TOKEN.match(text, pos)
-        assert m, f"DOT: cannot read {text[pos:pos + 20]!r}"
-        pos = m.end()
-        if m.lastgroup in ("ws", "comment"):
-            continue
+    out = []
+    for m in scan(_DOT_TOKEN, text, "DOT"):
         value = m.group()
         if m.lastgroup == "quoted":
             out.append(("id", value[1:-1].replace('\\"', '"')))

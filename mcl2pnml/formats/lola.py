@@ -35,6 +35,7 @@ from ..errors import Location, Mcl2PnmlError, source_lines
 from ..files import atomic_write_text, decode_text, read_bytes
 from ..net import ArcKind, Net, NetBuilder
 from ..pnml import ids
+from . import syntax_error
 
 KEYWORDS = {"PLACE", "MARKING", "TRANSITION", "CONSUME", "PRODUCE", "SAFE", "WEAK",
             "STRONG", "FAIR"}
@@ -122,7 +123,8 @@ COMMENT: /\{[^}]*\}/ | /\/\*(.|\n)*?\*\// | /\/\/[^\n]*/
 
 _PARSER = Lark(GRAMMAR, parser="lalr", maybe_placeholders=True)
 _READABLE = {"NAME": "a name", "NUMBER": "a number", "$END": "the end of the file",
-             "SEMICOLON": "';'", "COMMA": "','", "COLON": "':'"}
+             "SEMICOLON": "';'", "COMMA": "','", "COLON": "':'",
+             **{k: f"'{k}'" for k in KEYWORDS}}
 
 
 def parse_lola(text: str, filename: str = "<lola>") -> Net:
@@ -131,7 +133,7 @@ def parse_lola(text: str, filename: str = "<lola>") -> Net:
     try:
         tree = _PARSER.parse(text)
     except UnexpectedInput as e:
-        raise _syntax_error(e, text, lines, filename) from None
+        raise syntax_error(e, text, lines, filename, _READABLE) from None
     decode = ids.decode if _ESCAPED in text else (lambda n: n)
 
     def at(token: Token, message: str) -> Mcl2PnmlError:
@@ -183,24 +185,6 @@ def parse_lola(text: str, filename: str = "<lola>") -> Net:
                     b.arc(t, p, weight)
     net = b.build()
     return net.with_initial({p: n for p, n in marking.items() if n})
-
-
-def _syntax_error(e: UnexpectedInput, text: str, lines: list[str],
-                  filename: str) -> Mcl2PnmlError:
-    line, col = getattr(e, "line", 0), getattr(e, "column", 0)
-    if line is None or line < 1:
-        line = max(1, len(lines))
-        col = len(lines[-1]) + 1 if lines else 1
-    expected = sorted({_READABLE.get(t, f"'{t}'" if t.isupper() else t.lower()) for t in
-                       (getattr(e, "expected", None) or getattr(e, "allowed", None) or ())})
-    token = getattr(e, "token", None)
-    if token is not None and token.type != "$END":
-        found = f"unexpected {str(token)!r}"
-    else:
-        found = "unexpected end of file"
-    hint = f"; expected {', '.join(expected[:8])}" if expected else ""
-    src = lines[line - 1] if 0 < line <= len(lines) else None
-    return Mcl2PnmlError(f"syntax error: {found}{hint}", Location(filename, line, col, src))
 
 
 def load_lola(path: str | Path) -> Net:

@@ -53,6 +53,7 @@ from .. import __version__
 from ..errors import Location, Mcl2PnmlError, source_lines
 from ..files import atomic_write_text, decode_text, read_bytes
 from ..net import ArcKind, Net, NetBuilder, Timing, thaw
+from . import syntax_error
 
 # -- writing ---------------------------------------------------------------------------
 
@@ -348,36 +349,13 @@ def parse_tina(text: str, filename: str = "<tina>") -> Net:
     try:
         tree = _PARSER.parse(text)
     except UnexpectedInput as e:
-        raise _syntax_error(e, text, reader) from None
+        raise syntax_error(e, text, reader.lines, filename, _READABLE) from None
     for decl in tree.children:
         reader.declare(decl)
     try:
         return reader.net()
     except Mcl2PnmlError as e:   # e.g. a transition that reads and takes one place
         raise Mcl2PnmlError(e.message, Location(filename)) from None
-
-
-def _syntax_error(e: UnexpectedInput, text: str, reader: _Reader) -> Mcl2PnmlError:
-    lines = reader.lines
-    line, col = getattr(e, "line", 0), getattr(e, "column", 0)
-    if line is None or line < 1:
-        line = max(1, len(lines))
-        col = len(lines[-1]) + 1 if lines else 1
-    expected = sorted({_READABLE.get(t, t.lower()) for t in
-                       (getattr(e, "expected", None) or getattr(e, "allowed", None) or ())})
-    token = getattr(e, "token", None)
-    if token is not None and token.type != "$END":
-        found = f"unexpected {str(token)!r}"
-    elif token is not None:
-        found = "unexpected end of file"
-    else:
-        found = f"unexpected character {text[e.pos_in_stream]!r}" \
-            if getattr(e, "pos_in_stream", None) is not None and e.pos_in_stream < len(text) \
-            else "unexpected end of file"
-    hint = f"; expected {', '.join(expected[:8])}" if expected else ""
-    src = lines[line - 1] if 0 < line <= len(lines) else None
-    return Mcl2PnmlError(f"syntax error: {found}{hint}",
-                         Location(reader.filename, line, col, src))
 
 
 def load_tina(path: str | Path) -> Net:
