@@ -31,11 +31,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable
 
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.net import Net
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.net import Net
 
-from .matrix import Structure
-from .statespace import StateSpace, explore
+from analysis.matrix import Structure
+from analysis.statespace import StateSpace, explore
 
 
 def input_places(s: Structure) -> frozenset[int]:

@@ -34,8 +34,8 @@ from typing import Sequence
 
 import numpy as np
 
-from .matrix import Structure
-from .packedspace import KeyCollision, NotSafe, PackedStateSpace, _Firing, _keys, _masks, _masks_of
+from analysis.matrix import Structure
+from analysis.packedspace import KeyCollision, NotSafe, PackedStateSpace, _Firing, _keys, _masks, _masks_of
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 19
@@ -60,8 +60,8 @@ def warm_up() -> None:
     What the first exploration would otherwise pay: most of a second in a
     fresh process, much more the first time ever, when numba compiles them.
     """
-    from .matrix import structure
-    from mcl2pnml.net import NetBuilder
+    from analysis.matrix import structure
+    from mcl2pnml.core.net import NetBuilder
 
     for places in (1, 65):   # one word, then two
         b = NetBuilder("warm-up")
@@ -78,7 +78,7 @@ def explore_compiled(s: Structure, m0: Sequence[int], max_states: int, limit_err
                      progress=None) -> PackedStateSpace:
     """Breadth-first from ``m0``; raises :class:`NotSafe` at a second token in a place."""
     global _ran
-    from . import _compiled_loops as kernels   # imports numba: 0.3 s, so only now
+    from analysis import _compiled_loops as kernels   # imports numba: 0.3 s, so only now
     words = max(1, (len(s.places) + 63) // 64)
     need, take, give = _masks(s, words)
     start = _masks_of([[p for p, k in enumerate(m0) if k]], words)

@@ -29,9 +29,9 @@ from typing import Mapping, Sequence
 from sympy import QQ, ZZ
 from sympy.polys.matrices import DomainMatrix
 
-from mcl2pnml.errors import Mcl2PnmlError
+from mcl2pnml.core.errors import Mcl2PnmlError
 
-from .matrix import Structure
+from analysis.matrix import Structure
 
 
 class AnalysisLimit(Mcl2PnmlError):
@@ -137,7 +137,7 @@ def is_p_invariant(s: Structure, y: Mapping[str, int]) -> bool:
 def invariant_value(s: Structure, y: Mapping[str, int], marking: Mapping[str, int]) -> int:
     """y . M: the token count a P-invariant keeps constant (Murata 1989).
 
-    ``marking`` maps place names to tokens (a :class:`~mcl2pnml.net.Marking`,
+    ``marking`` maps place names to tokens (a :class:`~mcl2pnml.core.net.Marking`,
     or ``s.net.initial`` for M0); places it leaves out hold no token.
     """
     unknown = sorted(p for p in y if p not in s.place_index)

@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cached_property
 
-from mcl2pnml.net import ArcKind, Net
+from mcl2pnml.core.net import ArcKind, Net
 
 
 @dataclass(frozen=True, eq=False)

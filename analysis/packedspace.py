@@ -29,8 +29,8 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from .matrix import Structure
-from .statespace import StateSpace
+from analysis.matrix import Structure
+from analysis.statespace import StateSpace
 
 
 def _masks(s: Structure, words: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

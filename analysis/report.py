@@ -17,15 +17,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from mcl2pnml.net import Net
+from mcl2pnml.core.net import Net
 
-from .behaviour import behaviour
-from .invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
+from analysis.behaviour import behaviour
+from analysis.invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
                          minimal_semipositive_t_invariants, p_invariant_basis,
                          t_invariant_basis)
-from .matrix import structure
-from .siphons import minimal_siphons, minimal_traps, siphon_control
-from .statespace import ExplorationLimit, Progress, explore
+from analysis.matrix import structure
+from analysis.siphons import minimal_siphons, minimal_traps, siphon_control
+from analysis.statespace import ExplorationLimit, Progress, explore
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000

@@ -26,8 +26,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
-from .invariants import AnalysisLimit, integer_multiple
-from .matrix import Structure
+from analysis.invariants import AnalysisLimit, integer_multiple
+from analysis.matrix import Structure
 
 Sets = Sequence[frozenset[int]]
 

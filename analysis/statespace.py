@@ -48,9 +48,9 @@ from typing import Callable, Sequence
 import networkx as nx
 import numpy  # noqa: F401 - imported with the module: the packed explorer needs it at once
 
-from mcl2pnml.errors import Mcl2PnmlError
+from mcl2pnml.core.errors import Mcl2PnmlError
 
-from .matrix import Structure, structure as make_structure
+from analysis.matrix import Structure, structure as make_structure
 
 OMEGA = math.inf
 """The token count of a place that the coverability graph found unbounded."""
@@ -215,8 +215,8 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
         m0 = tuple(initial.get(p, 0) for p in s.places)
     unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
     if backend != "general" and unit and all(n <= 1 for n in m0):
-        from . import compiledspace   # they build on StateSpace: imported here, not above
-        from .packedspace import KeyCollision, NotSafe, explore_packed
+        from analysis import compiledspace   # they build on StateSpace: imported here, not above
+        from analysis.packedspace import KeyCollision, NotSafe, explore_packed
         try:
             if backend == "auto":
                 if compiledspace.loaded():

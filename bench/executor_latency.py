@@ -17,14 +17,14 @@ import statistics
 import sys
 import time
 
-from mcl2pnml.aal import ScriptedVehicle
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.engine import run
-from mcl2pnml.executor import PetriEngine
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse
+from mcl2pnml.runtime.aal import ScriptedVehicle
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.runtime.engine import run
+from mcl2pnml.runtime.executor import PetriEngine
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse
 
-from .missions import survey
+from bench.missions import survey
 
 
 def measure(tasks: int, runs: int = 3) -> dict[str, float]:

@@ -35,9 +35,9 @@ import sympy
 
 from analysis.invariants import p_invariant_basis
 from analysis.matrix import Structure, structure
-from mcl2pnml.compose import fuse, union
-from mcl2pnml.net import Net
-from mcl2pnml.template_library import default_library
+from mcl2pnml.core.compose import fuse, union
+from mcl2pnml.core.net import Net
+from mcl2pnml.language.library import default_library
 
 PLAIN_LIMIT = 60.0        # seconds for one run of plain sympy
 PRIME = 2**61 - 1         # for the rank certificate

@@ -14,7 +14,7 @@
 """
 from __future__ import annotations
 
-from mcl2pnml.net import Net, NetBuilder
+from mcl2pnml.core.net import Net, NetBuilder
 
 
 def cycles(k: int) -> Net:
@@ -119,9 +119,9 @@ def shared_memory(n: int) -> Net:
 
 
 def mission(width: int) -> Net:
-    from mcl2pnml.compiler import compile_checked
-    from mcl2pnml.mcl_checker import check
-    from mcl2pnml.mcl_parser import parse
+    from mcl2pnml.language.compiler import compile_checked
+    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.parser import parse
 
     lines = [f"primitive P{i}(x);" for i in range(width)]
     lines += [f"task T{i}(x) = AchieveGoal(P{i}(x)) timeout 10;" for i in range(width)]

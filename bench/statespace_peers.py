@@ -24,9 +24,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from mcl2pnml.pnml import save_pnml
+from mcl2pnml.io.pnml import save_pnml
 
-from . import nets
+from bench import nets
 
 TIMEOUT = 60.0
 RUNS = 3
@@ -43,7 +43,7 @@ def rss():
             return int(line.split()[1]) * 1024
 extra = {}
 if engine in ("ours", "numpy"):
-    from mcl2pnml.pnml import load_pnml
+    from mcl2pnml.io.pnml import load_pnml
     from analysis import compiledspace
     from analysis.behaviour import behaviour
     from analysis.matrix import structure

@@ -29,12 +29,12 @@ from pathlib import Path
 
 import numpy
 
-from mcl2pnml.files import atomic_write_text
+from mcl2pnml.core.files import atomic_write_text
 
-from . import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
-from . import statespace_peers as peers
-from .core_scale import slope
-from .missions import survey
+from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
+from bench import statespace_peers as peers
+from bench.core_scale import slope
+from bench.missions import survey
 
 OUT = Path(__file__).resolve().parent / "RESULTS.md"
 
@@ -132,9 +132,9 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     from analysis.invariants import p_invariant_basis
     from analysis.matrix import structure
-    from mcl2pnml.compiler import compile_checked
-    from mcl2pnml.mcl_checker import check
-    from mcl2pnml.mcl_parser import parse
+    from mcl2pnml.language.compiler import compile_checked
+    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.parser import parse
 
     lines = ["## Invariants: the exact P-invariant basis of compiled missions", "",
              "Surveys compiled from MCL; ours (sparse, exact) against plain "

@@ -8,11 +8,11 @@ needs:
 """
 __version__ = "0.1.0"
 
-from .errors import Mcl2PnmlError, NetError, PnmlError  # noqa: E402
-from .net import (Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing,  # noqa: E402
+from mcl2pnml.core.errors import Mcl2PnmlError, NetError, PnmlError  # noqa: E402
+from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing,  # noqa: E402
                   Transition)
-from .compose import compose, fuse, union  # noqa: E402
-from .pnml import load_pnml, parse_pnml, save_pnml, to_pnml_bytes  # noqa: E402
+from mcl2pnml.core.compose import compose, fuse, union  # noqa: E402
+from mcl2pnml.io.pnml import load_pnml, parse_pnml, save_pnml, to_pnml_bytes  # noqa: E402
 
 __all__ = [
     "__version__", "Mcl2PnmlError", "NetError", "PnmlError",

@@ -1,4 +1,4 @@
 """``python -m mcl2pnml`` is the ``mcl2pnml`` command."""
-from .cli import main
+from mcl2pnml.cli import main
 
 main()

@@ -13,9 +13,9 @@ from pathlib import Path
 
 import click
 
-from . import __version__
-from .errors import Location, Mcl2PnmlError, did_you_mean
-from .layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
+from mcl2pnml.core.version import __version__
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean
+from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
 EXAMPLES = """\b
 Examples:
@@ -76,8 +76,8 @@ def main() -> None:
 
 
 def _checked(file: Path):
-    from .mcl_checker import check as run_checks
-    from .mcl_parser import parse_file
+    from mcl2pnml.language.checker import check as run_checks
+    from mcl2pnml.language.parser import parse_file
 
     return run_checks(parse_file(file))
 
@@ -106,7 +106,7 @@ def functional(mission: Path, with_functions: bool) -> int:
     Structures are written sequence, parallel, if-then-else, while and
     monitor; an empty block or a missing else is NULL; functions stay calls.
     """
-    from .functional import format_node, function_expression, mission_expression
+    from mcl2pnml.language.functional import format_node, function_expression, mission_expression
 
     checked = _checked(mission)
     if with_functions:
@@ -118,7 +118,7 @@ def functional(mission: Path, with_functions: bool) -> int:
 
 
 def compile_file(mission: Path):
-    from .compiler import compile_checked
+    from mcl2pnml.language.compiler import compile_checked
 
     return compile_checked(_checked(mission))
 
@@ -136,11 +136,11 @@ def write_net(net, output: Path, fmt: str, layout_engine: str = "auto",
     ``mission``: a compiled mission, whose TINA file follows the executor's
     timing (what the vehicle does not fire fires at once, [0,0]).
     """
-    from .draw import instance_clusters, render, to_dot
-    from .files import atomic_write_text
-    from .formats.lola import save_lola
-    from .formats.tina import save_tina
-    from .pnml.writer import save_pnml
+    from mcl2pnml.view.draw import instance_clusters, render, to_dot
+    from mcl2pnml.core.files import atomic_write_text
+    from mcl2pnml.io.lola import save_lola
+    from mcl2pnml.io.tina import save_tina
+    from mcl2pnml.io.pnml.writer import save_pnml
 
     if fmt == "pnml":
         save_pnml(net, output, layout_engine)
@@ -229,11 +229,11 @@ def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: s
     import io
     import json
 
-    from . import journal as journals
-    from .aal import ScriptedVehicle
-    from .engine import run as drive
-    from .files import atomic_write_text
-    from .runlog import RunLog
+    from mcl2pnml.runtime import journal as journals
+    from mcl2pnml.runtime.aal import ScriptedVehicle
+    from mcl2pnml.runtime.engine import run as drive
+    from mcl2pnml.core.files import atomic_write_text
+    from mcl2pnml.runtime.runlog import RunLog
 
     replay = header = None
     if resume is not None:
@@ -263,10 +263,10 @@ def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: s
         raise click.BadParameter("a world is for the simulator (--vehicle sim)",
                                  param_hint="--world")
     if vehicle == "sim":
-        from .simulator import AUVSimulator, World
+        from mcl2pnml.runtime.simulator import AUVSimulator, World
         car = AUVSimulator(World.load(world) if world else World())
     elif realtime:
-        from .bridge import MappedVehicle, TcpTransport, VehicleMapping
+        from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
         if connect is None:
             raise click.BadParameter("a bridge needs --connect HOST:PORT (the bridge server "
                                      "on the vehicle)", param_hint="--connect")
@@ -277,18 +277,18 @@ def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: s
     if mission.suffix == ".mcl":
         checked = _checked(mission)
         if engine == "reference":
-            from .reference import ReferenceEngine
+            from mcl2pnml.runtime.reference import ReferenceEngine
             eng = ReferenceEngine(checked)
         else:
-            from .compiler import compile_checked
-            from .executor import PetriEngine
+            from mcl2pnml.language.compiler import compile_checked
+            from mcl2pnml.runtime.executor import PetriEngine
             eng = PetriEngine(compile_checked(checked))
     else:
         if engine == "reference":
             raise click.BadParameter("the reference engine reads MCL, not a net; give the "
                                      ".mcl file", param_hint="--engine")
-        from .executor import PetriEngine
-        from .pnml.reader import load_pnml
+        from mcl2pnml.runtime.executor import PetriEngine
+        from mcl2pnml.io.pnml.reader import load_pnml
         eng = PetriEngine(load_pnml(mission))
     offered = car.primitives
     needed = getattr(eng, "primitives_used", lambda: set())()
@@ -330,7 +330,7 @@ def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: s
         seen = len(eng.ignored)
 
     if realtime:
-        from .engine import run_realtime
+        from mcl2pnml.runtime.engine import run_realtime
         result = run_realtime(eng, car, listener=listener, max_time=max_time)
     else:
         result = drive(eng, car, listener=listener, max_time=max_time)
@@ -366,8 +366,8 @@ def validate(file: Path, grammar: Path | None) -> int:
     dangling arc); the reader's own checks catch those. Exit status 0 when
     valid, 2 with every problem listed when not.
     """
-    from .pnml.grammar import validate as run
-    from .pnml.reader import load_pnml
+    from mcl2pnml.io.pnml.grammar import validate as run
+    from mcl2pnml.io.pnml.reader import load_pnml
 
     verdict = run(file, grammar)
     if not verdict.valid:
@@ -396,8 +396,8 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
     A pattern (task) comes fused with its primitive, a structure with
     reduced tasks in its slots: the nets the paper analyses.
     """
-    from .pnml.writer import to_pnml_bytes
-    from .template_library import default_library
+    from mcl2pnml.io.pnml.writer import to_pnml_bytes
+    from mcl2pnml.language.library import default_library
 
     lib = default_library()
     if list_:
@@ -435,10 +435,10 @@ def show(what: str, output: Path | None, run_log: Path | None) -> int:
     (Fig. 3 of the paper); a recorded run can be followed step by step.
     The page needs no server and fetches nothing.
     """
-    from .compiler import compile_checked
-    from .formats import SUFFIXES, load_net
-    from .show import check_run, read_run, save_page, variant
-    from .template_library import TemplateKind, default_library
+    from mcl2pnml.language.compiler import compile_checked
+    from mcl2pnml.io.formats import SUFFIXES, load_net
+    from mcl2pnml.view.show import check_run, read_run, save_page, variant
+    from mcl2pnml.language.library import TemplateKind, default_library
 
     path = Path(what)
     is_file = path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES
@@ -515,7 +515,7 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
 
     from analysis.report import analyze as run, render_text
 
-    from .formats import load_net
+    from mcl2pnml.io.formats import load_net
 
     net = compile_file(file) if file.suffix == ".mcl" else load_net(file)
     start = None

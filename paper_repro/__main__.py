@@ -10,11 +10,11 @@ import json
 import sys
 from pathlib import Path
 
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.files import atomic_write_text
-from mcl2pnml.template_library import default_library
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.files import atomic_write_text
+from mcl2pnml.language.library import default_library
 
-from . import checks, experiment, figures
+from paper_repro import checks, experiment, figures
 
 OUT = Path(__file__).resolve().parent / "out"
 

@@ -26,11 +26,11 @@ from analysis.invariants import (format_invariant,
 from analysis.matrix import Structure, structure
 from analysis.siphons import minimal_siphons, siphon_control
 from analysis.statespace import explore
-from mcl2pnml.template_library import Library
-from mcl2pnml.template_parser import CONTROL
+from mcl2pnml.language.library import Library
+from mcl2pnml.language.template_parser import CONTROL
 
-from . import nets, paper
-from .paper import EQUATIONS, Equation
+from paper_repro import nets, paper
+from paper_repro.paper import EQUATIONS, Equation
 
 
 @dataclass

@@ -1,7 +1,7 @@
 """Section 3 and Fig. 5 of the paper: the SAUC-E mission run on the simulated AUV.
 
 ``examples/sauce.mcl`` (the paper's Algorithm 1) runs on
-:class:`~mcl2pnml.simulator.AUVSimulator` in the paper's 16 x 8 x 5 m tank,
+:class:`~mcl2pnml.runtime.simulator.AUVSimulator` in the paper's 16 x 8 x 5 m tank,
 through the Petri-net executor, twice: with the cross on the floor under
 the survey path, and without it. With the cross, the survey is aborted when
 the camera sees it, the vehicle dives, drops the marker and surfaces;
@@ -16,12 +16,12 @@ import bisect
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.engine import Outcome, run
-from mcl2pnml.executor import PetriEngine
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse_file
-from mcl2pnml.simulator import AUVSimulator, World
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.runtime.engine import Outcome, run
+from mcl2pnml.runtime.executor import PetriEngine
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse_file
+from mcl2pnml.runtime.simulator import AUVSimulator, World
 
 MISSION = Path(__file__).resolve().parents[1] / "examples" / "sauce.mcl"
 CROSS = (10.0, 4.0)
@@ -98,7 +98,7 @@ def checks(runs: list[Trial]) -> list:
     """The paper's account of the experiment (section 4), each claim against the runs."""
     import math
 
-    from .checks import Row
+    from paper_repro.checks import Row
 
     found, missed = runs
     enabled = [a.split()[1] for a in found.actions]

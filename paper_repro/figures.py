@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mcl2pnml.draw import render, to_dot
-from mcl2pnml.template_library import Library
+from mcl2pnml.view.draw import render, to_dot
+from mcl2pnml.language.library import Library
 
 FIGURES = {
     1: ("primitive", "Fig. 1. Vehicle primitive Petri net model (M0 = {OFF, C})"),

@@ -10,9 +10,9 @@
 """
 from __future__ import annotations
 
-from mcl2pnml.compose import glue
-from mcl2pnml.net import ArcKind, Net, NetBuilder
-from mcl2pnml.template_library import Library
+from mcl2pnml.core.compose import glue
+from mcl2pnml.core.net import ArcKind, Net, NetBuilder
+from mcl2pnml.language.library import Library
 
 #: The transitions of the task template that read ON; the paper's text has none.
 WAIT_FOR_ON = ("t03", "t07")

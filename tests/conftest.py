@@ -14,8 +14,8 @@ sys.path.insert(0, str(ROOT))  # examples/ and paper_repro/ are not installed
 @pytest.fixture(scope="session")
 def grammar_dir() -> Path:
     """The official grammar; its absence is a failure that says what is missing."""
-    from mcl2pnml.errors import Mcl2PnmlError
-    from mcl2pnml.pnml.grammar import find_grammar
+    from mcl2pnml.core.errors import Mcl2PnmlError
+    from mcl2pnml.io.pnml.grammar import find_grammar
 
     try:
         return find_grammar()
@@ -26,7 +26,7 @@ def grammar_dir() -> Path:
 @pytest.fixture(scope="session")
 def assert_valid(grammar_dir):
     """Validate PNML bytes against the official grammar and the reader's rules."""
-    from mcl2pnml.pnml.grammar import validate_bytes
+    from mcl2pnml.io.pnml.grammar import validate_bytes
 
     def check(data: bytes, name: str = "<written>") -> None:
         verdict = validate_bytes(data, name, grammar_dir)

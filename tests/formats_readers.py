@@ -1,5 +1,5 @@
 """Small readers of TINA's .net and LoLA's formats, written for the tests from the
-formats' published descriptions, independently of ``mcl2pnml.formats``.
+formats' published descriptions, independently of ``mcl2pnml.io.formats``.
 
 They read what a tool would, into one plain shape to compare nets by:
 ``{"places": {id: tokens}, "transitions": {id: (interval or None)},

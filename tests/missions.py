@@ -6,12 +6,12 @@ import json
 
 from hypothesis import strategies as st
 
-from mcl2pnml.aal import ScriptedVehicle
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.engine import run
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.executor import PetriEngine
-from mcl2pnml.reference import ReferenceEngine
+from mcl2pnml.runtime.aal import ScriptedVehicle
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.runtime.engine import run
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.runtime.executor import PetriEngine
+from mcl2pnml.runtime.reference import ReferenceEngine
 
 MAX_TIME = 2_000.0
 

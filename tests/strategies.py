@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
-from mcl2pnml.net import ArcKind, NetBuilder, Timing
+from mcl2pnml.core.net import ArcKind, NetBuilder, Timing
 
 ids = st.one_of(
     st.from_regex(r"[A-Za-z_][A-Za-z0-9_.]{0,6}", fullmatch=True),

@@ -5,7 +5,7 @@ import shutil
 
 import pytest
 
-from mcl2pnml.pnml import load_pnml
+from mcl2pnml.io.pnml import load_pnml
 
 from conftest import DATA, ROOT
 from test_cli import run

@@ -19,12 +19,12 @@ import pytest
 from analysis.behaviour import behaviour
 from analysis.matrix import structure
 from analysis.statespace import explore
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.functional import format_node, function_expression, mission_expression
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse_file
-from mcl2pnml.net import ArcKind, Timing, thaw
-from mcl2pnml.pnml import parse_pnml, save_pnml, to_pnml_bytes
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.language.functional import format_node, function_expression, mission_expression
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse_file
+from mcl2pnml.core.net import ArcKind, Timing, thaw
+from mcl2pnml.io.pnml import parse_pnml, save_pnml, to_pnml_bytes
 
 from bench.missions import survey
 
@@ -223,7 +223,7 @@ def test_every_task_reduced_ends_the_mission_alike(mission: Path):
     mission.B and with an abort pending (dam inspection, whose full state space takes
     minutes with an abort pending, under the slow marker)."""
     from analysis.behaviour import final_markings_agree
-    from mcl2pnml.compiler import compile_checked as compile_
+    from mcl2pnml.language.compiler import compile_checked as compile_
 
     checked = check(parse_file(mission))
     full, reduced = compile_(checked), compile_(checked, reduced=True)

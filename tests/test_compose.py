@@ -2,9 +2,9 @@
 from hypothesis import given, settings, strategies as st
 import pytest
 
-from mcl2pnml.compose import compose, fuse, union
-from mcl2pnml.errors import NetError
-from mcl2pnml.net import Marking, Net, NetBuilder
+from mcl2pnml.core.compose import compose, fuse, union
+from mcl2pnml.core.errors import NetError
+from mcl2pnml.core.net import Marking, Net, NetBuilder
 
 from strategies import nets
 

@@ -4,8 +4,8 @@ import warnings
 import pytest
 
 from mcl2pnml import Net, save_pnml
-from mcl2pnml.net import ArcKind
-from mcl2pnml.pnml import ids
+from mcl2pnml.core.net import ArcKind
+from mcl2pnml.io import ids
 
 from examples.handbuilt_primitive import primitive
 from test_pnml import everything

@@ -10,8 +10,8 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse, parse_file
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse, parse_file
 
 from conftest import ROOT
 from missions import both, missions, scripts

@@ -11,15 +11,15 @@ import json
 
 import pytest
 
-from mcl2pnml.aal import (Action, ActionKind, Event, EventKind, SafeStop, ScriptedVehicle,
+from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, SafeStop, ScriptedVehicle,
                           Vehicle, VehicleInputError)
-from mcl2pnml.bridge import MappedVehicle, QueueTransport, VehicleMapping
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.engine import Outcome, run, run_realtime
-from mcl2pnml.executor import PetriEngine
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse
-from mcl2pnml.reference import ReferenceEngine
+from mcl2pnml.runtime.bridge import MappedVehicle, QueueTransport, VehicleMapping
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.runtime.engine import Outcome, run, run_realtime
+from mcl2pnml.runtime.executor import PetriEngine
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse
+from mcl2pnml.runtime.reference import ReferenceEngine
 
 from test_cli import run as cli
 

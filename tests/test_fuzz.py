@@ -25,13 +25,13 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 from lxml import etree
 
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.errors import ErrorList, Mcl2PnmlError
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import decode, parse
-from mcl2pnml.pnml.reader import parse_pnml
-from mcl2pnml.pnml.writer import to_pnml_bytes
-from mcl2pnml.template_library import default_library
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.core.errors import ErrorList, Mcl2PnmlError
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import decode, parse
+from mcl2pnml.io.pnml.reader import parse_pnml
+from mcl2pnml.io.pnml.writer import to_pnml_bytes
+from mcl2pnml.language.library import default_library
 
 from conftest import DATA, ROOT
 

@@ -26,10 +26,10 @@ from hypothesis import HealthCheck, assume, given, seed, settings, strategies as
 from analysis.behaviour import behaviour
 from analysis.matrix import structure
 from analysis.statespace import ExplorationLimit, explore
-from mcl2pnml import mcl_ast as ast
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse
+from mcl2pnml.language import ast
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse
 
 from missions import both, missions, scripts
 
@@ -45,6 +45,8 @@ GENERATED = missions(depth=3, width=2, function_depth=1).filter(
 #: The share of drawn missions that must be analysed from both starts.
 MIN_ANALYSED = 0.7
 FAST_EXAMPLES = 40
+#: The seed of the draws in `make test` (the slow variant seeds each chunk apart).
+FAST_SEED = 0
 SLOW_CHUNKS, SLOW_EXAMPLES = 10, 1_000     # 10,000 analysed missions in all
 STARTS = (("mission.B", {}), ("mission.B + mission.A", {"mission.A": 1}))
 
@@ -167,7 +169,9 @@ def check_tally(tally: Counter, examples: int) -> None:
 
 def test_generated_missions_are_safe_deadlock_free_reusable_and_run_the_same():
     tally, one = proven(FAST_EXAMPLES)
-    one()
+    # a fixed seed: the share that fits under the state limit is a property of
+    # the draws, and a share drawn afresh at each run made the test flaky
+    seed(FAST_SEED)(one)()
     check_tally(tally, FAST_EXAMPLES)
 
 
@@ -186,7 +190,7 @@ def test_the_generator_reaches_the_shapes_it_is_meant_to():
     def one(source):
         seen.update(features(check(parse(source, "generated.mcl"))))
 
-    one()
+    seed(FAST_SEED)(one)()
     wanted = ["three levels deep", "a task called from several places",
               "one task in two parallel branches", "a function as a condition",
               "a function calling a task", "a function calling a function"]

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from mcl2pnml.errors import Mcl2PnmlError, PnmlError
-from mcl2pnml.pnml.reader import parse_pnml
+from mcl2pnml.core.errors import Mcl2PnmlError, PnmlError
+from mcl2pnml.io.pnml.reader import parse_pnml
 
 from conftest import DATA
 
@@ -47,8 +47,8 @@ def run_cli(*args) -> subprocess.CompletedProcess:
 
 def load_measured(path: Path) -> tuple[str, int]:
     """What loading ``path`` in a fresh interpreter gives, and its peak memory in kB."""
-    script = ("import sys\nfrom mcl2pnml.errors import Mcl2PnmlError\n"
-              "from mcl2pnml.pnml.reader import load_pnml\n"
+    script = ("import sys\nfrom mcl2pnml.core.errors import Mcl2PnmlError\n"
+              "from mcl2pnml.io.pnml.reader import load_pnml\n"
               "try:\n    net = load_pnml(sys.argv[1])\n"
               "    print(f'loaded {len(net.places)} places')\n"
               "except Mcl2PnmlError as e:\n    print(e)\n"

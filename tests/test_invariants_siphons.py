@@ -10,7 +10,7 @@ from analysis.invariants import (format_invariant, minimal_semipositive_p_invari
 from analysis.matrix import structure
 from analysis.siphons import (is_siphon, is_trap, max_siphon_within, minimal_siphons,
                               minimal_traps, siphon_control)
-from mcl2pnml.net import NetBuilder
+from mcl2pnml.core.net import NetBuilder
 
 from strategies import nets
 

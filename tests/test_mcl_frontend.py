@@ -5,11 +5,11 @@ import sys
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from mcl2pnml import mcl_ast as ast
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.functional import format_node, mission_expression
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import decode, parse, parse_file
+from mcl2pnml.language import ast
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.language.functional import format_node, mission_expression
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import decode, parse, parse_file
 
 from conftest import DATA, ROOT
 
@@ -98,7 +98,7 @@ def test_garbage_gives_our_error_and_nothing_else(data):
 
 
 def test_long_lines_and_long_listings_are_cut_to_what_helps():
-    from mcl2pnml.errors import EXCERPT_WIDTH, LISTED, Location, did_you_mean
+    from mcl2pnml.core.errors import EXCERPT_WIDTH, LISTED, Location, did_you_mean
 
     line = "x" * 500 + "FAULT" + "y" * 500
     shown = Location("m.mcl", 1, 501, line).excerpt().splitlines()

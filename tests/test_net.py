@@ -2,8 +2,8 @@
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from mcl2pnml.errors import NetError
-from mcl2pnml.net import (Arc, ArcKind, FrozenDict, Marking, Net, NetBuilder, Place,
+from mcl2pnml.core.errors import NetError
+from mcl2pnml.core.net import (Arc, ArcKind, FrozenDict, Marking, Net, NetBuilder, Place,
                           Timing, Transition, freeze, thaw)
 
 

@@ -5,8 +5,8 @@ import sys
 
 import pytest
 
-from mcl2pnml.net import Net
-from mcl2pnml.template_library import Library, default_library
+from mcl2pnml.core.net import Net
+from mcl2pnml.language.library import Library, default_library
 from paper_repro import checks
 
 from conftest import ROOT

@@ -5,8 +5,8 @@ from hypothesis import given, settings
 
 from mcl2pnml import (ArcKind, NetBuilder, PnmlError, Timing, load_pnml, parse_pnml,
                       save_pnml, to_pnml_bytes)
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.pnml import ids
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.io import ids
 
 from conftest import DATA
 from strategies import nets
@@ -167,7 +167,7 @@ def test_choosing_one_of_several_nets():
 def test_save_is_atomic(tmp_path, monkeypatch):
     target = tmp_path / "net.pnml"
     target.write_text("old")
-    import mcl2pnml.files as files
+    import mcl2pnml.core.files as files
 
     def broken(*_a, **_k):
         raise OSError("disk full")
@@ -179,7 +179,7 @@ def test_save_is_atomic(tmp_path, monkeypatch):
 
 
 def test_grammar_rejects_what_it_should(grammar_dir):
-    from mcl2pnml.pnml.grammar import validate_bytes
+    from mcl2pnml.io.pnml.grammar import validate_bytes
     data = to_pnml_bytes(everything()).replace(b'type="http://www.pnml.org/version-2009/grammar/ptnet"',
                                                b'type="urn:not-a-type"')
     verdict = validate_bytes(data, "x.pnml", grammar_dir)
@@ -188,7 +188,7 @@ def test_grammar_rejects_what_it_should(grammar_dir):
 
 
 def test_missing_grammar_says_how_to_get_it(tmp_path, monkeypatch):
-    from mcl2pnml.pnml.grammar import ENV, find_grammar
+    from mcl2pnml.io.pnml.grammar import ENV, find_grammar
     monkeypatch.setenv(ENV, str(tmp_path))
     with pytest.raises(PnmlError, match=f"no ptnet.pntd in {tmp_path}.*{ENV}"):
         find_grammar()

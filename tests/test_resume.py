@@ -160,14 +160,14 @@ def test_a_full_disk_leaves_no_partial_file_and_keeps_the_old_one(tmp_path, monk
     """The disk fills up at the last moment (the fsync): the old file stays, no temp is left."""
     import errno
 
-    import mcl2pnml.files
+    import mcl2pnml.core.files
 
     target = tmp_path / f"{name}.out"
     target.write_text("the previous version\n")
 
     def full(fd):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-    monkeypatch.setattr(mcl2pnml.files.os, "fsync", full)
+    monkeypatch.setattr(mcl2pnml.core.files.os, "fsync", full)
     out = _cli_in_process(args + [target])
     assert out.exit_code == 2, out.output
     assert f"{target}: cannot write: No space left on device" in out.output
@@ -177,7 +177,7 @@ def test_a_full_disk_leaves_no_partial_file_and_keeps_the_old_one(tmp_path, monk
 
 def test_a_write_that_fails_half_way_leaves_no_file(tmp_path, monkeypatch):
     """A PNML streamed out fails after its first bytes: nothing appears at the target."""
-    import mcl2pnml.pnml.writer as writer
+    import mcl2pnml.io.pnml.writer as writer
 
     def half(net, out, layout_engine="auto"):
         out.write(b"<?xml version='1.0'?>\n<pnml")

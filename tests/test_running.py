@@ -5,16 +5,16 @@ import json
 
 import pytest
 
-from mcl2pnml.aal import Action, ActionKind, Event, EventKind, ScriptedVehicle, Vehicle
-from mcl2pnml.compiler import compile_checked
-from mcl2pnml.engine import Outcome, run
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.executor import PetriEngine
-from mcl2pnml.mcl_checker import check
-from mcl2pnml.mcl_parser import parse, parse_file
-from mcl2pnml.pnml import parse_pnml, to_pnml_bytes
-from mcl2pnml.reference import ReferenceEngine
-from mcl2pnml.simulator import AUVSimulator, World
+from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, ScriptedVehicle, Vehicle
+from mcl2pnml.language.compiler import compile_checked
+from mcl2pnml.runtime.engine import Outcome, run
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.runtime.executor import PetriEngine
+from mcl2pnml.language.checker import check
+from mcl2pnml.language.parser import parse, parse_file
+from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
+from mcl2pnml.runtime.reference import ReferenceEngine
+from mcl2pnml.runtime.simulator import AUVSimulator, World
 
 from conftest import ROOT
 from bench.missions import survey
@@ -50,7 +50,7 @@ def test_the_pnml_alone_runs_the_mission():
 
 
 def test_a_net_that_is_not_a_mission_is_refused():
-    from mcl2pnml.template_library import default_library
+    from mcl2pnml.language.library import default_library
     with pytest.raises(Mcl2PnmlError, match="not a compiled mission.*mission.OK"):
         PetriEngine(default_library().composed("task"))
 
@@ -303,7 +303,7 @@ BRIDGES = ROOT / "examples" / "bridges"
 
 
 def test_mapping_files_say_what_is_wrong(tmp_path):
-    from mcl2pnml.bridge import VehicleMapping
+    from mcl2pnml.runtime.bridge import VehicleMapping
     for text, message in [
         ('{"primitives": {"P": {"enable": {"command": "go"}}}}', '"disable" must be an object'),
         ('{"primitives": {"P": {"enable": {"command": "go"}, "disable": {"command": "s"}, '
@@ -317,7 +317,7 @@ def test_mapping_files_say_what_is_wrong(tmp_path):
 
 
 def test_the_mapping_turns_actions_into_commands_and_messages_into_events():
-    from mcl2pnml.bridge import VehicleMapping
+    from mcl2pnml.runtime.bridge import VehicleMapping
     m = VehicleMapping.load(BRIDGES / "sim_mapping.json")
     cmd = m.command(Action(0, ActionKind.ENABLE, "GoToWayPoint", ((10.0, 0.0, 2.0),)))
     assert cmd == {"command": "start_GoToWayPoint", "args": {"x": 10.0, "y": 0.0, "z": 2.0}}

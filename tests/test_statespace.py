@@ -11,7 +11,7 @@ from hypothesis import given, settings, strategies as st
 from analysis import compiledspace, packedspace, statespace
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, explore
-from mcl2pnml.net import ArcKind, NetBuilder
+from mcl2pnml.core.net import ArcKind, NetBuilder
 
 from strategies import nets
 

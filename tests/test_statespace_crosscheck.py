@@ -9,8 +9,9 @@ import warnings
 import pytest
 
 from analysis.statespace import explore
-from mcl2pnml.pnml import ids, save_pnml
-from mcl2pnml.template_library import default_library
+from mcl2pnml.io import ids
+from mcl2pnml.io.pnml import save_pnml
+from mcl2pnml.language.library import default_library
 
 from test_statespace import cycle
 

@@ -26,8 +26,8 @@ from analysis.matrix import structure
 from analysis.siphons import (SiphonReport, control_by_lp, is_siphon, is_trap,
                               max_siphon_within, max_trap_within, minimal_siphons,
                               minimal_traps, siphon_control)
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.net import ArcKind, Marking, Net, NetBuilder
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.net import ArcKind, Marking, Net, NetBuilder
 
 # ---------------------------------------------------------------------------
 # hand-built nets

@@ -11,10 +11,10 @@ import pytest
 
 from analysis.behaviour import behaviour
 from analysis.statespace import explore
-from mcl2pnml.errors import Mcl2PnmlError
-from mcl2pnml.pnml import parse_pnml, to_pnml_bytes
-from mcl2pnml.template_library import Library, default_library, source_places
-from mcl2pnml.template_parser import CONTROL, TemplateKind, parse_template
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
+from mcl2pnml.language.library import Library, default_library, source_places
+from mcl2pnml.language.template_parser import CONTROL, TemplateKind, parse_template
 
 from conftest import DATA
 from paper_repro import nets

@@ -1,0 +1,3 @@
+"""The version of mcl2pnml, which every file it writes names (PNML, TINA, LoLA)."""
+
+__version__ = "0.1.0"

@@ -1,0 +1,415 @@
+"""Reading PNML P/T nets: tolerant of what real tools write, strict on what is wrong.
+
+Tolerated: the PNML namespace or none (pm4py writes none); the P/T and the
+core-model net types; places and transitions straight under ``<net>``
+(ProM without ``<page>``); several and nested pages (flattened); reference
+places and transitions (resolved to the node they stand for); the older
+``<value>`` form of labels (PIPE); parallel arcs (their weights add up);
+unknown elements and other tools' ``<toolspecific>`` (skipped).
+
+Refused, each with a message naming file, line and column: XML that is not
+well-formed; a document type declaration (PNML needs none, and entities are
+how XML bombs and external fetches get in: nothing is ever resolved or
+fetched); duplicate ids; an arc whose end is missing or that joins two places
+or two transitions; a marking that is not a natural number; a weight that is
+not a positive integer; a reference that dangles or loops. All errors of a
+file are reported together.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lxml import etree
+
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all, source_lines
+from mcl2pnml.core.gcpause import without_gc
+from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
+from mcl2pnml.io import ids
+from mcl2pnml.io.pnml.writer import TOOL
+
+P_T_TYPES = {
+    "http://www.pnml.org/version-2009/grammar/ptnet",
+    "http://www.pnml.org/version-2009/grammar/pnmlcoremodel",
+    "http://www.informatik.hu-berlin.de/top/pntd/ptNetb",  # pre-standard PNML
+    "P/T net",  # PIPE
+}
+
+
+class XmlError(PnmlError):
+    """The bytes are not a well-formed, declaration-free XML document."""
+
+
+def _local(el) -> str:
+    tag = el.tag
+    if not isinstance(tag, str):  # comments, processing instructions
+        return ""
+    return tag.rsplit("}", 1)[-1]
+
+
+def _children(el, name: str):
+    return [c for c in el if _local(c) == name]
+
+
+def _child(el, name: str):
+    for c in el:
+        if _local(c) == name:
+            return c
+    return None
+
+
+class _Source:
+    """Maps elements back to line and column, for messages with a caret."""
+
+    def __init__(self, filename: str, data: bytes):
+        self.filename = filename
+        self.lines = source_lines(data.decode("utf-8", errors="replace"))
+
+    def at(self, line: int | None, column: int | None = None) -> Location:
+        if not line or line < 1 or not self.lines:
+            return Location(self.filename)
+        if line > len(self.lines):
+            # libxml2 puts "premature end of data" on the line after a final
+            # newline: shown at the end of the last line, where the file stops
+            line = len(self.lines)
+            column = len(self.lines[-1]) + 1
+        text = self.lines[line - 1]
+        column = min(max(1, column or 1), len(text) + 1)
+        return Location(self.filename, line, column, text)
+
+    def locate(self, el) -> Location:
+        line = el.sourceline
+        if not line or line > len(self.lines):
+            return Location(self.filename)
+        text = self.lines[line - 1]
+        # lxml keeps no column; find the start tag on its line (the one with
+        # this element's id, where several start on that line)
+        name, xml_id = _local(el), el.get("id")
+        col, start = None, 0
+        while True:
+            i = text.find("<", start)
+            if i < 0:
+                break
+            j = i + 1
+            while j < len(text) and (text[j].isalnum() or text[j] in ":_-."):
+                j += 1
+            if text[i + 1:j].rsplit(":", 1)[-1] == name:
+                if col is None:
+                    col = i + 1
+                end = text.find(">", j)
+                if xml_id is None or f'"{xml_id}"' in text[j:end if end >= 0 else None] \
+                        or f"'{xml_id}'" in text[j:end if end >= 0 else None]:
+                    col = i + 1
+                    break
+            start = j
+        return Location(self.filename, line, col or 1, text)
+
+
+@dataclass
+class _Raw:
+    """What one pass over the document found, before the net is built."""
+
+    places: dict = field(default_factory=dict)        # id -> Place
+    transitions: dict = field(default_factory=dict)   # id -> Transition
+    marking: dict = field(default_factory=dict)
+    refs: dict = field(default_factory=dict)          # reference id -> (target id, element)
+    arcs: list = field(default_factory=list)          # (element, source, target, weight, read)
+    seen: dict = field(default_factory=dict)          # xml id -> line it is first used on
+    errors: list = field(default_factory=list)
+
+
+class _Reader:
+    def __init__(self, src: _Source, decode: bool):
+        self.src = src
+        self.raw = _Raw()
+        self.decode = ids.decode if decode else (lambda s: s)
+
+    def error(self, el, message: str) -> None:
+        loc = self.src.locate(el) if el is not None else Location(self.src.filename)
+        self.raw.errors.append(PnmlError(message, loc))
+
+    # -- labels ----------------------------------------------------------------
+
+    def _label_text(self, el, name: str) -> str | None:
+        label = _child(el, name)
+        if label is None:
+            return None
+        text = _child(label, "text")
+        if text is not None:
+            return (text.text or "").strip()
+        value = _child(label, "value")  # PIPE and other pre-2009 writers
+        if value is not None:
+            v = (value.text or "").strip()
+            return v.split(",", 1)[1].strip() if v.startswith("Default,") else v
+        return None
+
+    def _natural(self, el, label: str, minimum: int, what: str) -> int | None:
+        text = self._label_text(el, label)
+        if text is None:
+            return None
+        try:
+            n = int(text)
+        except ValueError:
+            n = None
+        if n is None or n < minimum:
+            kind = "a natural number" if minimum == 0 else "a positive integer"
+            self.error(_child(el, label), f"{what}: {label} must be {kind}, not '{text}'")
+            return None
+        return n
+
+    def _position(self, el) -> tuple[float, float] | None:
+        g = _child(el, "graphics")
+        pos = _child(g, "position") if g is not None else None
+        if pos is None:
+            return None
+        try:
+            x, y = float(pos.get("x", "")), float(pos.get("y", ""))
+        except ValueError:
+            return None  # a drawing hint only: a bad one is dropped, not fatal
+        return (x, y) if math.isfinite(x) and math.isfinite(y) else None
+
+    def _ours(self, el):
+        return [ts for ts in _children(el, "toolspecific") if ts.get("tool") == TOOL]
+
+    def _payload(self, el):
+        for ts in self._ours(el):
+            p = _child(ts, "payload")
+            if p is not None:
+                try:
+                    return freeze(json.loads(p.text or "null"))
+                except (ValueError, Mcl2PnmlError) as e:
+                    self.error(p, f"payload is not JSON data: {e}")
+        return None
+
+    # -- nodes -----------------------------------------------------------------
+
+    def _id(self, el) -> str | None:
+        xml_id = el.get("id")
+        if xml_id is None:
+            self.error(el, f"<{_local(el)}> has no id")
+            return None
+        if xml_id in self.raw.seen:
+            first = self.raw.seen[xml_id]
+            self.error(el, f"duplicate id '{xml_id}' (first used on line {first})")
+            return None
+        # the line, not the element: a proxy kept per node would keep a
+        # million of them alive in a large file
+        self.raw.seen[xml_id] = el.sourceline
+        return xml_id
+
+    def _node_id(self, el) -> str | None:
+        """A place's or transition's id, checked here so that the error has its line
+        (the core would refuse it too, but knows no line)."""
+        xml_id = self._id(el)
+        if xml_id is not None and (not xml_id or xml_id != xml_id.strip()):
+            self.error(el, f"{_local(el)} id {xml_id!r} must be a non-empty string without "
+                           "leading or trailing white space")
+            return None
+        return xml_id
+
+    def place(self, el) -> None:
+        xml_id = self._node_id(el)
+        if xml_id is None:
+            return
+        node_id = self.decode(xml_id)
+        interface = None
+        for ts in self._ours(el):
+            i = _child(ts, "interface")
+            if i is not None:
+                interface = i.get("label")
+        self.raw.places[xml_id] = Place(node_id, self._label_text(el, "name"), interface,
+                                        self._payload(el), self._position(el))
+        tokens = self._natural(el, "initialMarking", 0, f"place '{xml_id}'")
+        if tokens:
+            self.raw.marking[node_id] = tokens
+
+    def transition(self, el) -> None:
+        xml_id = self._node_id(el)
+        if xml_id is None:
+            return
+        timing = None
+        for ts in self._ours(el):
+            t = _child(ts, "timing")
+            if t is not None:
+                try:
+                    latest = t.get("latest")
+                    timing = Timing(float(t.get("earliest", "0")),
+                                    None if latest is None else float(latest))
+                except (ValueError, Mcl2PnmlError) as e:
+                    self.error(t, f"transition '{xml_id}': bad timing: {e}")
+        self.raw.transitions[xml_id] = Transition(
+            self.decode(xml_id), self._label_text(el, "name"), timing,
+            self._payload(el), self._position(el))
+
+    def reference(self, el) -> None:
+        xml_id = self._id(el)
+        if xml_id is None:
+            return
+        ref = el.get("ref")
+        if ref is None:
+            self.error(el, f"reference node '{xml_id}' has no ref attribute")
+            return
+        self.raw.refs[xml_id] = (ref, el)
+
+    def arc(self, el) -> None:
+        xml_id = self._id(el)
+        src, dst = el.get("source"), el.get("target")
+        if src is None or dst is None:
+            self.error(el, f"arc '{xml_id}' needs both a source and a target")
+            return
+        weight = self._natural(el, "inscription", 1, f"arc '{xml_id}'")
+        read = any(_child(ts, "read") is not None for ts in self._ours(el))
+        self.raw.arcs.append((el, src, dst, 1 if weight is None else weight, read))
+
+    def walk(self, net_el) -> None:
+        """Every node and arc, in document order, through pages of any depth."""
+        handlers = {"place": self.place, "transition": self.transition, "arc": self.arc,
+                    "referencePlace": self.reference, "referenceTransition": self.reference}
+        stack = [iter(net_el)]  # explicit: pages may nest deeper than Python recurses
+        while stack:
+            child = next(stack[-1], None)
+            if child is None:
+                stack.pop()
+                continue
+            name = _local(child)
+            if name == "page":
+                self._id(child)
+                stack.append(iter(child))
+            elif name in handlers:
+                handlers[name](child)
+
+    # -- resolution --------------------------------------------------------------
+
+    def resolve(self, xml_id: str, el, end: str) -> str | None:
+        """The node a (possibly reference) id stands for, or None after an error."""
+        seen = []
+        while xml_id in self.raw.refs:
+            if xml_id in seen:
+                self.error(el, f"arc {end} '{seen[0]}': references loop ({' -> '.join(seen)})")
+                return None
+            seen.append(xml_id)
+            xml_id = self.raw.refs[xml_id][0]
+        if xml_id not in self.raw.places and xml_id not in self.raw.transitions:
+            via = f" (through reference '{seen[0]}')" if seen else ""
+            self.error(el, f"arc {end} '{xml_id}'{via} is not a place or transition "
+                           "of this net")
+            return None
+        return xml_id
+
+    def build(self, name: str) -> Net:
+        raw = self.raw
+        weights: dict[tuple[str, str, bool], int] = {}
+        arc_el: dict[tuple[str, str, bool], object] = {}
+        for el, src, dst, weight, read in raw.arcs:
+            s, d = self.resolve(src, el, "source"), self.resolve(dst, el, "target")
+            if s is None or d is None:
+                continue
+            s_place, d_place = s in raw.places, d in raw.places
+            if s_place == d_place:
+                kind = "place" if s_place else "transition"
+                self.error(el, f"arc '{el.get('id')}' goes from {kind} '{s}' to {kind} "
+                               f"'{d}'; an arc joins a place and a transition")
+                continue
+            key = (s, d, read)
+            weights[key] = weights.get(key, 0) + weight
+            arc_el.setdefault(key, el)
+        arcs = []
+        for (s, d, read), w in weights.items():
+            if not read:
+                arcs.append(Arc(self.decode(s), self.decode(d), w))
+            elif s in raw.places:  # a read arc is the pair (p -> t, t -> p), both marked
+                if weights.get((d, s, True)) != w:
+                    self.error(arc_el[(s, d, read)],
+                               f"read arc from '{s}' to '{d}' has no matching return arc")
+                    continue
+                arcs.append(Arc(self.decode(s), self.decode(d), w, ArcKind.READ))
+            elif weights.get((d, s, True)) != w:
+                self.error(arc_el[(s, d, read)],
+                           f"read arc return from '{s}' to '{d}' has no matching arc")
+        raise_all(raw.errors)
+        return Net(name, tuple(raw.places.values()), tuple(raw.transitions.values()),
+                   tuple(arcs), Marking(raw.marking))
+
+
+def _doctype_refused(src: _Source) -> XmlError:
+    line = next((i for i, text in enumerate(src.lines, 1) if "<!DOCTYPE" in text), 1)
+    col = src.lines[line - 1].find("<!DOCTYPE") + 1 if src.lines else 1
+    return XmlError("document type declarations are refused: PNML needs none, and "
+                    "entities are never expanded or fetched", src.at(line, max(col, 1)))
+
+
+def _parse_xml(data: bytes, src: _Source):
+    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False,
+                             dtd_validation=False, huge_tree=False, remove_comments=True,
+                             remove_pis=True)
+    try:
+        tree = etree.fromstring(data, parser).getroottree()
+    except etree.XMLSyntaxError as e:
+        if b"<!DOCTYPE" in data:
+            # libxml2 still weighs the declared entities (a bomb fails with
+            # "maximum entity amplification" at line 1): the declaration is
+            # the fault to name, where it is
+            raise _doctype_refused(src) from None
+        line, col = getattr(e, "position", (e.lineno, None))
+        msg = str(e.msg).split(f", line {line}")[0]
+        raise XmlError(f"not well-formed XML: {msg}", src.at(line, col)) from None
+    except ValueError as e:  # e.g. a str with an encoding declaration
+        raise XmlError(f"cannot parse as XML: {e}", src.at(None)) from None
+    if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:
+        raise _doctype_refused(src)
+    return tree
+
+
+@without_gc  # a large file is millions of small objects, all alive (see gcpause)
+def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None) -> Net:
+    """Read one P/T net from PNML bytes. Raises :class:`PnmlError` (or several)."""
+    src = _Source(filename, data)
+    root = _parse_xml(data, src).getroot()
+    if _local(root) != "pnml":
+        raise PnmlError(f"the root element is <{_local(root)}>, not <pnml>", src.locate(root))
+    nets = _children(root, "net")
+    if not nets:
+        raise PnmlError("no <net> in this document", src.locate(root))
+    if net_id is not None:
+        chosen = [n for n in nets if n.get("id") == net_id]
+        if not chosen:
+            listing = ", ".join(str(n.get("id")) for n in nets)
+            raise PnmlError(f"no net with id '{net_id}'; nets in this file: {listing}",
+                            src.locate(root))
+        net_el = chosen[0]
+    elif len(nets) > 1:
+        listing = ", ".join(str(n.get("id")) for n in nets)
+        raise PnmlError(f"this file holds {len(nets)} nets ({listing}); choose one by its id",
+                        src.locate(nets[1]))
+    else:
+        net_el = nets[0]
+    net_type = net_el.get("type")
+    if net_type is not None and net_type not in P_T_TYPES:
+        raise PnmlError(f"net type '{net_type}' is not a place/transition net; readable: "
+                        + ", ".join(sorted(P_T_TYPES)), src.locate(net_el))
+    ours = [ts for ts in _children(net_el, "toolspecific") if ts.get("tool") == TOOL]
+    decode = any(_child(ts, "ids") is not None for ts in ours)
+    reader = _Reader(src, decode)
+    reader._id(net_el)
+    reader.walk(net_el)
+    name_el = _child(net_el, "name")
+    name = reader._label_text(net_el, "name") if name_el is not None else None
+    try:
+        return reader.build(name or net_el.get("id") or "net")
+    except NetError as e:  # a rule of the core, e.g. reading and consuming one place
+        raise PnmlError(e.message, Location(filename)) from None
+
+
+def read_file(path: str | Path) -> bytes:
+    """A file's bytes, or a :class:`PnmlError` that names it."""
+    try:
+        return Path(path).read_bytes()
+    except OSError as e:
+        raise PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
+
+
+def load_pnml(path: str | Path, net_id: str | None = None) -> Net:
+    """Read one P/T net from a PNML file."""
+    return parse_pnml(read_file(path), str(path), net_id)

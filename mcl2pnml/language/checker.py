@@ -1,0 +1,276 @@
+"""The checker: names, arities, patterns, recursion; every error of a file at once.
+
+It runs after the parser and before the compiler, and resolves what the
+compiler needs: the value of every const, the template of every task's
+pattern, the call graph of the functions in an order without cycles.
+
+Each error names file, line and column, shows the line with a caret, and
+says what would be valid ("unknown task or function 'Goo'; did you mean
+'Go'? declared tasks and functions: Go, Stop").
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Iterable
+
+from mcl2pnml.language import ast
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
+from mcl2pnml.language.library import Library, default_library
+from mcl2pnml.language.template_parser import Template, TemplateKind
+
+KIND = {ast.Const: "const", ast.Primitive: "primitive", ast.Task: "task",
+        ast.Function: "function"}
+
+
+@dataclass(frozen=True)
+class Checked:
+    """A program that passed every check, with what the compiler needs resolved."""
+
+    program: ast.Program
+    consts: dict[str, Any]                 # name -> value (numbers, strings, tuples)
+    primitives: dict[str, ast.Primitive]
+    tasks: dict[str, ast.Task]
+    patterns: dict[str, Template]          # task name -> its pattern's template
+    functions: dict[str, ast.Function]
+    function_order: tuple[str, ...]        # callees before callers
+    mission: ast.Mission
+
+
+class _Checker:
+    def __init__(self, program: ast.Program, library: Library):
+        self.p = program
+        self.lib = library
+        self.lines = source_lines(program.source)
+        self.errors: list[Mcl2PnmlError] = []
+        self.names: dict[str, Any] = {}
+
+    def error(self, pos: ast.Pos, message: str) -> None:
+        src = self.lines[pos.line - 1] if 0 < pos.line <= len(self.lines) else None
+        self.errors.append(Mcl2PnmlError(message, Location(self.p.file, pos.line or None,
+                                                           pos.column or None, src)))
+
+    def of_kind(self, kind) -> list[str]:
+        return [n for n, d in self.names.items() if isinstance(d, kind)]
+
+    # -- declarations ------------------------------------------------------------------
+
+    def declare(self) -> None:
+        missions = self.p.of(ast.Mission)
+        for d in self.p.declarations:
+            if isinstance(d, ast.Mission):
+                continue
+            first = self.names.get(d.name)
+            if first is not None:
+                self.error(d.pos, f"duplicate name '{d.name}': already declared as a "
+                                  f"{KIND[type(first)]} on line {first.pos.line}")
+                continue
+            self.names[d.name] = d
+            params = getattr(d, "params", ())
+            seen: set[str] = set()
+            for name in params:
+                if name in seen:
+                    self.error(d.pos, f"{KIND[type(d)]} '{d.name}' has two parameters named "
+                                      f"'{name}'")
+                seen.add(name)
+        if not missions:
+            line = max(1, len(self.lines))
+            self.error(ast.Pos(line, 1), "no mission: a file needs one 'mission { ... }'")
+        for extra in missions[1:]:
+            self.error(extra.pos, f"a second mission (the first is on line {missions[0].pos.line});"
+                                  " a file has exactly one")
+
+    # -- values ------------------------------------------------------------------------
+
+    def const_values(self) -> dict[str, Any]:
+        values: dict[str, Any] = {}
+        visiting: list[str] = []
+
+        def value_of(v: ast.Value, where: str) -> Any:
+            if isinstance(v, ast.Number):
+                return v.value
+            if isinstance(v, ast.String):
+                return v.value
+            if isinstance(v, ast.Tuple):
+                return tuple(value_of(i, where) for i in v.items)
+            target = self.names.get(v.name)
+            if not isinstance(target, ast.Const):
+                self.unknown_value(v, "const " + where, ())
+                return None
+            return resolve(target)
+
+        def resolve(c: ast.Const) -> Any:
+            if c.name in values:
+                return values[c.name]
+            if c.name in visiting:
+                cycle = visiting[visiting.index(c.name):] + [c.name]
+                self.error(c.pos, f"const '{c.name}' is defined in terms of itself: "
+                                  + " -> ".join(cycle))
+                values[c.name] = None
+                return None
+            visiting.append(c.name)
+            values[c.name] = value_of(c.value, c.name)
+            visiting.pop()
+            return values[c.name]
+
+        for c in self.p.of(ast.Const):
+            if self.names.get(c.name) is c:
+                resolve(c)
+        return values
+
+    def unknown_value(self, v: ast.Ref, where: str, params: Iterable[str]) -> None:
+        target = self.names.get(v.name)
+        params = list(params)
+        if target is not None:
+            self.error(v.pos, f"'{v.name}' is a {KIND[type(target)]}, not a value; in {where} "
+                              "a value is a const, a literal"
+                              + (", or a parameter" if params else ""))
+            return
+        valid = self.of_kind(ast.Const) + params
+        what = ("parameters and consts" if params else "consts")
+        self.error(v.pos, f"undeclared name '{v.name}' in {where}"
+                   + did_you_mean(v.name, valid, what))
+
+    def check_args(self, args: Iterable[ast.Value], params: tuple[str, ...], where: str) -> None:
+        for a in args:
+            if isinstance(a, ast.Ref):
+                if a.name not in params and not isinstance(self.names.get(a.name), ast.Const):
+                    self.unknown_value(a, where, params)
+            elif isinstance(a, ast.Tuple):
+                self.check_args(a.items, params, where)
+
+    def arity(self, pos, kind: str, name: str, params: tuple[str, ...], given: int) -> None:
+        if len(params) != given:
+            plural = "s" * (len(params) != 1)
+            listing = f" ({', '.join(params)})" if params else ""
+            self.error(pos, f"{kind} '{name}' takes {len(params)} argument{plural}{listing}, "
+                            f"given {given}")
+
+    # -- tasks ---------------------------------------------------------------------------
+
+    def tasks(self) -> dict[str, Template]:
+        # patterns by their own names (AchieveGoal), not by the CLI's aliases (task)
+        patterns = {t.name: t for t in self.lib.unique() if t.kind is TemplateKind.PATTERN}
+        out: dict[str, Template] = {}
+        for task in self.p.of(ast.Task):
+            where = f"task '{task.name}'"
+            template = patterns.get(task.pattern)
+            if template is None:
+                self.error(task.pattern_pos, f"unknown task pattern '{task.pattern}'"
+                           + did_you_mean(task.pattern, patterns, "patterns"))
+            else:
+                out[task.name] = template
+                slots = len(template.primitives)
+                if slots != len(task.primitives):
+                    self.error(task.pattern_pos,
+                               f"pattern {task.pattern} takes {slots} primitive"
+                               f"{'s' * (slots != 1)}, given {len(task.primitives)}")
+            for call in task.primitives:
+                prim = self.names.get(call.name)
+                if not isinstance(prim, ast.Primitive):
+                    if prim is None:
+                        self.error(call.pos, f"undeclared primitive '{call.name}'" + did_you_mean(
+                            call.name, self.of_kind(ast.Primitive), "declared primitives"))
+                    else:
+                        self.error(call.pos, f"'{call.name}' is a {KIND[type(prim)]}, not a "
+                                             "primitive")
+                    continue
+                self.arity(call.pos, "primitive", call.name, prim.params, len(call.args))
+                self.check_args(call.args, task.params, where)
+            if task.timeout is not None and not task.timeout.value > 0:
+                self.error(task.timeout.pos, f"a timeout is a positive number of seconds, "
+                                             f"not {task.timeout.text}")
+        return out
+
+    # -- statements ----------------------------------------------------------------------
+
+    def statements(self, stmt: ast.Statement, params: tuple[str, ...], where: str,
+                   calls: list[str]) -> None:
+        if isinstance(stmt, ast.Call):
+            target = self.names.get(stmt.name)
+            if isinstance(target, (ast.Task, ast.Function)):
+                self.arity(stmt.pos, KIND[type(target)], stmt.name, target.params, len(stmt.args))
+                if isinstance(target, ast.Function):
+                    calls.append(stmt.name)
+            elif target is None:
+                self.error(stmt.pos, f"unknown task or function '{stmt.name}'" + did_you_mean(
+                    stmt.name, self.of_kind(ast.Task) + self.of_kind(ast.Function),
+                    "declared tasks and functions"))
+            elif isinstance(target, ast.Primitive):
+                users = [t.name for t in self.p.of(ast.Task)
+                         if any(c.name == stmt.name for c in t.primitives)]
+                hint = (f"; call a task that uses it: {', '.join(users)}" if users else
+                        f"; declare a task that uses it, e.g. task Do{stmt.name}() = "
+                        f"AchieveGoal({stmt.name}(...));")
+                self.error(stmt.pos, f"'{stmt.name}' is a primitive, not a task or function"
+                           + hint)
+            else:
+                self.error(stmt.pos, f"'{stmt.name}' is a {KIND[type(target)]}, not a task or "
+                                     "function")
+            self.check_args(stmt.args, params, where)
+        elif isinstance(stmt, ast.Block):
+            for s in stmt.body:
+                self.statements(s, params, where, calls)
+        elif isinstance(stmt, ast.Parallel):
+            for s in stmt.items:
+                self.statements(s, params, where, calls)
+        elif isinstance(stmt, ast.Monitor):
+            self.statements(stmt.watched, params, where, calls)
+            self.statements(stmt.watcher, params, where, calls)
+        elif isinstance(stmt, ast.If):
+            self.statements(stmt.condition, params, where, calls)
+            self.statements(stmt.then, params, where, calls)
+            if stmt.otherwise is not None:
+                self.statements(stmt.otherwise, params, where, calls)
+        elif isinstance(stmt, ast.While):
+            self.statements(stmt.condition, params, where, calls)
+            self.statements(stmt.body, params, where, calls)
+
+    def functions(self) -> tuple[str, ...]:
+        graph: dict[str, list[str]] = {}
+        for f in self.p.of(ast.Function):
+            calls: list[str] = []
+            self.statements(f.body, f.params, f"function '{f.name}'", calls)
+            graph[f.name] = calls
+        for m in self.p.of(ast.Mission):
+            self.statements(m.body, (), "the mission", [])
+        # recursion, direct or not: a depth-first search for a cycle
+        order: list[str] = []
+        state: dict[str, int] = {}
+        reported: set[frozenset[str]] = set()
+
+        def visit(name: str, path: list[str]) -> None:
+            state[name] = 1
+            for callee in graph.get(name, ()):
+                if state.get(callee) == 1:
+                    cycle = path[path.index(callee):] + [callee]
+                    key = frozenset(cycle)
+                    if key not in reported:
+                        reported.add(key)
+                        f = self.names[callee]
+                        self.error(f.pos, "recursion: " + " calls ".join(cycle)
+                                   + "; a mission must be finite, so functions may not call "
+                                     "themselves, directly or not")
+                elif callee in graph and state.get(callee) is None:
+                    visit(callee, path + [callee])
+            state[name] = 2
+            order.append(name)
+
+        for name in graph:
+            if state.get(name) is None:
+                visit(name, [name])
+        return tuple(order)
+
+
+def check(program: ast.Program, library: Library | None = None) -> Checked:
+    """Check a parsed program; raise every error found, or return it resolved."""
+    c = _Checker(program, library or default_library())
+    c.declare()
+    consts = c.const_values()
+    patterns = c.tasks()
+    order = c.functions()
+    raise_all(c.errors)
+    return Checked(program, consts,
+                   {d.name: d for d in program.of(ast.Primitive)},
+                   {d.name: d for d in program.of(ast.Task)}, patterns,
+                   {d.name: d for d in program.of(ast.Function)}, order,
+                   program.of(ast.Mission)[0])

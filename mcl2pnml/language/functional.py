@@ -1,0 +1,123 @@
+"""Step 1 of the compiler: imperative MCL to functional code (the paper's Algorithm 2).
+
+Every control structure becomes a function whose arguments are other
+functions (structures or calls), as section 3.2 describes:
+
+* a block of statements is a right-nested ``sequence(first, rest)``, with
+  one statement it is that statement, empty it is ``NULL``;
+* ``parallel(a, b, c)`` is ``parallel(a, parallel(b, c))``: the parallel
+  net joins two structures, as the sequence does;
+* ``if (c) then {t} else {e}`` is ``if-then-else(c, t, e)``, with ``NULL``
+  for a missing else;
+* ``while (c) {b}`` is ``while(c, b)``; ``monitor(a, b)`` stays as it is;
+* calls of tasks and functions stay calls, with their arguments as written.
+
+The paper's Algorithm 1 gives, character for character, the string that
+``shared/spec/cli.md`` shows for Algorithm 2.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Union
+
+from mcl2pnml.language import ast
+
+
+@dataclass(frozen=True)
+class FCall:
+    """A call of a task or a function, with its arguments."""
+
+    name: str
+    args: tuple[ast.Value, ...]
+    pos: ast.Pos
+
+
+@dataclass(frozen=True)
+class FStructure:
+    """A control structure applied to its sub-structures (``NULL`` has none)."""
+
+    kind: str          # sequence, parallel, if-then-else, while, monitor, NULL
+    children: tuple["FNode", ...]
+    pos: ast.Pos
+
+
+FNode = Union[FCall, FStructure]
+
+NULL_KIND = "NULL"
+
+
+def to_functional(stmt: ast.Statement) -> FNode:
+    if isinstance(stmt, ast.Call):
+        return FCall(stmt.name, stmt.args, stmt.pos)
+    if isinstance(stmt, ast.Block):
+        return _sequence(list(stmt.body), stmt.pos)
+    if isinstance(stmt, ast.Parallel):
+        items = [to_functional(s) for s in stmt.items]
+        node = items[-1]
+        for item in reversed(items[:-1]):
+            node = FStructure("parallel", (item, node), item.pos)
+        return node
+    if isinstance(stmt, ast.Monitor):
+        return FStructure("monitor", (to_functional(stmt.watched), to_functional(stmt.watcher)),
+                          stmt.pos)
+    if isinstance(stmt, ast.If):
+        otherwise = (to_functional(stmt.otherwise) if stmt.otherwise is not None
+                     else FStructure(NULL_KIND, (), stmt.pos))
+        return FStructure("if-then-else", (to_functional(stmt.condition),
+                                           to_functional(stmt.then), otherwise), stmt.pos)
+    if isinstance(stmt, ast.While):
+        return FStructure("while", (to_functional(stmt.condition), to_functional(stmt.body)),
+                          stmt.pos)
+    raise TypeError(f"not a statement: {stmt!r}")
+
+
+def _sequence(body: list[ast.Statement], pos: ast.Pos) -> FNode:
+    if not body:
+        return FStructure(NULL_KIND, (), pos)
+    # built from the end, in a loop: a block of 10,000 statements nests
+    # 10,000 sequences, far deeper than Python's recursion limit
+    items = [to_functional(s) for s in body]
+    node = items[-1]
+    for item in reversed(items[:-1]):
+        node = FStructure("sequence", (item, node), item.pos)
+    return node
+
+
+def format_value(v: ast.Value) -> str:
+    if isinstance(v, ast.Number):
+        return v.text
+    if isinstance(v, ast.String):
+        return '"' + v.value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, ast.Tuple):
+        return "(" + ", ".join(format_value(i) for i in v.items) + ")"
+    return v.name
+
+
+def format_node(node: FNode) -> str:
+    """The functional code as the paper prints it (iterative: sequences nest deep)."""
+    out: list[str] = []
+    stack: list[FNode | str] = [node]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            out.append(item)
+        elif isinstance(item, FCall):
+            out.append(f"{item.name}({', '.join(format_value(a) for a in item.args)})")
+        elif item.kind == NULL_KIND:
+            out.append(NULL_KIND)
+        else:
+            pieces: list[FNode | str] = [f"{item.kind}("]
+            for i, child in enumerate(item.children):
+                pieces += [", "] if i else []
+                pieces.append(child)
+            pieces.append(")")
+            stack.extend(reversed(pieces))
+    return "".join(out)
+
+
+def mission_expression(mission: ast.Mission) -> FNode:
+    return to_functional(mission.body)
+
+
+def function_expression(function: ast.Function) -> FNode:
+    return to_functional(function.body)

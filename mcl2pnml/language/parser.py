@@ -1,0 +1,334 @@
+"""MCL text to the AST (lark, LALR), the first stage of the compiler.
+
+The grammar is ``shared/spec/mcl.md``'s: declarations in any order (const,
+primitive, task, function, mission), statements that are calls, blocks,
+``parallel``, ``monitor``, ``if``/``then``/``else`` and ``while``/``do``.
+Comments are ``// ...`` and ``/* ... */``.
+
+A syntax error is one :class:`Mcl2PnmlError` at the first fault, with the
+line, a caret, and what would have been valid there; input that is not
+UTF-8 text (or is binary) is refused the same way, at the first bad byte.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharacters,
+                  UnexpectedEOF, UnexpectedInput)
+
+from mcl2pnml.language import ast
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
+from mcl2pnml.core.files import decode_text, read_bytes
+from mcl2pnml.core.gcpause import without_gc
+
+GRAMMAR = r"""
+start: declaration*
+
+?declaration: const | primitive | task | function | mission
+
+const: "const" NAME "=" value ";"
+primitive: "primitive" NAME "(" [names] ")" ";"
+task: "task" NAME "(" [names] ")" "=" NAME "(" primcall ("," primcall)* ")" [timeout] ";"
+timeout: "timeout" NUMBER
+primcall: NAME "(" [values] ")"
+function: "function" NAME "(" [names] ")" block
+mission: MISSION block
+
+names: NAME ("," NAME)*
+values: value ("," value)*
+
+?value: NUMBER    -> number
+      | STRING    -> string
+      | NAME      -> ref
+      | "(" values ")" -> tuple
+
+block: "{" statement* "}"
+
+?statement: call ";"
+          | parallel ";"
+          | monitor ";"
+          | if_
+          | while_
+          | block
+
+?structure: call | block | parallel | monitor
+
+call: NAME "(" [values] ")"
+parallel: "parallel" "(" structure ("," structure)+ ")"
+monitor: "monitor" "(" structure "," structure ")"
+if_: "if" "(" structure ")" ["then"] block ["else" block]
+while_: "while" "(" structure ")" ["do"] block
+
+MISSION: "mission"
+NAME: /[A-Za-z_][A-Za-z0-9_]*/
+NUMBER: /[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?/
+STRING: /"([^"\\\n]|\\.)*"/
+COMMENT: /\/\/[^\n]*/ | /\/\*(.|\n)*?\*\//
+
+%import common.WS
+%ignore WS
+%ignore COMMENT
+"""
+
+KEYWORDS = {"const", "primitive", "task", "function", "mission", "if", "then", "else",
+            "while", "do", "timeout", "parallel", "monitor"}
+
+_READABLE = {"NAME": "a name", "NUMBER": "a number", "STRING": "a string",
+             "$END": "the end of the file"}
+
+
+def _describe(terminal: str) -> str:
+    if terminal in _READABLE:
+        return _READABLE[terminal]
+    try:
+        pattern = _tree_parser().get_terminal(terminal).pattern
+    except KeyError:
+        return terminal.lower()
+    return f"'{pattern.value}'" if pattern.type == "str" else terminal.lower()
+
+
+def _pos(item) -> ast.Pos:
+    if isinstance(item, Token):
+        return ast.Pos(item.line, item.column)
+    meta = getattr(item, "meta", None)
+    return ast.Pos(getattr(meta, "line", 0), getattr(meta, "column", 0))
+
+
+class _Build(Transformer_NonRecursive):
+    """Parse tree to AST nodes, each with the position of its first token."""
+
+    def __default_token__(self, token):
+        return token
+
+    def start(self, items):
+        return tuple(items)
+
+    def names(self, items):
+        return tuple(str(t) for t in items)
+
+    def values(self, items):
+        return tuple(items)
+
+    def number(self, items):
+        (tok,) = items
+        text = str(tok)
+        value = float(text) if any(c in text for c in ".eE") else int(text)
+        return ast.Number(value, text, _pos(tok))
+
+    def string(self, items):
+        (tok,) = items
+        raw = str(tok)[1:-1]
+        return ast.String(raw.encode("utf-8").decode("unicode_escape") if "\\" in raw else raw,
+                          _pos(tok))
+
+    def ref(self, items):
+        (tok,) = items
+        return ast.Ref(str(tok), _pos(tok))
+
+    def tuple(self, items):
+        (values,) = items
+        first = values[0].pos if values else ast.Pos(0, 0)
+        return ast.Tuple(tuple(values), ast.Pos(first.line, max(1, first.column - 1)))
+
+    def const(self, items):
+        name, value = items
+        return ast.Const(str(name), value, _pos(name))
+
+    def primitive(self, items):
+        name, params = items
+        return ast.Primitive(str(name), params or (), _pos(name))
+
+    def timeout(self, items):
+        return self.number(items)
+
+    def primcall(self, items):
+        name, args = items
+        return ast.PrimCall(str(name), args or (), _pos(name))
+
+    def task(self, items):
+        name, params, pattern, *rest = items
+        timeout = rest[-1] if rest and isinstance(rest[-1], ast.Number) else None
+        calls = tuple(c for c in rest if isinstance(c, ast.PrimCall))
+        return ast.Task(str(name), params or (), str(pattern), calls, timeout, _pos(name),
+                        _pos(pattern))
+
+    def function(self, items):
+        name, params, body = items
+        return ast.Function(str(name), params or (), body, _pos(name))
+
+    def mission(self, items):
+        keyword, body = items
+        return ast.Mission(body, _pos(keyword))
+
+    def block(self, items):
+        return ast.Block(tuple(items), ast.Pos(0, 0))
+
+    def call(self, items):
+        name, args = items
+        return ast.Call(str(name), args or (), _pos(name))
+
+    def parallel(self, items):
+        return ast.Parallel(tuple(items), items[0].pos if items else ast.Pos(0, 0))
+
+    def monitor(self, items):
+        return ast.Monitor(items[0], items[1], items[0].pos)
+
+    def if_(self, items):
+        cond, then, otherwise = items
+        return ast.If(cond, then, otherwise, cond.pos)
+
+    def while_(self, items):
+        cond, body = items
+        return ast.While(cond, body, cond.pos)
+
+
+def decode(data: bytes, filename: str) -> str:
+    """MCL source as text; not UTF-8, or binary, is an error at the first bad byte."""
+    return decode_text(data, filename, "an MCL")
+
+
+class _Suspect(Exception):
+    """Raised while parsing straight to the AST at what the checks on the tree must judge."""
+
+
+def _name(token: Token) -> Token:
+    """The lexer's check of every name: a keyword lets the tree's checks say what is wrong."""
+    if token in KEYWORDS:
+        raise _Suspect
+    return token
+
+
+#: Parses straight to the AST: :class:`_Build`'s methods run as the rules are
+#: reduced, so no tree is built, nor walked again to transform it and to
+#: check it (a 10,000-call mission parsed in half the time). Whatever is in
+#: doubt, from a syntax error to a keyword used as a name, is parsed again
+#: by :func:`_parse_tree`, as every file was before, so that errors are
+#: found and reported exactly as they were.
+_PARSER = Lark(GRAMMAR, parser="lalr", maybe_placeholders=True, transformer=_Build(),
+               lexer_callbacks={"NAME": _name})
+
+
+@lru_cache(maxsize=None)
+def _tree_parser() -> Lark:
+    """The parser that builds a tree with positions, for the checks and the error messages."""
+    return Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+
+
+@without_gc
+def parse(text: str, filename: str = "<mcl>") -> ast.Program:
+    """Parse MCL source into a :class:`~mcl2pnml.language.ast.Program` (no checks beyond syntax)."""
+    try:
+        declarations = _PARSER.parse(text)
+    except Exception:   # any fault, or doubt: the tree says which, and where
+        declarations = None
+    if declarations is None or _deepest(declarations) > MAX_NESTING:
+        declarations = _parse_tree(text, filename)
+    return ast.Program(declarations, filename, text)
+
+
+def _parse_tree(text: str, filename: str) -> tuple[ast.Declaration, ...]:
+    """Parse to a tree, check it, then build the AST: the slow way, that locates every error."""
+    lines = source_lines(text)
+    try:
+        tree = _tree_parser().parse(text)
+    except UnexpectedInput as e:
+        line, col = e.line, e.column
+        if isinstance(e, UnexpectedEOF) or line < 1:
+            line = max(1, len(lines))
+            col = len(lines[-1]) + 1 if lines else 1
+        src = lines[line - 1] if 0 < line <= len(lines) else None
+        expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
+                                                  or getattr(e, "allowed", None) or ())})
+        if isinstance(e, UnexpectedCharacters):
+            found = f"unexpected character {text[e.pos_in_stream]!r}"
+        elif isinstance(e, UnexpectedEOF):
+            found = "unexpected end of file"
+        elif e.token.type == "$END":
+            found = "unexpected end of file"
+        else:
+            tok = e.token
+            found = (f"'{tok}' is a keyword" if str(tok) in KEYWORDS and "a name" in expected
+                     else f"unexpected {_describe(tok.type) if tok.type != 'NAME' else repr(str(tok))}")
+        hint = f"; expected {', '.join(expected[:-1])} or {expected[-1]}" if len(expected) > 1 \
+            else (f"; expected {expected[0]}" if expected else "")
+        raise Mcl2PnmlError(f"syntax error: {found}{hint}",
+                            Location(filename, line, col, src)) from None
+    _check_nesting(tree, lines, filename)
+    return _Build().transform(tree)
+
+
+#: How deep blocks, structures, calls and tuples may nest. Missions people
+#: write nest a handful of levels; the limit keeps every later stage (some
+#: of which walk the program recursively) far from Python's stack limit.
+MAX_NESTING = 100
+_NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall", "tuple"}
+
+
+def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
+    """Refuse nesting deeper than :data:`MAX_NESTING`, and keywords used as names.
+
+    One walk in source order, with a stack rather than recursion (a file
+    nested 3,000 deep must get this message, not overflow Python's stack);
+    the first fault in the file is the one reported.
+    """
+    stack: list[tuple[Tree | Token, int]] = [(tree, 0)]
+    while stack:
+        node, depth = stack.pop()
+        if isinstance(node, Token):
+            if node.type == "NAME" and str(node) in KEYWORDS:
+                # the contextual lexer lets a keyword through as a name
+                src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
+                raise Mcl2PnmlError(f"'{node}' is a keyword and cannot be used as a name",
+                                    Location(filename, node.line, node.column, src))
+            continue
+        if node.data in _NESTING:
+            depth += 1
+            if depth > MAX_NESTING:
+                line, col = node.meta.line, node.meta.column
+                src = lines[line - 1] if 0 < line <= len(lines) else None
+                raise Mcl2PnmlError(
+                    f"nested too deeply: more than {MAX_NESTING} levels of blocks, "
+                    "structures, calls and tuples; split the mission into functions",
+                    Location(filename, line, col, src))
+        stack.extend((child, depth) for child in reversed(node.children)
+                     if isinstance(child, (Tree, Token)))
+
+
+def _deepest(declarations: tuple[ast.Declaration, ...]) -> int:
+    """How deep the AST's blocks, structures, calls and tuples nest: the tree's depth.
+
+    Each of those rules builds one AST node, which holds what the rule's
+    tree node holds, so the depths are the same; this walk is what the
+    fast path pays to know that :func:`_check_nesting` has nothing to say.
+    """
+    deepest = 0
+    stack: list[tuple[object, int]] = [(d, 0) for d in declarations]
+    while stack:
+        node, depth = stack.pop()
+        children = _CHILDREN.get(type(node))
+        if children is None:
+            continue
+        if type(node) in _NESTED:
+            depth += 1
+            deepest = max(deepest, depth)
+        stack.extend((child, depth) for child in children(node) if child is not None)
+    return deepest
+
+
+_NESTED = {ast.Block, ast.Parallel, ast.Monitor, ast.If, ast.While, ast.Call, ast.PrimCall,
+           ast.Tuple}
+_CHILDREN = {
+    ast.Const: lambda n: (n.value,), ast.Task: lambda n: n.primitives,
+    ast.PrimCall: lambda n: n.args, ast.Function: lambda n: (n.body,),
+    ast.Mission: lambda n: (n.body,), ast.Block: lambda n: n.body,
+    ast.Parallel: lambda n: n.items, ast.Monitor: lambda n: (n.watched, n.watcher),
+    ast.If: lambda n: (n.condition, n.then, n.otherwise),
+    ast.While: lambda n: (n.condition, n.body), ast.Call: lambda n: n.args,
+    ast.Tuple: lambda n: n.items,
+}
+
+
+def parse_file(path: str | Path) -> ast.Program:
+    path = Path(path)
+    return parse(decode(read_bytes(path), str(path)), str(path))

@@ -1,5 +1,0 @@
-"""PNML in and out: the writer, the tolerant-but-strict reader, the grammar check."""
-from .reader import load_pnml, parse_pnml
-from .writer import save_pnml, to_pnml_bytes, write_pnml
-
-__all__ = ["load_pnml", "parse_pnml", "save_pnml", "to_pnml_bytes", "write_pnml"]

@@ -1,0 +1,278 @@
+"""The Petri-net executor: the paper's Mission Control System (section 2.1).
+
+It plays a compiled mission net, from MCL or from its PNML alone, against a
+vehicle. Everything it needs is in the net: the transitions that send
+actions (payload ``actions``), the transitions that vehicle events fire
+(payload ``event`` and ``primitive``), the arguments of every call (payload
+``bind`` on the call sites' ``enter``), and the time-outs (timed
+transitions).
+
+How it fires:
+
+* **immediate transitions** fire as soon as they are enabled, the one
+  enabled longest first; transitions enabled by the same firing go in the
+  order of the net (the documented conflict rule);
+* **call entries** (a call site's ``enter``, which takes a shared task or
+  function) fire last: only when nothing else can fire at this instant,
+  and then the first in program order (the order of the call sites in the
+  net). So when a task is free, of all the calls waiting for it at that
+  instant, the one written first gets it, however the instant unfolded;
+* **event transitions** fire only when their primitive reports that event;
+  an event that no enabled transition waits for is ignored, with a reason;
+* **timed transitions** fire when they have been enabled, without a break,
+  for their delay (the earliest time of their interval).
+
+Enabling is incremental, with *watched inputs* (as SAT solvers watch
+literals): a disabled transition waits on one input place that lacks
+tokens, the one with the fewest other consumers, and is looked at again
+only when that place gains tokens; an enabled one is looked at again when
+one of its inputs loses tokens. A task's shared result place has a
+consumer in every call site, but only the call site that is inside waits
+on it, so one event costs the same in a mission of ten tasks or of ten
+thousand (a test counts the transitions each event makes it examine).
+"""
+from __future__ import annotations
+
+import heapq
+from typing import Any, Callable
+
+from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
+from mcl2pnml.runtime.engine import Engine, Outcome
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.net import SUMMARY_MARKED, ArcKind, Net, thaw
+
+RESULTS = {"mission.OK": Outcome.OK, "mission.FAIL": Outcome.FAIL,
+           "mission.ABORTED": Outcome.ABORTED}
+#: Firings allowed at one instant before the run is stopped as a zero-time loop.
+ZENO_LIMIT = 1_000_000
+
+
+class PetriEngine(Engine):
+    """Runs one mission net (see the module's documentation for the firing rules)."""
+
+    def __init__(self, net: Net):
+        missing = [p for p in RESULTS if p not in net.place_index]
+        if missing:
+            raise Mcl2PnmlError(f"net '{net.name}' is not a compiled mission: it has no place "
+                                f"{', '.join(missing)} (compile MCL with `mcl2pnml compile`)")
+        self.net = net
+        self.places = [p.id for p in net.places]
+        self.transitions = [t.id for t in net.transitions]
+        pindex = {p: i for i, p in enumerate(self.places)}
+        n = len(self.transitions)
+        self.pre: list[list[tuple[int, int]]] = [[] for _ in range(n)]    # consumed
+        self.test: list[list[tuple[int, int]]] = [[] for _ in range(n)]   # read
+        self.post: list[list[tuple[int, int]]] = [[] for _ in range(n)]
+        consumers = [0] * len(self.places)
+        tindex = {t: i for i, t in enumerate(self.transitions)}
+        for a in net.arcs:
+            if a.source in tindex:
+                self.post[tindex[a.source]].append((pindex[a.target], a.weight))
+            else:
+                i, p = tindex[a.target], pindex[a.source]
+                (self.test if a.kind is ArcKind.READ else self.pre)[i].append((p, a.weight))
+                consumers[p] += 1
+        # the inputs of each transition, the most private first: the one to watch
+        self.inputs = [sorted(self.pre[i] + self.test[i], key=lambda pw: consumers[pw[0]])
+                       for i in range(n)]
+        self.watch: list[set[int]] = [set() for _ in self.places]      # disabled, waiting on p
+        self.enabled_on: list[set[int]] = [set() for _ in self.places]  # enabled, using p
+        self.watching: list[int | None] = [None] * n
+        self.delay: list[float | None] = []
+        self.payload: list[dict[str, Any]] = []
+        self.by_event: dict[tuple[str, EventKind], list[int]] = {}
+        for i, t in enumerate(net.transitions):
+            payload = thaw(t.payload) or {}
+            self.payload.append(payload)
+            self.delay.append(t.timing.earliest if t.timing is not None else None)
+            if "event" in payload and "primitive" in payload:
+                key = (payload["primitive"], EventKind(payload["event"]))
+                self.by_event.setdefault(key, []).append(i)
+        self.event_driven = {i for ts in self.by_event.values() for i in ts}
+        self.result_places = {pindex[p]: o for p, o in RESULTS.items()}
+        # what each firing changes, worked out once: the places whose count
+        # falls or rises (True: falls), in place order, and the result places
+        # among those that rise
+        self.changes: list[tuple[tuple[int, bool], ...]] = []
+        self.results_marked: list[tuple[int, ...]] = []
+        for i in range(n):
+            change: dict[int, int] = {}
+            for p, w in self.pre[i]:
+                change[p] = change.get(p, 0) - w
+            for p, w in self.post[i]:
+                change[p] = change.get(p, 0) + w
+            self.changes.append(tuple((p, change[p] < 0) for p in sorted(change) if change[p]))
+            self.results_marked.append(tuple(p for p in sorted(change)
+                                             if change[p] > 0 and p in self.result_places))
+        self.marking = [net.initial[p] for p in self.places]
+        self.env: dict[str, dict[str, Any]] = {"mission": {}}
+        self.ready: list[tuple[int, int, int]] = []  # (step enabled, index, version)
+        self.entries: list[tuple[int, int]] = []     # call entries: (index, version)
+        self.entry = [("call" in p) for p in self.payload]
+        self.timers: list[tuple[float, str, int, int]] = []  # (due, task, index, version)
+        self.version = [0] * n
+        self.enabled = [False] * n
+        self.step = 0
+        self.now = 0.0
+        self.outcome: Outcome | None = None
+        self.ignored: list[tuple[Event, str]] = []
+        #: called with (time, transition id) at each firing: the live log
+        self.on_fire: Callable[[float, str], None] | None = None
+
+    # -- enabling ------------------------------------------------------------------
+
+    def _update(self, i: int) -> None:
+        """Re-examine transition ``i`` after a change of its input places."""
+        m = self.marking
+        lacking = None
+        for p, w in self.inputs[i]:
+            if m[p] < w:
+                lacking = p
+                break
+        now = lacking is None
+        if not now:   # watch the first input that lacks tokens
+            old = self.watching[i]
+            if old != lacking:
+                if old is not None:
+                    self.watch[old].discard(i)
+                self.watch[lacking].add(i)
+                self.watching[i] = lacking
+        if now == self.enabled[i]:
+            return
+        self.enabled[i] = now
+        for p, _ in self.inputs[i]:
+            (self.enabled_on[p].add if now else self.enabled_on[p].discard)(i)
+        if now and self.watching[i] is not None:
+            self.watch[self.watching[i]].discard(i)
+            self.watching[i] = None
+        self.version[i] += 1          # a timer set before a break no longer counts
+        if not now or i in self.event_driven:
+            return
+        if self.entry[i]:
+            heapq.heappush(self.entries, (i, self.version[i]))
+        elif self.delay[i] is None:
+            heapq.heappush(self.ready, (self.step, i, self.version[i]))
+        else:
+            task = self.transitions[i].rsplit(".", 1)[0]
+            heapq.heappush(self.timers, (self.now + self.delay[i], task, i, self.version[i]))
+
+    def _fire(self, i: int) -> list[Action]:
+        m = self.marking
+        for p, w in self.pre[i]:
+            m[p] -= w
+        for p, w in self.post[i]:
+            m[p] += w
+        self.step += 1
+        if self.on_fire is not None:
+            self.on_fire(self.now, self.transitions[i])
+        update = self._update
+        for p, falls in self.changes[i]:
+            if falls:       # enabled ones may lose an input
+                for j in sorted(self.enabled_on[p]):
+                    update(j)
+            else:           # the ones waiting on p may now be enabled
+                for j in sorted(self.watch[p]):
+                    update(j)
+        for p in self.results_marked[i]:
+            if m[p]:
+                self.outcome = self.result_places[p]
+        return self._effects(i)
+
+    def _effects(self, i: int) -> list[Action]:
+        payload = self.payload[i]
+        if "call" in payload:      # a call site's enter: bind the callee's parameters
+            scope = self.env.get(payload.get("scope", "mission"), {})
+            self.env[payload["call"]] = {name: self._value(expr, scope)
+                                         for name, expr in payload.get("bind", {}).items()}
+        actions = []
+        for a in payload.get("actions", ()):
+            kind = ActionKind(a["action"])
+            scope = self.env.get(a.get("scope", ""), {})
+            args = tuple(self._value(x, scope) for x in a.get("args", ()))
+            actions.append(Action(self.now, kind, a["primitive"], args))
+        return actions
+
+    @staticmethod
+    def _value(expr: dict[str, Any], scope: dict[str, Any]) -> Any:
+        value = scope[expr["param"]] if "param" in expr else expr["value"]
+        return tuple(value) if isinstance(value, list) else value
+
+    def _settle(self) -> list[Action]:
+        """Fire immediate transitions, the one enabled longest first, until none is."""
+        actions: list[Action] = []
+        fired = 0
+        while (self.ready or self.entries) and self.outcome is None:
+            if self.ready:
+                _, i, version = heapq.heappop(self.ready)
+            else:   # nothing else can fire: the first waiting call in program order
+                i, version = heapq.heappop(self.entries)
+            if version != self.version[i] or not self.enabled[i]:
+                continue   # disabled since, or queued again later
+            actions += self._fire(i)
+            fired += 1
+            if fired > ZENO_LIMIT:
+                raise Mcl2PnmlError(
+                    f"the mission fires for ever at t={self.now:g} s without time passing "
+                    "(a while loop whose condition and body end at once?)")
+        return actions
+
+    # -- the engine interface ----------------------------------------------------------
+
+    def start(self, t: float) -> list[Action]:
+        self.now = t
+        for i in range(len(self.transitions)):
+            self._update(i)
+        return self._settle()
+
+    def on_event(self, event: Event) -> list[Action]:
+        self.now = event.t
+        candidates = self.by_event.get((event.primitive, event.kind))
+        if not candidates:
+            known = sorted({p for p, _ in self.by_event})
+            reason = (f"no primitive '{event.primitive}' in this mission"
+                      if event.primitive not in known else
+                      f"'{event.primitive}' never reports '{event.kind.value}'")
+            self.ignored.append((event, reason))
+            return []
+        ready = [i for i in candidates if self.enabled[i]]
+        if not ready:
+            self.ignored.append((event, f"nothing waits for '{event.kind.value}' from "
+                                        f"'{event.primitive}' now"))
+            return []
+        actions = self._fire(ready[0])
+        return actions + self._settle()
+
+    def next_timer(self) -> tuple[float, str] | None:
+        while self.timers:
+            due, task, i, version = self.timers[0]
+            if version == self.version[i] and self.enabled[i]:
+                return due, task
+            heapq.heappop(self.timers)   # cancelled: disabled since it was set
+        return None
+
+    def fire_timer(self, t: float, name: str) -> list[Action]:
+        due, task, i, version = heapq.heappop(self.timers)
+        assert task == name and due == t
+        self.now = t
+        actions = self._fire(i)
+        return actions + self._settle()
+
+    def primitives_used(self) -> set[str]:
+        """The primitives the mission enables (the vehicle must offer them)."""
+        return {p for p, _ in self.by_event}
+
+    def waiting(self) -> list[str]:
+        out = []
+        for (prim, kind), ts in sorted(self.by_event.items(), key=lambda kv: (kv[0][0],
+                                                                           kv[0][1].value)):
+            if any(self.enabled[i] for i in ts):
+                out.append(f"{prim}: waits for the vehicle's '{kind.value}'")
+        for due, task, i, version in sorted(self.timers):
+            if version == self.version[i] and self.enabled[i]:
+                out.append(f"{self.transitions[i]}: the time-out of {task} at t={due:g} s")
+        marked = [f"{p}" + (f"*{n}" if n > 1 else "")
+                  for p, n in zip(self.places, self.marking) if n]
+        shown = marked[:SUMMARY_MARKED] + ([f"... {len(marked) - SUMMARY_MARKED:,} more"]
+                                           if len(marked) > SUMMARY_MARKED else [])
+        out.append(f"marked ({len(marked)} places): " + ", ".join(shown))
+        return out

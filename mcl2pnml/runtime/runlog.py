@@ -1,0 +1,77 @@
+"""Watching a run: a live log for people, a JSON-lines log for tools.
+
+Each action, event, fired transition and ignored event is one line as it
+happens, in virtual time::
+
+    t=  30.000  event     achieved  GoToWayPoint
+    t=  30.000  action    disable   GoToWayPoint
+    t=  30.000  fire      Survey.AchieveWayPoint-1.return_OK
+
+The JSON-lines log has the same entries as objects (``{"t": 30, "event":
+"achieved", "primitive": "GoToWayPoint"}``, ``{"t": 30, "fire": "..."}``,
+``{"t": 30, "ignored": {...}, "reason": "..."}``), one per line, so that a
+tool can follow a run while it happens or replay it after. The safe stop
+at the end of a run (docs/faults.md) is logged as ``safe-stop`` lines
+(``"safe_stop": true`` in JSON), and the run's end as ``{"t": ...,
+"outcome": ...}``. The journal of :mod:`mcl2pnml.runtime.journal` is this log,
+written a flushed line at a time.
+"""
+from __future__ import annotations
+
+import json
+from typing import IO, Any
+
+from mcl2pnml.runtime.aal import Action, Event, SafeStop, _time
+
+
+def _args(args: tuple) -> str:
+    return ", ".join(json.dumps(a) if not isinstance(a, tuple) else
+                     "(" + ", ".join(json.dumps(x) for x in a) + ")" for a in args)
+
+
+class RunLog:
+    """Writes the live log (``text``) and the JSON-lines log (``jsonl``), either or both."""
+
+    def __init__(self, text: IO[str] | None = None, jsonl: IO[str] | None = None,
+                 transitions: bool = False, journal: Any = None):
+        self.text, self.jsonl, self.transitions = text, jsonl, transitions
+        self.journal = journal     # mcl2pnml.runtime.journal's writer: one whole line per write
+
+    def _json(self, obj: dict[str, Any]) -> None:
+        line = json.dumps(obj) + "\n"
+        if self.jsonl is not None:
+            self.jsonl.write(line)
+        if self.journal is not None:
+            self.journal.write(line)
+
+    def _line(self, t: float, kind: str, what: str, obj: dict[str, Any]) -> None:
+        if self.text is not None:
+            self.text.write(f"t={t:9.3f}  {kind:<8}  {what}\n")
+            self.text.flush()
+        self._json(obj)
+
+    def entry(self, entry: Action | Event) -> None:
+        if isinstance(entry, SafeStop):    # the run loop's, not the mission's: say so
+            self._line(entry.t, "safe-stop", f"{entry.kind.value:<9} {entry.primitive}",
+                       entry.as_json())
+        elif isinstance(entry, Action):
+            what = f"{entry.kind.value:<9} {entry.primitive}"
+            if entry.args:
+                what += f"({_args(entry.args)})"
+            self._line(entry.t, "action", what, entry.as_json())
+        else:
+            self._line(entry.t, "event", f"{entry.kind.value:<9} {entry.primitive}",
+                       entry.as_json())
+
+    def fired(self, t: float, transition: str) -> None:
+        if self.text is not None and self.transitions:
+            self.text.write(f"t={t:9.3f}  {'fire':<8}  {transition}\n")
+        self._json({"t": _time(t), "fire": transition})
+
+    def ignored(self, event: Event, reason: str) -> None:
+        self._line(event.t, "ignored", f"{event.kind.value} from {event.primitive}: {reason}",
+                   {"t": _time(event.t), "ignored": event.as_json(), "reason": reason})
+
+    def end(self, t: float, outcome: str) -> None:
+        """The last line: the run is over (a resumed run has nothing left to do)."""
+        self._json({"t": _time(t), "outcome": outcome})
