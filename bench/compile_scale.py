@@ -31,7 +31,7 @@ def peak_mb():
 from mcl2pnml.language.parser import parse_file
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.compiler import compile_checked
-from mcl2pnml.io.pnml.writer import save_pnml
+from mcl2pnml.pipeline import save_pnml
 source, target = sys.argv[1], sys.argv[2]
 t0 = time.perf_counter(); program = parse_file(source)
 t1 = time.perf_counter(); checked = check(program)

@@ -119,8 +119,7 @@ def run(cases=CASES, peers=("snakes", "pm4py"), log=print) -> list[dict]:
     last: dict[tuple[str, str], float | None] = {}   # (family, peer) -> seconds a marking
     with tempfile.TemporaryDirectory() as tmp:
         for family, size, make in cases:
-            path = save_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"),
-                             layout_engine="none")
+            path = save_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"))
             row = {"family": family, "size": size, "ours": measure("ours", path),
                    "numpy": measure("numpy", path)}
             for peer in peers:

@@ -1,22 +1,28 @@
 """mcl2pnml: AUV missions in MCL, compiled to Petri nets, analysed and run.
 
-The facade. Each pipeline stage is a module of its own (see
-``docs/ARCHITECTURE.md``); this module re-exports what a user of the library
-needs:
+The facade: what a user of the library needs, from the layers below
+(``docs/ARCHITECTURE.md``): the net core (:mod:`mcl2pnml.core`), and the
+pipeline (:mod:`mcl2pnml.pipeline`) that compiles missions, loads and saves
+nets in every format, analyses and runs them.
 
 >>> from mcl2pnml import NetBuilder, save_pnml, load_pnml
 """
-__version__ = "0.1.0"
-
-from mcl2pnml.core.errors import Mcl2PnmlError, NetError, PnmlError  # noqa: E402
-from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing,  # noqa: E402
-                  Transition)
-from mcl2pnml.core.compose import compose, fuse, union  # noqa: E402
-from mcl2pnml.io.pnml import load_pnml, parse_pnml, save_pnml, to_pnml_bytes  # noqa: E402
+from mcl2pnml.core.version import __version__
+from mcl2pnml.core.errors import Mcl2PnmlError, NetError, PnmlError
+from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing, Transition
+from mcl2pnml.core.compose import compose, fuse, union
+from mcl2pnml.io.pnml.reader import load_pnml, parse_pnml
+from mcl2pnml.pipeline import (RunOptions, analyze, check_file, check_source, compile_file,
+                               compile_source, functional_form, load_net, run_mission,
+                               save_net, save_pnml, save_show_page, show_nets, template_net,
+                               templates, to_pnml_bytes, validate_pnml)
 
 __all__ = [
     "__version__", "Mcl2PnmlError", "NetError", "PnmlError",
     "Arc", "ArcKind", "Marking", "Net", "NetBuilder", "Place", "Timing", "Transition",
     "compose", "fuse", "union",
     "load_pnml", "parse_pnml", "save_pnml", "to_pnml_bytes",
+    "check_file", "check_source", "compile_file", "compile_source", "functional_form",
+    "load_net", "save_net", "template_net", "templates", "validate_pnml", "analyze",
+    "run_mission", "RunOptions", "show_nets", "save_show_page",
 ]

@@ -1,20 +1,24 @@
 """The ``mcl2pnml`` command (click), as specified in ``shared/spec/cli.md``.
 
-A thin layer: each command parses its arguments, calls one library function
-and prints. Errors are handled once, in :meth:`Cli.main`: a bad argument is
-one line on stderr, a bad input file is the error's own message (file, line,
-column, the line with a caret), and both exit with status 2, with no
-traceback and no partial output file.
+It parses options and prints; the work is the pipeline facade's
+(:mod:`mcl2pnml.pipeline`). Errors are handled once, in :meth:`Cli.main`: a
+bad argument is one line on stderr, a bad input file is the error's own
+message (file, line, column, the line with a caret), and both exit with
+status 2, with no traceback and no partial output file.
 """
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
 import click
 
+from mcl2pnml import pipeline
+from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
 from mcl2pnml.core.version import __version__
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean
+from mcl2pnml.io.formats import FORMATS
+from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
 EXAMPLES = """\b
@@ -22,23 +26,39 @@ Examples:
   mcl2pnml check examples/sauce.mcl
   mcl2pnml functional examples/sauce.mcl
   mcl2pnml compile examples/sauce.mcl -o sauce.pnml
-  mcl2pnml compile examples/sauce.mcl --format dot -o sauce.dot
-  mcl2pnml run examples/sauce.mcl --vehicle script.json
   mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
   mcl2pnml run examples/sauce.mcl --vehicle script.json --journal run.journal
   mcl2pnml run examples/sauce.mcl --resume run.journal
   mcl2pnml template --list
   mcl2pnml template task -o task.pnml
-  mcl2pnml analyze task.pnml
   mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
   mcl2pnml show task -o task.html
   mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
 """
+EXPLORERS = ("auto", "compiled", "packed", "general")
+FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
+                click.Path(dir_okay=False, path_type=Path))
+#: ``--format``: every format of the table that can be written
+FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
+                             show_default=True,
+                             help="; ".join(f"{f.name}: {f.says}" for f in FORMATS.values()))
+
+
+class Command(click.Command):
+    """A command that shows the option errors of the layers below as its own."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except OptionError as e:   # raised below the CLI: shown as click shows its own
+            raise click.BadParameter(e.message, ctx, param_hint=e.option) from None
 
 
 class Cli(click.Group):
     """A click group whose errors are one clear line and exit status 2."""
+
+    command_class = Command
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True,
              **extra):
@@ -75,29 +95,19 @@ def main() -> None:
     """
 
 
-def _checked(file: Path):
-    from mcl2pnml.language.checker import check as run_checks
-    from mcl2pnml.language.parser import parse_file
-
-    return run_checks(parse_file(file))
-
-
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("mission", type=FILE)
 def check(mission: Path) -> int:
     """Parse and check MISSION (MCL): names, arities, patterns, recursion.
 
     Every error of the file is reported at once, each with file:line:col.
     """
-    checked = _checked(mission)
-    tasks, functions = len(checked.tasks), len(checked.functions)
-    click.echo(f"{mission}: ok ({len(checked.primitives)} primitives, {tasks} tasks, "
-               f"{functions} function{'s' * (functions != 1)}, {len(checked.consts)} consts)")
+    click.echo(f"{mission}: ok ({pipeline.check_file(mission).summary()})")
     return 0
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("mission", type=FILE)
 @click.option("--functions", "with_functions", is_flag=True,
               help="Also print each function's body in functional form.")
 def functional(mission: Path, with_functions: bool) -> int:
@@ -106,277 +116,92 @@ def functional(mission: Path, with_functions: bool) -> int:
     Structures are written sequence, parallel, if-then-else, while and
     monitor; an empty block or a missing else is NULL; functions stay calls.
     """
-    from mcl2pnml.language.functional import format_node, function_expression, mission_expression
-
-    checked = _checked(mission)
-    if with_functions:
-        for name in checked.function_order:
-            f = checked.functions[name]
-            click.echo(f"{name}({', '.join(f.params)}) = {format_node(function_expression(f))}")
-    click.echo(format_node(mission_expression(checked.mission)))
+    for line in pipeline.functional_form(pipeline.check_file(mission), functions=with_functions):
+        click.echo(line)
     return 0
 
 
-def compile_file(mission: Path):
-    from mcl2pnml.language.compiler import compile_checked
-
-    return compile_checked(_checked(mission))
-
-
-FORMATS = ("pnml", "tina", "lola", "dot", "svg", "png")
-#: The suffix each format's file gets by default.
-SUFFIX = {"pnml": ".pnml", "tina": ".net", "lola": ".lola", "dot": ".dot", "svg": ".svg",
-          "png": ".png"}
-
-
-def write_net(net, output: Path, fmt: str, layout_engine: str = "auto",
-              title: str | None = None, mission: bool = False) -> None:
-    """``net`` to ``output`` in one of :data:`FORMATS` (drawings boxed by instance).
-
-    ``mission``: a compiled mission, whose TINA file follows the executor's
-    timing (what the vehicle does not fire fires at once, [0,0]).
-    """
-    from mcl2pnml.view.draw import instance_clusters, render, to_dot
-    from mcl2pnml.core.files import atomic_write_text
-    from mcl2pnml.io.lola import save_lola
-    from mcl2pnml.io.tina import save_tina
-    from mcl2pnml.io.pnml.writer import save_pnml
-
-    if fmt == "pnml":
-        save_pnml(net, output, layout_engine)
-    elif fmt == "tina":
-        save_tina(net, output, urgent=mission)
-    elif fmt == "lola":
-        save_lola(net, output)
-    else:
-        graph = to_dot(net, clusters=instance_clusters(net), title=title or net.name,
-                       legend=True)
-        if fmt == "dot":
-            atomic_write_text(output, graph.source)
-        else:
-            render(graph, str(output), fmt)
-
-
 @main.command("compile", epilog=EXAMPLES)
-@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
-              help="Write here (default: MISSION with the format's suffix).")
-@click.option("--format", "fmt", type=click.Choice(FORMATS), default="pnml", show_default=True,
-              help="PNML (ISO/IEC 15909-2); TINA's .net (a time Petri net: time-outs as "
-                   "intervals); LoLA's net format; or a graphviz drawing: dot source, SVG or "
-                   "PNG.")
+@click.argument("mission", type=FILE)
+@click.option("-o", "--output", type=OUTPUT, help="Write here (default: MISSION.suffix).")
+@FORMAT_OPTION
 @click.option("--layout", "layout_engine", type=click.Choice(ENGINES), default="auto",
               show_default=True,
               help="Node positions in the PNML: graphviz dot, BFS layers, or none "
                    f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,}).")
 def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -> int:
-    """Compile MISSION (MCL) to one composed Petri net.
+    """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
     time-outs and vehicle bindings travel in the PNML as toolspecific data.
-    The initial marking has mission.B and mission.MTX marked.
     """
-    net = compile_file(mission)
-    output = output or mission.with_suffix(SUFFIX[fmt])
-    write_net(net, output, fmt, layout_engine, title=mission.name, mission=True)
+    net = pipeline.compile_file(mission)
+    output = output or mission.with_suffix(FORMATS[fmt].suffixes[0])
+    pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("mission", type=FILE)
 @click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
-              show_default=True,
-              help="petri: the executor plays the compiled net; reference: MCL interpreted "
-                   "directly. Both must give the same result.")
+              show_default=True, help="petri: the executor plays the compiled net; "
+              "reference: MCL interpreted directly. Both must give the same result.")
 @click.option("--vehicle", default="sim", show_default=True,
-              metavar="sim|SCRIPT.json|bridge:MAPPING.json",
-              help="The kinematic AUV simulator, a vehicle script "
-                   '({"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}), or a real vehicle '
-                   "through a mapping file and a bridge (real time; see --connect).")
-@click.option("--connect", metavar="HOST:PORT",
-              help="The vehicle's bridge server, for --vehicle bridge:MAPPING.json.")
-@click.option("--json", "as_json", is_flag=True,
-              help="Print only the result: {outcome, time, trace}.")
-@click.option("--log", "log_path", type=click.Path(dir_okay=False, path_type=Path),
-              help="Also write every action, event and fired transition as JSON lines here.")
-@click.option("--world", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="The simulator's world as JSON: tank, start, cross (null: none), noise, "
-                   "seed, limits. Default: the paper's 16 x 8 x 5 m tank, a cross at (10, 4).")
+              metavar="|".join(kind.name for kind in VEHICLES),
+              help="The AUV simulator, a real vehicle through a mapping file and a bridge "
+              '(see --connect), or a script ({"PRIMITIVE": ["ok@5", "fail@3", "never"]}).')
+@click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge:.")
+@click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace}.")
+@click.option("--log", "log_path", type=OUTPUT, help="Also log the run here as JSON lines.")
+@click.option("--world", type=FILE, help="The simulator's world (JSON: tank, start, cross, "
+              "noise, seed, limits). Default: the paper's 16 x 8 x 5 m tank, a cross at (10, 4).")
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
               show_default=True, help="Stop a mission still running at this virtual time.")
-@click.option("--journal", "journal_path", type=click.Path(dir_okay=False, path_type=Path),
-              help="Journal the run here as it happens (JSON lines, each flushed; a new "
-                   "file), so that a killed run can be resumed.")
-@click.option("--resume", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="Continue the killed run of this journal: replay it, check it, go on "
-                   "and append to it (its engine, vehicle, world and time limit are reused).")
+@click.option("--journal", type=OUTPUT,
+              help="Journal the run here as it happens (a new file), to resume it if killed.")
+@click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "
+              "engine, vehicle, world and time limit: replay, check, go on, append.")
 @click.pass_context
-def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: str | None,
-        as_json: bool, log_path: Path | None, world: Path | None, transitions: bool,
-        max_time: float, journal_path: Path | None, resume: Path | None) -> int:
+def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
+        **options) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows
-    each action and event as it happens; at the end, the outcome (OK, FAIL,
-    ABORTED, or STALLED with what the mission still waits for), and the
-    safe stop: every primitive still enabled is disabled, however the run
-    ends (docs/faults.md). --journal writes the run down as it goes;
-    --resume JOURNAL continues it after a crash, with no step lost or
-    repeated.
+    each action and event; then the outcome (OK, FAIL, ABORTED, or STALLED
+    with what the mission waits for) and the safe stop: every primitive still
+    enabled is disabled, however the run ends (docs/faults.md). --journal
+    writes the run down as it goes; --resume continues it after a crash.
     """
-    import io
-    import json
-
-    from mcl2pnml.runtime import journal as journals
-    from mcl2pnml.runtime.aal import ScriptedVehicle
-    from mcl2pnml.runtime.engine import run as drive
-    from mcl2pnml.core.files import atomic_write_text
-    from mcl2pnml.runtime.runlog import RunLog
-
-    replay = header = None
-    if resume is not None:
-        if journal_path is not None:
-            raise click.BadParameter("--resume appends to its own journal; leave out --journal",
-                                     param_hint="--journal")
-        loaded = journals.load(resume)
-        header = loaded.header
-        given = {"engine": engine, "vehicle": vehicle, "world": world and str(world),
-                 "max_time": max_time}
-        for key, value in given.items():
-            explicit = ctx.get_parameter_source(key) is click.core.ParameterSource.COMMANDLINE
-            if explicit and value != header.get(key):
-                raise Mcl2PnmlError(f"the journal's run has --{key.replace('_', '-')} "
-                                    f"{header.get(key)}, not {value}",
-                                    Location(str(resume), 1, 1))
-        engine, vehicle, max_time = header["engine"], header["vehicle"], header["max_time"]
-        world = Path(header["world"]) if header.get("world") else None
-        if loaded.torn:
-            click.echo(loaded.torn, err=True)
-    if vehicle.startswith("bridge:") and (resume or journal_path):
-        raise click.BadParameter("a journal replays a vehicle of its own (sim or a script); "
-                                 "a real vehicle's run cannot be replayed",
-                                 param_hint="--resume" if resume else "--journal")
-    realtime = vehicle.startswith("bridge:")
-    if world and vehicle != "sim":
-        raise click.BadParameter("a world is for the simulator (--vehicle sim)",
-                                 param_hint="--world")
-    if vehicle == "sim":
-        from mcl2pnml.runtime.simulator import AUVSimulator, World
-        car = AUVSimulator(World.load(world) if world else World())
-    elif realtime:
-        from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
-        if connect is None:
-            raise click.BadParameter("a bridge needs --connect HOST:PORT (the bridge server "
-                                     "on the vehicle)", param_hint="--connect")
-        car = MappedVehicle(VehicleMapping.load(vehicle[len("bridge:"):]),
-                            TcpTransport(connect))
-    else:
-        car = ScriptedVehicle.load(vehicle)
-    if mission.suffix == ".mcl":
-        checked = _checked(mission)
-        if engine == "reference":
-            from mcl2pnml.runtime.reference import ReferenceEngine
-            eng = ReferenceEngine(checked)
-        else:
-            from mcl2pnml.language.compiler import compile_checked
-            from mcl2pnml.runtime.executor import PetriEngine
-            eng = PetriEngine(compile_checked(checked))
-    else:
-        if engine == "reference":
-            raise click.BadParameter("the reference engine reads MCL, not a net; give the "
-                                     ".mcl file", param_hint="--engine")
-        from mcl2pnml.runtime.executor import PetriEngine
-        from mcl2pnml.io.pnml.reader import load_pnml
-        eng = PetriEngine(load_pnml(mission))
-    offered = car.primitives
-    needed = getattr(eng, "primitives_used", lambda: set())()
-    if offered is not None and needed - offered:
-        missing = sorted(needed - offered)[0]
-        raise click.BadParameter(f"the mission uses '{missing}', which this vehicle does not "
-                                 f"offer; it offers {', '.join(sorted(offered))}",
-                                 param_hint="--vehicle")
-    if isinstance(car, ScriptedVehicle):
-        car.check_primitives(needed)
-    if resume or journal_path:   # the files the run depends on, as they are now
-        files = {"mission": mission, "vehicle": None if vehicle == "sim" else Path(vehicle),
-                 "world": world}
-        digests = {f"{k}_sha256": journals.digest(f) for k, f in files.items() if f}
-        for key, value in digests.items():
-            if header is not None and header.get(key) != value:
-                raise Mcl2PnmlError(f"{files[key[:-7]]} has changed since this journal was "
-                                    "written: its run cannot be resumed",
-                                    Location(str(resume), 1, 1))
-    jsonl = io.StringIO() if log_path else None
-    if resume is not None:
-        replay = sink = journals.Replay(loaded)
-    elif journal_path is not None:
-        sink = journals.create(journal_path, {
-            "mission": str(mission), "engine": engine, "vehicle": vehicle,
-            "world": world and str(world), "max_time": max_time, **digests})
-    else:
-        sink = None
-    log = RunLog(None if as_json else sys.stdout, jsonl, transitions, sink)
-    if hasattr(eng, "on_fire"):
-        eng.on_fire = log.fired
-    seen = 0
-
-    def listener(entry) -> None:
-        nonlocal seen
-        log.entry(entry)
-        for event, reason in eng.ignored[seen:]:
-            log.ignored(event, reason)
-        seen = len(eng.ignored)
-
-    if realtime:
-        from mcl2pnml.runtime.engine import run_realtime
-        result = run_realtime(eng, car, listener=listener, max_time=max_time)
-    else:
-        result = drive(eng, car, listener=listener, max_time=max_time)
-    for event, reason in result.ignored[seen:]:
-        log.ignored(event, reason)
-    log.end(result.time, result.outcome.value)
-    if replay is not None:
-        replay.finish()
-    if log_path is not None:
-        atomic_write_text(log_path, jsonl.getvalue())
-    if as_json:
-        click.echo(json.dumps(result.as_json()))
-    else:
-        click.echo(f"outcome {result.outcome.value} at t={result.time:g} s")
-        for line in result.waiting:
-            click.echo(f"  {line}")
-        if result.safe_stop:
-            click.echo("  safe stop: disabled " + ", ".join(a.primitive
-                                                            for a in result.safe_stop))
+    given = frozenset(k for k in options if ctx.get_parameter_source(k)
+                      is click.core.ParameterSource.COMMANDLINE)
+    result = pipeline.run_mission(
+        mission, pipeline.RunOptions(**options, explicit=given),
+        text=None if as_json else sys.stdout, log_path=log_path,
+        note=lambda line: click.echo(line, err=True))
+    click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
     return 0
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("file", type=FILE)
 @click.option("--grammar", type=click.Path(exists=True, file_okay=False, path_type=Path),
-              help="Directory of the official PNML RELAX NG grammar (ptnet.pntd and the "
-                   "files it includes). Default: $MCL2PNML_PNML_GRAMMAR, else a "
-                   "shared/pnml-grammar directory beside or above this one.")
+              help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...). Default: "
+                   "$MCL2PNML_PNML_GRAMMAR, else a shared/pnml-grammar beside or above.")
 def validate(file: Path, grammar: Path | None) -> int:
     """Check FILE against the official PNML grammar and the P/T net rules.
 
-    The grammar lets some faults pass (an arc from a place to a place, a
-    dangling arc); the reader's own checks catch those. Exit status 0 when
-    valid, 2 with every problem listed when not.
+    The reader catches what the grammar lets pass (an arc from a place to a
+    place, a dangling arc). Exit 0 when valid, 2 with every problem when not.
     """
-    from mcl2pnml.io.pnml.grammar import validate as run
-    from mcl2pnml.io.pnml.reader import load_pnml
-
-    verdict = run(file, grammar)
+    verdict, net = pipeline.validate_pnml(file, grammar)
     if not verdict.valid:
         for error in verdict.errors:
             click.echo(str(error), err=True)
         n = len(verdict.errors)
         click.echo(f"{file}: invalid PNML ({n} problem{'s' * (n != 1)})", err=True)
         return 2
-    net = load_pnml(file)
     click.echo(f"{file}: valid PNML P/T net (ISO/IEC 15909-2, 2009 grammar): "
                f"{len(net.places)} places, {len(net.transitions)} transitions, "
                f"{len(net.arcs)} arcs")
@@ -386,156 +211,87 @@ def validate(file: Path, grammar: Path | None) -> int:
 @main.command(epilog=EXAMPLES)
 @click.argument("name", required=False)
 @click.option("--list", "list_", is_flag=True, help="List the template nets and exit.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
-              help="Write here (default: PNML to standard output).")
-@click.option("--format", "fmt", type=click.Choice(FORMATS), default="pnml", show_default=True,
-              help="As for compile: PNML, TINA, LoLA, or a drawing (dot, SVG, PNG).")
+@click.option("-o", "--output", type=OUTPUT, help="Write here (default: PNML to standard output).")
+@FORMAT_OPTION
 def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> int:
     """Write the paper's net NAME, from the paper's initial marking M0.
 
     A pattern (task) comes fused with its primitive, a structure with
     reduced tasks in its slots: the nets the paper analyses.
     """
-    from mcl2pnml.io.pnml.writer import to_pnml_bytes
-    from mcl2pnml.language.library import default_library
-
-    lib = default_library()
     if list_:
-        rows = [(", ".join(t.names), t.kind.value, t.doc) for t in lib.unique()]
-        width = max(len(r[0]) for r in rows)
+        rows = pipeline.templates()
+        width = max(len(names) for names, _, _ in rows)
         for names, kind, doc in rows:
             click.echo(f"{names.ljust(width)}  {kind:<9}  {doc}")
         return 0
     if name is None:
         raise click.UsageError("give a template NAME, or --list")
-    net = lib.composed(name)
+    net = pipeline.template_net(name)
     if output is None and fmt == "pnml":
-        click.echo(to_pnml_bytes(net).decode(), nl=False)
+        click.echo(pipeline.to_pnml_bytes(net).decode(), nl=False)
         return 0
-    output = output or Path(name + SUFFIX[fmt])
-    write_net(net, output, fmt)
+    output = output or Path(name + FORMATS[fmt].suffixes[0])
+    pipeline.save_net(net, output, fmt)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 
 
 @main.command(epilog=EXAMPLES)
 @click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path),
-              help="Write the page here (default: the mission's, net's or template's name "
-                   "with .html, in the current directory).")
-@click.option("--run", "run_log", type=click.Path(exists=True, dir_okay=False, path_type=Path),
-              help="A run to follow step by step: the JSON-lines log of `mcl2pnml run --log`.")
+@click.option("-o", "--output", type=OUTPUT, help="Write the page here (default: NAME.html).")
+@click.option("--run", "run_log", type=FILE, help="A run to follow: a log of `run --log`.")
 def show(what: str, output: Path | None, run_log: Path | None) -> int:
     """Write one self-contained HTML page to play the token game on a net.
 
     WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
-    template's name (see `template --list`). Click an enabled transition to
-    fire it; step back, reset; the marking and every P-invariant are shown
-    at each step. A mission or a task can be switched to its reduced model
-    (Fig. 3 of the paper); a recorded run can be followed step by step.
-    The page needs no server and fetches nothing.
+    template (see `template --list`). Click an enabled transition to fire it;
+    step back, reset; see the marking and every P-invariant at each step,
+    the reduced model (Fig. 3), a recorded run step by step. The page needs
+    no server and fetches nothing.
     """
-    from mcl2pnml.language.compiler import compile_checked
-    from mcl2pnml.io.formats import SUFFIXES, load_net
-    from mcl2pnml.view.show import check_run, read_run, save_page, variant
-    from mcl2pnml.language.library import TemplateKind, default_library
-
-    path = Path(what)
-    is_file = path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES
-    if is_file and not path.is_file():
-        raise click.BadParameter(f"no file '{what}'", param_hint="MISSION.mcl|NET|TEMPLATE")
-    if not is_file and run_log is not None:
-        raise click.BadParameter("a run is of a mission: give the mission's .mcl or its "
-                                 "compiled net, not a template", param_hint="--run")
-    if path.suffix == ".mcl":
-        title = path.stem
-        checked = _checked(path)
-        nets = [(compile_checked(checked), "the mission"),
-                (compile_checked(checked, reduced=True),
-                 "the mission, every task reduced (Fig. 3)")]
-    elif is_file:
-        title = path.stem
-        nets = [(load_net(path), "the net")]
-    else:
-        lib = default_library()
-        template = lib.get(what)   # unknown: the error lists the templates
-        title = what
-        if template.kind is TemplateKind.PATTERN:
-            nets = [(lib.composed(what), f"{what} with its primitive (Fig. 2)"),
-                    (lib.composed(lib.reduced.name), "its reduced model (Fig. 3)")]
-        else:
-            nets = [(lib.composed(what), f"{what}, as the paper analyses it")]
-    run_entries = None
-    if run_log is not None:
-        run_entries = read_run(run_log)
-        check_run(nets[0][0], run_entries, str(run_log))
+    title, nets = pipeline.show_nets(what, with_run=run_log is not None)
     output = output or Path(f"{title}.html")
-    save_page(output, title, [variant(net, label) for net, label in nets], run_entries)
+    pipeline.save_show_page(output, title, nets, run_log)
     click.echo(f"wrote {output}: {nets[0][0].summary()}", err=True)
     return 0
 
 
-def _parse_initial(text: str) -> dict[str, int]:
-    marking: dict[str, int] = {}
-    for item in filter(None, (i.strip() for i in text.split(","))):
-        place, _, count = item.partition("*")
-        if count and not count.isdigit():
-            raise click.BadParameter(f"'{item}': a count is a natural number (P*2)",
-                                     param_hint="--initial")
-        marking[place] = marking.get(place, 0) + (int(count) if count else 1)
-    return marking
+def _progress(states: int, frontier: int) -> None:
+    click.echo(f"\r  explored {states:,} markings, {frontier:,} to go...", err=True, nl=False)
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("file", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.argument("file", type=FILE)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 @click.option("--initial", metavar="P,Q,...",
               help="Start from this marking instead of the file's (P*2 for two tokens).")
 @click.option("--state-space", is_flag=True,
               help="Explore the reachable markings only (no invariants, no siphons).")
-@click.option("--max-states", type=click.IntRange(min=1), default=5_000_000, show_default=True,
-              help="Stop exploring past this many markings.")
+@click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
+              show_default=True, help="Stop exploring past this many markings.")
 @click.option("--progress/--no-progress", default=None,
-              help="Show progress of long explorations (default: when stderr is a terminal).")
-@click.option("--explorer", type=click.Choice(["auto", "compiled", "packed", "general"]),
-              default="auto", show_default=True,
-              help="How to explore the markings of a safe net: compiled code (fastest; "
-                   "most of a second to load in a fresh process), numpy, or the general "
-                   "explorer that every net can use. auto: numpy, then compiled past "
-                   "500,000 markings.")
+              help="Show the progress of long explorations (default: on a terminal).")
+@click.option("--explorer", type=click.Choice(EXPLORERS), default="auto", show_default=True,
+              help="How to explore a safe net's markings: compiled code (fastest; most of a "
+                   "second to load), numpy, or the general explorer every net can use. "
+                   "auto: numpy, then compiled past 500,000 markings.")
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
             max_states: int, progress: bool | None, explorer: str) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
-    Invariants, siphons, reachable markings. Works on any P/T net, not only
-    ours: PNML from TAPAAL, PIPE, pm4py..., and the text formats of TINA
-    and LoLA (told apart by the file's suffix: .pnml or .xml, .net, .lola).
+    Invariants, siphons, reachable markings, on any P/T net: PNML from
+    TAPAAL, PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml,
+    .net, .lola).
     """
-    import json
-
-    from analysis.report import analyze as run, render_text
-
-    from mcl2pnml.io.formats import load_net
-
-    net = compile_file(file) if file.suffix == ".mcl" else load_net(file)
-    start = None
-    if initial is not None:
-        start = _parse_initial(initial)
-        unknown = sorted(p for p in start if p not in net.place_index)
-        if unknown:
-            raise click.BadParameter(
-                f"no place {', '.join(unknown)} in {file}"
-                + did_you_mean(unknown[0], net.place_index, "places"), param_hint="--initial")
-    show = sys.stderr.isatty() if progress is None else progress
-
-    def report(states: int, frontier: int) -> None:
-        click.echo(f"\r  explored {states:,} markings, {frontier:,} to go...", err=True, nl=False)
-
-    result = run(net, start, state_space_only=state_space, max_states=max_states,
-                 progress=report if show else None, explorer=explorer)
-    if show:
+    net = pipeline.load_net(file)
+    start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
+    shown = sys.stderr.isatty() if progress is None else progress
+    result = pipeline.analyze(net, start, state_space_only=state_space, max_states=max_states,
+                              progress=_progress if shown else None, explorer=explorer)
+    if shown:
         click.echo("", err=True)
-    click.echo(json.dumps(result, indent=2) if as_json else render_text(result))
+    click.echo(json.dumps(result, indent=2) if as_json else pipeline.analysis_text(result))
     return 0
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mcl2pnml.view.draw import render, to_dot
+from mcl2pnml.io.dot import render, to_dot
 from mcl2pnml.language.library import Library
 
 FIGURES = {

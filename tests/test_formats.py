@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from hypothesis import given, settings
 
-from mcl2pnml.cli import compile_file
+from mcl2pnml.pipeline import compile_file
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.io.formats import load_net
 from mcl2pnml.io.lola import parse_lola, to_lola
@@ -194,7 +194,7 @@ def test_an_unknown_suffix_lists_the_known_formats(tmp_path):
 
 def net_from_dot(text: str) -> tuple[dict, dict]:
     """The net a DOT drawing of ours shows, in the readers' shape, and its clusters."""
-    from mcl2pnml.view.draw import TOKEN
+    from mcl2pnml.io.dot import TOKEN
 
     dot = read_dot(text)
     kinds = {n: a.get("class") for n, a in dot["nodes"].items()}
@@ -222,7 +222,7 @@ def net_from_dot(text: str) -> tuple[dict, dict]:
 @pytest.mark.parametrize("name, net", missions() + templates(), ids=lambda x: x
                          if isinstance(x, str) else "")
 def test_dot_shows_the_net_and_its_instances(name, net):
-    from mcl2pnml.view.draw import instance_clusters, to_dot
+    from mcl2pnml.io.dot import instance_clusters, to_dot
 
     boxes = instance_clusters(net)
     source = to_dot(net, clusters=boxes).source
@@ -251,7 +251,7 @@ def test_dot_shows_the_net_and_its_instances(name, net):
 
 
 def test_fusion_places_sit_between_the_boxes_they_join():
-    from mcl2pnml.view.draw import instance_clusters, to_dot
+    from mcl2pnml.io.dot import instance_clusters, to_dot
 
     net = compile_file(ROOT / "examples" / "sauce.mcl")
     _, clusters = net_from_dot(to_dot(net, clusters=instance_clusters(net)).source)

@@ -43,7 +43,7 @@ def test_the_pnml_alone_runs_the_mission():
     """Bindings, actions, events and time-outs all travel in the PNML."""
     c = check(parse_file(SAUCE))
     net = compile_checked(c)
-    from_pnml = parse_pnml(to_pnml_bytes(net, layout_engine="none"))
+    from_pnml = parse_pnml(to_pnml_bytes(net))
     a = run(PetriEngine(net), scripted(FOUND)).as_json()
     b = run(PetriEngine(from_pnml), scripted(FOUND)).as_json()
     assert a == b and a["outcome"] == "OK"

@@ -1,37 +1,106 @@
-"""Nets in the text formats of other Petri-net tools, written and read.
+"""The format table: every file format a net is read from or written to.
 
-* :mod:`~mcl2pnml.io.tina`: TINA's ``.net`` (time Petri nets, LAAS-CNRS);
-* :mod:`~mcl2pnml.io.lola`: LoLA's net format (P/T nets, Rostock).
+* PNML (ISO/IEC 15909-2), the standard, in :mod:`mcl2pnml.io.pnml`;
+* TINA's ``.net`` (time Petri nets, LAAS-CNRS), :mod:`mcl2pnml.io.tina`;
+* LoLA's net format (P/T nets, Rostock), :mod:`mcl2pnml.io.lola`;
+* graphviz's DOT, and the SVG and PNG it renders, :mod:`mcl2pnml.io.dot`.
 
-PNML, the standard, lives in :mod:`mcl2pnml.io.pnml`. :func:`load_net` reads
-any of them by the file's suffix.
+Each :class:`Format` names the module and functions that implement it,
+imported only when the format is used (graphviz, lark and lxml are not
+loaded for a format that does not need them). Adding a format is one new
+module of ``mcl2pnml.io`` and one entry in :data:`FORMATS`: ``compile
+--format``, ``template --format``, ``analyze`` and ``show`` take it from
+here.
 """
 from __future__ import annotations
 
+import importlib
+from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Mapping
+from typing import Callable, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.net import Net
 
+
+@dataclass(frozen=True)
+class SaveOptions:
+    """What a writer may be told besides the net; each format takes what it can say."""
+
+    #: node id -> (x, y), PNML's ``<graphics>`` (a layout, computed by the caller)
+    positions: Mapping[str, tuple[float, float]] | None = None
+    #: a drawing's title
+    title: str | None = None
+    #: a compiled mission: what the vehicle does not fire fires at once (TINA's [0,0])
+    urgent: bool = False
+
+
+@dataclass(frozen=True)
+class Format:
+    """One file format: its names, what it can say, and where it is implemented."""
+
+    #: the name ``--format`` takes
+    name: str
+    #: what the file holds, in messages ("PNML", "TINA")
+    title: str
+    #: suffixes it is recognised by; the first is the one it is written with
+    suffixes: tuple[str, ...]
+    #: what it can say of our nets, for the help
+    says: str
+    #: the module implementing it
+    module: str
+    #: its reader, ``(path) -> Net`` (None: write-only)
+    loader: str | None = None
+    #: its writer, ``(net, path, **options)``
+    saver: str | None = None
+    #: the :class:`SaveOptions` fields its writer takes
+    options: tuple[str, ...] = ()
+
+    def _function(self, name: str) -> Callable:
+        return getattr(importlib.import_module(self.module), name)
+
+    def load(self, path: str | Path) -> Net:
+        return self._function(self.loader)(path)
+
+    def save(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> None:
+        """Write ``net`` to ``path``, whole or not at all."""
+        given = {f.name: getattr(options, f.name) for f in fields(options)}
+        self._function(self.saver)(net, path, **{k: given[k] for k in self.options})
+
+
+FORMATS: dict[str, Format] = {f.name: f for f in (
+    Format("pnml", "PNML", (".pnml", ".xml"),
+           "PNML (ISO/IEC 15909-2), with time-outs and bindings as toolspecific data",
+           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions",)),
+    Format("tina", "TINA", (".net",), "TINA's .net: a time Petri net, time-outs as intervals",
+           "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
+    Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
+           "mcl2pnml.io.lola", "load_lola", "save_lola"),
+    Format("dot", "DOT", (".dot",), "graphviz's DOT source of the drawing",
+           "mcl2pnml.io.dot", None, "save_dot", ("title",)),
+    Format("svg", "SVG", (".svg",), "the drawing as SVG", "mcl2pnml.io.dot", None, "save_svg",
+           ("title",)),
+    Format("png", "PNG", (".png",), "the drawing as PNG", "mcl2pnml.io.dot", None, "save_png",
+           ("title",)),
+)}
+
+#: Suffix -> the format that reads it.
+READERS: dict[str, Format] = {s: f for f in FORMATS.values() if f.loader for s in f.suffixes}
 #: Suffix -> what the file holds, for the messages that list them.
-SUFFIXES = {".pnml": "PNML", ".xml": "PNML", ".net": "TINA", ".lola": "LoLA",
-            ".llnet": "LoLA"}
+SUFFIXES: dict[str, str] = {s: f.title for s, f in READERS.items()}
+
+
+def reader_of(path: str | Path) -> Format:
+    """The format that reads ``path``, told by its suffix."""
+    path = Path(path)
+    fmt = READERS.get(path.suffix.lower())
+    if fmt is None:
+        known = ", ".join(f"{s} ({k})" for s, k in SUFFIXES.items())
+        raise Mcl2PnmlError(f"cannot tell the format of '{path.name}' from its suffix; known: "
+                            f"{known}, and .mcl for missions", Location(str(path)))
+    return fmt
 
 
 def load_net(path: str | Path) -> Net:
-    """A net from a PNML, TINA or LoLA file, chosen by its suffix."""
-    path = Path(path)
-    kind = SUFFIXES.get(path.suffix.lower())
-    if kind == "PNML":
-        from mcl2pnml.io.pnml.reader import load_pnml
-        return load_pnml(path)
-    if kind == "TINA":
-        from mcl2pnml.io.tina import load_tina
-        return load_tina(path)
-    if kind == "LoLA":
-        from mcl2pnml.io.lola import load_lola
-        return load_lola(path)
-    known = ", ".join(f"{s} ({k})" for s, k in SUFFIXES.items())
-    raise Mcl2PnmlError(f"cannot tell the format of '{path.name}' from its suffix; known: "
-                        f"{known}, and .mcl for missions", Location(str(path)))
+    """A net from a file of any format that has a reader, chosen by its suffix."""
+    return reader_of(path).load(path)

@@ -35,6 +35,12 @@ class Checked:
     function_order: tuple[str, ...]        # callees before callers
     mission: ast.Mission
 
+    def summary(self) -> str:
+        """What the program declares, as ``mcl2pnml check`` reports it."""
+        n = len(self.functions)
+        return (f"{len(self.primitives)} primitives, {len(self.tasks)} tasks, "
+                f"{n} function{'s' * (n != 1)}, {len(self.consts)} consts")
+
 
 class _Checker:
     def __init__(self, program: ast.Program, library: Library):

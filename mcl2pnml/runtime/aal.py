@@ -161,6 +161,9 @@ class Vehicle(ABC):
     def advance(self, t: float) -> None:
         """Let the vehicle's own time reach ``t`` (simulators move; others need not)."""
 
+    def check_primitives(self, used: set[str]) -> None:
+        """Refuse a mission this vehicle cannot serve, before it starts (default: any)."""
+
 
 class LiveVehicle(ABC):
     """A vehicle in real time: its events come when they come (see :mod:`mcl2pnml.runtime.bridge`).
@@ -175,6 +178,9 @@ class LiveVehicle(ABC):
     @abstractmethod
     def act(self, action: Action) -> None:
         """Send an action to the vehicle."""
+
+    def check_primitives(self, used: set[str]) -> None:
+        """Refuse a mission this vehicle cannot serve, before it starts (default: any)."""
 
     @abstractmethod
     def wait_event(self, timeout: float | None, clock) -> Event | None:

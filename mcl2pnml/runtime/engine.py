@@ -97,6 +97,14 @@ class Run:
             out["safe_stop"] = [a.as_json() for a in self.safe_stop]
         return out
 
+    def report(self) -> list[str]:
+        """The end of ``mcl2pnml run``'s text: the outcome, what it waits for, the safe stop."""
+        lines = [f"outcome {self.outcome.value} at t={self.time:g} s"]
+        lines += [f"  {line}" for line in self.waiting]
+        if self.safe_stop:
+            lines.append("  safe stop: disabled " + ", ".join(a.primitive for a in self.safe_stop))
+        return lines
+
 
 Listener = Callable[[Action | Event], None]
 

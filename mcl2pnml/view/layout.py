@@ -23,12 +23,6 @@ from mcl2pnml.core.net import Net
 
 #: Above this many nodes, ``dot`` is too slow and the layered layout is used.
 DOT_LIMIT = 1500
-#: graphviz settings that bound dot's slowest phases, network simplex
-#: (``nslimit``) and crossing minimisation (``mclimit``): without them dot
-#: takes 45 s on the paper's mission (421 nodes). ``newrank`` ranks the
-#: instance boxes together, which is faster still and avoids graphviz 2.43's
-#: "trouble in init_rank" on missions of 50 calls and more.
-DOT_SPEED = {"nslimit": "2", "nslimit1": "2", "mclimit": "0.5", "newrank": "true"}
 #: Seconds dot may take before the layered layout is used instead.
 DOT_TIMEOUT = 30
 #: Above this many nodes, ``auto`` lays nothing out.
@@ -67,7 +61,7 @@ def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
 
 
 def _dot_layout(net: Net) -> dict[str, tuple[float, float]] | None:
-    """Where dot puts each node in the drawing of :mod:`mcl2pnml.view.draw` (None: dot failed).
+    """Where dot puts each node in the drawing of :mod:`mcl2pnml.io.dot` (None: dot failed).
 
     The same graph as ``compile --format svg``, so the PNML opens as that
     picture; its boxes around instances also make dot fast (0.2 s instead
@@ -75,7 +69,7 @@ def _dot_layout(net: Net) -> dict[str, tuple[float, float]] | None:
     """
     if not dot_available():
         raise RuntimeError("graphviz 'dot' is not installed (apt-get install graphviz)")
-    from mcl2pnml.view.draw import instance_clusters, to_dot   # draw uses this module's settings
+    from mcl2pnml.io.dot import instance_clusters, to_dot   # imports graphviz: only now
 
     source = to_dot(net, clusters=instance_clusters(net), legend=False).source
     try:
@@ -149,3 +143,9 @@ def _normalise(pos: Mapping[str, tuple[float, float]], flip_y: bool) -> dict[str
         y = (y1 - y) if flip_y else (y - y0)
         out[n] = (round(x - x0 + MARGIN, 1), round(y + MARGIN, 1))
     return out
+
+
+def positions(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
+    """Where to draw each node: the nodes' own positions when all have one, else a layout."""
+    from mcl2pnml.io.pnml.writer import own_positions
+    return own_positions(net) or layout(net, engine)

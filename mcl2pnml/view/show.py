@@ -2,7 +2,7 @@
 
 The page is for teaching Petri-net supervisors: it draws the net where its
 PNML ``<graphics>`` put it (:mod:`mcl2pnml.view.layout`), boxes the nodes of each
-instance (a task, a structure, a call site: :func:`~mcl2pnml.view.draw.instance_clusters`)
+instance (a task, a structure, a call site: :func:`~mcl2pnml.io.dot.instance_clusters`)
 and highlights the fusion places where they meet; a student clicks an
 enabled transition to fire it, steps back, resets, and sees the marking and
 every P-invariant's value at each step (each must keep its value at M0: a
@@ -23,7 +23,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable
 
-from mcl2pnml.view.draw import border_out, instance_clusters
+from mcl2pnml.io.dot import border_out, instance_clusters
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_text
 from mcl2pnml.view.layout import layout

@@ -10,9 +10,9 @@ where other tools skip it and our reader restores it:
   fires it correctly), each marked ``<read/>``; our reader joins them again.
 
 One flat ``<page>`` per net, because nested pages break LoLA and SNAKES and
-make pm4py silently wrong. Every node gets a ``<graphics><position>`` from
-:mod:`mcl2pnml.view.layout` unless all nodes already have one (or the layout
-engine is ``none``, the default above 100,000 nodes).
+make pm4py silently wrong. Every node gets a ``<graphics><position>`` when
+the caller hands positions (a layout: :mod:`mcl2pnml.view.layout`), or when
+every node of the net already has one; writing never lays out.
 
 The document is generated as text, one line per place, transition and arc
 (``grep`` finds a node with its whole definition), and streamed in chunks,
@@ -32,15 +32,17 @@ import re
 from functools import lru_cache
 from operator import attrgetter
 from pathlib import Path
-from typing import Any, BinaryIO, Callable, Iterator
+from typing import TYPE_CHECKING, Any, BinaryIO, Callable, Iterator, Mapping
 from xml.sax.saxutils import escape
 
 from mcl2pnml.core.version import __version__
 from mcl2pnml.core.files import atomic_writer
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import ArcKind, FrozenDict, Net, Place, Timing, Transition
-from mcl2pnml.view.layout import layout
 from mcl2pnml.io import ids
+
+if TYPE_CHECKING:
+    from mcl2pnml.io.formats import SaveOptions
 
 NS = "http://www.pnml.org/version-2009/grammar/pnml"
 PTNET = "http://www.pnml.org/version-2009/grammar/ptnet"
@@ -188,11 +190,21 @@ def _node_lines(tag: str, nodes: tuple[Place, ...] | tuple[Transition, ...], key
 _ID, _NAME, _PAYLOAD = attrgetter("id"), attrgetter("name"), attrgetter("payload")
 
 
-def _chunks(net: Net, xid: _Ids, layout_engine: str) -> Iterator[str]:
+Positions = Mapping[str, "tuple[float, float]"]
+
+
+def own_positions(net: Net) -> dict[str, tuple[float, float]] | None:
+    """The nodes' own positions, when every node has one (a net read from a drawn file)."""
+    nodes = (*net.places, *net.transitions)
+    if all(n.position is not None for n in nodes):
+        return {n.id: n.position for n in nodes}
+    return None
+
+
+def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
     """The page, one line per place, transition and arc, in chunks of :data:`CHUNK` lines."""
-    positioned = all(n.position is not None for n in (*net.places, *net.transitions))
-    pos = ({n.id: n.position for n in (*net.places, *net.transitions)} if positioned
-           else layout(net, layout_engine))
+    pos = own_positions(net) if positions is None else positions
+    pos = pos or {}
     node = xid.node
     tokens = dict(net.initial.items())
     # Payloads are keyed by identity: call sites share their prototype's
@@ -247,8 +259,12 @@ def _chunks(net: Net, xid: _Ids, layout_engine: str) -> Iterator[str]:
 
 
 @without_gc
-def write_pnml(net: Net, out: BinaryIO, layout_engine: str = "auto") -> None:
-    """Stream ``net`` as a PNML document into a binary file object."""
+def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None) -> None:
+    """Stream ``net`` as a PNML document into a binary file object.
+
+    ``positions`` (node id -> x, y) go into ``<graphics>``; None: the nodes'
+    own positions if every node has one, else no positions at all.
+    """
     xid = _Ids(net)
     net_id = xid.fresh(ids.encode(net.name) if net.name else "net")
     page_id = xid.fresh("page")
@@ -257,21 +273,26 @@ def write_pnml(net: Net, out: BinaryIO, layout_engine: str = "auto") -> None:
                f'<net id="{net_id}" type="{PTNET}">\n'
                f"<name><text>{_text(net.name or 'net')}</text></name>\n"
                f'<page id="{page_id}">\n').encode())
-    for chunk in _chunks(net, xid, layout_engine):
+    for chunk in _chunks(net, xid, positions):
         out.write(chunk.encode())
     out.write(("</page>\n"
                f'{_TOOL_OPEN}<ids encoding="xml-name-escapes"/></toolspecific>\n'
                "</net>\n</pnml>\n").encode())
 
 
-def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
+def to_pnml_bytes(net: Net, positions: Positions | None = None) -> bytes:
     buf = io.BytesIO()
-    write_pnml(net, buf, layout_engine)
+    write_pnml(net, buf, positions)
     return buf.getvalue()
 
 
-def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
+def save_pnml(net: Net, path: str | Path, positions: Positions | None = None) -> Path:
     """Write ``net`` to ``path`` atomically; returns the path."""
     with atomic_writer(path) as out:
-        write_pnml(net, out, layout_engine)
+        write_pnml(net, out, positions)
     return Path(path)
+
+
+def save(net: Net, path: str | Path, options: "SaveOptions") -> None:
+    """The format table's entry point (:mod:`mcl2pnml.io.formats`)."""
+    save_pnml(net, path, options.positions)

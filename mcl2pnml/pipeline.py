@@ -1,0 +1,242 @@
+"""The pipeline facade: the few calls that the CLI, ``paper_repro``, ``bench`` and tests use.
+
+Each call strings the layers together the one way they go: MCL text is
+parsed and checked, turned into its functional form (the paper's
+Algorithm 2) and compiled to one net (section 2.4); a net is laid out
+(:mod:`mcl2pnml.view`) and saved in a format of the table
+(:mod:`mcl2pnml.io.formats`), or loaded from one; analysed
+(:mod:`analysis`); run against a vehicle (:mod:`mcl2pnml.runtime`); or
+shown as a token-game page. The layers below never import this module.
+
+Heavy modules (numpy, lxml, graphviz, numba) are imported by the call that
+needs them, so that ``mcl2pnml --version`` and ``mcl2pnml check`` start
+fast.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import IO, Any, Callable
+
+from mcl2pnml.core.errors import OptionError
+from mcl2pnml.core.net import Net
+from mcl2pnml.io.formats import FORMATS, SaveOptions, reader_of
+from mcl2pnml.runtime.session import RunOptions
+
+__all__ = [
+    "check_file", "check_source", "compile_file", "compile_source", "functional_form",
+    "load_net", "save_net", "to_pnml_bytes", "save_pnml", "template_net", "templates",
+    "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
+]
+
+
+# -- the language: MCL to a net (section 2.4) ---------------------------------------------
+
+def check_file(path: str | Path):
+    """Parse and check an MCL file: the resolved program the compiler takes."""
+    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.parser import parse_file
+    return check(parse_file(path))
+
+
+def check_source(text: str, filename: str = "<mcl>"):
+    """Parse and check MCL text; errors name ``filename``."""
+    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.parser import parse
+    return check(parse(text, filename))
+
+
+def compile_checked(checked, *, reduced: bool = False) -> Net:
+    """One composed net (step 2); ``reduced``: every task the paper's reduced model (Fig. 3)."""
+    from mcl2pnml.language.compiler import compile_checked as compile_
+    return compile_(checked, reduced=reduced)
+
+
+def compile_file(path: str | Path, *, reduced: bool = False) -> Net:
+    return compile_checked(check_file(path), reduced=reduced)
+
+
+def compile_source(text: str, filename: str = "<mcl>", *, reduced: bool = False) -> Net:
+    return compile_checked(check_source(text, filename), reduced=reduced)
+
+
+def functional_form(checked, *, functions: bool = False) -> list[str]:
+    """Step 1, the paper's Algorithm 2: each function's body (if asked), then the mission."""
+    from mcl2pnml.language.functional import (format_node, function_expression,
+                                              mission_expression)
+    lines = []
+    if functions:
+        for name in checked.function_order:
+            f = checked.functions[name]
+            lines.append(f"{name}({', '.join(f.params)}) = "
+                         f"{format_node(function_expression(f))}")
+    lines.append(format_node(mission_expression(checked.mission)))
+    return lines
+
+
+# -- nets in files -------------------------------------------------------------------------
+
+def load_net(path: str | Path) -> Net:
+    """A net from any file: a mission (``.mcl``, compiled) or a format of the table."""
+    return compile_file(path) if Path(path).suffix == ".mcl" else reader_of(path).load(path)
+
+
+def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
+             title: str | None = None, mission: bool = False) -> Path:
+    """Write ``net`` to ``path`` in format ``fmt`` (a name of the format table).
+
+    ``layout`` places the nodes where the format keeps positions (PNML):
+    ``auto``, ``dot``, ``layers`` or ``none``. ``mission``: a compiled
+    mission, whose TINA file follows the executor's timing.
+    """
+    form = FORMATS[fmt]
+    positions = None
+    if "positions" in form.options and layout != "none":
+        from mcl2pnml.view.layout import positions as lay_out
+        positions = lay_out(net, layout)
+    form.save(net, path, SaveOptions(positions=positions, title=title, urgent=mission))
+    return Path(path)
+
+
+def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
+    """``net`` as PNML at ``path``, laid out by ``layout_engine`` (written whole or not at all)."""
+    return save_net(net, path, "pnml", layout=layout_engine)
+
+
+def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
+    """``net`` as a PNML document, laid out by ``layout_engine``."""
+    from mcl2pnml.io.pnml.writer import to_pnml_bytes as write
+    if layout_engine == "none":
+        return write(net)
+    from mcl2pnml.view.layout import positions
+    return write(net, positions(net, layout_engine))
+
+
+def validate_pnml(path: str | Path, grammar: str | Path | None = None):
+    """The official grammar's verdict on a PNML file, and the net when it is valid."""
+    from mcl2pnml.io.pnml.grammar import validate
+    from mcl2pnml.io.pnml.reader import load_pnml
+    verdict = validate(path, grammar)
+    return verdict, (load_pnml(path) if verdict.valid else None)
+
+
+# -- the paper's nets ----------------------------------------------------------------------
+
+def templates() -> list[tuple[str, str, str]]:
+    """Every template: its names, its kind, its one-line description."""
+    from mcl2pnml.language.library import default_library
+    return [(", ".join(t.names), t.kind.value, t.doc) for t in default_library().unique()]
+
+
+def template_net(name: str) -> Net:
+    """Template ``name`` composed as the paper analyses it, from its M0."""
+    from mcl2pnml.language.library import default_library
+    return default_library().composed(name)
+
+
+# -- analysis ------------------------------------------------------------------------------
+
+def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> dict[str, Any]:
+    """Invariants, siphons and reachable markings (:func:`analysis.report.analyze`)."""
+    from analysis.report import analyze as run
+    return run(net, initial, **options)
+
+
+def parse_marking(text: str, net: Net, where: str = "") -> dict[str, int]:
+    """A marking written ``P,Q*2`` (``analyze --initial``): place -> tokens."""
+    from mcl2pnml.core.errors import did_you_mean
+    marking: dict[str, int] = {}
+    for item in filter(None, (i.strip() for i in text.split(","))):
+        place, _, count = item.partition("*")
+        if count and not count.isdigit():
+            raise OptionError("--initial", f"'{item}': a count is a natural number (P*2)")
+        marking[place] = marking.get(place, 0) + (int(count) if count else 1)
+    unknown = sorted(p for p in marking if p not in net.place_index)
+    if unknown:
+        raise OptionError("--initial", f"no place {', '.join(unknown)} in {where or net.name}"
+                          + did_you_mean(unknown[0], net.place_index, "places"))
+    return marking
+
+
+def analysis_text(result: dict[str, Any]) -> str:
+    from analysis.report import render_text
+    return render_text(result)
+
+
+# -- running -------------------------------------------------------------------------------
+
+def _engine_for(mission: Path) -> Callable[[str], Any]:
+    """How to build each engine for ``mission`` (the reference engine reads MCL only)."""
+    def make(kind: str):
+        from mcl2pnml.runtime.executor import PetriEngine
+        if mission.suffix == ".mcl":
+            checked = check_file(mission)
+            if kind == "reference":
+                from mcl2pnml.runtime.reference import ReferenceEngine
+                return ReferenceEngine(checked)
+            return PetriEngine(compile_checked(checked))
+        if kind == "reference":
+            raise OptionError("--engine", "the reference engine reads MCL, not a net; give "
+                                          "the .mcl file")
+        from mcl2pnml.io.pnml.reader import load_pnml
+        return PetriEngine(load_pnml(mission))
+    return make
+
+
+def run_mission(mission: str | Path, options: RunOptions = RunOptions(), *,
+                text: IO[str] | None = None, log_path: str | Path | None = None,
+                note: Callable[[str], None] = lambda line: None):
+    """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle.
+
+    Returns the run (outcome, time, trace, safe stop); see
+    :func:`mcl2pnml.runtime.session.run_session` for the rest.
+    """
+    from mcl2pnml.runtime.session import run_session
+    mission = Path(mission)
+    return run_session(mission, options, _engine_for(mission), text=text,
+                       log_path=Path(log_path) if log_path else None, note=note)
+
+
+# -- the token game ------------------------------------------------------------------------
+
+def show_nets(what: str, *, with_run: bool = False) -> tuple[str, list[tuple[Net, str]]]:
+    """The page's title and the nets it shows for ``what``, each with its label.
+
+    A mission: the mission and its reduced model (Fig. 3); a net file: the
+    net; a pattern: the task with its primitive (Fig. 2) and the reduced
+    task; a structure: as the paper analyses it. ``with_run``: a recorded run
+    will be followed, which only a mission or its net can have.
+    """
+    from mcl2pnml.io.formats import SUFFIXES
+    path = Path(what)
+    if path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES:
+        if not path.is_file():
+            raise OptionError("MISSION.mcl|NET|TEMPLATE", f"no file '{what}'")
+        if path.suffix != ".mcl":
+            return path.stem, [(load_net(path), "the net")]
+        checked = check_file(path)
+        return path.stem, [(compile_checked(checked), "the mission"),
+                           (compile_checked(checked, reduced=True),
+                            "the mission, every task reduced (Fig. 3)")]
+    if with_run:
+        raise OptionError("--run", "a run is of a mission: give the mission's .mcl or its "
+                                   "compiled net, not a template")
+    from mcl2pnml.language.library import default_library
+    from mcl2pnml.language.template_parser import TemplateKind
+    lib = default_library()
+    template = lib.get(what)   # unknown: the error lists the templates
+    if template.kind is TemplateKind.PATTERN:
+        return what, [(lib.composed(what), f"{what} with its primitive (Fig. 2)"),
+                      (lib.composed(lib.reduced.name), "its reduced model (Fig. 3)")]
+    return what, [(lib.composed(what), f"{what}, as the paper analyses it")]
+
+
+def save_show_page(path: str | Path, title: str, nets: list[tuple[Net, str]],
+                   run_log: str | Path | None = None) -> Path:
+    """The token-game page of ``nets``, following the run of ``run_log`` if given."""
+    from mcl2pnml.view.show import check_run, read_run, save_page, variant
+    entries = None
+    if run_log is not None:
+        entries = read_run(run_log)
+        check_run(nets[0][0], entries, str(run_log))
+    save_page(path, title, [variant(net, label) for net, label in nets], entries)
+    return Path(path)

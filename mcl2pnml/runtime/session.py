@@ -1,0 +1,149 @@
+"""One run of a mission: a vehicle, an engine, the log and the journal, wired together.
+
+What ``mcl2pnml run`` does between reading its options and printing the
+outcome (shared/spec/cli.md, ``run``): resume a journal's run with the
+journal's own options, build the vehicle (:mod:`mcl2pnml.runtime.vehicles`),
+check that it offers the primitives the mission uses, journal the run or
+replay a journal, drive the engine in virtual time or, against a real
+vehicle, on the wall clock (:mod:`mcl2pnml.runtime.engine`), and write the
+JSON-lines log. The engine comes from the caller, which knows how to read a
+mission (MCL or a compiled net): this layer does not.
+"""
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import IO, Callable
+
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.files import atomic_write_text
+from mcl2pnml.runtime import journal as journals
+from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
+from mcl2pnml.runtime.runlog import RunLog
+from mcl2pnml.runtime.vehicles import VehicleKind, kind_of
+
+#: The options of a run that its journal's header records, and a resume reuses.
+JOURNALED = ("engine", "vehicle", "world", "max_time")
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How to run a mission: ``mcl2pnml run``'s options, as typed values."""
+
+    engine: str = "petri"
+    vehicle: str = "sim"
+    connect: str | None = None
+    world: Path | None = None
+    max_time: float = 24 * 3600.0
+    #: show fired transitions in the live log
+    transitions: bool = False
+    journal: Path | None = None
+    resume: Path | None = None
+    #: the options the user gave (a resumed run must not contradict its journal on them)
+    explicit: frozenset[str] = field(default_factory=frozenset)
+
+
+def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
+    """The options of the journal's run, for ``--resume`` (unchanged otherwise)."""
+    if options.resume is None:
+        return options, None
+    if options.journal is not None:
+        raise OptionError("--journal", "--resume appends to its own journal; leave out --journal")
+    loaded = journals.load(options.resume)
+    header = loaded.header
+    given = {"engine": options.engine, "vehicle": options.vehicle,
+             "world": options.world and str(options.world), "max_time": options.max_time}
+    for key in JOURNALED:
+        if key in options.explicit and given[key] != header.get(key):
+            raise Mcl2PnmlError(f"the journal's run has --{key.replace('_', '-')} "
+                                f"{header.get(key)}, not {given[key]}",
+                                Location(str(options.resume), 1, 1))
+    world = Path(header["world"]) if header.get("world") else None
+    return replace(options, engine=header["engine"], vehicle=header["vehicle"],
+                   max_time=header["max_time"], world=world), loaded
+
+
+def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
+    kind = kind_of(options.vehicle)
+    if kind.realtime and (options.resume or options.journal):
+        raise OptionError("--resume" if options.resume else "--journal",
+                          "a journal replays a vehicle of its own (sim or a script); a real "
+                          "vehicle's run cannot be replayed")
+    if options.world and not kind.takes_world:
+        raise OptionError("--world", "a world is for the simulator (--vehicle sim)")
+    return kind, kind.build(options.vehicle, options.connect, options.world)
+
+
+def _check_primitives(engine: Engine, vehicle) -> None:
+    """The vehicle must offer every primitive the mission uses (section 2.1)."""
+    needed = engine.primitives_used()
+    offered = vehicle.primitives
+    if offered is not None and needed - offered:
+        missing = sorted(needed - offered)[0]
+        raise OptionError("--vehicle", f"the mission uses '{missing}', which this vehicle "
+                                       f"does not offer; it offers {', '.join(sorted(offered))}")
+    vehicle.check_primitives(needed)
+
+
+def _journal(mission: Path, options: RunOptions, kind: VehicleKind,
+             loaded: journals.Loaded | None):
+    """Where the log's lines go besides the log: a new journal, a replay, or nowhere."""
+    if options.resume is None and options.journal is None:
+        return None
+    # the files the run depends on, as they are now: a resume needs them unchanged
+    files = {"mission": mission, "vehicle": kind.source(options.vehicle),
+             "world": options.world}
+    digests = {f"{k}_sha256": journals.digest(f) for k, f in files.items() if f}
+    if loaded is not None:
+        for key, value in digests.items():
+            if loaded.header.get(key) != value:
+                raise Mcl2PnmlError(f"{files[key[:-7]]} has changed since this journal was "
+                                    "written: its run cannot be resumed",
+                                    Location(str(options.resume), 1, 1))
+        return journals.Replay(loaded)
+    return journals.create(options.journal, {
+        "mission": str(mission), "engine": options.engine, "vehicle": options.vehicle,
+        "world": options.world and str(options.world), "max_time": options.max_time,
+        **digests})
+
+
+def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str], Engine], *,
+                text: IO[str] | None = None, log_path: Path | None = None,
+                note: Callable[[str], None] = lambda line: None) -> Run:
+    """Run ``mission`` as ``options`` say; the engine is ``make_engine(options.engine)``.
+
+    ``text`` receives the live log, ``log_path`` the JSON-lines log (written
+    whole at the end), ``note`` what the user should know on the side (a
+    torn journal line dropped). However the run ends, the engine loop's
+    safe stop has disabled every primitive still enabled.
+    """
+    options, loaded = resumed(options)
+    if loaded is not None and loaded.torn:
+        note(loaded.torn)
+    kind, vehicle = _vehicle(options)
+    engine = make_engine(options.engine)
+    _check_primitives(engine, vehicle)
+    sink = _journal(mission, options, kind, loaded)
+    jsonl = io.StringIO() if log_path else None
+    log = RunLog(text, jsonl, options.transitions, sink)
+    engine.on_fire = log.fired
+    seen = 0
+
+    def listener(entry) -> None:
+        nonlocal seen
+        log.entry(entry)
+        for event, reason in engine.ignored[seen:]:
+            log.ignored(event, reason)
+        seen = len(engine.ignored)
+
+    loop = run_realtime if kind.realtime else drive
+    result = loop(engine, vehicle, listener=listener, max_time=options.max_time)
+    for event, reason in result.ignored[seen:]:
+        log.ignored(event, reason)
+    log.end(result.time, result.outcome.value)
+    if isinstance(sink, journals.Replay):
+        sink.finish()
+    if log_path is not None:
+        atomic_write_text(log_path, jsonl.getvalue())
+    return result

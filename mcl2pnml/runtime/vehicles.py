@@ -1,0 +1,70 @@
+"""The vehicles a mission can run against, one table entry each (``run --vehicle``).
+
+The paper's missions run first against a simulated vehicle, then a real one
+(section 3): each kind of vehicle behind the Architecture Abstraction Layer
+(section 2.1) is one :class:`VehicleKind`, chosen by the ``--vehicle``
+specification it recognises. Adding a kind of vehicle is one new module
+(its adapter, implementing :class:`~mcl2pnml.runtime.aal.Vehicle` or
+:class:`~mcl2pnml.runtime.aal.LiveVehicle`) and one entry in
+:data:`VEHICLES`; the CLI and the run session take it from here.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from mcl2pnml.core.errors import OptionError
+from mcl2pnml.runtime.aal import LiveVehicle, Vehicle
+
+
+@dataclass(frozen=True)
+class VehicleKind:
+    """One kind of vehicle: how ``--vehicle`` names it and how it is built."""
+
+    #: the name the help and the messages give it
+    name: str
+    #: does a ``--vehicle`` specification name this kind?
+    matches: Callable[[str], bool]
+    #: the vehicle, from the specification, the ``--connect`` address and the world file
+    build: Callable[[str, "str | None", "Path | None"], "Vehicle | LiveVehicle"]
+    #: a real vehicle: driven on the wall clock, and a run of it cannot be replayed
+    realtime: bool = False
+    #: the simulator alone takes a world file
+    takes_world: bool = False
+    #: the file the vehicle is read from, whose digest a journal keeps (None: none)
+    source: Callable[[str], "Path | None"] = lambda spec: None
+
+
+def _simulator(spec: str, connect: str | None, world: Path | None) -> Vehicle:
+    from mcl2pnml.runtime.simulator import AUVSimulator, World
+    return AUVSimulator(World.load(world) if world else World())
+
+
+def _bridge(spec: str, connect: str | None, world: Path | None) -> LiveVehicle:
+    from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
+    if connect is None:
+        raise OptionError("--connect", "a bridge needs --connect HOST:PORT (the bridge server "
+                                       "on the vehicle)")
+    return MappedVehicle(VehicleMapping.load(spec[len("bridge:"):]), TcpTransport(connect))
+
+
+def _script(spec: str, connect: str | None, world: Path | None) -> Vehicle:
+    from mcl2pnml.runtime.aal import ScriptedVehicle
+    return ScriptedVehicle.load(spec)
+
+
+#: Every kind of vehicle, the first that matches wins: the kinematic AUV
+#: simulator, a real vehicle through a mapping file and a bridge server, and
+#: (whatever else is given) a vehicle script of shared/spec/cli.md.
+VEHICLES: tuple[VehicleKind, ...] = (
+    VehicleKind("sim", lambda spec: spec == "sim", _simulator, takes_world=True),
+    VehicleKind("bridge:MAPPING.json", lambda spec: spec.startswith("bridge:"), _bridge,
+                realtime=True),
+    VehicleKind("SCRIPT.json", lambda spec: True, _script, source=Path),
+)
+
+
+def kind_of(spec: str) -> VehicleKind:
+    """The kind of vehicle ``spec`` names (the script, when nothing else matches)."""
+    return next(kind for kind in VEHICLES if kind.matches(spec))
