@@ -1,0 +1,83 @@
+"""The layer rules of docs/ARCHITECTURE.md, held by import-linter and by the import graph.
+
+The contracts live in pyproject.toml (``[tool.importlinter]``): the core
+imports nothing of ours; the language, io and analysis import only the core;
+the runtime the core (and the reference engine the language); the view the
+core, io and analysis; only the facade and the CLI import everything; and no
+import circle anywhere. A contract that no longer fails when it is broken
+proves nothing, so one test breaks it on purpose, in a copy of the code.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import grimp
+import networkx as nx
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("mcl2pnml", "analysis")
+LINT = Path(sys.executable).with_name("lint-imports")
+
+
+def lint(where: Path) -> subprocess.CompletedProcess:
+    if not LINT.exists():
+        pytest.fail(f"import-linter is not installed ({LINT} is missing): run `make setup`")
+    env = {**os.environ, "PYTHONPATH": str(where)}
+    return subprocess.run([str(LINT), "--no-cache", "--no-logo"], cwd=where, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_the_layer_contracts_hold():
+    out = lint(ROOT)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "broken" not in out.stdout.lower() and "Contracts: 4 kept, 0 broken." in out.stdout
+
+
+@pytest.mark.parametrize("importer, imported, contract", [
+    ("mcl2pnml/core/net.py", "mcl2pnml.view.layout", "The CLI over the facade"),
+    ("mcl2pnml/runtime/engine.py", "mcl2pnml.io.pnml.reader", "The runtime reads no file"),
+    ("analysis/invariants.py", "mcl2pnml.language.compiler", "The CLI over the facade"),
+    ("mcl2pnml/core/errors.py", "mcl2pnml.core.net", "No import circle"),
+])
+def test_a_forbidden_import_breaks_a_contract(tmp_path: Path, importer: str, imported: str,
+                                              contract: str):
+    for package in PACKAGES:
+        shutil.copytree(ROOT / package, tmp_path / package,
+                        ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copy(ROOT / "pyproject.toml", tmp_path)
+    with (tmp_path / importer).open("a") as f:
+        f.write(f"\nimport {imported}  # forbidden on purpose\n")
+    out = lint(tmp_path)
+    assert out.returncode == 1, out.stdout + out.stderr
+    broken = out.stdout.split("Broken contracts", 1)[-1]
+    assert contract in broken, out.stdout
+    assert imported.rpartition(".")[2] in broken, out.stdout   # the offending import is named
+
+
+def import_graph() -> nx.DiGraph:
+    graph = grimp.build_graph(*PACKAGES, cache_dir=None)
+    g = nx.DiGraph()
+    for module in graph.modules:
+        g.add_node(module)
+        g.add_edges_from((module, m) for m in graph.find_modules_directly_imported_by(module))
+    return g
+
+
+def test_no_module_imports_one_that_imports_it_back():
+    """Stricter than the sibling contract: any circle, between any two modules of ours."""
+    g = import_graph()
+    cycles = list(nx.simple_cycles(g))
+    assert not cycles, f"import circles: {cycles[:5]}"
+
+
+def test_the_core_imports_nothing_of_ours_but_the_core():
+    g = import_graph()
+    for module in g:
+        if module.startswith("mcl2pnml.core"):
+            outside = [m for m in g.successors(module) if not m.startswith("mcl2pnml.core")]
+            assert not outside, f"{module} imports {outside}"
