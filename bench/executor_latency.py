@@ -18,18 +18,16 @@ import sys
 import time
 
 from mcl2pnml.runtime.aal import ScriptedVehicle
-from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.runtime.engine import run
 from mcl2pnml.runtime.executor import PetriEngine
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse
+from mcl2pnml.pipeline import compile_source
 
 from bench.missions import survey
 
 
 def measure(tasks: int, runs: int = 3) -> dict[str, float]:
     """The event times of ``runs`` runs of a fresh engine on the ``tasks``-call survey, pooled."""
-    net = compile_checked(check(parse(survey(tasks), f"survey{tasks}.mcl")))
+    net = compile_source(survey(tasks), f"survey{tasks}.mcl")
     times: list[float] = []
     for _ in range(runs):
         engine = PetriEngine(net)

@@ -132,9 +132,7 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     from analysis.invariants import p_invariant_basis
     from analysis.matrix import structure
-    from mcl2pnml.language.compiler import compile_checked
-    from mcl2pnml.language.checker import check
-    from mcl2pnml.language.parser import parse
+    from mcl2pnml.pipeline import compile_source
 
     lines = ["## Invariants: the exact P-invariant basis of compiled missions", "",
              "Surveys compiled from MCL; ours (sparse, exact) against plain "
@@ -144,7 +142,7 @@ def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
              "|---:|---:|---:|---:|---:|---:|---:|"]
     plain_ok, at_5000 = True, None
     for calls in ([5, 15] if quick else [5, 15, 55, 110, 275]):
-        net = compile_checked(check(parse(survey(calls), f"survey{calls}.mcl")))
+        net = compile_source(survey(calls), f"survey{calls}.mcl")
         s = structure(net)
         ours, basis = inv.median_time(lambda: p_invariant_basis(s))
         plain_cell, ratio = "-", "-"

@@ -16,11 +16,9 @@ import bisect
 from dataclasses import dataclass
 from pathlib import Path
 
-from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.runtime.engine import Outcome, run
 from mcl2pnml.runtime.executor import PetriEngine
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse_file
+from mcl2pnml.pipeline import compile_file
 from mcl2pnml.runtime.simulator import AUVSimulator, World
 
 MISSION = Path(__file__).resolve().parents[1] / "examples" / "sauce.mcl"
@@ -43,7 +41,7 @@ class Trial:
 
 def trial(cross: tuple[float, float] | None, label: str, noise: float = 0.03,
           seed: int = 7) -> Trial:
-    net = compile_checked(check(parse_file(MISSION)))
+    net = compile_file(MISSION)
     vehicle = AUVSimulator(World(cross=cross, noise=noise, seed=seed))
     result = run(PetriEngine(net), vehicle, max_time=3600)
     actions = [f"{e.kind.value} {e.primitive}" for e in result.entries

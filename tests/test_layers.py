@@ -81,3 +81,16 @@ def test_the_core_imports_nothing_of_ours_but_the_core():
         if module.startswith("mcl2pnml.core"):
             outside = [m for m in g.successors(module) if not m.startswith("mcl2pnml.core")]
             assert not outside, f"{module} imports {outside}"
+
+
+def test_serialising_never_lays_out(tmp_path: Path):
+    """``--layout none``: no layout is computed and graphviz is never imported."""
+    out = subprocess.run([sys.executable, "-X", "importtime", "-m", "mcl2pnml", "compile",
+                          str(ROOT / "examples" / "sauce.mcl"), "-o", str(tmp_path / "s.pnml"),
+                          "--layout", "none"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    imported = [line.rsplit("|", 1)[-1].strip() for line in out.stderr.splitlines()
+                if line.startswith("import time:")]
+    assert "mcl2pnml.io.pnml.writer" in imported
+    assert not [m for m in imported if m.split(".")[0] == "graphviz" or m == "mcl2pnml.io.dot"]
+    assert "<graphics>" not in (tmp_path / "s.pnml").read_text()
