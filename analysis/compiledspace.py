@@ -34,7 +34,7 @@ from typing import Sequence
 
 import numpy as np
 
-from analysis.matrix import Structure
+from mcl2pnml.core.structure import Structure
 from analysis.packedspace import KeyCollision, NotSafe, PackedStateSpace, _Firing, _keys, _masks, _masks_of
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
@@ -60,7 +60,7 @@ def warm_up() -> None:
     What the first exploration would otherwise pay: most of a second in a
     fresh process, much more the first time ever, when numba compiles them.
     """
-    from analysis.matrix import structure
+    from mcl2pnml.core.structure import structure
     from mcl2pnml.core.net import NetBuilder
 
     for places in (1, 65):   # one word, then two

@@ -29,7 +29,7 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from analysis.matrix import Structure
+from mcl2pnml.core.structure import Structure
 from analysis.statespace import StateSpace
 
 

@@ -50,7 +50,7 @@ import numpy  # noqa: F401 - imported with the module: the packed explorer needs
 
 from mcl2pnml.core.errors import Mcl2PnmlError
 
-from analysis.matrix import Structure, structure as make_structure
+from mcl2pnml.core.structure import Structure, structure as make_structure
 
 OMEGA = math.inf
 """The token count of a place that the coverability graph found unbounded."""

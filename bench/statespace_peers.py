@@ -46,7 +46,7 @@ if engine in ("ours", "numpy"):
     from mcl2pnml.io.pnml import load_pnml
     from analysis import compiledspace
     from analysis.behaviour import behaviour
-    from analysis.matrix import structure
+    from mcl2pnml.core.structure import structure
     from analysis.statespace import explore
     import analysis.packedspace   # loaded on first use otherwise: loading is not exploring
     s = structure(load_pnml(path))

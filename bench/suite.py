@@ -131,7 +131,7 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
 
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     from analysis.invariants import p_invariant_basis
-    from analysis.matrix import structure
+    from mcl2pnml.core.structure import structure
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.checker import check
     from mcl2pnml.language.parser import parse
