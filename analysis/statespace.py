@@ -42,8 +42,8 @@ __all__ = ["BACKENDS", "HANDOVER", "OMEGA", "PROGRESS_EVERY", "ExplorationLimit"
            "StateSpace", "explore"]
 
 PROGRESS_EVERY = 100_000
-"""Markings between two progress reports of the general explorer (the others report once a
-breadth-first level or a compiled slice)."""
+"""Markings between two progress reports of the general explorer (the safe-net
+ones report once a breadth-first level or a compiled slice)."""
 
 
 class ExplorationLimit(Mcl2PnmlError):

@@ -48,7 +48,6 @@ if engine in ("ours", "numpy"):
     from analysis.behaviour import behaviour
     from mcl2pnml.core.structure import structure
     from analysis.statespace import explore
-    import analysis.packedspace   # loaded on first use otherwise: loading is not exploring
     s = structure(load_pnml(path))
     if engine == "ours":
         t0 = time.perf_counter(); compiledspace.warm_up()   # numba's code, from its cache
