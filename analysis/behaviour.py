@@ -33,8 +33,8 @@ from typing import Iterable
 
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.structure import Structure
 
-from analysis.matrix import Structure
 from analysis.statespace import StateSpace, explore
 
 

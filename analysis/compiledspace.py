@@ -1,8 +1,9 @@
 """The reachability graph of a safe net, explored one marking at a time in compiled code.
 
-The third explorer behind :func:`analysis.statespace.explore`, for the same
-nets as :mod:`analysis.packedspace` (1-safe, unit weights): markings are rows
-of bits packed into 64-bit words, and firing a transition is three bit
+One of the two safe-net explorers behind :func:`analysis.statespace.explore`,
+for the same nets as :mod:`analysis.packedspace` (1-safe, unit weights):
+markings are rows of bits packed into 64-bit words
+(:mod:`analysis.packedmarkings`), and firing a transition is three bit
 operations (``need`` covered, ``keep`` the rest, ``give`` the outputs). Here
 the loop is the textbook one, a queue of markings and a hash set, compiled
 to machine code by numba, so each (marking, transition) pair costs a few
@@ -19,7 +20,7 @@ after another) gain most.
 * The compiled loop runs in slices of :data:`SLICE` expansions, handing
   back to Python in between: the caller's progress report is called, and
   Ctrl-C is honoured, at least every few tenths of a second.
-* The result is a :class:`~analysis.packedspace.PackedStateSpace`, the same
+* The result is a :class:`~analysis.packedmarkings.PackedStateSpace`, the same
   value the numpy explorer returns, so terminal markings, reachability by
   unfiring and the edge list come from the same code whichever explorer ran.
 
@@ -34,8 +35,14 @@ from typing import Sequence
 
 import numpy as np
 
-from analysis.matrix import Structure
-from analysis.packedspace import KeyCollision, NotSafe, PackedStateSpace, _Firing, _keys, _masks, _masks_of
+from mcl2pnml.core.net import NetBuilder
+from mcl2pnml.core.structure import Structure, structure
+
+from analysis.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace,
+                                     marking_row, masks, word_count)
+# bound under this module's own name, so that the keys of this explorer alone
+# can be replaced (the key-collision tests do)
+from analysis.packedmarkings import keys_of as _keys
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 19
@@ -60,9 +67,6 @@ def warm_up() -> None:
     What the first exploration would otherwise pay: most of a second in a
     fresh process, much more the first time ever, when numba compiles them.
     """
-    from analysis.matrix import structure
-    from mcl2pnml.core.net import NetBuilder
-
     for places in (1, 65):   # one word, then two
         b = NetBuilder("warm-up")
         for p in range(places):
@@ -79,9 +83,9 @@ def explore_compiled(s: Structure, m0: Sequence[int], max_states: int, limit_err
     """Breadth-first from ``m0``; raises :class:`NotSafe` at a second token in a place."""
     global _ran
     from analysis import _compiled_loops as kernels   # imports numba: 0.3 s, so only now
-    words = max(1, (len(s.places) + 63) // 64)
-    need, take, give = _masks(s, words)
-    start = _masks_of([[p for p, k in enumerate(m0) if k]], words)
+    words = word_count(s)
+    need, take, give = masks(s, words)
+    start = marking_row(m0, words)
     if words == 1:
         rows = _run_one_word(kernels, need[:, 0], ~take[:, 0], give[:, 0], start[0, 0],
                              max_states, limit_error, progress)
@@ -99,7 +103,7 @@ def explore_compiled(s: Structure, m0: Sequence[int], max_states: int, limit_err
         packed = rows[order]
         del rows, order
     _ran = True
-    return PackedStateSpace(s, packed, keys, _keys(start)[0], _Firing.by(need, need, take, give))
+    return PackedStateSpace(s, packed, keys, _keys(start)[0], Firing.by(need, need, take, give))
 
 
 def _drive(kernels, step, masks: tuple, state: tuple, max_states: int, limit_error,

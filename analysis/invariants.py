@@ -30,8 +30,7 @@ from sympy import QQ, ZZ
 from sympy.polys.matrices import DomainMatrix
 
 from mcl2pnml.core.errors import Mcl2PnmlError
-
-from analysis.matrix import Structure
+from mcl2pnml.core.structure import Structure
 
 
 class AnalysisLimit(Mcl2PnmlError):

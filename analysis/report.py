@@ -18,12 +18,12 @@ from __future__ import annotations
 from typing import Any
 
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.structure import structure
 
 from analysis.behaviour import behaviour
 from analysis.invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
                          minimal_semipositive_t_invariants, p_invariant_basis,
                          t_invariant_basis)
-from analysis.matrix import structure
 from analysis.siphons import minimal_siphons, minimal_traps, siphon_control
 from analysis.statespace import ExplorationLimit, Progress, explore
 

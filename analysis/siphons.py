@@ -6,8 +6,9 @@ once S is empty it stays empty, and the transitions that need it are dead.
 A *trap* is the dual, a nonempty Q with Q• ⊆ •Q: once marked, always marked.
 A read arc counts both ways here (the transition is in •p and in p•), as
 the self-loop it stands for: it needs a token of S to fire, and puts it back.
-The pre- and post-sets come from :class:`~analysis.matrix.Structure`, which
-already counts read arcs so.
+The pre- and post-sets come from
+:class:`~mcl2pnml.core.structure.Structure`, which already counts read arcs
+so.
 
 * :func:`max_siphon_within` (and :func:`max_trap_within`): the largest
   siphon inside a set of places, in linear time. Siphons are closed under
@@ -26,8 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
+from mcl2pnml.core.structure import Structure
+
 from analysis.invariants import AnalysisLimit, integer_multiple
-from analysis.matrix import Structure
 
 Sets = Sequence[frozenset[int]]
 

@@ -34,9 +34,9 @@ import flint
 import sympy
 
 from analysis.invariants import p_invariant_basis
-from analysis.matrix import Structure, structure
 from mcl2pnml.core.compose import fuse, union
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.structure import Structure, structure
 from mcl2pnml.language.library import default_library
 
 PLAIN_LIMIT = 60.0        # seconds for one run of plain sympy

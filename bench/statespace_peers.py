@@ -46,9 +46,8 @@ if engine in ("ours", "numpy"):
     from mcl2pnml.io.pnml import load_pnml
     from analysis import compiledspace
     from analysis.behaviour import behaviour
-    from analysis.matrix import structure
+    from mcl2pnml.core.structure import structure
     from analysis.statespace import explore
-    import analysis.packedspace   # loaded on first use otherwise: loading is not exploring
     s = structure(load_pnml(path))
     if engine == "ours":
         t0 = time.perf_counter(); compiledspace.warm_up()   # numba's code, from its cache

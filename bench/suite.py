@@ -131,7 +131,7 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
 
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     from analysis.invariants import p_invariant_basis
-    from analysis.matrix import structure
+    from mcl2pnml.core.structure import structure
     from mcl2pnml.pipeline import compile_source
 
     lines = ["## Invariants: the exact P-invariant basis of compiled missions", "",

@@ -17,13 +17,13 @@ from pathlib import Path
 import pytest
 
 from analysis.behaviour import behaviour
-from analysis.matrix import structure
 from analysis.statespace import explore
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.functional import format_node, function_expression, mission_expression
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import parse_file
 from mcl2pnml.core.net import ArcKind, Timing, thaw
+from mcl2pnml.core.structure import structure
 from mcl2pnml.io.pnml import parse_pnml, save_pnml, to_pnml_bytes
 
 from bench.missions import survey

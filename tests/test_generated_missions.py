@@ -24,8 +24,8 @@ import pytest
 from hypothesis import HealthCheck, assume, given, seed, settings, strategies as st
 
 from analysis.behaviour import behaviour
-from analysis.matrix import structure
 from analysis.statespace import ExplorationLimit, explore
+from mcl2pnml.core.structure import structure
 from mcl2pnml.language import ast
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.checker import check

@@ -7,10 +7,10 @@ from hypothesis import given, settings
 from analysis.invariants import (format_invariant, minimal_semipositive_p_invariants,
                                  minimal_semipositive_t_invariants, p_invariant_basis,
                                  t_invariant_basis)
-from analysis.matrix import structure
 from analysis.siphons import (is_siphon, is_trap, max_siphon_within, minimal_siphons,
                               minimal_traps, siphon_control)
 from mcl2pnml.core.net import NetBuilder
+from mcl2pnml.core.structure import structure
 
 from strategies import nets
 

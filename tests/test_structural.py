@@ -22,12 +22,12 @@ from analysis.invariants import (AnalysisLimit, format_invariant, invariant_valu
                                  is_p_invariant, minimal_semipositive_p_invariants,
                                  minimal_semipositive_t_invariants, p_invariant_basis,
                                  t_invariant_basis)
-from analysis.matrix import structure
 from analysis.siphons import (SiphonReport, control_by_lp, is_siphon, is_trap,
                               max_siphon_within, max_trap_within, minimal_siphons,
                               minimal_traps, siphon_control)
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import ArcKind, Marking, Net, NetBuilder
+from mcl2pnml.core.structure import structure
 
 # ---------------------------------------------------------------------------
 # hand-built nets

@@ -39,7 +39,8 @@ from typing import Any, Callable
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
 from mcl2pnml.runtime.engine import Engine, Outcome
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.core.net import SUMMARY_MARKED, ArcKind, Net, thaw
+from mcl2pnml.core.net import SUMMARY_MARKED, Net, thaw
+from mcl2pnml.core.structure import structure
 
 RESULTS = {"mission.OK": Outcome.OK, "mission.FAIL": Outcome.FAIL,
            "mission.ABORTED": Outcome.ABORTED}
@@ -56,22 +57,16 @@ class PetriEngine(Engine):
             raise Mcl2PnmlError(f"net '{net.name}' is not a compiled mission: it has no place "
                                 f"{', '.join(missing)} (compile MCL with `mcl2pnml compile`)")
         self.net = net
-        self.places = [p.id for p in net.places]
-        self.transitions = [t.id for t in net.transitions]
-        pindex = {p: i for i, p in enumerate(self.places)}
+        s = structure(net)
+        self.places = list(s.places)
+        self.transitions = list(s.transitions)
+        pindex = s.place_index
         n = len(self.transitions)
-        self.pre: list[list[tuple[int, int]]] = [[] for _ in range(n)]    # consumed
-        self.test: list[list[tuple[int, int]]] = [[] for _ in range(n)]   # read
-        self.post: list[list[tuple[int, int]]] = [[] for _ in range(n)]
-        consumers = [0] * len(self.places)
-        tindex = {t: i for i, t in enumerate(self.transitions)}
-        for a in net.arcs:
-            if a.source in tindex:
-                self.post[tindex[a.source]].append((pindex[a.target], a.weight))
-            else:
-                i, p = tindex[a.target], pindex[a.source]
-                (self.test if a.kind is ArcKind.READ else self.pre)[i].append((p, a.weight))
-                consumers[p] += 1
+        # (place, weight) lists, in arc order: what the firing loop walks
+        self.pre = [list(arcs.items()) for arcs in s.pre]     # consumed
+        self.test = [list(arcs.items()) for arcs in s.read]   # read
+        self.post = [list(arcs.items()) for arcs in s.post]
+        consumers = [len(ts) for ts in s.place_post]          # p•, readers included
         # the inputs of each transition, the most private first: the one to watch
         self.inputs = [sorted(self.pre[i] + self.test[i], key=lambda pw: consumers[pw[0]])
                        for i in range(n)]
@@ -90,19 +85,15 @@ class PetriEngine(Engine):
                 self.by_event.setdefault(key, []).append(i)
         self.event_driven = {i for ts in self.by_event.values() for i in ts}
         self.result_places = {pindex[p]: o for p, o in RESULTS.items()}
-        # what each firing changes, worked out once: the places whose count
-        # falls or rises (True: falls), in place order, and the result places
-        # among those that rise
+        # what each firing changes (its column of the incidence matrix), worked
+        # out once: the places whose count falls or rises (True: falls), in
+        # place order, and the result places among those that rise
         self.changes: list[tuple[tuple[int, bool], ...]] = []
         self.results_marked: list[tuple[int, ...]] = []
-        for i in range(n):
-            change: dict[int, int] = {}
-            for p, w in self.pre[i]:
-                change[p] = change.get(p, 0) - w
-            for p, w in self.post[i]:
-                change[p] = change.get(p, 0) + w
-            self.changes.append(tuple((p, change[p] < 0) for p in sorted(change) if change[p]))
-            self.results_marked.append(tuple(p for p in sorted(change)
+        for change in s.incidence:
+            rows = sorted(change)
+            self.changes.append(tuple((p, change[p] < 0) for p in rows))
+            self.results_marked.append(tuple(p for p in rows
                                              if change[p] > 0 and p in self.result_places))
         self.marking = [net.initial[p] for p in self.places]
         self.env: dict[str, dict[str, Any]] = {"mission": {}}

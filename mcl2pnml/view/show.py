@@ -38,7 +38,7 @@ MAX_INVARIANTS = 400
 def variant(net: Net, label: str) -> dict[str, Any]:
     """One net as the page draws it: nodes with positions, arcs by index, boxes, invariants."""
     from analysis.invariants import p_invariant_basis
-    from analysis.matrix import structure
+    from mcl2pnml.core.structure import structure
 
     nodes = len(net.places) + len(net.transitions)
     if nodes > MAX_NODES:

@@ -1,4 +1,4 @@
-"""The structure of a net as index-based, sparse data: what every analysis starts from.
+"""The indexed pre/post view of a net: what analysis and execution start from.
 
 Places and transitions are numbered in the net's order. For transition ``j``:
 
@@ -15,6 +15,12 @@ transition.
 For siphons and traps a read arc counts as an arc both ways (the transition
 is in the pre-set and the post-set of the place), which is the firing rule
 of the equivalent self-loop.
+
+It serves the invariants (``C``, Murata section VII), the siphons and traps
+(•p, p•, •t, t•), the three state-space explorers (the firing rule, and the
+bit masks of the safe-net ones), and the executor of
+:mod:`mcl2pnml.runtime.executor` (the paper's section 2.1: what a firing
+takes, reads and changes, and each place's consumers).
 """
 from __future__ import annotations
 

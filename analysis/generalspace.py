@@ -1,0 +1,221 @@
+"""The general explorer: the reachability graph, or the Karp-Miller coverability graph.
+
+From a net's initial marking, :func:`explore_general` builds
+
+* the **reachability graph** when the net is bounded (every reachable
+  marking once, an edge per firing), or
+* a **coverability graph** (Karp and Miller 1969; Murata 1989, section V-A)
+  when it is not: a marking that strictly covers one of its ancestors gets
+  the token count ``omega`` (written ``w``) in the places that grew, and the
+  set of nodes covers every reachable marking.
+
+Markings are tuples of counts and edges flat integer arrays (source,
+transition, target); the acceleration follows the first-discovery path. It
+takes every net, where the safe-net explorers (:mod:`analysis.packedspace`,
+:mod:`analysis.compiledspace`) take only 1-safe nets with unit weights.
+
+Transitions are explored untimed: a timed transition (the task's time-out
+``t03``) may fire in any order with the others, which is what equations.md
+asks for the coverability analysis ("any order of firing").
+
+Owns :class:`StateSpace`, the value every explorer returns (the safe-net
+ones a subclass of it): terminal markings, reachability of a set, shortest
+firing sequences for counterexamples, and :meth:`StateSpace.graph`, the
+graph as networkx on demand.
+"""
+from __future__ import annotations
+
+import math
+from array import array
+from collections import deque
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable, Sequence
+
+import networkx as nx
+
+from mcl2pnml.core.structure import Structure
+
+OMEGA = math.inf
+"""The token count of a place that the coverability graph found unbounded."""
+
+Progress = Callable[[int, int], None]
+"""Called now and then during a long exploration with (states, frontier)."""
+
+
+@dataclass(eq=False)
+class StateSpace:
+    """The explored graph: node 0 is the initial marking."""
+
+    structure: Structure
+    markings: list[tuple]                 # node -> token counts (OMEGA where unbounded)
+    src: array = field(repr=False)        # edge k goes src[k] --trans[k]--> dst[k]
+    trans: array = field(repr=False)
+    dst: array = field(repr=False)
+    coverability: bool = False            # True if acceleration was needed (unbounded)
+
+    # -- basic facts -------------------------------------------------------------
+
+    @property
+    def states(self) -> int:
+        return len(self.markings)
+
+    @property
+    def bounded(self) -> bool:
+        return not self.coverability
+
+    @cached_property
+    def bound(self) -> float:
+        """The largest token count of any place in any node (OMEGA if unbounded)."""
+        return max((max(m) for m in self.markings if m), default=0)
+
+    @property
+    def safe(self) -> bool:
+        return self.bounded and self.bound <= 1
+
+    @cached_property
+    def out_degree(self) -> array:
+        deg = array("i", bytes(4 * self.states))
+        for s in self.src:
+            deg[s] += 1
+        return deg
+
+    @cached_property
+    def terminal(self) -> list[int]:
+        """Nodes where no transition is enabled (dead markings)."""
+        return [n for n, d in enumerate(self.out_degree) if d == 0]
+
+    def marking(self, node: int) -> dict[str, float]:
+        places = self.structure.places
+        return {places[i]: n for i, n in enumerate(self.markings[node]) if n}
+
+    def format(self, node: int) -> list[str]:
+        """Sorted place names, ``P*2`` for counts above one, ``P*w`` for omega."""
+        out = []
+        for p, n in sorted(self.marking(node).items()):
+            out.append(p if n == 1 else f"{p}*{'w' if n == OMEGA else int(n)}")
+        return out
+
+    # -- graph questions -----------------------------------------------------------
+
+    def _reverse(self) -> list[list[int]]:
+        rev: list[list[int]] = [[] for _ in range(self.states)]
+        for s, d in zip(self.src, self.dst):
+            rev[d].append(s)
+        return rev
+
+    def can_reach(self, targets: Sequence[int]) -> list[bool]:
+        """For every node, whether some node of ``targets`` is reachable from it."""
+        rev = self._reverse()
+        seen = [False] * self.states
+        queue = deque(targets)
+        for t in targets:
+            seen[t] = True
+        while queue:
+            n = queue.popleft()
+            for m in rev[n]:
+                if not seen[m]:
+                    seen[m] = True
+                    queue.append(m)
+        return seen
+
+    def always_can_reach(self, targets: Sequence[int]) -> bool:
+        return all(self.can_reach(targets))
+
+    @property
+    def home_initial(self) -> bool:
+        """Whether the initial marking can be reached again from every marking."""
+        return self.always_can_reach([0])
+
+    def path_to(self, node: int) -> list[str]:
+        """Transition names of a shortest firing sequence from M0 to ``node``."""
+        parent: dict[int, tuple[int, int]] = {0: (-1, -1)}
+        adj: list[list[tuple[int, int]]] = [[] for _ in range(self.states)]
+        for s, t, d in zip(self.src, self.trans, self.dst):
+            adj[s].append((t, d))
+        queue = deque([0])
+        while queue and node not in parent:
+            n = queue.popleft()
+            for t, d in adj[n]:
+                if d not in parent:
+                    parent[d] = (n, t)
+                    queue.append(d)
+        path = []
+        while node in parent and parent[node][0] >= 0:
+            node, t = parent[node]
+            path.append(self.structure.transitions[t])
+        return path[::-1]
+
+    def graph(self) -> nx.MultiDiGraph:
+        """The graph as networkx: nodes carry ``marking``, edges ``transition``."""
+        g = nx.MultiDiGraph()
+        for n in range(self.states):
+            g.add_node(n, marking=self.marking(n))
+        names = self.structure.transitions
+        for s, t, d in zip(self.src, self.trans, self.dst):
+            g.add_edge(s, d, transition=names[t])
+        return g
+
+
+def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_error,
+                    progress: Progress | None, every: int) -> StateSpace:
+    """Karp-Miller exploration with tuples of counts (OMEGA for unbounded).
+
+    Raises ``limit_error`` past ``max_states`` markings; calls ``progress``
+    once every ``every`` markings.
+    """
+    need: list[list[tuple[int, int]]] = []
+    delta: list[list[tuple[int, int]]] = []
+    for j, (pre, read, post) in enumerate(zip(s.pre, s.read, s.post)):
+        needs = dict(read)
+        for p, w in pre.items():
+            needs[p] = max(needs.get(p, 0), w)
+        need.append(sorted(needs.items()))
+        delta.append(sorted(s.incidence[j].items()))
+    markings: list[tuple] = [tuple(m0)]
+    parent: list[int] = [-1]
+    index = {markings[0]: 0}
+    src, trans, dst = array("i"), array("i"), array("i")
+    accelerated = False
+    head = 0
+    while head < len(markings):
+        m = markings[head]
+        for t in range(len(need)):
+            if all(m[p] >= w for p, w in need[t]):
+                m2 = list(m)
+                for p, d in delta[t]:
+                    m2[p] += d  # OMEGA +- d stays OMEGA
+                m2 = tuple(m2)
+                if m2 not in index:
+                    m2, grew = _accelerate(m2, head, markings, parent)
+                    accelerated |= grew
+                k = index.get(m2)
+                if k is None:
+                    k = len(markings)
+                    if k >= max_states:
+                        raise limit_error
+                    index[m2] = k
+                    markings.append(m2)
+                    parent.append(head)
+                    if progress and k % every == 0:
+                        progress(k, k - head)
+                src.append(head)
+                trans.append(t)
+                dst.append(k)
+        head += 1
+    return StateSpace(s, markings, src, trans, dst, coverability=accelerated)
+
+
+def _accelerate(m: tuple, node: int, markings: list[tuple], parent: list[int]) -> tuple[tuple, bool]:
+    """Karp-Miller: places that grew since an ancestor it covers become OMEGA."""
+    total = sum(m)
+    grew = False
+    while node >= 0:
+        a = markings[node]
+        # a cheap filter first: covering needs at least as many tokens in all
+        if sum(a) <= total and a != m and all(x >= y for x, y in zip(m, a)):
+            m = tuple(OMEGA if x > y else x for x, y in zip(m, a))
+            total = sum(m)
+            grew = True
+        node = parent[node]
+    return m, grew
