@@ -43,6 +43,11 @@ Progress = Callable[[int, int], None]
 """Called now and then during a long exploration with (states, frontier)."""
 
 
+PROGRESS_EVERY = 100_000
+"""Markings between two progress reports (the safe-net explorers report once a
+breadth-first level or a compiled slice)."""
+
+
 @dataclass(eq=False)
 class StateSpace:
     """The explored graph: node 0 is the initial marking."""
@@ -158,12 +163,13 @@ class StateSpace:
 
 
 def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_error,
-                    progress: Progress | None, every: int) -> StateSpace:
+                    progress: Progress | None = None) -> StateSpace:
     """Karp-Miller exploration with tuples of counts (OMEGA for unbounded).
 
     Raises ``limit_error`` past ``max_states`` markings; calls ``progress``
-    once every ``every`` markings.
+    once every :data:`PROGRESS_EVERY` markings.
     """
+    every = PROGRESS_EVERY
     need: list[list[tuple[int, int]]] = []
     delta: list[list[tuple[int, int]]] = []
     for j, (pre, read, post) in enumerate(zip(s.pre, s.read, s.post)):

@@ -34,24 +34,22 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.structure import Structure, structure as make_structure
 
 from analysis import compiledspace
+from analysis.explorers import CHOICES, EXPLORERS
 from analysis.generalspace import OMEGA, Progress, StateSpace, explore_general
 from analysis.packedmarkings import KeyCollision, NotSafe
 from analysis.packedspace import explore_packed
 
-__all__ = ["BACKENDS", "HANDOVER", "OMEGA", "PROGRESS_EVERY", "ExplorationLimit", "Progress",
-           "StateSpace", "explore"]
-
-PROGRESS_EVERY = 100_000
-"""Markings between two progress reports of the general explorer (the safe-net
-ones report once a breadth-first level or a compiled slice)."""
+__all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "Progress", "StateSpace",
+           "explore"]
 
 
 class ExplorationLimit(Mcl2PnmlError):
     """The exploration met its state limit before it finished."""
 
 
-BACKENDS = ("auto", "compiled", "packed", "general")
-"""The explorers :func:`explore` can be asked for (see the module's documentation)."""
+BACKENDS = CHOICES
+"""The explorers :func:`explore` can be asked for: ``auto`` or a name of
+:data:`analysis.explorers.EXPLORERS`."""
 
 HANDOVER = 500_000
 """Markings after which ``"auto"`` leaves the numpy explorer for the compiled one."""
@@ -81,26 +79,37 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
             raise Mcl2PnmlError(f"initial marking names unknown places: {', '.join(unknown)}")
         m0 = tuple(initial.get(p, 0) for p in s.places)
     unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
-    if backend != "general" and unit and all(n <= 1 for n in m0):
+    if unit and all(n <= 1 for n in m0):
         try:
             if backend == "auto":
-                if compiledspace.loaded():
-                    backend = "compiled"
-                elif compiledspace.available() and max_states > HANDOVER:
-                    try:
-                        return explore_packed(s, m0, HANDOVER, _HandOver(), progress)
-                    except _HandOver:
-                        backend = "compiled"
-            if backend == "compiled":
-                if not compiledspace.available():
-                    raise Mcl2PnmlError("the compiled explorer needs numba, which is not "
+                backend = _auto(s, m0, max_states, progress)
+                if isinstance(backend, StateSpace):
+                    return backend
+            chosen = EXPLORERS[backend]
+            if chosen.safe_only:
+                if not chosen.can_run():
+                    raise Mcl2PnmlError(f"the {backend} explorer needs numba, which is not "
                                         "installed; known explorers: " + ", ".join(BACKENDS))
-                return compiledspace.explore_compiled(s, m0, max_states, _limit(max_states),
-                                                      progress)
-            return explore_packed(s, m0, max_states, _limit(max_states), progress)
+                return chosen.explore(s, m0, max_states, _limit(max_states), progress)
         except (NotSafe, KeyCollision):
             pass   # not safe after all, or (once in 2^64) two markings share a key
     return _explore_general(s, m0, max_states, progress)
+
+
+def _auto(s: Structure, m0, max_states: int, progress) -> "str | StateSpace":
+    """The explorer ``auto`` picks for a safe net, or the state space it already built.
+
+    The compiled explorer when its code is loaded; otherwise numpy, which
+    hands over to the compiled one past :data:`HANDOVER` markings.
+    """
+    if compiledspace.loaded():
+        return "compiled"
+    if compiledspace.available() and max_states > HANDOVER:
+        try:
+            return explore_packed(s, m0, HANDOVER, _HandOver(), progress)
+        except _HandOver:
+            return "compiled"
+    return "packed"
 
 
 def _limit(max_states: int) -> ExplorationLimit:
@@ -110,5 +119,5 @@ def _limit(max_states: int) -> ExplorationLimit:
 
 def _explore_general(s: Structure, m0: Sequence[int], max_states: int,
                      progress: Progress | None) -> StateSpace:
-    """The general explorer, with this module's limit error and progress rate."""
-    return explore_general(s, m0, max_states, _limit(max_states), progress, PROGRESS_EVERY)
+    """The general explorer, with this module's limit error."""
+    return explore_general(s, m0, max_states, _limit(max_states), progress)

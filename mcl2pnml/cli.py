@@ -14,6 +14,7 @@ from pathlib import Path
 
 import click
 
+from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
 from mcl2pnml.core.version import __version__
@@ -36,7 +37,6 @@ Examples:
   mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
 """
-EXPLORERS = ("auto", "compiled", "packed", "general")
 FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
 #: ``--format``: every format of the table that can be written
@@ -273,9 +273,8 @@ def _progress(states: int, frontier: int) -> None:
 @click.option("--progress/--no-progress", default=None,
               help="Show the progress of long explorations (default: on a terminal).")
 @click.option("--explorer", type=click.Choice(EXPLORERS), default="auto", show_default=True,
-              help="How to explore a safe net's markings: compiled code (fastest; most of a "
-                   "second to load), numpy, or the general explorer every net can use. "
-                   "auto: numpy, then compiled past 500,000 markings.")
+              help="; ".join(f"{e.name}: {e.doc}" for e in EXPLORER_TABLE.values())
+              + ". auto: numpy, then compiled past 500,000 markings.")
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
             max_states: int, progress: bool | None, explorer: str) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).

@@ -8,7 +8,7 @@ which these tests cover too).
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from analysis import compiledspace, packedspace, statespace
+from analysis import compiledspace, generalspace, packedspace, statespace
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, explore
 from mcl2pnml.core.net import ArcKind, NetBuilder
@@ -115,12 +115,12 @@ def test_deadlock_is_reported_as_improper(backend):
 
 def test_limit_and_progress(backend):
     calls = []
-    old = statespace.PROGRESS_EVERY
-    statespace.PROGRESS_EVERY = 10
+    old = generalspace.PROGRESS_EVERY
+    generalspace.PROGRESS_EVERY = 10
     try:
         explore(cycle(3), backend=backend, progress=lambda n, f: calls.append(n))
     finally:
-        statespace.PROGRESS_EVERY = old
+        generalspace.PROGRESS_EVERY = old
     assert calls and calls == sorted(calls)
     with pytest.raises(ExplorationLimit, match="more than 10 markings"):
         explore(cycle(3), max_states=10, backend=backend)

@@ -1,0 +1,65 @@
+"""The explorers of a net's reachable markings, one table entry each (``analyze --explorer``).
+
+Each :class:`Explorer` names the module and the function that explore, and
+is imported only when used: this table loads neither numpy nor numba, so
+the command line can list the explorers without paying for them. Every
+explorer takes the same arguments (the net's
+:class:`~mcl2pnml.core.structure.Structure`, the initial marking as counts,
+the state limit, the error to raise at it, the progress callback) and
+returns a :class:`~analysis.generalspace.StateSpace`; one that explores
+safe nets only raises :class:`~analysis.packedmarkings.NotSafe` at the
+first second token, and the general explorer takes over.
+:func:`analysis.statespace.explore` chooses among them.
+
+Adding an explorer is one module with such a function and one entry in
+:data:`EXPLORERS`; the chooser, ``analyze --explorer`` and the shared test
+suite (tests/test_statespace.py, run against every entry) take it from
+here.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class Explorer:
+    """One way to explore the markings of a net."""
+
+    #: the name ``--explorer`` and ``explore(backend=)`` take
+    name: str
+    #: what it is, for the help
+    doc: str
+    #: the module implementing it
+    module: str
+    #: its function ``(structure, m0, max_states, limit_error, progress) -> StateSpace``
+    function: str
+    #: it explores safe nets only (unit weights, at most one token a place)
+    safe_only: bool = False
+    #: the module's function saying whether it can run here (None: always)
+    available: str | None = None
+
+    def _get(self, name: str) -> Callable:
+        return getattr(importlib.import_module(self.module), name)
+
+    def can_run(self) -> bool:
+        return self.available is None or self._get(self.available)()
+
+    def explore(self, s, m0, max_states: int, limit_error, progress=None):
+        return self._get(self.function)(s, m0, max_states, limit_error, progress)
+
+
+EXPLORERS: dict[str, Explorer] = {e.name: e for e in (
+    Explorer("compiled", "compiled code for safe nets (fastest; most of a second to load)",
+             "analysis.compiledspace", "explore_compiled", safe_only=True,
+             available="available"),
+    Explorer("packed", "numpy for safe nets, a breadth-first frontier at a time",
+             "analysis.packedspace", "explore_packed", safe_only=True),
+    Explorer("general", "any net: the reachability or Karp-Miller coverability graph",
+             "analysis.generalspace", "explore_general"),
+)}
+
+#: What ``backend=`` accepts: ``auto`` (the policy of :func:`analysis.statespace.explore`)
+#: or an explorer of the table.
+CHOICES: tuple[str, ...] = ("auto", *EXPLORERS)
