@@ -3,7 +3,7 @@ they show, and every picture is there (python tests/tutorial.py --update rewrite
 the outputs and the tutorial's pictures)."""
 import re
 
-from conftest import ROOT
+from helpers import ROOT
 from tutorial import DOC, main
 
 
