@@ -2,9 +2,10 @@
 the two engines, and a net with every feature of the core.
 
 Golden files hold what the code gives for fixed inputs: ``*.golden`` (the
-compiler's verdicts) and ``*.expected`` (the message of each invalid input).
-``MCL2PNML_REGOLD=1`` rewrites every one of them after a deliberate change;
-review the diff before committing it.
+compiler's verdicts), ``*.expected`` (the message of each invalid input) and
+the console blocks of the tutorial (tests/tutorial.py). ``MCL2PNML_REGOLD=1``
+rewrites every one of them after a deliberate change; review the diff before
+committing it.
 """
 from __future__ import annotations
 
