@@ -1,4 +1,4 @@
-"""How the net core scales: build, fuse, write and read PNML of ring nets.
+"""How the net core scales: build, fuse, write and read PNML of ring nets (:func:`analysis.zoo.cycle`).
 
 Run:  .venv/bin/python -m bench.core_scale [SIZES...]
 
@@ -13,18 +13,8 @@ import statistics
 import sys
 import time
 
-from mcl2pnml import NetBuilder, compose, parse_pnml, to_pnml_bytes
-
-
-def ring(n: int, name: str):
-    b = NetBuilder(name)
-    for i in range(n):
-        b.place(f"p{i}", 1 if i == 0 else 0)
-        b.transition(f"t{i}")
-    for i in range(n):
-        b.arc(f"p{i}", f"t{i}")
-        b.arc(f"t{i}", f"p{(i + 1) % n}")
-    return b.build()
+from analysis.zoo import cycle
+from mcl2pnml import compose, parse_pnml, to_pnml_bytes
 
 
 def measure(size: int) -> dict[str, float]:
@@ -32,7 +22,7 @@ def measure(size: int) -> dict[str, float]:
     out: dict[str, list[float]] = {"build": [], "fuse": [], "write": [], "read": []}
     for _ in range(3):
         t0 = time.perf_counter()
-        a, b = ring(n, "a"), ring(n, "b")
+        a, b = cycle(n, "a"), cycle(n, "b")
         t1 = time.perf_counter()
         net = compose({"a": a, "b": b}, [["a.p0", "b.p0"]])
         t2 = time.perf_counter()

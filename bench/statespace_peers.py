@@ -26,6 +26,7 @@ from pathlib import Path
 
 from mcl2pnml.io.pnml import save_pnml
 
+from analysis import zoo
 from bench import nets
 
 TIMEOUT = 60.0
@@ -99,10 +100,10 @@ def measure(engine: str, path: Path) -> dict | None:
     return summary
 
 
-CASES = ([("cycles", k, nets.cycles) for k in range(6, 12)]
-         + [("philosophers", n, nets.philosophers) for n in (8, 10, 12)]
-         + [("token ring", n, nets.token_ring) for n in (8, 10, 12)]
-         + [("shared memory", n, nets.shared_memory) for n in (6, 8, 10)]
+CASES = ([("cycles", k, zoo.cycles) for k in range(6, 12)]
+         + [("philosophers", n, zoo.philosophers_left_first) for n in (8, 10, 12)]
+         + [("token ring", n, zoo.token_ring) for n in (8, 10, 12)]
+         + [("shared memory", n, zoo.shared_memory) for n in (6, 8, 10)]
          + [("mission, parallel width", w, nets.mission) for w in (2, 3, 4)])
 
 

@@ -31,6 +31,7 @@ import numpy
 
 from mcl2pnml.core.files import atomic_write_text
 
+from analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
 from bench import statespace_peers as peers
 from bench.core_scale import slope
@@ -59,8 +60,8 @@ def holds(flag: bool) -> str:
 
 
 def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
-    cases = peers.CASES if not quick else [("cycles", 6, nets.cycles),
-                                           ("philosophers", 8, nets.philosophers),
+    cases = peers.CASES if not quick else [("cycles", 6, zoo.cycles),
+                                           ("philosophers", 8, zoo.philosophers_left_first),
                                            ("mission, parallel width", 2, nets.mission)]
     rows = peers.run(cases, log=log)
     lines = ["## State spaces: ours, SNAKES, pm4py", "",

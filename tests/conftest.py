@@ -1,13 +1,15 @@
-"""Shared fixtures: the official PNML grammar and a validator every PNML test uses."""
+"""Shared fixtures: the official PNML grammar and a validator every PNML test uses,
+graphviz, and the engine under test; what tests import lives in helpers.py."""
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-DATA = Path(__file__).resolve().parent / "data"
+pytest.register_assert_rewrite("helpers")  # its assertions explain their failures, as a test's do
+
+from helpers import ENGINES, ROOT, Engine  # noqa: E402  (after the rewrite hook)
+
 sys.path.insert(0, str(ROOT))  # examples/ and paper_repro/ are not installed
 
 
@@ -45,3 +47,9 @@ def dot() -> str:
         pytest.fail("graphviz 'dot' is needed to lay out and draw nets: `make setup` "
                     "installs it with apt-get (or: apt-get install graphviz)")
     return path
+
+
+@pytest.fixture(params=[Engine(name) for name in ENGINES], ids=ENGINES)
+def engine(request) -> Engine:
+    """Each engine in turn, for the checks that hold of either one alone."""
+    return request.param

@@ -1,19 +1,8 @@
-"""Hypothesis strategies for whole MCL missions and vehicle scripts, to run both engines on,
-and :func:`both`, which runs one mission on both engines."""
+"""Hypothesis strategies for whole MCL missions and vehicle scripts, to run both engines on
+(with :func:`helpers.both`)."""
 from __future__ import annotations
 
-import json
-
 from hypothesis import strategies as st
-
-from mcl2pnml.runtime.aal import ScriptedVehicle
-from mcl2pnml.language.compiler import compile_checked
-from mcl2pnml.runtime.engine import run
-from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.runtime.executor import PetriEngine
-from mcl2pnml.runtime.reference import ReferenceEngine
-
-MAX_TIME = 2_000.0
 
 PRIMITIVES = ["Pa", "Pb", "Pc"]
 
@@ -95,18 +84,3 @@ replies = st.one_of(st.sampled_from(["never"]),
                               st.sampled_from([0, 1, 2, 5, 10])))
 scripts = st.fixed_dictionaries({p: st.lists(replies, max_size=6) for p in PRIMITIVES})
 
-
-def both(checked, script: dict, net=None) -> tuple[dict, dict]:
-    """The ``--json`` run of the executor and of the reference engine, with one script.
-
-    ``net`` is the compiled mission when the caller has it already.
-    """
-    text = json.dumps(script)
-    out = []
-    for engine in (PetriEngine(net or compile_checked(checked)), ReferenceEngine(checked)):
-        try:
-            out.append(run(engine, ScriptedVehicle.from_json(text),
-                           max_time=MAX_TIME).as_json())
-        except Mcl2PnmlError as e:   # a zero-time loop: both must say so
-            out.append({"error": e.message})
-    return out[0], out[1]

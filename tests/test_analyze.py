@@ -1,19 +1,12 @@
 """`mcl2pnml analyze` and `mcl2pnml template`: the contract of cli.md, on our nets and others'."""
 import json
-import subprocess
-import sys
 
 import pytest
 
-from conftest import DATA
+from helpers import DATA, run_cli as run
 
 SPEC_KEYS = {"places", "transitions", "p_invariants", "siphons", "bounded", "safe",
              "terminal_markings", "reusable", "deadlock_free", "states"}
-
-
-def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
 @pytest.fixture(scope="module")

@@ -1,18 +1,10 @@
 """The command line: one clear line and exit 2 on bad input, never a traceback."""
-import subprocess
-import sys
-
 import pytest
 
 from mcl2pnml import __version__, save_pnml
 
-from conftest import DATA
+from helpers import DATA, run_cli as run
 from examples.handbuilt_primitive import primitive
-
-
-def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=120)
 
 
 def test_version_and_help():

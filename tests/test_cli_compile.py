@@ -7,8 +7,7 @@ import pytest
 
 from mcl2pnml.io.pnml import load_pnml
 
-from conftest import DATA, ROOT
-from test_cli import run
+from helpers import DATA, ROOT, run_cli as run
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
 

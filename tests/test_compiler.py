@@ -6,12 +6,10 @@ the templates issue (state space, 1-safety, deadlocks, reusability, the
 results the mission can end with), from ``mission.B`` and again with an
 abort already pending (``mission.A``). The small missions under
 ``data/mcl/golden`` cover one feature each; ``examples/`` are the realistic
-ones. Set ``MCL2PNML_REGOLD=1`` to rewrite the golden files after a
-deliberate change, and review the diff.
+ones. ``MCL2PNML_REGOLD=1`` rewrites the golden files (tests/helpers.py).
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
@@ -28,7 +26,7 @@ from mcl2pnml.io.pnml import parse_pnml, save_pnml, to_pnml_bytes
 
 from bench.missions import survey
 
-from conftest import DATA, ROOT
+from helpers import DATA, ROOT, assert_golden
 
 GOLDEN = DATA / "mcl" / "golden"
 SMALL = sorted(GOLDEN.glob("*.mcl"))
@@ -36,7 +34,6 @@ EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 #: Missions whose state space with a pending abort is too large for every run
 #: (millions of markings): their abort case runs under ``-m slow``.
 ABORT_IS_SLOW = {"dam_inspection"}
-REGOLD = os.environ.get("MCL2PNML_REGOLD") == "1"
 
 
 def golden_path(mission: Path) -> Path:
@@ -89,12 +86,7 @@ CASES = [pytest.param(m, id=m.stem) for m in SMALL + EXAMPLES]
 @pytest.mark.parametrize("mission", CASES)
 def test_golden_and_proven(mission: Path):
     text, checks = render(mission, with_abort=mission.stem not in ABORT_IS_SLOW)
-    path = golden_path(mission)
-    if REGOLD or not path.exists():
-        path.write_text(text)
-        if not REGOLD:
-            pytest.fail(f"wrote the missing golden file {path}; review it and commit it")
-    assert text == path.read_text(), f"{mission.name} differs from {path.name}"
+    assert_golden(golden_path(mission), text)
     for label, space, b in checks:
         # the properties themselves, so that a regression names what broke
         assert space.safe, f"{mission.name} from {label}: not 1-safe"

@@ -8,7 +8,7 @@ from mcl2pnml.core.net import ArcKind
 from mcl2pnml.io import ids
 
 from examples.handbuilt_primitive import primitive
-from test_pnml import everything
+from helpers import everything
 
 
 def _expected_arcs(net: Net, xml_ids: bool = False) -> set:

@@ -13,8 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import parse, parse_file
 
-from conftest import ROOT
-from missions import both, missions, scripts
+from helpers import ROOT, both
+from missions import missions, scripts
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 

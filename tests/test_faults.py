@@ -14,14 +14,11 @@ import pytest
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, SafeStop, ScriptedVehicle,
                           Vehicle, VehicleInputError)
 from mcl2pnml.runtime.bridge import MappedVehicle, QueueTransport, VehicleMapping
-from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.runtime.engine import Outcome, run, run_realtime
-from mcl2pnml.runtime.executor import PetriEngine
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import parse
-from mcl2pnml.runtime.reference import ReferenceEngine
 
-from test_cli import run as cli
+from helpers import engines, run_cli as cli
 
 MISSION = """\
 primitive P(x);
@@ -112,15 +109,13 @@ class Faulty(Vehicle):
         self.inner.act(action)
 
 
-def engines():
-    c = check(parse(MISSION, "faults.mcl"))
-    return [PetriEngine(compile_checked(c)), ReferenceEngine(c)]
+FAULTS = check(parse(MISSION, "faults.mcl"))
 
 
 def both(make_vehicle, **kw):
     """Run both engines, each with a fresh faulty vehicle; they must agree on everything."""
     results, vehicles = [], []
-    for engine in engines():
+    for engine in engines(FAULTS):
         vehicles.append(make_vehicle())
         results.append(run(engine, vehicles[-1], **kw))
     a, b = results
@@ -221,14 +216,13 @@ def test_the_time_limit_stops_the_vehicle():
     assert [a.primitive for a in r.safe_stop] == ["P"]
 
 
-def test_an_interrupt_stops_the_vehicle_before_it_is_passed_on():
-    for engine in engines():
-        vehicle = Faulty(SCRIPT, interrupt_at=6)
-        seen = []
-        with pytest.raises(KeyboardInterrupt):
-            run(engine, vehicle, listener=seen.append)
-        assert vehicle.inner.enabled == set()
-        assert seen[-1] == SafeStop(10, ActionKind.DISABLE, "Q")   # the time reached
+def test_an_interrupt_stops_the_vehicle_before_it_is_passed_on(engine):
+    vehicle = Faulty(SCRIPT, interrupt_at=6)
+    seen = []
+    with pytest.raises(KeyboardInterrupt):
+        run(engine(FAULTS), vehicle, listener=seen.append)
+    assert vehicle.inner.enabled == set()
+    assert seen[-1] == SafeStop(10, ActionKind.DISABLE, "Q")   # the time reached
 
 
 # -- unknown events: bad input, one message naming where it came from ------------------
@@ -273,18 +267,17 @@ def sent(transport) -> list[dict]:
     return out
 
 
-def test_a_garbled_line_on_the_link_is_one_message_quoting_it_after_a_safe_stop():
-    for engine in engines():
-        transport = QueueTransport()
-        transport.inbox.put(b'{"primitive": "P", "sta\n')
-        with pytest.raises(VehicleInputError, match=r"""not a JSON object: '{"primitive": "P", "sta'"""):
-            run_realtime(engine, MappedVehicle(MAPPING, transport), clock=lambda: 0.0)
-        assert sent(transport) == [{"command": "start_P", "x": 1}, {"command": "stop_P"}]
+def test_a_garbled_line_on_the_link_is_one_message_quoting_it_after_a_safe_stop(engine):
+    transport = QueueTransport()
+    transport.inbox.put(b'{"primitive": "P", "sta\n')
+    with pytest.raises(VehicleInputError, match=r"""not a JSON object: '{"primitive": "P", "sta'"""):
+        run_realtime(engine(FAULTS), MappedVehicle(MAPPING, transport), clock=lambda: 0.0)
+    assert sent(transport) == [{"command": "start_P", "x": 1}, {"command": "stop_P"}]
 
 
 def test_a_dropped_link_stalls_the_run_saying_so():
     results = []
-    for engine in engines():
+    for engine in engines(FAULTS):
         transport = QueueTransport()
         transport.inbox.put({"primitive": "P", "status": "done"})
         transport.close()

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -20,7 +18,7 @@ from mcl2pnml.core.net import ArcKind, NetBuilder, Timing
 from mcl2pnml.io import ids
 from mcl2pnml.language.library import default_library
 
-from conftest import DATA, ROOT
+from helpers import DATA, ROOT, assert_error_golden, run_cli as run
 from formats_readers import read_dot, read_lola, read_tina
 from strategies import nets
 
@@ -157,15 +155,9 @@ def test_a_net_written_by_hand_for_lola():
 @pytest.mark.parametrize("path", INVALID, ids=lambda p: p.name)
 def test_bad_files_give_the_expected_message(path):
     """Golden messages: file:line:col, the line, a caret."""
-    expected = path.with_suffix(".expected").read_text()
     with pytest.raises(Mcl2PnmlError) as info:
         load_net(path.relative_to(ROOT))
-    assert str(info.value) + "\n" == expected
-
-
-def run(*args):
-    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
+    assert_error_golden(path, info.value)
 
 
 @pytest.mark.parametrize("fmt, suffix", [("tina", ".net"), ("lola", ".lola")])

@@ -33,7 +33,7 @@ from mcl2pnml.io.pnml.reader import parse_pnml
 from mcl2pnml.io.pnml.writer import to_pnml_bytes
 from mcl2pnml.language.library import default_library
 
-from conftest import DATA, ROOT
+from helpers import DATA, ROOT
 
 MCL_NAME = "fuzz.mcl"
 PNML_NAME = "fuzz.pnml"

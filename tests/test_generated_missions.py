@@ -31,7 +31,8 @@ from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import parse
 
-from missions import both, missions, scripts
+from helpers import both
+from missions import missions, scripts
 
 MAX_STATES = 20_000
 #: The most parallel and monitor structures in one mission, functions included.

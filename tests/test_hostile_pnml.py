@@ -21,7 +21,7 @@ import pytest
 from mcl2pnml.core.errors import Mcl2PnmlError, PnmlError
 from mcl2pnml.io.pnml.reader import parse_pnml
 
-from conftest import DATA
+from helpers import DATA, run_cli
 
 HEAD = (b'<?xml version="1.0"?>\n'
         b'<pnml xmlns="http://www.pnml.org/version-2009/grammar/pnml">\n'
@@ -37,12 +37,6 @@ BILLION_LAUGHS = (b'<?xml version="1.0"?>\n<!DOCTYPE pnml [\n <!ENTITY l0 "ha">\
                              for i in range(1, 10))
                   + b"]>\n" + HEAD[22:] + b'<place id="p"><name><text>&l9;</text></name>'
                   + b"</place>\n" + TAIL)
-
-
-def run_cli(*args) -> subprocess.CompletedProcess:
-    # the timeout only guards against a hang; nothing here is timed
-    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)
 
 
 def load_measured(path: Path) -> tuple[str, int]:

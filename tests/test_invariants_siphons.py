@@ -9,30 +9,11 @@ from analysis.invariants import (format_invariant, minimal_semipositive_p_invari
                                  t_invariant_basis)
 from analysis.siphons import (is_siphon, is_trap, max_siphon_within, minimal_siphons,
                               minimal_traps, siphon_control)
+from analysis.zoo import philosophers
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import structure
 
 from strategies import nets
-
-
-def philosophers(n: int = 3):
-    """Dijkstra's dining philosophers: think -> take both forks -> eat -> release."""
-    b = NetBuilder(f"philosophers{n}")
-    for i in range(n):
-        b.place(f"think{i}", 1)
-        b.place(f"eat{i}")
-        b.place(f"fork{i}", 1)
-    for i in range(n):
-        left, right = f"fork{i}", f"fork{(i + 1) % n}"
-        b.transition(f"take{i}")
-        b.transition(f"release{i}")
-        for p in (f"think{i}", left, right):
-            b.arc(p, f"take{i}")
-        b.arc(f"take{i}", f"eat{i}")
-        b.arc(f"eat{i}", f"release{i}")
-        for p in (f"think{i}", left, right):
-            b.arc(f"release{i}", p)
-    return b.build()
 
 
 def test_philosophers_invariants_are_the_textbook_ones():

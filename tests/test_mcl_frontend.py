@@ -1,7 +1,4 @@
 """The MCL front end: parser, checker, functional form (golden files, sqlglot style)."""
-import subprocess
-import sys
-
 import pytest
 from hypothesis import given, settings, strategies as st
 
@@ -11,7 +8,7 @@ from mcl2pnml.language.functional import format_node, mission_expression
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import decode, parse, parse_file
 
-from conftest import DATA, ROOT
+from helpers import DATA, ROOT, assert_error_golden, run_cli as run
 
 INVALID = sorted((DATA / "mcl" / "invalid").glob("*.mcl"))
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
@@ -70,7 +67,7 @@ def test_literals_and_comments():
 def test_invalid_files_give_the_expected_messages(path):
     with pytest.raises(Mcl2PnmlError) as info:
         check(parse(decode(path.read_bytes(), path.name), path.name))
-    assert str(info.value) + "\n" == path.with_suffix(".expected").read_text()
+    assert_error_golden(path, info.value)
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
@@ -79,8 +76,6 @@ def test_every_example_checks(path):
 
 
 def test_cli_check_and_functional():
-    run = lambda *a: subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, a)],
-                                    capture_output=True, text=True, timeout=120)
     out = run("functional", ROOT / "examples" / "sauce.mcl")
     assert out.returncode == 0 and out.stdout.strip() == ALGORITHM_2
     out = run("check", DATA / "mcl" / "invalid" / "several_errors.mcl")

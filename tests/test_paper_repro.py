@@ -9,7 +9,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.language.library import Library, default_library
 from paper_repro import checks
 
-from conftest import ROOT
+from helpers import ROOT
 
 
 @pytest.fixture(scope="module")

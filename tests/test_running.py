@@ -13,12 +13,10 @@ from mcl2pnml.runtime.executor import PetriEngine
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import parse, parse_file
 from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
-from mcl2pnml.runtime.reference import ReferenceEngine
 from mcl2pnml.runtime.simulator import AUVSimulator, World
 
-from conftest import ROOT
+from helpers import ENGINES, ROOT, engines, run_cli as cli
 from bench.missions import survey
-from test_cli import run as cli
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
 FOUND = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
@@ -27,10 +25,6 @@ FOUND = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
 
 def checked(source: str):
     return check(parse(source, "m.mcl"))
-
-
-def engines(c):
-    return [PetriEngine(compile_checked(c)), ReferenceEngine(c)]
 
 
 def scripted(script: dict) -> ScriptedVehicle:
@@ -95,30 +89,27 @@ def test_the_cost_of_an_event_does_not_grow_with_the_mission():
     assert large[1] <= small[1]
 
 
-def test_a_mission_that_waits_for_ever_stalls_and_says_on_what():
+def test_a_mission_that_waits_for_ever_stalls_and_says_on_what(engine):
     c = checked("primitive P(x);\ntask T(x) = AchieveGoal(P(x));\nmission { T(1); }\n")
-    for engine in engines(c):
-        result = run(engine, scripted({"P": ["never"]}))
-        assert result.outcome is Outcome.STALLED and result.time == 0
-        assert any("P: waits for the vehicle's 'achieved' or 'failed'" in w
-                   or "P: waits for the vehicle's 'achieved'" in w for w in result.waiting), \
-            result.waiting
+    result = run(engine(c), scripted({"P": ["never"]}))
+    assert result.outcome is Outcome.STALLED and result.time == 0
+    assert any("P: waits for the vehicle's 'achieved' or 'failed'" in w
+               or "P: waits for the vehicle's 'achieved'" in w for w in result.waiting), \
+        result.waiting
 
 
-def test_a_loop_that_never_lets_time_pass_is_an_error_not_a_hang():
+def test_a_loop_that_never_lets_time_pass_is_an_error_not_a_hang(engine):
     c = checked("primitive P(x);\ntask T(x) = AchieveGoal(P(x));\n"
                 "mission { while ({ }) { } }\n")
-    for engine in engines(c):
-        with pytest.raises(Mcl2PnmlError, match="without time passing"):
-            run(engine, scripted({}))
+    with pytest.raises(Mcl2PnmlError, match="without time passing"):
+        run(engine(c), scripted({}))
 
 
-def test_time_outs_fire_on_virtual_time():
+def test_time_outs_fire_on_virtual_time(engine):
     c = checked("primitive P(x);\ntask T(x) = AchieveGoal(P(x)) timeout 42.5;\n"
                 "mission { T(1); }\n")
-    for engine in engines(c):
-        result = run(engine, scripted({"P": ["never"]}))
-        assert result.outcome is Outcome.FAIL and result.time == 42.5
+    result = run(engine(c), scripted({"P": ["never"]}))
+    assert result.outcome is Outcome.FAIL and result.time == 42.5
 
 
 # -- bad vehicle events: logged, ignored, and the mission goes on ---------------------
@@ -259,7 +250,7 @@ def test_run_json_is_the_object_of_the_spec(tmp_path):
     script = tmp_path / "v.json"
     script.write_text(json.dumps(FOUND))
     outs = [json.loads(cli("run", SAUCE, "--engine", e, "--vehicle", script, "--json").stdout)
-            for e in ("petri", "reference")]
+            for e in ENGINES]
     assert outs[0] == outs[1]
     assert set(outs[0]) == {"outcome", "time", "trace"} and outs[0]["outcome"] == "OK"
     assert outs[0]["trace"][0] == {"t": 0, "action": "enable", "primitive": "DetectCross",

@@ -10,13 +10,11 @@ from __future__ import annotations
 import json
 import re
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from conftest import ROOT
+from helpers import ROOT, run_cli as run
 
 SHOTS = ROOT / "out" / "screenshots"
 CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -32,11 +30,6 @@ mission {
     Goto((10.0, 5.0, 5.0));
 }
 """
-
-
-def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
-                          capture_output=True, text=True, timeout=300, cwd=cwd)
 
 
 @pytest.fixture(scope="module")

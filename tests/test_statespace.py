@@ -11,22 +11,10 @@ from hypothesis import given, settings, strategies as st
 from analysis import compiledspace, generalspace, packedspace, statespace
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, explore
+from analysis.zoo import cycles
 from mcl2pnml.core.net import ArcKind, NetBuilder
 
 from strategies import nets
-
-
-def cycle(k: int = 1):
-    """k independent 4-place cycles: 4**k markings."""
-    b = NetBuilder(f"cycles{k}")
-    for c in range(k):
-        for i in range(4):
-            b.place(f"c{c}p{i}", 1 if i == 0 else 0)
-            b.transition(f"c{c}t{i}")
-        for i in range(4):
-            b.arc(f"c{c}p{i}", f"c{c}t{i}")
-            b.arc(f"c{c}t{i}", f"c{c}p{(i + 1) % 4}")
-    return b.build()
 
 
 SAFE_BACKENDS = ("compiled", "packed")
@@ -39,7 +27,7 @@ def backend(request):
 
 def test_independent_cycles_have_4_to_the_k_markings(backend):
     for k in (1, 2, 3):
-        space = explore(cycle(k), backend=backend)
+        space = explore(cycles(k), backend=backend)
         assert space.states == 4 ** k and space.safe and not space.terminal
         assert behaviour(space).home_marking and behaviour(space).reusable
 
@@ -118,16 +106,16 @@ def test_limit_and_progress(backend):
     old = generalspace.PROGRESS_EVERY
     generalspace.PROGRESS_EVERY = 10
     try:
-        explore(cycle(3), backend=backend, progress=lambda n, f: calls.append(n))
+        explore(cycles(3), backend=backend, progress=lambda n, f: calls.append(n))
     finally:
         generalspace.PROGRESS_EVERY = old
     assert calls and calls == sorted(calls)
     with pytest.raises(ExplorationLimit, match="more than 10 markings"):
-        explore(cycle(3), max_states=10, backend=backend)
+        explore(cycles(3), max_states=10, backend=backend)
 
 
 def test_graph_and_paths(backend):
-    space = explore(cycle(1), backend=backend)
+    space = explore(cycles(1), backend=backend)
     g = space.graph()
     assert g.number_of_nodes() == 4 and g.number_of_edges() == 4
     assert space.path_to(2) == ["c0t0", "c0t1"]
@@ -269,7 +257,7 @@ def test_a_second_token_hands_over_to_the_general_explorer(backend):
 def test_the_compiled_explorer_reports_progress_between_slices(monkeypatch):
     monkeypatch.setattr(compiledspace, "SLICE", 4)
     calls = []
-    space = explore(cycle(3), backend="compiled", progress=lambda n, f: calls.append((n, f)))
+    space = explore(cycles(3), backend="compiled", progress=lambda n, f: calls.append((n, f)))
     assert space.states == 64 and len(calls) >= 64 // 4
     assert [n for n, _ in calls] == sorted(n for n, _ in calls) and calls[-1] == (64, 0)
 
@@ -280,11 +268,11 @@ def test_auto_leaves_the_numpy_explorer_for_the_compiled_one_past_the_handover(m
     used = []
     monkeypatch.setattr(compiledspace, "explore_compiled",
                         lambda *a, _real=compiledspace.explore_compiled: used.append(1) or _real(*a))
-    assert explore(cycle(1)).states == 4 and not used             # small: numpy alone
-    assert explore(cycle(2)).states == 16 and used == [1]           # past 10: compiled
+    assert explore(cycles(1)).states == 4 and not used             # small: numpy alone
+    assert explore(cycles(2)).states == 16 and used == [1]           # past 10: compiled
 
 
 def test_an_unknown_explorer_is_named_with_the_known_ones():
     with pytest.raises(statespace.Mcl2PnmlError, match="unknown explorer 'fast'; known: auto, "
                        "compiled, packed, general"):
-        explore(cycle(1), backend="fast")
+        explore(cycles(1), backend="fast")

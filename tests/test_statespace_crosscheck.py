@@ -9,15 +9,15 @@ import warnings
 import pytest
 
 from analysis.statespace import explore
+from analysis.zoo import cycles
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml import save_pnml
 from mcl2pnml.language.library import default_library
 
-from test_statespace import cycle
 
 LIB = default_library()
 NETS = [LIB.composed(n) for n in ("task", "task-reduced", "sequence", "parallel", "while",
-                                  "monitor", "KeepTwoGoals")] + [cycle(3)]
+                                  "monitor", "KeepTwoGoals")] + [cycles(3)]
 
 
 def _ours(net):

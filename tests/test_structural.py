@@ -25,44 +25,13 @@ from analysis.invariants import (AnalysisLimit, format_invariant, invariant_valu
 from analysis.siphons import (SiphonReport, control_by_lp, is_siphon, is_trap,
                               max_siphon_within, max_trap_within, minimal_siphons,
                               minimal_traps, siphon_control)
+from analysis.zoo import cycle, philosophers
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import ArcKind, Marking, Net, NetBuilder
 from mcl2pnml.core.structure import structure
 
 # ---------------------------------------------------------------------------
 # hand-built nets
-
-
-def cycle(n: int = 4) -> Net:
-    """p0 -> t0 -> p1 -> t1 -> ... -> p{n-1} -> t{n-1} -> p0, one token in p0."""
-    b = NetBuilder(f"cycle{n}")
-    for i in range(n):
-        b.place(f"p{i}", 1 if i == 0 else 0)
-        b.transition(f"t{i}")
-    for i in range(n):
-        b.arc(f"p{i}", f"t{i}")
-        b.arc(f"t{i}", f"p{(i + 1) % n}")
-    return b.build()
-
-
-def philosophers(n: int = 3) -> Net:
-    """Dining philosophers taking both forks at once: philosopher i uses
-    fork i and fork i+1, so fork i is shared by philosophers i and i-1."""
-    b = NetBuilder(f"philosophers{n}")
-    for i in range(n):
-        b.place(f"think{i}", 1)
-        b.place(f"eat{i}")
-        b.place(f"fork{i}", 1)
-    for i in range(n):
-        hands = (f"think{i}", f"fork{i}", f"fork{(i + 1) % n}")
-        b.transition(f"take{i}")
-        b.transition(f"release{i}")
-        for p in hands:
-            b.arc(p, f"take{i}")
-            b.arc(f"release{i}", p)
-        b.arc(f"take{i}", f"eat{i}")
-        b.arc(f"eat{i}", f"release{i}")
-    return b.build()
 
 
 def guarded(link: str) -> Net:

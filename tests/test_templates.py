@@ -16,7 +16,7 @@ from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
 from mcl2pnml.language.library import Library, default_library, source_places
 from mcl2pnml.language.template_parser import CONTROL, TemplateKind, parse_template
 
-from conftest import DATA
+from helpers import DATA, assert_error_golden
 from paper_repro import nets
 
 LIB = default_library()
@@ -144,7 +144,7 @@ def test_source_places_are_the_inputs():
 def test_bad_templates_give_the_expected_message(path):
     with pytest.raises(Mcl2PnmlError) as info:
         parse_template(path.read_text(), path.name, ("E", "D", "OFF", "S1", "S2", "ON"))
-    assert str(info.value) + "\n" == path.with_suffix(".expected").read_text()
+    assert_error_golden(path, info.value)
 
 
 def test_docs_and_tags_reach_the_payload():

@@ -1,14 +1,14 @@
 """docs/tutorial.md and docs/interop.md are true: every command in them prints what
-they show, and every picture is there (python tests/tutorial.py --update rewrites
-the outputs and the tutorial's pictures)."""
+they show, and every picture is there (python tests/tutorial.py --update, or this
+test under MCL2PNML_REGOLD=1, rewrites the outputs and the tutorial's pictures)."""
 import re
 
-from conftest import ROOT
+from helpers import REGOLD, ROOT
 from tutorial import DOC, main
 
 
 def test_every_command_prints_what_the_tutorial_shows(capsys):
-    stale = main([])
+    stale = main(["--update"] if REGOLD else [])
     assert stale == 0, ("the docs no longer match what their commands print "
                         "(python tests/tutorial.py --update):\n" + capsys.readouterr().out)
 
