@@ -10,13 +10,11 @@ from mcl2pnml.core.net import Net
 
 
 def mission(width: int) -> Net:
-    from mcl2pnml.language.compiler import compile_checked
-    from mcl2pnml.language.checker import check
-    from mcl2pnml.language.parser import parse
+    from mcl2pnml.pipeline import compile_source
 
     lines = [f"primitive P{i}(x);" for i in range(width)]
     lines += [f"task T{i}(x) = AchieveGoal(P{i}(x)) timeout 10;" for i in range(width)]
     calls = ", ".join(f"T{i}({i})" for i in range(width))
     body = f"parallel({calls});" if width > 1 else "T0(0);"
     lines.append(f"mission {{ {body} }}")
-    return compile_checked(check(parse("\n".join(lines), f"parallel-{width}.mcl")))
+    return compile_source("\n".join(lines), f"parallel-{width}.mcl")
