@@ -90,7 +90,9 @@ class MissionPlace(enum.Enum):
     """Begin: marked in the initial marking, it starts the mission."""
 
     A = "A"
-    """Abort: nothing above the mission marks it; a run stops by other means."""
+    """Abort: the operator's input. The analysis marks it with B to prove that
+    an aborted mission ends and can be run again; the executor never sees it
+    marked (a run stops by its safe stop, docs/faults.md)."""
 
     OK = "OK"
     """The mission ended OK."""
@@ -110,8 +112,9 @@ class MissionPlace(enum.Enum):
 #: The places whose marking ends a run, each a result of shared/spec/mcl.md.
 RESULT_PLACES = (MissionPlace.OK, MissionPlace.FAIL, MissionPlace.ABORTED)
 
-#: A call site's transition that enters the callee (section 2.5: the call
-#: takes the callee's gate and locks); its payload is a :class:`CallEntry`.
+#: A call site's transition that enters the callee (it takes the callee's
+#: gate and locks: shared/spec/mcl.md, "Sharing"); its payload holds a
+#: :class:`CallEntry`.
 ENTER = "enter"
 
 
@@ -153,8 +156,10 @@ def _argument(value: Any) -> Any:
 
 @dataclass(frozen=True)
 class CallEntry:
-    """A call site's entry (section 2.5): the callee it enters and the values of
-    the callee's parameters, evaluated in ``scope`` when the entry fires."""
+    """A call site's entry, as the compiler writes it (section 2.4): the callee
+    it enters and the values of the callee's parameters, evaluated in
+    ``scope`` when the entry fires. One shared net per task and function,
+    entered with each call's own arguments (shared/spec/mcl.md, "Sharing")."""
 
     callee: str
     scope: str
