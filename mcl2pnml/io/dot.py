@@ -28,6 +28,7 @@ import graphviz
 
 from mcl2pnml.core.files import atomic_write_bytes, atomic_write_text
 from mcl2pnml.core.net import ArcKind, Net
+from mcl2pnml.core.payloads import read_transition
 
 TOKEN = "\u25cf"
 #: graphviz settings that bound dot's slowest phases, network simplex
@@ -72,7 +73,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         label = _inside(t.label, box_name)
         attrs = {"shape": "box", "height": "0.5", "width": "0.12", "style": "filled",
                  "fillcolor": "white", "xlabel": label, "label": "", "class": "transition"}
-        if t.timing is not None or (t.payload and t.payload.get("timeout")):
+        if t.timing is not None or read_transition(t).timeout is not None:
             delay = f" {t.timing}" if t.timing is not None else " (time-out)"
             attrs.update(fillcolor="gray35", xlabel=label + delay)
         target.node(t.id, **attrs)

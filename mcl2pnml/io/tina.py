@@ -53,6 +53,7 @@ from mcl2pnml.core.version import __version__
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
 from mcl2pnml.core.files import atomic_write_text, decode_text, read_bytes
 from mcl2pnml.core.net import ArcKind, Net, NetBuilder, Timing, thaw
+from mcl2pnml.core.payloads import read_transition
 from mcl2pnml.io.text import syntax_error
 
 # -- writing ---------------------------------------------------------------------------
@@ -117,14 +118,13 @@ def to_tina(net: Net, *, urgent: bool = False) -> str:
     lines.append("")
     pre, post = net.pre, net.post
     for t in net.transitions:
-        payload = thaw(t.payload) if t.payload else {}
-        if payload:
+        if t.payload:
             lines.append(_comment(f"{t.id}: payload {_json(t.payload)}"))
         label = f" : {name(t.name)}" if t.name is not None else ""
         if t.timing is not None:
             hi = "w[" if t.timing.latest is None else _bound(t.timing.latest, digits) + "]"
             interval = f" [{_bound(t.timing.earliest, digits)},{hi}"
-        elif urgent and "event" not in payload:
+        elif urgent and read_transition(t).event is None:
             interval = " [0,0]"
         else:
             interval = ""

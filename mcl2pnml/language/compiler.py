@@ -31,20 +31,26 @@ are no primitives or locks: the mission's control flow alone.)
 
 The root of the mission is named ``mission``: ``mission.B`` and
 ``mission.MTX`` are marked, and analysing the PNML alone covers the whole
-mission.
+mission (its interface: :class:`~mcl2pnml.core.payloads.MissionPlace`).
 
 What the executor needs travels as payloads (and so as PNML toolspecific
-data): events on the primitives' transitions, actions and their argument
-expressions on the task transitions that mark E or D, bindings on each call
-site's entry, delays on time-outs.
+data), written through the records of :mod:`mcl2pnml.core.payloads`: events
+on the primitives' transitions, actions and their argument expressions on
+the task transitions that mark E or D, bindings on each call site's entry,
+delays on time-outs.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
 
+from dataclasses import replace
+
 from mcl2pnml.language import ast
+from mcl2pnml.core import payloads
 from mcl2pnml.core.compose import compose
+from mcl2pnml.core.payloads import (ENTER, MISSION, ActionKind, ActionSpec, Arg, CallEntry,
+                                    MissionPlace, Param, TimeOut, TransitionPayload, Value)
 from mcl2pnml.language.functional import FCall, FNode, NULL_KIND, function_expression, mission_expression
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.language.checker import Checked
@@ -52,15 +58,18 @@ from mcl2pnml.core.net import Marking, Net, NetBuilder, Place, Timing, Transitio
 from mcl2pnml.language.library import Library, at_rest, default_library
 from mcl2pnml.language.template_parser import CONTROL, slot_places
 
+#: The doc of every gate: a task's or function's, taken by the call inside it.
+GATE_DOC = "free: no call is inside"
+
 STRUCTURE_TEMPLATE = {"sequence": "sequence", "parallel": "parallel", "if-then-else": "if-then-else",
                       "while": "while", "monitor": "monitor", NULL_KIND: "null"}
 
 
-def _expr(value: ast.Value, params: tuple[str, ...], consts: dict[str, Any]) -> Any:
-    """An argument as JSON: {"value": v} for what is known now, {"param": p} otherwise."""
+def _expr(value: ast.Value, params: tuple[str, ...], consts: dict[str, Any]) -> Arg:
+    """An argument: a value for what is known now (consts resolved), else the parameter."""
     if isinstance(value, ast.Ref) and value.name in params:
-        return {"param": value.name}
-    return {"value": _value(value, consts)}
+        return Param(value.name)
+    return Value(_value(value, consts))
 
 
 def _value(value: ast.Value, consts: dict[str, Any]) -> Any:
@@ -68,10 +77,15 @@ def _value(value: ast.Value, consts: dict[str, Any]) -> Any:
         return value.value
     if isinstance(value, ast.String):
         return value.value
+    # tuples, as payloads hold them frozen
     if isinstance(value, ast.Tuple):
-        return [_value(i, consts) for i in value.items]
-    v = consts[value.name]
-    return list(v) if isinstance(v, tuple) else v
+        return tuple(_value(i, consts) for i in value.items)
+    return consts[value.name]
+
+
+def _doc(text: str) -> dict[str, Any] | None:
+    """A transition's payload that is a doc line alone."""
+    return TransitionPayload(doc=text).to_json()
 
 
 @dataclass
@@ -113,11 +127,10 @@ class Compiler:
         for p in net.places:
             b.place(p.id, net.initial[p.id], name=p.name, interface=p.interface,
                     payload=p.payload)
-        b.place("LOCK", 1, payload={"doc": "free: no task uses this primitive"})
+        b.place("LOCK", 1, payload=payloads.place_payload("free: no task uses this primitive"))
         for t in net.transitions:
-            payload = dict(t.payload or {})
-            payload["primitive"] = name
-            b.transition(t.id, name=t.name, payload=payload)
+            payload = payloads.read_transition(t).of_primitive(name)
+            b.transition(t.id, name=t.name, payload=payload.to_json())
         for a in net.arcs:
             b.arc(a.source, a.target, a.weight, a.kind)
         return b.build()
@@ -125,7 +138,7 @@ class Compiler:
     def task_net(self, task: ast.Task) -> tuple[Net, list[list[str]]]:
         if self.reduced:
             net = at_rest(self.lib.reduced.net)
-            gate = Place("GATE", payload=freeze({"doc": "free: no call is inside"}))
+            gate = Place("GATE", payload=freeze(payloads.place_payload(GATE_DOC)))
             own = Net(task.name, (*net.places, gate), net.transitions, net.arcs,
                       Marking({**net.initial, "GATE": 1}))
             return own, []
@@ -139,31 +152,31 @@ class Compiler:
         calls = {slot: call for slot, call in zip(template.primitives, task.primitives)}
         transitions = []
         for t in net.transitions:
-            payload = dict(t.payload or {})
+            payload = payloads.read_transition(t)
             actions = []
             for arc in net.post[t.id]:
                 prim, role = slot_of.get(arc.target, (None, None))
                 if role == "E":
                     call = next(c for s, c in calls.items()
                                 if slot_places(s, tuple(interface)).get(arc.target) == "E")
-                    # "scope": the task whose parameters the arguments name
-                    actions.append({"action": "enable", "primitive": prim, "scope": task.name,
-                                    "args": [_expr(v, task.params, self.c.consts)
-                                             for v in call.args]})
+                    # scope: the task whose parameters the arguments name
+                    actions.append(ActionSpec(ActionKind.ENABLE, prim, task.name,
+                                              tuple(_expr(v, task.params, self.c.consts)
+                                                    for v in call.args)))
                 elif role == "D":
-                    actions.append({"action": "disable", "primitive": prim})
+                    actions.append(ActionSpec(ActionKind.DISABLE, prim))
             if actions:
-                payload["actions"] = actions
+                payload = replace(payload, actions=(*payload.actions, *actions))
             timing = None
-            if payload.get("timeout") is True:
+            if payload.timeout is not None and payload.timeout.seconds is None:
                 if task.timeout is None:
                     continue  # no time-out declared: the task waits for its primitive
-                payload["timeout"] = task.timeout.value
+                payload = replace(payload, timeout=TimeOut(task.timeout.value))
                 timing = Timing.delay(float(task.timeout.value))
-            transitions.append(Transition(t.id, t.name, timing, freeze(payload or None)))
+            transitions.append(Transition(t.id, t.name, timing, freeze(payload.to_json())))
         kept = {t.id for t in transitions}
         arcs = tuple(a for a in net.arcs if a.source in kept or a.target in kept)
-        places = (*net.places, Place("GATE", payload=freeze({"doc": "free: no call is inside"})))
+        places = (*net.places, Place("GATE", payload=freeze(payloads.place_payload(GATE_DOC))))
         marking = dict(net.initial)
         marking["GATE"] = 1
         own = Net(task.name, places, tuple(transitions), arcs, Marking(marking))
@@ -210,15 +223,17 @@ class Compiler:
     def call(self, node: FCall, name: str, scope: str, params: tuple[str, ...]) -> None:
         """A call site, fused with the callee's control places, gate and primitive locks."""
         target = self.c.tasks.get(node.name) or self.c.functions[node.name]
-        binding = {p: _expr(v, params, self.c.consts) for p, v in zip(target.params, node.args)}
-        # "scope" says where the arguments' parameters live: the function
+        binding = tuple((p, _expr(v, params, self.c.consts))
+                        for p, v in zip(target.params, node.args))
+        # the scope says where the arguments' parameters live: the function
         # whose body holds this call, or the mission (no parameters)
-        enter = {"call": node.name, "scope": scope or "mission", "bind": binding,
-                 "doc": f"the callee is free: enter {node.name} with these arguments"}
+        enter = TransitionPayload(
+            doc=f"the callee is free: enter {node.name} with these arguments",
+            entry=CallEntry(node.name, scope or MISSION, binding))
         proto = self._call_sites.get(node.name)
         if proto is None:
             proto = self._call_sites[node.name] = self.call_site(node.name)
-        self.a.parts.append((name, proto.with_payloads({"enter": enter})))
+        self.a.parts.append((name, proto.with_payloads({ENTER: enter.to_json()})))
         self.a.groups += [[f"{node.name}.{p}", f"{name}.to.{p}"]
                           for p in ("GATE", *CONTROL) if p != "MTX"]
         for prim in self._locks(node.name):
@@ -235,30 +250,30 @@ class Compiler:
         b = NetBuilder(callee)
         for p in CONTROL:
             b.place(p, 1 if p == "MTX" else 0, interface=p)
-        b.place("IN", payload={"doc": f"inside {callee}"})
-        b.place("ABT", payload={"doc": f"abort passed on to {callee}"})
+        b.place("IN", payload=payloads.place_payload(f"inside {callee}"))
+        b.place("ABT", payload=payloads.place_payload(f"abort passed on to {callee}"))
         for p in ("GATE", *CONTROL):
             if p != "MTX":
                 b.place(f"to.{p}", interface=f"{callee}.{p}")
         for prim in locks:
             b.place(f"lock.{prim}", interface=f"{prim}.LOCK")
-        enter = b.transition("enter")
+        enter = b.transition(ENTER)
         for p in ("B", "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
             b.arc(p, enter)
         b.arc(enter, "to.B")
         b.arc(enter, "IN")
-        t = b.transition("pending_abort", payload={"doc": "aborted before it started"})
+        t = b.transition("pending_abort", payload=_doc("aborted before it started"))
         b.arc("B", t)
         b.arc("A", t)
         b.arc(t, "ABORTED")
-        t = b.transition("abort", payload={"doc": f"pass the abort on to {callee}"})
+        t = b.transition("abort", payload=_doc(f"pass the abort on to {callee}"))
         b.arc("IN", t)
         b.arc("A", t)
         b.arc(t, "to.A")
         b.arc(t, "ABT")
 
         def leave(tid: str, inputs: list[str], result: str, doc: str) -> None:
-            t = b.transition(tid, payload={"doc": doc})
+            t = b.transition(tid, payload=_doc(doc))
             for p in inputs:
                 b.arc(p, t)
             for p in (result, "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
@@ -285,13 +300,14 @@ class Compiler:
             f = self.c.functions[fname]
             self.instance(function_expression(f), fname, fname, f.params)
             gate = NetBuilder("gate")
-            gate.place("GATE", 1, payload={"doc": "free: no call is inside"})
+            gate.place("GATE", 1, payload=payloads.place_payload(GATE_DOC))
             self.a.parts.append((fname, gate.build()))
-        self.instance(mission_expression(self.c.mission), "mission", "", ())
+        self.instance(mission_expression(self.c.mission), MISSION, "", ())
         # the root is added last; its B is where the mission starts
         prefix, root = self.a.parts[-1]
-        assert prefix == "mission"
-        self.a.parts[-1] = (prefix, root.with_initial({**root.initial, "B": 1}))
+        assert prefix == MISSION
+        begin = MissionPlace.B.value
+        self.a.parts[-1] = (prefix, root.with_initial({**root.initial, begin: 1}))
         return compose(self.a.parts, self.a.groups, name=self._name())
 
     def _name(self) -> str:

@@ -44,7 +44,9 @@ from pathlib import Path
 
 from lark import Lark, Token, Transformer, UnexpectedInput, v_args
 
+from mcl2pnml.core import payloads
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all
+from mcl2pnml.core.payloads import PayloadError
 from mcl2pnml.core.net import ArcKind, Net, NetBuilder
 
 #: The control interface of every task and structure (the paper's Fp, section 2.5).
@@ -217,7 +219,7 @@ def parse_template(text: str, filename: str = "<template>",
             return
         declared[name] = token
         b.place(name, tokens, interface=name if interface else None,
-                payload={"doc": doc} if doc else None)
+                payload=payloads.place_payload(doc))
 
     for item in items[1:]:
         if item[0] == "uses":
@@ -248,13 +250,15 @@ def parse_template(text: str, filename: str = "<template>",
         if str(name) in declared:
             errors.append(Mcl2PnmlError(f"'{name}' names a place already", loc(name)))
             continue
-        payload: dict = {}
-        if tdoc is not None:
-            payload["doc"] = _doc(tdoc)
-        for key, token, value in tags:
-            payload[key] = value
         try:
-            b.transition(str(name), payload=payload or None)
+            # read through the payload records: a tag they know with a bad
+            # value (``event=arrived``) is an error of the template, here
+            payload = payloads.tagged(_doc(tdoc), [(key, value) for key, _, value in tags])
+        except PayloadError as e:
+            errors.append(Mcl2PnmlError(e.message, loc(name)))
+            continue
+        try:
+            b.transition(str(name), payload=payload.to_json())
         except Mcl2PnmlError as e:
             errors.append(Mcl2PnmlError(e.message, loc(name)))
             continue

@@ -15,7 +15,6 @@ milliseconds and a test is exactly reproducible.
 """
 from __future__ import annotations
 
-import enum
 import json
 import math
 import re
@@ -26,32 +25,10 @@ from typing import Any, Iterable, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import read_text
-
-
-class ActionKind(enum.Enum):
-    """What the mission asks of a primitive."""
-
-    ENABLE = "enable"
-    """Start the primitive with these arguments (the task marked its E place)."""
-
-    DISABLE = "disable"
-    """Stop the primitive (the task marked its D place)."""
-
-
-class EventKind(enum.Enum):
-    """What a primitive reports back; each fires the primitive net's transition of that name."""
-
-    ON = "on"
-    """The primitive is running: the vehicle has processed the enable."""
-
-    ACHIEVED = "achieved"
-    """The goal is reached (or reached again)."""
-
-    FAILED = "failed"
-    """The goal cannot be reached, or was lost."""
-
-    OFF = "off"
-    """The primitive has stopped: the vehicle has processed the disable."""
+# The kinds of actions and events are what a compiled net's payloads say, so
+# they are defined with the payload records in core (which may not import
+# runtime) and re-exported here, where the vehicle's side of the layer uses them.
+from mcl2pnml.core.payloads import ActionKind, EventKind  # noqa: F401 (re-exported)
 
 
 @dataclass(frozen=True)

@@ -1,11 +1,12 @@
 """The Petri-net executor: the paper's Mission Control System (section 2.1).
 
 It plays a compiled mission net, from MCL or from its PNML alone, against a
-vehicle. Everything it needs is in the net: the transitions that send
-actions (payload ``actions``), the transitions that vehicle events fire
-(payload ``event`` and ``primitive``), the arguments of every call (payload
-``bind`` on the call sites' ``enter``), and the time-outs (timed
-transitions).
+vehicle. Everything it needs is in the net, read once through the records
+of :mod:`mcl2pnml.core.payloads`: the transitions that send actions
+(:class:`~mcl2pnml.core.payloads.ActionSpec`), the transitions that vehicle
+events fire (:class:`~mcl2pnml.core.payloads.EventBinding`), the arguments of
+every call (:class:`~mcl2pnml.core.payloads.CallEntry` on the call sites'
+``enter``), and the time-outs (timed transitions).
 
 How it fires:
 
@@ -36,14 +37,15 @@ from __future__ import annotations
 import heapq
 from typing import Any, Callable
 
-from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
+from mcl2pnml.runtime.aal import Action, Event, EventKind
 from mcl2pnml.runtime.engine import Engine, Outcome
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.core.net import SUMMARY_MARKED, Net, thaw
+from mcl2pnml.core.net import SUMMARY_MARKED, Net
+from mcl2pnml.core.payloads import MISSION, MissionPlace, TransitionPayload, read_transition
 from mcl2pnml.core.structure import structure
 
-RESULTS = {"mission.OK": Outcome.OK, "mission.FAIL": Outcome.FAIL,
-           "mission.ABORTED": Outcome.ABORTED}
+RESULTS = {MissionPlace.OK.id: Outcome.OK, MissionPlace.FAIL.id: Outcome.FAIL,
+           MissionPlace.ABORTED.id: Outcome.ABORTED}
 #: Firings allowed at one instant before the run is stopped as a zero-time loop.
 ZENO_LIMIT = 1_000_000
 
@@ -74,14 +76,15 @@ class PetriEngine(Engine):
         self.enabled_on: list[set[int]] = [set() for _ in self.places]  # enabled, using p
         self.watching: list[int | None] = [None] * n
         self.delay: list[float | None] = []
-        self.payload: list[dict[str, Any]] = []
+        self.payload: list[TransitionPayload] = []
         self.by_event: dict[tuple[str, EventKind], list[int]] = {}
         for i, t in enumerate(net.transitions):
-            payload = thaw(t.payload) or {}
+            payload = read_transition(t)
             self.payload.append(payload)
             self.delay.append(t.timing.earliest if t.timing is not None else None)
-            if "event" in payload and "primitive" in payload:
-                key = (payload["primitive"], EventKind(payload["event"]))
+            event = payload.event
+            if event is not None and event.primitive is not None:
+                key = (event.primitive, event.kind)
                 self.by_event.setdefault(key, []).append(i)
         self.event_driven = {i for ts in self.by_event.values() for i in ts}
         self.result_places = {pindex[p]: o for p, o in RESULTS.items()}
@@ -96,10 +99,10 @@ class PetriEngine(Engine):
             self.results_marked.append(tuple(p for p in rows
                                              if change[p] > 0 and p in self.result_places))
         self.marking = [net.initial[p] for p in self.places]
-        self.env: dict[str, dict[str, Any]] = {"mission": {}}
+        self.env: dict[str, dict[str, Any]] = {MISSION: {}}
         self.ready: list[tuple[int, int, int]] = []  # (step enabled, index, version)
         self.entries: list[tuple[int, int]] = []     # call entries: (index, version)
-        self.entry = [("call" in p) for p in self.payload]
+        self.entry = [p.entry is not None for p in self.payload]
         self.timers: list[tuple[float, str, int, int]] = []  # (due, task, index, version)
         self.version = [0] * n
         self.enabled = [False] * n
@@ -171,22 +174,16 @@ class PetriEngine(Engine):
 
     def _effects(self, i: int) -> list[Action]:
         payload = self.payload[i]
-        if "call" in payload:      # a call site's enter: bind the callee's parameters
-            scope = self.env.get(payload.get("scope", "mission"), {})
-            self.env[payload["call"]] = {name: self._value(expr, scope)
-                                         for name, expr in payload.get("bind", {}).items()}
+        entry = payload.entry
+        if entry is not None:      # a call site's enter: bind the callee's parameters
+            scope = self.env.get(entry.scope, {})
+            self.env[entry.callee] = {name: arg.evaluate(scope) for name, arg in entry.bindings}
         actions = []
-        for a in payload.get("actions", ()):
-            kind = ActionKind(a["action"])
-            scope = self.env.get(a.get("scope", ""), {})
-            args = tuple(self._value(x, scope) for x in a.get("args", ()))
-            actions.append(Action(self.now, kind, a["primitive"], args))
+        for a in payload.actions:
+            scope = self.env.get(a.scope, {})
+            args = tuple(x.evaluate(scope) for x in a.args)
+            actions.append(Action(self.now, a.kind, a.primitive, args))
         return actions
-
-    @staticmethod
-    def _value(expr: dict[str, Any], scope: dict[str, Any]) -> Any:
-        value = scope[expr["param"]] if "param" in expr else expr["value"]
-        return tuple(value) if isinstance(value, list) else value
 
     def _settle(self) -> list[Action]:
         """Fire immediate transitions, the one enabled longest first, until none is."""

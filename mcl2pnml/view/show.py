@@ -28,6 +28,7 @@ from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_text
 from mcl2pnml.view.layout import layout
 from mcl2pnml.core.net import Net, thaw
+from mcl2pnml.core.payloads import doc_of, read_transition
 
 #: Above this many nodes the page would be a heap nobody can read: refused.
 MAX_NODES = 5_000
@@ -54,17 +55,17 @@ def variant(net: Net, label: str) -> dict[str, Any]:
     places = [{"id": p.id, "label": p.label, "x": pos[p.id][0], "y": pos[p.id][1],
                "tokens": net.initial[p.id], "interface": p.interface,
                "fusion": p.id in border, "group": box_of.get(p.id),
-               "doc": _payload(p.payload).get("doc")} for p in net.places]
+               "doc": thaw(doc_of(p.payload))} for p in net.places]
     transitions = []
     for t in net.transitions:
-        payload = _payload(t.payload)
-        kind = ("event" if "event" in payload else "timeout" if t.timing is not None
-                else "action" if payload.get("actions") else "call" if "call" in payload
+        payload = read_transition(t)
+        kind = ("event" if payload.event is not None else "timeout" if t.timing is not None
+                else "action" if payload.actions else "call" if payload.entry is not None
                 else "")
         transitions.append({
             "id": t.id, "label": t.label, "x": pos[t.id][0], "y": pos[t.id][1],
             "timing": str(t.timing) if t.timing is not None else None, "kind": kind,
-            "group": box_of.get(t.id), "doc": payload.get("doc"),
+            "group": box_of.get(t.id), "doc": thaw(payload.doc),
             "pre": [[index[a.source], a.weight] for a in net.pre[t.id]
                     if a.kind.value == "normal"],
             "read": [[index[a.source], a.weight] for a in net.pre[t.id]
@@ -75,12 +76,6 @@ def variant(net: Net, label: str) -> dict[str, Any]:
                    "value": sum(c * net.initial[p] for p, c in y.items())} for y in basis]
     return {"label": label, "name": net.name, "places": places, "transitions": transitions,
             "groups": sorted(kept), "invariants": invariants}
-
-
-def _payload(payload) -> dict[str, Any]:
-    """A node's payload as a dict (payloads of other tools' nets may be anything)."""
-    data = thaw(payload) if payload is not None else {}
-    return data if isinstance(data, dict) else {}
 
 
 def read_run(path: str | Path) -> list[dict[str, Any]]:
