@@ -16,10 +16,9 @@ import pytest
 
 from analysis.behaviour import behaviour
 from analysis.statespace import explore
+from mcl2pnml.pipeline import check_file, compile_file
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.functional import format_node, function_expression, mission_expression
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse_file
 from mcl2pnml.core.net import ArcKind, Timing, thaw
 from mcl2pnml.core.structure import structure
 from mcl2pnml.io.pnml import parse_pnml, save_pnml, to_pnml_bytes
@@ -57,7 +56,7 @@ def verdict(net, initial: dict[str, int]) -> tuple[list[str], object, object]:
 
 
 def render(mission: Path, with_abort: bool) -> tuple[str, list]:
-    checked = check(parse_file(mission))
+    checked = check_file(mission)
     lines = ["# step 1: functional form"]
     for name in checked.function_order:
         f = checked.functions[name]
@@ -97,13 +96,13 @@ def test_golden_and_proven(mission: Path):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(ABORT_IS_SLOW))
 def test_large_missions_with_a_pending_abort(name: str):
-    net = compile_checked(check(parse_file(ROOT / "examples" / f"{name}.mcl")))
+    net = compile_file(ROOT / "examples" / f"{name}.mcl")
     _, space, b = verdict(net, {**net.initial, "mission.A": 1})
     assert space.safe and b.deadlock_free and b.reusable
 
 
 def compiled(path: Path):
-    return compile_checked(check(parse_file(path)))
+    return compile_file(path)
 
 
 def inside(space, marker: str) -> list[int]:
@@ -217,7 +216,7 @@ def test_every_task_reduced_ends_the_mission_alike(mission: Path):
     from analysis.behaviour import final_markings_agree
     from mcl2pnml.language.compiler import compile_checked as compile_
 
-    checked = check(parse_file(mission))
+    checked = check_file(mission)
     full, reduced = compile_(checked), compile_(checked, reduced=True)
     assert not any(p.id.endswith(".LOCK") or ".S1" in p.id for p in reduced.places)
     assert len(reduced.places) < len(full.places)

@@ -10,8 +10,7 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse, parse_file
+from mcl2pnml.pipeline import check_file, check_source
 
 from helpers import ROOT, both
 from missions import missions, scripts
@@ -31,14 +30,14 @@ def example_scripts(checked) -> list[dict]:
 
 @pytest.mark.parametrize("mission", EXAMPLES, ids=lambda p: p.stem)
 def test_every_example_runs_the_same_on_both_engines(mission):
-    checked = check(parse_file(mission))
+    checked = check_file(mission)
     for script in example_scripts(checked):
         petri, reference = both(checked, script)
         assert petri == reference, f"{mission.name} with {script}"
 
 
 def test_the_papers_mission_ends_as_the_paper_says():
-    checked = check(parse_file(ROOT / "examples" / "sauce.mcl"))
+    checked = check_file(ROOT / "examples" / "sauce.mcl")
     # the cross is found during the survey: dive, drop the marker, surface
     found = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
              "KeepDepth": ["ok@5", "ok@6"], "ReleaseMarker": ["ok@1"]}
@@ -59,7 +58,7 @@ def test_the_papers_mission_ends_as_the_paper_says():
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(missions(), scripts)
 def test_generated_missions_run_the_same_on_both_engines(source, script):
-    checked = check(parse(source, "generated.mcl"))
+    checked = check_source(source, "generated.mcl")
     petri, reference = both(checked, script)
     assert petri == reference, source
 
@@ -68,7 +67,7 @@ def test_generated_missions_run_the_same_on_both_engines(source, script):
 @settings(max_examples=3000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(missions(), scripts)
 def test_many_generated_missions_run_the_same_on_both_engines(source, script):
-    checked = check(parse(source, "generated.mcl"))
+    checked = check_source(source, "generated.mcl")
     petri, reference = both(checked, script)
     assert petri == reference, source
 
@@ -85,7 +84,7 @@ def test_many_generated_missions_run_the_same_on_both_engines(source, script):
 def test_an_abort_between_two_steps_of_a_structure(body):
     source = ("primitive Pa(v);\ntask T0(x) = AchieveGoal(Pa(x));\n"
               f"mission {{ {body} }}\n")
-    checked = check(parse(source, "race.mcl"))
+    checked = check_source(source, "race.mcl")
     for script in ({"Pa": []}, {"Pa": ["ok@0"] * 3}, {"Pa": ["fail@0"]}):
         petri, reference = both(checked, script)
         assert petri == reference, (body, script)

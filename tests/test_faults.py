@@ -11,12 +11,11 @@ import json
 
 import pytest
 
+from mcl2pnml.pipeline import check_source
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, SafeStop, ScriptedVehicle,
                           Vehicle, VehicleInputError)
 from mcl2pnml.runtime.bridge import MappedVehicle, QueueTransport, VehicleMapping
 from mcl2pnml.runtime.engine import Outcome, run, run_realtime
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse
 
 from helpers import engines, run_cli as cli
 
@@ -109,7 +108,7 @@ class Faulty(Vehicle):
         self.inner.act(action)
 
 
-FAULTS = check(parse(MISSION, "faults.mcl"))
+FAULTS = check_source(MISSION, "faults.mcl")
 
 
 def both(make_vehicle, **kw):

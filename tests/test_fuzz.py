@@ -25,12 +25,13 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 from lxml import etree
 
+from mcl2pnml.pipeline import compile_source
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.core.errors import ErrorList, Mcl2PnmlError
 from mcl2pnml.language.checker import check
 from mcl2pnml.language.parser import decode, parse
 from mcl2pnml.io.pnml.reader import parse_pnml
-from mcl2pnml.io.pnml.writer import to_pnml_bytes
+from mcl2pnml.pipeline import to_pnml_bytes
 from mcl2pnml.language.library import default_library
 
 from helpers import DATA, ROOT
@@ -67,7 +68,7 @@ def pnml_corpus() -> tuple[bytes, ...]:
     for t in library.unique():
         files.append(to_pnml_bytes(library.composed(t.name), "layers"))
     for p in (ROOT / "examples" / "sauce.mcl", DATA / "mcl" / "golden" / "if_else.mcl"):
-        net = compile_checked(check(parse(p.read_text(), p.name)))
+        net = compile_source(p.read_text(), p.name)
         files.append(to_pnml_bytes(net, "layers"))
     return tuple(files)
 

@@ -25,11 +25,10 @@ from hypothesis import HealthCheck, assume, given, seed, settings, strategies as
 
 from analysis.behaviour import behaviour
 from analysis.statespace import ExplorationLimit, explore
+from mcl2pnml.pipeline import check_source
 from mcl2pnml.core.structure import structure
 from mcl2pnml.language import ast
 from mcl2pnml.language.compiler import compile_checked
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse
 
 from helpers import both
 from missions import missions, scripts
@@ -121,7 +120,7 @@ def features(checked) -> set[str]:
 
 def prove(source: str, run_scripts: list[dict], tally: Counter) -> None:
     """Compile, run on both engines, analyse from both starts; count what was done."""
-    checked = check(parse(source, "generated.mcl"))
+    checked = check_source(source, "generated.mcl")
     net = compile_checked(checked)
     tally["drawn"] += 1
     for script in run_scripts:
@@ -189,7 +188,7 @@ def test_the_generator_reaches_the_shapes_it_is_meant_to():
     @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(GENERATED)
     def one(source):
-        seen.update(features(check(parse(source, "generated.mcl"))))
+        seen.update(features(check_source(source, "generated.mcl")))
 
     seed(FAST_SEED)(one)()
     wanted = ["three levels deep", "a task called from several places",

@@ -5,15 +5,13 @@ from pathlib import Path
 
 import pytest
 
+from mcl2pnml.pipeline import compile_file
 from mcl2pnml.core import payloads
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import NetBuilder, freeze
 from mcl2pnml.core.payloads import (ActionKind, ActionSpec, CallEntry, EventBinding, EventKind,
                                     MissionPlace, Param, PayloadError, TimeOut,
                                     TransitionPayload, Value)
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.compiler import compile_checked
-from mcl2pnml.language.parser import parse_file
 from mcl2pnml.language.template_parser import parse_template
 from mcl2pnml.runtime import aal
 
@@ -24,7 +22,7 @@ EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 
 @pytest.mark.parametrize("mission", EXAMPLES, ids=lambda p: p.stem)
 def test_every_compiled_payload_reads_and_writes_back_the_same(mission: Path):
-    net = compile_checked(check(parse_file(mission)))
+    net = compile_file(mission)
     for t in net.transitions:
         assert freeze(payloads.read(t.payload).to_json()) == t.payload, t.id
     entries = [payloads.read(t.payload).entry for t in net.transitions if t.id.endswith(".enter")]

@@ -5,13 +5,12 @@ import json
 
 import pytest
 
+from mcl2pnml.pipeline import check_file, check_source
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, ScriptedVehicle, Vehicle
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.runtime.engine import Outcome, run
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.runtime.executor import PetriEngine
-from mcl2pnml.language.checker import check
-from mcl2pnml.language.parser import parse, parse_file
 from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
 from mcl2pnml.runtime.simulator import AUVSimulator, World
 
@@ -24,7 +23,7 @@ FOUND = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
 
 
 def checked(source: str):
-    return check(parse(source, "m.mcl"))
+    return check_source(source, "m.mcl")
 
 
 def scripted(script: dict) -> ScriptedVehicle:
@@ -35,7 +34,7 @@ def scripted(script: dict) -> ScriptedVehicle:
 
 def test_the_pnml_alone_runs_the_mission():
     """Bindings, actions, events and time-outs all travel in the PNML."""
-    c = check(parse_file(SAUCE))
+    c = check_file(SAUCE)
     net = compile_checked(c)
     from_pnml = parse_pnml(to_pnml_bytes(net))
     a = run(PetriEngine(net), scripted(FOUND)).as_json()
@@ -136,7 +135,7 @@ class Meddling(Vehicle):
 
 
 def test_bad_events_are_logged_and_ignored_alike_by_both_engines():
-    c = check(parse_file(SAUCE))
+    c = check_file(SAUCE)
     bad = [Event(10, EventKind.ACHIEVED, "Thruster"),        # no such primitive
            Event(12, EventKind.ACHIEVED, "ReleaseMarker"),   # not enabled
            Event(15, EventKind.OFF, "GoToWayPoint"),         # off without a disable
@@ -238,7 +237,7 @@ def test_noise_is_seeded():
 
 
 def test_both_engines_agree_on_the_simulated_auv():
-    c = check(parse_file(SAUCE))
+    c = check_file(SAUCE)
     runs = [run(e, AUVSimulator(World(noise=0.05, seed=4)), max_time=3600).as_json()
             for e in engines(c)]
     assert runs[0] == runs[1] and runs[0]["outcome"] == "OK"

@@ -265,6 +265,9 @@ def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None) -> N
     ``positions`` (node id -> x, y) go into ``<graphics>``; None: the nodes'
     own positions if every node has one, else no positions at all.
     """
+    if positions is not None and not isinstance(positions, Mapping):
+        # a layout engine's name belongs to the caller, which lays out: writing never does
+        raise TypeError(f"positions are a mapping of node ids to (x, y), not {positions!r}")
     xid = _Ids(net)
     net_id = xid.fresh(ids.encode(net.name) if net.name else "net")
     page_id = xid.fresh("page")
