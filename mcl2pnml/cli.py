@@ -291,7 +291,7 @@ def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: s
         from mcl2pnml.io.pnml.reader import load_pnml
         eng = PetriEngine(load_pnml(mission))
     offered = car.primitives
-    needed = getattr(eng, "primitives_used", lambda: set())()
+    needed = eng.primitives_used()
     if offered is not None and needed - offered:
         missing = sorted(needed - offered)[0]
         raise click.BadParameter(f"the mission uses '{missing}', which this vehicle does not "
@@ -318,8 +318,7 @@ def run(ctx: click.Context, mission: Path, engine: str, vehicle: str, connect: s
     else:
         sink = None
     log = RunLog(None if as_json else sys.stdout, jsonl, transitions, sink)
-    if hasattr(eng, "on_fire"):
-        eng.on_fire = log.fired
+    eng.on_fire = log.fired
     seen = 0
 
     def listener(entry) -> None:
