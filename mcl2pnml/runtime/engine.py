@@ -42,12 +42,52 @@ class Outcome(enum.Enum):
     """Nothing can happen any more (no enabled transition, timer or pending
     event) and no result was reached."""
 
+    # The member values are the words of cli.md's JSON and of the run log:
+    # these two methods are the only mapping between the two, both ways.
+    def as_json(self) -> str:
+        """The outcome as ``mcl2pnml run --json`` and the run log write it."""
+        return self.value
+
+    @classmethod
+    def from_json(cls, word: str) -> "Outcome":
+        """The outcome a JSON object names (the inverse of :meth:`as_json`)."""
+        return cls(word)
+
+
+FireListener = Callable[[float, str], None]
+
 
 class Engine(ABC):
-    """One way of running a mission. Every method returns the actions it caused, in order."""
+    """One way of running a mission. Every method returns the actions it caused, in order.
 
-    #: the result, once the mission has one
-    outcome: Outcome | None = None
+    Besides running the mission, an engine answers what the run loop and
+    the command line ask of it: the primitives the vehicle must offer
+    (:meth:`primitives_used`), the events it ignored and why
+    (:attr:`ignored`), and, where the engine has transitions, each firing as
+    it happens (:attr:`on_fire`).
+    """
+
+    #: The result, once the mission has one: the run loop stops the moment
+    #: it is set (the vehicle is then safe-stopped, :func:`run`).
+    outcome: Outcome | None
+
+    #: Every vehicle event that changed nothing, with the reason, in the
+    #: order they came: a report the mission did not wait for (a primitive
+    #: not enabled, a second ``achieved``) or from a primitive it does not
+    #: use. The robot went on as if the event had not come; the live log
+    #: shows each one, and the run's result lists them all.
+    ignored: list[tuple[Event, str]]
+
+    #: Called with (time, transition id) at each firing, where the engine
+    #: has transitions (the Petri-net executor): the live log's ``fire``
+    #: lines, which say why the robot did what it did. None: nobody listens.
+    #: An engine without transitions (the reference engine) never calls it.
+    on_fire: FireListener | None
+
+    def __init__(self) -> None:
+        self.outcome = None
+        self.ignored = []
+        self.on_fire = None
 
     @abstractmethod
     def start(self, t: float) -> list[Action]:
@@ -74,7 +114,13 @@ class Engine(ABC):
     def waiting(self) -> list[str]:
         """What the mission waits for now, in words (for a run that stalls)."""
 
-    ignored: list[tuple[Event, str]]
+    @abstractmethod
+    def primitives_used(self) -> set[str]:
+        """The primitives the mission may enable: the vehicle must offer every one.
+
+        Checked before the run starts, so that a mission never drives the
+        robot half-way and then needs a primitive it does not have.
+        """
 
 
 @dataclass
@@ -91,7 +137,7 @@ class Run:
 
     def as_json(self) -> dict[str, Any]:
         """The object of ``mcl2pnml run --json`` (cli.md), with ``safe_stop`` when there was one."""
-        out = {"outcome": self.outcome.value, "time": _time(self.time),
+        out = {"outcome": self.outcome.as_json(), "time": _time(self.time),
                "trace": canonical_trace(self.entries)}
         if self.safe_stop:
             out["safe_stop"] = [a.as_json() for a in self.safe_stop]

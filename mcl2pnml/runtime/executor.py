@@ -35,7 +35,7 @@ thousand (a test counts the transitions each event makes it examine).
 from __future__ import annotations
 
 import heapq
-from typing import Any, Callable
+from typing import Any
 
 from mcl2pnml.runtime.aal import Action, Event, EventKind
 from mcl2pnml.runtime.engine import Engine, Outcome
@@ -54,6 +54,7 @@ class PetriEngine(Engine):
     """Runs one mission net (see the module's documentation for the firing rules)."""
 
     def __init__(self, net: Net):
+        super().__init__()
         missing = [p for p in RESULTS if p not in net.place_index]
         if missing:
             raise Mcl2PnmlError(f"net '{net.name}' is not a compiled mission: it has no place "
@@ -108,10 +109,6 @@ class PetriEngine(Engine):
         self.enabled = [False] * n
         self.step = 0
         self.now = 0.0
-        self.outcome: Outcome | None = None
-        self.ignored: list[tuple[Event, str]] = []
-        #: called with (time, transition id) at each firing: the live log
-        self.on_fire: Callable[[float, str], None] | None = None
 
     # -- enabling ------------------------------------------------------------------
 
@@ -246,7 +243,7 @@ class PetriEngine(Engine):
         return actions + self._settle()
 
     def primitives_used(self) -> set[str]:
-        """The primitives the mission enables (the vehicle must offer them)."""
+        # the primitives whose events some transition waits for
         return {p for p, _ in self.by_event}
 
     def waiting(self) -> list[str]:

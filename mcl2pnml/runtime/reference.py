@@ -3,7 +3,8 @@
 It exists to judge the executor (and to be judged by it): the same mission,
 the same vehicle, and both engines must give the same outcome, time and
 trace. It reads the checked program, not the compiled net, and keeps one
-small state machine per running statement:
+small state machine per running statement. Their lifecycle is one for all
+(:class:`_Node`, its phases :class:`Phase`); what differs is what each does:
 
 * a **call** waits until its task or function is free, and a task also
   until its primitives are (all at once), then runs it with the call's
@@ -28,7 +29,9 @@ not accept is ignored here too, with the same reason.
 """
 from __future__ import annotations
 
+import enum
 import heapq
+from abc import ABC, abstractmethod
 from collections import deque
 from typing import Any, Callable
 
@@ -38,7 +41,8 @@ from mcl2pnml.runtime.engine import Engine, Outcome
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.language.checker import Checked
 
-OK, FAIL, ABORTED = "OK", "FAIL", "ABORTED"
+# a statement ends in one of the outcomes of a whole mission (mcl.md, "Results")
+OK, FAIL, ABORTED = Outcome.OK, Outcome.FAIL, Outcome.ABORTED
 #: How each pattern ends: on the time-out, and when a primitive achieves its goal.
 PATTERNS = {
     "AchieveGoal": {"timeout": FAIL, "achieved": OK},
@@ -61,7 +65,10 @@ class _Primitive:
 
 
 class ReferenceEngine(Engine):
+    """Runs a checked program statement by statement (see the module's documentation)."""
+
     def __init__(self, checked: Checked):
+        super().__init__()
         self.c = checked
         for task in checked.tasks.values():
             if task.pattern not in PATTERNS:
@@ -71,8 +78,6 @@ class ReferenceEngine(Engine):
         self.now = 0.0
         self.steps: deque[Callable[[], None]] = deque()
         self.actions: list[Action] = []
-        self.outcome: Outcome | None = None
-        self.ignored: list[tuple[Event, str]] = []
         self.prims = {name: _Primitive(name) for name in checked.primitives}
         self.busy: set[str] = set()                # tasks, functions and primitives in use
         self.waiting_calls: list["_Call"] = []
@@ -164,8 +169,8 @@ class ReferenceEngine(Engine):
     def start(self, t: float) -> list[Action]:
         self.now = t
 
-        def finish(result: str) -> None:
-            self.outcome = Outcome(result)
+        def finish(_: _Node, result: Outcome) -> None:
+            self.outcome = result
         root = _statement(self, self.c.mission.body, {}, finish)
         self.later(root.start)
         return self._settle()
@@ -233,7 +238,7 @@ class ReferenceEngine(Engine):
         return self._settle()
 
     def primitives_used(self) -> set[str]:
-        """The primitives the mission enables (the vehicle must offer them)."""
+        # the primitives of its tasks, whether or not a call reaches them
         return self._used()
 
     def waiting(self) -> list[str]:
@@ -256,31 +261,135 @@ class ReferenceEngine(Engine):
 # ---------------------------------------------------------------------------
 # running statements
 
-Done = Callable[[str], None]
+class Phase(enum.Enum):
+    """Where a running statement is in its life (mcl.md, "Results")."""
+
+    NEW = enum.auto()
+    """Made, its start step queued. An abort now is only noted: when its start
+    step comes, the statement ends ABORTED without doing anything (mcl.md's
+    abort rule: a call still waiting to enter never starts)."""
+
+    RUNNING = enum.auto()
+    """Started: it runs its children (a task, its primitives). An abort now is
+    passed on to what it runs, and it ends ABORTED once that has stopped."""
+
+    STOPPING = enum.auto()
+    """Its result is decided; it waits for what still runs to stop (a
+    monitor's other statement, a task's primitives going off). An abort now
+    changes nothing: the result stands (the paper's equations 17 and 18)."""
+
+    ENDED = enum.auto()
+    """It has reported its one result to its parent; nothing changes it any more."""
 
 
-class _Node:
-    """A running statement: started once, aborted at most once, reports one result."""
+#: What a statement calls with its result: its parent's :meth:`_Node.child_ended`.
+Ended = Callable[["_Node", Outcome], None]
 
-    def __init__(self, engine: ReferenceEngine, env: dict[str, Any], done: Done):
+
+class _Node(ABC):
+    """A running statement: started once, aborted at most once, reports one result.
+
+    The lifecycle is the same for every statement (mcl.md, "Results", the
+    abort rule) and is written here once: :meth:`start`, :meth:`abort`,
+    :meth:`child_ended`, :meth:`end`. What a statement does is in three hooks:
+    :meth:`begin` when it starts, :meth:`on_child_end` when one of its
+    children ends (while it is neither aborted nor stopping), and
+    :meth:`on_abort` when it is aborted while running.
+    """
+
+    def __init__(self, engine: ReferenceEngine, env: dict[str, Any], done: Ended):
         self.e, self.env, self.done_cb = engine, env, done
-        self.ended = False
+        self.phase = Phase.NEW
         self.aborted = False
+        self.result: Outcome | None = None     # decided, while STOPPING
+        self.running: list[_Node] = []          # children started and not ended, in order
+
+    # -- the lifecycle -------------------------------------------------------------------
 
     def start(self) -> None:
-        raise NotImplementedError
+        """Its start step: aborted before it, the statement ends ABORTED and does nothing."""
+        if self.aborted:
+            return self.end(ABORTED)
+        self.phase = Phase.RUNNING
+        self.begin()
 
     def abort(self) -> None:
-        raise NotImplementedError
+        """Abort it: once, and only until its result is decided (mcl.md, "Results", abort)."""
+        if self.aborted or self.phase in (Phase.STOPPING, Phase.ENDED):
+            return
+        self.aborted = True
+        if self.phase is Phase.RUNNING:
+            self.on_abort()
 
-    def done(self, result: str) -> None:
-        if not self.ended:
-            self.ended = True
-            self.done_cb(result)
+    def child_ended(self, child: _Node, result: Outcome) -> None:
+        """A child's result. Aborted or stopping, the statement only drains: it ends
+        when nothing it runs is left, ABORTED or with its decided result."""
+        self.running.remove(child)
+        if self.aborted or self.phase is Phase.STOPPING:
+            if not self.running:
+                self.end(ABORTED if self.aborted else self.result)
+            return
+        self.on_child_end(child, result)
+
+    def end(self, result: Outcome) -> None:
+        """Report the result to the parent; any later end is ignored: one result each."""
+        if self.phase is not Phase.ENDED:
+            self.phase = Phase.ENDED
+            self.done_cb(self, result)
+
+    # -- what the statements use ---------------------------------------------------------
+
+    def run(self, stmt: ast.Statement, env: dict[str, Any] | None = None) -> _Node:
+        """Run ``stmt`` as a child (in this statement's scope unless ``env`` is given)."""
+        return self.adopt(_statement(self.e, stmt, self.env if env is None else env,
+                                     self.child_ended))
+
+    def adopt(self, child: _Node) -> _Node:
+        # its start is a step of its own, after those already queued: the
+        # order in which the net's transitions become enabled
+        self.running.append(child)
+        self.e.later(child.start)
+        return child
+
+    def after(self, step: Callable[[], None]) -> None:
+        """Queue this statement's next step (a block's next statement, a loop's next test).
+
+        Aborted between one step's end and the next one's start, with nothing
+        running, the statement ends ABORTED instead of taking the step.
+        """
+        def go() -> None:
+            if self.aborted:
+                return self.end(ABORTED)
+            step()
+        self.e.later(go)
+
+    def settle(self, result: Outcome) -> None:
+        """The result is decided: stop what still runs; it is reported once that has ended."""
+        self.phase = Phase.STOPPING
+        self.result = result
+        self.abort_children()
+
+    def abort_children(self) -> None:
+        for child in self.running:
+            self.e.later(child.abort)
+
+    # -- the hooks -----------------------------------------------------------------------
+
+    @abstractmethod
+    def begin(self) -> None:
+        """What the statement does when it starts (not aborted before)."""
+
+    def on_child_end(self, child: _Node, result: Outcome) -> None:
+        """A child ended while the statement runs: by default its result is the statement's."""
+        self.end(result)
+
+    def on_abort(self) -> None:
+        """Aborted while running: by default, abort every child still running."""
+        self.abort_children()
 
 
 def _statement(engine: ReferenceEngine, stmt: ast.Statement, env: dict[str, Any],
-               done: Done) -> _Node:
+               done: Ended) -> _Node:
     """The running form of a statement, nested as mcl.md's functional form nests it.
 
     A block of one statement is that statement, an empty one NULL, a longer
@@ -315,204 +424,113 @@ def _value(v: ast.Value, env: dict[str, Any], consts: dict[str, Any]) -> Any:
 
 
 class _Null(_Node):
-    """NULL, an empty block: ends OK at once (ABORTED if aborted before it started)."""
+    """NULL, an empty block: ends OK at once (mcl.md, "Statements and structures")."""
 
-    def start(self) -> None:
-        self.done(ABORTED if self.aborted else OK)
-
-    def abort(self) -> None:
-        self.aborted = True
+    def begin(self) -> None:
+        self.end(OK)
 
 
 class _Sequence(_Node):
-    """A statement, then the rest of its block; the first result that is not OK ends it."""
+    """A statement, then the rest of its block: the first result that is not OK ends it
+    (mcl.md, "Results", sequence)."""
 
     def __init__(self, engine, first, rest, env, done):
         super().__init__(engine, env, done)
-        self.parts, self.i, self.child = [first, rest], 0, None
+        self.first, self.rest = first, rest
 
-    def start(self) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        self.next()
+    def begin(self) -> None:
+        self.run(self.first)
 
-    def next(self) -> None:
-        if self.aborted:   # aborted between one statement's end and the next one's start
-            return self.done(ABORTED)
-        stmt = self.parts[self.i]
-        self.i += 1
-        self.child = _statement(self.e, stmt, self.env, self.child_done)
-        self.e.later(self.child.start)
-
-    def child_done(self, result: str) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        if result != OK:
-            return self.done(result)
-        if self.i == len(self.parts):
-            return self.done(OK)
-        self.e.later(self.next)
-
-    def abort(self) -> None:
-        if self.ended or self.aborted:
-            return
-        self.aborted = True
-        if self.child is not None:
-            child = self.child
-            self.e.later(child.abort)
-        # not yet started: start() sees it and ends ABORTED
+    def on_child_end(self, child: _Node, result: Outcome) -> None:
+        if result is not OK or self.rest is None:
+            return self.end(result)
+        rest, self.rest = self.rest, None
+        self.after(lambda: self.run(rest))
 
 
 class _Parallel(_Node):
-    """All at once; ends when all have ended: OK if all OK, else FAIL."""
+    """All at once; ends when all have ended: OK if all OK, else FAIL
+    (mcl.md, "Results", parallel)."""
 
     def __init__(self, engine, items, env, done):
         super().__init__(engine, env, done)
-        self.items, self.children, self.results = items, [], {}
+        self.items, self.failed = items, False
 
-    def start(self) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        for k, stmt in enumerate(self.items):
-            child = _statement(self.e, stmt, self.env, lambda r, k=k: self.child_done(k, r))
-            self.children.append(child)
-            self.e.later(child.start)
+    def begin(self) -> None:
+        for stmt in self.items:
+            self.run(stmt)
 
-    def child_done(self, k: int, result: str) -> None:
-        self.results[k] = result
-        if len(self.results) < len(self.items):
-            return
-        if self.aborted:
-            return self.done(ABORTED)
-        self.done(OK if all(r == OK for r in self.results.values()) else FAIL)
-
-    def abort(self) -> None:
-        if self.ended or self.aborted:
-            return
-        self.aborted = True
-        for k, child in enumerate(self.children):
-            if k not in self.results:
-                self.e.later(child.abort)
+    def on_child_end(self, child: _Node, result: Outcome) -> None:
+        self.failed |= result is not OK
+        if not self.running:
+            self.end(FAIL if self.failed else OK)
 
 
 class _Monitor(_Node):
-    """Both at once; the first to end stops the other (mcl.md's rules for the result)."""
+    """Both at once; the first to end decides the result and stops the other
+    (mcl.md, "Results", monitor)."""
 
     def __init__(self, engine, stmt, env, done):
         super().__init__(engine, env, done)
-        self.stmt, self.first, self.result = stmt, None, None
-        self.children: list[_Node] = []
-        self.stopped = 0
+        self.stmt = stmt
+        self.watched: _Node | None = None
 
-    def start(self) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        for k, stmt in enumerate((self.stmt.watched, self.stmt.watcher)):
-            child = _statement(self.e, stmt, self.env, lambda r, k=k: self.child_done(k, r))
-            self.children.append(child)
-        for child in self.children:
-            self.e.later(child.start)
+    def begin(self) -> None:
+        self.watched = self.run(self.stmt.watched)
+        self.run(self.stmt.watcher)
 
-    def child_done(self, k: int, result: str) -> None:
-        self.stopped += 1
-        if self.first is None and not self.aborted:
-            self.first = k
-            # the watched one first: FAIL; the watcher first: its result
-            self.result = FAIL if k == 0 else (OK if result == OK else FAIL)
-            other = self.children[1 - k]
-            self.e.later(other.abort)
-            return
-        if self.stopped == 2:
-            self.done(ABORTED if self.aborted and self.first is None else self.result)
-
-    def abort(self) -> None:
-        if self.ended or self.aborted:
-            return
-        if self.first is not None:
-            return   # already stopping its other child: the result stands
-        self.aborted = True
-        for child in self.children:
-            if not child.ended:
-                self.e.later(child.abort)
+    def on_child_end(self, child: _Node, result: Outcome) -> None:
+        # the watched one first: FAIL; the watcher first: OK only if it ended OK
+        self.settle(FAIL if child is self.watched or result is not OK else OK)
 
 
 class _If(_Node):
-    """The condition, then the then-block (OK) or the else-block (FAIL; absent: OK)."""
+    """The condition, then the then-block (OK) or the else-block (FAIL; absent: OK)
+    (mcl.md, "Results", if)."""
 
     def __init__(self, engine, stmt, env, done):
         super().__init__(engine, env, done)
-        self.stmt, self.child = stmt, None
+        self.stmt = stmt
+        self.condition: _Node | None = None
 
-    def start(self) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        self.child = _statement(self.e, self.stmt.condition, self.env, self.condition_done)
-        self.e.later(self.child.start)
+    def begin(self) -> None:
+        self.condition = self.run(self.stmt.condition)
 
-    def condition_done(self, result: str) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        branch = self.stmt.then if result == OK else (self.stmt.otherwise or ast.Block(()))
-        self.child = _statement(self.e, branch, self.env, self.branch_done)
-        self.e.later(self.child.start)
-
-    def branch_done(self, result: str) -> None:
-        self.done(ABORTED if self.aborted else result)
-
-    def abort(self) -> None:
-        if self.ended or self.aborted:
-            return
-        self.aborted = True
-        if self.child is not None:
-            child = self.child
-            self.e.later(child.abort)
+    def on_child_end(self, child: _Node, result: Outcome) -> None:
+        if child is not self.condition:
+            return self.end(result)     # the branch's result is the if's
+        self.run(self.stmt.then if result is OK else (self.stmt.otherwise or ast.Block(())))
 
 
 class _While(_Node):
-    """The condition; FAIL ends the loop OK, OK runs the body; a failed body fails the loop."""
+    """The condition; FAIL ends the loop OK, OK runs the body; a failed body fails the loop
+    (mcl.md, "Results", while)."""
 
     def __init__(self, engine, stmt, env, done):
         super().__init__(engine, env, done)
-        self.stmt, self.child = stmt, None
+        self.stmt = stmt
+        self.condition: _Node | None = None
 
-    def start(self) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
+    def begin(self) -> None:
         self.test()
 
     def test(self) -> None:
-        if self.aborted:   # aborted between the body's end and the next test
-            return self.done(ABORTED)
-        self.child = _statement(self.e, self.stmt.condition, self.env, self.condition_done)
-        self.e.later(self.child.start)
+        self.condition = self.run(self.stmt.condition)
 
-    def condition_done(self, result: str) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        if result != OK:
-            return self.done(OK)
-        self.child = _statement(self.e, self.stmt.body, self.env, self.body_done)
-        self.e.later(self.child.start)
-
-    def body_done(self, result: str) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        if result == OK:
-            self.e.later(self.test)
+    def on_child_end(self, child: _Node, result: Outcome) -> None:
+        if child is self.condition:
+            if result is not OK:
+                return self.end(OK)
+            self.run(self.stmt.body)
+        elif result is OK:
+            self.after(self.test)
         else:
-            self.done(FAIL)
-
-    def abort(self) -> None:
-        if self.ended or self.aborted:
-            return
-        self.aborted = True
-        if self.child is not None:
-            child = self.child
-            self.e.later(child.abort)
+            self.end(FAIL)
 
 
 class _Call(_Node):
-    """A call: wait for the callee (and a task's primitives), run it, pass an abort on."""
+    """A call: wait for the callee (and a task's primitives), run it, pass an abort on
+    (mcl.md, "Sharing", and "Results", abort)."""
 
     def __init__(self, engine, call: ast.Call, env, done):
         super().__init__(engine, env, done)
@@ -523,59 +541,41 @@ class _Call(_Node):
         self.args = {p: _value(v, env, engine.c.consts) for p, v in zip(target.params, call.args)}
         prims = sorted({p.name for p in self.task.primitives}) if self.task else []
         self.needs = [call.name, *prims]
-        self.inner: _Node | None = None
-        self.state = "new"
+        self.inner: _Node | None = None     # None: still waiting to enter
 
-    def start(self) -> None:
-        if self.aborted:
-            return self.done(ABORTED)
-        self.state = "waiting"
+    def begin(self) -> None:
         self.e.request(self)
 
     def enter(self) -> None:
-        self.state = "inside"
+        """The engine's :meth:`~ReferenceEngine.grant`: the callee is ours, run it."""
         if self.task is not None:
-            self.inner = _TaskRun(self.e, self.task, self.args, self.returned)
+            self.inner = self.adopt(_TaskRun(self.e, self.task, self.args, self.child_ended))
         else:
-            body = self.e.c.functions[self.call.name].body
-            self.inner = _statement(self.e, body, self.args, self.returned)
-        self.e.later(self.inner.start)
+            self.inner = self.run(self.e.c.functions[self.call.name].body, self.args)
 
-    def returned(self, result: str) -> None:
-        self.state = "done"
-        self.e.release(self.needs)
-        self.done(ABORTED if self.aborted else result)
+    def child_ended(self, child: _Node, result: Outcome) -> None:
+        self.e.release(self.needs)     # the callee is free again, whatever its result
+        super().child_ended(child, result)
 
-    def abort(self) -> None:
-        if self.ended or self.aborted:
-            return
-        self.aborted = True
-        if self.state == "waiting":
+    def on_abort(self) -> None:
+        if self.inner is None:         # still waiting: it never starts
             self.e.waiting_calls.remove(self)
-            self.state = "done"
-            self.done(ABORTED)    # it never started
-        elif self.state == "inside":
-            inner = self.inner
-            self.e.later(inner.abort)
+            return self.end(ABORTED)
+        super().on_abort()
 
 
 class _TaskRun(_Node):
-    """A task inside: enable, wait for the goal (or the time-out or an abort), disable."""
+    """A task inside: enable, wait for the goal (or the time-out or an abort), disable
+    (mcl.md, "Results", task; the pattern's template net)."""
 
     def __init__(self, engine, task: ast.Task, env, done):
         super().__init__(engine, env, done)
         self.task = task
         self.rules = PATTERNS[task.pattern]
         self.prims = [engine.prims[p.name] for p in task.primitives]
-        self.state = "new"        # running, stopping
-        self.result: str | None = None
         self.timer: int | None = None
-        self.abort_pending = False
 
-    def start(self) -> None:
-        if self.abort_pending:       # aborted before it started (the net's t11)
-            return self.done(ABORTED)
-        self.state = "running"
+    def begin(self) -> None:
         for call, prim in zip(self.task.primitives, self.prims):
             prim.user = self
             prim.request = ActionKind.ENABLE
@@ -586,19 +586,19 @@ class _TaskRun(_Node):
         return all(p.on for p in self.prims)
 
     def primitive_changed(self, prim: _Primitive, kind: EventKind) -> None:
-        if self.state == "running":
+        if self.phase is Phase.RUNNING:
             if kind is EventKind.ON and self.all_on():
                 if self.task.timeout is not None:
                     self.timer = self.e.set_timer(self, float(self.task.timeout.value))
-                if self.abort_pending:
+                if self.aborted:
                     return self.stop(ABORTED)
             if self.all_on() or kind is not EventKind.ON:
                 self.check_goal()
-        elif self.state == "stopping" and kind is EventKind.OFF:
+        elif self.phase is Phase.STOPPING and kind is EventKind.OFF:
             if not any(p.on for p in self.prims):
                 for p in self.prims:
                     p.user = None
-                self.done(self.result)
+                self.end(self.result)
 
     def check_goal(self) -> None:
         if any(p.goal == "S1" for p in self.prims) and self.others_on():
@@ -611,26 +611,19 @@ class _TaskRun(_Node):
         return all(p.on for p in self.prims)
 
     def timed_out(self) -> None:
-        if self.state == "running":
+        if self.phase is Phase.RUNNING:
             self.timer = None
             self.stop(self.rules["timeout"])
 
-    def stop(self, result: str) -> None:
-        self.state = "stopping"
-        self.result = result
+    def stop(self, result: Outcome) -> None:
+        self.settle(result)
         self.e.cancel_timer(self.timer)
         self.timer = None
         for prim in self.prims:
             prim.request = ActionKind.DISABLE
             self.e.act(ActionKind.DISABLE, prim.name)
 
-    def abort(self) -> None:
-        if self.state == "new":
-            self.abort_pending = True
-            return
-        if self.state != "running":
-            return    # stopping already: the result stands (the call reports ABORTED)
+    def on_abort(self) -> None:
         if self.all_on():
             self.stop(ABORTED)
-        else:
-            self.abort_pending = True   # the net's t07 waits for the primitive to be on
+        # else the net's t07 waits for the primitives to be on: primitive_changed sees the abort

@@ -22,6 +22,7 @@ import json
 from typing import IO, Any
 
 from mcl2pnml.runtime.aal import Action, Event, SafeStop, _time
+from mcl2pnml.runtime.engine import Outcome
 
 
 def _args(args: tuple) -> str:
@@ -72,6 +73,10 @@ class RunLog:
         self._line(event.t, "ignored", f"{event.kind.value} from {event.primitive}: {reason}",
                    {"t": _time(event.t), "ignored": event.as_json(), "reason": reason})
 
-    def end(self, t: float, outcome: str) -> None:
-        """The last line: the run is over (a resumed run has nothing left to do)."""
-        self._json({"t": _time(t), "outcome": outcome})
+    def end(self, t: float, outcome: Outcome) -> None:
+        """The last line: the run is over (a resumed run has nothing left to do).
+
+        The outcome is written by :meth:`Outcome.as_json`, as the run's
+        ``--json`` object has it.
+        """
+        self._json({"t": _time(t), "outcome": outcome.as_json()})

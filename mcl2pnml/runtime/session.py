@@ -141,7 +141,7 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     result = loop(engine, vehicle, listener=listener, max_time=options.max_time)
     for event, reason in result.ignored[seen:]:
         log.ignored(event, reason)
-    log.end(result.time, result.outcome.value)
+    log.end(result.time, result.outcome)
     if isinstance(sink, journals.Replay):
         sink.finish()
     if log_path is not None:
