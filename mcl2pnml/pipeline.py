@@ -88,7 +88,9 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     ``auto``, ``dot``, ``layers`` or ``none``. ``mission``: a compiled
     mission, whose TINA file follows the executor's timing.
     """
-    form = FORMATS[fmt]
+    form = FORMATS.get(fmt)
+    if form is None:
+        raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     positions = None
     if "positions" in form.options and layout != "none":
         from mcl2pnml.view.layout import positions as lay_out
