@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
 
 from analysis.behaviour import behaviour
@@ -51,6 +52,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         space = None
         limits["states"] = e.message
     b = behaviour(space) if space is not None else None
+    ours = has_mission_interface(net)
     # what the state space says: also all of ``--state-space``
     result: dict[str, Any] = {
         "net": net.name,
@@ -62,8 +64,15 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         "bounded": space.bounded if space else None,
         "safe": space.safe if space else None,
         "terminal_markings": sorted(list(m) for m in b.terminal) if b else None,
-        "deadlock_free": b.deadlock_free if b else None,
-        "deadlocks": sorted(list(m) for m in b.improper) if b else None,
+        # a net with the paper's interface ends properly in a dead marking (one
+        # result marked, the rest at rest): a deadlock is a dead marking that
+        # is not such an end. Another net's every dead marking is a deadlock,
+        # as every other tool counts them.
+        "interface": "mission" if ours else "none",
+        "deadlock_free": (b.deadlock_free if ours else not b.terminal) if b else None,
+        "deadlocks": sorted(list(m) for m in (b.improper if ours else b.terminal))
+        if b else None,
+        "ends_properly": b.deadlock_free if b else None,
         "final_always_reachable": b.final_always_reachable if b else None,
         "home_marking": b.home_marking if b else None,
         "reusable": b.reusable if b else None,
@@ -107,6 +116,14 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     return result
 
 
+def has_mission_interface(net: Net) -> bool:
+    """Whether ``net`` has the paper's interface: fusion places (a template or a task, as
+    our files label them), or a compiled mission's result places (which TINA and LoLA
+    files keep by name)."""
+    return (any(p.interface is not None for p in net.places)
+            or any(r.id in net.place_index for r in RESULT_PLACES))
+
+
 # ---------------------------------------------------------------------------
 # the readable report
 
@@ -138,9 +155,11 @@ def render_text(r: dict[str, Any]) -> str:
         ["bounded", _yes(r["bounded"])],
         ["every siphon marked and controlled (inputs aside)", _yes(r.get("siphons_controlled"))],
         ["safe (1-bounded)", _yes(r["safe"])],
-        ["deadlock-free (every dead marking is a proper end)", _yes(r.get("deadlock_free"))],
-        ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],
-        ["reusable", _yes(r.get("reusable"))],
+        *([["deadlock-free (every dead marking is a proper end)", _yes(r.get("deadlock_free"))],
+           ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],
+           ["reusable", _yes(r.get("reusable"))]] if r.get("interface") != "none" else
+          [["deadlock-free (no dead marking)", _yes(r.get("deadlock_free"))],
+           ["M0 reachable again from every marking", _yes(r.get("home_marking"))]]),
         ["reachable markings" + (" (coverability nodes)" if r["bounded"] is False else ""),
          "not computed" if r["states"] is None else f"{r['states']:,}"],
     ]))
@@ -162,7 +181,7 @@ def render_text(r: dict[str, Any]) -> str:
         if r.get("t_invariants") is not None:
             out += ["", f"T-invariants (a basis of {len(r['t_invariants'])}):"]
             out += [f"  {format_invariant(x)}" for x in r["t_invariants"]] or ["  none"]
-    if r.get("deadlocks"):
+    if r.get("deadlocks") and r.get("interface") != "none":
         out += ["", "Dead markings that are not a proper end:"]
         out += [f"  {{{', '.join(m)}}}" for m in r["deadlocks"]]
     for key, why in r.get("limits", {}).items():

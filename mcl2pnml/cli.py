@@ -1,10 +1,8 @@
-"""The ``mcl2pnml`` command (click), as specified in ``shared/spec/cli.md``.
+"""The ``mcl2pnml`` command (click), as ``shared/spec/cli.md`` specifies it.
 
-It parses options and prints; the work is the pipeline facade's
-(:mod:`mcl2pnml.pipeline`). Errors are handled once, in :meth:`Cli.main`: a
-bad argument is one line on stderr, a bad input file is the error's own
-message (file, line, column, the line with a caret), and both exit with
-status 2, with no traceback and no partial output file.
+It parses options and prints; the work is :mod:`mcl2pnml.pipeline`'s. Errors are handled
+once, in :meth:`Cli.main`: a bad argument is one line, a bad input file its located
+message (file:line:col, the line, a caret); both exit 2, with no traceback or partial file.
 """
 from __future__ import annotations
 
@@ -30,16 +28,15 @@ Examples:
   mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
   mcl2pnml run examples/sauce.mcl --vehicle script.json --journal run.journal
   mcl2pnml run examples/sauce.mcl --resume run.journal
-  mcl2pnml template --list
   mcl2pnml template task -o task.pnml
   mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
-  mcl2pnml show task -o task.html
   mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
 """
 FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
-#: ``--format``: every format of the table that can be written
+NET_OPTION = click.option("--net", "net_id", metavar="ID",
+                          help="The net to read, of a PNML file that holds several.")
 FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
                              show_default=True,
                              help="; ".join(f"{f.name}: {f.says}" for f in FORMATS.values()))
@@ -163,9 +160,10 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -
               help="Journal the run here as it happens (a new file), to resume it if killed.")
 @click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "
               "engine, vehicle, world and time limit: replay, check, go on, append.")
+@NET_OPTION
 @click.pass_context
 def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
-        **options) -> int:
+        net_id: str | None, **options) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows
@@ -178,7 +176,7 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
                       is click.core.ParameterSource.COMMANDLINE)
     result = pipeline.run_mission(
         mission, pipeline.RunOptions(**options, explicit=given),
-        text=None if as_json else sys.stdout, log_path=log_path,
+        text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
         note=lambda line: click.echo(line, err=True))
     click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
     return 0
@@ -189,13 +187,14 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
 @click.option("--grammar", type=click.Path(exists=True, file_okay=False, path_type=Path),
               help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...). Default: "
                    "$MCL2PNML_PNML_GRAMMAR, else a shared/pnml-grammar beside or above.")
-def validate(file: Path, grammar: Path | None) -> int:
+@NET_OPTION
+def validate(file: Path, grammar: Path | None, net_id: str | None) -> int:
     """Check FILE against the official PNML grammar and the P/T net rules.
 
     The reader catches what the grammar lets pass (an arc from a place to a
     place, a dangling arc). Exit 0 when valid, 2 with every problem when not.
     """
-    verdict, net = pipeline.validate_pnml(file, grammar)
+    verdict, net = pipeline.validate_pnml(file, grammar, net_id)
     if not verdict.valid:
         for error in verdict.errors:
             click.echo(str(error), err=True)
@@ -241,7 +240,8 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
 @click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE")
 @click.option("-o", "--output", type=OUTPUT, help="Write the page here (default: NAME.html).")
 @click.option("--run", "run_log", type=FILE, help="A run to follow: a log of `run --log`.")
-def show(what: str, output: Path | None, run_log: Path | None) -> int:
+@NET_OPTION
+def show(what: str, output: Path | None, run_log: Path | None, net_id: str | None) -> int:
     """Write one self-contained HTML page to play the token game on a net.
 
     WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
@@ -250,7 +250,7 @@ def show(what: str, output: Path | None, run_log: Path | None) -> int:
     the reduced model (Fig. 3), a recorded run step by step. The page needs
     no server and fetches nothing.
     """
-    title, nets = pipeline.show_nets(what, with_run=run_log is not None)
+    title, nets = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id)
     output = output or Path(f"{title}.html")
     pipeline.save_show_page(output, title, nets, run_log)
     click.echo(f"wrote {output}: {nets[0][0].summary()}", err=True)
@@ -275,15 +275,16 @@ def _progress(states: int, frontier: int) -> None:
 @click.option("--explorer", type=click.Choice(EXPLORERS), default="auto", show_default=True,
               help="; ".join(f"{e.name}: {e.doc}" for e in EXPLORER_TABLE.values())
               + ". auto: numpy, then compiled past 500,000 markings.")
+@NET_OPTION
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
-            max_states: int, progress: bool | None, explorer: str) -> int:
+            max_states: int, progress: bool | None, explorer: str, net_id: str | None) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from
     TAPAAL, PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml,
     .net, .lola).
     """
-    net = pipeline.load_net(file)
+    net = pipeline.load_net(file, net_id)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress
     result = pipeline.analyze(net, start, state_space_only=state_space, max_states=max_states,

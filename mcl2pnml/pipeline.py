@@ -75,9 +75,16 @@ def functional_form(checked, *, functions: bool = False) -> list[str]:
 
 # -- nets in files -------------------------------------------------------------------------
 
-def load_net(path: str | Path) -> Net:
-    """A net from any file: a mission (``.mcl``, compiled) or a format of the table."""
-    return compile_file(path) if Path(path).suffix == ".mcl" else reader_of(path).load(path)
+def load_net(path: str | Path, net_id: str | None = None) -> Net:
+    """A net from any file: a mission (``.mcl``, compiled) or a format of the table.
+
+    ``net_id`` chooses one net of a file that holds several (PNML).
+    """
+    if Path(path).suffix != ".mcl":
+        return reader_of(path).load(path, net_id)
+    if net_id is not None:
+        raise OptionError("--net", "a mission compiles to one net; leave out --net")
+    return compile_file(path)
 
 
 def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
@@ -113,12 +120,13 @@ def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
     return write(net, positions(net, layout_engine))
 
 
-def validate_pnml(path: str | Path, grammar: str | Path | None = None):
+def validate_pnml(path: str | Path, grammar: str | Path | None = None,
+                  net_id: str | None = None):
     """The official grammar's verdict on a PNML file, and the net when it is valid."""
     from mcl2pnml.io.pnml.grammar import validate
     from mcl2pnml.io.pnml.reader import load_pnml
-    verdict = validate(path, grammar)
-    return verdict, (load_pnml(path) if verdict.valid else None)
+    verdict = validate(path, grammar, net_id)
+    return verdict, (load_pnml(path, net_id) if verdict.valid else None)
 
 
 # -- the paper's nets ----------------------------------------------------------------------
@@ -166,7 +174,7 @@ def analysis_text(result: dict[str, Any]) -> str:
 
 # -- running -------------------------------------------------------------------------------
 
-def _engine_for(mission: Path) -> Callable[[str], Any]:
+def _engine_for(mission: Path, net_id: str | None) -> Callable[[str], Any]:
     """How to build each engine for ``mission`` (the reference engine reads MCL only)."""
     def make(kind: str):
         from mcl2pnml.runtime.executor import PetriEngine
@@ -180,13 +188,13 @@ def _engine_for(mission: Path) -> Callable[[str], Any]:
             raise OptionError("--engine", "the reference engine reads MCL, not a net; give "
                                           "the .mcl file")
         from mcl2pnml.io.pnml.reader import load_pnml
-        return PetriEngine(load_pnml(mission))
+        return PetriEngine(load_pnml(mission, net_id))
     return make
 
 
 def run_mission(mission: str | Path, options: RunOptions = RunOptions(), *,
                 text: IO[str] | None = None, log_path: str | Path | None = None,
-                note: Callable[[str], None] = lambda line: None):
+                note: Callable[[str], None] = lambda line: None, net_id: str | None = None):
     """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle.
 
     Returns the run (outcome, time, trace, safe stop); see
@@ -194,13 +202,14 @@ def run_mission(mission: str | Path, options: RunOptions = RunOptions(), *,
     """
     from mcl2pnml.runtime.session import run_session
     mission = Path(mission)
-    return run_session(mission, options, _engine_for(mission), text=text,
+    return run_session(mission, options, _engine_for(mission, net_id), text=text,
                        log_path=Path(log_path) if log_path else None, note=note)
 
 
 # -- the token game ------------------------------------------------------------------------
 
-def show_nets(what: str, *, with_run: bool = False) -> tuple[str, list[tuple[Net, str]]]:
+def show_nets(what: str, *, with_run: bool = False,
+              net_id: str | None = None) -> tuple[str, list[tuple[Net, str]]]:
     """The page's title and the nets it shows for ``what``, each with its label.
 
     A mission: the mission and its reduced model (Fig. 3); a net file: the
@@ -210,11 +219,14 @@ def show_nets(what: str, *, with_run: bool = False) -> tuple[str, list[tuple[Net
     """
     from mcl2pnml.io.formats import SUFFIXES
     path = Path(what)
+    if net_id is not None and path.suffix.lower() not in SUFFIXES:
+        raise OptionError("--net", "only a net file (PNML) may hold several nets; leave out "
+                                   "--net")
     if path.suffix == ".mcl" or path.suffix.lower() in SUFFIXES:
         if not path.is_file():
             raise OptionError("MISSION.mcl|NET|TEMPLATE", f"no file '{what}'")
         if path.suffix != ".mcl":
-            return path.stem, [(load_net(path), "the net")]
+            return path.stem, [(load_net(path, net_id), "the net")]
         checked = check_file(path)
         return path.stem, [(compile_checked(checked), "the mission"),
                            (compile_checked(checked, reduced=True),

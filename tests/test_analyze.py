@@ -83,7 +83,10 @@ def test_a_net_written_by_pm4py():
                        "--json").stdout)
     assert r["places"] == 6 and r["safe"]
     assert r["terminal_markings"] == [["sink"]]
-    assert r["deadlock_free"] and r["reusable"]
+    # no mission interface: its dead marking is a deadlock, as other tools count it,
+    # and it is also the workflow's proper end
+    assert r["interface"] == "none" and not r["deadlock_free"] and r["deadlocks"] == [["sink"]]
+    assert r["ends_properly"] and r["reusable"]
 
 
 def test_every_explorer_gives_the_same_answer(task_pnml):
@@ -118,3 +121,21 @@ def test_a_state_space_too_large_still_gives_the_structure(task_pnml):
     assert len(r["p_invariants"]) == 6 and r["siphons"]
     out = run("analyze", task_pnml, "--state-space", "--max-states", "5")
     assert out.returncode == 2 and "more than 5 markings" in out.stderr
+
+
+def test_one_net_of_several_is_chosen_with_net():
+    two = DATA / "pnml" / "invalid" / "two_nets.pnml"
+    r = json.loads(run("analyze", two, "--net", "second", "--state-space", "--json").stdout)
+    assert r["net"] == "second" and r["states"] == 1
+    out = run("analyze", two)
+    assert out.returncode == 2 and "choose one with --net ID" in out.stderr
+    for command in (["validate", two], ["show", two, "-o", "/dev/null"]):
+        out = run(*command, "--net", "third")
+        assert out.returncode == 2 and "no net with id 'third'" in out.stderr, command
+
+
+def test_net_is_refused_where_a_file_holds_one_net(tmp_path):
+    path = tmp_path / "one.net"
+    path.write_text("pl p (1)\ntr t p -> \n")
+    out = run("analyze", path, "--net", "x")
+    assert out.returncode == 2 and "--net" in out.stderr and "holds one net" in out.stderr

@@ -114,6 +114,43 @@ def test_reader_takes_pipe_value_labels():
     assert {(a.source, a.target, a.weight) for a in net.arcs} == {("P0", "T0", 2), ("T0", "P1", 1)}
 
 
+def test_tapaal_native_files_keep_their_markings_and_weights():
+    """TAPAAL's own format says markings and weights in attributes: read, not dropped."""
+    net = load_pnml(DATA / "pnml" / "foreign" / "tapaal_native.pnml")
+    assert dict(net.initial.items()) == {"P0": 2}
+    assert {(a.source, a.target, a.weight) for a in net.arcs} == {("P0", "T0", 2),
+                                                                 ("T0", "P1", 3)}
+
+
+def test_read_arcs_of_other_tools_are_read_arcs():
+    net = load_pnml(DATA / "pnml" / "foreign" / "read_arcs_prom.pnml")
+    assert {(a.source, a.target, a.kind) for a in net.arcs} == {
+        ("todo", "work", ArcKind.NORMAL), ("work", "done", ArcKind.NORMAL),
+        ("lights_on", "work", ArcKind.READ)}
+
+
+def test_a_woped_subprocess_stands_in_for_its_transition():
+    """The subprocess page refines its transition: the net read is the flattened one."""
+    net = load_pnml(DATA / "pnml" / "foreign" / "woped_subprocess.pnml")
+    assert {t.id for t in net.transitions} == {"sub1_t1", "sub1_t2", "sub1_t3"}
+    assert {p.id for p in net.places} == {"p1", "p2", "sub1_p1"}
+    assert {(a.source, a.target) for a in net.arcs} == {
+        ("p1", "sub1_t1"), ("sub1_t1", "sub1_p1"), ("sub1_p1", "sub1_t2"),
+        ("sub1_p1", "sub1_t3"), ("sub1_t2", "p2"), ("sub1_t3", "p2")}
+
+
+def test_errors_in_one_line_files_point_at_the_faulty_element():
+    """ProM and pm4py write a net on one line: the caret goes under this arc's label."""
+    line = ('<pnml><net id="n"><page id="g"><place id="p"/><transition id="t"/>'
+            '<arc id="a1" source="p" target="t"><inscription><text>1</text></inscription></arc>'
+            '<arc id="a2" source="p" target="t"><inscription><text>0</text></inscription></arc>'
+            '</page></net></pnml>')
+    with pytest.raises(PnmlError) as info:
+        parse_pnml(line.encode(), "one_line.pnml")
+    column = info.value.location.column
+    assert line[column - 1:].startswith("<inscription><text>0"), column
+
+
 def test_foreign_nets_round_trip_through_our_writer(assert_valid):
     for path in FOREIGN:
         net = load_pnml(path)

@@ -19,7 +19,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Callable, Mapping
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 from mcl2pnml.core.net import Net
 
 
@@ -55,12 +55,19 @@ class Format:
     saver: str | None = None
     #: the :class:`SaveOptions` fields its writer takes
     options: tuple[str, ...] = ()
+    #: a file may hold several nets, one chosen by its id (``--net``)
+    several: bool = False
 
     def _function(self, name: str) -> Callable:
         return getattr(importlib.import_module(self.module), name)
 
-    def load(self, path: str | Path) -> Net:
-        return self._function(self.loader)(path)
+    def load(self, path: str | Path, net_id: str | None = None) -> Net:
+        """The net of ``path``; ``net_id`` chooses one where a file holds several."""
+        if net_id is None:
+            return self._function(self.loader)(path)
+        if not self.several:
+            raise OptionError("--net", f"a {self.title} file holds one net; leave out --net")
+        return self._function(self.loader)(path, net_id)
 
     def save(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> None:
         """Write ``net`` to ``path``, whole or not at all."""
@@ -71,7 +78,7 @@ class Format:
 FORMATS: dict[str, Format] = {f.name: f for f in (
     Format("pnml", "PNML", (".pnml", ".xml"),
            "PNML (ISO/IEC 15909-2), with time-outs and bindings as toolspecific data",
-           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions",)),
+           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions",), several=True),
     Format("tina", "TINA", (".net",), "TINA's .net: a time Petri net, time-outs as intervals",
            "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
     Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
@@ -101,6 +108,6 @@ def reader_of(path: str | Path) -> Format:
     return fmt
 
 
-def load_net(path: str | Path) -> Net:
+def load_net(path: str | Path, net_id: str | None = None) -> Net:
     """A net from a file of any format that has a reader, chosen by its suffix."""
-    return reader_of(path).load(path)
+    return reader_of(path).load(path, net_id)

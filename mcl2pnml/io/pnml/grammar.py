@@ -72,12 +72,17 @@ class Verdict:
         return not self.errors
 
 
-def validate(path: str | Path, grammar: str | Path | None = None) -> Verdict:
-    """Check a PNML file against the grammar and against the reader's rules."""
-    return validate_bytes(read_file(path), str(path), grammar)
+def validate(path: str | Path, grammar: str | Path | None = None,
+             net_id: str | None = None) -> Verdict:
+    """Check a PNML file against the grammar and against the reader's rules.
+
+    ``net_id``: the net the reader's rules are checked on, of a file that holds several.
+    """
+    return validate_bytes(read_file(path), str(path), grammar, net_id)
 
 
-def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None) -> Verdict:
+def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None,
+                   net_id: str | None = None) -> Verdict:
     rng = _relaxng(str(find_grammar(grammar)))
     src = _Source(filename, data)
     try:
@@ -90,7 +95,7 @@ def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None
             errors.append(PnmlError(f"grammar: {entry.message}",
                                     src.at(entry.line, entry.column or None)))
     try:
-        parse_pnml(data, filename)
+        parse_pnml(data, filename, net_id)
     except ErrorList as e:
         errors.extend(e.errors)
     except PnmlError as e:

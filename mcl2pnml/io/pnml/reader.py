@@ -7,6 +7,17 @@ places and transitions (resolved to the node they stand for); the older
 ``<value>`` form of labels (PIPE); parallel arcs (their weights add up);
 unknown elements and other tools' ``<toolspecific>`` (skipped).
 
+Arc types, written three ways by real tools (TAPAAL's ``type`` attribute,
+ProM's and pm4py's ``<arctype>``, PIPE's ``<type value>``): ``normal`` is
+an ordinary arc, ``read`` and ``test`` are read arcs; inhibitor and reset
+arcs are refused, since a P/T reading of them would be silently wrong and
+the invariants and siphons of a P/T net do not hold for them. Coloured
+content (declarations, sorts, high-level markings and inscriptions, a
+marking written as a multiset) is refused whatever type the net claims.
+TAPAAL's own format (old HU-Berlin namespace, markings and weights as
+attributes) is read with its markings and weights when it is untimed, and
+refused where its time or colour would matter.
+
 Refused, each with a message naming file, line and column: XML that is not
 well-formed; a document type declaration (PNML needs none, and entities are
 how XML bombs and external fetches get in: nothing is ever resolved or
@@ -28,6 +39,7 @@ from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, r
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
 from mcl2pnml.io import ids
+from mcl2pnml.io.pnml.tapaal import is_tapaal, parse_tapaal
 from mcl2pnml.io.pnml.writer import TOOL
 
 P_T_TYPES = {
@@ -36,6 +48,33 @@ P_T_TYPES = {
     "http://www.informatik.hu-berlin.de/top/pntd/ptNetb",  # pre-standard PNML
     "P/T net",  # PIPE
 }
+
+
+#: Arc types that are ordinary arcs, as tools spell them.
+NORMAL_ARCS = frozenset({"normal", "regular", "ordinary", "default", "standard"})
+#: Arc types that test a place without taking from it: our read arcs.
+READ_ARCS = frozenset({"read", "test"})
+#: Arc types a P/T net cannot say, with what they are.
+REFUSED_ARCS = {
+    "inhibitor": "an inhibitor arc (it enables its transition only while the place is empty)",
+    "tapninhibitor": "an inhibitor arc (it enables its transition only while the place is "
+                     "empty)",
+    "reset": "a reset arc (firing empties the place)",
+    "transfer": "a transfer arc (firing moves every token of the place)",
+    "transport": "a transport arc of a timed-arc net",
+}
+#: Elements that only coloured (high-level) nets have, with what they are.
+HIGH_LEVEL = {
+    "declaration": "a declaration of sorts and variables",
+    "declarations": "a declaration of sorts and variables",
+    "hlinitialMarking": "a high-level initial marking",
+    "hlinscription": "a high-level arc inscription",
+    "condition": "a transition guard",
+    "multiset": "a marking written as a multiset of coloured tokens",
+}
+#: How an arc of the file reads: an ordinary arc, a read arc of another tool, or
+#: half of the self-loop pair our writer makes of a read arc.
+NORMAL, READ, PAIR = "normal", "read", "pair"
 
 
 class XmlError(PnmlError):
@@ -83,11 +122,23 @@ class _Source:
         line = el.sourceline
         if not line or line > len(self.lines):
             return Location(self.filename)
+        return Location(self.filename, line, self._column(el, line), self.lines[line - 1])
+
+    def _column(self, el, line: int) -> int:
+        """Where ``el``'s start tag is on its line (lxml keeps no column).
+
+        The tag with this element's id; an element without one is searched
+        from its parent's tag on, when the parent starts on the same line,
+        so that in a file written on one line (ProM, pm4py) the caret is
+        under this arc's inscription, not the first of the line.
+        """
         text = self.lines[line - 1]
-        # lxml keeps no column; find the start tag on its line (the one with
-        # this element's id, where several start on that line)
         name, xml_id = _local(el), el.get("id")
-        col, start = None, 0
+        parent = el.getparent()
+        start = 0
+        if xml_id is None and parent is not None and parent.sourceline == line:
+            start = self._column(parent, line)   # 1-based: past the parent's '<'
+        col = None
         while True:
             i = text.find("<", start)
             if i < 0:
@@ -104,7 +155,7 @@ class _Source:
                     col = i + 1
                     break
             start = j
-        return Location(self.filename, line, col or 1, text)
+        return col or 1
 
 
 @dataclass
@@ -117,6 +168,7 @@ class _Raw:
     refs: dict = field(default_factory=dict)          # reference id -> (target id, element)
     arcs: list = field(default_factory=list)          # (element, source, target, weight, read)
     seen: dict = field(default_factory=dict)          # xml id -> line it is first used on
+    substituted: set = field(default_factory=set)     # transitions refined by a subprocess
     errors: list = field(default_factory=list)
 
 
@@ -253,30 +305,95 @@ class _Reader:
             return
         self.raw.refs[xml_id] = (ref, el)
 
-    def arc(self, el) -> None:
-        xml_id = self._id(el)
+    def _arc_type(self, el) -> tuple[str | None, object]:
+        """The arc's type as its writer spelled it, and the element that says it."""
+        if el.get("type") is not None:                      # TAPAAL
+            return el.get("type").strip().lower(), el
+        arctype = _child(el, "arctype")                     # ProM, pm4py
+        if arctype is not None:
+            text = _child(arctype, "text")
+            return ((text.text if text is not None else arctype.text) or "").strip().lower(), \
+                arctype
+        kind = _child(el, "type")                           # PIPE
+        if kind is not None:
+            return (kind.get("value") or kind.text or "").strip().lower(), kind
+        return None, el
+
+    def arc(self, el, scoped: bool = False) -> None:
+        xml_id = el.get("id") if scoped else self._id(el)
         src, dst = el.get("source"), el.get("target")
         if src is None or dst is None:
             self.error(el, f"arc '{xml_id}' needs both a source and a target")
             return
         weight = self._natural(el, "inscription", 1, f"arc '{xml_id}'")
-        read = any(_child(ts, "read") is not None for ts in self._ours(el))
+        kind, said_by = self._arc_type(el)
+        if kind in REFUSED_ARCS:
+            self.error(said_by, f"arc '{xml_id}' is {REFUSED_ARCS[kind]}: a P/T net has none, "
+                                "and reading it as an ordinary arc would change what the "
+                                "net does; remove it, or analyse the net with a tool for "
+                                "its class")
+            return
+        if kind is not None and kind not in NORMAL_ARCS and kind not in READ_ARCS:
+            self.error(said_by, f"arc '{xml_id}' has type '{kind}', which is not a P/T arc; "
+                                "known: " + ", ".join(sorted(NORMAL_ARCS | READ_ARCS)))
+            return
+        if any(_child(ts, "read") is not None for ts in self._ours(el)):
+            read = PAIR
+        else:
+            read = READ if kind in READ_ARCS else NORMAL
         self.raw.arcs.append((el, src, dst, 1 if weight is None else weight, read))
 
+    def coloured(self, net_el) -> None:
+        """Refuse what only a coloured (high-level) net has, wherever it is in the net.
+
+        Searched by lxml in one pass (the names in any namespace); other
+        tools' ``<toolspecific>`` data is theirs and skipped.
+        """
+        for el in net_el.iter(*(f"{{*}}{name}" for name in (*HIGH_LEVEL, "structure"))):
+            name = _local(el)
+            if name == "structure" and _local(el.getparent()) != "type":
+                continue   # a high-level label's body: its label is reported
+            if any(_local(a) == "toolspecific" for a in el.iterancestors()):
+                continue
+            what = HIGH_LEVEL.get(name, "a place's sort")
+            self.error(el, f"<{name}> is {what}: this is a coloured (high-level) net, "
+                           "whatever its type says, and a P/T reading would drop its colours "
+                           "and tokens; unfold it to a P/T net first")
+            return   # one message says it: the rest of the net is coloured alike
+
     def walk(self, net_el) -> None:
-        """Every node and arc, in document order, through pages of any depth."""
+        """Every node and arc, in document order, through pages of any depth.
+
+        A page with the id of a transition and a ``<net>`` inside is a WoPeD
+        subprocess: the net that refines that transition. Its places with
+        the ids of the transition's input and output places are those
+        places; the subprocess is read in the transition's stead
+        (substitution), so the net read is the one WoPeD runs, flattened.
+        Arc ids inside a subprocess repeat the top level's and name nothing
+        else, so they are not held to be unique.
+        """
         handlers = {"place": self.place, "transition": self.transition, "arc": self.arc,
                     "referencePlace": self.reference, "referenceTransition": self.reference}
-        stack = [iter(net_el)]  # explicit: pages may nest deeper than Python recurses
+        # explicit: pages may nest deeper than Python recurses; True: in a subprocess
+        stack = [(iter(net_el), False)]
         while stack:
-            child = next(stack[-1], None)
+            children, inside = stack[-1]
+            child = next(children, None)
             if child is None:
                 stack.pop()
                 continue
             name = _local(child)
-            if name == "page":
+            sub = _child(child, "net") if name == "page" else None
+            if sub is not None and child.get("id") in self.raw.transitions:
+                self.raw.substituted.add(child.get("id"))
+                stack.append((iter(sub), True))
+            elif name == "page":
                 self._id(child)
-                stack.append(iter(child))
+                stack.append((iter(child), inside))
+            elif inside and name == "place" and child.get("id") in self.raw.places:
+                continue   # the subprocess's copy of the transition's input or output place
+            elif inside and name == "arc":
+                self.arc(child, scoped=True)
             elif name in handlers:
                 handlers[name](child)
 
@@ -302,7 +419,11 @@ class _Reader:
         raw = self.raw
         weights: dict[tuple[str, str, bool], int] = {}
         arc_el: dict[tuple[str, str, bool], object] = {}
+        for t in raw.substituted:   # its subprocess stands in its place
+            del raw.transitions[t]
         for el, src, dst, weight, read in raw.arcs:
+            if src in raw.substituted or dst in raw.substituted:
+                continue
             s, d = self.resolve(src, el, "source"), self.resolve(dst, el, "target")
             if s is None or d is None:
                 continue
@@ -312,20 +433,26 @@ class _Reader:
                 self.error(el, f"arc '{el.get('id')}' goes from {kind} '{s}' to {kind} "
                                f"'{d}'; an arc joins a place and a transition")
                 continue
+            if read == READ and not s_place:
+                self.error(el, f"read arc '{el.get('id')}' goes from transition '{s}' to "
+                               f"place '{d}'; a read arc tests a place for its transition")
+                continue
             key = (s, d, read)
             weights[key] = weights.get(key, 0) + weight
             arc_el.setdefault(key, el)
         arcs = []
         for (s, d, read), w in weights.items():
-            if not read:
+            if read == NORMAL:
                 arcs.append(Arc(self.decode(s), self.decode(d), w))
+            elif read == READ:
+                arcs.append(Arc(self.decode(s), self.decode(d), w, ArcKind.READ))
             elif s in raw.places:  # a read arc is the pair (p -> t, t -> p), both marked
-                if weights.get((d, s, True)) != w:
+                if weights.get((d, s, PAIR)) != w:
                     self.error(arc_el[(s, d, read)],
                                f"read arc from '{s}' to '{d}' has no matching return arc")
                     continue
                 arcs.append(Arc(self.decode(s), self.decode(d), w, ArcKind.READ))
-            elif weights.get((d, s, True)) != w:
+            elif weights.get((d, s, PAIR)) != w:
                 self.error(arc_el[(s, d, read)],
                            f"read arc return from '{s}' to '{d}' has no matching arc")
         raise_all(raw.errors)
@@ -369,6 +496,11 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
     root = _parse_xml(data, src).getroot()
     if _local(root) != "pnml":
         raise PnmlError(f"the root element is <{_local(root)}>, not <pnml>", src.locate(root))
+    if is_tapaal(root):
+        try:
+            return parse_tapaal(root, src, net_id)
+        except NetError as e:  # an arc to nowhere, say
+            raise PnmlError(e.message, Location(filename)) from None
     nets = _children(root, "net")
     if not nets:
         raise PnmlError("no <net> in this document", src.locate(root))
@@ -381,7 +513,8 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
         net_el = chosen[0]
     elif len(nets) > 1:
         listing = ", ".join(str(n.get("id")) for n in nets)
-        raise PnmlError(f"this file holds {len(nets)} nets ({listing}); choose one by its id",
+        raise PnmlError(f"this file holds {len(nets)} nets ({listing}); choose one with "
+                        "--net ID",
                         src.locate(nets[1]))
     else:
         net_el = nets[0]
@@ -393,6 +526,7 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
     decode = any(_child(ts, "ids") is not None for ts in ours)
     reader = _Reader(src, decode)
     reader._id(net_el)
+    reader.coloured(net_el)
     reader.walk(net_el)
     name_el = _child(net_el, "name")
     name = reader._label_text(net_el, "name") if name_el is not None else None
