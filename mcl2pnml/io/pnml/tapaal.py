@@ -7,13 +7,14 @@ net type ``P/T net`` and everything as attributes: a place's tokens in
 arc's weight in ``weight``, its time interval in ``inscription="[0,inf)"``
 and its kind in ``type`` (``timed`` input, ``normal`` output,
 ``tapnInhibitor``, ``transport``; older files have ``inputArc``,
-``outputArc``, ``inhibitorArc`` and ``transportArc`` elements instead).
-Read as a standard PNML file, every marking would silently be 0.
+``outputArc``, ``inhibitorArc`` and ``transportArc`` elements instead, and
+often no namespace). Read as a standard PNML file, every marking would
+silently be 0.
 
 A file whose time cannot matter (every invariant ``< inf``, every interval
 ``[0,inf)``) is the P/T net it draws, and is read with its markings and
 weights. Everything else is refused with its place in the file: time that
-matters, inhibitor and transport arcs, colours, and a model of several
+matters, inhibitor arcs, colours, and a model of several
 components, which TAPAAL composes through shared places and transitions
 (pick one with ``--net``, knowingly, or export the composed net as PNML from
 TAPAAL).
@@ -32,9 +33,25 @@ OLD_ARCS = {"inputArc": "timed", "outputArc": "normal", "inhibitorArc": "tapninh
             "transportArc": "transport"}
 
 
+#: Arc types only TAPAAL's own format has.
+TAPAAL_TYPES = {"timed", "transport", "tapninhibitor"}
+
+
 def is_tapaal(root) -> bool:
-    """Whether a document is in TAPAAL's own format (its root's namespace)."""
-    return isinstance(root.tag, str) and root.tag.startswith("{" + NAMESPACE + "}")
+    """Whether a document is in TAPAAL's own format.
+
+    Its root's namespace says so, but older files (and TAPAAL's own test
+    models) have none: then a place with its marking in an attribute, an arc
+    element of the old kinds, or an arc of a type only TAPAAL has.
+    """
+    if isinstance(root.tag, str) and root.tag.startswith("{" + NAMESPACE + "}"):
+        return True
+    for el in root.iter("{*}place", *(f"{{*}}{name}" for name in OLD_ARCS), "{*}arc"):
+        name = _local(el)
+        if (name in OLD_ARCS or (name == "place" and el.get("initialMarking") is not None)
+                or (name == "arc" and (el.get("type") or "").lower() in TAPAAL_TYPES)):
+            return True
+    return False
 
 
 def _local(el) -> str:
@@ -105,19 +122,23 @@ class _Tapaal:
                            "while the place holds fewer tokens than its weight): a P/T net has "
                            "none; remove it, or analyse the net with TAPAAL")
             return
+        inscription = (el.get("inscription") or "").replace(" ", "")
         if kind == "transport":
-            self.error(el, f"arc '{aid}' is a transport arc of a timed-arc net; mcl2pnml reads "
-                           "untimed P/T nets")
-            return
-        interval = (el.get("inscription") or "[0,inf)").replace(" ", "")
-        if kind == "timed" and interval not in UNTIMED_INTERVAL:
+            # a pair of transport arcs moves a token and its age (the ":1" names the
+            # pair); where no interval or invariant looks at ages, that is a token
+            # taken from one place and put in another: an input and an output arc
+            inscription = inscription.rpartition(":")[0] if ":" in inscription else inscription
+        if kind in ("timed", "transport") and (inscription or "[0,inf)") not in UNTIMED_INTERVAL:
             self.timed_error(el, f"arc '{aid}' has the time interval '{el.get('inscription')}'")
             return
-        if kind not in ("timed", "normal"):
+        if kind not in ("timed", "normal", "transport"):
             self.error(el, f"arc '{aid}' has type '{el.get('type')}', which mcl2pnml does not "
-                           "know; known: timed, normal")
+                           "know; known: timed, normal, transport")
             return
-        weight = self.natural(el, "weight", 1, 1)
+        if el.get("weight") is None and kind == "normal" and inscription.isdigit():
+            weight = self.natural(el, "inscription", 1, 1)   # older files: the weight
+        else:
+            weight = self.natural(el, "weight", 1, 1)
         key = (el.get("source"), el.get("target"))
         arcs[key] = arcs.get(key, 0) + weight
 
