@@ -12,8 +12,10 @@ OUT    := out
 
 # graphviz's `dot` lays out PNML drawings and renders figures; Chromium plays the
 # token game page of `mcl2pnml show` in the browser tests. Both from Debian's
-# packages where missing (machines here run as root).
-APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium)
+# packages where missing (machines here run as root). GLPK lets TAPAAL's verifypn, one of
+# the peer tools the external-corpus tests compare us with, start.
+APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium) \
+                $(if $(shell /sbin/ldconfig -p 2>/dev/null | grep libglpk.so.40),,libglpk40)
 
 system-deps:
 	@if [ -n "$(strip $(APT_PACKAGES))" ]; then \

@@ -1,0 +1,96 @@
+"""The real Petri-net tools the tests compare us with: TAPAAL's verifypn and LoLA.
+
+They are looked for in ``$MCL2PNML_PEERS``, then in ``../shared/peers/bin`` beside
+the repository, then on PATH. A test that needs one calls :func:`need`, which
+skips with the reason when the tool is absent (a clone without ``../shared``) or
+cannot start (verifypn without GLPK). Every call has a timeout.
+"""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+
+from helpers import ROOT
+
+VERIFYPN = "verifypn-linux64"
+LOLA = "lola"
+TIMEOUT = 120.0
+
+_DEADLOCK_QUERY = """<?xml version="1.0"?>
+<property-set xmlns="http://mcc.lip6.fr/">
+  <property><id>deadlock</id><description>EF deadlock</description>
+    <formula><exists-path><finally><deadlock/></finally></exists-path></formula></property>
+</property-set>
+"""
+
+
+def _places() -> list[tuple[str, Path]]:
+    found = []
+    if os.environ.get("MCL2PNML_PEERS"):
+        found.append(("$MCL2PNML_PEERS", Path(os.environ["MCL2PNML_PEERS"])))
+    found.append(("../shared/peers/bin", ROOT.parent / "shared" / "peers" / "bin"))
+    return found
+
+
+@lru_cache(maxsize=None)
+def find(name: str) -> tuple[Path | None, str]:
+    """The tool's path, or None and why it is not usable."""
+    for _, folder in _places():
+        if (folder / name).is_file():
+            path = folder / name
+            break
+    else:
+        on_path = shutil.which(name)
+        if not on_path:
+            where = ", ".join(label for label, _ in _places())
+            return None, f"{name} not found in {where} or on PATH"
+        path = Path(on_path)
+    try:
+        probe = subprocess.run([str(path), "--help"], capture_output=True, text=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        return None, f"{path} does not start: {e}"
+    if "error while loading shared libraries" in probe.stderr:
+        return None, f"{path} does not start: {probe.stderr.strip()} (verifypn needs libglpk40)"
+    return path, ""
+
+
+def need(name: str) -> Path:
+    """The tool's path; skips the calling test, saying why, when it is not usable."""
+    path, why = find(name)
+    if path is None:
+        pytest.skip(why)
+    return path
+
+
+def _run(args: list[str]) -> str:
+    r = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT)
+    return r.stdout + r.stderr
+
+
+def verifypn_states(net: Path) -> int | None:
+    """verifypn's count of reachable markings, reductions off; None if it gives none."""
+    out = _run([str(need(VERIFYPN)), "-n", "1", "-e", "-r", "0", "-p", str(net)])
+    m = re.search(r"STATE_SPACE STATES (\d+)", out)
+    return int(m.group(1)) if m else None
+
+
+def verifypn_deadlock(net: Path, scratch: Path) -> bool | None:
+    """verifypn's answer to EF deadlock, reductions off; None if it gives none."""
+    query = scratch / "deadlock.xml"
+    query.write_text(_DEADLOCK_QUERY)
+    out = _run([str(need(VERIFYPN)), "-x", "1", "-r", "0", "-p", "-s", "BFS", str(net), str(query)])
+    m = re.search(r"FORMULA \S+ (TRUE|FALSE)", out)
+    return None if m is None else m.group(1) == "TRUE"
+
+
+def lola_states(net: Path) -> int | None:
+    """LoLA's count of reachable markings, stubborn sets off; None if it gives none."""
+    out = _run([str(need(LOLA)), "--pnmlnet", str(net), "--check=full", "--stubborn=off"])
+    m = re.search(r"markings\s*:\s*(\d+)", out)
+    return int(m.group(1)) if m else None
