@@ -169,6 +169,7 @@ class _Raw:
     arcs: list = field(default_factory=list)          # (element, source, target, weight, read)
     seen: dict = field(default_factory=dict)          # xml id -> line it is first used on
     substituted: set = field(default_factory=set)     # transitions refined by a subprocess
+    firing_rules: dict = field(default_factory=dict)  # (priority, timed) -> first transition
     errors: list = field(default_factory=list)
 
 
@@ -194,7 +195,15 @@ class _Reader:
         value = _child(label, "value")  # PIPE and other pre-2009 writers
         if value is not None:
             v = (value.text or "").strip()
-            return v.split(",", 1)[1].strip() if v.startswith("Default,") else v
+            if not v.startswith("Default,"):
+                return v
+            # PIPE's "Default,1": tokens of the default class; another class
+            # ("Default,1,red,2") is a coloured marking
+            classes = v.split(",")
+            if len(classes) > 2 and any(n.strip() not in ("", "0") for n in classes[3::2]):
+                self.error(value, f"'{v}': tokens of several classes (PIPE's colours): this "
+                                  "is a coloured net; a P/T reading would drop its colours")
+            return classes[1].strip()
         return None
 
     def _natural(self, el, label: str, minimum: int, what: str) -> int | None:
@@ -276,11 +285,25 @@ class _Reader:
         tokens = self._natural(el, "initialMarking", 0, f"place '{xml_id}'")
         if tokens:
             self.raw.marking[node_id] = tokens
+        capacity = self._label_text(el, "capacity")   # PIPE's; 0 means none
+        if capacity not in (None, "", "0"):
+            self.error(_child(el, "capacity"),
+                       f"place '{xml_id}' has the capacity {capacity}: a transition that would "
+                       "put more tokens in it cannot fire, which a P/T net cannot say")
 
     def transition(self, el) -> None:
         xml_id = self._node_id(el)
         if xml_id is None:
             return
+        # PIPE's priorities, and its immediate transitions that fire before timed ones
+        # (GSPN): which transition may fire depends on them once they differ
+        firing = (self._label_text(el, "priority") or "1", self._label_text(el, "timed") or "false")
+        self.raw.firing_rules.setdefault(firing, el)
+        guard = (el.get("guard") or "true").strip().lower()
+        if guard != "true":   # a data Petri net (ProM, pm4py): variables decide what fires
+            self.error(el, f"transition '{xml_id}' has the guard '{el.get('guard')}' (a data "
+                           "Petri net): a P/T reading would let it fire whatever the data; "
+                           "mcl2pnml reads P/T nets")
         timing = None
         for ts in self._ours(el):
             t = _child(ts, "timing")
@@ -421,6 +444,13 @@ class _Reader:
         arc_el: dict[tuple[str, str, bool], object] = {}
         for t in raw.substituted:   # its subprocess stands in its place
             del raw.transitions[t]
+        if len(raw.firing_rules) > 1:
+            el = list(raw.firing_rules.values())[1]
+            rules = ", ".join(f"priority {p}{' timed' if timed == 'true' else ''}"
+                              for p, timed in raw.firing_rules)
+            self.error(el, f"transition '{el.get('id')}' differs from others in priority or "
+                           f"timing ({rules}): which transition may fire depends on them, "
+                           "which a P/T net cannot say")
         for el, src, dst, weight, read in raw.arcs:
             if src in raw.substituted or dst in raw.substituted:
                 continue

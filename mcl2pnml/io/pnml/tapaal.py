@@ -14,7 +14,7 @@ silently be 0.
 A file whose time cannot matter (every invariant ``< inf``, every interval
 ``[0,inf)``) is the P/T net it draws, and is read with its markings and
 weights. Everything else is refused with its place in the file: time that
-matters, inhibitor arcs, colours, and a model of several
+matters, inhibitor and transport arcs, colours, and a model of several
 components, which TAPAAL composes through shared places and transitions
 (pick one with ``--net``, knowingly, or export the composed net as PNML from
 TAPAAL).
@@ -93,8 +93,16 @@ class _Tapaal:
         transitions: dict[str, Transition] = {}
         marking: dict[str, int] = {}
         arcs: dict[tuple[str, str], int] = {}
+        arc_els = []
         for el in net_el:
             name = _local(el)
+            if name in ("place", "transition"):
+                if not (el.get("id") or "").strip():
+                    self.error(el, f"a {name} without an id")
+                    continue
+                if el.get("id") in places or el.get("id") in transitions:
+                    self.error(el, f"duplicate id '{el.get('id')}'")
+                    continue
             if name == "place":
                 pid = el.get("id")
                 invariant = (el.get("invariant") or "< inf").replace(" ", "")
@@ -108,7 +116,14 @@ class _Tapaal:
             elif name == "transition":
                 transitions[el.get("id")] = Transition(el.get("id"), el.get("name"))
             elif name == "arc" or name in OLD_ARCS:
-                self.arc(el, name, arcs)
+                arc_els.append((el, name))
+        for el, name in arc_els:   # every node first: arcs may come before their ends
+            src, dst = el.get("source"), el.get("target")
+            if (src in places) == (dst in places) or not {src, dst} <= places.keys() | transitions.keys():
+                self.error(el, f"arc from '{src}' to '{dst}' does not join a place and a "
+                               "transition of this net")
+                continue
+            self.arc(el, name, arcs)
         raise_all(self.errors)
         return Net(net_el.get("id") or "net", tuple(places.values()),
                    tuple(transitions.values()),
@@ -122,18 +137,19 @@ class _Tapaal:
                            "while the place holds fewer tokens than its weight): a P/T net has "
                            "none; remove it, or analyse the net with TAPAAL")
             return
-        inscription = (el.get("inscription") or "").replace(" ", "")
         if kind == "transport":
-            # a pair of transport arcs moves a token and its age (the ":1" names the
-            # pair); where no interval or invariant looks at ages, that is a token
-            # taken from one place and put in another: an input and an output arc
-            inscription = inscription.rpartition(":")[0] if ":" in inscription else inscription
-        if kind in ("timed", "transport") and (inscription or "[0,inf)") not in UNTIMED_INTERVAL:
+            # it moves a token with its age; even where ages cannot matter, TAPAAL's
+            # engines and its two spellings of it do not agree on what it does
+            self.error(el, f"arc '{aid}' is a transport arc of a timed-arc net; mcl2pnml reads "
+                           "P/T nets: replace it by an input and an output arc in TAPAAL")
+            return
+        inscription = (el.get("inscription") or "").replace(" ", "")
+        if kind == "timed" and (inscription or "[0,inf)") not in UNTIMED_INTERVAL:
             self.timed_error(el, f"arc '{aid}' has the time interval '{el.get('inscription')}'")
             return
-        if kind not in ("timed", "normal", "transport"):
+        if kind not in ("timed", "normal"):
             self.error(el, f"arc '{aid}' has type '{el.get('type')}', which mcl2pnml does not "
-                           "know; known: timed, normal, transport")
+                           "know; known: timed, normal")
             return
         if el.get("weight") is None and kind == "normal" and inscription.isdigit():
             weight = self.natural(el, "inscription", 1, 1)   # older files: the weight
