@@ -37,7 +37,6 @@ import numpy as np
 from mcl2pnml.core.structure import Structure
 
 from analysis.generalspace import StateSpace
-from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 18
@@ -71,6 +70,7 @@ def _words_estimate(s: Structure) -> int:
 
 def invariant_bounds(s: Structure, m0: Sequence[int]) -> list[int | None]:
     """Per place, the bound a semi-positive P-invariant proves (None: none does)."""
+    from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants  # sympy
     bounds: list[int | None] = [None] * len(s.places)
     if len(s.places) > INVARIANT_PLACES:
         return bounds

@@ -1,6 +1,6 @@
 """Which explorer builds the state space: :func:`explore` and its ``backend``.
 
-Three explorers (:data:`BACKENDS`) share one interface, the
+Four explorers (:data:`BACKENDS`) share one interface, the
 :class:`~analysis.generalspace.StateSpace` they return, and one test suite:
 
 * ``"compiled"``, :mod:`analysis.compiledspace`, for safe nets: markings as
@@ -10,17 +10,31 @@ Three explorers (:data:`BACKENDS`) share one interface, the
   markings, a whole breadth-first frontier fired at once in numpy. Both
   give the same :class:`~analysis.packedmarkings.PackedStateSpace`, whose
   edges are recomputed when needed rather than stored;
+* ``"counters"``, :mod:`analysis.counterspace`, for bounded nets: counters
+  packed into words, as wide as the P-invariants prove, the same compiled
+  loop; it raises :class:`~analysis.counterspace.NotBounded` on a net that
+  may be unbounded;
 * ``"general"``, :mod:`analysis.generalspace`, for every net: the
   reachability graph, or the Karp-Miller coverability graph (Murata 1989,
   section V-A) when the net is unbounded, with markings as tuples of counts.
 
-The safe-net explorers are tried when every weight is 1 and M0 is 0/1; the
-first firing that would put a second token in a place hands over to the
-general one. ``"auto"`` (the default) takes the compiled explorer when its
-machine code is loaded in this process, and otherwise the numpy one, which
-hands over to the compiled one past :data:`HANDOVER` markings: loading the
-compiled code takes most of a second in a fresh process (importing numba,
-reading its cache), more than a small state space takes to explore.
+``"auto"`` (the default) chooses by the net's kind and size. A safe net
+(every weight 1, M0 0/1) gets the compiled explorer when its machine code
+is loaded in this process, and otherwise the numpy one, which hands over to
+the compiled one past :data:`HANDOVER` markings: loading compiled code takes
+most of a second in a fresh process (importing numba, reading its cache),
+more than a small state space takes to explore. A net that is not safe (or
+a safe-net explorer's first second token) gets the counter explorer, after
+the general one alone up to :data:`GENERAL_HANDOVER` markings while compiled
+code is not loaded; a net the counter explorer finds possibly unbounded
+gets the general one, Karp-Miller. Without numba, the general one takes
+every net that is not safe.
+
+Every exploration has a memory budget in bytes (``max_memory``, default
+:func:`default_memory`): each explorer's bytes per marking turn it into a
+number of markings, and the exploration stops there with
+:class:`MemoryLimit` (how many markings were found, and how many dead ones
+were met) rather than being killed by the kernel.
 
 This module sits on top of the explorers and imports them; none imports it.
 The names the callers use with :func:`explore` (:class:`StateSpace`,
@@ -63,7 +77,7 @@ BACKENDS = CHOICES
 HANDOVER = 500_000
 """Markings after which ``"auto"`` leaves the numpy explorer for the compiled one."""
 
-GENERAL_HANDOVER = 20_000
+GENERAL_HANDOVER = 5_000
 """Markings after which ``"auto"`` leaves the general explorer for the counter one on
 a net that is not safe (when numba is installed but not loaded yet)."""
 
