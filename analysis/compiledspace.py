@@ -48,6 +48,11 @@ from analysis.packedmarkings import keys_of as _keys
 SLICE = 1 << 19
 
 
+def footprint(s: Structure) -> int:
+    """Bytes a marking costs at most: the queue (doubling), the table, the final sort."""
+    return 24 * word_count(s) + 48
+
+
 def available() -> bool:
     """Whether numba is installed, so that this explorer can run (numba is not imported)."""
     return importlib.util.find_spec("numba") is not None
@@ -59,6 +64,12 @@ _ran = False   # whether the compiled loops have run in this process, so are loa
 def loaded() -> bool:
     """Whether the compiled loops have been loaded in this process (by a run or :func:`warm_up`)."""
     return _ran
+
+
+def mark_loaded() -> None:
+    """Record that compiled code (this explorer's or the counter one's) has run here."""
+    global _ran
+    _ran = True
 
 
 def warm_up() -> None:
@@ -119,11 +130,24 @@ def _drive(kernels, step, masks: tuple, state: tuple, max_states: int, limit_err
         if code == kernels.NOT_SAFE:
             raise NotSafe
         if code == kernels.LIMIT:
+            limit_error.explored = count
+            limit_error.deadlocks = _dead(queue[:head], masks[0])
             raise limit_error
         if progress:
             progress(count, count - head)
         if head == count:
             return queue[:count]
+
+
+def _dead(rows: np.ndarray, need: np.ndarray) -> int:
+    """How many of ``rows`` (markings, or one word each) enable no transition."""
+    rows = rows.reshape(len(rows), -1)
+    need = need.reshape(len(need), -1)
+    dead = 0
+    for start in range(0, len(rows), 1 << 12):
+        part = rows[start:start + (1 << 12), None, :]
+        dead += int((~np.all(part & need == need, axis=2)).all(axis=1).sum())
+    return dead
 
 
 def _run_one_word(kernels, need, keep, give, m0, max_states, limit_error,

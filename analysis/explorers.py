@@ -8,7 +8,14 @@ explorer takes the same arguments (the net's
 the state limit, the error to raise at it, the progress callback) and
 returns a :class:`~analysis.generalspace.StateSpace`; one that explores
 safe nets only raises :class:`~analysis.packedmarkings.NotSafe` at the
-first second token, and the general explorer takes over.
+first second token, and the counter explorer (or, without numba, the
+general one) takes over; the counter explorer raises
+:class:`~analysis.counterspace.NotBounded` when the net may be unbounded,
+and the general one (Karp-Miller) takes over. Each also says what a
+marking costs it in bytes (``footprint``), so that a memory budget becomes
+a number of markings; at its limit an explorer sets ``explored`` (markings
+found) and ``deadlocks`` (dead markings among those expanded, or None) on
+the error it raises.
 :func:`analysis.statespace.explore` chooses among them.
 
 Adding an explorer is one module with such a function and one entry in
@@ -39,12 +46,18 @@ class Explorer:
     safe_only: bool = False
     #: the module's function saying whether it can run here (None: always)
     available: str | None = None
+    #: the module's function ``(structure) -> bytes`` a marking costs at most while
+    #: exploring, which turns a memory budget into a number of markings
+    footprint: str = "footprint"
 
     def _get(self, name: str) -> Callable:
         return getattr(importlib.import_module(self.module), name)
 
     def can_run(self) -> bool:
         return self.available is None or self._get(self.available)()
+
+    def bytes_per_marking(self, s) -> int:
+        return self._get(self.footprint)(s)
 
     def explore(self, s, m0, max_states: int, limit_error, progress=None):
         return self._get(self.function)(s, m0, max_states, limit_error, progress)
@@ -56,6 +69,8 @@ EXPLORERS: dict[str, Explorer] = {e.name: e for e in (
              available="available"),
     Explorer("packed", "numpy for safe nets, a breadth-first frontier at a time",
              "analysis.packedspace", "explore_packed", safe_only=True),
+    Explorer("counters", "compiled code for bounded nets: counters packed into words",
+             "analysis.counterspace", "explore_counters", available="available"),
     Explorer("general", "any net: the reachability or Karp-Miller coverability graph",
              "analysis.generalspace", "explore_general"),
 )}

@@ -162,12 +162,30 @@ class StateSpace:
         return g
 
 
+def footprint(s: Structure) -> int:
+    """Bytes a marking costs at most: its tuple of counts, its entry in the index and
+    the parent list, its edges (a few a marking), the reverse lists built to answer
+    reachability, and the filter's two numbers."""
+    return 8 * len(s.places) + 220 + 24 * min(len(s.transitions), 8)
+
+
 def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_error,
                     progress: Progress | None = None) -> StateSpace:
-    """Karp-Miller exploration with tuples of counts (OMEGA for unbounded).
+    """Breadth-first reachability, turning into Karp-Miller coverability only where needed.
 
-    Raises ``limit_error`` past ``max_states`` markings; calls ``progress``
-    once every :data:`PROGRESS_EVERY` markings.
+    Markings are tuples of counts (OMEGA for unbounded). The acceleration of
+    Karp and Miller (1969) compares a new marking with every ancestor on its
+    first-discovery path; here that walk is taken only when it can find
+    something: a marking that strictly covers an ancestor has a larger
+    :func:`_weight` (places no semi-positive P-invariant covers: Murata 1989,
+    section VII), so each node keeps the smallest weight on its path, and
+    a new marking no heavier than that is stored as it is. On a net whose
+    places are all covered no walk ever happens (plain reachability); the
+    graph is the same as with the walk every time.
+
+    Raises ``limit_error`` past ``max_states`` markings (with ``explored``
+    and ``deadlocks`` set on it); calls ``progress`` once every
+    :data:`PROGRESS_EVERY` markings.
     """
     every = PROGRESS_EVERY
     need: list[list[tuple[int, int]]] = []
@@ -178,40 +196,83 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
             needs[p] = max(needs.get(p, 0), w)
         need.append(sorted(needs.items()))
         delta.append(sorted(s.incidence[j].items()))
+    free = _uncovered(s)
     markings: list[tuple] = [tuple(m0)]
     parent: list[int] = [-1]
+    lightest: list[int] = [_weight(markings[0], free)]   # smallest weight on the path
     index = {markings[0]: 0}
     src, trans, dst = array("i"), array("i"), array("i")
     accelerated = False
-    head = 0
+    head = dead = 0
     while head < len(markings):
         m = markings[head]
+        fired = False
         for t in range(len(need)):
             if all(m[p] >= w for p, w in need[t]):
+                fired = True
                 m2 = list(m)
                 for p, d in delta[t]:
                     m2[p] += d  # OMEGA +- d stays OMEGA
                 m2 = tuple(m2)
-                if m2 not in index:
+                if m2 not in index and (free is None or _weight(m2, free) > lightest[head]):
                     m2, grew = _accelerate(m2, head, markings, parent)
                     accelerated |= grew
                 k = index.get(m2)
                 if k is None:
                     k = len(markings)
                     if k >= max_states:
+                        limit_error.explored, limit_error.deadlocks = k, dead
                         raise limit_error
                     index[m2] = k
                     markings.append(m2)
                     parent.append(head)
+                    lightest.append(min(lightest[head], _weight(m2, free)))
                     if progress and k % every == 0:
                         progress(k, k - head)
                 src.append(head)
                 trans.append(t)
                 dst.append(k)
+        dead += not fired
         head += 1
     return StateSpace(s, markings, src, trans, dst, coverability=accelerated)
 
 
+#: Nets up to this many places have their semi-positive P-invariants computed to
+#: filter the Karp-Miller walks (:func:`_uncovered`); larger ones use every place.
+INVARIANT_PLACES = 2_000
+
+
+def _uncovered(s: Structure) -> "list[int] | None":
+    """The places no semi-positive P-invariant covers (None: every place is covered).
+
+    A covered place is bounded, and a weighted sum of covered places is
+    constant on every firing path (the invariant), so a marking that
+    strictly covers an ancestor exceeds it on uncovered places only.
+    """
+    from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants
+    if len(s.places) > INVARIANT_PLACES:
+        return list(range(len(s.places)))
+    try:
+        invariants = minimal_semipositive_p_invariants(s, 20_000)
+    except AnalysisLimit:
+        return list(range(len(s.places)))
+    covered = {s.place_index[p] for y in invariants for p in y}
+    free = [p for p in range(len(s.places)) if p not in covered]
+    return free or None
+
+
+def _weight(m: tuple, free: "list[int] | None") -> int:
+    """What grows when a marking strictly covers an ancestor: its OMEGA places first,
+    then its tokens in uncovered places (a lexicographic pair as one exact integer)."""
+    if free is None:
+        return 0
+    omegas = tokens = 0
+    for p in free:
+        if m[p] == OMEGA:
+            omegas += 1
+        else:
+            tokens += m[p]
+    return (omegas << 64) + int(tokens)
 def _accelerate(m: tuple, node: int, markings: list[tuple], parent: list[int]) -> tuple[tuple, bool]:
     """Karp-Miller: places that grew since an ancestor it covers become OMEGA."""
     total = sum(m)

@@ -28,6 +28,12 @@ from analysis.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateS
 from analysis.packedmarkings import keys_of as _keys
 
 
+def footprint(s: Structure) -> int:
+    """Bytes a marking costs at most: the sorted markings and their keys, merged
+    into a copy a level at a time, and the frontier fired in chunks."""
+    return 32 * word_count(s) + 64
+
+
 def explore_packed(s: Structure, m0: Sequence[int], max_states: int, limit_error,
                    progress=None) -> "PackedStateSpace":
     """Breadth-first, a frontier at a time; raises :class:`NotSafe` at a second token."""

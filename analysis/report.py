@@ -8,10 +8,11 @@ The JSON object holds what ``shared/spec/cli.md`` lists (``places``,
 termination facts of :mod:`analysis.behaviour`.
 
 Results that could not be computed within their limits (a state space past
-``--max-states``; minimal siphons, whose number can grow exponentially) are
-reported as ``null`` with the reason under ``"limits"``, never silently left
-out; the structural results are still computed when the state space is too
-large.
+``--max-states`` or its memory budget, ``--max-memory``; minimal siphons,
+whose number can grow exponentially) are reported as ``null`` with the
+reason under ``"limits"``, never silently left out; the structural results
+are computed first, so they are there when the state space is too large,
+with ``"partial"``: the markings explored and whether a dead one was met.
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ from analysis.invariants import (AnalysisLimit, format_invariant, minimal_semipo
                          minimal_semipositive_t_invariants, p_invariant_basis,
                          t_invariant_basis)
 from analysis.siphons import minimal_siphons, minimal_traps, siphon_control
-from analysis.statespace import ExplorationLimit, Progress, explore
+from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
@@ -35,26 +36,45 @@ SIPHON_LIMIT = 20_000
 
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
             max_states: int = 5_000_000, progress: Progress | None = None,
-            explorer: str = "auto") -> dict[str, Any]:
+            explorer: str = "auto", max_memory: int | None = None) -> dict[str, Any]:
     """Everything we know how to prove about ``net``, as JSON-ready data.
 
-    ``explorer`` is one of :data:`analysis.statespace.BACKENDS`.
+    ``explorer`` is one of :data:`analysis.statespace.BACKENDS`; ``max_memory``
+    is the exploration's budget in bytes (default: half the memory available).
+    The structural results come first, so that an exploration stopped by its
+    budget still ends in a partial answer: ``"partial"`` says how many
+    markings were explored and whether a dead marking was met among them.
     """
     if initial is not None:
         net = net.with_initial(initial)
     s = structure(net)
     limits: dict[str, str] = {}
+    structural = {} if state_space_only else _structural(s, limits)
+    partial = None
     try:
-        space = explore(s, max_states=max_states, progress=progress, backend=explorer)
+        space = explore(s, max_states=max_states, progress=progress, backend=explorer,
+                        max_memory=max_memory)
     except ExplorationLimit as e:
-        if state_space_only:
+        if state_space_only and not isinstance(e, MemoryLimit):
             raise
         space = None
         limits["states"] = e.message
+        partial = {"markings_explored": e.explored,
+                   "deadlock_found": None if e.deadlocks is None else e.deadlocks > 0}
+    result = _state_space_facts(net, s, space)
+    result.update(structural)
+    if partial is not None:
+        result["partial"] = partial
+    if limits:
+        result["limits"] = limits
+    return result
+
+
+def _state_space_facts(net: Net, s, space) -> dict[str, Any]:
+    """What the state space says: also all of ``--state-space``."""
     b = behaviour(space) if space is not None else None
     ours = has_mission_interface(net)
-    # what the state space says: also all of ``--state-space``
-    result: dict[str, Any] = {
+    return {
         "net": net.name,
         "places": len(s.places),
         "transitions": len(s.transitions),
@@ -77,9 +97,10 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         "home_marking": b.home_marking if b else None,
         "reusable": b.reusable if b else None,
     }
-    if state_space_only:
-        return result
 
+
+def _structural(s, limits: dict[str, str]) -> dict[str, Any]:
+    """Invariants, siphons and traps, each within its limit (past it: None and the reason)."""
     def bounded_run(key: str, fn, *args):
         try:
             return fn(*args)
@@ -95,7 +116,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     traps = bounded_run("traps", minimal_traps, s, SIPHON_LIMIT)
     control = (siphon_control(s, siphons, semi_p or [])
                if siphons is not None else None)
-    result.update({
+    return {
         "p_invariants": p_invariant_basis(s),
         "t_invariants": t_invariant_basis(s),
         "semipositive_p_invariants": semi_p,
@@ -110,10 +131,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         "siphons_controlled": None if control is None else all(
             r.source or (r.marked and r.controlled) for r in control),
         "traps": None if traps is None else [s.names(x) for x in traps],
-    })
-    if limits:
-        result["limits"] = limits
-    return result
+    }
 
 
 def has_mission_interface(net: Net) -> bool:
@@ -181,6 +199,12 @@ def render_text(r: dict[str, Any]) -> str:
         if r.get("t_invariants") is not None:
             out += ["", f"T-invariants (a basis of {len(r['t_invariants'])}):"]
             out += [f"  {format_invariant(x)}" for x in r["t_invariants"]] or ["  none"]
+    if r.get("partial"):
+        found = r["partial"]["deadlock_found"]
+        out += ["", f"Partial answer: {r['partial']['markings_explored']:,} markings explored; "
+                + {True: "a dead marking was already found among them.",
+                   False: "no dead marking among those expanded.",
+                   None: "dead markings not checked."}[found]]
     if r.get("deadlocks") and r.get("interface") != "none":
         out += ["", "Dead markings that are not a proper end:"]
         out += [f"  {{{', '.join(m)}}}" for m in r["deadlocks"]]

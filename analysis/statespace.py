@@ -1,6 +1,6 @@
 """Which explorer builds the state space: :func:`explore` and its ``backend``.
 
-Three explorers (:data:`BACKENDS`) share one interface, the
+Four explorers (:data:`BACKENDS`) share one interface, the
 :class:`~analysis.generalspace.StateSpace` they return, and one test suite:
 
 * ``"compiled"``, :mod:`analysis.compiledspace`, for safe nets: markings as
@@ -10,17 +10,31 @@ Three explorers (:data:`BACKENDS`) share one interface, the
   markings, a whole breadth-first frontier fired at once in numpy. Both
   give the same :class:`~analysis.packedmarkings.PackedStateSpace`, whose
   edges are recomputed when needed rather than stored;
+* ``"counters"``, :mod:`analysis.counterspace`, for bounded nets: counters
+  packed into words, as wide as the P-invariants prove, the same compiled
+  loop; it raises :class:`~analysis.counterspace.NotBounded` on a net that
+  may be unbounded;
 * ``"general"``, :mod:`analysis.generalspace`, for every net: the
   reachability graph, or the Karp-Miller coverability graph (Murata 1989,
   section V-A) when the net is unbounded, with markings as tuples of counts.
 
-The safe-net explorers are tried when every weight is 1 and M0 is 0/1; the
-first firing that would put a second token in a place hands over to the
-general one. ``"auto"`` (the default) takes the compiled explorer when its
-machine code is loaded in this process, and otherwise the numpy one, which
-hands over to the compiled one past :data:`HANDOVER` markings: loading the
-compiled code takes most of a second in a fresh process (importing numba,
-reading its cache), more than a small state space takes to explore.
+``"auto"`` (the default) chooses by the net's kind and size. A safe net
+(every weight 1, M0 0/1) gets the compiled explorer when its machine code
+is loaded in this process, and otherwise the numpy one, which hands over to
+the compiled one past :data:`HANDOVER` markings: loading compiled code takes
+most of a second in a fresh process (importing numba, reading its cache),
+more than a small state space takes to explore. A net that is not safe (or
+a safe-net explorer's first second token) gets the counter explorer, after
+the general one alone up to :data:`GENERAL_HANDOVER` markings while compiled
+code is not loaded; a net the counter explorer finds possibly unbounded
+gets the general one, Karp-Miller. Without numba, the general one takes
+every net that is not safe.
+
+Every exploration has a memory budget in bytes (``max_memory``, default
+:func:`default_memory`): each explorer's bytes per marking turn it into a
+number of markings, and the exploration stops there with
+:class:`MemoryLimit` (how many markings were found, and how many dead ones
+were met) rather than being killed by the kernel.
 
 This module sits on top of the explorers and imports them; none imports it.
 The names the callers use with :func:`explore` (:class:`StateSpace`,
@@ -28,23 +42,32 @@ The names the callers use with :func:`explore` (:class:`StateSpace`,
 """
 from __future__ import annotations
 
-from typing import Sequence
-
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.structure import Structure, structure as make_structure
 
 from analysis import compiledspace
 from analysis.explorers import CHOICES, EXPLORERS
 from analysis.generalspace import OMEGA, Progress, StateSpace, explore_general
+from analysis.counterspace import NotBounded
 from analysis.packedmarkings import KeyCollision, NotSafe
-from analysis.packedspace import explore_packed
 
-__all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "Progress", "StateSpace",
-           "explore"]
+__all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "MemoryLimit", "Progress",
+           "StateSpace", "default_memory", "explore"]
 
 
 class ExplorationLimit(Mcl2PnmlError):
-    """The exploration met its state limit before it finished."""
+    """The exploration met its state limit before it finished.
+
+    ``explored`` is how many markings were found, ``deadlocks`` how many dead
+    markings were met among those expanded (None when the explorer cannot tell).
+    """
+
+    explored: int | None = None
+    deadlocks: int | None = None
+
+
+class MemoryLimit(ExplorationLimit):
+    """The exploration would have gone past its memory budget (``max_memory``)."""
 
 
 BACKENDS = CHOICES
@@ -54,49 +77,139 @@ BACKENDS = CHOICES
 HANDOVER = 500_000
 """Markings after which ``"auto"`` leaves the numpy explorer for the compiled one."""
 
+GENERAL_HANDOVER = 5_000
+"""Markings after which ``"auto"`` leaves the general explorer for the counter one on
+a net that is not safe (when numba is installed but not loaded yet)."""
+
 
 class _HandOver(Exception):
-    """The numpy explorer passed :data:`HANDOVER` markings: the compiled one starts again."""
+    """The explorer passed its hand-over count: a compiled one starts again."""
+
+
+def default_memory() -> int:
+    """Half of the memory available now (``MemAvailable``), or 2 GiB where that is unknown."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024 // 2
+    except OSError:
+        pass
+    return 2 << 30
 
 
 def explore(net_or_structure, initial: dict[str, int] | None = None, *,
             max_states: int = 5_000_000, progress: Progress | None = None,
-            backend: str = "auto") -> StateSpace:
+            backend: str = "auto", max_memory: int | None = None) -> StateSpace:
     """Explore the markings reachable from ``initial`` (default: the net's M0).
 
     ``backend`` is one of :data:`BACKENDS`; a safe-net explorer asked for a
-    net that is not safe hands over to ``"general"``, as ``"auto"`` does.
+    net that is not safe hands over to ``"counters"`` (to ``"general"``
+    without numba), which hands over to ``"general"`` on a net that may be
+    unbounded, as ``"auto"`` does. ``max_memory`` is a budget in bytes
+    (default :func:`default_memory`): each explorer's bytes per marking turn
+    it into a number of markings, and past it :class:`MemoryLimit` is raised
+    (past ``max_states``, :class:`ExplorationLimit`).
     """
     if backend not in BACKENDS:
         raise Mcl2PnmlError(f"unknown explorer '{backend}'; known: {', '.join(BACKENDS)}")
     s = (net_or_structure if isinstance(net_or_structure, Structure)
          else make_structure(net_or_structure))
-    if initial is None:
-        m0 = s.initial_vector()
-    else:
-        unknown = [p for p in initial if p not in s.place_index]
-        if unknown:
-            raise Mcl2PnmlError(f"initial marking names unknown places: {', '.join(unknown)}")
-        m0 = tuple(initial.get(p, 0) for p in s.places)
+    m0 = _initial(s, initial)
+    budget = _Budget(max_states, default_memory() if max_memory is None else max_memory)
     unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
-    if unit and all(n <= 1 for n in m0):
+    try:
+        if unit and all(n <= 1 for n in m0):
+            try:
+                return _explore_safe(s, m0, backend, budget, progress)
+            except (NotSafe, KeyCollision):
+                pass   # not safe after all, or (once in 2^64) two markings share a key
+        if backend != "general" and EXPLORERS["counters"].can_run():
+            try:
+                return _explore_counters(s, m0, backend, budget, progress)
+            except NotBounded:
+                pass   # perhaps unbounded: Karp-Miller decides
+        return budget.run(EXPLORERS["general"], s, m0, progress)
+    except ExplorationLimit as e:
+        if e.explored is None:
+            e.explored = budget.states
+        raise
+
+
+def _initial(s: Structure, initial: dict[str, int] | None) -> tuple[int, ...]:
+    if initial is None:
+        return s.initial_vector()
+    unknown = [p for p in initial if p not in s.place_index]
+    if unknown:
+        raise Mcl2PnmlError(f"initial marking names unknown places: {', '.join(unknown)}")
+    return tuple(initial.get(p, 0) for p in s.places)
+
+
+class _Budget:
+    """The two limits of one exploration, as a number of markings for each explorer."""
+
+    def __init__(self, max_states: int, max_memory: int):
+        self.max_states, self.max_memory = max_states, max_memory
+        self.states = max_states
+
+    def run(self, explorer, s: Structure, m0, progress, cap: int | None = None,
+            error: Exception | None = None):
+        per = explorer.bytes_per_marking(s)
+        self.states = min(self.max_states, max(1, self.max_memory // per))
+        if cap is not None and cap < self.states:
+            return explorer.explore(s, m0, cap, error, progress)
+        return explorer.explore(s, m0, self.states, self._error(per), progress)
+
+    def _error(self, per: int) -> ExplorationLimit:
+        if self.states < self.max_states:
+            return MemoryLimit(
+                f"the exploration stopped at {self.states:,} markings, its memory budget of "
+                f"{_size(self.max_memory)} ({per:,} bytes a marking); raise the budget "
+                "(--max-memory) or analyse a smaller net")
+        return _limit(self.max_states)
+
+
+def _size(n: int) -> str:
+    for unit, shift in (("G", 30), ("M", 20), ("K", 10)):
+        if n >= 1 << shift:
+            return f"{n / (1 << shift):.1f} {unit}B"
+    return f"{n} bytes"
+
+
+def _explore_safe(s: Structure, m0, backend: str, budget: _Budget, progress) -> StateSpace:
+    """A safe-net explorer (raises NotSafe at a second token in a place)."""
+    if backend == "auto":
+        backend = _auto(s, m0, budget, progress)
+        if isinstance(backend, StateSpace):
+            return backend
+    chosen = EXPLORERS[backend]
+    if not chosen.can_run():
+        raise Mcl2PnmlError(f"the {backend} explorer needs numba, which is not "
+                            "installed; known explorers: " + ", ".join(BACKENDS))
+    if not chosen.safe_only:
+        raise NotSafe   # the counter or general explorer, asked for by name
+    return budget.run(chosen, s, m0, progress)
+
+
+def _explore_counters(s: Structure, m0, backend: str, budget: _Budget,
+                      progress) -> StateSpace:
+    """The counter explorer; ``auto`` tries the general one first on small state spaces.
+
+    Loading compiled code costs most of a second in a fresh process, more
+    than a small state space takes to explore without it.
+    """
+    if backend == "auto" and not compiledspace.loaded():
         try:
-            if backend == "auto":
-                backend = _auto(s, m0, max_states, progress)
-                if isinstance(backend, StateSpace):
-                    return backend
-            chosen = EXPLORERS[backend]
-            if chosen.safe_only:
-                if not chosen.can_run():
-                    raise Mcl2PnmlError(f"the {backend} explorer needs numba, which is not "
-                                        "installed; known explorers: " + ", ".join(BACKENDS))
-                return chosen.explore(s, m0, max_states, _limit(max_states), progress)
-        except (NotSafe, KeyCollision):
-            pass   # not safe after all, or (once in 2^64) two markings share a key
-    return _explore_general(s, m0, max_states, progress)
+            return budget.run(EXPLORERS["general"], s, m0, progress, GENERAL_HANDOVER,
+                              _HandOver())
+        except _HandOver:
+            pass
+    space = budget.run(EXPLORERS["counters"], s, m0, progress)
+    compiledspace.mark_loaded()
+    return space
 
 
-def _auto(s: Structure, m0, max_states: int, progress) -> "str | StateSpace":
+def _auto(s: Structure, m0, budget: _Budget, progress) -> "str | StateSpace":
     """The explorer ``auto`` picks for a safe net, or the state space it already built.
 
     The compiled explorer when its code is loaded; otherwise numpy, which
@@ -104,9 +217,9 @@ def _auto(s: Structure, m0, max_states: int, progress) -> "str | StateSpace":
     """
     if compiledspace.loaded():
         return "compiled"
-    if compiledspace.available() and max_states > HANDOVER:
+    if compiledspace.available() and budget.max_states > HANDOVER:
         try:
-            return explore_packed(s, m0, HANDOVER, _HandOver(), progress)
+            return budget.run(EXPLORERS["packed"], s, m0, progress, HANDOVER, _HandOver())
         except _HandOver:
             return "compiled"
     return "packed"
@@ -117,7 +230,8 @@ def _limit(max_states: int) -> ExplorationLimit:
                             "raise the limit (--max-states) or analyse a smaller net")
 
 
-def _explore_general(s: Structure, m0: Sequence[int], max_states: int,
+
+def _explore_general(s: Structure, m0, max_states: int,
                      progress: Progress | None) -> StateSpace:
-    """The general explorer, with this module's limit error."""
+    """The general explorer, with this module's limit error (what the tests compare with)."""
     return explore_general(s, m0, max_states, _limit(max_states), progress)

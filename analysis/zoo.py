@@ -28,6 +28,12 @@ the analyses on them, the benchmarks time the explorers on them.
   multiprocessor systems", ACM TOCS 2(2), 1984; a model of the Model
   Checking Contest): a processor is active, asks for the bus to reach its
   own or the shared memory, and gives it back.
+* :func:`kanban`: the Kanban manufacturing system of Ciardo and Tilgner
+  ("On the use of Kronecker operators for the solution of generalized
+  stochastic Petri nets", ICASE report 96-35, 1996; a model of the Model
+  Checking Contest): four cells, ``n`` kanban cards each, a part that may
+  be redone; bounded (P-invariants) but not safe: 160, 4,600, 58,400 and
+  454,475 markings for ``n`` = 1 to 4.
 
 Ids are the ones the tests name in their assertions (``p0``, ``c0t1``,
 ``think0``, ``fork2``, ...), so a net's places and transitions stay where
@@ -38,7 +44,7 @@ from __future__ import annotations
 from mcl2pnml.core.net import Net, NetBuilder
 
 __all__ = ["cycle", "cycles", "philosophers", "philosophers_left_first", "token_ring",
-           "shared_memory"]
+           "shared_memory", "kanban"]
 
 
 def cycle(n: int = 4, name: str | None = None, interface: str | None = None) -> Net:
@@ -181,4 +187,31 @@ def shared_memory(n: int) -> Net:
         b.arc(f"access_ext{i}", f"end_ext{i}")
         for p in (f"active{i}", "bus_free", "ext_free"):
             b.arc(f"end_ext{i}", p)
+    return b.build()
+
+
+def kanban(n: int) -> Net:
+    """Ciardo and Tilgner's Kanban system: four cells of ``n`` cards, cell 1 forks into 2
+    and 3, which join into 4."""
+    b = NetBuilder(f"kanban{n}")
+    for i in range(1, 5):
+        b.place(f"Pm{i}")
+        b.place(f"Pback{i}")
+        b.place(f"Pkan{i}", n)
+        b.place(f"Pout{i}")
+    for i in range(1, 5):
+        for t, before, after in (("tredo", "Pm", "Pback"), ("tback", "Pback", "Pm"),
+                                 ("tok", "Pm", "Pout")):
+            b.transition(f"{t}{i}")
+            b.arc(f"{before}{i}", f"{t}{i}")
+            b.arc(f"{t}{i}", f"{after}{i}")
+    for t, ins, outs in (("tin1", ["Pkan1"], ["Pm1"]),
+                         ("tsynch1_23", ["Pout1", "Pkan2", "Pkan3"], ["Pkan1", "Pm2", "Pm3"]),
+                         ("tsynch4_23", ["Pout2", "Pout3", "Pkan4"], ["Pkan2", "Pkan3", "Pm4"]),
+                         ("tout4", ["Pout4"], ["Pkan4"])):
+        b.transition(t)
+        for p in ins:
+            b.arc(p, t)
+        for p in outs:
+            b.arc(t, p)
     return b.build()

@@ -7,6 +7,8 @@ Measures, on this machine, in one run (about fifteen minutes on 2 cores):
 * state spaces: ours against SNAKES and pm4py on the same PNML files
   (:mod:`bench.statespace_peers`): states per second, peak memory, bytes
   per state, and our speed as a ratio to each peer;
+* Model Checking Contest models: ``analyze --state-space`` against TAPAAL's
+  verifypn and LoLA, time and peak memory (:mod:`bench.real_models`);
 * invariants: the exact P-invariant basis of compiled missions of 100 to
   5,000 places against plain ``sympy.Matrix.nullspace``
   (:mod:`bench.invariants_vs_nullspace`);
@@ -33,6 +35,7 @@ from mcl2pnml.core.files import atomic_write_text
 
 from analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
+from bench import real_models
 from bench import statespace_peers as peers
 from bench.core_scale import slope
 from bench.missions import survey
@@ -127,6 +130,32 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
                      f"{rate:,.0f} states/s"),
                     ("state space: under 64 bytes per state on cycles 10", per < 64,
                      f"{per:.0f} B/state")]
+    return lines, targets
+
+
+def real_models_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    """Model Checking Contest models against verifypn and LoLA (:mod:`bench.real_models`)."""
+    rows = real_models.run(log=log)
+    lines = ["## Model Checking Contest models: ours, verifypn, LoLA", "",
+             f"Measured {datetime.date.today().isoformat()}. `mcl2pnml analyze --state-space` "
+             "against `verifypn-linux64 -n 1 -e -r 0 -p` and `lola --check=full "
+             "--stubborn=off`, each the command a user runs (start-up included), a fresh "
+             "process each; seconds and peak resident memory; the last column is our time "
+             "over the faster peer's. The files and where they come from: "
+             "`bench/models/PROVENANCE.md`.", "", *real_models.table(rows)]
+    ratios = [r["ours"]["seconds"] / min(r[t]["seconds"] for t in ("verifypn", "lola") if r[t])
+              for r in rows if r["ours"] and (r["verifypn"] or r["lola"])]
+    by = {r["model"]: r["ours"] for r in rows}
+    sat, kanban = by.get("SatelliteMemory-PT-X00100Y0003"), by.get("Kanban-PT-00005")
+    targets = [("MCC models: no net more than 2x slower than the faster peer",
+                bool(ratios) and max(ratios) <= 2,
+                f"worst {max(ratios):.1f}x" if ratios else "no model measured"),
+               ("SatelliteMemory-PT-X00100Y0003 under 2 s", bool(sat) and sat["seconds"] < 2,
+                f"{sat['seconds']:.2f} s" if sat else "not measured"),
+               ("Kanban-PT-00005 under 60 s within 4 GB",
+                bool(kanban) and kanban["seconds"] < 60 and kanban["peak_mb"] < 4096,
+                f"{kanban['seconds']:.1f} s, {kanban['peak_mb']:.0f} MB" if kanban
+                else "the model file is not in bench/models")]
     return lines, targets
 
 
@@ -242,7 +271,8 @@ def main(argv: list[str]) -> int:
     quick = "--quick" in argv
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
     sections, targets = [], []
-    for name, section in (("state spaces", statespace_section), ("invariants", invariants_section),
+    for name, section in (("state spaces", statespace_section),
+                          ("MCC models", real_models_section), ("invariants", invariants_section),
                           ("compile", compile_section), ("executor", executor_section)):
         log(f"{name}...")
         lines, found = section(quick, log)

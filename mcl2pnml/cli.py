@@ -266,34 +266,32 @@ def _progress(states: int, frontier: int) -> None:
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 @click.option("--initial", metavar="P,Q,...",
               help="Start from this marking instead of the file's (P*2 for two tokens).")
-@click.option("--state-space", is_flag=True,
-              help="Explore the reachable markings only (no invariants, no siphons).")
+@click.option("--state-space", is_flag=True, help="The reachable markings only (no invariants).")
 @click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
               show_default=True, help="Stop exploring past this many markings.")
 @click.option("--progress/--no-progress", default=None,
               help="Show the progress of long explorations (default: on a terminal).")
 @click.option("--explorer", type=click.Choice(EXPLORERS), default="auto", show_default=True,
               help="; ".join(f"{e.name}: {e.doc}" for e in EXPLORER_TABLE.values())
-              + ". auto: numpy, then compiled past 500,000 markings.")
+              + ". auto: the fastest for the net's kind and size.")
+@click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half free).")
 @NET_OPTION
-def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool,
-            max_states: int, progress: bool | None, explorer: str, net_id: str | None) -> int:
+def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
+            progress: bool | None, explorer: str, max_memory: str | None,
+            net_id: str | None) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
-    Invariants, siphons, reachable markings, on any P/T net: PNML from
-    TAPAAL, PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml,
-    .net, .lola).
+    Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
+    PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml, .net, .lola).
+    Exit status 3: a partial answer (the memory budget was reached).
     """
     net = pipeline.load_net(file, net_id)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress
     result = pipeline.analyze(net, start, state_space_only=state_space, max_states=max_states,
-                              progress=_progress if shown else None, explorer=explorer)
+                              progress=_progress if shown else None, explorer=explorer,
+                              max_memory=max_memory)
     if shown:
         click.echo("", err=True)
     click.echo(json.dumps(result, indent=2) if as_json else pipeline.analysis_text(result))
-    return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    main()
+    return 3 if "partial" in result else 0

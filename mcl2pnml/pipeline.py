@@ -146,9 +146,27 @@ def template_net(name: str) -> Net:
 # -- analysis ------------------------------------------------------------------------------
 
 def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> dict[str, Any]:
-    """Invariants, siphons and reachable markings (:func:`analysis.report.analyze`)."""
+    """Invariants, siphons and reachable markings (:func:`analysis.report.analyze`);
+    ``max_memory`` may be written as ``--max-memory`` takes it (:func:`parse_size`)."""
     from analysis.report import analyze as run
+    if isinstance(options.get("max_memory"), str):
+        options["max_memory"] = parse_size(options["max_memory"])
     return run(net, initial, **options)
+
+
+def parse_size(text: str, option: str = "--max-memory") -> int:
+    """A size in bytes written ``4G``, ``500M``, ``64K`` or ``1000000`` (powers of 1024)."""
+    units = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
+    number, unit = text.strip().upper().rstrip("B"), ""
+    if number and number[-1] in units:
+        number, unit = number[:-1], number[-1]
+    try:
+        size = float(number) * units[unit]
+    except ValueError:
+        raise OptionError(option, f"'{text}': a size is a number with K, M, G or T (4G, 500M)")
+    if size < 1:
+        raise OptionError(option, f"'{text}': a size is at least one byte")
+    return int(size)
 
 
 def parse_marking(text: str, net: Net, where: str = "") -> dict[str, int]:

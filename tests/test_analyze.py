@@ -101,7 +101,7 @@ def test_every_explorer_gives_the_same_answer(task_pnml):
     (["--initial", "B,NOPE"], "no place NOPE"),
     (["--initial", "B*x"], "a count is a natural number"),
     (["--max-states", "0"], "0"),
-    (["--explorer", "fast"], "'fast' is not one of 'auto', 'compiled', 'packed', 'general'"),
+    (["--explorer", "fast"], "'fast' is not one of 'auto', 'compiled', 'packed', 'counters', 'general'"),
 ])
 def test_bad_options_are_one_line(task_pnml, args, message):
     out = run("analyze", task_pnml, *args)
@@ -139,3 +139,21 @@ def test_net_is_refused_where_a_file_holds_one_net(tmp_path):
     path.write_text("pl p (1)\ntr t p -> \n")
     out = run("analyze", path, "--net", "x")
     assert out.returncode == 2 and "--net" in out.stderr and "holds one net" in out.stderr
+
+
+def test_a_memory_budget_ends_in_a_partial_answer_with_exit_status_3(task_pnml):
+    """The structural results are computed before the exploration and kept."""
+    out = run("analyze", task_pnml, "--json", "--max-memory", "1K")
+    r = json.loads(out.stdout)
+    assert out.returncode == 3 and r["states"] is None and "memory budget" in r["limits"]["states"]
+    assert r["partial"]["markings_explored"] > 0 and r["p_invariants"] and r["siphons"]
+    out = run("analyze", task_pnml, "--state-space", "--max-memory", "1K")
+    assert out.returncode == 3 and "Partial answer:" in out.stdout and "markings explored" in out.stdout
+    assert run("analyze", task_pnml, "--state-space", "--max-memory", "1G").returncode == 0
+
+
+@pytest.mark.parametrize("size, message", [("lots", "'lots': a size is a number"),
+                                           ("0", "at least one byte")])
+def test_a_bad_memory_budget_is_one_line(task_pnml, size, message):
+    out = run("analyze", task_pnml, "--max-memory", size)
+    assert out.returncode == 2 and message in out.stderr and "--max-memory" in out.stderr

@@ -10,9 +10,10 @@ from hypothesis import given, settings, strategies as st
 
 from analysis import compiledspace, generalspace, packedspace, statespace
 from analysis.behaviour import behaviour, final_markings_agree
-from analysis.statespace import OMEGA, ExplorationLimit, explore
-from analysis.zoo import cycles
+from analysis.statespace import OMEGA, ExplorationLimit, MemoryLimit, explore
+from analysis.zoo import cycles, kanban
 from mcl2pnml.core.net import ArcKind, NetBuilder
+from mcl2pnml.core.structure import structure
 
 from strategies import nets
 
@@ -274,5 +275,136 @@ def test_auto_leaves_the_numpy_explorer_for_the_compiled_one_past_the_handover(m
 
 def test_an_unknown_explorer_is_named_with_the_known_ones():
     with pytest.raises(statespace.Mcl2PnmlError, match="unknown explorer 'fast'; known: auto, "
-                       "compiled, packed, general"):
+                       "compiled, packed, counters, general"):
         explore(cycles(1), backend="fast")
+
+
+# -- bounded nets that are not safe, unbounded ones, and the memory budget -------------------
+
+def test_a_bounded_net_that_is_not_safe(backend):
+    """Kanban (Ciardo and Tilgner): 160 and 4,600 markings, bounded by its P-invariants."""
+    for n, states in ((1, 160), (2, 4_600)):
+        space = explore(kanban(n), backend=backend)
+        assert space.states == states and space.bounded and space.bound == n and space.safe == (n == 1)
+        assert not space.terminal and space.home_initial and behaviour(space).reusable
+        assert space.format(0) == [f"Pkan{i}" + (f"*{n}" if n > 1 else "") for i in range(1, 5)]
+
+
+def test_counters_grow_past_their_first_width():
+    """No invariant bounds the place, so its counter starts narrow and is widened."""
+    b = NetBuilder("fill")
+    b.place("src", 40)
+    b.place("sink")
+    b.transition("t")
+    b.arc("src", "t")
+    b.arc("t", "sink", 3)
+    b.transition("drain")
+    b.arc("sink", "drain", 120)
+    space = explore(b.build(), backend="counters")
+    assert type(space).__name__ == "CounterStateSpace"
+    assert space.states == 42 and space.bound == 120
+    assert sorted(space.format(n) for n in space.terminal) == [[]]
+
+
+@settings(max_examples=150, deadline=None)
+@given(nets(max_places=5, max_transitions=4))
+def test_the_counter_explorer_agrees_with_the_general_one(net):
+    try:
+        fast = explore(net, max_states=3000, backend="counters")
+        slow = statespace._explore_general(fast.structure, tuple(fast.markings[0]), 3000, None)
+    except ExplorationLimit:
+        return
+    assert fast.bounded == slow.bounded
+    if fast.bounded:
+        _same_space(fast, slow)
+    else:
+        assert list(fast.markings) == list(slow.markings)
+
+
+def _karp_miller_walking_every_ancestor(s, m0, max_states):
+    """The coverability graph as it was built before the incremental filter, for comparison."""
+    need = [sorted({**dict(read), **{p: max(w, read.get(p, 0)) for p, w in pre.items()}}.items())
+            for pre, read in zip(s.pre, s.read)]
+    delta = [sorted(c.items()) for c in s.incidence]
+    markings, parent, index, edges = [tuple(m0)], [-1], {tuple(m0): 0}, []
+    head = 0
+    while head < len(markings):
+        m = markings[head]
+        for t in range(len(need)):
+            if all(m[p] >= w for p, w in need[t]):
+                m2 = list(m)
+                for p, d in delta[t]:
+                    m2[p] += d
+                m2 = tuple(m2)
+                if m2 not in index:
+                    m2, _ = generalspace._accelerate(m2, head, markings, parent)
+                if m2 not in index:
+                    if len(markings) >= max_states:
+                        raise ExplorationLimit("limit")
+                    index[m2] = len(markings)
+                    markings.append(m2)
+                    parent.append(head)
+                edges.append((head, t, index[m2]))
+        head += 1
+    return markings, edges
+
+
+@settings(max_examples=200, deadline=None)
+@given(nets(max_places=5, max_transitions=4))
+def test_incremental_karp_miller_builds_the_graph_of_the_full_walk(net):
+    s = structure(net)
+    try:
+        old = _karp_miller_walking_every_ancestor(s, s.initial_vector(), 2000)
+    except ExplorationLimit:
+        return
+    new = statespace._explore_general(s, s.initial_vector(), 2000, None)
+    assert list(new.markings) == old[0]
+    assert list(zip(new.src, new.trans, new.dst)) == old[1]
+
+
+def test_incremental_karp_miller_on_unbounded_nets_with_invariants():
+    """A covered cycle beside a growing place: omega appears where the full walk puts it."""
+    b = NetBuilder("pump")
+    b.place("a", 1)
+    b.place("b")
+    b.place("pool")
+    b.transition("go")
+    b.arc("a", "go")
+    b.arc("go", "b")
+    b.transition("back")
+    b.arc("b", "back")
+    b.arc("back", "a")
+    b.arc("back", "pool", 2)
+    s = structure(b.build())
+    old = _karp_miller_walking_every_ancestor(s, s.initial_vector(), 100)
+    new = explore(b.build(), backend="general")
+    assert list(new.markings) == old[0] and new.coverability
+    assert ["a", "pool*w"] in [new.format(n) for n in range(new.states)]
+
+
+def test_a_memory_budget_stops_every_explorer_with_what_it_found(backend):
+    with pytest.raises(MemoryLimit, match="memory budget of 1.0 KB") as stopped:
+        explore(cycles(4), backend=backend, max_memory=1024)
+    assert 0 < stopped.value.explored < 256
+    with pytest.raises(MemoryLimit) as stopped:
+        explore(kanban(2), backend=backend, max_memory=20_000)
+    assert 0 < stopped.value.explored < 4_600
+    assert stopped.value.deadlocks in (0, None)   # Kanban has no dead marking
+    assert explore(kanban(2), backend=backend, max_memory=1 << 30).states == 4_600
+
+
+def test_dead_markings_met_before_the_budget_are_counted(backend):
+    b = NetBuilder("halt or count")
+    for p, n in (("start", 1), ("halted", 0), ("run", 0), ("p", 30), ("q", 0)):
+        b.place(p, n)
+    for t, before, after in (("halt", "start", "halted"), ("go", "start", "run"),
+                             ("count", "p", "q")):
+        b.transition(t)
+        b.arc(before, t)
+        b.arc(t, after)
+    b.read("run", "count")
+    with pytest.raises(ExplorationLimit) as stopped:
+        explore(b.build(), backend=backend, max_states=20)
+    assert stopped.value.explored == 20 and stopped.value.deadlocks in (1, None)
+    if backend in ("general", "counters"):
+        assert stopped.value.deadlocks == 1

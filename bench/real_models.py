@@ -1,0 +1,101 @@
+"""Full state spaces of Model Checking Contest models: ``mcl2pnml analyze --state-space``
+against TAPAAL's verifypn and LoLA, each a fresh process, measured in the same run.
+
+Run:  .venv/bin/python -m bench.real_models
+
+The models are the PNML files of ``bench/models/`` (where each comes from:
+``bench/models/PROVENANCE.md``). Each tool runs as the command a user types,
+start-up included, under GNU ``time``: wall-clock seconds and the peak
+resident memory of the process (its ``ru_maxrss``, the kernel's VmHWM at
+exit; ``time`` itself is a small parent, so the fork does not inflate it).
+The peers run without reductions, to compare exploration with exploration:
+``verifypn-linux64 -n 1 -e -r 0 -p`` and ``lola --check=full --stubborn=off``
+(``/work/shared/peers/README.md``). A tool that is not installed, fails or
+passes :data:`TIMEOUT` seconds gets ``None``.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+MODELS = ROOT / "bench" / "models"
+PEERS = ROOT.parent / "shared" / "peers" / "bin"
+TIMEOUT = 120.0
+
+
+def _tool(name: str) -> str | None:
+    local = PEERS / name
+    return str(local) if local.exists() else shutil.which(name)
+
+
+def commands(model: Path) -> dict[str, list[str] | None]:
+    verifypn, lola = _tool("verifypn-linux64"), _tool("lola")
+    ours = Path(sys.executable).with_name("mcl2pnml")
+    return {
+        "ours": [str(ours), "analyze", "--state-space", "--json", str(model)],
+        "verifypn": verifypn and [verifypn, "-n", "1", "-e", "-r", "0", "-p", str(model)],
+        "lola": lola and [lola, "--pnmlnet", str(model), "--check=full", "--stubborn=off"],
+    }
+
+
+def states_of(tool: str, text: str) -> int | None:
+    """The number of markings each tool prints."""
+    pattern = {"ours": r'"states": (\d+)', "verifypn": r"STATE_SPACE STATES (\d+)",
+               "lola": r"markings\s*:\s*(\d+)"}[tool]
+    found = re.search(pattern, text)
+    return int(found.group(1)) if found else None
+
+
+def measure(tool: str, command: list[str]) -> dict | None:
+    """Seconds, peak MB and markings of one run, or None if it failed or timed out."""
+    timer = shutil.which("time") or "/usr/bin/time"
+    start = time.perf_counter()
+    try:
+        out = subprocess.run([timer, "-f", "PEAK_KB %M", *command], capture_output=True,
+                             text=True, timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        return None
+    seconds = time.perf_counter() - start
+    peak = re.search(r"PEAK_KB (\d+)", out.stderr)
+    states = states_of(tool, out.stdout + out.stderr)
+    if states is None or peak is None:
+        return None
+    return {"seconds": seconds, "peak_mb": int(peak.group(1)) / 1024, "states": states,
+            "partial": out.returncode == 3}
+
+
+def run(log=lambda text: None) -> list[dict]:
+    """One row a model: each tool's measurement (None where it did not finish)."""
+    rows = []
+    for model in sorted(MODELS.glob("*.pnml")):
+        row = {"model": model.stem}
+        for tool, command in commands(model).items():
+            log(f"  {model.stem}: {tool}")
+            row[tool] = measure(tool, command) if command else None
+        rows.append(row)
+    return rows
+
+
+def table(rows: list[dict]) -> list[str]:
+    lines = ["| model | markings | ours (s) | ours (MB) | verifypn (s) | verifypn (MB) "
+             "| LoLA (s) | LoLA (MB) | ours / faster peer (time) |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        o = r["ours"]
+        cells = [r["model"], f"{o['states']:,}" if o else "-"]
+        for tool in ("ours", "verifypn", "lola"):
+            m = r[tool]
+            cells += [f"{m['seconds']:.2f}", f"{m['peak_mb']:.0f}"] if m else ["-", "-"]
+        peers = [r[t]["seconds"] for t in ("verifypn", "lola") if r[t]]
+        cells.append(f"{o['seconds'] / min(peers):.1f}x" if o and peers else "-")
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+if __name__ == "__main__":
+    print("\n".join(table(run(log=lambda t: print(t, file=sys.stderr)))))
