@@ -166,11 +166,10 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
         net_id: str | None, **options) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
-    Time is virtual: a mission of hours runs in a moment. The live log shows
-    each action and event; then the outcome (OK, FAIL, ABORTED, or STALLED
-    with what the mission waits for) and the safe stop: every primitive still
-    enabled is disabled, however the run ends (docs/faults.md). --journal
-    writes the run down as it goes; --resume continues it after a crash.
+    Time is virtual: a mission of hours runs in a moment. The live log shows each action
+    and event; then the outcome (OK, FAIL, ABORTED, or STALLED with what it waits for) and
+    the safe stop: every primitive still enabled is disabled, however the run ends
+    (docs/faults.md). --journal writes the run as it goes; --resume continues it.
     """
     given = frozenset(k for k in options if ctx.get_parameter_source(k)
                       is click.core.ParameterSource.COMMANDLINE)
