@@ -32,6 +32,17 @@ from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
 SIPHON_LIMIT = 20_000
+#: The work either enumeration may do, in row (or subproblem) entries: each
+#: intermediate row of Farkas' algorithm spans every place and transition,
+#: each siphon subproblem every place, so the counts above are lowered on a
+#: wide net. 20,000 rows of a 20,000-place net took 50 s; a million places
+#: would never end, nor fit in memory.
+WORK_LIMIT = 20_000_000
+
+
+def _limit(count: int, width: int) -> int:
+    """The count limit of an enumeration whose items are ``width`` entries wide."""
+    return max(1, min(count, WORK_LIMIT // max(1, width)))
 
 
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
@@ -101,6 +112,8 @@ def _state_space_facts(net: Net, s, space) -> dict[str, Any]:
 
 def _structural(s, limits: dict[str, str]) -> dict[str, Any]:
     """Invariants, siphons and traps, each within its limit (past it: None and the reason)."""
+    width = len(s.places) + len(s.transitions)
+
     def bounded_run(key: str, fn, *args):
         try:
             return fn(*args)
@@ -109,11 +122,11 @@ def _structural(s, limits: dict[str, str]) -> dict[str, Any]:
             return None
 
     semi_p = bounded_run("semipositive_p_invariants", minimal_semipositive_p_invariants,
-                         s, FARKAS_LIMIT)
+                         s, _limit(FARKAS_LIMIT, width))
     semi_t = bounded_run("semipositive_t_invariants", minimal_semipositive_t_invariants,
-                         s, FARKAS_LIMIT)
-    siphons = bounded_run("siphons", minimal_siphons, s, SIPHON_LIMIT)
-    traps = bounded_run("traps", minimal_traps, s, SIPHON_LIMIT)
+                         s, _limit(FARKAS_LIMIT, width))
+    siphons = bounded_run("siphons", minimal_siphons, s, _limit(SIPHON_LIMIT, len(s.places)))
+    traps = bounded_run("traps", minimal_traps, s, _limit(SIPHON_LIMIT, len(s.places)))
     control = (siphon_control(s, siphons, semi_p or [])
                if siphons is not None else None)
     return {
