@@ -221,9 +221,11 @@ def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
             raise AnalysisLimit(f"more than {limit:,} intermediate rows computing the minimal "
                                 f"semi-positive {what} (Farkas algorithm)")
 
+    # before the rows are built: row i's support mask is i bits wide, so a
+    # million rows would take 60 GB before the limit could say no
+    over_limit(len(a_rows))
     for i, a_row in enumerate(a_rows):
         add({k: v for k, v in a_row.items() if v}, {i: 1}, 1 << i)
-    over_limit(len(rows))
 
     while remaining:
         # cheapest column first: it makes the fewest new rows

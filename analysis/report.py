@@ -27,7 +27,7 @@ from analysis.invariants import (AnalysisLimit, format_invariant, minimal_semipo
                          minimal_semipositive_t_invariants, p_invariant_basis,
                          t_invariant_basis)
 from analysis.siphons import minimal_siphons, minimal_traps, siphon_control
-from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore
+from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore, resident
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
@@ -63,8 +63,11 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     structural = {} if state_space_only else _structural(s, limits)
     partial = None
     try:
+        # a budget given is the whole process's: what the net and the structural
+        # results hold counts against it (the default, half of what is free now,
+        # leaves it out already)
         space = explore(s, max_states=max_states, progress=progress, backend=explorer,
-                        max_memory=max_memory)
+                        max_memory=max_memory, held=0 if max_memory is None else resident())
     except ExplorationLimit as e:
         if state_space_only and not isinstance(e, MemoryLimit):
             raise

@@ -52,7 +52,7 @@ from analysis.counterspace import NotBounded
 from analysis.packedmarkings import KeyCollision, NotSafe
 
 __all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "MemoryLimit", "Progress",
-           "StateSpace", "default_memory", "explore"]
+           "StateSpace", "default_memory", "explore", "resident"]
 
 
 class ExplorationLimit(Mcl2PnmlError):
@@ -86,6 +86,18 @@ class _HandOver(Exception):
     """The explorer passed its hand-over count: a compiled one starts again."""
 
 
+def resident() -> int:
+    """The bytes this process holds now (VmRSS), or 0 where that is unknown."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
 def default_memory() -> int:
     """Half of the memory available now (``MemAvailable``), or 2 GiB where that is unknown."""
     try:
@@ -100,7 +112,8 @@ def default_memory() -> int:
 
 def explore(net_or_structure, initial: dict[str, int] | None = None, *,
             max_states: int = 5_000_000, progress: Progress | None = None,
-            backend: str = "auto", max_memory: int | None = None) -> StateSpace:
+            backend: str = "auto", max_memory: int | None = None,
+            held: int = 0) -> StateSpace:
     """Explore the markings reachable from ``initial`` (default: the net's M0).
 
     ``backend`` is one of :data:`BACKENDS`; a safe-net explorer asked for a
@@ -109,22 +122,28 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
     unbounded, as ``"auto"`` does. ``max_memory`` is a budget in bytes
     (default :func:`default_memory`): each explorer's bytes per marking turn
     it into a number of markings, and past it :class:`MemoryLimit` is raised
-    (past ``max_states``, :class:`ExplorationLimit`).
+    (past ``max_states``, :class:`ExplorationLimit`). ``held``: bytes of the
+    budget the caller already holds (the net, the analysis so far).
     """
     if backend not in BACKENDS:
         raise Mcl2PnmlError(f"unknown explorer '{backend}'; known: {', '.join(BACKENDS)}")
     s = (net_or_structure if isinstance(net_or_structure, Structure)
          else make_structure(net_or_structure))
     m0 = _initial(s, initial)
-    budget = _Budget(max_states, default_memory() if max_memory is None else max_memory)
+    budget = _Budget(max_states, default_memory() if max_memory is None else max_memory,
+                     held)
     unit = all(w == 1 for arcs in (*s.pre, *s.read, *s.post) for w in arcs.values())
+    # the packed explorers hold a few dense masks a transition, a word per 64
+    # places each: on a wide net (400,000 places and transitions: 120 GB) they
+    # alone would be over budget, and the general explorer is left
+    wide = _mask_bytes(s) > budget.free // 2
     try:
-        if unit and all(n <= 1 for n in m0):
+        if unit and all(n <= 1 for n in m0) and not wide:
             try:
                 return _explore_safe(s, m0, backend, budget, progress)
             except (NotSafe, KeyCollision):
                 pass   # not safe after all, or (once in 2^64) two markings share a key
-        if backend != "general" and EXPLORERS["counters"].can_run():
+        if backend != "general" and EXPLORERS["counters"].can_run() and not wide:
             try:
                 return _explore_counters(s, m0, backend, budget, progress)
             except NotBounded:
@@ -134,6 +153,12 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
         if e.explored is None:
             e.explored = budget.states
         raise
+
+
+def _mask_bytes(s: Structure) -> int:
+    """What the packed explorers' transition masks take: eight arrays of a row a
+    transition, a 64-bit word per 64 places (counters: per 8)."""
+    return 8 * len(s.transitions) * 8 * max(1, -(-len(s.places) * 8 // 64))
 
 
 def _initial(s: Structure, initial: dict[str, int] | None) -> tuple[int, ...]:
@@ -148,14 +173,15 @@ def _initial(s: Structure, initial: dict[str, int] | None) -> tuple[int, ...]:
 class _Budget:
     """The two limits of one exploration, as a number of markings for each explorer."""
 
-    def __init__(self, max_states: int, max_memory: int):
+    def __init__(self, max_states: int, max_memory: int, held: int = 0):
         self.max_states, self.max_memory = max_states, max_memory
+        self.free = max_memory - held
         self.states = max_states
 
     def run(self, explorer, s: Structure, m0, progress, cap: int | None = None,
             error: Exception | None = None):
         per = explorer.bytes_per_marking(s)
-        self.states = min(self.max_states, max(1, self.max_memory // per))
+        self.states = min(self.max_states, max(1, self.free // per))
         if cap is not None and cap < self.states:
             return explorer.explore(s, m0, cap, error, progress)
         return explorer.explore(s, m0, self.states, self._error(per), progress)
