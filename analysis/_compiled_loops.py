@@ -40,6 +40,40 @@ def slot_of_words(row, bits):
 
 
 @_jit
+def find(queue, table, bits, row):
+    """Position of ``row`` among the rows of ``queue`` that ``table`` holds, or -1 and
+    the free slot where it would go (linear probing; the words are compared, so
+    two markings are never merged)."""
+    words = queue.shape[1]
+    mask = (1 << bits) - 1
+    i = slot_of_words(row, bits)
+    while table[i] >= 0:
+        j = table[i]
+        same = True
+        for w in range(words):
+            if queue[j, w] != row[w]:
+                same = False
+                break
+        if same:
+            return j, i
+        i = (i + 1) & mask
+    return -1, i
+
+
+@_jit
+def rehash(queue, count, bits):
+    """A new table of positions for the first ``count`` rows (after growth or re-packing)."""
+    mask = (1 << bits) - 1
+    table = np.full(1 << bits, -1, dtype=np.int64)
+    for q in range(count):
+        i = slot_of_words(queue[q], bits)
+        while table[i] >= 0:
+            i = (i + 1) & mask
+        table[i] = q
+    return table
+
+
+@_jit
 def step_one_word(need, keep, give, queue, count, head, table, bits, zero_seen,
                   max_states, budget):
     """Markings of one word: the table holds the markings themselves (0: a free slot).
@@ -99,7 +133,6 @@ def step_words(need, keep, give, queue, count, head, table, bits, max_states, bu
     A probe compares the words themselves, so two markings are never merged.
     """
     words = need.shape[1]
-    mask = (1 << bits) - 1
     new = np.empty(words, dtype=np.uint64)
     stop = head + budget
     while head < count and head < stop:
@@ -116,19 +149,8 @@ def step_words(need, keep, give, queue, count, head, table, bits, max_states, bu
                 if rest & give[t, w]:
                     return queue, count, head, table, bits, NOT_SAFE
                 new[w] = rest | give[t, w]
-            i = slot_of_words(new, bits)
-            seen = False
-            while table[i] >= 0:
-                j = table[i]
-                seen = True
-                for w in range(words):
-                    if queue[j, w] != new[w]:
-                        seen = False
-                        break
-                if seen:
-                    break
-                i = (i + 1) & mask
-            if seen:
+            j, i = find(queue, table, bits, new)
+            if j >= 0:
                 continue
             if count >= max_states:
                 return queue, count, head, table, bits, LIMIT
@@ -141,12 +163,67 @@ def step_words(need, keep, give, queue, count, head, table, bits, max_states, bu
             count += 1
             if 10 * count > 7 * len(table):
                 bits += 1
-                mask = (1 << bits) - 1
-                table = np.full(1 << bits, -1, dtype=np.int64)
-                for q in range(count):
-                    i = slot_of_words(queue[q], bits)
-                    while table[i] >= 0:
-                        i = (i + 1) & mask
-                    table[i] = q
+                table = rehash(queue, count, bits)
         head += 1
     return queue, count, head, table, bits, GOING
+
+
+# -- the explored state space, asked again (PackedStateSpace) ---------------------------
+
+@_jit
+def out_degree(packed, need):
+    """Per sorted position, how many transitions the marking enables."""
+    degree = np.zeros(packed.shape[0], dtype=np.int32)
+    words = packed.shape[1]
+    for q in range(packed.shape[0]):
+        for t in range(need.shape[0]):
+            enabled = True
+            for w in range(words):
+                if packed[q, w] & need[t, w] != need[t, w]:
+                    enabled = False
+                    break
+            if enabled:
+                degree[q] += 1
+    return degree
+
+
+@_jit
+def backward(packed, table, bits, need, take, give, seen, frontier):
+    """Mark in ``seen`` every sorted position that reaches one of ``frontier`` (already seen).
+
+    Unfiring: in a safe net the only marking t can come from is the one after
+    without t's outputs and with its inputs; it is a predecessor when it is a
+    reachable marking (found in ``table``, :func:`rehash` of ``packed``),
+    enables t and really fires into the one after.
+    """
+    words = packed.shape[1]
+    stack = np.empty(packed.shape[0], dtype=np.int64)
+    top = 0
+    for n in frontier:
+        stack[top] = n
+        top += 1
+    before = np.empty(words, dtype=np.uint64)
+    while top:
+        top -= 1
+        a = stack[top]
+        for t in range(need.shape[0]):
+            ok = True
+            for w in range(words):
+                after = packed[a, w]
+                if after & give[t, w] != give[t, w]:
+                    ok = False
+                    break
+                b = (after & ~give[t, w]) | take[t, w]
+                if (b & need[t, w] != need[t, w]
+                        or (b & ~take[t, w]) | give[t, w] != after):
+                    ok = False
+                    break
+                before[w] = b
+            if not ok:
+                continue
+            j = find(packed, table, bits, before)[0]
+            if j >= 0 and not seen[j]:
+                seen[j] = True
+                stack[top] = j
+                top += 1
+    return seen
