@@ -74,6 +74,20 @@ def rehash(queue, count, bits):
 
 
 @_jit
+def sparse_index(queue, count):
+    """A table of positions at most 35% full, and its bits, for searching backwards.
+
+    There a predecessor is looked for at every edge, and each probe is a
+    cache miss: half as full as while exploring, probes are fewer (on
+    RwMutex-PT-r0020w0010, 21 million edges: 1.7 s instead of 2.2 s).
+    """
+    bits = 12
+    while 20 * count > 7 << bits:
+        bits += 1
+    return rehash(queue, count, bits), bits
+
+
+@_jit
 def step_one_word(need, keep, give, queue, count, head, table, bits, zero_seen,
                   max_states, budget):
     """Markings of one word: the table holds the markings themselves (0: a free slot).
@@ -127,10 +141,15 @@ def step_one_word(need, keep, give, queue, count, head, table, bits, zero_seen,
 
 
 @_jit
-def step_words(need, keep, give, queue, count, head, table, bits, max_states, budget):
+def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, queue, count, head,
+               table, bits, max_states, budget):
     """Markings of several words: the table holds positions in the queue (-1: free).
 
     A probe compares the words themselves, so two markings are never merged.
+    A transition is tested on the words it needs only
+    (``need_word[need_ptr[t]:need_ptr[t + 1]]``) and fired on those it
+    touches (``touch_*``, :func:`analysis.packedmarkings.touched`): on a net
+    of a thousand places, one to four words of sixteen.
     """
     words = need.shape[1]
     new = np.empty(words, dtype=np.uint64)
@@ -138,14 +157,18 @@ def step_words(need, keep, give, queue, count, head, table, bits, max_states, bu
     while head < count and head < stop:
         for t in range(need.shape[0]):
             enabled = True
-            for w in range(words):
+            for k in range(need_ptr[t], need_ptr[t + 1]):
+                w = need_word[k]
                 if queue[head, w] & need[t, w] != need[t, w]:
                     enabled = False
                     break
             if not enabled:
                 continue
             for w in range(words):
-                rest = queue[head, w] & keep[t, w]
+                new[w] = queue[head, w]
+            for k in range(touch_ptr[t], touch_ptr[t + 1]):
+                w = touch_word[k]
+                rest = new[w] & keep[t, w]
                 if rest & give[t, w]:
                     return queue, count, head, table, bits, NOT_SAFE
                 new[w] = rest | give[t, w]
@@ -171,14 +194,14 @@ def step_words(need, keep, give, queue, count, head, table, bits, max_states, bu
 # -- the explored state space, asked again (PackedStateSpace) ---------------------------
 
 @_jit
-def out_degree(packed, need):
-    """Per sorted position, how many transitions the marking enables."""
+def out_degree(packed, need, need_ptr, need_word):
+    """Per sorted position, how many transitions the marking enables (on the words needed)."""
     degree = np.zeros(packed.shape[0], dtype=np.int32)
-    words = packed.shape[1]
     for q in range(packed.shape[0]):
         for t in range(need.shape[0]):
             enabled = True
-            for w in range(words):
+            for k in range(need_ptr[t], need_ptr[t + 1]):
+                w = need_word[k]
                 if packed[q, w] & need[t, w] != need[t, w]:
                     enabled = False
                     break
@@ -188,7 +211,7 @@ def out_degree(packed, need):
 
 
 @_jit
-def backward(packed, table, bits, need, take, give, seen, frontier):
+def backward(packed, table, bits, need, take, give, touch_ptr, touch_word, seen, frontier):
     """Mark in ``seen`` every sorted position that reaches one of ``frontier`` (already seen).
 
     Unfiring: in a safe net the only marking t can come from is the one after
@@ -197,18 +220,25 @@ def backward(packed, table, bits, need, take, give, seen, frontier):
     enables t and really fires into the one after.
     """
     words = packed.shape[1]
-    stack = np.empty(packed.shape[0], dtype=np.int64)
+    # first in, first out: the next marking to unfire was queued long ago, so the
+    # processor overlaps its lookups (last in, first out chains every cache miss
+    # to the one before: half as fast)
+    todo = np.empty(packed.shape[0], dtype=np.int64)
     top = 0
     for n in frontier:
-        stack[top] = n
+        todo[top] = n
         top += 1
     before = np.empty(words, dtype=np.uint64)
-    while top:
-        top -= 1
-        a = stack[top]
+    head = 0
+    while head < top:
+        a = todo[head]
+        head += 1
+        for w in range(words):
+            before[w] = packed[a, w]
         for t in range(need.shape[0]):
             ok = True
-            for w in range(words):
+            for k in range(touch_ptr[t], touch_ptr[t + 1]):
+                w = touch_word[k]
                 after = packed[a, w]
                 if after & give[t, w] != give[t, w]:
                     ok = False
@@ -219,11 +249,13 @@ def backward(packed, table, bits, need, take, give, seen, frontier):
                     ok = False
                     break
                 before[w] = b
-            if not ok:
-                continue
-            j = find(packed, table, bits, before)[0]
-            if j >= 0 and not seen[j]:
-                seen[j] = True
-                stack[top] = j
-                top += 1
+            if ok:
+                j = find(packed, table, bits, before)[0]
+                if j >= 0 and not seen[j]:
+                    seen[j] = True
+                    todo[top] = j
+                    top += 1
+            for k in range(touch_ptr[t], touch_ptr[t + 1]):   # back to the marking after
+                w = touch_word[k]
+                before[w] = packed[a, w]
     return seen

@@ -22,7 +22,7 @@ Miller 1969).
 import numba
 import numpy as np
 
-from analysis._compiled_loops import find as _find, rehash
+from analysis._compiled_loops import find as _find, rehash, sparse_index  # noqa: F401
 
 GOING, LIMIT, OVERFLOW, GROWING = 0, 1, 2, 3
 
@@ -134,15 +134,17 @@ def backward(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
     Unfiring: the only marking t can come from is the one after minus t's
     change; it is a predecessor when it is reachable and enables t.
     """
-    stack = np.empty(count, dtype=np.int64)
+    # first in, first out, as :func:`analysis._compiled_loops.backward` does
+    todo = np.empty(count, dtype=np.int64)
     top = 0
     for n in frontier:
-        stack[top] = n
+        todo[top] = n
         top += 1
     before = np.empty(queue.shape[1], dtype=np.uint64)
-    while top:
-        top -= 1
-        after = queue[stack[top]]
+    head = 0
+    while head < top:
+        after = queue[todo[head]]
+        head += 1
         for t in range(n_ptr.shape[0] - 1):
             if not _fire_into(after, before, t, d_ptr, d_word, d_shift, d_mask, d_val, -1):
                 continue
@@ -151,6 +153,6 @@ def backward(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
             j = _find(queue, table, bits, before)[0]
             if j >= 0 and not seen[j]:
                 seen[j] = True
-                stack[top] = j
+                todo[top] = j
                 top += 1
     return seen

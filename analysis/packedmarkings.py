@@ -53,6 +53,17 @@ def masks_of(place_sets, words: int) -> np.ndarray:
                      for b in bits], dtype=np.uint64).reshape(len(bits), words)
 
 
+def touched(*masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The words each transition's masks have bits in, as compressed rows (ptr, word).
+
+    So that compiled loops test and fire a transition on those words only.
+    """
+    rows, words = np.nonzero(np.bitwise_or.reduce(masks) != 0)
+    ptr = np.zeros(len(masks[0]) + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=len(masks[0])), out=ptr[1:])
+    return ptr, words.astype(np.int64)
+
+
 def word_count(s: Structure) -> int:
     """64-bit words per marking of ``s``: one per 64 places, at least one."""
     return max(1, (len(s.places) + 63) // 64)
@@ -276,7 +287,8 @@ class PackedStateSpace(StateSpace):
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
         kernels = self._kernels()
         if kernels is not None:
-            degree = kernels.out_degree(self.packed, self.firing.need)
+            degree = kernels.out_degree(self.packed, self.firing.need,
+                                        *touched(self.firing.need))
         else:
             degree = np.zeros(self.states, dtype=np.int32)
             for r, _ in self._enabled():
@@ -343,14 +355,16 @@ class PackedStateSpace(StateSpace):
         frontier = np.unique(self.position(np.asarray(list(targets), dtype=np.int64)))
         seen[frontier] = True
         f = self.firing
-        bits = 12
-        while 20 * self.states > 7 << bits:   # at most 35% full: fewer probes, each a
-            bits += 1                          # cache miss (2.5 s, not 3.5, for 21M edges)
         # a hash table of positions: a probe or two a predecessor, where a
-        # binary search on the keys costs some twenty cache misses (4.5 s)
-        table = kernels.rehash(self.packed, self.states, bits)
-        return kernels.backward(self.packed, table, bits, f.need, f.take, f.give, seen,
-                                frontier)
+        # binary search on the keys costs some twenty cache misses (4.5 s, not 1.7)
+        table, bits = kernels.sparse_index(self.packed, self.states)
+        return kernels.backward(self.packed, table, bits, f.need, f.take, f.give,
+                                *self._touched, seen, frontier)
+
+    @cached_property
+    def _touched(self) -> tuple[np.ndarray, np.ndarray]:
+        f = self.firing
+        return touched(f.need, f.take, f.give)
 
     def _can_reach_numpy(self, targets: Sequence[int]) -> list[bool]:
         """:meth:`can_reach` in numpy: a breadth-first frontier unfired at once."""
