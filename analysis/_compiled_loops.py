@@ -141,6 +141,16 @@ def step_one_word(need, keep, give, queue, count, head, table, bits, zero_seen,
 
 
 @_jit
+def enables(rows, q, t, need, need_ptr, need_word):
+    """Whether marking ``rows[q]`` (of several words) enables t, tested on the words t needs."""
+    for k in range(need_ptr[t], need_ptr[t + 1]):
+        w = need_word[k]
+        if rows[q, w] & need[t, w] != need[t, w]:
+            return False
+    return True
+
+
+@_jit
 def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, queue, count, head,
                table, bits, max_states, budget):
     """Markings of several words: the table holds positions in the queue (-1: free).
@@ -156,13 +166,7 @@ def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, que
     stop = head + budget
     while head < count and head < stop:
         for t in range(need.shape[0]):
-            enabled = True
-            for k in range(need_ptr[t], need_ptr[t + 1]):
-                w = need_word[k]
-                if queue[head, w] & need[t, w] != need[t, w]:
-                    enabled = False
-                    break
-            if not enabled:
+            if not enables(queue, head, t, need, need_ptr, need_word):
                 continue
             for w in range(words):
                 new[w] = queue[head, w]
@@ -199,13 +203,7 @@ def out_degree(packed, need, need_ptr, need_word):
     degree = np.zeros(packed.shape[0], dtype=np.int32)
     for q in range(packed.shape[0]):
         for t in range(need.shape[0]):
-            enabled = True
-            for k in range(need_ptr[t], need_ptr[t + 1]):
-                w = need_word[k]
-                if packed[q, w] & need[t, w] != need[t, w]:
-                    enabled = False
-                    break
-            if enabled:
+            if enables(packed, q, t, need, need_ptr, need_word):
                 degree[q] += 1
     return degree
 
