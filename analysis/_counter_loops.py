@@ -6,7 +6,7 @@ transition is two lists of fields (compressed rows: ``*_ptr[t]`` to
 ``*_ptr[t + 1]``): what it needs (word, shift, mask, tokens) and what it
 changes (word, shift, mask, signed change, place). The queue of markings
 and the open-addressing hash set of positions in it are those of
-:mod:`analysis._compiled_loops` (its hash, :func:`slot_of_words`): the
+:mod:`analysis._compiled_loops` (its probe and re-hash, ``find`` and ``rehash``): the
 queue is the array of markings in the order found, so node ``n`` of the
 state space is row ``n`` and node 0 the initial marking.
 
@@ -22,7 +22,7 @@ Miller 1969).
 import numba
 import numpy as np
 
-from analysis._compiled_loops import slot_of_words
+from analysis._compiled_loops import find as _find, rehash, sparse_index  # noqa: F401
 
 GOING, LIMIT, OVERFLOW, GROWING = 0, 1, 2, 3
 
@@ -35,38 +35,6 @@ def _enabled(row, t, n_ptr, n_word, n_shift, n_mask, n_val):
         if (row[n_word[k]] >> n_shift[k]) & n_mask[k] < n_val[k]:
             return False
     return True
-
-
-@_jit
-def _find(queue, table, bits, row):
-    """Position of ``row`` in the queue, or -1 and the free slot where it would go."""
-    words = queue.shape[1]
-    mask = (1 << bits) - 1
-    i = slot_of_words(row, bits)
-    while table[i] >= 0:
-        j = table[i]
-        same = True
-        for w in range(words):
-            if queue[j, w] != row[w]:
-                same = False
-                break
-        if same:
-            return j, i
-        i = (i + 1) & mask
-    return -1, i
-
-
-@_jit
-def rehash(queue, count, bits):
-    """A new table of positions for the first ``count`` rows (after growth or re-packing)."""
-    mask = (1 << bits) - 1
-    table = np.full(1 << bits, -1, dtype=np.int64)
-    for q in range(count):
-        i = slot_of_words(queue[q], bits)
-        while table[i] >= 0:
-            i = (i + 1) & mask
-        table[i] = q
-    return table
 
 
 @_jit
@@ -166,15 +134,17 @@ def backward(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
     Unfiring: the only marking t can come from is the one after minus t's
     change; it is a predecessor when it is reachable and enables t.
     """
-    stack = np.empty(count, dtype=np.int64)
+    # first in, first out, as :func:`analysis._compiled_loops.backward` does
+    todo = np.empty(count, dtype=np.int64)
     top = 0
     for n in frontier:
-        stack[top] = n
+        todo[top] = n
         top += 1
     before = np.empty(queue.shape[1], dtype=np.uint64)
-    while top:
-        top -= 1
-        after = queue[stack[top]]
+    head = 0
+    while head < top:
+        after = queue[todo[head]]
+        head += 1
         for t in range(n_ptr.shape[0] - 1):
             if not _fire_into(after, before, t, d_ptr, d_word, d_shift, d_mask, d_val, -1):
                 continue
@@ -183,6 +153,6 @@ def backward(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
             j = _find(queue, table, bits, before)[0]
             if j >= 0 and not seen[j]:
                 seen[j] = True
-                stack[top] = j
+                todo[top] = j
                 top += 1
     return seen

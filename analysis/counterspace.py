@@ -253,9 +253,12 @@ class CounterStateSpace(StateSpace):
 
     @cached_property
     def bound(self) -> float:
-        top = 0
-        for start in range(0, self.states, 1 << 20):
-            top = max(top, int(self.layout.unpack(self.rows[start:start + (1 << 20)]).max()))
+        # a place at a time: unpacking every marking into a row of counts
+        # would cost 8 bytes a place a marking
+        lay, top = self.layout, 0
+        for p in range(len(lay.widths)):
+            field = (self.rows[:, lay.word[p]] >> np.uint64(lay.shift[p])) & np.uint64(lay.mask(p))
+            top = max(top, int(field.max(initial=0)))
         return top
 
     @cached_property
@@ -291,5 +294,6 @@ class CounterStateSpace(StateSpace):
         frontier = np.unique(np.asarray(list(targets), dtype=np.int64))
         seen = np.zeros(self.states, dtype=np.bool_)
         seen[frontier] = True
-        return k.backward(self.rows, self.states, self.table, self.bits, *self._need,
+        table, bits = k.sparse_index(self.rows, self.states)
+        return k.backward(self.rows, self.states, table, bits, *self._need,
                           *self._change[:5], seen, frontier).tolist()

@@ -30,11 +30,12 @@ from array import array
 from collections import deque
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable, Sequence
-
-import networkx as nx
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from mcl2pnml.core.structure import Structure
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 OMEGA = math.inf
 """The token count of a place that the coverability graph found unbounded."""
@@ -153,6 +154,7 @@ class StateSpace:
 
     def graph(self) -> nx.MultiDiGraph:
         """The graph as networkx: nodes carry ``marking``, edges ``transition``."""
+        import networkx as nx   # a quarter of a second to import: only for whoever asks
         g = nx.MultiDiGraph()
         for n in range(self.states):
             g.add_node(n, marking=self.marking(n))

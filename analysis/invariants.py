@@ -26,9 +26,6 @@ import heapq
 from math import gcd, lcm
 from typing import Mapping, Sequence
 
-from sympy import QQ, ZZ
-from sympy.polys.matrices import DomainMatrix
-
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.structure import Structure
 
@@ -44,6 +41,7 @@ def integer_multiple(vec: Mapping[int, object]) -> dict[int, int]:
     elements); zero entries are left out. Signs are kept, so a vector that
     must stay positive on some places (a siphon's control) still does.
     """
+    from sympy import QQ   # sympy takes most of a second to import: only when needed
     items = [(k, QQ.convert(v)) for k, v in vec.items() if v]
     scale = lcm(*(int(QQ.denom(v)) for _, v in items))
     ints = {k: int(QQ.numer(v)) * (scale // int(QQ.denom(v))) for k, v in items}
@@ -84,6 +82,10 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     on the paper's task it reads like the paper's own equations
     (``MTX + EXE + E_OK + E_FAIL + W_OK + W_FAIL + W_A``).
     """
+    # sympy takes most of a second to import: Farkas (and so the counter
+    # explorer's bounds) does without it
+    from sympy import QQ, ZZ
+    from sympy.polys.matrices import DomainMatrix
     last = ncols - 1
     data = {i: {last - j: ZZ(v) for j, v in row.items() if v} for i, row in enumerate(rows)}
     a = DomainMatrix({i: r for i, r in data.items() if r}, (len(rows), ncols), ZZ)

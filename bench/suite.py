@@ -72,7 +72,7 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
              "a fresh interpreter; seconds, states per second, bytes per state (peak resident "
              "memory during the exploration, over the number of states); our speed as a "
              "ratio to each peer. Ours is the compiled explorer (what `analyze` uses once "
-             "its code is loaded, and past 500,000 markings); \"numpy\" is our numpy "
+             "its code is loaded, and past 20,000 markings); \"numpy\" is our numpy "
              "explorer (what `analyze` uses first in a fresh process). \"+ analysis\": the "
              "further time ours takes to find the terminal markings and decide deadlock "
              "freedom and reusability (what `analyze --state-space` adds; the peers do not "
@@ -105,7 +105,7 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
     lines += ["", f"Loading the compiled explorer's code in a fresh process (importing numba "
               f"and reading its cache; not counted above): {load:.2f} s, the median over "
               "these runs. That is why `analyze` starts with the numpy explorer and loads "
-              "the compiled one only past 500,000 markings."]
+              "the compiled one only past 20,000 markings."]
     slow = [(r, peer) for r in rows for peer in ("snakes", "pm4py")
             if r.get(peer) and r[peer]["seconds"] / r["ours"]["seconds"] < 100]
     if slow:

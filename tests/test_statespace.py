@@ -5,6 +5,7 @@ each runs against the compiled, the numpy and the general explorer (the
 safe-net ones hand over to the general one on nets that are not safe,
 which these tests cover too).
 """
+import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
@@ -408,3 +409,28 @@ def test_dead_markings_met_before_the_budget_are_counted(backend):
     assert stopped.value.explored == 20 and stopped.value.deadlocks in (1, None)
     if backend in ("general", "counters"):
         assert stopped.value.deadlocks == 1
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.one_of(spread_safe_nets(), nets(max_places=6, max_transitions=5)),
+       st.data())
+def test_compiled_and_numpy_answers_of_a_packed_state_space_agree(net, data):
+    """Terminal markings and backward reachability: compiled loops and numpy alike."""
+    space = explore(net, max_states=5000, backend="packed")
+    if type(space).__name__ != "PackedStateSpace":
+        return   # not safe: another explorer's space
+    goal = data.draw(st.lists(st.integers(0, space.states - 1), max_size=3))
+    numpy_reach = space._can_reach_numpy(goal)
+    from analysis import packedmarkings
+    old = packedmarkings.COMPILED_FROM
+    packedmarkings.COMPILED_FROM = 0
+    try:
+        space.__dict__.pop("out_degree", None)
+        assert space._kernels() is not None
+        assert space.can_reach(goal) == numpy_reach
+        assert space.always_can_reach(goal) == all(numpy_reach)
+        compiled_degree = list(space.out_degree)
+    finally:
+        packedmarkings.COMPILED_FROM = old
+    # the edge list is numpy's own firing
+    assert compiled_degree == np.bincount(space.src, minlength=space.states).tolist()
