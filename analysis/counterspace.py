@@ -36,7 +36,7 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.generalspace import StateSpace
+from analysis.generalspace import DecodedMarkings, StateSpace
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 18
@@ -217,19 +217,11 @@ def _covers_an_ancestor(s: Structure, layout: Layout, queue: np.ndarray, parent:
     return False
 
 
-class CounterMarkings(Sequence):
+class CounterMarkings(DecodedMarkings):
     """The markings by node, decoded one at a time into tuples of counts."""
 
-    def __init__(self, space: "CounterStateSpace"):
-        self.space = space
-
-    def __len__(self) -> int:
-        return self.space.states
-
-    def __getitem__(self, node):
-        if isinstance(node, slice):
-            return [self[i] for i in range(*node.indices(len(self)))]
-        row = self.space.rows[node:node + 1] if node >= 0 else self.space.rows[node:][:1]
+    def decode(self, node: int) -> tuple[int, ...]:
+        row = self.space.rows[node:node + 1]
         return tuple(int(x) for x in self.space.layout.unpack(row)[0])
 
 

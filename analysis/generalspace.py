@@ -49,6 +49,29 @@ PROGRESS_EVERY = 100_000
 breadth-first level or a compiled slice)."""
 
 
+class DecodedMarkings(Sequence):
+    """The markings of a state space kept packed, decoded one node at a time.
+
+    A packed state space (safe nets' bits, bounded nets' counters) keeps its
+    markings in arrays; this sequence gives each as the tuple of counts every
+    :class:`StateSpace` shows, without unpacking them all at once.
+    """
+
+    def __init__(self, space: "StateSpace"):
+        self.space = space
+
+    def __len__(self) -> int:
+        return self.space.states
+
+    def __getitem__(self, node):
+        if isinstance(node, slice):
+            return [self[i] for i in range(*node.indices(len(self)))]
+        return self.decode(node + len(self) if node < 0 else node)
+
+    def decode(self, node: int) -> tuple[int, ...]:
+        raise NotImplementedError
+
+
 @dataclass(eq=False)
 class StateSpace:
     """The explored graph: node 0 is the initial marking."""

@@ -38,7 +38,7 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.generalspace import StateSpace
+from analysis.generalspace import DecodedMarkings, StateSpace
 
 
 def masks(s: Structure, words: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -201,20 +201,10 @@ def chunks(n: int, transitions: int):
         yield slice(start, min(n, start + step))
 
 
-class PackedMarkings(Sequence):
+class PackedMarkings(DecodedMarkings):
     """The markings by node, decoded one at a time into tuples of 0/1."""
 
-    def __init__(self, space: "PackedStateSpace"):
-        self.space = space
-
-    def __len__(self) -> int:
-        return self.space.states
-
-    def __getitem__(self, node):
-        if isinstance(node, slice):
-            return [self[i] for i in range(*node.indices(len(self)))]
-        if node < 0:
-            node += len(self)
+    def decode(self, node: int) -> tuple[int, ...]:
         row = self.space.packed[self.space.position(node)]
         return tuple(int(row[p // 64] >> np.uint64(p % 64)) & 1
                      for p in range(len(self.space.structure.places)))
