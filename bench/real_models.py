@@ -10,7 +10,7 @@ resident memory of the process (its ``ru_maxrss``, the kernel's VmHWM at
 exit; ``time`` itself is a small parent, so the fork does not inflate it).
 The peers run without reductions, to compare exploration with exploration:
 ``verifypn-linux64 -n 1 -e -r 0 -p`` and ``lola --check=full --stubborn=off``
-(``/work/shared/peers/README.md``). A tool that is not installed, fails or
+(``../shared/peers/README.md``). A tool that is not installed, fails or
 passes :data:`TIMEOUT` seconds gets ``None``.
 """
 from __future__ import annotations
