@@ -33,6 +33,8 @@ OLD_ARCS = {"inputArc": "timed", "outputArc": "normal", "inhibitorArc": "tapninh
             "transportArc": "transport"}
 
 
+#: Arc kinds refused whatever they join (an old transport arc names three nodes).
+REFUSED = {"tapninhibitor", "inhibitor", "transport"}
 #: Arc types only TAPAAL's own format has.
 TAPAAL_TYPES = {"timed", "transport", "tapninhibitor"}
 
@@ -119,7 +121,12 @@ class _Tapaal:
                 arc_els.append((el, name))
         for el, name in arc_els:   # every node first: arcs may come before their ends
             src, dst = el.get("source"), el.get("target")
-            if (src in places) == (dst in places) or not {src, dst} <= places.keys() | transitions.keys():
+            kind = (el.get("type") or OLD_ARCS.get(name, "")).lower()
+            if kind in REFUSED:   # said for what it is, whatever its ends
+                self.arc(el, name, arcs)
+                continue
+            ends = places.keys() | transitions.keys()
+            if (src in places) == (dst in places) or not {src, dst} <= ends:
                 self.error(el, f"arc from '{src}' to '{dst}' does not join a place and a "
                                "transition of this net")
                 continue
