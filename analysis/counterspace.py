@@ -36,7 +36,7 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.generalspace import DecodedMarkings, StateSpace
+from analysis.generalspace import DecodedMarkings, EdgesOnDemand, StateSpace
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 18
@@ -225,7 +225,7 @@ class CounterMarkings(DecodedMarkings):
         return tuple(int(x) for x in self.space.layout.unpack(row)[0])
 
 
-class CounterStateSpace(StateSpace):
+class CounterStateSpace(EdgesOnDemand, StateSpace):
     """A reachability graph kept as its packed markings in the order found (see the module)."""
 
     def __init__(self, structure: Structure, rows: np.ndarray, table: np.ndarray, bits: int,
@@ -267,18 +267,6 @@ class CounterStateSpace(StateSpace):
         from analysis import _counter_loops as k
         return k.edges(self.rows, self.states, self.table, self.bits, *self._need,
                        *self._change[:5], int(self.out_degree.sum()))
-
-    @property
-    def src(self):  # type: ignore[override]
-        return self._edges[0]
-
-    @property
-    def trans(self):  # type: ignore[override]
-        return self._edges[1]
-
-    @property
-    def dst(self):  # type: ignore[override]
-        return self._edges[2]
 
     def can_reach(self, targets: Sequence[int]) -> list[bool]:
         """For every node, whether one of ``targets`` is reachable from it (by unfiring)."""

@@ -72,6 +72,26 @@ class DecodedMarkings(Sequence):
         raise NotImplementedError
 
 
+class EdgesOnDemand:
+    """A packed state space's edge list, built when first asked for (its ``_edges``).
+
+    The packed explorers keep markings, not edges: most analyses never need
+    them, and they would cost more than the markings.
+    """
+
+    @property
+    def src(self):
+        return self._edges[0]
+
+    @property
+    def trans(self):
+        return self._edges[1]
+
+    @property
+    def dst(self):
+        return self._edges[2]
+
+
 @dataclass(eq=False)
 class StateSpace:
     """The explored graph: node 0 is the initial marking."""

@@ -38,7 +38,7 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.generalspace import DecodedMarkings, StateSpace
+from analysis.generalspace import DecodedMarkings, EdgesOnDemand, StateSpace
 
 
 def masks(s: Structure, words: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -210,7 +210,7 @@ class PackedMarkings(DecodedMarkings):
                      for p in range(len(self.space.structure.places)))
 
 
-class PackedStateSpace(StateSpace):
+class PackedStateSpace(EdgesOnDemand, StateSpace):
     """A reachability graph kept as its sorted, packed markings (see the module's documentation).
 
     Node 0 is the initial marking, as in every :class:`StateSpace`; the
@@ -306,24 +306,12 @@ class PackedStateSpace(StateSpace):
         order = np.lexsort((trans_, src_))
         return src_[order], trans_[order], dst_[order]
 
-    @property
-    def src(self):  # type: ignore[override]
-        return self._edges[0]
-
-    @property
-    def trans(self):  # type: ignore[override]
-        return self._edges[1]
-
-    @property
-    def dst(self):  # type: ignore[override]
-        return self._edges[2]
-
     # -- reachability, backwards, by unfiring ------------------------------------------
 
     def can_reach(self, targets: Sequence[int]) -> list[bool]:
         """For every node, whether one of ``targets`` is reachable from it.
 
-        In compiled code (a depth-first search, unfiring one marking at a
+        In compiled code (a breadth-first search, unfiring one marking at a
         time, each predecessor found in a hash table of the markings) when its
         loops pay or are loaded; otherwise in numpy, a frontier at a time
         (:meth:`_can_reach_numpy`). Both give the same answer.
