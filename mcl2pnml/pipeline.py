@@ -98,10 +98,7 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     form = FORMATS.get(fmt)
     if form is None:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
-    positions = None
-    if "positions" in form.options and layout != "none":
-        from mcl2pnml.view.layout import positions as lay_out
-        positions = lay_out(net, layout)
+    positions = _positions(net, layout) if "positions" in form.options else None
     form.save(net, path, SaveOptions(positions=positions, title=title, urgent=mission))
     return Path(path)
 
@@ -114,10 +111,15 @@ def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
 def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
     """``net`` as a PNML document, laid out by ``layout_engine``."""
     from mcl2pnml.io.pnml.writer import to_pnml_bytes as write
-    if layout_engine == "none":
-        return write(net)
+    return write(net, _positions(net, layout_engine))
+
+
+def _positions(net: Net, layout: str):
+    """Node positions from ``layout``; ``none`` computes none (nor imports the view)."""
+    if layout == "none":
+        return None
     from mcl2pnml.view.layout import positions
-    return write(net, positions(net, layout_engine))
+    return positions(net, layout)
 
 
 def validate_pnml(path: str | Path, grammar: str | Path | None = None,
