@@ -184,23 +184,26 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
 @main.command(epilog=EXAMPLES)
 @click.argument("file", type=FILE)
 @click.option("--grammar", type=click.Path(exists=True, file_okay=False, path_type=Path),
-              help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...). Default: "
-                   "$MCL2PNML_PNML_GRAMMAR, else a shared/pnml-grammar beside or above.")
+              help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...), applied "
+                   "as well as mcl2pnml's own schema. Default: $MCL2PNML_PNML_GRAMMAR, else a "
+                   "shared/pnml-grammar beside or above, else none.")
 @NET_OPTION
 def validate(file: Path, grammar: Path | None, net_id: str | None) -> int:
-    """Check FILE against the official PNML grammar and the P/T net rules.
+    """Check FILE against mcl2pnml's PNML schema, the official grammar where it is
+    given or found, and the P/T net rules.
 
-    The reader catches what the grammar lets pass (an arc from a place to a
-    place, a dangling arc). Exit 0 when valid, 2 with every problem when not.
+    The rules catch what no schema can say (an arc from a place to a place, a
+    reference loop). Exit 0 when valid, 2 with every problem when not.
     """
     verdict, net = pipeline.validate_pnml(file, grammar, net_id)
     if not verdict.valid:
         for error in verdict.errors:
             click.echo(str(error), err=True)
         n = len(verdict.errors)
-        click.echo(f"{file}: invalid PNML ({n} problem{'s' * (n != 1)})", err=True)
+        click.echo(f"{file}: invalid PNML ({n} problem{'s' * (n != 1)}; {verdict.judges()})",
+                   err=True)
         return 2
-    click.echo(f"{file}: valid PNML P/T net (ISO/IEC 15909-2, 2009 grammar): "
+    click.echo(f"{file}: valid PNML P/T net ({verdict.judges()}): "
                f"{len(net.places)} places, {len(net.transitions)} transitions, "
                f"{len(net.arcs)} arcs")
     return 0

@@ -124,7 +124,9 @@ def _positions(net: Net, layout: str):
 
 def validate_pnml(path: str | Path, grammar: str | Path | None = None,
                   net_id: str | None = None):
-    """The official grammar's verdict on a PNML file, and the net when it is valid."""
+    """The verdict on a PNML file of our schema, of the official grammar when ``grammar``
+    gives it (or it is found: :func:`mcl2pnml.io.pnml.grammar.find_grammar`) and of the
+    reader's rules; and the net when it is valid."""
     from mcl2pnml.io.pnml.grammar import validate
     from mcl2pnml.io.pnml.reader import load_pnml
     verdict = validate(path, grammar, net_id)

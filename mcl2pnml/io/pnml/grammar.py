@@ -1,103 +1,263 @@
-"""Validation against the official PNML grammar (ISO/IEC 15909-2, RELAX NG).
+"""Validation of PNML P/T nets: our schema, the official grammar where it is, the reader's rules.
 
-The grammar files are AFNOR's and are not shipped with mcl2pnml. They are
-looked for, in order:
+Three judges, in this order:
 
-1. the directory given explicitly (``mcl2pnml validate --grammar DIR``);
-2. the directory in the environment variable ``MCL2PNML_PNML_GRAMMAR``;
-3. a ``shared/pnml-grammar`` directory beside or above the working directory
-   or the installed package (where a checkout of this project keeps it).
+1. mcl2pnml's own RELAX NG schema of ISO/IEC 15909-2 P/T nets (``ptnet.rng``
+   beside this module, shipped with the package), always;
+2. the official 2009 grammar (AFNOR's RELAX NG files, not shipped with
+   mcl2pnml), when it is given or found, looked for in order:
 
-The directory must hold ``ptnet.pntd`` and the files it includes
-(``pnmlcoremodel.rng``, ``conventions.rng``, ``anyElement.rng``) with local
-``include`` references, as pnml.org's ``grammar.zip`` unpacked and pointed at
-its own files.
+   a. the directory given explicitly (``mcl2pnml validate --grammar DIR``);
+   b. the directory in the environment variable ``MCL2PNML_PNML_GRAMMAR``;
+   c. a ``shared/pnml-grammar`` directory beside or above the working
+      directory or the installed package (where a checkout of this project
+      keeps it).
 
-The grammar cannot check everything: an arc from a place to a place passes
-it, so :func:`validate` also runs the reader's own checks, and a file is
-valid only when both agree.
+   ``MCL2PNML_PNML_GRAMMAR=none`` applies our schema alone, wherever the
+   official grammar is. A directory given (a or b) must hold ``ptnet.pntd`` and the files it
+   includes (``pnmlcoremodel.rng``, ``conventions.rng``, ``anyElement.rng``)
+   with local ``include`` references, as pnml.org's ``grammar.zip`` unpacked
+   and pointed at its own files; one that does not, or that lxml cannot
+   compile, is an error, as is a broken one found by c;
+3. the reader's own rules (:func:`mcl2pnml.io.pnml.reader.parse_pnml`), which
+   no RELAX NG schema can express: an arc from a place to a place passes
+   both schemas.
+
+A file is valid only when every judge applied finds it so. The two schemas
+admit the same documents (``tests/test_schema.py`` holds them side by side on
+every file we write, a corpus and its mutations), so where both reject a
+file a message they both give is shown once, naming both.
 """
 from __future__ import annotations
 
 import os
+import re
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 
 from lxml import etree
 
-from mcl2pnml.core.errors import ErrorList, Mcl2PnmlError, PnmlError
+from mcl2pnml.core.errors import ErrorList, Location, Mcl2PnmlError, PnmlError
 from mcl2pnml.io.pnml.reader import XmlError, _parse_xml, _Source, parse_pnml, read_file
+from mcl2pnml.io.pnml.writer import NS, PTNET
 
 ENV = "MCL2PNML_PNML_GRAMMAR"
 ENTRY = "ptnet.pntd"
+#: The value of ``$MCL2PNML_PNML_GRAMMAR`` that applies our schema alone.
+NONE = "none"
+#: Our schema, package data of :mod:`mcl2pnml.io.pnml`.
+SCHEMA = "ptnet.rng"
+OURS = "mcl2pnml's ISO/IEC 15909-2 schema"
+OFFICIAL = "official 2009 grammar"
+CORE_MODEL = "http://www.pnml.org/version-2009/grammar/pnmlcoremodel"
+#: How a schema message says which schema gave it.
+_SAID_BY = {frozenset({OURS}): "schema", frozenset({OFFICIAL}): "official grammar",
+            frozenset({OURS, OFFICIAL}): "schema and official grammar"}
+#: libxml2's message for an IDREF that names no id: it comes without a node.
+_UNKNOWN_ID = re.compile(r'IDREF attribute (\S+) references an unknown ID "(.*)"')
+#: libxml2's messages that blame an element's attributes, naming the element.
+_ATTRIBUTES = re.compile(r"Element (\S+) failed to validate attributes|"
+                         r"Invalid attribute \S+ for element (\S+)")
+#: A step of a libxml2 path with a namespace prefix.
+_PREFIXED = re.compile(r"([A-Za-z_][\w.-]*):([A-Za-z_][\w.-]*)")
+#: What is valid, for the faults where libxml2 says only that something is not.
+_HINTS = (
+    (re.compile(r"Expecting a namespace for element"),
+     f'PNML elements are in the namespace "{NS}"'),
+    (re.compile(r"Element net failed to validate attributes"),
+     f"a net has an id and the type {PTNET} (or the core model's, {CORE_MODEL})"),
+)
 
 
-def find_grammar(explicit: str | Path | None = None) -> Path:
-    """The directory of the PNML grammar, or a :class:`PnmlError` saying how to get one."""
-    if explicit is not None:
-        candidates = [Path(explicit)]
-    elif os.environ.get(ENV):
-        candidates = [Path(os.environ[ENV])]
-    else:
-        candidates = []
-        for start in (Path.cwd(), Path(__file__).resolve().parent):
-            for d in (start, *start.parents):
-                candidates.append(d / "shared" / "pnml-grammar")
-    for c in candidates:
-        if (c / ENTRY).is_file():
-            return c
-    where = candidates[0] if (explicit is not None or os.environ.get(ENV)) else None
-    detail = f"no {ENTRY} in {where}" if where else "not found beside or above this directory"
-    raise PnmlError(
-        f"PNML grammar {detail}; unpack pnml.org's version-2009 grammar.zip (ptnet.pntd and "
-        f"the .rng files it includes) and pass --grammar DIR or set {ENV}=DIR")
+def find_grammar(explicit: str | Path | None = None) -> Path | None:
+    """The directory of the official PNML grammar, or ``None`` when none is found.
+
+    A directory given (``explicit``, else ``$MCL2PNML_PNML_GRAMMAR``) that has
+    no ``ptnet.pntd`` is a :class:`PnmlError` saying how to get the grammar;
+    ``$MCL2PNML_PNML_GRAMMAR`` set to ``none`` turns the search off.
+    """
+    given = explicit if explicit is not None else os.environ.get(ENV) or None
+    if explicit is None and given == NONE:
+        return None
+    if given is not None:
+        if (Path(given) / ENTRY).is_file():
+            return Path(given)
+        source = "--grammar" if explicit is not None else ENV
+        raise PnmlError(
+            f"PNML grammar: no {ENTRY} in {given} (from {source}); unpack pnml.org's version-2009 grammar.zip "
+            f"(ptnet.pntd and the .rng files it includes) and pass --grammar DIR or set "
+            f"{ENV}=DIR")
+    for start in (Path.cwd(), Path(__file__).resolve().parent):
+        for d in (start, *start.parents):
+            if (d / "shared" / "pnml-grammar" / ENTRY).is_file():
+                return d / "shared" / "pnml-grammar"
+    return None
+
+
+def schema_text() -> bytes:
+    """Our schema's text, from the installed package (a wheel or a checkout alike)."""
+    return resources.files(__package__).joinpath(SCHEMA).read_bytes()
+
+
+@lru_cache(maxsize=1)
+def our_schema() -> etree.RelaxNG:
+    """Our schema, compiled once."""
+    return etree.RelaxNG(etree.fromstring(schema_text()))
 
 
 @lru_cache(maxsize=4)
-def _relaxng(directory: str) -> etree.RelaxNG:
+def official_grammar(directory: str) -> etree.RelaxNG:
+    """The official grammar in ``directory``, compiled once, or a located :class:`PnmlError`."""
+    path = os.path.join(directory, ENTRY)
     parser = etree.XMLParser(no_network=True, resolve_entities=False)
-    return etree.RelaxNG(etree.parse(os.path.join(directory, ENTRY), parser))
+    try:
+        return etree.RelaxNG(etree.parse(path, parser))
+    except (OSError, etree.LxmlError) as e:
+        # the first complaint with a line is the cause (a missing include, say);
+        # the later ones are its consequences (references left without a definition)
+        log = list(getattr(e, "error_log", None) or ())
+        entry = next((x for x in log if x.line), log[0] if log else None)
+        where = Location(entry.filename or path, entry.line or None, entry.column or None) \
+            if entry is not None else Location(path)
+        raise PnmlError(f"the PNML grammar in {directory} cannot be used: "
+                        f"{entry.message if entry is not None else e}; give the directory of "
+                        "pnml.org's version-2009 grammar.zip unpacked", where) from None
+
+
+@dataclass(frozen=True)
+class SchemaVerdict:
+    """What one schema made of a document."""
+
+    schema: str
+    valid: bool
 
 
 @dataclass(frozen=True)
 class Verdict:
-    """The outcome of :func:`validate`: valid, or the problems found."""
+    """The outcome of :func:`validate`: the problems found, and which schemas judged."""
 
     file: str
     errors: tuple[Mcl2PnmlError, ...]
+    schemas: tuple[SchemaVerdict, ...] = ()
 
     @property
     def valid(self) -> bool:
         return not self.errors
 
+    def judges(self) -> str:
+        """``"mcl2pnml's ISO/IEC 15909-2 schema; official 2009 grammar: valid"``: who judged.
+
+        Our schema is named alone when the file is valid (it always applies);
+        each schema's own verdict is given as soon as one differs or fails.
+        """
+        if self.valid:
+            first, *rest = self.schemas
+            return "; ".join([first.schema, *(f"{s.schema}: valid" for s in rest)])
+        return "; ".join(f"{s.schema}: {'valid' if s.valid else 'invalid'}"
+                         for s in self.schemas)
+
 
 def validate(path: str | Path, grammar: str | Path | None = None,
              net_id: str | None = None) -> Verdict:
-    """Check a PNML file against the grammar and against the reader's rules.
-
-    ``net_id``: the net the reader's rules are checked on, of a file that holds several.
-    """
+    """Check a PNML file against our schema, the official grammar where it is, and the
+    reader's rules. ``net_id``: the net the reader's rules are checked on, of a file
+    that holds several."""
     return validate_bytes(read_file(path), str(path), grammar, net_id)
 
 
 def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None,
                    net_id: str | None = None) -> Verdict:
-    rng = _relaxng(str(find_grammar(grammar)))
+    """:func:`validate` on a document's bytes; ``filename`` names it in messages."""
+    judges = [(OURS, our_schema())]
+    official = find_grammar(grammar)
+    if official is not None:
+        judges.append((OFFICIAL, official_grammar(str(official))))
     src = _Source(filename, data)
     try:
         doc = _parse_xml(data, src)
-    except XmlError as e:
-        return Verdict(filename, (e,))  # nothing more can be checked
-    errors: list[Mcl2PnmlError] = []
-    if not rng.validate(doc):
-        for entry in rng.error_log:
-            errors.append(PnmlError(f"grammar: {entry.message}",
-                                    src.at(entry.line, entry.column or None)))
+    except XmlError as e:   # no schema can judge what is not XML
+        return Verdict(filename, (e,), tuple(SchemaVerdict(name, False) for name, _ in judges))
+    found: dict[tuple, set[str]] = {}   # (location, message) -> the schemas that say it
+    schemas = []
+    for name, rng in judges:
+        valid = rng.validate(doc)
+        schemas.append(SchemaVerdict(name, valid))
+        for key in ([] if valid else _schema_errors(rng.error_log, doc, src)):
+            found.setdefault(key, set()).add(name)
+    errors: list[Mcl2PnmlError] = [PnmlError(f"{_SAID_BY[frozenset(names)]}: {message}", where)
+                                   for (where, message), names in found.items()]
     try:
         parse_pnml(data, filename, net_id)
     except ErrorList as e:
         errors.extend(e.errors)
     except PnmlError as e:
         errors.append(e)
-    return Verdict(filename, tuple(errors))
+    return Verdict(filename, tuple(errors), tuple(schemas))
+
+
+def _schema_errors(log, doc, src: _Source) -> list[tuple[Location, str]]:
+    """libxml2's complaints, one message per element at fault, located at its start tag.
+
+    libxml2 logs a fault from the inside out: details without a node
+    ("Extra element text in interleave"), then the element that failed,
+    then each enclosing element that failed because of it. The details go
+    with the element they precede; an element that only failed because of
+    a descendant already reported is not reported again.
+    """
+    groups: dict[object, list[str]] = {}   # element -> its messages, in the log's order
+    pending: list[str] = []
+    for entry in log:
+        message = entry.message.strip().replace("element , ", "element, ")  # a name left blank
+        if message not in pending:
+            pending.append(message)
+        node = _node(doc, entry.path, message) if entry.path else _referrer(doc, message)
+        if node is not None:
+            groups.setdefault(node, [])
+            groups[node] += [m for m in pending if m not in groups[node]]
+            pending = []
+    if pending:   # nothing in the log names an element: the document as a whole
+        groups.setdefault(doc.getroot(), []).extend(pending)
+    reported: list = []
+    out = []
+    for node, messages in groups.items():
+        if any(node in r.iterancestors() for r in reported):
+            continue
+        reported.append(node)
+        messages += [hint for pattern, hint in _HINTS
+                     if any(pattern.search(m) for m in messages)]
+        out.append((src.locate(node), "; ".join(messages)))
+    return out
+
+
+def _node(doc, path: str, message: str):
+    """The element libxml2's ``path`` names, or the one its ``message`` blames.
+
+    The path is where libxml2 stood: for a fault of content, the child that
+    did not fit (the place to show); for a fault of attributes, sometimes a
+    child of the element whose attributes are wrong, which the message names.
+    A step in another namespace is written with the document's prefix, which
+    XPath does not know: it is matched by its local name.
+    """
+    path = _PREFIXED.sub(r"*[local-name()='\2']", path)
+    try:
+        found = doc.xpath(path)
+    except etree.XPathError:
+        return None
+    node = found[0] if found and isinstance(found[0], etree._Element) else None
+    blamed = _ATTRIBUTES.search(message)
+    if node is not None and blamed:
+        owner = next((el for el in (node, *node.iterancestors())
+                      if etree.QName(el).localname == (blamed.group(1) or blamed.group(2))), None)
+        node = owner if owner is not None else node
+    return node
+
+
+def _referrer(doc, message: str):
+    """The element whose IDREF names an id that does not exist, from libxml2's message."""
+    m = _UNKNOWN_ID.fullmatch(message)
+    if m is None:
+        return None
+    attribute, value = m.groups()
+    return next((el for el in doc.iter() if el.get(attribute) == value), None)
