@@ -74,7 +74,16 @@ def behaviour(space: StateSpace) -> Behaviour:
     good = [n for n in terminal if proper(n)]
     bad = [n for n in terminal if not proper(n)]
     reach_good = space.always_can_reach(good) if good else False
-    home = space.home_initial if space.bounded else False
+    # One backward pass, not two: a dead marking reaches nothing but itself, so
+    # with one M0 is a home marking only when it is the only reachable marking
+    # (then it is that dead marking); the search from M0 is needed only when no
+    # marking is dead.
+    if not space.bounded:
+        home = False
+    elif terminal:
+        home = space.states == 1
+    else:
+        home = space.home_initial
     reusable = space.bounded and not bad and (reach_good if terminal else home)
     return Behaviour(
         terminal=tuple(tuple(space.format(n)) for n in terminal),

@@ -39,7 +39,7 @@ from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import Structure, structure
 
 from analysis.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace,
-                                     marking_row, masks, touched, word_count)
+                                     key_index, marking_row, masks, touched, word_count)
 # bound under this module's own name, so that the keys of this explorer alone
 # can be replaced (the key-collision tests do)
 from analysis.packedmarkings import keys_of as _keys
@@ -157,7 +157,8 @@ def _run_one_word(kernels, need, keep, give, m0, max_states, limit_error,
     queue[0] = m0
     table = np.zeros(1 << bits, dtype=np.uint64)
     table[kernels.slot_of_word(m0, bits)] = m0   # an empty marking stays out, as 0 is "free"
-    return _drive(kernels, kernels.step_one_word, (need, keep, give),
+    return _drive(kernels, kernels.step_one_word,
+                  (need, keep, give, *key_index(need, np.array([m0], dtype=np.uint64))),
                   (queue, 1, 0, table, bits, m0 == 0), max_states, limit_error, progress)
 
 
@@ -169,6 +170,7 @@ def _run_words(kernels, need, keep, give, m0, max_states, limit_error,
     table = np.full(1 << bits, -1, dtype=np.int64)
     table[kernels.slot_of_words(m0, bits)] = 0
     return _drive(kernels, kernels.step_words,
-                  (need, keep, give, *touched(need), *touched(need, ~keep, give)),
+                  (need, keep, give, *touched(need), *touched(need, ~keep, give),
+                   *key_index(need, m0)),
                   (queue, 1, 0, table, bits),
                   max_states, limit_error, progress)

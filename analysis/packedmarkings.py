@@ -64,6 +64,38 @@ def touched(*masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ptr, words.astype(np.int64)
 
 
+def key_index(test: np.ndarray, m0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each transition keyed on one place of its ``test`` mask, as compressed rows by place.
+
+    ``test`` is ``(transitions, words)``: what must be marked for the
+    transition to be worth trying (its needed places when firing, its
+    outputs when unfiring). A marking then tries only the transitions keyed
+    on its marked places (:func:`analysis._compiled_loops.candidates`). The
+    key is a place unmarked in ``m0`` where there is one, the lowest such:
+    places marked at the start (mutexes, idle states) stay marked in most
+    markings, and keying on them would test the transition nearly always.
+    Returns ``(ptr, transitions, free)``: place p's transitions are
+    ``transitions[ptr[p]:ptr[p + 1]]``; ``free`` are those that test nothing.
+    """
+    m0 = m0.reshape(-1)
+    test = test.reshape(len(test), m0.size)
+    rare = test & ~m0.reshape(1, -1)
+    pick = np.where(np.any(rare != 0, axis=1, keepdims=True), rare, test)
+    nonzero = pick != 0
+    has = nonzero.any(axis=1)
+    word = np.argmax(nonzero, axis=1)
+    x = pick[np.arange(len(pick)), word]
+    low = x & (~x + np.uint64(1))
+    # the index of a power of two, exactly (float64 holds every power of two below 2^64)
+    bit = np.rint(np.log2(np.where(has, low, 1).astype(np.float64))).astype(np.int64)
+    place = word * 64 + bit
+    keyed = np.nonzero(has)[0]
+    order = keyed[np.argsort(place[keyed], kind="stable")]
+    ptr = np.zeros(test.shape[1] * 64 + 1, dtype=np.int64)
+    np.cumsum(np.bincount(place[keyed], minlength=test.shape[1] * 64), out=ptr[1:])
+    return ptr, order.astype(np.int64), np.nonzero(~has)[0].astype(np.int64)
+
+
 def word_count(s: Structure) -> int:
     """64-bit words per marking of ``s``: one per 64 places, at least one."""
     return max(1, (len(s.places) + 63) // 64)
@@ -278,7 +310,8 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         kernels = self._kernels()
         if kernels is not None:
             degree = kernels.out_degree(self.packed, self.firing.need,
-                                        *touched(self.firing.need))
+                                        *touched(self.firing.need),
+                                        *key_index(self.firing.need, self.packed[self.start]))
         else:
             degree = np.zeros(self.states, dtype=np.int32)
             for r, _ in self._enabled():
@@ -335,9 +368,10 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         f = self.firing
         # a hash table of positions: a probe or two a predecessor, where a
         # binary search on the keys costs some twenty cache misses (4.5 s, not 1.7)
-        table, bits = kernels.sparse_index(self.packed, self.states)
+        table, bits = kernels.paired_index(self.packed, self.states)
         return kernels.backward(self.packed, table, bits, f.need, f.take, f.give,
-                                *self._touched, seen, frontier)
+                                *self._touched, *key_index(f.give, self.packed[self.start]),
+                                seen, frontier)
 
     @cached_property
     def _touched(self) -> tuple[np.ndarray, np.ndarray]:
