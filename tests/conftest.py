@@ -21,8 +21,9 @@ def grammar_dir() -> Path:
 
     found = find_grammar()
     if found is None:
-        pytest.skip(f"the official PNML grammar is not here (no shared/pnml-grammar beside or "
-                    f"above, {ENV} unset); our own schema is applied without it")
+        pytest.skip(f"the official PNML grammar is not here (no {ENV}, no shared/pnml-grammar "
+                    f"beside or above) or is set aside ({ENV}=none); our own schema is applied "
+                    "without it")
     return found
 
 

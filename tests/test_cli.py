@@ -15,15 +15,15 @@ def test_version_and_help():
     assert run("validate", "--help").stdout.count("--grammar") >= 1
 
 
-def test_validate_a_good_file(tmp_path, grammar_dir):
+def test_validate_a_good_file(tmp_path):
     path = save_pnml(primitive(), tmp_path / "primitive.pnml")
-    out = run("validate", path, "--grammar", grammar_dir)
+    out = run("validate", path)   # our schema, and the official grammar where it is found
     assert out.returncode == 0, out.stderr
     assert "valid PNML P/T net" in out.stdout and "7 places, 8 transitions" in out.stdout
 
 
-def test_validate_finds_what_the_grammar_lets_pass(grammar_dir):
-    out = run("validate", DATA / "pnml" / "invalid" / "place_to_place.pnml", "--grammar", grammar_dir)
+def test_validate_finds_what_the_grammar_lets_pass():
+    out = run("validate", DATA / "pnml" / "invalid" / "place_to_place.pnml")
     assert out.returncode == 2
     assert "place_to_place.pnml:7:7: arc 'a' goes from place 'p' to place 'q'" in out.stderr
     assert "Traceback" not in out.stderr
@@ -45,8 +45,8 @@ def test_bad_arguments_are_one_line_and_exit_2(args, message):
 
 @pytest.mark.parametrize("path", sorted((DATA / "pnml" / "invalid").glob("*.pnml")),
                          ids=lambda p: p.name)
-def test_bad_pnml_exits_2_with_positions(path, grammar_dir):
-    out = run("validate", path, "--grammar", grammar_dir)
+def test_bad_pnml_exits_2_with_positions(path):
+    out = run("validate", path)
     assert out.returncode == 2 and "Traceback" not in out.stderr
     assert f"{path}:" in out.stderr and "^" in out.stderr
 

@@ -22,6 +22,7 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
                      if p.suffix in (".py", ".pnt"))
     assert templates == shipped
     assert any(n.startswith("analysis/") for n in names)
+    assert "mcl2pnml/io/pnml/ptnet.rng" in names   # our PNML schema: validate needs it
     assert any(n.endswith("entry_points.txt") for n in names)
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
                     "--target", str(target), str(wheel)], check=True, timeout=300)
@@ -36,3 +37,9 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
     out = subprocess.run([str(target / "bin" / "mcl2pnml"), "--version"], capture_output=True,
                          text=True, cwd=tmp_path, env=env, timeout=60)
     assert out.returncode == 0 and out.stdout.startswith("mcl2pnml "), out.stderr
+    # the installed copy validates with its own schema, the official grammar set aside
+    pnml = ROOT / "tests" / "data" / "pnml" / "schema" / "valid" / "everything.pnml"
+    out = subprocess.run([str(target / "bin" / "mcl2pnml"), "validate", str(pnml)],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=60,
+                         env={**env, "MCL2PNML_PNML_GRAMMAR": "none"})
+    assert out.returncode == 0 and "(mcl2pnml's ISO/IEC 15909-2 schema)" in out.stdout, out.stderr
