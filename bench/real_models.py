@@ -51,8 +51,17 @@ def states_of(tool: str, text: str) -> int | None:
     return int(found.group(1)) if found else None
 
 
+#: What each peer prints of its exploration alone (start-up, parsing and output
+#: aside): verifypn in seconds, LoLA in whole seconds.
+EXPLORATION = {"verifypn": r"Spent ([\d.]+) on verification",
+               "lola": r"time used\s*:\s*([\d.]+)"}
+
+
 def measure(tool: str, command: list[str]) -> dict | None:
-    """Seconds, peak MB and markings of one run, or None if it failed or timed out."""
+    """Seconds, peak MB and markings of one run, or None if it failed or timed out.
+
+    ``explore_seconds`` is the exploration alone where the tool reports it.
+    """
     timer = shutil.which("time") or "/usr/bin/time"
     start = time.perf_counter()
     try:
@@ -65,8 +74,10 @@ def measure(tool: str, command: list[str]) -> dict | None:
     states = states_of(tool, out.stdout + out.stderr)
     if states is None or peak is None:
         return None
+    inner = re.search(EXPLORATION[tool], out.stdout + out.stderr) if tool in EXPLORATION else None
     return {"seconds": seconds, "peak_mb": int(peak.group(1)) / 1024, "states": states,
-            "partial": out.returncode == 3}
+            "partial": out.returncode == 3,
+            "explore_seconds": float(inner.group(1)) if inner else None}
 
 
 def run(log=lambda text: None) -> list[dict]:

@@ -1,4 +1,4 @@
-"""State spaces: our explorer against SNAKES and pm4py, on the same PNML files.
+"""State spaces: our explorer against SNAKES, pm4py, verifypn and LoLA, on the same PNML files.
 
 Run:  .venv/bin/python -m bench.statespace_peers
 
@@ -14,6 +14,12 @@ is timed apart as ``load_seconds``); the exploration is. (The peers also store t
 asked, which the second, analysis time includes where it needs them.) A run that does
 not finish within :data:`TIMEOUT` seconds is reported as such. Each figure
 is the median of :data:`RUNS` runs when a run takes under 5 s, else one run.
+
+Then, on the same file, the whole commands a user runs, each a fresh process
+with its peak memory (:func:`measure_command`): ``mcl2pnml analyze
+--state-space`` (start-up, reading, exploring, the analysis and the output),
+TAPAAL's verifypn and LoLA with their reductions off; for the peers also
+their exploration alone, as they print it.
 """
 from __future__ import annotations
 
@@ -27,7 +33,7 @@ from pathlib import Path
 from mcl2pnml.io.pnml import save_pnml
 
 from analysis import zoo
-from bench import nets
+from bench import nets, real_models
 
 TIMEOUT = 60.0
 RUNS = 3
@@ -100,15 +106,42 @@ def measure(engine: str, path: Path) -> dict | None:
     return summary
 
 
+def measure_command(tool: str, path: Path) -> dict | None:
+    """The whole command a user runs (:mod:`bench.real_models`): ``mcl2pnml analyze
+    --state-space``, or a peer with its reductions off; the median of a few
+    runs when a run takes under 5 s, else one. None: not installed, failed,
+    timed out."""
+    command = real_models.commands(path)[tool]
+    if command is None:
+        return None
+    results = []
+    for _ in range(RUNS):
+        result = real_models.measure(tool, command)
+        if result is None:
+            return None
+        results.append(result)
+        if result["seconds"] > 5:
+            break
+    middle = sorted(results, key=lambda r: r["seconds"])[len(results) // 2]
+    return {**middle, "peak_mb": statistics.median(r["peak_mb"] for r in results)}
+
+
+#: The nets where our whole command is held to the peers: at least as fast as the
+#: faster of verifypn and LoLA, within twice verifypn's peak memory.
+HELD = (("cycles", 10), ("cycles", 11), ("dam inspection, aborts pending", 0),
+        ("dam inspection, aborts pending", 1))
+
 CASES = ([("cycles", k, zoo.cycles) for k in range(6, 12)]
          + [("philosophers", n, zoo.philosophers_left_first) for n in (8, 10, 12)]
          + [("token ring", n, zoo.token_ring) for n in (8, 10, 12)]
          + [("shared memory", n, zoo.shared_memory) for n in (6, 8, 10)]
-         + [("mission, parallel width", w, nets.mission) for w in (2, 3, 4)])
+         + [("mission, parallel width", w, nets.mission) for w in (2, 3, 4)]
+         + [("dam inspection, aborts pending", a, nets.dam) for a in (0, 1)])
 
 
-def run(cases=CASES, peers=("snakes", "pm4py"), log=print) -> list[dict]:
-    """Every case on ours and on each peer.
+def run(cases=CASES, peers=("snakes", "pm4py"), log=print,
+        commands=("ours", "verifypn", "lola")) -> list[dict]:
+    """Every case on ours and on each peer, then as whole commands (``commands``).
 
     A peer is not run on a net where it cannot finish in time: where it
     timed out on a smaller net of the family, or where its time per marking
@@ -128,10 +161,11 @@ def run(cases=CASES, peers=("snakes", "pm4py"), log=print) -> list[dict]:
                 row[peer] = None if hopeless else measure(peer, path)
                 last[family, peer] = (row[peer]["seconds"] / row["ours"]["states"]
                                       if row[peer] else None)
+            row["command"] = {tool: measure_command(tool, path) for tool in commands}
             rows.append(row)
             log(f"  {family} {size}: " + ", ".join(
-                f"{k} {v['seconds']:.3f}s" if v else f"{k} -" for k, v in row.items()
-                if k not in ("family", "size")))
+                f"{k} {v['seconds']:.3f}s" if v else f"{k} -" for k, v in
+                [*row.items(), *row["command"].items()] if k not in ("family", "size", "command")))
     return rows
 
 
