@@ -14,8 +14,11 @@ OUT    := out
 # token game page of `mcl2pnml show` in the browser tests. Both from Debian's
 # packages where missing (machines here run as root). GLPK lets TAPAAL's verifypn, one of
 # the peer tools the external-corpus tests compare us with, start.
+# A C compiler builds the safe-net explorer's loops (analysis/_native.c) at install;
+# without one mcl2pnml installs all the same and explores with numba's.
 APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium) \
-                $(if $(shell /sbin/ldconfig -p 2>/dev/null | grep libglpk.so.40),,libglpk40)
+                $(if $(shell /sbin/ldconfig -p 2>/dev/null | grep libglpk.so.40),,libglpk40) \
+                $(if $(shell command -v cc),,gcc)
 
 system-deps:
 	@if [ -n "$(strip $(APT_PACKAGES))" ]; then \
@@ -25,7 +28,7 @@ system-deps:
 	  || echo "warning: could not install$(APT_PACKAGES); the tests that need them will say so"; \
 	fi
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml analysis/_native.c
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'

@@ -121,6 +121,13 @@ def sparse_index(queue, count):
     return rehash(queue, count, bits), bits
 
 
+def start_table(m0, bits):
+    """The table of :func:`step_words` holding ``m0`` alone (positions, -1 free)."""
+    table = np.full(1 << bits, -1, dtype=np.int64)
+    table[slot_of_words(m0, bits)] = 0
+    return table
+
+
 @_jit
 def paired_index(queue, count):
     """A table of positions at most 70% full, each slot holding a marking's first word too.

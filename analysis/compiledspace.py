@@ -39,7 +39,8 @@ from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import Structure, structure
 
 from analysis.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace,
-                                     key_index, marking_row, masks, touched, word_count)
+                                     key_index, marking_row, masks, place_weights, touched,
+                                     word_count)
 # bound under this module's own name, so that the keys of this explorer alone
 # can be replaced (the key-collision tests do)
 from analysis.packedmarkings import keys_of as _keys
@@ -89,11 +90,34 @@ def warm_up() -> None:
         explore_compiled(s, s.initial_vector(), 10, RuntimeError("warm-up"))
 
 
+def native_available() -> bool:
+    """Whether the loops in C were built when mcl2pnml was installed (they need a C compiler)."""
+    try:
+        from analysis import _native_loops   # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def explore_native(s: Structure, m0: Sequence[int], max_states: int, limit_error,
+                   progress=None) -> PackedStateSpace:
+    """:func:`explore_compiled` with the loops in C (:mod:`analysis._native_loops`)."""
+    from analysis import _native_loops as kernels
+    return _explore(kernels, s, m0, max_states, limit_error, progress)
+
+
 def explore_compiled(s: Structure, m0: Sequence[int], max_states: int, limit_error,
                      progress=None) -> PackedStateSpace:
     """Breadth-first from ``m0``; raises :class:`NotSafe` at a second token in a place."""
     global _ran
     from analysis import _compiled_loops as kernels   # imports numba: 0.3 s, so only now
+    space = _explore(kernels, s, m0, max_states, limit_error, progress)
+    _ran = True
+    return space
+
+
+def _explore(kernels, s: Structure, m0: Sequence[int], max_states: int, limit_error,
+             progress) -> PackedStateSpace:
     words = word_count(s)
     need, take, give = masks(s, words)
     start = marking_row(m0, words)
@@ -113,7 +137,6 @@ def explore_compiled(s: Structure, m0: Sequence[int], max_states: int, limit_err
             raise KeyCollision   # distinct markings, one key: the exact explorer takes over
         packed = rows[order]
         del rows, order
-    _ran = True
     return PackedStateSpace(s, packed, keys, _keys(start)[0], Firing.by(need, need, take, give))
 
 
@@ -158,7 +181,7 @@ def _run_one_word(kernels, need, keep, give, m0, max_states, limit_error,
     table = np.zeros(1 << bits, dtype=np.uint64)
     table[kernels.slot_of_word(m0, bits)] = m0   # an empty marking stays out, as 0 is "free"
     return _drive(kernels, kernels.step_one_word,
-                  (need, keep, give, *key_index(need, np.array([m0], dtype=np.uint64))),
+                  (need, keep, give, *key_index(need, place_weights(np.array([m0], dtype=np.uint64)))),
                   (queue, 1, 0, table, bits, m0 == 0), max_states, limit_error, progress)
 
 
@@ -167,10 +190,9 @@ def _run_words(kernels, need, keep, give, m0, max_states, limit_error,
     bits = 12
     queue = np.empty((1024, len(m0)), dtype=np.uint64)
     queue[0] = m0
-    table = np.full(1 << bits, -1, dtype=np.int64)
-    table[kernels.slot_of_words(m0, bits)] = 0
+    table = kernels.start_table(m0, bits)
     return _drive(kernels, kernels.step_words,
                   (need, keep, give, *touched(need), *touched(need, ~keep, give),
-                   *key_index(need, m0)),
+                   *key_index(need, place_weights(m0.reshape(1, -1)))),
                   (queue, 1, 0, table, bits),
                   max_states, limit_error, progress)

@@ -64,6 +64,9 @@ class Explorer:
 
 
 EXPLORERS: dict[str, Explorer] = {e.name: e for e in (
+    Explorer("native", "C code for safe nets, built at install (fastest; loads at once)",
+             "analysis.compiledspace", "explore_native", safe_only=True,
+             available="native_available"),
     Explorer("compiled", "compiled code for safe nets (fastest; most of a second to load)",
              "analysis.compiledspace", "explore_compiled", safe_only=True,
              available="available"),

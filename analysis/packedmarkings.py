@@ -64,36 +64,46 @@ def touched(*masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ptr, words.astype(np.int64)
 
 
-def key_index(test: np.ndarray, m0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def key_index(test: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each transition keyed on one place of its ``test`` mask, as compressed rows by place.
 
     ``test`` is ``(transitions, words)``: what must be marked for the
     transition to be worth trying (its needed places when firing, its
     outputs when unfiring). A marking then tries only the transitions keyed
-    on its marked places (:func:`analysis._compiled_loops.candidates`). The
-    key is a place unmarked in ``m0`` where there is one, the lowest such:
-    places marked at the start (mutexes, idle states) stay marked in most
-    markings, and keying on them would test the transition nearly always.
-    Returns ``(ptr, transitions, free)``: place p's transitions are
-    ``transitions[ptr[p]:ptr[p + 1]]``; ``free`` are those that test nothing.
+    on its marked places (:func:`analysis._compiled_loops.candidates`), so
+    the key is the place of the mask least often marked: ``weight`` says how
+    often each place is (:func:`place_weights`), the lowest-numbered place
+    winning a tie. Returns ``(ptr, transitions, free)``: place p's
+    transitions are ``transitions[ptr[p]:ptr[p + 1]]``; ``free`` are those
+    that test nothing.
     """
-    m0 = m0.reshape(-1)
-    test = test.reshape(len(test), m0.size)
-    rare = test & ~m0.reshape(1, -1)
-    pick = np.where(np.any(rare != 0, axis=1, keepdims=True), rare, test)
-    nonzero = pick != 0
-    has = nonzero.any(axis=1)
-    word = np.argmax(nonzero, axis=1)
-    x = pick[np.arange(len(pick)), word]
-    low = x & (~x + np.uint64(1))
-    # the index of a power of two, exactly (float64 holds every power of two below 2^64)
-    bit = np.rint(np.log2(np.where(has, low, 1).astype(np.float64))).astype(np.int64)
-    place = word * 64 + bit
-    keyed = np.nonzero(has)[0]
+    words = len(weight) // 64
+    test = np.ascontiguousarray(test.reshape(len(test), words))
+    place = np.full(len(test), -1, dtype=np.int64)
+    for first in range(0, len(test), 4096):   # a few MB of bits at a time
+        bits = np.unpackbits(test[first:first + 4096].view(np.uint8), axis=1,
+                             bitorder="little").astype(bool)
+        scored = np.where(bits, weight, np.inf)
+        best = np.argmin(scored, axis=1)
+        place[first:first + 4096] = np.where(bits.any(axis=1), best, -1)
+    keyed = np.nonzero(place >= 0)[0]
     order = keyed[np.argsort(place[keyed], kind="stable")]
-    ptr = np.zeros(test.shape[1] * 64 + 1, dtype=np.int64)
-    np.cumsum(np.bincount(place[keyed], minlength=test.shape[1] * 64), out=ptr[1:])
-    return ptr, order.astype(np.int64), np.nonzero(~has)[0].astype(np.int64)
+    ptr = np.zeros(words * 64 + 1, dtype=np.int64)
+    np.cumsum(np.bincount(place[keyed], minlength=words * 64), out=ptr[1:])
+    return ptr, order.astype(np.int64), np.nonzero(place < 0)[0].astype(np.int64)
+
+
+def place_weights(rows: np.ndarray, sample: int = 1 << 16) -> np.ndarray:
+    """How often each place is marked in ``rows`` (markings, one row of words each),
+    counted on an even sample of at most ``sample`` of them: the weights of
+    :func:`key_index`. With the initial marking alone, its marked places weigh
+    1 and the others 0: places marked at the start (mutexes, idle states)
+    stay marked in most markings."""
+    rows = rows.reshape(len(rows), -1)
+    step = max(1, len(rows) // sample)
+    bits = np.unpackbits(np.ascontiguousarray(rows[::step]).view(np.uint8), axis=1,
+                         bitorder="little")
+    return bits.sum(axis=0, dtype=np.float64)
 
 
 def word_count(s: Structure) -> int:
@@ -298,7 +308,13 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
             yield r + part.start, j
 
     def _kernels(self):
-        """The compiled loops, when they pay (:data:`COMPILED_FROM`), else None (numpy)."""
+        """The loops in C when they were built; else numba's when they pay
+        (:data:`COMPILED_FROM`) or are loaded; else None (numpy)."""
+        try:
+            from analysis import _native_loops
+            return _native_loops
+        except ImportError:
+            pass
         if "analysis._compiled_loops" in sys.modules or (
                 self.states >= COMPILED_FROM and importlib.util.find_spec("numba")):
             from analysis import _compiled_loops   # imports numba
@@ -311,7 +327,7 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         if kernels is not None:
             degree = kernels.out_degree(self.packed, self.firing.need,
                                         *touched(self.firing.need),
-                                        *key_index(self.firing.need, self.packed[self.start]))
+                                        *key_index(self.firing.need, self._weights))
         else:
             degree = np.zeros(self.states, dtype=np.int32)
             for r, _ in self._enabled():
@@ -370,8 +386,13 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         # binary search on the keys costs some twenty cache misses (4.5 s, not 1.7)
         table, bits = kernels.paired_index(self.packed, self.states)
         return kernels.backward(self.packed, table, bits, f.need, f.take, f.give,
-                                *self._touched, *key_index(f.give, self.packed[self.start]),
+                                *self._touched, *key_index(f.give, self._weights),
                                 seen, frontier)
+
+    @cached_property
+    def _weights(self) -> np.ndarray:
+        """How often each place is marked here, on a sample (:func:`place_weights`)."""
+        return place_weights(self.packed)
 
     @cached_property
     def _touched(self) -> tuple[np.ndarray, np.ndarray]:

@@ -101,7 +101,7 @@ def test_every_explorer_gives_the_same_answer(task_pnml):
     (["--initial", "B,NOPE"], "no place NOPE"),
     (["--initial", "B*x"], "a count is a natural number"),
     (["--max-states", "0"], "0"),
-    (["--explorer", "fast"], "'fast' is not one of 'auto', 'compiled', 'packed', 'counters', 'general'"),
+    (["--explorer", "fast"], "'fast' is not one of 'auto', 'native', 'compiled', 'packed', 'counters', 'general'"),
 ])
 def test_bad_options_are_one_line(task_pnml, args, message):
     out = run("analyze", task_pnml, *args)

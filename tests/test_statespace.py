@@ -1,15 +1,20 @@
 """Reachability and coverability graphs, on nets whose answers are known by hand.
 
 One suite for every explorer: the tests take the ``backend`` fixture, so
-each runs against the compiled, the numpy and the general explorer (the
+each runs against the native (C), the compiled (numba), the numpy, the
+counter and the general explorer (the
 safe-net ones hand over to the general one on nets that are not safe,
 which these tests cover too).
 """
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
 from analysis import compiledspace, generalspace, packedspace, statespace
+from analysis.explorers import EXPLORERS
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, MemoryLimit, explore
 from analysis.zoo import cycles, kanban
@@ -19,12 +24,27 @@ from mcl2pnml.core.structure import structure
 from strategies import nets
 
 
-SAFE_BACKENDS = ("compiled", "packed")
+SAFE_BACKENDS = ("native", "compiled", "packed")
+
+
+def runnable(name: str) -> str:
+    """``name``, or a skip saying why that explorer cannot run on this machine."""
+    if name != "auto" and not EXPLORERS[name].can_run():
+        pytest.skip(f"the {name} explorer cannot run here: {EXPLORERS[name].doc}; "
+                    + ("mcl2pnml was installed without a C compiler" if name == "native"
+                       else "numba is not installed"))
+    return name
 
 
 @pytest.fixture(params=[b for b in statespace.BACKENDS if b != "auto"])
 def backend(request):
-    return request.param
+    return runnable(request.param)
+
+
+#: The safe-net explorers as parameters, each skipped with its reason where it cannot run.
+SAFE = [pytest.param(b, marks=pytest.mark.skipif(not EXPLORERS[b].can_run(),
+                                                 reason=f"the {b} explorer cannot run here"))
+        for b in SAFE_BACKENDS]
 
 
 def test_independent_cycles_have_4_to_the_k_markings(backend):
@@ -123,7 +143,7 @@ def test_graph_and_paths(backend):
     assert space.path_to(2) == ["c0t0", "c0t1"]
 
 
-@pytest.mark.parametrize("backend", SAFE_BACKENDS)
+@pytest.mark.parametrize("backend", SAFE)
 @settings(max_examples=80, deadline=None)
 @given(nets(max_places=5, max_transitions=4))
 def test_the_bitset_explorers_agree_with_the_general_one(backend, net):
@@ -206,7 +226,7 @@ def _same_space(fast, slow):
     assert dict(zip(fast.markings, fast.can_reach(goal_fast))) == reach_slow
 
 
-@pytest.mark.parametrize("backend", SAFE_BACKENDS)
+@pytest.mark.parametrize("backend", SAFE)
 @settings(max_examples=120, deadline=None)
 @given(spread_safe_nets())
 def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
@@ -217,7 +237,7 @@ def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
     _same_space(fast, slow)
 
 
-@pytest.mark.parametrize("backend", SAFE_BACKENDS)
+@pytest.mark.parametrize("backend", SAFE)
 def test_markings_that_share_a_key_fall_back_to_exact_exploration(backend, monkeypatch):
     """A key collision (once in 2^64 pairs) must never merge two markings.
 
@@ -243,7 +263,7 @@ def test_markings_that_share_a_key_fall_back_to_exact_exploration(backend, monke
                                                     tuple(fooled.markings[0]), 100, None))
 
 
-@pytest.mark.parametrize("backend", SAFE_BACKENDS)
+@pytest.mark.parametrize("backend", SAFE)
 def test_a_second_token_hands_over_to_the_general_explorer(backend):
     b = NetBuilder("two tokens later")
     b.place("p", 1)
@@ -264,7 +284,32 @@ def test_the_compiled_explorer_reports_progress_between_slices(monkeypatch):
     assert [n for n, _ in calls] == sorted(n for n, _ in calls) and calls[-1] == (64, 0)
 
 
+def test_the_native_explorer_reports_progress_between_slices(monkeypatch):
+    runnable("native")
+    monkeypatch.setattr(compiledspace, "SLICE", 4)
+    calls = []
+    space = explore(cycles(3), backend="native", progress=lambda n, f: calls.append((n, f)))
+    assert space.states == 64 and len(calls) >= 64 // 4 and calls[-1] == (64, 0)
+
+
+def test_auto_takes_the_native_explorer_where_it_was_built(monkeypatch):
+    runnable("native")
+    used = []
+    monkeypatch.setattr(compiledspace, "explore_native",
+                        lambda *a, _real=compiledspace.explore_native: used.append(1) or _real(*a))
+    assert explore(cycles(1)).states == 4 and used == [1]
+
+
+def test_without_its_c_code_the_native_explorer_says_what_it_needs(monkeypatch):
+    monkeypatch.setattr(compiledspace, "native_available", lambda: False)
+    with pytest.raises(statespace.Mcl2PnmlError, match="the native explorer needs its C code, "
+                       "built when mcl2pnml is installed on a machine with a C compiler"):
+        explore(cycles(1), backend="native")
+    assert explore(cycles(2)).states == 16   # auto goes on without it
+
+
 def test_auto_leaves_the_numpy_explorer_for_the_compiled_one_past_the_handover(monkeypatch):
+    monkeypatch.setattr(compiledspace, "native_available", lambda: False)
     monkeypatch.setattr(compiledspace, "_ran", False)   # as in a fresh process
     monkeypatch.setattr(statespace, "HANDOVER", 10)
     used = []
@@ -276,7 +321,7 @@ def test_auto_leaves_the_numpy_explorer_for_the_compiled_one_past_the_handover(m
 
 def test_an_unknown_explorer_is_named_with_the_known_ones():
     with pytest.raises(statespace.Mcl2PnmlError, match="unknown explorer 'fast'; known: auto, "
-                       "compiled, packed, counters, general"):
+                       "native, compiled, packed, counters, general"):
         explore(cycles(1), backend="fast")
 
 
@@ -434,3 +479,13 @@ def test_compiled_and_numpy_answers_of_a_packed_state_space_agree(net, data):
         packedmarkings.COMPILED_FROM = old
     # the edge list is numpy's own firing
     assert compiled_degree == np.bincount(space.src, minlength=space.states).tolist()
+
+
+def test_with_its_c_code_a_safe_net_is_analysed_without_loading_numba():
+    """Loading numba costs half a second and some 120 MB: a safe net needs none of it."""
+    runnable("native")
+    code = ("import sys; from analysis.zoo import cycles; from analysis.report import analyze; "
+            "r = analyze(cycles(8)); print(r['states'], 'numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, check=True)
+    assert out.stdout.split() == [str(4 ** 8), "False"]

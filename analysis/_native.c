@@ -1,0 +1,523 @@
+/* The loops of the safe-net explorer in C: analysis/_native_loops.py's machine code.
+ *
+ * The same loops as analysis/_compiled_loops.py (read its docstrings for the
+ * algorithms: a breadth-first queue of markings packed into 64-bit words, an
+ * open-addressing hash set with linear probing, each transition keyed on one
+ * place it needs), built once when mcl2pnml is installed instead of compiled
+ * by numba in every new process: loading them costs a millisecond and a few
+ * hundred kilobytes, where numba's runtime costs half a second and some
+ * 120 MB. The shared test suite runs both on the same nets.
+ *
+ * The functions take numpy arrays through the buffer protocol and never
+ * allocate them: when the queue or the table is full, a step returns
+ * QUEUE_FULL or TABLE_FULL before expanding the marking at the head, and the
+ * Python side grows the array and calls again, so every byte is a numpy array
+ * that the memory budget sees.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <stdint.h>
+#include <string.h>
+
+enum { GOING = 0, NOT_SAFE = 1, LIMIT = 2, QUEUE_FULL = 3, TABLE_FULL = 4 };
+
+static const uint64_t GOLDEN = 0x9E3779B97F4A7C15ULL;
+
+static inline int64_t slot_one(uint64_t m, int bits) {
+    return (int64_t)((m * GOLDEN) >> (64 - bits));
+}
+
+/* A row's 64-bit hash: its top bits (times GOLDEN) choose the slot, its low 32 bits are
+ * the fingerprint kept in the slot. */
+static inline uint64_t hash_row(const uint64_t *row, int64_t words) {
+    uint64_t h = 0;
+    for (int64_t w = 0; w < words; w++) {
+        h = (h ^ row[w]) * GOLDEN;
+        h ^= h >> 29;
+    }
+    return h;
+}
+
+static inline int64_t slot_of_hash(uint64_t h, int bits) {
+    return (int64_t)((h * GOLDEN) >> (64 - bits));
+}
+
+static inline int64_t slot_row(const uint64_t *row, int64_t words, int bits) {
+    return slot_of_hash(hash_row(row, words), bits);
+}
+
+/* A slot of a table of rows: the fingerprint in the high half, the position + 1 in the
+ * low half (0: free). A probe reads the row itself only when the fingerprints agree, so
+ * an unsuccessful search (six probes at 70% full) costs one cache miss, not six. */
+static inline uint64_t entry(uint64_t h, int64_t position) {
+    return ((h & 0xFFFFFFFFULL) << 32) | (uint64_t)(position + 1);
+}
+
+/* The transitions keyed on the marked places of row (and the free ones), into out. */
+static inline int64_t candidates(const uint64_t *row, int64_t words, const int64_t *key_ptr,
+                                 const int64_t *key_t, const int64_t *free_t, int64_t nfree,
+                                 int64_t *out) {
+    int64_t n = 0;
+    for (int64_t i = 0; i < nfree; i++)
+        out[n++] = free_t[i];
+    for (int64_t w = 0; w < words; w++) {
+        uint64_t x = row[w];
+        while (x) {
+            int64_t p = w * 64 + __builtin_ctzll(x);
+            x &= x - 1;
+            for (int64_t k = key_ptr[p]; k < key_ptr[p + 1]; k++)
+                out[n++] = key_t[k];
+        }
+    }
+    return n;
+}
+
+/* -- arguments ------------------------------------------------------------------------- */
+
+/* The buffers of one call, released together whatever happens. */
+typedef struct {
+    Py_buffer views[16];
+    int count;
+} Buffers;
+
+static void release(Buffers *b) {
+    for (int i = 0; i < b->count; i++)
+        PyBuffer_Release(&b->views[i]);
+    b->count = 0;
+}
+
+/* The data of a C-contiguous buffer of `itemsize`-byte items; NULL and an exception if not. */
+static void *data_of(Buffers *b, PyObject *obj, Py_ssize_t itemsize, int writable) {
+    Py_buffer *v = &b->views[b->count];
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, v, flags) < 0)
+        return NULL;
+    b->count++;
+    if (v->itemsize != itemsize) {
+        PyErr_Format(PyExc_TypeError, "expected items of %zd bytes, got %zd", itemsize,
+                     v->itemsize);
+        return NULL;
+    }
+    return v->buf;
+}
+
+static Py_ssize_t items_of(Buffers *b) { return b->views[b->count - 1].len / b->views[b->count - 1].itemsize; }
+
+/* The masks every loop reads, in the order of the Python signatures. */
+typedef struct {
+    const uint64_t *need, *keep, *give;
+    const int64_t *need_ptr, *need_word, *touch_ptr, *touch_word, *key_ptr, *key_t, *free_t;
+    int64_t transitions, words, nfree;
+} Masks;
+
+/* -- exploring ------------------------------------------------------------------------- */
+
+static inline int enables(const uint64_t *row, const Masks *m, int64_t t) {
+    for (int64_t k = m->need_ptr[t]; k < m->need_ptr[t + 1]; k++) {
+        int64_t w = m->need_word[k];
+        uint64_t need = m->need[t * m->words + w];
+        if ((row[w] & need) != need)
+            return 0;
+    }
+    return 1;
+}
+
+/* Position of row among queue's rows that table (entries, 0 free) holds, or -1 with the
+ * free *slot and the row's hash *h. */
+static inline int64_t find(const uint64_t *queue, int64_t words, const uint64_t *table, int bits,
+                           const uint64_t *row, int64_t *slot, uint64_t *h) {
+    int64_t mask = ((int64_t)1 << bits) - 1;
+    *h = hash_row(row, words);
+    uint64_t fp = *h & 0xFFFFFFFFULL;
+    int64_t i = slot_of_hash(*h, bits);
+    while (table[i] != 0) {
+        if ((table[i] >> 32) == fp) {
+            int64_t j = (int64_t)(table[i] & 0xFFFFFFFFULL) - 1;
+            if (memcmp(queue + j * words, row, (size_t)words * 8) == 0)
+                return j;
+        }
+        i = (i + 1) & mask;
+    }
+    *slot = i;
+    return -1;
+}
+
+static PyObject *py_step_words(PyObject *self, PyObject *args) {
+    PyObject *o[14];
+    long long count, head, max_states, budget;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOLLOiLL", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5],
+                          &o[6], &o[7], &o[8], &o[9], &o[10], &count, &head, &o[11], &bits,
+                          &max_states, &budget))
+        return NULL;
+    Buffers b = {.count = 0};
+    Masks m;
+    uint64_t *queue, *table;
+    if (!(m.need = data_of(&b, o[0], 8, 0))) goto fail;
+    m.transitions = items_of(&b);
+    if (!(m.keep = data_of(&b, o[1], 8, 0)) || !(m.give = data_of(&b, o[2], 8, 0))
+        || !(m.need_ptr = data_of(&b, o[3], 8, 0)) || !(m.need_word = data_of(&b, o[4], 8, 0))
+        || !(m.touch_ptr = data_of(&b, o[5], 8, 0)) || !(m.touch_word = data_of(&b, o[6], 8, 0))
+        || !(m.key_ptr = data_of(&b, o[7], 8, 0)) || !(m.key_t = data_of(&b, o[8], 8, 0))
+        || !(m.free_t = data_of(&b, o[9], 8, 0)))
+        goto fail;
+    m.nfree = items_of(&b);
+    if (!(queue = data_of(&b, o[10], 8, 1))) goto fail;
+    m.words = b.views[b.count - 1].ndim == 2 ? b.views[b.count - 1].shape[1] : 1;
+    int64_t capacity = items_of(&b) / m.words;
+    m.transitions /= m.words;
+    if (!(table = data_of(&b, o[11], 8, 1))) goto fail;
+    int64_t table_size = items_of(&b);
+
+    int code = GOING;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
+    uint64_t *next = PyMem_Malloc(8 * (size_t)m.words);
+    if (!cand || !next) { PyMem_Free(cand); PyMem_Free(next); PyErr_NoMemory(); goto fail; }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t stop = head + budget, words = m.words;
+    while (head < count && head < stop) {
+        /* room for every successor of the head first, so that no marking is half expanded */
+        if (count + m.transitions > capacity) { code = QUEUE_FULL; break; }
+        if (10 * (count + m.transitions) > 7 * table_size) { code = TABLE_FULL; break; }
+        const uint64_t *row = queue + head * words;
+        int64_t n = candidates(row, words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
+        for (int64_t c = 0; c < n && code == GOING; c++) {
+            int64_t t = cand[c];
+            if (!enables(row, &m, t))
+                continue;
+            memcpy(next, row, 8 * (size_t)words);
+            for (int64_t k = m.touch_ptr[t]; k < m.touch_ptr[t + 1]; k++) {
+                int64_t w = m.touch_word[k];
+                uint64_t rest = next[w] & m.keep[t * words + w];
+                if (rest & m.give[t * words + w]) { code = NOT_SAFE; break; }
+                next[w] = rest | m.give[t * words + w];
+            }
+            if (code != GOING)
+                break;
+            int64_t slot;
+            uint64_t h;
+            if (find(queue, words, table, bits, next, &slot, &h) >= 0)
+                continue;
+            if (count >= max_states) { code = LIMIT; break; }
+            memcpy(queue + count * words, next, 8 * (size_t)words);
+            table[slot] = entry(h, count++);
+        }
+        if (code != GOING)
+            break;
+        head++;
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(cand);
+    PyMem_Free(next);
+    release(&b);
+    return Py_BuildValue("LLi", (long long)count, (long long)head, code);
+fail:
+    release(&b);
+    return NULL;
+}
+
+static PyObject *py_step_one_word(PyObject *self, PyObject *args) {
+    PyObject *o[8];
+    long long count, head, max_states, budget;
+    int bits, zero_seen;
+    if (!PyArg_ParseTuple(args, "OOOOOOOLLOipLL", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5],
+                          &o[6], &count, &head, &o[7], &bits, &zero_seen, &max_states, &budget))
+        return NULL;
+    Buffers b = {.count = 0};
+    const uint64_t *need, *keep, *give;
+    const int64_t *key_ptr, *key_t, *free_t;
+    uint64_t *queue, *table;
+    if (!(need = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t transitions = items_of(&b);
+    if (!(keep = data_of(&b, o[1], 8, 0)) || !(give = data_of(&b, o[2], 8, 0))
+        || !(key_ptr = data_of(&b, o[3], 8, 0)) || !(key_t = data_of(&b, o[4], 8, 0))
+        || !(free_t = data_of(&b, o[5], 8, 0)))
+        goto fail;
+    int64_t nfree = items_of(&b);
+    if (!(queue = data_of(&b, o[6], 8, 1))) goto fail;
+    int64_t capacity = items_of(&b);
+    if (!(table = data_of(&b, o[7], 8, 1))) goto fail;
+    int64_t table_size = items_of(&b);
+
+    int code = GOING;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(transitions + 1));
+    if (!cand) { PyErr_NoMemory(); goto fail; }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t stop = head + budget, mask = ((int64_t)1 << bits) - 1;
+    while (head < count && head < stop) {
+        if (count + transitions > capacity) { code = QUEUE_FULL; break; }
+        if (10 * (count + transitions) > 7 * table_size) { code = TABLE_FULL; break; }
+        uint64_t m = queue[head];
+        int64_t n = candidates(&m, 1, key_ptr, key_t, free_t, nfree, cand);
+        for (int64_t c = 0; c < n; c++) {
+            int64_t t = cand[c];
+            if ((m & need[t]) != need[t])
+                continue;
+            uint64_t rest = m & keep[t];
+            if (rest & give[t]) { code = NOT_SAFE; break; }
+            uint64_t next = rest | give[t];
+            int64_t i = 0;
+            if (next == 0) {
+                /* the empty marking cannot be told from a free slot: remembered apart */
+                if (zero_seen)
+                    continue;
+            } else {
+                i = slot_one(next, bits);
+                while (table[i] != 0 && table[i] != next)
+                    i = (i + 1) & mask;
+                if (table[i] == next)
+                    continue;
+            }
+            if (count >= max_states) { code = LIMIT; break; }
+            if (next == 0)
+                zero_seen = 1;
+            else
+                table[i] = next;
+            queue[count++] = next;
+        }
+        if (code != GOING)
+            break;
+        head++;
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(cand);
+    release(&b);
+    return Py_BuildValue("LLNi", (long long)count, (long long)head, PyBool_FromLong(zero_seen),
+                         code);
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* rehash(queue, count, table, bits, values): the first count rows of queue into table (all
+ * 0, free): the markings themselves (values: one word), or their entries. */
+static PyObject *py_rehash(PyObject *self, PyObject *args) {
+    PyObject *oq, *ot;
+    long long count;
+    int bits, by_value;
+    if (!PyArg_ParseTuple(args, "OLOip", &oq, &count, &ot, &bits, &by_value))
+        return NULL;
+    Buffers b = {.count = 0};
+    uint64_t *queue, *table;
+    if (!(queue = data_of(&b, oq, 8, 0))) goto fail;
+    int64_t words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(table = data_of(&b, ot, 8, 1))) goto fail;
+    int64_t mask = ((int64_t)1 << bits) - 1;
+    for (int64_t q = 0; q < count; q++) {
+        int64_t i;
+        uint64_t value;
+        if (by_value) {
+            if ((value = queue[q]) == 0) continue;
+            i = slot_one(value, bits);
+        } else {
+            uint64_t h = hash_row(queue + q * words, words);
+            i = slot_of_hash(h, bits);
+            value = entry(h, q);
+        }
+        while (table[i] != 0) i = (i + 1) & mask;
+        table[i] = value;
+    }
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* -- the explored state space, asked again --------------------------------------------- */
+
+/* out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t, degree) */
+static PyObject *py_out_degree(PyObject *self, PyObject *args) {
+    PyObject *o[8];
+    if (!PyArg_ParseTuple(args, "OOOOOOOO", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
+                          &o[7]))
+        return NULL;
+    Buffers b = {.count = 0};
+    Masks m;
+    const uint64_t *packed;
+    int32_t *degree;
+    if (!(packed = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t states = b.views[0].ndim >= 1 ? b.views[0].shape[0] : 0;
+    m.words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(m.need = data_of(&b, o[1], 8, 0))) goto fail;
+    m.transitions = items_of(&b) / m.words;
+    if (!(m.need_ptr = data_of(&b, o[2], 8, 0)) || !(m.need_word = data_of(&b, o[3], 8, 0))
+        || !(m.key_ptr = data_of(&b, o[4], 8, 0)) || !(m.key_t = data_of(&b, o[5], 8, 0))
+        || !(m.free_t = data_of(&b, o[6], 8, 0)))
+        goto fail;
+    m.nfree = items_of(&b);
+    if (!(degree = data_of(&b, o[7], 4, 1))) goto fail;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
+    if (!cand) { PyErr_NoMemory(); goto fail; }
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t q = 0; q < states; q++) {
+        const uint64_t *row = packed + q * m.words;
+        int64_t n = candidates(row, m.words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
+        int32_t d = 0;
+        for (int64_t c = 0; c < n; c++)
+            d += enables(row, &m, cand[c]);
+        degree[q] = d;
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(cand);
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* paired_index(packed, table, bits): the entries of packed's rows, for the backward search. */
+static PyObject *py_paired_index(PyObject *self, PyObject *args) {
+    PyObject *op, *ot;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOi", &op, &ot, &bits))
+        return NULL;
+    Buffers b = {.count = 0};
+    const uint64_t *packed;
+    uint64_t *table;
+    if (!(packed = data_of(&b, op, 8, 0))) goto fail;
+    int64_t states = b.views[0].shape[0], words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(table = data_of(&b, ot, 8, 1))) goto fail;
+    int64_t mask = ((int64_t)1 << bits) - 1;
+    for (int64_t q = 0; q < states; q++) {
+        uint64_t h = hash_row(packed + q * words, words);
+        int64_t i = slot_of_hash(h, bits);
+        while (table[i] != 0) i = (i + 1) & mask;
+        table[i] = entry(h, q);
+    }
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* backward(packed, pairs, bits, need, take, give, touch_ptr, touch_word, key_ptr, key_t,
+ *          free_t, seen, frontier): mark in seen every position that reaches the frontier. */
+static PyObject *py_backward(PyObject *self, PyObject *args) {
+    PyObject *o[13];
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOiOOOOOOOOOO", &o[0], &o[1], &bits, &o[2], &o[3], &o[4],
+                          &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11]))
+        return NULL;
+    Buffers b = {.count = 0};
+    const uint64_t *packed, *need, *take, *give, *pairs;
+    const int64_t *touch_ptr, *touch_word, *key_ptr, *key_t, *free_t, *frontier;
+    uint8_t *seen;
+    if (!(packed = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t states = b.views[0].shape[0], words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(pairs = data_of(&b, o[1], 8, 0)) || !(need = data_of(&b, o[2], 8, 0))) goto fail;
+    int64_t transitions = items_of(&b) / words;
+    if (!(take = data_of(&b, o[3], 8, 0)) || !(give = data_of(&b, o[4], 8, 0))
+        || !(touch_ptr = data_of(&b, o[5], 8, 0)) || !(touch_word = data_of(&b, o[6], 8, 0))
+        || !(key_ptr = data_of(&b, o[7], 8, 0)) || !(key_t = data_of(&b, o[8], 8, 0))
+        || !(free_t = data_of(&b, o[9], 8, 0)))
+        goto fail;
+    int64_t nfree = items_of(&b);
+    if (!(seen = data_of(&b, o[10], 1, 1)) || !(frontier = data_of(&b, o[11], 8, 0))) goto fail;
+    int64_t nfrontier = items_of(&b);
+    int64_t *todo = PyMem_Malloc(sizeof(int64_t) * (size_t)(states + 1));
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(transitions + 1));
+    uint64_t *before = PyMem_Malloc(8 * (size_t)words);
+    if (!todo || !cand || !before) {
+        PyMem_Free(todo); PyMem_Free(cand); PyMem_Free(before);
+        PyErr_NoMemory();
+        goto fail;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t top = 0, head = 0;
+    for (int64_t i = 0; i < nfrontier; i++)
+        todo[top++] = frontier[i];
+    /* first in, first out: the lookups of consecutive markings overlap in the processor */
+    while (head < top) {
+        int64_t a = todo[head++];
+        const uint64_t *after = packed + a * words;
+        memcpy(before, after, 8 * (size_t)words);
+        int64_t n = candidates(after, words, key_ptr, key_t, free_t, nfree, cand);
+        for (int64_t c = 0; c < n; c++) {
+            int64_t t = cand[c];
+            int ok = 1;
+            for (int64_t k = touch_ptr[t]; k < touch_ptr[t + 1]; k++) {
+                int64_t w = touch_word[k];
+                uint64_t g = give[t * words + w], tk = take[t * words + w],
+                         nd = need[t * words + w], x = after[w];
+                if ((x & g) != g) { ok = 0; break; }
+                uint64_t y = (x & ~g) | tk;
+                if ((y & nd) != nd || ((y & ~tk) | g) != x) { ok = 0; break; }
+                before[w] = y;
+            }
+            if (ok) {
+                int64_t slot;
+                uint64_t h;
+                int64_t j = find(packed, words, pairs, bits, before, &slot, &h);
+                if (j >= 0 && !seen[j]) {
+                    seen[j] = 1;
+                    todo[top++] = j;
+                }
+            }
+            for (int64_t k = touch_ptr[t]; k < touch_ptr[t + 1]; k++)
+                before[touch_word[k]] = after[touch_word[k]];
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(todo);
+    PyMem_Free(cand);
+    PyMem_Free(before);
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+static PyObject *py_slot_of_words(PyObject *self, PyObject *args) {
+    PyObject *o;
+    int bits;
+    if (!PyArg_ParseTuple(args, "Oi", &o, &bits))
+        return NULL;
+    Buffers b = {.count = 0};
+    const uint64_t *row = data_of(&b, o, 8, 0);
+    if (!row) { release(&b); return NULL; }
+    int64_t slot = slot_row(row, items_of(&b), bits);
+    release(&b);
+    return PyLong_FromLongLong(slot);
+}
+
+static PyObject *py_slot_of_word(PyObject *self, PyObject *args) {
+    unsigned long long m;
+    int bits;
+    if (!PyArg_ParseTuple(args, "Ki", &m, &bits))
+        return NULL;
+    return PyLong_FromLongLong(slot_one((uint64_t)m, bits));
+}
+
+static PyMethodDef methods[] = {
+    {"step_words", py_step_words, METH_VARARGS, "Expand markings of several words."},
+    {"step_one_word", py_step_one_word, METH_VARARGS, "Expand markings of one word."},
+    {"rehash", py_rehash, METH_VARARGS, "Fill a free table with the queue's first rows."},
+    {"out_degree", py_out_degree, METH_VARARGS, "Enabled transitions per marking."},
+    {"paired_index", py_paired_index, METH_VARARGS, "The backward search's table."},
+    {"backward", py_backward, METH_VARARGS, "Markings that reach the frontier."},
+    {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
+    {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, "analysis._native",
+    "The safe-net explorer's loops in C (see analysis/_native_loops.py).", -1, methods,
+};
+
+PyMODINIT_FUNC PyInit__native(void) {
+    PyObject *m = PyModule_Create(&module);
+    if (m && (PyModule_AddIntConstant(m, "GOING", GOING) < 0
+              || PyModule_AddIntConstant(m, "NOT_SAFE", NOT_SAFE) < 0
+              || PyModule_AddIntConstant(m, "LIMIT", LIMIT) < 0
+              || PyModule_AddIntConstant(m, "QUEUE_FULL", QUEUE_FULL) < 0
+              || PyModule_AddIntConstant(m, "TABLE_FULL", TABLE_FULL) < 0)) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}

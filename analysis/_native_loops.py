@@ -1,0 +1,117 @@
+"""The loops of :mod:`analysis.compiledspace` in C (``analysis/_native.c``), with the
+signatures of :mod:`analysis._compiled_loops`, so that either runs the same explorer.
+
+The C module is built when mcl2pnml is installed (an optional extension: a
+machine without a C compiler installs without it, and :func:`available`
+says so). It never allocates the arrays: a step that finds the queue or
+the table too small for the next marking's successors stops before that
+marking, and the functions here grow the array, numpy's like every other,
+and go on; so the two modules take and return the same values.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from analysis import _native as c
+
+GOING, NOT_SAFE, LIMIT = c.GOING, c.NOT_SAFE, c.LIMIT
+
+
+def slot_of_word(m, bits: int) -> int:
+    return c.slot_of_word(int(m), bits)
+
+
+def slot_of_words(row: np.ndarray, bits: int) -> int:
+    return c.slot_of_words(np.ascontiguousarray(row, dtype=np.uint64), bits)
+
+
+def _contiguous(*arrays: np.ndarray) -> list[np.ndarray]:
+    return [np.ascontiguousarray(a) for a in arrays]
+
+
+def _grown_queue(queue: np.ndarray, count: int, room: int) -> np.ndarray:
+    size = len(queue)
+    while size < count + room:
+        size *= 2
+    grown = np.empty((size, *queue.shape[1:]), dtype=queue.dtype)
+    grown[:count] = queue[:count]
+    return grown
+
+
+def start_table(m0: np.ndarray, bits: int) -> np.ndarray:
+    """The table of :func:`step_words` holding ``m0`` alone (unlike the numba loops': each
+    slot is a fingerprint and a position, 0 free)."""
+    table = np.zeros(1 << bits, dtype=np.uint64)
+    c.rehash(np.ascontiguousarray(m0, dtype=np.uint64).reshape(1, -1), 1, table, bits, False)
+    return table
+
+
+def _grown_table(queue: np.ndarray, count: int, room: int, bits: int,
+                 by_value: bool) -> tuple[np.ndarray, int]:
+    while 10 * (count + room) > 7 << bits:
+        bits += 1
+    table = np.zeros(1 << bits, dtype=np.uint64)
+    c.rehash(queue, count, table, bits, by_value)
+    return table, bits
+
+
+def step_one_word(need, keep, give, key_ptr, key_t, free_t, queue, count, head, table, bits,
+                  zero_seen, max_states, budget):
+    """:func:`analysis._compiled_loops.step_one_word`, in C."""
+    masks = _contiguous(need, keep, give, key_ptr, key_t, free_t)
+    room = len(need)
+    while True:
+        count, head, zero_seen, code = c.step_one_word(*masks, queue, count, head, table, bits,
+                                                       zero_seen, max_states, budget)
+        if code == c.QUEUE_FULL:
+            queue = _grown_queue(queue, count, room)
+        elif code == c.TABLE_FULL:
+            table, bits = _grown_table(queue, count, room, bits, True)
+        else:
+            return queue, count, head, table, bits, zero_seen, code
+
+
+def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key_ptr, key_t,
+               free_t, queue, count, head, table, bits, max_states, budget):
+    """:func:`analysis._compiled_loops.step_words`, in C."""
+    masks = _contiguous(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key_ptr,
+                        key_t, free_t)
+    room = len(need)
+    while True:
+        count, head, code = c.step_words(*masks, queue, count, head, table, bits, max_states,
+                                         budget)
+        if code == c.QUEUE_FULL:
+            queue = _grown_queue(queue, count, room)
+        elif code == c.TABLE_FULL:
+            table, bits = _grown_table(queue, count, room, bits, False)
+        else:
+            return queue, count, head, table, bits, code
+
+
+def out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.ndarray:
+    """:func:`analysis._compiled_loops.out_degree`, in C."""
+    degree = np.zeros(len(packed), dtype=np.int32)
+    c.out_degree(*_contiguous(packed, need, need_ptr, need_word, key_ptr, key_t, free_t), degree)
+    return degree
+
+
+def paired_index(queue: np.ndarray, count: int) -> tuple[np.ndarray, int]:
+    """The backward search's table of the first ``count`` rows: entries as in
+    :func:`start_table`, at most 70% full: the fingerprints make a search for a
+    predecessor that is not there cheap, so a table twice as full costs no
+    time and half the memory."""
+    bits = 12
+    while 10 * count > 7 << bits:
+        bits += 1
+    table = np.zeros(1 << bits, dtype=np.uint64)
+    c.paired_index(np.ascontiguousarray(queue[:count]), table, bits)
+    return table, bits
+
+
+def backward(packed, pairs, bits, need, take, give, touch_ptr, touch_word, key_ptr, key_t, free_t,
+             seen, frontier) -> np.ndarray:
+    """:func:`analysis._compiled_loops.backward`, in C."""
+    c.backward(*_contiguous(packed, pairs), bits,
+               *_contiguous(need, take, give, touch_ptr, touch_word, key_ptr, key_t, free_t),
+               seen, np.ascontiguousarray(frontier, dtype=np.int64))
+    return seen
