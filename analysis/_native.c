@@ -122,14 +122,14 @@ static inline int enables(const uint64_t *row, const Masks *m, int64_t t) {
     return 1;
 }
 
-/* Position of row among queue's rows that table (entries, 0 free) holds, or -1 with the
- * free *slot and the row's hash *h. */
-static inline int64_t find(const uint64_t *queue, int64_t words, const uint64_t *table, int bits,
-                           const uint64_t *row, int64_t *slot, uint64_t *h) {
-    int64_t mask = ((int64_t)1 << bits) - 1;
-    *h = hash_row(row, words);
-    uint64_t fp = *h & 0xFFFFFFFFULL;
-    int64_t i = slot_of_hash(*h, bits);
+/* Markings are looked up in batches: the successors (or predecessors) of one marking are
+ * built and hashed first and their slots fetched ahead (__builtin_prefetch), then probed,
+ * so that the cache misses of a batch overlap instead of following one another. */
+#define BATCH 32
+
+static inline int64_t probe(const uint64_t *queue, int64_t words, const uint64_t *table,
+                            int64_t mask, const uint64_t *row, uint64_t fp, int64_t i,
+                            int64_t *slot) {
     while (table[i] != 0) {
         if ((table[i] >> 32) == fp) {
             int64_t j = (int64_t)(table[i] & 0xFFFFFFFFULL) - 1;
@@ -140,6 +140,28 @@ static inline int64_t find(const uint64_t *queue, int64_t words, const uint64_t 
     }
     *slot = i;
     return -1;
+}
+
+/* The second stage of a batch: where the home slot's fingerprint agrees, fetch the
+ * marking that the probe will compare (the slots were fetched in the first stage). */
+static inline void prefetch_rows(const uint64_t *queue, int64_t words, const uint64_t *table,
+                                 int bits, const uint64_t *hashes, int nb) {
+    for (int i = 0; i < nb; i++) {
+        uint64_t e = table[slot_of_hash(hashes[i], bits)];
+        if (e != 0 && (e >> 32) == (hashes[i] & 0xFFFFFFFFULL))
+            __builtin_prefetch(queue + ((int64_t)(e & 0xFFFFFFFFULL) - 1) * words);
+    }
+}
+
+/* Position of row among queue's rows that table (entries, 0 free) holds, or -1 with the
+ * free *slot and the row's hash *h. */
+static inline int64_t find(const uint64_t *queue, int64_t words, const uint64_t *table, int bits,
+                           const uint64_t *row, int64_t *slot, uint64_t *h) {
+    int64_t mask = ((int64_t)1 << bits) - 1;
+    *h = hash_row(row, words);
+    uint64_t fp = *h & 0xFFFFFFFFULL;
+    int64_t i = slot_of_hash(*h, bits);
+    return probe(queue, words, table, mask, row, fp, i, slot);
 }
 
 static PyObject *py_step_words(PyObject *self, PyObject *args) {
@@ -171,7 +193,7 @@ static PyObject *py_step_words(PyObject *self, PyObject *args) {
 
     int code = GOING;
     int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
-    uint64_t *next = PyMem_Malloc(8 * (size_t)m.words);
+    uint64_t *next = PyMem_Malloc(8 * BATCH * (size_t)m.words), hashes[BATCH];
     if (!cand || !next) { PyMem_Free(cand); PyMem_Free(next); PyErr_NoMemory(); goto fail; }
     Py_BEGIN_ALLOW_THREADS
     int64_t stop = head + budget, words = m.words;
@@ -181,26 +203,38 @@ static PyObject *py_step_words(PyObject *self, PyObject *args) {
         if (10 * (count + m.transitions) > 7 * table_size) { code = TABLE_FULL; break; }
         const uint64_t *row = queue + head * words;
         int64_t n = candidates(row, words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
-        for (int64_t c = 0; c < n && code == GOING; c++) {
-            int64_t t = cand[c];
-            if (!enables(row, &m, t))
-                continue;
-            memcpy(next, row, 8 * (size_t)words);
-            for (int64_t k = m.touch_ptr[t]; k < m.touch_ptr[t + 1]; k++) {
-                int64_t w = m.touch_word[k];
-                uint64_t rest = next[w] & m.keep[t * words + w];
-                if (rest & m.give[t * words + w]) { code = NOT_SAFE; break; }
-                next[w] = rest | m.give[t * words + w];
+        int64_t c = 0, tmask = ((int64_t)1 << bits) - 1;
+        while (c < n && code == GOING) {
+            int nb = 0;
+            for (; c < n && nb < BATCH; c++) {
+                int64_t t = cand[c];
+                if (!enables(row, &m, t))
+                    continue;
+                uint64_t *nx = next + nb * words;
+                memcpy(nx, row, 8 * (size_t)words);
+                for (int64_t k = m.touch_ptr[t]; k < m.touch_ptr[t + 1]; k++) {
+                    int64_t w = m.touch_word[k];
+                    uint64_t rest = nx[w] & m.keep[t * words + w];
+                    if (rest & m.give[t * words + w]) { code = NOT_SAFE; break; }
+                    nx[w] = rest | m.give[t * words + w];
+                }
+                if (code != GOING)
+                    break;
+                hashes[nb] = hash_row(nx, words);
+                __builtin_prefetch(&table[slot_of_hash(hashes[nb], bits)]);
+                nb++;
             }
-            if (code != GOING)
-                break;
-            int64_t slot;
-            uint64_t h;
-            if (find(queue, words, table, bits, next, &slot, &h) >= 0)
-                continue;
-            if (count >= max_states) { code = LIMIT; break; }
-            memcpy(queue + count * words, next, 8 * (size_t)words);
-            table[slot] = entry(h, count++);
+            prefetch_rows(queue, words, table, bits, hashes, nb);
+            for (int i = 0; i < nb && code == GOING; i++) {
+                const uint64_t *nx = next + i * words;
+                int64_t slot = -1;
+                if (probe(queue, words, table, tmask, nx, hashes[i] & 0xFFFFFFFFULL,
+                          slot_of_hash(hashes[i], bits), &slot) >= 0)
+                    continue;
+                if (count >= max_states) { code = LIMIT; break; }
+                memcpy(queue + count * words, nx, 8 * (size_t)words);
+                table[slot] = entry(hashes[i], count++);
+            }
         }
         if (code != GOING)
             break;
@@ -247,33 +281,42 @@ static PyObject *py_step_one_word(PyObject *self, PyObject *args) {
     while (head < count && head < stop) {
         if (count + transitions > capacity) { code = QUEUE_FULL; break; }
         if (10 * (count + transitions) > 7 * table_size) { code = TABLE_FULL; break; }
-        uint64_t m = queue[head];
+        uint64_t m = queue[head], batch[BATCH];
         int64_t n = candidates(&m, 1, key_ptr, key_t, free_t, nfree, cand);
-        for (int64_t c = 0; c < n; c++) {
-            int64_t t = cand[c];
-            if ((m & need[t]) != need[t])
-                continue;
-            uint64_t rest = m & keep[t];
-            if (rest & give[t]) { code = NOT_SAFE; break; }
-            uint64_t next = rest | give[t];
-            int64_t i = 0;
-            if (next == 0) {
-                /* the empty marking cannot be told from a free slot: remembered apart */
-                if (zero_seen)
+        int64_t c = 0;
+        while (c < n && code == GOING) {
+            int nb = 0;
+            for (; c < n && nb < BATCH; c++) {
+                int64_t t = cand[c];
+                if ((m & need[t]) != need[t])
                     continue;
-            } else {
-                i = slot_one(next, bits);
-                while (table[i] != 0 && table[i] != next)
-                    i = (i + 1) & mask;
-                if (table[i] == next)
-                    continue;
+                uint64_t rest = m & keep[t];
+                if (rest & give[t]) { code = NOT_SAFE; break; }
+                batch[nb] = rest | give[t];
+                __builtin_prefetch(&table[slot_one(batch[nb], bits)]);
+                nb++;
             }
-            if (count >= max_states) { code = LIMIT; break; }
-            if (next == 0)
-                zero_seen = 1;
-            else
-                table[i] = next;
-            queue[count++] = next;
+            for (int j = 0; j < nb && code == GOING; j++) {
+                uint64_t next = batch[j];
+                int64_t i = 0;
+                if (next == 0) {
+                    /* the empty marking cannot be told from a free slot: remembered apart */
+                    if (zero_seen)
+                        continue;
+                } else {
+                    i = slot_one(next, bits);
+                    while (table[i] != 0 && table[i] != next)
+                        i = (i + 1) & mask;
+                    if (table[i] == next)
+                        continue;
+                }
+                if (count >= max_states) { code = LIMIT; break; }
+                if (next == 0)
+                    zero_seen = 1;
+                else
+                    table[i] = next;
+                queue[count++] = next;
+            }
         }
         if (code != GOING)
             break;
@@ -419,7 +462,7 @@ static PyObject *py_backward(PyObject *self, PyObject *args) {
     int64_t nfrontier = items_of(&b);
     int64_t *todo = PyMem_Malloc(sizeof(int64_t) * (size_t)(states + 1));
     int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(transitions + 1));
-    uint64_t *before = PyMem_Malloc(8 * (size_t)words);
+    uint64_t *before = PyMem_Malloc(8 * BATCH * (size_t)words), hashes[BATCH];
     if (!todo || !cand || !before) {
         PyMem_Free(todo); PyMem_Free(cand); PyMem_Free(before);
         PyErr_NoMemory();
@@ -430,40 +473,145 @@ static PyObject *py_backward(PyObject *self, PyObject *args) {
     for (int64_t i = 0; i < nfrontier; i++)
         todo[top++] = frontier[i];
     /* first in, first out: the lookups of consecutive markings overlap in the processor */
+    int64_t mask = ((int64_t)1 << bits) - 1;
     while (head < top) {
+        if (head + 8 < top)   /* the marking unfired eight turns from now */
+            __builtin_prefetch(packed + todo[head + 8] * words);
         int64_t a = todo[head++];
         const uint64_t *after = packed + a * words;
-        memcpy(before, after, 8 * (size_t)words);
         int64_t n = candidates(after, words, key_ptr, key_t, free_t, nfree, cand);
-        for (int64_t c = 0; c < n; c++) {
-            int64_t t = cand[c];
-            int ok = 1;
-            for (int64_t k = touch_ptr[t]; k < touch_ptr[t + 1]; k++) {
-                int64_t w = touch_word[k];
-                uint64_t g = give[t * words + w], tk = take[t * words + w],
-                         nd = need[t * words + w], x = after[w];
-                if ((x & g) != g) { ok = 0; break; }
-                uint64_t y = (x & ~g) | tk;
-                if ((y & nd) != nd || ((y & ~tk) | g) != x) { ok = 0; break; }
-                before[w] = y;
+        int64_t c = 0;
+        while (c < n) {
+            int nb = 0;
+            for (; c < n && nb < BATCH; c++) {
+                int64_t t = cand[c];
+                uint64_t *bf = before + nb * words;
+                int ok = 1;
+                memcpy(bf, after, 8 * (size_t)words);
+                for (int64_t k = touch_ptr[t]; k < touch_ptr[t + 1]; k++) {
+                    int64_t w = touch_word[k];
+                    uint64_t g = give[t * words + w], tk = take[t * words + w],
+                             nd = need[t * words + w], x = after[w];
+                    if ((x & g) != g) { ok = 0; break; }
+                    uint64_t y = (x & ~g) | tk;
+                    if ((y & nd) != nd || ((y & ~tk) | g) != x) { ok = 0; break; }
+                    bf[w] = y;
+                }
+                if (!ok)
+                    continue;
+                hashes[nb] = hash_row(bf, words);
+                __builtin_prefetch(&pairs[slot_of_hash(hashes[nb], bits)]);
+                nb++;
             }
-            if (ok) {
+            prefetch_rows(packed, words, pairs, bits, hashes, nb);
+            for (int i = 0; i < nb; i++) {
                 int64_t slot;
-                uint64_t h;
-                int64_t j = find(packed, words, pairs, bits, before, &slot, &h);
+                int64_t j = probe(packed, words, pairs, mask, before + i * words,
+                                  hashes[i] & 0xFFFFFFFFULL, slot_of_hash(hashes[i], bits), &slot);
                 if (j >= 0 && !seen[j]) {
                     seen[j] = 1;
                     todo[top++] = j;
                 }
             }
-            for (int64_t k = touch_ptr[t]; k < touch_ptr[t + 1]; k++)
-                before[touch_word[k]] = after[touch_word[k]];
         }
     }
     Py_END_ALLOW_THREADS
     PyMem_Free(todo);
     PyMem_Free(cand);
     PyMem_Free(before);
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* backward_one_word(packed, table, bits, need, take, give, key_ptr, key_t, free_t, seen,
+ *                   frontier): backward for markings of one word, in the slots of a table of
+ * the markings themselves (rehash by value). A predecessor is found by its value alone, one
+ * cache miss, and the marking to unfire next is read in its slot: the search never goes to
+ * the sorted markings until the end, when each position reads its slot's verdict. The empty
+ * marking, which cannot sit in a slot, is the extra slot at the end. */
+static PyObject *py_backward_one_word(PyObject *self, PyObject *args) {
+    PyObject *o[11];
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOiOOOOOOOO", &o[0], &o[1], &bits, &o[2], &o[3], &o[4], &o[5],
+                          &o[6], &o[7], &o[8], &o[9]))
+        return NULL;
+    Buffers b = {.count = 0};
+    const uint64_t *packed, *table, *need, *take, *give;
+    const int64_t *key_ptr, *key_t, *free_t, *frontier;
+    uint8_t *seen;
+    if (!(packed = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t states = items_of(&b);
+    if (!(table = data_of(&b, o[1], 8, 0))) goto fail;
+    int64_t size = items_of(&b), mask = size - 1;
+    if (!(need = data_of(&b, o[2], 8, 0))) goto fail;
+    int64_t transitions = items_of(&b);
+    if (!(take = data_of(&b, o[3], 8, 0)) || !(give = data_of(&b, o[4], 8, 0))
+        || !(key_ptr = data_of(&b, o[5], 8, 0)) || !(key_t = data_of(&b, o[6], 8, 0))
+        || !(free_t = data_of(&b, o[7], 8, 0)))
+        goto fail;
+    int64_t nfree = items_of(&b);
+    if (!(seen = data_of(&b, o[8], 1, 1)) || !(frontier = data_of(&b, o[9], 8, 0))) goto fail;
+    int64_t nfrontier = items_of(&b);
+    uint8_t *in = PyMem_Calloc((size_t)size + 1, 1);
+    int64_t *todo = PyMem_Malloc(sizeof(int64_t) * (size_t)(states + 1));
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(transitions + 1));
+    if (!in || !todo || !cand) {
+        PyMem_Free(in); PyMem_Free(todo); PyMem_Free(cand);
+        PyErr_NoMemory();
+        goto fail;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    /* the slot of a reachable marking (size: the empty one) */
+#define SLOT_OF(value, out) do {                                                 \
+        uint64_t v_ = (value);                                                   \
+        if (v_ == 0) { out = size; break; }                                      \
+        int64_t i_ = slot_one(v_, bits);                                         \
+        while (table[i_] != 0 && table[i_] != v_) i_ = (i_ + 1) & mask;          \
+        out = table[i_] == v_ ? i_ : -1;                                         \
+    } while (0)
+    int64_t top = 0, head = 0;
+    for (int64_t f = 0; f < nfrontier; f++) {
+        int64_t i;
+        SLOT_OF(packed[frontier[f]], i);
+        if (i >= 0 && !in[i]) { in[i] = 1; todo[top++] = i; }
+    }
+    while (head < top) {
+        int64_t a = todo[head++];
+        uint64_t after = a == size ? 0 : table[a], batch[BATCH];
+        int64_t n = candidates(&after, 1, key_ptr, key_t, free_t, nfree, cand), c = 0;
+        while (c < n) {
+            int nb = 0;
+            for (; c < n && nb < BATCH; c++) {
+                int64_t t = cand[c];
+                uint64_t g = give[t], tk = take[t], nd = need[t];
+                if ((after & g) != g) continue;
+                uint64_t y = (after & ~g) | tk;
+                if ((y & nd) != nd || ((y & ~tk) | g) != after) continue;
+                batch[nb++] = y;
+                __builtin_prefetch(&table[slot_one(y, bits)]);
+            }
+            for (int k = 0; k < nb; k++) {
+                int64_t i;
+                SLOT_OF(batch[k], i);
+                if (i >= 0 && !in[i]) { in[i] = 1; todo[top++] = i; }
+            }
+        }
+    }
+    for (int64_t q = 0; q < states; q++) {
+        if (q + 16 < states)
+            __builtin_prefetch(&table[slot_one(packed[q + 16], bits)]);
+        int64_t i;
+        SLOT_OF(packed[q], i);
+        seen[q] = i >= 0 && in[i];
+    }
+#undef SLOT_OF
+    Py_END_ALLOW_THREADS
+    PyMem_Free(in);
+    PyMem_Free(todo);
+    PyMem_Free(cand);
     release(&b);
     Py_RETURN_NONE;
 fail:
@@ -499,6 +647,8 @@ static PyMethodDef methods[] = {
     {"out_degree", py_out_degree, METH_VARARGS, "Enabled transitions per marking."},
     {"paired_index", py_paired_index, METH_VARARGS, "The backward search's table."},
     {"backward", py_backward, METH_VARARGS, "Markings that reach the frontier."},
+    {"backward_one_word", py_backward_one_word, METH_VARARGS,
+     "Markings of one word that reach the frontier."},
     {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
     {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
     {NULL, NULL, 0, NULL},

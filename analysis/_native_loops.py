@@ -104,14 +104,24 @@ def paired_index(queue: np.ndarray, count: int) -> tuple[np.ndarray, int]:
     while 10 * count > 7 << bits:
         bits += 1
     table = np.zeros(1 << bits, dtype=np.uint64)
-    c.paired_index(np.ascontiguousarray(queue[:count]), table, bits)
+    rows = np.ascontiguousarray(queue[:count])
+    if rows.ndim == 2 and rows.shape[1] == 1:
+        c.rehash(rows, count, table, bits, True)   # one word: the markings themselves
+    else:
+        c.paired_index(rows, table, bits)
     return table, bits
 
 
 def backward(packed, pairs, bits, need, take, give, touch_ptr, touch_word, key_ptr, key_t, free_t,
              seen, frontier) -> np.ndarray:
     """:func:`analysis._compiled_loops.backward`, in C."""
+    frontier = np.ascontiguousarray(frontier, dtype=np.int64)
+    if packed.ndim == 2 and packed.shape[1] == 1:
+        # a table of the markings themselves (:func:`paired_index`): its slots are the nodes
+        c.backward_one_word(*_contiguous(packed, pairs), bits,
+                            *_contiguous(need, take, give, key_ptr, key_t, free_t), seen, frontier)
+        return seen
     c.backward(*_contiguous(packed, pairs), bits,
                *_contiguous(need, take, give, touch_ptr, touch_word, key_ptr, key_t, free_t),
-               seen, np.ascontiguousarray(frontier, dtype=np.int64))
+               seen, frontier)
     return seen

@@ -456,29 +456,56 @@ def test_dead_markings_met_before_the_budget_are_counted(backend):
         assert stopped.value.deadlocks == 1
 
 
+def _kernel_modules() -> list:
+    """The compiled loops that answer for a packed state space, each where it can run."""
+    names = [("native", "analysis._native_loops"), ("compiled", "analysis._compiled_loops")]
+    return [pytest.param(module, id=name,
+                         marks=pytest.mark.skipif(not EXPLORERS[name].can_run(),
+                                                  reason=f"the {name} loops cannot run here"))
+            for name, module in names]
+
+
+@pytest.mark.parametrize("module", _kernel_modules())
 @settings(max_examples=80, deadline=None)
 @given(st.one_of(spread_safe_nets(), nets(max_places=6, max_transitions=5)),
        st.data())
-def test_compiled_and_numpy_answers_of_a_packed_state_space_agree(net, data):
-    """Terminal markings and backward reachability: compiled loops and numpy alike."""
+def test_compiled_and_numpy_answers_of_a_packed_state_space_agree(module, net, data):
+    """Terminal markings and backward reachability: the loops in C, numba's and numpy alike."""
+    import importlib
     space = explore(net, max_states=5000, backend="packed")
     if type(space).__name__ != "PackedStateSpace":
         return   # not safe: another explorer's space
     goal = data.draw(st.lists(st.integers(0, space.states - 1), max_size=3))
     numpy_reach = space._can_reach_numpy(goal)
-    from analysis import packedmarkings
-    old = packedmarkings.COMPILED_FROM
-    packedmarkings.COMPILED_FROM = 0
-    try:
-        space.__dict__.pop("out_degree", None)
-        assert space._kernels() is not None
-        assert space.can_reach(goal) == numpy_reach
-        assert space.always_can_reach(goal) == all(numpy_reach)
-        compiled_degree = list(space.out_degree)
-    finally:
-        packedmarkings.COMPILED_FROM = old
+    kernels = importlib.import_module(module)
+    space._kernels = lambda: kernels
+    space.__dict__.pop("out_degree", None)
+    assert space.can_reach(goal) == numpy_reach
+    assert space.always_can_reach(goal) == all(numpy_reach)
+    compiled_degree = list(space.out_degree)
     # the edge list is numpy's own firing
     assert compiled_degree == np.bincount(space.src, minlength=space.states).tolist()
+
+
+@pytest.mark.parametrize("module", _kernel_modules())
+def test_the_empty_marking_is_reached_backwards_too(module):
+    """A table of markings by value has no slot for the empty one: it is kept apart."""
+    import importlib
+    b = NetBuilder("drain")
+    b.place("a", 1)
+    b.place("b")
+    b.transition("t")
+    b.transition("u")
+    b.arc("a", "t")
+    b.arc("t", "b")
+    b.arc("b", "u")   # u empties the net
+    space = explore(b.build(), backend="packed")
+    kernels = importlib.import_module(module)
+    space._kernels = lambda: kernels
+    empty = next(n for n in range(space.states) if not space.marking(n))
+    assert space.states == 3 and space.terminal == [empty]
+    assert space.can_reach([empty]) == [True, True, True]
+    assert space.can_reach([0]) == [n == 0 for n in range(3)]
 
 
 def test_with_its_c_code_a_safe_net_is_analysed_without_loading_numba():
