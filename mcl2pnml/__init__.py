@@ -12,7 +12,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError, NetError, PnmlError
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing, Transition
 from mcl2pnml.core.compose import compose, fuse, union
 from mcl2pnml.io.pnml.reader import load_pnml, parse_pnml
-from mcl2pnml.pipeline import (RunOptions, analyze, check_file, check_source, compile_file,
+from mcl2pnml.pipeline import (analyze, check_file, check_source, compile_file,
                                compile_source, functional_form, load_net, run_mission,
                                save_net, save_pnml, save_show_page, show_nets, template_net,
                                templates, to_pnml_bytes, validate_pnml)
@@ -26,3 +26,11 @@ __all__ = [
     "load_net", "save_net", "template_net", "templates", "validate_pnml", "analyze",
     "run_mission", "RunOptions", "show_nets", "save_show_page",
 ]
+
+
+def __getattr__(name: str):
+    # RunOptions comes with the runtime, imported only by what runs a mission
+    if name == "RunOptions":
+        from mcl2pnml.runtime.session import RunOptions
+        return RunOptions
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

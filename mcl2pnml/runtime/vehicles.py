@@ -12,10 +12,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from mcl2pnml.core.errors import OptionError
-from mcl2pnml.runtime.aal import LiveVehicle, Vehicle
+
+if TYPE_CHECKING:   # the table names the kinds; building one imports what it needs
+    from mcl2pnml.runtime.aal import LiveVehicle, Vehicle
 
 
 @dataclass(frozen=True)
