@@ -4,7 +4,8 @@ Run:  .venv/bin/python -m bench.statespace_peers
 
 Every exploration runs in a fresh interpreter (so that peak memory is its
 own) on a PNML file written by us. Ours explores the reachable markings
-(:func:`analysis.statespace.explore`) with the compiled explorer, and then,
+(:func:`analysis.statespace.explore`) with the native explorer (the loops
+in C; numba's where they were not built), and then,
 timed apart, finds what ``mcl2pnml analyze FILE --state-space`` adds to
 them (terminal markings, deadlock freedom, reusability); "numpy" is our
 numpy explorer on the same file; SNAKES builds its ``StateGraph``; pm4py
@@ -56,12 +57,17 @@ if engine in ("ours", "numpy"):
     from mcl2pnml.core.structure import structure
     from analysis.statespace import explore
     s = structure(load_pnml(path))
-    if engine == "ours":
-        t0 = time.perf_counter(); compiledspace.warm_up()   # numba's code, from its cache
-        extra["load_seconds"] = time.perf_counter() - t0
+    # ours: the loops in C where they were built (what `analyze` takes), else numba's;
+    # loading them is timed apart
+    t0 = time.perf_counter()
+    backend = ("native" if compiledspace.native_available() else "compiled"
+               ) if engine == "ours" else "packed"
+    if backend == "compiled":
+        compiledspace.warm_up()   # numba's code, from its cache
+    extra["load_seconds"] = time.perf_counter() - t0
+    extra["backend"] = backend
     before = rss(); t0 = time.perf_counter()
-    space = explore(s, max_states=50_000_000,
-                    backend="compiled" if engine == "ours" else "packed")
+    space = explore(s, max_states=50_000_000, backend=backend)
     states = space.states
     seconds, size = time.perf_counter() - t0, max(0, rss() - before)
     if engine == "ours":
@@ -103,6 +109,8 @@ def measure(engine: str, path: Path) -> dict | None:
     for extra in ("analysis_seconds", "load_seconds"):
         if extra in results[0]:
             summary[extra] = statistics.median(r[extra] for r in results)
+    if "backend" in results[0]:
+        summary["backend"] = results[0]["backend"]
     return summary
 
 
