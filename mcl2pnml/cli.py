@@ -17,6 +17,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
+from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
@@ -126,16 +127,29 @@ def functional(mission: Path, with_functions: bool) -> int:
               show_default=True,
               help="Node positions in the PNML: graphviz dot, BFS layers, or none "
                    f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,}).")
-def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str) -> int:
+@click.option("--queries", type=OUTPUT, metavar="FILE.xml",
+              help="Also write the mission's properties (deadlock, an end always reachable) "
+                   "in the Model Checking Contest's XML, for the tools that read the PNML.")
+@click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)), default="verifypn",
+              show_default=True, help="How --queries writes a deadlock inside a formula: "
+              + "; ".join(f"{name}: {form}" for name, form in QUERY_TOOLS.items()))
+def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
+             queries: Path | None, tool: str) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
     time-outs and vehicle bindings travel in the PNML as toolspecific data.
     """
-    net = pipeline.compile_file(mission)
     output = output or mission.with_suffix(FORMATS[fmt].suffixes[0])
+    if queries is not None and queries.resolve() == output.resolve():
+        raise click.BadParameter("the queries go in a file of their own, not the net's",
+                                 param_hint="--queries")
+    net = pipeline.compile_file(mission)
     pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
+    if queries is not None:
+        written = pipeline.save_queries(net, queries, tool)
+        click.echo(f"wrote {queries}: {', '.join(p.id for p in written)} (for {tool})", err=True)
     return 0
 
 

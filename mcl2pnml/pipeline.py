@@ -24,7 +24,7 @@ from mcl2pnml.runtime.session import RunOptions
 
 __all__ = [
     "check_file", "check_source", "compile_file", "compile_source", "functional_form",
-    "load_net", "save_net", "to_pnml_bytes", "save_pnml", "template_net", "templates",
+    "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "templates",
     "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
 ]
 
@@ -106,6 +106,13 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
 def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
     """``net`` as PNML at ``path``, laid out by ``layout_engine`` (written whole or not at all)."""
     return save_net(net, path, "pnml", layout=layout_engine)
+
+
+def save_queries(net: Net, path: str | Path, tool: str = "verifypn"):
+    """The compiled mission's properties for ``tool`` (verifypn or lola) in the Model Checking
+    Contest's XML (:mod:`mcl2pnml.io.mccquery`), with the ids of its PNML; returns them."""
+    from mcl2pnml.io.mccquery import save_queries as save
+    return save(net, path, tool)
 
 
 def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:

@@ -94,3 +94,25 @@ def lola_states(net: Path) -> int | None:
     out = _run([str(need(LOLA)), "--pnmlnet", str(net), "--check=full", "--stubborn=off"])
     m = re.search(r"markings\s*:\s*(\d+)", out)
     return int(m.group(1)) if m else None
+
+
+# -- the Model Checking Contest's XML queries (tests/test_queries.py) --------------------
+
+def _verdicts(pattern: str, out: str) -> dict[str, bool]:
+    return {m.group(1): m.group(2).lower() == "true" for m in re.finditer(pattern, out, re.M)}
+
+
+def verifypn_queries(net: Path, queries: Path, count: int) -> dict[str, bool]:
+    """verifypn's answer to each of the ``count`` properties of ``queries``, reductions off."""
+    numbers = ",".join(str(i) for i in range(1, count + 1))
+    out = _run([str(need(VERIFYPN)), "-x", numbers, "-r", "0", "-p", "-s", "BFS",
+                str(net), str(queries)])
+    return _verdicts(r"^FORMULA (\S+) (TRUE|FALSE)", out)
+
+
+def lola_queries(net: Path, queries: Path) -> dict[str, bool]:
+    """LoLA's answer to each property of ``queries`` (``--xmlformula``), from its final table
+    (``  ID:  CATEGORY  true|false  PRODUCED BY``; ``unknown`` is left out)."""
+    out = _run([str(need(LOLA)), "--pnmlnet", str(net), "--xmlformula", f"--formula={queries}"])
+    table = out.partition("FINAL RESULTS")[2]
+    return _verdicts(r"^\s*(\S+):.*?\s(true|false)\s", table)
