@@ -14,19 +14,21 @@ Three judges, in this order:
       keeps it).
 
    ``MCL2PNML_PNML_GRAMMAR=none`` applies our schema alone, wherever the
-   official grammar is. A directory given (a or b) must hold ``ptnet.pntd`` and the files it
-   includes (``pnmlcoremodel.rng``, ``conventions.rng``, ``anyElement.rng``)
-   with local ``include`` references, as pnml.org's ``grammar.zip`` unpacked
-   and pointed at its own files; one that does not, or that lxml cannot
-   compile, is an error, as is a broken one found by c;
+   official grammar is. A directory given (a or b) must hold ``ptnet.pntd``
+   and the files it includes (``pnmlcoremodel.rng``, ``conventions.rng``,
+   ``anyElement.rng``) with local ``include`` references, as pnml.org's
+   ``grammar.zip`` unpacked and pointed at its own files; one that does not,
+   or that lxml cannot compile, is an error, as is a broken one found by c;
 3. the reader's own rules (:func:`mcl2pnml.io.pnml.reader.parse_pnml`), which
    no RELAX NG schema can express: an arc from a place to a place passes
    both schemas.
 
 A file is valid only when every judge applied finds it so. The two schemas
 admit the same documents (``tests/test_schema.py`` holds them side by side on
-every file we write, a corpus and its mutations), so where both reject a
-file a message they both give is shown once, naming both.
+every file we write, a corpus and its mutations), but for some orders of a
+page's children that the standard admits and libxml2, checking the official
+grammar, refuses; where both reject an element, one message says so, naming
+both, in our schema's words.
 """
 from __future__ import annotations
 
@@ -62,12 +64,14 @@ _ATTRIBUTES = re.compile(r"Element (\S+) failed to validate attributes|"
                          r"Invalid attribute \S+ for element (\S+)")
 #: A step of a libxml2 path with a namespace prefix.
 _PREFIXED = re.compile(r"([A-Za-z_][\w.-]*):([A-Za-z_][\w.-]*)")
-#: What is valid, for the faults where libxml2 says only that something is not.
+#: What is valid, for the faults where libxml2 says only that something is not:
+#: (the element at fault, what libxml2 says of it, what to add).
 _HINTS = (
-    (re.compile(r"Expecting a namespace for element"),
+    ("pnml", re.compile(r"Expecting a namespace for element"),
      f'PNML elements are in the namespace "{NS}"'),
-    (re.compile(r"Element net failed to validate attributes"),
+    ("net", re.compile(r"Element net failed to validate attributes"),
      f"a net has an id and the type {PTNET} (or the core model's, {CORE_MODEL})"),
+    ("net", re.compile(r"Expecting an element, got nothing"), "a net has one page at least"),
 )
 
 
@@ -86,9 +90,9 @@ def find_grammar(explicit: str | Path | None = None) -> Path | None:
             return Path(given)
         source = "--grammar" if explicit is not None else ENV
         raise PnmlError(
-            f"PNML grammar: no {ENTRY} in {given} (from {source}); unpack pnml.org's version-2009 grammar.zip "
-            f"(ptnet.pntd and the .rng files it includes) and pass --grammar DIR or set "
-            f"{ENV}=DIR")
+            f"PNML grammar: no {ENTRY} in {given} (from {source}); unpack pnml.org's "
+            f"version-2009 grammar.zip (ptnet.pntd and the .rng files it includes) and pass "
+            f"--grammar DIR or set {ENV}=DIR")
     for start in (Path.cwd(), Path(__file__).resolve().parent):
         for d in (start, *start.parents):
             if (d / "shared" / "pnml-grammar" / ENTRY).is_file():
@@ -123,7 +127,8 @@ def official_grammar(directory: str) -> etree.RelaxNG:
             if entry is not None else Location(path)
         raise PnmlError(f"the PNML grammar in {directory} cannot be used: "
                         f"{entry.message if entry is not None else e}; give the directory of "
-                        "pnml.org's version-2009 grammar.zip unpacked", where) from None
+                        f"pnml.org's version-2009 grammar.zip unpacked, or set {ENV}={NONE} "
+                        "to apply mcl2pnml's schema alone", where) from None
 
 
 @dataclass(frozen=True)
@@ -179,15 +184,19 @@ def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None
         doc = _parse_xml(data, src)
     except XmlError as e:   # no schema can judge what is not XML
         return Verdict(filename, (e,), tuple(SchemaVerdict(name, False) for name, _ in judges))
-    found: dict[tuple, set[str]] = {}   # (location, message) -> the schemas that say it
+    # the element at fault -> what each schema says of it: one message per element, in
+    # our schema's words where it has some (the official grammar's interleaves add a
+    # line per enclosing element that ours, written as sequences, does not)
+    found: dict[Location, dict[str, str]] = {}
     schemas = []
     for name, rng in judges:
         valid = rng.validate(doc)
         schemas.append(SchemaVerdict(name, valid))
-        for key in ([] if valid else _schema_errors(rng.error_log, doc, src)):
-            found.setdefault(key, set()).add(name)
-    errors: list[Mcl2PnmlError] = [PnmlError(f"{_SAID_BY[frozenset(names)]}: {message}", where)
-                                   for (where, message), names in found.items()]
+        for where, message in ([] if valid else _schema_errors(rng.error_log, doc, src)):
+            found.setdefault(where, {})[name] = message
+    errors: list[Mcl2PnmlError] = [
+        PnmlError(f"{_SAID_BY[frozenset(said)]}: {said.get(OURS) or said[OFFICIAL]}", where)
+        for where, said in found.items()]
     try:
         parse_pnml(data, filename, net_id)
     except ErrorList as e:
@@ -225,8 +234,9 @@ def _schema_errors(log, doc, src: _Source) -> list[tuple[Location, str]]:
         if any(node in r.iterancestors() for r in reported):
             continue
         reported.append(node)
-        messages += [hint for pattern, hint in _HINTS
-                     if any(pattern.search(m) for m in messages)]
+        local = etree.QName(node).localname
+        messages += [hint for name, pattern, hint in _HINTS
+                     if name == local and any(pattern.search(m) for m in messages)]
         out.append((src.locate(node), "; ".join(messages)))
     return out
 
@@ -248,8 +258,9 @@ def _node(doc, path: str, message: str):
     node = found[0] if found and isinstance(found[0], etree._Element) else None
     blamed = _ATTRIBUTES.search(message)
     if node is not None and blamed:
+        name = blamed.group(1) or blamed.group(2)
         owner = next((el for el in (node, *node.iterancestors())
-                      if etree.QName(el).localname == (blamed.group(1) or blamed.group(2))), None)
+                      if etree.QName(el).localname == name), None)
         node = owner if owner is not None else node
     return node
 
