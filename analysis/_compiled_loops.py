@@ -300,6 +300,20 @@ def out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t):
 
 
 @_jit
+def live(packed, need, need_ptr, need_word, key_ptr, key_t, free_t):
+    """Per sorted position, 1 if the marking enables a transition, 0 if it is dead: the
+    test stops at the first enabled one, where :func:`out_degree` counts them all."""
+    alive = np.zeros(packed.shape[0], dtype=np.int32)
+    cand = np.empty(need.shape[0], dtype=np.int64)
+    for q in range(packed.shape[0]):
+        for c in range(candidates(packed[q], key_ptr, key_t, free_t, cand)):
+            if enables(packed, q, cand[c], need, need_ptr, need_word):
+                alive[q] = 1
+                break
+    return alive
+
+
+@_jit
 def backward(packed, pairs, bits, need, take, give, touch_ptr, touch_word, key_ptr, key_t, free_t,
              seen, frontier):
     """Mark in ``seen`` every sorted position that reaches one of ``frontier`` (already seen).

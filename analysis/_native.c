@@ -369,11 +369,14 @@ fail:
 
 /* -- the explored state space, asked again --------------------------------------------- */
 
-/* out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t, degree) */
+/* out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t, degree, first):
+ * how many transitions each marking enables; with first, 1 at the first one found (what
+ * telling the dead markings needs, at a fraction of the cost). */
 static PyObject *py_out_degree(PyObject *self, PyObject *args) {
     PyObject *o[8];
-    if (!PyArg_ParseTuple(args, "OOOOOOOO", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
-                          &o[7]))
+    int first;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOp", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6],
+                          &o[7], &first))
         return NULL;
     Buffers b = {.count = 0};
     Masks m;
@@ -397,7 +400,7 @@ static PyObject *py_out_degree(PyObject *self, PyObject *args) {
         const uint64_t *row = packed + q * m.words;
         int64_t n = candidates(row, m.words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
         int32_t d = 0;
-        for (int64_t c = 0; c < n; c++)
+        for (int64_t c = 0; c < n && !(first && d); c++)
             d += enables(row, &m, cand[c]);
         degree[q] = d;
     }

@@ -91,8 +91,17 @@ def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key
 def out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.ndarray:
     """:func:`analysis._compiled_loops.out_degree`, in C."""
     degree = np.zeros(len(packed), dtype=np.int32)
-    c.out_degree(*_contiguous(packed, need, need_ptr, need_word, key_ptr, key_t, free_t), degree)
+    c.out_degree(*_contiguous(packed, need, need_ptr, need_word, key_ptr, key_t, free_t), degree,
+                 False)
     return degree
+
+
+def live(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.ndarray:
+    """:func:`analysis._compiled_loops.live`, in C."""
+    alive = np.zeros(len(packed), dtype=np.int32)
+    c.out_degree(*_contiguous(packed, need, need_ptr, need_word, key_ptr, key_t, free_t), alive,
+                 True)
+    return alive
 
 
 def paired_index(queue: np.ndarray, count: int) -> tuple[np.ndarray, int]:

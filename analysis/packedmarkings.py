@@ -336,6 +336,13 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
 
     @cached_property
     def terminal(self) -> list[int]:  # type: ignore[override]
+        if "out_degree" not in self.__dict__:
+            kernels = self._kernels()
+            if kernels is not None:
+                # whether each marking enables anything: the first enabled transition says
+                alive = kernels.live(self.packed, self.firing.need, *touched(self.firing.need),
+                                     *key_index(self.firing.need, self._weights))
+                return sorted(self.node_of(np.nonzero(alive == 0)[0]).tolist())
         return sorted(np.nonzero(self.out_degree == 0)[0].tolist())
 
     @cached_property
