@@ -121,6 +121,11 @@ def sparse_index(queue, count):
     return rehash(queue, count, bits), bits
 
 
+def new_queue(words, max_states, room):
+    """The first queue of markings (grown by doubling in the loops)."""
+    return np.empty((1024, words) if words > 1 else 1024, dtype=np.uint64)
+
+
 def start_table(m0, bits):
     """The table of :func:`step_words` holding ``m0`` alone (positions, -1 free)."""
     table = np.full(1 << bits, -1, dtype=np.int64)

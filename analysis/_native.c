@@ -622,6 +622,53 @@ fail:
     return NULL;
 }
 
+/* permute_rows(rows, order): rows[i] = the old rows[order[i]] for every i, in place,
+ * following the permutation's cycles: sorting the markings found costs no second copy of
+ * them (a hundred megabytes on a state space of three million markings). */
+static PyObject *py_permute_rows(PyObject *self, PyObject *args) {
+    PyObject *orows, *oorder;
+    if (!PyArg_ParseTuple(args, "OO", &orows, &oorder))
+        return NULL;
+    Buffers b = {.count = 0};
+    uint64_t *rows;
+    const int64_t *order;
+    if (!(rows = data_of(&b, orows, 8, 1))) goto fail;
+    int64_t n = b.views[0].shape[0], words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(order = data_of(&b, oorder, 8, 0))) goto fail;
+    if (items_of(&b) != n) {
+        PyErr_SetString(PyExc_ValueError, "one position a row");
+        goto fail;
+    }
+    uint8_t *done = PyMem_Calloc((size_t)n + 1, 1);
+    uint64_t *held = PyMem_Malloc(8 * (size_t)words);
+    if (!done || !held) { PyMem_Free(done); PyMem_Free(held); PyErr_NoMemory(); goto fail; }
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t i = 0; i < n; i++) {
+        if (done[i])
+            continue;
+        memcpy(held, rows + i * words, 8 * (size_t)words);
+        int64_t j = i;
+        for (;;) {
+            int64_t k = order[j];
+            done[j] = 1;
+            if (k == i) {
+                memcpy(rows + j * words, held, 8 * (size_t)words);
+                break;
+            }
+            memcpy(rows + j * words, rows + k * words, 8 * (size_t)words);
+            j = k;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(done);
+    PyMem_Free(held);
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
 static PyObject *py_slot_of_words(PyObject *self, PyObject *args) {
     PyObject *o;
     int bits;
@@ -652,6 +699,7 @@ static PyMethodDef methods[] = {
     {"backward", py_backward, METH_VARARGS, "Markings that reach the frontier."},
     {"backward_one_word", py_backward_one_word, METH_VARARGS,
      "Markings of one word that reach the frontier."},
+    {"permute_rows", py_permute_rows, METH_VARARGS, "Reorder rows in place."},
     {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
     {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
     {NULL, NULL, 0, NULL},

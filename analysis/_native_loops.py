@@ -29,6 +29,15 @@ def _contiguous(*arrays: np.ndarray) -> list[np.ndarray]:
     return [np.ascontiguousarray(a) for a in arrays]
 
 
+def new_queue(words: int, max_states: int, room: int) -> np.ndarray:
+    """The queue of markings, as long as it may ever need to be (``max_states`` and one
+    marking's successors), allocated and never written: the kernel maps a page in only
+    when a marking is stored there, so it costs what it holds and never grows by copying
+    (``max_states`` comes from the memory budget, so the length is within it)."""
+    shape = (max_states + room + 1, words) if words > 1 else (max_states + room + 1,)
+    return np.empty(shape, dtype=np.uint64)
+
+
 def _grown_queue(queue: np.ndarray, count: int, room: int) -> np.ndarray:
     size = len(queue)
     while size < count + room:
@@ -36,6 +45,12 @@ def _grown_queue(queue: np.ndarray, count: int, room: int) -> np.ndarray:
     grown = np.empty((size, *queue.shape[1:]), dtype=queue.dtype)
     grown[:count] = queue[:count]
     return grown
+
+
+def permute_rows(rows: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """``rows[order]``, in place (``rows`` must own its data)."""
+    c.permute_rows(rows, np.ascontiguousarray(order, dtype=np.int64))
+    return rows
 
 
 def start_table(m0: np.ndarray, bits: int) -> np.ndarray:

@@ -122,22 +122,37 @@ def _explore(kernels, s: Structure, m0: Sequence[int], max_states: int, limit_er
     need, take, give = masks(s, words)
     start = marking_row(m0, words)
     if words == 1:
-        rows = _run_one_word(kernels, need[:, 0], ~take[:, 0], give[:, 0], start[0, 0],
-                             max_states, limit_error, progress)
+        rows = _owned(_run_one_word(kernels, need[:, 0], ~take[:, 0], give[:, 0], start[0, 0],
+                                    max_states, limit_error, progress))
         rows.sort()   # in place: the markings are their own keys
         keys = rows if rows.base is None or 4 * rows.base.size < 5 * rows.size else rows.copy()
         packed = keys.reshape(-1, 1)
     else:
-        rows = _run_words(kernels, need, ~take, give, start[0], max_states, limit_error,
-                          progress)
+        rows = _owned(_run_words(kernels, need, ~take, give, start[0], max_states, limit_error,
+                                 progress))
         keys = _keys(rows)
         order = np.argsort(keys)
         keys = keys[order]
         if len(keys) > 1 and np.any(keys[1:] == keys[:-1]):
             raise KeyCollision   # distinct markings, one key: the exact explorer takes over
-        packed = rows[order]
+        if hasattr(kernels, "permute_rows") and rows.flags.owndata:
+            packed = kernels.permute_rows(rows, order)   # no second copy of the markings
+        else:
+            packed = rows[order]
         del rows, order
     return PackedStateSpace(s, packed, keys, _keys(start)[0], Firing.by(need, need, take, give))
+
+
+def _owned(rows: np.ndarray) -> np.ndarray:
+    """The found markings, the queue's spare rows given back where the queue can shrink in
+    place (it doubles as it grows: up to half of it is spare)."""
+    queue = rows.base
+    if queue is None or not queue.flags.owndata or queue.base is not None:
+        return rows
+    count = len(rows)
+    del rows   # no view may outlive the resize
+    queue.resize((count, *queue.shape[1:]), refcheck=False)
+    return queue
 
 
 def _drive(kernels, step, masks: tuple, state: tuple, max_states: int, limit_error,
@@ -176,7 +191,7 @@ def _dead(rows: np.ndarray, need: np.ndarray) -> int:
 def _run_one_word(kernels, need, keep, give, m0, max_states, limit_error,
                   progress) -> np.ndarray:
     bits = 12
-    queue = np.empty(1024, dtype=np.uint64)
+    queue = kernels.new_queue(1, max_states, len(need))
     queue[0] = m0
     table = np.zeros(1 << bits, dtype=np.uint64)
     table[kernels.slot_of_word(m0, bits)] = m0   # an empty marking stays out, as 0 is "free"
@@ -188,7 +203,7 @@ def _run_one_word(kernels, need, keep, give, m0, max_states, limit_error,
 def _run_words(kernels, need, keep, give, m0, max_states, limit_error,
                progress) -> np.ndarray:
     bits = 12
-    queue = np.empty((1024, len(m0)), dtype=np.uint64)
+    queue = kernels.new_queue(len(m0), max_states, len(need))
     queue[0] = m0
     table = kernels.start_table(m0, bits)
     return _drive(kernels, kernels.step_words,
