@@ -15,12 +15,23 @@ fast.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import IO, Any, Callable
+from typing import IO, TYPE_CHECKING, Any, Callable
 
 from mcl2pnml.core.errors import OptionError
 from mcl2pnml.core.net import Net
 from mcl2pnml.io.formats import FORMATS, SaveOptions, reader_of
-from mcl2pnml.runtime.session import RunOptions
+
+if TYPE_CHECKING:
+    from mcl2pnml.runtime.session import RunOptions
+
+
+def __getattr__(name: str) -> Any:
+    # the run's options come with the runtime, which only `run` needs: a command that
+    # does not run a mission does not pay for importing it
+    if name == "RunOptions":
+        from mcl2pnml.runtime.session import RunOptions
+        return RunOptions
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
     "check_file", "check_source", "compile_file", "compile_source", "functional_form",
@@ -221,7 +232,7 @@ def _engine_for(mission: Path, net_id: str | None) -> Callable[[str], Any]:
     return make
 
 
-def run_mission(mission: str | Path, options: RunOptions = RunOptions(), *,
+def run_mission(mission: str | Path, options: "RunOptions | None" = None, *,
                 text: IO[str] | None = None, log_path: str | Path | None = None,
                 note: Callable[[str], None] = lambda line: None, net_id: str | None = None):
     """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle.
@@ -229,9 +240,9 @@ def run_mission(mission: str | Path, options: RunOptions = RunOptions(), *,
     Returns the run (outcome, time, trace, safe stop); see
     :func:`mcl2pnml.runtime.session.run_session` for the rest.
     """
-    from mcl2pnml.runtime.session import run_session
+    from mcl2pnml.runtime.session import RunOptions, run_session
     mission = Path(mission)
-    return run_session(mission, options, _engine_for(mission, net_id), text=text,
+    return run_session(mission, options or RunOptions(), _engine_for(mission, net_id), text=text,
                        log_path=Path(log_path) if log_path else None, note=note)
 
 
