@@ -582,6 +582,8 @@ static PyObject *py_backward_one_word(PyObject *self, PyObject *args) {
         if (i >= 0 && !in[i]) { in[i] = 1; todo[top++] = i; }
     }
     while (head < top) {
+        if (head + 8 < top)   /* the slot unfired eight turns from now */
+            __builtin_prefetch(&table[todo[head + 8]]);
         int64_t a = todo[head++];
         uint64_t after = a == size ? 0 : table[a], batch[BATCH];
         int64_t n = candidates(&after, 1, key_ptr, key_t, free_t, nfree, cand), c = 0;

@@ -93,7 +93,7 @@ def key_index(test: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndar
     return ptr, order.astype(np.int64), np.nonzero(place < 0)[0].astype(np.int64)
 
 
-def place_weights(rows: np.ndarray, sample: int = 1 << 16) -> np.ndarray:
+def place_weights(rows: np.ndarray, sample: int = 1 << 12) -> np.ndarray:
     """How often each place is marked in ``rows`` (markings, one row of words each),
     counted on an even sample of at most ``sample`` of them: the weights of
     :func:`key_index`. With the initial marking alone, its marked places weigh
