@@ -1,16 +1,51 @@
 """docs/tutorial.md and docs/interop.md are true: every command in them prints what
 they show, and every picture is there (python tests/tutorial.py --update, or this
-test under MCL2PNML_REGOLD=1, rewrites the outputs and the tutorial's pictures)."""
+test under MCL2PNML_REGOLD=1, rewrites the outputs and the tutorial's pictures).
+
+The blocks that run verifypn or LoLA are compared where those tools are found;
+where one is not, the documents are still checked without those blocks, and
+a test of its own skips saying which blocks were not compared and why.
+"""
 import re
+import sys
+
+import pytest
 
 from helpers import REGOLD, ROOT
-from tutorial import DOC, main
+from tutorial import DOC, Report, check, render, tool_dir
 
 
-def test_every_command_prints_what_the_tutorial_shows(capsys):
-    stale = main(["--update"] if REGOLD else [])
-    assert stale == 0, ("the docs no longer match what their commands print "
-                        "(python tests/tutorial.py --update):\n" + capsys.readouterr().out)
+@pytest.fixture(scope="module")
+def report():
+    return check(update=REGOLD)
+
+
+def test_every_command_prints_what_the_tutorial_shows(report):
+    assert not report.stale, ("the docs no longer match what their commands print "
+                              "(python tests/tutorial.py --update):\n" + "".join(report.diff))
+
+
+def test_the_commands_of_other_tools_print_what_the_docs_show(report):
+    if report.unchecked:
+        pytest.skip("not compared: " + " | ".join(report.unchecked))
+    # verifypn's and LoLA's blocks of interop.md were run and compared above
+    assert report.peer_blocks >= 2, report
+
+
+def test_a_block_of_an_absent_peer_is_kept_and_said(tmp_path):
+    text = ("```console\n$ echo one | lola --check=full x.lola\nas the doc says\n```\n\n"
+            "```console\n$ python -c 'import sys; print(sys.executable)'\n$ echo two | cat\n```\n")
+    report = Report()
+    bin_, _ = tool_dir(tmp_path)
+    fresh = render(text, tmp_path, bin_, {"lola": "lola not found (here on purpose)"}, report,
+                   "doc.md")
+    kept, ran = fresh.split("\n\n")
+    assert kept == text.split("\n\n")[0]           # not run, not rewritten
+    assert ran == (f"```console\n$ python -c 'import sys; print(sys.executable)'\n"
+                   f"{sys.executable}\n$ echo two | cat\ntwo\n```\n")
+    assert report.unchecked == ["doc.md, the block of `$ echo one | lola --check=full x.lola`: "
+                                "lola not found (here on purpose)"]
+    assert report.peer_blocks == 0
 
 
 def test_every_picture_is_there():
