@@ -76,7 +76,7 @@ static inline int64_t candidates(const uint64_t *row, int64_t words, const int64
 
 /* The buffers of one call, released together whatever happens. */
 typedef struct {
-    Py_buffer views[16];
+    Py_buffer views[24];
     int count;
 } Buffers;
 
@@ -671,6 +671,225 @@ fail:
     return NULL;
 }
 
+/* -- bounded nets: counters packed into words (analysis/_counter_loops.py's loops) ------- */
+
+/* A transition's fields as compressed rows: its needs (value: tokens, unsigned) or its
+ * changes (value: signed). */
+typedef struct {
+    const int64_t *ptr, *word;
+    const uint64_t *shift, *mask;
+    const uint64_t *need;    /* the needs' tokens */
+    const int64_t *change;   /* the changes' signed counts */
+    int64_t transitions;
+} Fields;
+
+/* The five arrays (ptr, word, shift, mask, value) of objs into f; 0 and an exception if not. */
+static int fields_of(Buffers *b, PyObject **objs, Fields *f, int is_change) {
+    if (!(f->ptr = data_of(b, objs[0], 8, 0))) return 0;
+    f->transitions = items_of(b) - 1;
+    if (!(f->word = data_of(b, objs[1], 8, 0)) || !(f->shift = data_of(b, objs[2], 8, 0))
+        || !(f->mask = data_of(b, objs[3], 8, 0)))
+        return 0;
+    const void *v = data_of(b, objs[4], 8, 0);
+    if (!v) return 0;
+    f->need = is_change ? NULL : v;
+    f->change = is_change ? v : NULL;
+    return 1;
+}
+
+static inline int counter_enabled(const uint64_t *row, const Fields *n, int64_t t) {
+    for (int64_t k = n->ptr[t]; k < n->ptr[t + 1]; k++)
+        if (((row[n->word[k]] >> n->shift[k]) & n->mask[k]) < n->need[k])
+            return 0;
+    return 1;
+}
+
+/* out = row changed by sign times t's change; -1 if every counter fits its field, else the
+ * index of the first field that would not (below 0 or past its mask). */
+static inline int64_t counter_fire(const uint64_t *row, uint64_t *out, int64_t words,
+                                   const Fields *d, int64_t t, int sign) {
+    memcpy(out, row, 8 * (size_t)words);
+    for (int64_t k = d->ptr[t]; k < d->ptr[t + 1]; k++) {
+        int64_t w = d->word[k];
+        uint64_t m = d->mask[k], sh = d->shift[k];
+        int64_t f = (int64_t)((out[w] >> sh) & m) + sign * d->change[k];
+        if (f < 0 || f > (int64_t)m)
+            return k;
+        out[w] = (out[w] & ~(m << sh)) | ((uint64_t)f << sh);
+    }
+    return -1;
+}
+
+enum { OVERFLOW = 5, GROWING = 6 };
+
+/* counter_step(n x5, d x5, d_place, growing, queue, parent, count, head, table, bits, dead,
+ *              max_states, budget) -> (count, head, dead, code, info) */
+static PyObject *py_counter_step(PyObject *self, PyObject *args) {
+    PyObject *o[17];
+    long long count, head, dead, max_states, budget;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOLLOiLLL", &o[0], &o[1], &o[2], &o[3], &o[4],
+                          &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &o[12], &o[13],
+                          &count, &head, &o[14], &bits, &dead, &max_states, &budget))
+        return NULL;
+    Buffers b = {.count = 0};
+    Fields n, d;
+    const int64_t *place;
+    const uint8_t *growing;
+    uint64_t *queue, *table;
+    int64_t *parent;
+    if (!fields_of(&b, o, &n, 0) || !fields_of(&b, o + 5, &d, 1)
+        || !(place = data_of(&b, o[10], 8, 0)) || !(growing = data_of(&b, o[11], 1, 0))
+        || !(queue = data_of(&b, o[12], 8, 1)))
+        goto fail;
+    int64_t words = b.views[b.count - 1].ndim == 2 ? b.views[b.count - 1].shape[1] : 1;
+    int64_t capacity = b.views[b.count - 1].shape[0];
+    if (!(parent = data_of(&b, o[13], 8, 1))) goto fail;
+    if (items_of(&b) < capacity) capacity = items_of(&b);
+    if (!(table = data_of(&b, o[14], 8, 1))) goto fail;
+    int64_t table_size = items_of(&b), tmask = table_size - 1, info = 0;
+    uint64_t *next = PyMem_Malloc(8 * (size_t)words);
+    if (!next) { PyErr_NoMemory(); goto fail; }
+    int code = GOING;
+    Py_BEGIN_ALLOW_THREADS
+    int64_t stop = head + budget, transitions = n.transitions;
+    while (head < count && head < stop) {
+        if (count + transitions > capacity) { code = QUEUE_FULL; break; }
+        if (10 * (count + transitions) > 7 * table_size) { code = TABLE_FULL; break; }
+        const uint64_t *row = queue + head * words;
+        int fired = 0;
+        for (int64_t t = 0; t < transitions && code == GOING; t++) {
+            if (!counter_enabled(row, &n, t))
+                continue;
+            fired = 1;
+            if (growing[t]) { code = GROWING; info = t; break; }
+            int64_t k = counter_fire(row, next, words, &d, t, 1);
+            if (k >= 0) { code = OVERFLOW; info = place[k]; break; }
+            uint64_t h = hash_row(next, words);
+            int64_t slot = -1;
+            if (probe(queue, words, table, tmask, next, h & 0xFFFFFFFFULL, slot_of_hash(h, bits),
+                      &slot) >= 0)
+                continue;
+            if (count >= max_states) { code = LIMIT; break; }
+            memcpy(queue + count * words, next, 8 * (size_t)words);
+            parent[count] = head;
+            table[slot] = entry(h, count++);
+        }
+        if (code != GOING)
+            break;
+        if (!fired)
+            dead++;
+        head++;
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(next);
+    release(&b);
+    return Py_BuildValue("LLLiL", count, head, dead, code, (long long)info);
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* counter_out_degree(rows, n x5, degree) */
+static PyObject *py_counter_out_degree(PyObject *self, PyObject *args) {
+    PyObject *o[7];
+    if (!PyArg_ParseTuple(args, "OOOOOOO", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6]))
+        return NULL;
+    Buffers b = {.count = 0};
+    Fields n;
+    const uint64_t *rows;
+    int32_t *degree;
+    if (!(rows = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t states = b.views[0].shape[0], words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!fields_of(&b, o + 1, &n, 0) || !(degree = data_of(&b, o[6], 4, 1))) goto fail;
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t q = 0; q < states; q++) {
+        int32_t deg = 0;
+        for (int64_t t = 0; t < n.transitions; t++)
+            deg += counter_enabled(rows + q * words, &n, t);
+        degree[q] = deg;
+    }
+    Py_END_ALLOW_THREADS
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* counter_walk(rows, table, bits, n x5, d x5, sign, seen, frontier, src, trans, dst):
+ * sign 1: every firing (source, transition, target) into src, trans, dst, in node order;
+ * sign -1: mark in seen every node that reaches the frontier, by unfiring. */
+static PyObject *py_counter_walk(PyObject *self, PyObject *args) {
+    PyObject *o[17];
+    int bits, sign;
+    if (!PyArg_ParseTuple(args, "OOiOOOOOOOOOOiOOOOO", &o[0], &o[1], &bits, &o[2], &o[3], &o[4],
+                          &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &sign, &o[12],
+                          &o[13], &o[14], &o[15], &o[16]))
+        return NULL;
+    Buffers b = {.count = 0};
+    Fields n, d;
+    const uint64_t *rows, *table;
+    uint8_t *seen;
+    const int64_t *frontier;
+    int32_t *src, *trans, *dst;
+    if (!(rows = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t states = b.views[0].shape[0], words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(table = data_of(&b, o[1], 8, 0))) goto fail;
+    int64_t tmask = items_of(&b) - 1;
+    if (!fields_of(&b, o + 2, &n, 0) || !fields_of(&b, o + 7, &d, 1)
+        || !(seen = data_of(&b, o[12], 1, 1)) || !(frontier = data_of(&b, o[13], 8, 0)))
+        goto fail;
+    int64_t nfrontier = items_of(&b);
+    if (!(src = data_of(&b, o[14], 4, 1))) goto fail;
+    int64_t total = items_of(&b);
+    if (!(trans = data_of(&b, o[15], 4, 1)) || !(dst = data_of(&b, o[16], 4, 1))) goto fail;
+    uint64_t *other = PyMem_Malloc(8 * (size_t)words);
+    int64_t *todo = sign < 0 ? PyMem_Malloc(sizeof(int64_t) * (size_t)(states + 1)) : NULL;
+    if (!other || (sign < 0 && !todo)) {
+        PyMem_Free(other); PyMem_Free(todo); PyErr_NoMemory(); goto fail;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    if (sign > 0) {
+        int64_t e = 0;
+        for (int64_t q = 0; q < states && e < total; q++)
+            for (int64_t t = 0; t < n.transitions && e < total; t++) {
+                if (!counter_enabled(rows + q * words, &n, t)) continue;
+                counter_fire(rows + q * words, other, words, &d, t, 1);
+                uint64_t h = hash_row(other, words);
+                int64_t slot;
+                src[e] = (int32_t)q;
+                trans[e] = (int32_t)t;
+                dst[e++] = (int32_t)probe(rows, words, table, tmask, other, h & 0xFFFFFFFFULL,
+                                          slot_of_hash(h, bits), &slot);
+            }
+    } else {
+        int64_t top = 0, head = 0;
+        for (int64_t i = 0; i < nfrontier; i++)
+            todo[top++] = frontier[i];
+        /* first in, first out, as the safe nets' backward search */
+        while (head < top) {
+            const uint64_t *after = rows + todo[head++] * words;
+            for (int64_t t = 0; t < n.transitions; t++) {
+                if (counter_fire(after, other, words, &d, t, -1) >= 0) continue;
+                if (!counter_enabled(other, &n, t)) continue;
+                uint64_t h = hash_row(other, words);
+                int64_t slot, j = probe(rows, words, table, tmask, other, h & 0xFFFFFFFFULL,
+                                        slot_of_hash(h, bits), &slot);
+                if (j >= 0 && !seen[j]) { seen[j] = 1; todo[top++] = j; }
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(other);
+    PyMem_Free(todo);
+    release(&b);
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
 static PyObject *py_slot_of_words(PyObject *self, PyObject *args) {
     PyObject *o;
     int bits;
@@ -702,6 +921,11 @@ static PyMethodDef methods[] = {
     {"backward_one_word", py_backward_one_word, METH_VARARGS,
      "Markings of one word that reach the frontier."},
     {"permute_rows", py_permute_rows, METH_VARARGS, "Reorder rows in place."},
+    {"counter_step", py_counter_step, METH_VARARGS, "Expand markings of counters."},
+    {"counter_out_degree", py_counter_out_degree, METH_VARARGS,
+     "Enabled transitions per marking of counters."},
+    {"counter_walk", py_counter_walk, METH_VARARGS,
+     "The edges of markings of counters, or those that reach the frontier."},
     {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
     {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
     {NULL, NULL, 0, NULL},
@@ -718,7 +942,9 @@ PyMODINIT_FUNC PyInit__native(void) {
               || PyModule_AddIntConstant(m, "NOT_SAFE", NOT_SAFE) < 0
               || PyModule_AddIntConstant(m, "LIMIT", LIMIT) < 0
               || PyModule_AddIntConstant(m, "QUEUE_FULL", QUEUE_FULL) < 0
-              || PyModule_AddIntConstant(m, "TABLE_FULL", TABLE_FULL) < 0)) {
+              || PyModule_AddIntConstant(m, "TABLE_FULL", TABLE_FULL) < 0
+              || PyModule_AddIntConstant(m, "OVERFLOW", OVERFLOW) < 0
+              || PyModule_AddIntConstant(m, "GROWING", GROWING) < 0)) {
         Py_DECREF(m);
         return NULL;
     }

@@ -3,8 +3,9 @@
 The explorer for nets that are not safe (weights, places with several
 tokens) but bounded: a marking is a row of 64-bit words holding one
 counter a place, each as wide as the place needs, and the loop is the
-textbook queue and hash set of :mod:`analysis.compiledspace`, compiled by
-numba (:mod:`analysis._counter_loops`).
+textbook queue and hash set of :mod:`analysis.compiledspace`, in C where
+it was built at install (:mod:`analysis._native_counter_loops`), else
+compiled by numba (:mod:`analysis._counter_loops`).
 
 * **Widths.** A place covered by a semi-positive P-invariant y is bounded
   by y.M0 / y(p) (Murata 1989, section VII; the invariants are the minimal
@@ -37,6 +38,7 @@ import numpy as np
 from mcl2pnml.core.structure import Structure
 
 from analysis.generalspace import DecodedMarkings, EdgesOnDemand, StateSpace
+from analysis.packedmarkings import distinct
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 18
@@ -56,7 +58,25 @@ class NotBounded(Exception):
 
 def available() -> bool:
     from analysis.compiledspace import available as numba_installed
-    return numba_installed()
+    return native_loops() is not None or numba_installed()
+
+
+def native_loops():
+    """The loops in C where they were built (:mod:`analysis._native_counter_loops`), else None."""
+    try:
+        from analysis import _native_counter_loops
+    except ImportError:
+        return None
+    return _native_counter_loops
+
+
+def kernels():
+    """The loops: in C where they were built, else numba's (imported only now: 0.5 s)."""
+    native = native_loops()
+    if native is not None:
+        return native
+    from analysis import _counter_loops
+    return _counter_loops
 
 
 def footprint(s: Structure) -> int:
@@ -159,7 +179,7 @@ def _initial_widths(s: Structure, m0: Sequence[int]) -> list[int]:
 def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_error,
                      progress=None) -> "CounterStateSpace":
     """Breadth-first from ``m0``; raises :class:`NotBounded` when the net may be unbounded."""
-    from analysis import _counter_loops as k   # imports numba: only now
+    k = kernels()
     layout = Layout(_initial_widths(s, m0))
     queue = layout.pack(np.array([m0], dtype=np.int64))
     parent = np.full(queue.shape[0], -1, dtype=np.int64)
@@ -177,7 +197,7 @@ def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_err
             if code != k.GOING or head == count:
                 break
         if code == k.GOING:
-            return CounterStateSpace(s, queue[:count], table, bits, layout)
+            return CounterStateSpace(s, queue[:count], table, bits, layout, k)
         if code == k.LIMIT:
             limit_error.explored, limit_error.deadlocks = count, dead
             raise limit_error
@@ -229,9 +249,11 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
     """A reachability graph kept as its packed markings in the order found (see the module)."""
 
     def __init__(self, structure: Structure, rows: np.ndarray, table: np.ndarray, bits: int,
-                 layout: Layout):
+                 layout: Layout, loops=None):
         self.structure = structure
         self.rows, self.table, self.bits, self.layout = rows, table, bits, layout
+        # the loops that built the table ask it again: its slots are theirs
+        self.loops = loops or kernels()
         self.coverability = False
         self._need, self._change, _ = _tables(structure, layout)
 
@@ -255,8 +277,7 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
 
     @cached_property
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
-        from analysis import _counter_loops as k
-        return k.out_degree(self.rows, self.states, *self._need)
+        return self.loops.out_degree(self.rows, self.states, *self._need)
 
     @cached_property
     def terminal(self) -> list[int]:  # type: ignore[override]
@@ -264,14 +285,13 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
 
     @cached_property
     def _edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        from analysis import _counter_loops as k
-        return k.edges(self.rows, self.states, self.table, self.bits, *self._need,
+        return self.loops.edges(self.rows, self.states, self.table, self.bits, *self._need,
                        *self._change[:5], int(self.out_degree.sum()))
 
     def can_reach(self, targets: Sequence[int]) -> list[bool]:
         """For every node, whether one of ``targets`` is reachable from it (by unfiring)."""
-        from analysis import _counter_loops as k
-        frontier = np.unique(np.asarray(list(targets), dtype=np.int64))
+        k = self.loops
+        frontier = distinct(np.sort(np.asarray(list(targets), dtype=np.int64)))
         seen = np.zeros(self.states, dtype=np.bool_)
         seen[frontier] = True
         table, bits = k.sparse_index(self.rows, self.states)

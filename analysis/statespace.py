@@ -62,7 +62,7 @@ from mcl2pnml.core.structure import Structure, structure as make_structure
 from analysis import compiledspace
 from analysis.explorers import CHOICES, EXPLORERS
 from analysis.generalspace import OMEGA, Progress, StateSpace, explore_general
-from analysis.counterspace import NotBounded
+from analysis.counterspace import NotBounded, native_loops as counter_loops_in_c
 from analysis.packedmarkings import COMPILED_FROM, KeyCollision, NotSafe
 
 __all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "MemoryLimit", "Progress",
@@ -238,10 +238,11 @@ def _explore_counters(s: Structure, m0, backend: str, budget: _Budget,
                       progress) -> StateSpace:
     """The counter explorer; ``auto`` tries the general one first on small state spaces.
 
-    Loading compiled code costs most of a second in a fresh process, more
-    than a small state space takes to explore without it.
+    Loading numba's compiled code costs most of a second in a fresh
+    process, more than a small state space takes to explore without it; the
+    loops in C, where they were built, load at once and go first.
     """
-    if backend == "auto" and not compiledspace.loaded():
+    if backend == "auto" and not compiledspace.loaded() and not counter_loops_in_c():
         try:
             return budget.run(EXPLORERS["general"], s, m0, progress, GENERAL_HANDOVER,
                               _HandOver())

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from analysis import compiledspace, generalspace, packedspace, statespace
+from analysis import compiledspace, counterspace, generalspace, packedspace, statespace
 from analysis.explorers import EXPLORERS
 from analysis.behaviour import behaviour, final_markings_agree
 from analysis.statespace import OMEGA, ExplorationLimit, MemoryLimit, explore
@@ -36,8 +36,14 @@ def runnable(name: str) -> str:
     return name
 
 
-@pytest.fixture(params=[b for b in statespace.BACKENDS if b != "auto"])
-def backend(request):
+@pytest.fixture(params=[b for b in statespace.BACKENDS if b != "auto"] + ["counters-numba"])
+def backend(request, monkeypatch):
+    """Every explorer; the counter one twice, its loops in C and numba's."""
+    if request.param == "counters-numba":
+        if not compiledspace.available():
+            pytest.skip("numba is not installed")
+        monkeypatch.setattr(counterspace, "native_loops", lambda: None)
+        return "counters"
     return runnable(request.param)
 
 
@@ -512,11 +518,14 @@ def test_the_empty_marking_is_reached_backwards_too(module):
     assert space.can_reach([0]) == [n == 0 for n in range(3)]
 
 
-def test_with_its_c_code_a_safe_net_is_analysed_without_loading_numba():
-    """Loading numba costs half a second and some 120 MB: a safe net needs none of it."""
+def test_with_its_c_code_a_net_is_analysed_without_loading_numba():
+    """Loading numba costs half a second and some 120 MB: a safe net needs none of it, nor
+    a bounded one (Kanban, counters)."""
     runnable("native")
-    code = ("import sys; from analysis.zoo import cycles; from analysis.report import analyze; "
-            "r = analyze(cycles(8)); print(r['states'], 'numba' in sys.modules)")
+    code = ("import sys; from analysis.zoo import cycles, kanban; "
+            "from analysis.report import analyze; "
+            "print(analyze(cycles(8))['states'], analyze(kanban(2))['states'], "
+            "'numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120, check=True)
-    assert out.stdout.split() == [str(4 ** 8), "False"]
+    assert out.stdout.split() == [str(4 ** 8), "4600", "False"]
