@@ -49,11 +49,18 @@ def _needs_escape(node: str) -> bool:
         or "_x" in node
 
 
+def _encode(node: str) -> str:
+    """``node`` as a LoLA name that :func:`ids.decode` maps back: the XML-name escapes,
+    and a keyword's first letter escaped too (a keyword is an XML name, left as it is)."""
+    name = ids.encode(node)
+    return f"_x{ord(name[0]):04X}_{name[1:]}" if name in KEYWORDS else name
+
+
 def to_lola(net: Net) -> str:
     """The net as LoLA text (see the module's documentation)."""
     nodes = [p.id for p in net.places] + [t.id for t in net.transitions]
     escape = any(map(_needs_escape, nodes))
-    out = (lambda n: ids.encode(n)) if escape else (lambda n: n)
+    out = _encode if escape else (lambda n: n)
     timed = [t.id for t in net.transitions if t.timing is not None]
     reads = sum(a.kind is ArcKind.READ for a in net.arcs)
     head = [f"{{ {_safe(net.name or 'net')}: written by mcl2pnml {__version__} }}"]
@@ -90,9 +97,14 @@ def to_lola(net: Net) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: What may not appear in a ``{ }`` comment: its end, and (LoLA reads such a comment
+#: within one line) line breaks and the other control characters.
+_UNSAFE = str.maketrans({"{": "(", "}": ")", **{chr(c): " " for c in (*range(32), 127)}})
+
+
 def _safe(text: str) -> str:
-    """Text for inside a ``{ }`` comment, which ends at the first ``}``."""
-    return text.replace("{", "(").replace("}", ")")
+    """Text for inside a ``{ }`` comment, on one line (LoLA 2's lexer: ``"{"[^\\n\\r]*"}"``)."""
+    return text.translate(_UNSAFE)
 
 
 def save_lola(net: Net, path: str | Path) -> Path:

@@ -470,6 +470,13 @@ class _Reader:
             key = (s, d, read)
             weights[key] = weights.get(key, 0) + weight
             arc_el.setdefault(key, el)
+        for (s, d, read), w in list(weights.items()):
+            forward = weights.get((d, s, PAIR))
+            if read == PAIR and d in raw.places and forward is not None and w > forward:
+                # our writer's return half also carries the transition's own arc
+                # into the place (a file has no two arcs between the same nodes)
+                weights[(s, d, read)] = forward
+                weights[(s, d, NORMAL)] = weights.get((s, d, NORMAL), 0) + w - forward
         arcs = []
         for (s, d, read), w in weights.items():
             if read == NORMAL:

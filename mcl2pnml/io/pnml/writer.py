@@ -8,6 +8,11 @@ where other tools skip it and our reader restores it:
 * a transition's timing and payload: ``<timing earliest="300" latest="300"/>``;
 * a read arc: written as the two arcs of a self-loop (so that every P/T tool
   fires it correctly), each marked ``<read/>``; our reader joins them again.
+  When its transition also puts tokens into the place, the return arc
+  carries them too, and our reader takes what exceeds the read arc's weight
+  as that arc: two arcs from one node to another are read differently by
+  each tool (verifypn adds them up, pm4py keeps one, SNAKES refuses them,
+  LoLA crashes), so a file never has any.
 
 One flat ``<page>`` per net, because nested pages break LoLA and SNAKES and
 make pm4py silently wrong. Every node gets a ``<graphics><position>`` when
@@ -30,7 +35,8 @@ import io
 import json
 import re
 from functools import lru_cache
-from operator import attrgetter
+from itertools import compress, repeat
+from operator import attrgetter, is_
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO, Callable, Iterator, Mapping
 
@@ -228,6 +234,13 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
     # comprehension, a chunk at a time, instead of one step per arc.
     stem = xid.numbering("a")
     sources, targets, weights, kinds = net.columns
+    extras: Any = repeat(0)
+    own = _into_read_places(sources, targets, weights, kinds)
+    if own:
+        # the transition's own arc into a place it reads goes with the read arc's return
+        rows = [(s, d, w, k, own.get((s, d), 0))
+                for s, d, w, k in zip(sources, targets, weights, kinds) if (d, s) not in own]
+        sources, targets, weights, kinds, extras = map(list, zip(*rows))
     if node is not None:
         sources, targets = [node[s] for s in sources], [node[t] for t in targets]
     number = 0
@@ -241,8 +254,9 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
             number += stop - start
             continue
         chunk = []
-        for src, dst, weight, kind in zip(sources[start:stop], targets[start:stop],
-                                          weights[start:stop], kinds[start:stop]):
+        for src, dst, weight, kind, extra in zip(sources[start:stop], targets[start:stop],
+                                                 weights[start:stop], kinds[start:stop],
+                                                 extras[start:stop] if own else extras):
             number += 1
             inscription = (f"<inscription><text>{weight}</text></inscription>"
                            if weight != 1 else "")
@@ -255,9 +269,27 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
                 chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
                              f"{inscription}{_READ}</arc>\n")
                 number += 1
+                if extra:
+                    inscription = f"<inscription><text>{weight + extra}</text></inscription>"
                 chunk.append(f'<arc id="{stem}{number}" source="{dst}" target="{src}">'
                              f"{inscription}{_READ}</arc>\n")
         yield "".join(chunk)
+
+
+def _into_read_places(sources, targets, weights, kinds) -> dict[tuple[str, str], int]:
+    """(place, transition) -> the weight of the transition's arc into a place it reads.
+
+    Read arcs go from a place to a transition, so every arc the other way is
+    an ordinary one; a compiled mission has none of these.
+    """
+    # scans in C (map, compress): a mission of a million arcs pays a few milliseconds
+    reads = set(compress(zip(targets, sources), map(is_, kinds, repeat(ArcKind.READ))))
+    if not reads:
+        return {}
+    readers = {t for t, _ in reads}
+    return {(d, s): w for s, d, w in compress(zip(sources, targets, weights),
+                                                map(readers.__contains__, sources))
+            if (s, d) in reads}
 
 
 @without_gc
