@@ -43,14 +43,21 @@ are written an element a line, indented, so that a reader can follow them.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from html import escape as _escape
 from pathlib import Path
-from xml.sax.saxutils import escape
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES, MissionPlace
 from mcl2pnml.io import ids
+
+
+def escape(text: str) -> str:
+    # &, < and > as xml.sax.saxutils.escape does, without importing it: it imports urllib,
+    # http and email, and the command line imports this module at start-up
+    return _escape(text, quote=False)
+
 
 NAMESPACE = "http://mcc.lip6.fr/"
 #: The places the outside marks: no proper end is asked to leave them as they were.
