@@ -253,10 +253,15 @@ class Judgement:
             + (f"\n\n... and {more} more" if more > 0 else ""))
 
 
-def judge(cases, scratch: Path, max_states: int | None = None) -> Judgement:
-    """Each case explored by us, written, and asked of the tools; every answer compared."""
+def need_peers() -> None:
+    """Both tools, or the test skips saying which is missing and why."""
     peers.need(peers.VERIFYPN)
     peers.need(peers.LOLA)
+
+
+def judge(cases, scratch: Path, max_states: int | None = None) -> Judgement:
+    """Each case explored by us, written, and asked of the tools; every answer compared."""
+    need_peers()
     tally: Counter = Counter()
     wrong: list[str] = []
     asked: list[tuple[Case, Facts, Path, dict[Question, Future]]] = []
@@ -391,6 +396,7 @@ TEMPLATES = [names.split(", ")[0] for names, _, _ in pipeline.templates()]
 
 @pytest.mark.parametrize("name", TEMPLATES)
 def test_templates(name, tmp_path):
+    need_peers()
     net = pipeline.template_net(name)
     judged = judge([Case(f"template {name}", net, "auto", every=True)], tmp_path)
     judged.check()
@@ -401,6 +407,7 @@ def test_templates(name, tmp_path):
     pytest.param(p, id=p.stem, marks=[pytest.mark.slow] if p.stem in LARGE_EXAMPLES else [])
     for p in EXAMPLES])
 def test_examples(example, tmp_path):
+    need_peers()
     net = pipeline.compile_file(example)
     judged = judge(mission_cases(example.name, net, layout="auto"), tmp_path)
     judged.check()
@@ -410,11 +417,13 @@ def test_examples(example, tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
 def test_examples_every_explorer(example, tmp_path):
+    need_peers()
     net = pipeline.compile_file(example)
     judge(mission_cases(example.name, net, every=True), tmp_path).check()
 
 
 def test_generated_missions(tmp_path):
+    need_peers()
     cases = generated_missions(SMALL_MISSIONS, FAST_MISSIONS, FAST_SEED, every=False)
     judged = judge(cases, tmp_path, MAX_STATES)
     judged.check()
@@ -428,6 +437,7 @@ NET_KINDS = [pytest.param(nets(), "any", id="any"),
 
 @pytest.mark.parametrize("strategy, kind", NET_KINDS)
 def test_generated_nets(strategy, kind, tmp_path):
+    need_peers()
     cases = generated_nets(strategy, f"generated net ({kind})", FAST_NETS, FAST_SEED)
     judged = judge(cases, tmp_path, MAX_STATES)
     judged.check()
@@ -436,12 +446,10 @@ def test_generated_nets(strategy, kind, tmp_path):
     assert judged.tally["dead"] > 0 and judged.tally["live"] > 0, dict(judged.tally)
 
 
-def test_names_that_neither_format_takes_as_they_are(tmp_path):
+def awkward_names() -> Net:
     """Ids that are keywords, numbers, or hold white space, punctuation, a comment's start,
-    an escape or a letter outside ASCII, in a net whose name spans lines and holds braces:
-    both tools read both files as the net it is (LoLA refused a keyword as a name, and a
-    line break in the net's name, which our LoLA file shows in a comment: LoLA's comments
-    end with their line)."""
+    an escape or a letter outside ASCII, in a net whose name spans lines and holds braces.
+    Two tokens cycle until both have left the first place, then the net ends."""
     places = ["PLACE", "a b", "x:y", "(p)", "/*c", "12", "\u00e9t\u00e9", "_x0041_"]
     transitions = ["TRANSITION", "t {1}", "CONSUME", "99", "u;v", "//w", "\u00fc", "SAFE"]
     b = NetBuilder("two lines\n{and braces}\r")
@@ -451,21 +459,16 @@ def test_names_that_neither_format_takes_as_they_are(tmp_path):
         b.transition(t)
         b.arc(places[k], t)
         b.arc(t, places[k + 1])
-    # back from the last place to the second while the first is still marked (a read
-    # arc): the two tokens cycle until both have left the first place, then end
+    # back from the last place to the second while the first is still marked (a read arc)
     b.transition(transitions[-1])
     b.read(places[0], transitions[-1])
     b.arc(places[-1], transitions[-1])
     b.arc(transitions[-1], places[1])
-    judged = judge([Case("awkward names", b.build(), "auto", every=True)], tmp_path)
-    judged.check()
-    assert judged.tally["judged"] == 1
+    return b.build()
 
 
-def test_a_transition_that_reads_a_place_and_fills_it(tmp_path):
-    """The read arc's return and the transition's own arc into the place are one arc in
-    the file: two arcs between the same nodes are read differently by each tool (LoLA
-    crashed on them, pm4py kept one, SNAKES refused them). Our reader gets the net back."""
+def reads_and_fills() -> Net:
+    """A transition that reads a place and also puts tokens into it."""
     b = NetBuilder("reads and fills")
     b.place("p", 1)
     b.place("q", 3)
@@ -477,7 +480,42 @@ def test_a_transition_that_reads_a_place_and_fills_it(tmp_path):
     b.transition("u")
     b.arc("p", "u", 3)
     b.arc("u", "r")
-    net = b.build()
+    return b.build()
+
+
+def test_awkward_names_keep_to_lolas_syntax(tmp_path):
+    """LoLA refused a keyword as a name, and a line break in the net's name, which our
+    file shows in a comment (LoLA's comments end with their line): keywords are escaped,
+    the comment stays on its line, and our reader gets the net back."""
+    net = awkward_names()
+    path = pipeline.save_net(net, tmp_path / "net.lola", "lola")
+    text = path.read_text()
+    assert re.match(r"\{[^\n}]*\}\n", text), text.splitlines()[:2]
+    names = re.findall(r"^\s*([^\s:,;]+)[,;]?$", text.partition("MARKING")[0], re.M)
+    keywords = {"PLACE", "MARKING", "TRANSITION", "CONSUME", "PRODUCE", "SAFE"}
+    assert not keywords & set(names[1:]), names
+    # LoLA has no read arcs: ours come back as the self-loop the file says
+    back = pipeline.load_net(path)
+    assert (_flow(back), back.initial) == (_flow(net), net.initial)
+
+
+def _flow(net: Net) -> list[tuple[str, str, int]]:
+    """The arcs as a P/T tool sees them: a read arc is the self-loop it fires as."""
+    return sorted([(a.source, a.target, a.weight) for a in net.arcs]
+                  + [(a.target, a.source, a.weight) for a in net.arcs if a.kind is ArcKind.READ])
+
+
+def test_awkward_names_read_by_the_tools(tmp_path):
+    judged = judge([Case("awkward names", awkward_names(), "auto", every=True)], tmp_path)
+    judged.check()
+    assert judged.tally["judged"] == 1
+
+
+def test_no_two_arcs_between_the_same_nodes(tmp_path):
+    """The read arc's return and the transition's own arc into the place are one arc in
+    the file: two arcs between the same nodes are read differently by each tool (LoLA
+    crashed on them, pm4py kept one, SNAKES refused them). Our reader gets the net back."""
+    net = reads_and_fills()
     path = pipeline.save_net(net, tmp_path / "net.pnml", layout="none")
     ends = re.findall(r'<arc id="[^"]*" source="([^"]*)" target="([^"]*)"', path.read_text())
     assert len(ends) == len(set(ends)), f"two arcs between the same nodes: {sorted(ends)}"
@@ -488,7 +526,10 @@ def test_a_transition_that_reads_a_place_and_fills_it(tmp_path):
     graph = StateGraph(snakes.pnml.loads(path.read_text()))
     graph.build()
     assert len(graph) == pipeline.analyze(net, state_space_only=True)["states"]
-    judged = judge([Case("reads and fills", net, every=True)], tmp_path / "peers")
+
+
+def test_a_transition_that_reads_a_place_and_fills_it(tmp_path):
+    judged = judge([Case("reads and fills", reads_and_fills(), every=True)], tmp_path)
     judged.check()
     assert judged.tally["judged"] == 1
 
@@ -496,6 +537,7 @@ def test_a_transition_that_reads_a_place_and_fills_it(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("chunk", range(SLOW_CHUNKS))
 def test_thousands_of_generated_missions(chunk, tmp_path):
+    need_peers()
     cases = generated_missions(DEEP_MISSIONS, SLOW_MISSIONS, 1 + chunk, every=False)
     judged = judge(cases, tmp_path, MAX_STATES)
     judged.check()
@@ -505,6 +547,7 @@ def test_thousands_of_generated_missions(chunk, tmp_path):
 
 @pytest.mark.slow
 def test_generated_missions_every_explorer(tmp_path):
+    need_peers()
     cases = generated_missions(SMALL_MISSIONS, EVERY_EXPLORER_MISSIONS, 99, every=True)
     judged = judge(cases, tmp_path, MAX_STATES)
     judged.check()
@@ -515,6 +558,7 @@ def test_generated_missions_every_explorer(tmp_path):
 @pytest.mark.parametrize("chunk", range(SLOW_CHUNKS))
 @pytest.mark.parametrize("strategy, kind", NET_KINDS)
 def test_thousands_of_generated_nets(strategy, kind, chunk, tmp_path):
+    need_peers()
     cases = generated_nets(strategy, f"generated net ({kind})", SLOW_NETS, 1 + chunk)
     judged = judge(cases, tmp_path, MAX_STATES)
     judged.check()
