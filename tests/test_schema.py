@@ -168,6 +168,10 @@ def test_the_schema_ships_with_the_package_and_stands_alone():
 def test_without_the_official_grammar_our_schema_judges_alone(tmp_path, monkeypatch):
     # as in a clone with nothing beside it: neither the working directory nor the
     # package is under a shared/pnml-grammar
+    above = [d for d in tmp_path.parents if (d / "shared" / "pnml-grammar").is_dir()]
+    if above:
+        pytest.skip(f"a grammar sits above the temporary directory ({above[0]}/shared), "
+                    "so a clone without one cannot be imitated here")
     monkeypatch.delenv(ENV, raising=False)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(grammar, "__file__", str(tmp_path / "site" / "grammar.py"))
