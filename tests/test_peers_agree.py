@@ -75,10 +75,11 @@ MAX_STATES = 20_000
 FAST_MISSIONS, FAST_NETS, FAST_SEED = 100, 100, 0
 #: The slow variants: chunks of generated missions and nets, each chunk its own seed,
 #: and the missions judged by every explorer whatever their size.
-SLOW_CHUNKS, SLOW_MISSIONS, SLOW_NETS, EVERY_EXPLORER_MISSIONS = 4, 500, 500, 50
+SLOW_CHUNKS, SLOW_MISSIONS, SLOW_NETS, EVERY_EXPLORER_MISSIONS = 4, 500, 500, 20
 #: The share of drawn nets that must be judged (not over the state limit, not unbounded):
-#: a third of strategies.py's nets may be unbounded, none of ours.
-MIN_JUDGED = {"missions": 0.9, "any": 0.5, "bounded": 1.0}
+#: deep missions pass the state limit more often (one in seven), a third of
+#: strategies.py's nets may be unbounded, none of ours.
+MIN_JUDGED = {"missions": 0.9, "deep missions": 0.8, "any": 0.5, "bounded": 1.0}
 WORKERS = max(2, os.cpu_count() or 2)
 
 
@@ -541,7 +542,7 @@ def test_thousands_of_generated_missions(chunk, tmp_path):
     cases = generated_missions(DEEP_MISSIONS, SLOW_MISSIONS, 1 + chunk, every=False)
     judged = judge(cases, tmp_path, MAX_STATES)
     judged.check()
-    check_tally(judged, len(cases), "missions")
+    check_tally(judged, len(cases), "deep missions")
     print(f"\nchunk {chunk}: {dict(judged.tally)}")
 
 
