@@ -325,9 +325,7 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
         kernels = self._kernels()
         if kernels is not None:
-            degree = kernels.out_degree(self.packed, self.firing.need,
-                                        *touched(self.firing.need),
-                                        *key_index(self.firing.need, self._weights))
+            degree = kernels.out_degree(self.packed, self.firing.need, *self._firing_index)
         else:
             degree = np.zeros(self.states, dtype=np.int32)
             for r, _ in self._enabled():
@@ -340,8 +338,7 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
             kernels = self._kernels()
             if kernels is not None:
                 # whether each marking enables anything: the first enabled transition says
-                alive = kernels.live(self.packed, self.firing.need, *touched(self.firing.need),
-                                     *key_index(self.firing.need, self._weights))
+                alive = kernels.live(self.packed, self.firing.need, *self._firing_index)
                 return sorted(self.node_of(np.nonzero(alive == 0)[0]).tolist())
         return sorted(np.nonzero(self.out_degree == 0)[0].tolist())
 
@@ -396,6 +393,13 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         return kernels.backward(self.packed, table, bits, f.need, f.take, f.give,
                                 *self._touched, *key_index(f.give, self._weights),
                                 seen, frontier)
+
+    @cached_property
+    def _firing_index(self) -> tuple[np.ndarray, ...]:
+        """The words each transition needs and its key place (:func:`touched`,
+        :func:`key_index`), built once for the loops that test enabling."""
+        need = self.firing.need
+        return (*touched(need), *key_index(need, self._weights))
 
     @cached_property
     def _weights(self) -> np.ndarray:
