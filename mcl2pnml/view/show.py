@@ -15,10 +15,45 @@ started by B, ending in OK, FAIL or ABORTED, without its primitive).
 Everything the page needs is inside it: the data as JSON, the script and
 the style; it fetches nothing, so it opens from a file, offline, in any
 browser. The page itself is ``show_page.html`` beside this module.
+
+Security. Everything that comes from the input (file names, node ids and
+names, doc lines, run logs) is data, never markup or code, whoever wrote
+it; the page trusts only its own template, script and style:
+
+* the template is filled in one pass (:func:`fill`): a regular expression
+  finds its slots, ``__TITLE__``, ``__CSP__`` and ``__DATA__``, and what is put
+  in one slot is never scanned again, so no input reaches another slot;
+* the title is HTML-escaped text; the data is one JSON document in a
+  ``<script type="application/json">`` element, which the browser never
+  runs and the page reads with ``JSON.parse``. It is written in ASCII with
+  ``<``, ``>``, ``&``, U+2028 and U+2029 as ``\\u`` escapes, so that no string
+  can end the element or open an HTML comment (``</script>``, ``<!--``, which
+  would put the parser in a state that swallows the page's script), and
+  without NaN or infinities, which JSON has not: a run log holding them is
+  refused, with the file, line and column (:func:`read_run`);
+* the script never makes markup from data: text goes in with
+  ``textContent``, the drawing is SVG elements made one by one, and no
+  attribute it sets from data is a URL, a style or an event handler;
+* a Content-Security-Policy (:func:`csp`) lets run only the page's one
+  script and one style, named by their SHA-256 hashes computed here from the
+  template (no ``'unsafe-inline'``), and nothing else: ``default-src 'none'``
+  (no image, font, frame or connection, not even ``data:``),
+  ``connect-src 'none'``, ``form-action 'none'``, ``base-uri 'none'``, and
+  Trusted Types (``require-trusted-types-for 'script'``), so that an HTML
+  sink such as ``innerHTML`` would throw in browsers that have them (Chromium
+  does). No policy keeps a page from navigating: ``navigate-to`` was dropped
+  from the CSP draft and no browser enforces it (Chromium even reports it
+  as an error on the console), so it is not written; the page's defence
+  against being navigated away is that no input can run script or make a
+  link or a form.
 """
 from __future__ import annotations
 
+import base64
+import hashlib
 import json
+import math
+import re
 from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable
@@ -46,6 +81,10 @@ def variant(net: Net, label: str) -> dict[str, Any]:
         raise Mcl2PnmlError(f"net '{net.name}' has {nodes:,} nodes; a page draws at most "
                             f"{MAX_NODES:,} (compile it to PNML or DOT instead)")
     pos = layout(net, "auto")
+    if len(pos) < nodes:
+        # dot left a node out: graphviz reads an id written <...> as its own HTML
+        # markup, under another name; the layered layout places every node
+        pos = layout(net, "layers")
     boxes = instance_clusters(net)
     kept = border_out(net, boxes)
     box_of = {n: name for name, members in kept.items() for n in members}
@@ -55,7 +94,7 @@ def variant(net: Net, label: str) -> dict[str, Any]:
     places = [{"id": p.id, "label": p.label, "x": pos[p.id][0], "y": pos[p.id][1],
                "tokens": net.initial[p.id], "interface": p.interface,
                "fusion": p.id in border, "group": box_of.get(p.id),
-               "doc": thaw(doc_of(p.payload))} for p in net.places]
+               "doc": _text(doc_of(p.payload))} for p in net.places]
     transitions = []
     for t in net.transitions:
         payload = read_transition(t)
@@ -65,7 +104,7 @@ def variant(net: Net, label: str) -> dict[str, Any]:
         transitions.append({
             "id": t.id, "label": t.label, "x": pos[t.id][0], "y": pos[t.id][1],
             "timing": str(t.timing) if t.timing is not None else None, "kind": kind,
-            "group": box_of.get(t.id), "doc": thaw(payload.doc),
+            "group": box_of.get(t.id), "doc": _text(payload.doc),
             "pre": [[index[a.source], a.weight] for a in net.pre[t.id]
                     if a.kind.value == "normal"],
             "read": [[index[a.source], a.weight] for a in net.pre[t.id]
@@ -78,20 +117,76 @@ def variant(net: Net, label: str) -> dict[str, Any]:
             "groups": sorted(kept), "invariants": invariants}
 
 
+def _text(doc: Any) -> str | None:
+    """A doc line as the page shows it: text (a payload may hold any JSON value,
+    NaN included, and the page's data may hold no NaN)."""
+    if doc is None or isinstance(doc, str):
+        return doc
+    return json.dumps(thaw(doc), ensure_ascii=False)
+
+
+class _NotFinite(ValueError):
+    """A run log's NaN, Infinity or number too large for a float."""
+
+    def __init__(self, token: str):
+        super().__init__(token)
+        self.token = token
+
+
+def _no_constant(token: str) -> Any:
+    raise _NotFinite(token)
+
+
+def _finite(token: str) -> float:
+    x = float(token)
+    if not math.isfinite(x):
+        raise _NotFinite(token)
+    return x
+
+
+#: JSON strings (skipped) and the tokens a JSON line may spell a non-finite number with.
+_TOKEN = re.compile(r'"(?:[^"\\]|\\.)*"|-?Infinity|NaN|-?\d+(?:\.\d+)?(?:[eE][+-]?\d+)?')
+
+
+def _column(line: str, token: str) -> int:
+    """Where ``token`` first stands outside a string in a JSON line, from 1."""
+    for m in _TOKEN.finditer(line):
+        if m.group() == token:
+            return m.start() + 1
+    return 1
+
+
 def read_run(path: str | Path) -> list[dict[str, Any]]:
-    """The entries of a JSON-lines run log (``mcl2pnml run --log``); bad lines are errors."""
+    """The entries of a JSON-lines run log (``mcl2pnml run --log``); bad lines are errors.
+
+    JSON has no NaN nor infinity, and the page's data holds none: ``NaN``,
+    ``Infinity`` and numbers too large for a float (``1e999``), which
+    Python's ``json`` would accept, are refused where they stand, as is a
+    ``fire`` that is not a transition id (a string).
+    """
     entries = []
     text = read_text(path, "run log")
     for n, line in enumerate(text.split("\n"), 1):
         if not line.strip():
             continue
         try:
-            entry = json.loads(line)
+            entry = json.loads(line, parse_constant=_no_constant, parse_float=_finite)
         except json.JSONDecodeError as e:
             raise Mcl2PnmlError(f"not a JSON line: {e.msg}",
                                 Location(str(path), n, e.colno, line)) from None
+        except _NotFinite as e:
+            what = ("a number too large for a run log (it would be infinite)"
+                    if e.token[-1].isdigit() else "not a JSON value (JSON has no NaN or infinity)")
+            raise Mcl2PnmlError(f"'{e.token}' is {what}",
+                                Location(str(path), n, _column(line, e.token), line)) from None
+        except ValueError as e:   # an integer of thousands of digits
+            raise Mcl2PnmlError(f"not a run log's JSON line: {e}",
+                                Location(str(path), n, 1, line)) from None
         if not isinstance(entry, dict):
             raise Mcl2PnmlError("a run log's line is a JSON object",
+                                Location(str(path), n, 1, line))
+        if "fire" in entry and not isinstance(entry["fire"], str):
+            raise Mcl2PnmlError("a run log's 'fire' is a transition id, a JSON string",
                                 Location(str(path), n, 1, line))
         entries.append(entry)
     return entries
@@ -106,22 +201,78 @@ def check_run(net: Net, entries: Iterable[dict[str, Any]], path: str) -> None:
                                 f"'{net.name}': a log of another mission?", Location(path))
 
 
+# -- the page ------------------------------------------------------------------------------
+
+#: The template's slots: ``__NAME__``, each filled once, all in one pass.
+SLOTS = ("TITLE", "CSP", "DATA")
+_SLOT = re.compile("__(" + "|".join(SLOTS) + ")__")
+#: The page's own script and style, which the CSP names by their hashes.
+_INLINE = re.compile(r"<(script|style)>(.*?)</\1>", re.S)
+#: In JSON, these can only stand inside strings; as ``\u`` escapes they cannot
+#: end the data's element (``</script``), open a comment (``<!--``) or, in the
+#: script of an older browser, end a line (U+2028, U+2029).
+_JSON_IN_HTML = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026",
+                               "\u2028": "\\u2028", "\u2029": "\\u2029"})
+
+
+def template() -> str:
+    """The page's template, ``show_page.html``."""
+    return resources.files("mcl2pnml.view").joinpath("show_page.html").read_text("utf-8")
+
+
+def sha256_source(text: str) -> str:
+    """A CSP hash source: ``'sha256-…'`` of an inline element's text, as browsers hash it."""
+    digest = hashlib.sha256(text.encode("utf-8")).digest()
+    return f"'sha256-{base64.b64encode(digest).decode('ascii')}'"
+
+
+def csp(html: str) -> str:
+    """The Content-Security-Policy of the page made from the template ``html``: its one
+    script and one style, by hash; nothing else."""
+    inline = {"script": [], "style": []}
+    for m in _INLINE.finditer(html):
+        inline[m.group(1)].append(m.group(2))
+    if len(inline["script"]) != 1 or len(inline["style"]) != 1:
+        raise AssertionError("the page's template has one script and one style")
+    return ("default-src 'none'; "
+            f"script-src {sha256_source(inline['script'][0])}; "
+            f"style-src {sha256_source(inline['style'][0])}; "
+            "img-src 'none'; connect-src 'none'; font-src 'none'; frame-src 'none'; "
+            "object-src 'none'; worker-src 'none'; manifest-src 'none'; "
+            "form-action 'none'; base-uri 'none'; "
+            "require-trusted-types-for 'script'; trusted-types 'none'")
+
+
+def json_for_html(value: Any) -> str:
+    """``value`` as JSON that may stand inside a ``<script>`` element: ASCII, no ``<``,
+    ``>`` or ``&``, no NaN or infinity (a ``ValueError``)."""
+    text = json.dumps(value, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
+    return text.translate(_JSON_IN_HTML)
+
+
+def html_text(text: str) -> str:
+    """Text as HTML character data (and attribute value): markup characters escaped,
+    lone surrogates (an undecodable file name) replaced, so that it encodes as UTF-8."""
+    text = re.sub("[\ud800-\udfff]", "\ufffd", text)
+    return (text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+            .replace('"', "&quot;").replace("'", "&#39;"))
+
+
+def fill(html: str, slots: dict[str, str]) -> str:
+    """The template with its slots filled, in one pass: what a slot gets is not
+    scanned again, so a value that spells a slot's name stays as it is."""
+    return _SLOT.sub(lambda m: slots[m.group(1)], html)
+
+
 def page(title: str, variants: list[dict[str, Any]],
          run: list[dict[str, Any]] | None = None) -> str:
     """The HTML page: the template with the data inside it."""
-    data = json.dumps({"title": title, "variants": variants, "run": run},
-                      separators=(",", ":"))
-    # inside <script>, "</" would end the element: written as "<\/" in JSON strings
-    data = data.replace("</", "<\\/")
-    html = resources.files("mcl2pnml.view").joinpath("show_page.html").read_text("utf-8")
-    return html.replace("__TITLE__", _escape(title)).replace("__DATA__", data)
-
-
-def _escape(text: str) -> str:
-    return (text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-            .replace('"', "&quot;"))
-
-
+    try:
+        data = json_for_html({"title": title, "variants": variants, "run": run})
+    except ValueError as e:   # read_run and variant let no NaN through: a bug of ours
+        raise Mcl2PnmlError(f"the page's data is not JSON: {e}") from None
+    html = template()
+    return fill(html, {"TITLE": html_text(title), "CSP": csp(html), "DATA": data})
 def save_page(path: str | Path, title: str, variants: list[dict[str, Any]],
               run: list[dict[str, Any]] | None = None) -> Path:
     """Write the page, whole or not at all."""
