@@ -169,7 +169,8 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
               "noise, seed, limits). Default: the paper's 16 x 8 x 5 m tank, a cross at (10, 4).")
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
-              show_default=True, help="Stop a mission still running at this virtual time.")
+              show_default=True, help="Stop a mission still running at this time (virtual, or "
+              "the wall clock's for a real vehicle): outcome TIMELIMIT, with the safe stop.")
 @click.option("--journal", type=OUTPUT,
               help="Journal the run here as it happens (a new file), to resume it if killed.")
 @click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "
@@ -181,9 +182,14 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows each action
-    and event; then the outcome (OK, FAIL, ABORTED, or STALLED with what it waits for) and
-    the safe stop: every primitive still enabled is disabled, however the run ends
-    (docs/faults.md). --journal writes the run as it goes; --resume continues it.
+    and event; then the outcome (OK, FAIL, ABORTED, STALLED with what it waits for, or
+    TIMELIMIT: cut short by --max-time) and the safe stop: every primitive still enabled
+    is disabled, however the run ends (docs/faults.md). --journal writes the run as it
+    goes; --resume continues it.
+
+    \b
+    Exit status, one per outcome: 0 OK, 1 FAIL, 4 ABORTED, 5 STALLED, 6 TIMELIMIT;
+    2 bad input, 130 interrupted.
     """
     given = frozenset(k for k in options if ctx.get_parameter_source(k)
                       is click.core.ParameterSource.COMMANDLINE)
@@ -192,7 +198,7 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
         text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
         note=lambda line: click.echo(line, err=True))
     click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
-    return 0
+    return result.outcome.exit_status
 
 
 @main.command(epilog=EXAMPLES)

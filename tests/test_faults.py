@@ -208,11 +208,60 @@ def test_an_adapter_that_raises_stalls_the_run_saying_so():
     assert [a.primitive for a in r.safe_stop] == ["Q"]   # it may have half-started
 
 
-def test_the_time_limit_stops_the_vehicle():
+def test_the_time_limit_cuts_the_run_short_at_the_limit_and_stops_the_vehicle():
     r = both(lambda: Faulty(SCRIPT), max_time=3)
-    assert r.outcome is Outcome.STALLED and r.time == 0
-    assert r.waiting[0] == "stopped at the time limit of 3 s"
-    assert [a.primitive for a in r.safe_stop] == ["P"]
+    # not STALLED: P's report was due at 5 s; the run ends at the limit, not at the last event
+    assert r.outcome is Outcome.TIMELIMIT and r.time == 3
+    assert r.waiting[0] == "stopped at the time limit of 3 s; a vehicle event was due at t=5 s"
+    assert [(a.t, a.primitive) for a in r.safe_stop] == [(3, "P")]
+
+
+def test_a_time_out_due_past_the_limit_is_named():
+    # P never answers: T's time-out (10 s after P's on) is what was still due
+    r = both(lambda: Faulty(SCRIPT, drop={("P", ACHIEVED, 1)}), max_time=7)
+    assert r.outcome is Outcome.TIMELIMIT and r.time == 7
+    assert r.waiting[0].startswith("stopped at the time limit of 7 s; the time-out of ")
+    assert r.waiting[0].endswith(" was due at t=10 s")
+    assert [(a.t, a.primitive) for a in r.safe_stop] == [(7, "P")]
+
+
+def test_a_stall_before_the_limit_is_still_a_stall():
+    r = both(lambda: Faulty(SCRIPT, drop={("Q", ACHIEVED, 1)}), max_time=1000)
+    assert r.outcome is Outcome.STALLED and r.time == 5
+
+
+def test_the_time_limit_of_a_live_run_is_timelimit_at_the_limit(engine):
+    ticks = iter(range(0, 10_000, 10))     # each reading of the clock 10 s later
+    r = run_realtime(engine(FAULTS), MappedVehicle(MAPPING, QueueTransport()),
+                     clock=lambda: float(next(ticks)), max_time=25)
+    assert r.outcome is Outcome.TIMELIMIT and r.time == 25
+    assert r.waiting[0] == "stopped at the time limit of 25 s"
+    # (which primitive depends on how far the leaping clock took the mission)
+    assert len(r.safe_stop) == 1 and r.safe_stop[0].t == 25
+
+
+def test_each_outcome_has_an_exit_status_of_its_own():
+    statuses = {o: o.exit_status for o in Outcome}
+    assert statuses[Outcome.OK] == 0
+    assert len(set(statuses.values())) == len(Outcome)
+    # 2 is bad input, 3 a partial analysis, 130 an interrupt: never an outcome
+    assert not set(statuses.values()) & {2, 3, 130}
+
+
+@pytest.mark.parametrize("script, extra, outcome", [
+    (SCRIPT, [], "OK"),
+    ({"P": ["ok@5"], "Q": ["fail@5"]}, [], "FAIL"),
+    ({"P": ["ok@5"], "Q": ["never"]}, [], "STALLED"),
+    (SCRIPT, ["--max-time", "3"], "TIMELIMIT"),
+])
+def test_run_exits_with_its_outcomes_status(tmp_path, script, extra, outcome):
+    mission, vehicle = tmp_path / "m.mcl", tmp_path / "v.json"
+    mission.write_text(MISSION)
+    vehicle.write_text(json.dumps(script))
+    for engine in ("petri", "reference"):
+        out = cli("run", mission, "--vehicle", vehicle, "--engine", engine, "--json", *extra)
+        assert json.loads(out.stdout)["outcome"] == outcome, out.stderr
+        assert out.returncode == Outcome(outcome).exit_status, out.stderr
 
 
 def test_an_interrupt_stops_the_vehicle_before_it_is_passed_on(engine):

@@ -40,7 +40,13 @@ class Outcome(enum.Enum):
 
     STALLED = "STALLED"
     """Nothing can happen any more (no enabled transition, timer or pending
-    event) and no result was reached."""
+    event) and no result was reached; or the vehicle or its link failed
+    (the diagnosis says which)."""
+
+    TIMELIMIT = "TIMELIMIT"
+    """The time limit (``run --max-time``) came first: something was still
+    due (a vehicle event, a time-out) when the run was stopped at the limit,
+    with its safe stop. The mission did not stall: it was cut short."""
 
     # The member values are the words of cli.md's JSON and of the run log:
     # these two methods are the only mapping between the two, both ways.
@@ -52,6 +58,21 @@ class Outcome(enum.Enum):
     def from_json(cls, word: str) -> "Outcome":
         """The outcome a JSON object names (the inverse of :meth:`as_json`)."""
         return cls(word)
+
+    @property
+    def exit_status(self) -> int:
+        """The exit status of ``mcl2pnml run`` that ends this way.
+
+        One per outcome, so that a test harness or a vehicle's supervisor can
+        act on it without parsing the output. 2 is bad input (every command),
+        3 a partial analysis (``analyze``), 130 an interrupt: not used here.
+        """
+        return _EXIT_STATUS[self]
+
+
+#: ``mcl2pnml run``'s exit status per outcome (README.md, "Running a mission").
+_EXIT_STATUS = {Outcome.OK: 0, Outcome.FAIL: 1, Outcome.ABORTED: 4, Outcome.STALLED: 5,
+                Outcome.TIMELIMIT: 6}
 
 
 FireListener = Callable[[float, str], None]
@@ -204,11 +225,16 @@ class _Driver:
             raise _Fault from None
 
     def end(self, outcome: Outcome | None, t: float, note: list[str] | None = None) -> Run:
-        """The run's result, after the safe stop."""
+        """The run's result, after the safe stop.
+
+        No outcome is a stall; :attr:`Outcome.TIMELIMIT` is given with
+        ``note`` saying what was still due. Either way the diagnosis lists
+        the fault first, then the note, then what the mission waits for.
+        """
         stopped, failed = self.safe_stop(t)
         waiting: list[str] = []
-        if outcome is None:         # no result: say why the mission stopped
-            outcome = Outcome.STALLED
+        if outcome in (None, Outcome.TIMELIMIT):   # no result: say why the mission stopped
+            outcome = outcome or Outcome.STALLED
             waiting = ([self.fault] if self.fault else []) + (note or []) \
                 + self.engine.waiting()
         return Run(outcome, t, self.entries, list(self.engine.ignored), waiting + failed,
@@ -241,7 +267,7 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
 
     ``listener`` sees every action and event as it happens (the live log);
     ``max_time`` stops a mission that would run for ever (a loop whose
-    vehicle keeps answering) with the outcome STALLED. Whatever the ending,
+    vehicle keeps answering) at that time, with the outcome TIMELIMIT. Whatever the ending,
     primitives still enabled are disabled (:class:`~mcl2pnml.runtime.aal.SafeStop`),
     also before an error or an interrupt is passed on (docs/faults.md).
     """
@@ -258,7 +284,11 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
             by_vehicle = timer is None or (te is not None and te <= timer[0])
             at = te if by_vehicle else timer[0]
             if max_time is not None and at > max_time:
-                return d.end(None, t, [f"stopped at the time limit of {max_time:g} s"])
+                # cut short, not stalled: the stop (and its safe stop) is at the limit
+                due = "a vehicle event" if by_vehicle else f"the time-out of {timer[1]}"
+                return d.end(Outcome.TIMELIMIT, max_time,
+                             [f"stopped at the time limit of {max_time:g} s; {due} was due "
+                              f"at t={at:g} s"])
             t = at
             vehicle.advance(t)
             if by_vehicle:
@@ -279,7 +309,7 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
 
     Time is the wall clock from the start; time-outs fire when it reaches
     them, and events count from when they arrive. A real vehicle can always
-    still answer, so a run ends with a result, at ``max_time`` (STALLED), when
+    still answer, so a run ends with a result, at ``max_time`` (TIMELIMIT), when
     the link drops (STALLED, saying so), or when the operator interrupts it;
     each way with the safe stop of :func:`run`.
     """
@@ -302,7 +332,9 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
             if timer is not None and now() >= timer[0]:
                 d.deliver(engine.fire_timer(timer[0], timer[1]))
             elif max_time is not None and now() >= max_time:
-                return d.end(None, now(), [f"stopped at the time limit of {max_time:g} s"])
+                # a real vehicle can always still answer: the limit cuts the run short
+                return d.end(Outcome.TIMELIMIT, max_time,
+                             [f"stopped at the time limit of {max_time:g} s"])
     except _Fault:
         return d.end(None, now())
     except BaseException:
