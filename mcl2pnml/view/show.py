@@ -118,8 +118,7 @@ def variant(net: Net, label: str) -> dict[str, Any]:
 
 
 def _text(doc: Any) -> str | None:
-    """A doc line as the page shows it: text (a payload may hold any JSON value,
-    NaN included, and the page's data may hold no NaN)."""
+    """A doc line as the page shows it: text (a payload's doc may be any JSON value)."""
     if doc is None or isinstance(doc, str):
         return doc
     return json.dumps(thaw(doc), ensure_ascii=False)
@@ -273,6 +272,8 @@ def page(title: str, variants: list[dict[str, Any]],
         raise Mcl2PnmlError(f"the page's data is not JSON: {e}") from None
     html = template()
     return fill(html, {"TITLE": html_text(title), "CSP": csp(html), "DATA": data})
+
+
 def save_page(path: str | Path, title: str, variants: list[dict[str, Any]],
               run: list[dict[str, Any]] | None = None) -> Path:
     """Write the page, whole or not at all."""
