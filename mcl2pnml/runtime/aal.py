@@ -159,6 +159,19 @@ class LiveVehicle(ABC):
     def check_primitives(self, used: set[str]) -> None:
         """Refuse a mission this vehicle cannot serve, before it starts (default: any)."""
 
+    def check_enables(self, enables: Mapping[str, Iterable[tuple]] | None) -> None:
+        """Refuse, before anything is sent, arguments this vehicle cannot take (default: any).
+
+        ``enables``: every argument tuple each primitive may be enabled with,
+        or None when the engine cannot tell before the run.
+        """
+
+    def open(self) -> None:
+        """Connect to the vehicle, once the mission is checked (default: nothing to do)."""
+
+    def close(self) -> None:
+        """Let go of the vehicle, after the run and its safe stop (default: nothing to do)."""
+
     @abstractmethod
     def wait_event(self, timeout: float | None, clock) -> Event | None:
         """The next event, stamped ``clock()`` on arrival; None after ``timeout`` seconds."""

@@ -24,9 +24,13 @@ gives; ``on`` and ``off`` default to the vehicle's acknowledgement of the
 commands (rules ``"on"`` and ``"off"`` may say otherwise).
 
 Commands and messages are JSON objects, one per line, over a
-:class:`Transport`: standard streams, a TCP socket, or anything a bridge
-provides. The bridge on the vehicle's side translates them to its
-middleware; ``examples/bridges/`` has one for ROS 2 and one for MOOS-IvP.
+:class:`Transport`: in memory, or a TCP socket (optionally TLS) to the
+bridge on the vehicle, through the bounded, heartbeating and optionally
+authenticated link of :mod:`mcl2pnml.runtime.link`. The bridge translates
+them to its middleware; ``examples/bridges/`` has one for ROS 2 and one for
+MOOS-IvP. A mapping is checked against every argument the mission may send
+before anything is sent (:meth:`MappedVehicle.check_enables`): a ``$1[7]``
+where ``$1`` has three items is refused then, not blamed on the vehicle later.
 """
 from __future__ import annotations
 
@@ -34,14 +38,20 @@ import json
 import queue
 import re
 import socket
-import threading
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterable, Mapping
 
-from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle, VehicleInputError
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
+                                  VehicleInputError, _strings)
+from mcl2pnml.core.errors import LISTED, Location, Mcl2PnmlError
 from mcl2pnml.core.files import read_text
+from mcl2pnml.runtime.link import (BadLine, Link, LinkBroken, LinkOptions, Side, client_tls,
+                                   parse_address, quote_line, read_secret)
+
+#: Messages from the vehicle that no rule matched, kept for the log (the oldest dropped first).
+UNMATCHED_KEPT = 100
 
 _ARG = re.compile(r"^\$(\d+)((?:\[\d+\])*)$")
 
@@ -66,13 +76,15 @@ class Binding:
     disable: Mapping[str, Any]
     rules: tuple[Rule, ...]
     acknowledged: frozenset[EventKind]   # on/off sent by us when the command is sent
+    #: where each placeholder ($1[0]...) of the enable is written: (line, column)
+    placeholders: Mapping[str, tuple[int, int]] | None = None
 
 
 class VehicleMapping:
     """A loaded mapping file (see the module's documentation)."""
 
-    def __init__(self, vehicle: str, bindings: dict[str, Binding]):
-        self.vehicle, self.bindings = vehicle, bindings
+    def __init__(self, vehicle: str, bindings: dict[str, Binding], filename: str = "<mapping>"):
+        self.vehicle, self.bindings, self.filename = vehicle, bindings, filename
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<mapping>") -> "VehicleMapping":
@@ -110,17 +122,34 @@ class VehicleMapping:
             for key in ("enable", "disable"):
                 _check_placeholders(spec[key], fail, f"{where}, {key}")
             bindings[name] = Binding(name, spec["enable"], spec["disable"], tuple(rules),
-                                     frozenset(acknowledged))
-        return cls(str(data.get("vehicle", "vehicle")), bindings)
+                                     frozenset(acknowledged), _placed(text, name))
+        return cls(str(data.get("vehicle", "vehicle")), bindings, filename)
 
     @classmethod
     def load(cls, path: str | Path) -> "VehicleMapping":
         return cls.from_json(read_text(path, "mapping file"), str(path))
 
     def command(self, action: Action) -> dict[str, Any]:
+        """The command of ``action``; a placeholder its arguments do not have is an error.
+
+        The error (a :class:`VehicleInputError`: the vehicle's side is
+        misdescribed) names the mapping file, where the placeholder is
+        written, the primitive, and the placeholders these arguments have.
+        """
         binding = self.bindings[action.primitive]
         spec = binding.enable if action.kind is ActionKind.ENABLE else binding.disable
-        return _fill(spec, action.args)
+        try:
+            return _fill(spec, action.args)
+        except _Missing as e:
+            placeholder = e.args[0]
+            line, column = (binding.placeholders or {}).get(placeholder, (None, None))
+            shown = ", ".join(repr(a) for a in action.args) or "none"
+            valid = _valid_placeholders(action.args)
+            listed = ", ".join(valid[:LISTED]) + (" ..." if len(valid) > LISTED else "")
+            raise VehicleInputError(
+                f"primitive '{action.primitive}', {action.kind.value}: '{placeholder}' is not "
+                f"in its arguments ({shown}); valid: {listed or 'no placeholder'}",
+                Location(self.filename, line, column)) from None
 
     def event(self, message: Mapping[str, Any], t: float) -> Event | None:
         for binding in self.bindings.values():
@@ -141,14 +170,49 @@ def _check_placeholders(spec: Any, fail, where: str) -> None:
             _check_placeholders(v, fail, where)
 
 
+def _placed(text: str, primitive: str) -> dict[str, tuple[int, int]]:
+    """Where each placeholder of ``primitive``'s entry is written: the first after its name."""
+    strings = list(_strings(text))
+    start = next((i for i, (s, _, _) in enumerate(strings) if s == primitive), len(strings))
+    found: dict[str, tuple[int, int]] = {}
+    for s, line, column in strings[start + 1:]:
+        if s in found or not isinstance(s, str) or not _ARG.match(s):
+            continue
+        found[s] = (line, column)
+    return found
+
+
+class _Missing(Exception):
+    """A placeholder the action's arguments do not have (the placeholder)."""
+
+
+def _valid_placeholders(args: tuple) -> list[str]:
+    """Every placeholder these arguments have: $1, $1[0], $1[0][1]..."""
+    out: list[str] = []
+
+    def walk(name: str, value: Any) -> None:
+        out.append(name)
+        if isinstance(value, (tuple, list)):
+            for i, item in enumerate(value):
+                walk(f"{name}[{i}]", item)
+    for n, arg in enumerate(args, 1):
+        walk(f"${n}", arg)
+    return out
+
+
 def _fill(spec: Any, args: tuple) -> Any:
     """The command with ``$n`` (and ``$n[i]...``) replaced by the action's arguments."""
     if isinstance(spec, str):
         m = _ARG.match(spec)
         if not m:
             return spec
-        value: Any = args[int(m.group(1)) - 1]
+        n = int(m.group(1))
+        if not 1 <= n <= len(args):
+            raise _Missing(spec)
+        value: Any = args[n - 1]
         for index in re.findall(r"\[(\d+)\]", m.group(2)):
+            if not isinstance(value, (tuple, list)) or int(index) >= len(value):
+                raise _Missing(spec)
             value = value[int(index)]
         return list(value) if isinstance(value, tuple) else value
     if isinstance(spec, dict):
@@ -161,12 +225,22 @@ def _fill(spec: Any, args: tuple) -> Any:
 class Transport:
     """JSON objects out (commands) and in (messages), one per line."""
 
+    def open(self) -> None:
+        """Connect, once the mission is checked: nothing is sent before (default: nothing)."""
+
+    def hang_up(self) -> None:
+        """Our side ends the link, after the safe stop (default: nothing)."""
+
     def send(self, obj: Mapping[str, Any]) -> None:
         raise NotImplementedError
 
     def receive(self, timeout: float | None) -> dict[str, Any] | None:
         """The next message, or None if none came within ``timeout`` seconds."""
         raise NotImplementedError
+
+
+def _not_json(why: str) -> VehicleInputError:
+    return VehicleInputError(f"the vehicle's bridge sent a line that is not a JSON object: {why}")
 
 
 class _Closed:
@@ -204,48 +278,71 @@ class QueueTransport(Transport):
             self.inbox.put(item)     # and for every later call
             raise LinkLost("the vehicle's bridge closed the link")
         if isinstance(item, (bytes, str)):   # a line received that is no message
-            text = item.decode(errors="replace") if isinstance(item, bytes) else item
-            raise VehicleInputError(f"the vehicle's bridge sent a line that is not a JSON "
-                                    f"object: {text.rstrip()!r}")
+            raise _not_json(quote_line(item))
         return item
 
 
-class TcpTransport(QueueTransport):
-    """JSON lines over TCP to the bridge on the vehicle (``host:port``)."""
+class TcpTransport(Transport):
+    """JSON lines over TCP (or TLS) to the bridge on the vehicle, through a :class:`Link`.
 
-    def __init__(self, address: str):
-        super().__init__()
-        host, _, port = address.rpartition(":")
-        try:
-            self.sock = socket.create_connection((host or "localhost", int(port)), timeout=10)
-        except (OSError, ValueError) as e:
-            raise Mcl2PnmlError(f"cannot connect to the vehicle's bridge at {address}: {e}") \
-                from None
-        self.sock.settimeout(None)    # the reader blocks until a line or the end
-        self.file = self.sock.makefile("rwb")
-        threading.Thread(target=self._read, daemon=True).start()
+    ``address`` is ``HOST:PORT`` (a name, IPv4, or ``[IPv6]``); ``options``
+    bound the link and give its secret and certificates, all checked here,
+    before :meth:`open` connects. Every failure of the link reaches
+    :meth:`send` and :meth:`receive` as a :class:`LinkLost` (closed, reset,
+    silent, a send that does not complete, a line too long, a bad MAC) or a
+    :class:`VehicleInputError` (a line that is not a JSON object).
+    """
 
-    def _read(self) -> None:
+    def __init__(self, address: str, options: LinkOptions | None = None):
+        self.address, self.options = address, options or LinkOptions()
+        self.host, self.port = parse_address(address)
+        self.secret = read_secret(self.options.secret) if self.options.secret else None
+        self.tls = client_tls(self.options)
+        self.link: Link | None = None
+
+    def open(self) -> None:
+        if self.link is not None:
+            return
+        sock = None
         try:
-            for line in self.file:
-                try:
-                    obj = json.loads(line)
-                except (json.JSONDecodeError, UnicodeDecodeError):
-                    obj = None
-                self.inbox.put(obj if isinstance(obj, dict) else line)
-        except OSError:
-            pass          # reset by the peer: the same as a close
-        self.close()
+            sock = socket.create_connection((self.host, self.port),
+                                            timeout=self.options.connect_timeout)
+            if self.tls is not None:
+                sock = self.tls.wrap_socket(sock, server_hostname=self.host)
+            link = Link(sock, Side.CONTROLLER, self.options, self.secret,
+                        peer="the vehicle's bridge")
+            link.handshake()
+        except (OSError, LinkBroken) as e:
+            if sock is not None:
+                sock.close()
+            why = e if isinstance(e, LinkBroken) else (
+                getattr(e, "reason", None) or e.strerror or e)
+            raise Mcl2PnmlError(f"cannot connect to the vehicle's bridge at {self.address}: "
+                                f"{why}") from None
+        link.start()
+        self.link = link
+
+    def hang_up(self) -> None:
+        if self.link is not None:
+            self.link.close()
 
     def send(self, obj: Mapping[str, Any]) -> None:
-        if self.closed:
-            raise LinkLost("the link is closed")
+        if self.link is None:
+            raise LinkLost("the link is not open")
         try:
-            self.file.write(json.dumps(dict(obj)).encode() + b"\n")
-            self.file.flush()
-        except OSError as e:
-            self.closed = True
-            raise LinkLost(f"cannot send to the vehicle's bridge: {e.strerror or e}") from None
+            self.link.send(dict(obj))
+        except LinkBroken as e:
+            raise LinkLost(str(e)) from None
+
+    def receive(self, timeout: float | None) -> dict[str, Any] | None:
+        if self.link is None:
+            raise LinkLost("the link is not open")
+        try:
+            return self.link.receive(timeout)
+        except LinkBroken as e:
+            raise LinkLost(str(e)) from None
+        except BadLine as e:
+            raise _not_json(str(e)) from None
 
 
 class MappedVehicle(LiveVehicle):
@@ -255,11 +352,32 @@ class MappedVehicle(LiveVehicle):
     they come. :func:`~mcl2pnml.runtime.engine.run_realtime` drives it.
     """
 
-    def __init__(self, mapping: VehicleMapping, transport: Transport):
+    def __init__(self, mapping: VehicleMapping, transport: Transport,
+                 kept: int = UNMATCHED_KEPT):
         self.mapping, self.transport = mapping, transport
         self.primitives = frozenset(mapping.bindings)
         self.pending: list[Event] = []        # acknowledgements we give ourselves
-        self.unmatched: list[dict[str, Any]] = []
+        #: the last ``kept`` messages no rule matched, and how many older ones were dropped
+        self.unmatched: deque[dict[str, Any]] = deque(maxlen=kept)
+        self.dropped = 0
+
+    def check_enables(self, enables: Mapping[str, Iterable[tuple]] | None) -> None:
+        """Refuse, before anything is sent, a mapping the mission's arguments do not fit.
+
+        ``enables`` holds every argument tuple each primitive may be
+        enabled with (:meth:`~mcl2pnml.runtime.engine.Engine.enable_arguments`;
+        None: the engine cannot tell, and each command is checked as it is made).
+        """
+        for primitive, argument_tuples in sorted((enables or {}).items()):
+            if primitive in self.mapping.bindings:
+                for args in argument_tuples:
+                    self.mapping.command(Action(0.0, ActionKind.ENABLE, primitive, tuple(args)))
+
+    def open(self) -> None:
+        self.transport.open()
+
+    def close(self) -> None:
+        self.transport.hang_up()
 
     def act(self, action: Action) -> None:
         self.transport.send(self.mapping.command(action))
@@ -281,5 +399,7 @@ class MappedVehicle(LiveVehicle):
             return None
         event = self.mapping.event(message, clock())
         if event is None:
+            if len(self.unmatched) == self.unmatched.maxlen:
+                self.dropped += 1
             self.unmatched.append(message)
         return event

@@ -37,7 +37,7 @@ from __future__ import annotations
 import heapq
 from typing import Any
 
-from mcl2pnml.runtime.aal import Action, Event, EventKind
+from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
 from mcl2pnml.runtime.engine import Engine, Outcome
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import SUMMARY_MARKED, Net
@@ -48,6 +48,8 @@ RESULTS = {MissionPlace.OK.id: Outcome.OK, MissionPlace.FAIL.id: Outcome.FAIL,
            MissionPlace.ABORTED.id: Outcome.ABORTED}
 #: Firings allowed at one instant before the run is stopped as a zero-time loop.
 ZENO_LIMIT = 1_000_000
+#: Bindings of tasks and functions past which a mission's enable arguments are not listed.
+ENABLE_ARGUMENTS_LIMIT = 100_000
 
 
 class PetriEngine(Engine):
@@ -241,6 +243,40 @@ class PetriEngine(Engine):
         self.now = t
         actions = self._fire(i)
         return actions + self._settle()
+
+    def enable_arguments(self) -> dict[str, list[tuple]] | None:
+        # The arguments are constants passed down call sites (no arithmetic),
+        # so the bindings each scope can have are a finite set: grown from the
+        # mission's, through every call entry, until nothing new appears.
+        envs: dict[str, dict[str, dict[str, Any]]] = {MISSION: {"{}": {}}}
+        entries = [p.entry for p in self.payload if p.entry is not None]
+        changed = True
+        while changed:
+            changed = False
+            for entry in entries:
+                for env in list(envs.get(entry.scope, {}).values()):
+                    try:
+                        bound = {name: arg.evaluate(env) for name, arg in entry.bindings}
+                    except KeyError:        # a scope this call site never runs in
+                        continue
+                    callee = envs.setdefault(entry.callee, {})
+                    key = repr(sorted(bound.items()))
+                    if key not in callee:
+                        if sum(map(len, envs.values())) > ENABLE_ARGUMENTS_LIMIT:
+                            return None     # too many to list: checked as they are sent
+                        callee[key], changed = bound, True
+        out: dict[str, dict[str, tuple]] = {}
+        for payload in self.payload:
+            for a in payload.actions:
+                if a.kind is not ActionKind.ENABLE:
+                    continue
+                for env in envs.get(a.scope, {"{}": {}}).values() if a.scope else [{}]:
+                    try:
+                        args = tuple(x.evaluate(env) for x in a.args)
+                    except KeyError:
+                        continue
+                    out.setdefault(a.primitive, {})[repr(args)] = args
+        return {p: list(found.values()) for p, found in out.items()}
 
     def primitives_used(self) -> set[str]:
         # the primitives whose events some transition waits for

@@ -18,6 +18,7 @@ from mcl2pnml.core.errors import OptionError
 
 if TYPE_CHECKING:   # the table names the kinds; building one imports what it needs
     from mcl2pnml.runtime.aal import LiveVehicle, Vehicle
+    from mcl2pnml.runtime.link import LinkOptions
 
 
 @dataclass(frozen=True)
@@ -28,8 +29,9 @@ class VehicleKind:
     name: str
     #: does a ``--vehicle`` specification name this kind?
     matches: Callable[[str], bool]
-    #: the vehicle, from the specification, the ``--connect`` address and the world file
-    build: Callable[[str, "str | None", "Path | None"], "Vehicle | LiveVehicle"]
+    #: the vehicle, from the specification, the ``--connect`` address, the world file
+    #: and the live link's bounds and security (``run --secret``, ``--heartbeat``...)
+    build: Callable[[str, "str | None", "Path | None", "LinkOptions"], "Vehicle | LiveVehicle"]
     #: a real vehicle: driven on the wall clock, and a run of it cannot be replayed
     realtime: bool = False
     #: the simulator alone takes a world file
@@ -38,20 +40,25 @@ class VehicleKind:
     source: Callable[[str], "Path | None"] = lambda spec: None
 
 
-def _simulator(spec: str, connect: str | None, world: Path | None) -> Vehicle:
+def _simulator(spec: str, connect: str | None, world: Path | None,
+               link: LinkOptions) -> Vehicle:
     from mcl2pnml.runtime.simulator import AUVSimulator, World
     return AUVSimulator(World.load(world) if world else World())
 
 
-def _bridge(spec: str, connect: str | None, world: Path | None) -> LiveVehicle:
+def _bridge(spec: str, connect: str | None, world: Path | None,
+            link: LinkOptions) -> LiveVehicle:
+    """The mapped vehicle; its link is checked (address, key file, certificates), not opened."""
     from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
     if connect is None:
         raise OptionError("--connect", "a bridge needs --connect HOST:PORT (the bridge server "
                                        "on the vehicle)")
-    return MappedVehicle(VehicleMapping.load(spec[len("bridge:"):]), TcpTransport(connect))
+    transport = TcpTransport(connect, link)
+    return MappedVehicle(VehicleMapping.load(spec[len("bridge:"):]), transport)
 
 
-def _script(spec: str, connect: str | None, world: Path | None) -> Vehicle:
+def _script(spec: str, connect: str | None, world: Path | None,
+            link: LinkOptions) -> Vehicle:
     from mcl2pnml.runtime.aal import ScriptedVehicle
     return ScriptedVehicle.load(spec)
 
