@@ -372,6 +372,62 @@ def test_a_silent_peer_is_a_lost_link_at_the_liveness_time_out():
     assert sum(m.get("link") == "heartbeat" for m in peer.received) >= 5
 
 
+@pytest.mark.timeout(20)
+def test_the_inbox_and_the_unmatched_telemetry_are_bounded():
+    def chatter(conn, peer: Peer) -> None:
+        plain_hello(conn, peer)
+        conn.sendall(b"".join(encode({"message": "battery", "level": i}) for i in range(5000)))
+        peer.read_lines(conn)           # then silent, to the liveness time-out
+    peer = Peer(chatter)
+    transport = TcpTransport(peer.address, LinkOptions(**{**FAST.__dict__, "inbox": 100,
+                                                            "liveness": 1.0}))
+    transport.open()
+    try:
+        time.sleep(0.5)                 # nothing taken: the link stops reading at 100
+        assert len(transport.link.inbox) == 100
+        vehicle = MappedVehicle(VehicleMapping.load(SIM_MAPPING), transport)
+        with pytest.raises(Exception) as e:
+            while True:
+                vehicle.wait_event(1.0, time.monotonic)
+        assert "no heartbeat within the liveness time-out of 1 s" in str(e.value)
+        # every line came (flow control, not loss); the last 100 unmatched are kept
+        assert len(vehicle.unmatched) == 100 and vehicle.dropped == 4900
+        assert vehicle.unmatched[-1] == {"message": "battery", "level": 4999}
+    finally:
+        transport.hang_up()
+
+
+@pytest.mark.timeout(20)
+def test_a_failure_of_the_reader_itself_is_a_lost_link_not_a_silent_death(monkeypatch):
+    def broken(self, line):
+        raise RuntimeError("a fault of the reader")
+    monkeypatch.setattr(Link, "_take", broken)
+    peer = Peer(send_after_first_command(encode(DONE)))
+    recorder = Recorder()
+    result = run_bridge(peer.address, recorder=recorder)
+    assert_lost(result, "the link failed: RuntimeError: a fault of the reader", recorder)
+
+
+@pytest.mark.timeout(20)
+def test_the_reference_engine_refuses_a_bad_mapping_before_sending_that_command(tmp_path):
+    from mcl2pnml.runtime.reference import ReferenceEngine
+    bad = VehicleMapping.from_json(SIM_MAPPING.read_text().replace("$1[2]", "$2"), "m.json")
+    engine = ReferenceEngine(check_source(GOTO, "mission.mcl"))
+    assert engine.enable_arguments() is None      # it cannot tell before the run...
+    peer = Peer(send_after_first_command(b""))
+    vehicle = MappedVehicle(bad, TcpTransport(peer.address, FAST))
+    vehicle.open()
+    try:           # ...so the command is checked as it is made, and never sent
+        with pytest.raises(VehicleInputError, match=r"^m.json:5:\d+: primitive 'GoToWayPoint', "
+                           r"enable: '\$2' is not in its arguments \(\(1.0, 2.0, 3.0\)\); "
+                           r"valid: \$1, \$1\[0\], \$1\[1\], \$1\[2\]$"):
+            run_realtime(engine, vehicle)
+    finally:
+        vehicle.close()
+    # the enable never went out (its disable did: the safe stop counts an enable that failed)
+    assert "start_GoToWayPoint" not in peer.commands()
+
+
 # -- the example bridge server ---------------------------------------------------------------
 
 @pytest.fixture
@@ -398,8 +454,16 @@ def address(server) -> str:
 @pytest.mark.timeout(20)
 def test_the_mission_runs_through_the_example_server_with_heartbeats(server):
     s = server()
+    assert s.server_address[0] == "127.0.0.1"       # loopback unless told otherwise
     result = run_bridge(address(s))
     assert result.outcome is Outcome.OK and result.safe_stop == []
+
+
+def test_the_example_server_refuses_a_key_file_others_can_read(tmp_path, capsys):
+    key = secret_file(tmp_path)
+    key.chmod(0o640)
+    assert bridge_server.main(["--port", "0", "--secret", str(key)]) == 2
+    assert "can be read by its group or others" in capsys.readouterr().err
 
 
 @pytest.mark.timeout(20)

@@ -4,6 +4,10 @@ NOT RUN BY THE TESTS: ``pymoos`` needs the MOOS libraries, which cannot be
 installed on the machines that build and test mcl2pnml. The code below is a
 starting point to adapt to a vehicle's MOOS variables, not a tested adapter.
 
+What it trusts: every client of the MOOSDB can post ``MCL_STATUS``, and
+this bridge forwards it to the mission; keep the MOOSDB's port to the
+vehicle's own processes (docs/faults.md, "Trust and safety of the live link").
+
 Each command is posted as the string variable ``MCL_<COMMAND>`` holding the
 JSON (an IvP behaviour's condition can watch it, e.g. ``MCL_START_GOTOWAYPOINT``);
 each change of ``MCL_STATUS`` (a JSON string the vehicle posts) is sent back
@@ -35,3 +39,7 @@ class MoosMiddleware:
 
     def command(self, cmd: dict) -> None:
         self.comms.notify(f"MCL_{cmd['command'].upper()}", json.dumps(cmd))
+
+    def link_lost(self) -> None:
+        """mcl2pnml is gone: ``MCL_STOP_ALL`` is the condition of the vehicle's failsafe."""
+        self.comms.notify("MCL_STOP_ALL", "true")

@@ -276,6 +276,7 @@ class Link:
         self.dead: str | None = None            # why sending is over
         self.last_heard = time.monotonic()
         self.early = b""                        # what came after the hello, with it
+        self.backlog: deque[bytes] = deque()    # lines of the last chunk, for a full inbox
         self.wake_r, self.wake_w = socket.socketpair()
         self.stopping = False
         self.thread: threading.Thread | None = None
@@ -403,6 +404,7 @@ class Link:
         beat = time.monotonic()              # the first heartbeat at once
         tls = isinstance(self.sock, ssl.SSLSocket)
         while not self.stopping:
+            self._take_backlog()
             now = time.monotonic()
             if not pending and self.dead is None:
                 with self.cond:
@@ -411,7 +413,7 @@ class Link:
                     pending = self._seal(current.body) if current.sealed else encode(current.body)
                 elif now >= beat:
                     pending, beat = self._seal(HEARTBEAT_LINE), now + self.options.heartbeat
-            reading = self.broken is None and len(self.inbox) < self.options.inbox
+            reading = self.broken is None and not self.backlog
             wanted = (selectors.EVENT_READ if reading else 0) | \
                 (selectors.EVENT_WRITE if pending and self.dead is None else 0)
             if wanted != registered:
@@ -423,7 +425,7 @@ class Link:
                 registered = wanted
             # a full inbox is polled: the caller empties it without waking us
             timeout = max(0.0, beat - now) if not pending and self.dead is None else None
-            if not reading and self.broken is None:
+            if self.backlog and self.broken is None:
                 timeout = 0.05
             if tls and reading and self.sock.pending():
                 timeout = 0.0
@@ -467,10 +469,13 @@ class Link:
         except LinkBroken as e:
             self._break(f"{self.peer} sent {e}")
             return
-        for line in lines:
-            if self.broken is not None:
-                return
-            self._take(line)
+        self.backlog.extend(lines)
+        self._take_backlog()
+
+    def _take_backlog(self) -> None:
+        """Take the lines received while the inbox has room (it holds at most ``inbox``)."""
+        while self.backlog and self.broken is None and len(self.inbox) < self.options.inbox:
+            self._take(self.backlog.popleft())
 
     def _take(self, line: bytes) -> None:
         self.last_heard = time.monotonic()
