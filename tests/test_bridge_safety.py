@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
-import resource
 import shutil
 import socket
 import subprocess
@@ -28,7 +26,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.pipeline import check_source
-from mcl2pnml.runtime.aal import ActionKind, Event, SafeStop, VehicleInputError
+from mcl2pnml.runtime.aal import ActionKind, Event, VehicleInputError
 from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
 from mcl2pnml.runtime.engine import Outcome, Run, run_realtime
 from mcl2pnml.runtime.executor import PetriEngine
@@ -229,7 +227,7 @@ def test_a_peer_that_never_reads_cannot_freeze_the_controller():
 
 
 @pytest.mark.timeout(30)
-def test_the_time_limit_holds_against_a_peer_that_never_reads(tmp_path):
+def test_the_command_line_ends_in_time_against_a_peer_that_never_reads(tmp_path):
     mission = tmp_path / "loop.mcl"
     mission.write_text(LOOP)
     mapping = tmp_path / "loop.json"

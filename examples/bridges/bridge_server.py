@@ -142,6 +142,7 @@ class Handler(socketserver.BaseRequestHandler):
             link.handshake()
         except LinkBroken as e:
             print(f"bridge: {e}", file=sys.stderr)
+            link.refuse(str(e))
             return
         link.start()
 

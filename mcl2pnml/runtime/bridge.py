@@ -38,6 +38,7 @@ import json
 import queue
 import re
 import socket
+import ssl
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
@@ -303,7 +304,7 @@ class TcpTransport(Transport):
     def open(self) -> None:
         if self.link is not None:
             return
-        sock = None
+        sock = link = None
         try:
             sock = socket.create_connection((self.host, self.port),
                                             timeout=self.options.connect_timeout)
@@ -311,12 +312,21 @@ class TcpTransport(Transport):
                 sock = self.tls.wrap_socket(sock, server_hostname=self.host)
             link = Link(sock, Side.CONTROLLER, self.options, self.secret,
                         peer="the vehicle's bridge")
-            link.handshake()
+            try:
+                link.handshake()
+            except LinkBroken as e:
+                link.refuse(str(e))
+                raise
         except (OSError, LinkBroken) as e:
-            if sock is not None:
+            if link is not None:
+                link.close()
+            elif sock is not None:
                 sock.close()
-            why = e if isinstance(e, LinkBroken) else (
-                getattr(e, "reason", None) or e.strerror or e)
+            if isinstance(e, ssl.SSLCertVerificationError):
+                why = f"TLS: {e.verify_message} ({e.reason})"
+            else:
+                why = e if isinstance(e, LinkBroken) else (
+                    getattr(e, "reason", None) or e.strerror or e)
             raise Mcl2PnmlError(f"cannot connect to the vehicle's bridge at {self.address}: "
                                 f"{why}") from None
         link.start()

@@ -73,6 +73,8 @@ SEND_TIMEOUT = 5.0
 MAX_LINE = 64 * 1024
 #: Messages received and not yet handled; the reading pauses while it is full.
 INBOX = 1024
+#: Lines waiting to be sent (each sender waits for its own: this bounds many senders).
+OUTBOX = 64
 #: Seconds to connect, and for the hellos (and TLS handshake) to cross.
 CONNECT_TIMEOUT = 10.0
 #: A shared secret is at least this many bytes.
@@ -289,7 +291,10 @@ class Link:
                 "heartbeat": self.options.heartbeat}
 
     def handshake(self) -> None:
-        """Send our hello and check the other end's; :class:`LinkBroken` says what went wrong."""
+        """Send our hello and check the other end's; :class:`LinkBroken` says what went wrong.
+
+        The caller then tells the other end why (:meth:`refuse`) and closes.
+        """
         timeout = self.options.connect_timeout
         self.sock.settimeout(timeout)
         buffer = b""
@@ -322,7 +327,6 @@ class Link:
         if hello.get("auth") != mine:
             why = (f"{self.peer} authenticates its lines (give --secret)" if mine == "none" else
                    f"{self.peer} does not authenticate its lines (it has no --secret)")
-            self.refuse(why)
             raise LinkBroken(why)
         nonce, period = hello.get("nonce"), hello.get("heartbeat")
         if not (isinstance(nonce, str) and len(nonce) == 32
@@ -409,6 +413,7 @@ class Link:
             if not pending and self.dead is None:
                 with self.cond:
                     current = self.outbox.popleft() if self.outbox else None
+                    self.cond.notify_all()        # room in the outbox
                 if current is not None:
                     pending = self._seal(current.body) if current.sealed else encode(current.body)
                 elif now >= beat:
@@ -533,19 +538,27 @@ class Link:
         line saying why (the other end reads it as the end of the link only).
         """
         out = _Out(body, sealed)
+        timeout = self.options.send_timeout
+        deadline = time.monotonic() + timeout
+        late = (f"could not send to {self.peer} within {timeout:g} s (the send time-out): "
+                "it does not read")
         with self.cond:
+            while self.dead is None and len(self.outbox) >= OUTBOX:
+                if not self.cond.wait(max(0.0, deadline - time.monotonic())):
+                    break
             if self.dead is not None:
                 raise LinkBroken(f"the link is closed: {self.dead}")
+            if len(self.outbox) >= OUTBOX:
+                self._break(late, sending=True)
+                raise LinkBroken(late)
             self.outbox.append(out)
         try:
             self.wake_w.send(b"\0")
         except OSError:
             pass        # the wake-up pipe is full: the thread is awake already
-        if not out.done.wait(self.options.send_timeout):
-            reason = (f"could not send to {self.peer} within {self.options.send_timeout:g} s "
-                      "(the send time-out): it does not read")
-            self._break(reason, sending=True)
-            raise LinkBroken(reason)
+        if not out.done.wait(max(0.0, deadline - time.monotonic())):
+            self._break(late, sending=True)
+            raise LinkBroken(late)
         if out.error is not None:
             raise LinkBroken(f"the link is closed: {out.error}")
 
