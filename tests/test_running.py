@@ -344,7 +344,7 @@ def test_a_run_stopped_at_its_time_limit_names_the_timers_it_waits_for():
                 "mission { T(1); }\n")
     for engine in engines(c):
         result = run(engine, scripted({"P": ["never"]}), max_time=100)
-        assert result.outcome is Outcome.STALLED
+        assert result.outcome is Outcome.TIMELIMIT and result.time == 100
         assert any("time-out" in w and "t=500 s" in w for w in result.waiting), result.waiting
 
 
