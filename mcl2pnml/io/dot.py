@@ -26,6 +26,7 @@ from typing import Mapping, Sequence
 
 import graphviz
 
+from mcl2pnml.core.errors import OptionError
 from mcl2pnml.core.files import atomic_write_bytes, atomic_write_text
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import read_transition
@@ -43,6 +44,40 @@ COPY_RETURNS = 3
 
 def _tokens(n: int) -> str:
     return TOKEN * n if n <= 3 else f"{n}{TOKEN}"
+
+
+def node_name(node_id: str) -> str:
+    """A node's name in DOT: its id, unless DOT would read that id as something else.
+
+    In an edge ``a:b`` is node ``a``, port ``b``; ``<...>`` is an HTML string
+    (markup graphviz renders, images it reads from disk included); a
+    backslash or a quote can end a quoted name early; graphviz keeps names
+    that start with ``%`` for its anonymous nodes. Such an id is named
+    ``~x`` and its UTF-8 in hex, which :func:`node_id` reads back; an id that
+    starts with ``~x`` is encoded too, so that an encoded name is never a real id.
+    """
+    if (any(c in node_id for c in ':\\"') or node_id.startswith(("%", _ENCODED))
+            or (node_id.startswith("<") and node_id.endswith(">"))):
+        return _ENCODED + node_id.encode().hex()
+    return node_id
+
+
+def node_id(name: str) -> str:
+    """The id of the node named ``name`` in DOT (the inverse of :func:`node_name`)."""
+    if name.startswith(_ENCODED):
+        try:
+            return bytes.fromhex(name[len(_ENCODED):]).decode()
+        except ValueError:      # a copy of a place (``NAME~3``), not a node of the net
+            return ""
+    return name
+
+
+_ENCODED = "~x"
+
+
+def _text(label: str) -> str:
+    """A label as plain text: graphviz must neither read it as HTML nor expand ``\\N``."""
+    return graphviz.escape(label)
 
 
 def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
@@ -65,18 +100,20 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         label = shown + (f"\n{_tokens(tokens)}" if tokens else "")
         # circles all of one size read best; long names get a larger one
         width = max(0.75, 0.085 * len(shown) + 0.15)
-        target.node(p.id, label, shape="circle", width=f"{width:.2f}", fixedsize="true",
+        target.node(node_name(p.id), _text(label), shape="circle", width=f"{width:.2f}",
+                    fixedsize="true",
                     peripheries="2" if p.interface is not None else "1",
                     **{"class": "place"})
 
     def add_transition(target, t, box_name: str | None = None) -> None:
         label = _inside(t.label, box_name)
         attrs = {"shape": "box", "height": "0.5", "width": "0.12", "style": "filled",
-                 "fillcolor": "white", "xlabel": label, "label": "", "class": "transition"}
+                 "fillcolor": "white", "xlabel": _text(label), "label": "",
+                 "class": "transition"}
         if t.timing is not None or read_transition(t).timeout is not None:
             delay = f" {t.timing}" if t.timing is not None else " (time-out)"
-            attrs.update(fillcolor="gray35", xlabel=label + delay)
-        target.node(t.id, **attrs)
+            attrs.update(fillcolor="gray35", xlabel=_text(label + delay))
+        target.node(node_name(t.id), **attrs)
 
     for p in net.places:
         if p.id not in clustered:
@@ -86,7 +123,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             add_transition(g, t)
     for name, members in clusters.items():
         with g.subgraph(name=f"cluster_{name}") as c:
-            c.attr(label=name, style="rounded,dashed", color="gray50", fontsize="11")
+            c.attr(label=_text(name), style="rounded,dashed", color="gray50", fontsize="11")
             for m in members:   # net order within the cluster, as given
                 if m in net.place_index:
                     add_place(c, net.place_index[m], name)
@@ -103,7 +140,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             with g.subgraph() as r:
                 r.attr(rank=rank)
                 for m in members:
-                    r.node(m)
+                    r.node(node_name(m))
     depth = flow_depth(net)
     back = {a for a in net.arcs if a.kind is ArcKind.NORMAL
             and depth.get(a.target, 0) <= depth.get(a.source, 0)}
@@ -114,7 +151,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     copies = 0
     for a in net.arcs:
         attrs = {}
-        target = a.target
+        target = node_name(a.target)
         if a.weight != 1:
             attrs["label"] = str(a.weight)
         if a.kind is ArcKind.READ:
@@ -126,20 +163,20 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             # transition, as PNML's reference places do, instead of crossing
             # the whole drawing
             copies += 1
-            target = f"{a.target}~{copies}"
+            target = f"{target}~{copies}"
             place = net.place_index[a.target]
             name = box.get(a.source)   # in its transition's box, if it has one
             where = g.subgraph(name=f"cluster_{name}") if name else contextlib.nullcontext(g)
             shown = _inside(place.label, name)
             with where as c:
-                c.node(target, shown, shape="circle", fixedsize="true", style="dashed",
+                c.node(target, _text(shown), shape="circle", fixedsize="true", style="dashed",
                        width=f"{max(0.55, 0.07 * len(shown) + 0.15):.2f}", fontsize="8",
                        **{"class": "copy"})
         elif a in back:
             # a token going back (a primitive switched off): drawn, but the
             # left-to-right order follows the forward flow
             attrs.update(constraint="false", color="gray40")
-        g.edge(a.source, target, **attrs)
+        g.edge(node_name(a.source), target, **attrs)
     if legend:
         with g.subgraph(name="cluster_legend") as k:
             k.attr(label="legend", fontsize="9", style="rounded", color="gray70")
@@ -224,9 +261,26 @@ def instance_clusters(net: Net) -> dict[str, list[str]]:
     return {k: v for k, v in groups.items() if len(v) > 1}
 
 
+#: How to get graphviz's ``dot`` program, for the message when it is missing.
+INSTALL_DOT = ("install graphviz (apt-get install graphviz, dnf install graphviz, "
+               "brew install graphviz, or https://graphviz.org/download/)")
+
+
+def dot_missing(option: str, without: str) -> OptionError:
+    """The one message when ``option`` needs graphviz's ``dot`` program and it is not on
+    the PATH: what is missing, how to install it, and (``without``) what works without it."""
+    return OptionError(option, f"graphviz's 'dot' program is not installed (no 'dot' on "
+                               f"the PATH): {INSTALL_DOT}; {without}")
+
+
 def render(graph: graphviz.Digraph, path: str, fmt: str) -> None:
     """Render to ``path`` in ``fmt`` (svg, png...), written whole or not at all."""
-    atomic_write_bytes(path, graph.pipe(format=fmt))
+    try:
+        data = graph.pipe(format=fmt)
+    except graphviz.ExecutableNotFound:
+        raise dot_missing("--format", "the formats pnml, tina, lola and dot (the source) "
+                                      "work without it") from None
+    atomic_write_bytes(path, data)
 
 
 def drawing(net: Net, title: str | None = None) -> graphviz.Digraph:

@@ -67,9 +67,11 @@ def _dot_layout(net: Net) -> dict[str, tuple[float, float]] | None:
     picture; its boxes around instances also make dot fast (0.2 s instead
     of 18 s on a 600-node mission).
     """
+    from mcl2pnml.io.dot import (dot_missing, instance_clusters, node_id,   # imports graphviz:
+                                 to_dot)                                # only now
     if not dot_available():
-        raise RuntimeError("graphviz 'dot' is not installed (apt-get install graphviz)")
-    from mcl2pnml.io.dot import instance_clusters, to_dot   # imports graphviz: only now
+        raise dot_missing("--layout", "the layouts layers and none work without it, and auto "
+                                      "lays out in layers when it is missing")
 
     source = to_dot(net, clusters=instance_clusters(net), legend=False).source
     try:
@@ -81,9 +83,10 @@ def _dot_layout(net: Net) -> dict[str, tuple[float, float]] | None:
     nodes = {n.id for n in (*net.places, *net.transitions)}
     pos: dict[str, tuple[float, float]] = {}
     for obj in graph.get("objects", []):
-        if obj.get("name") in nodes and "pos" in obj:
+        name = node_id(obj.get("name", ""))     # the id, where DOT needed it encoded
+        if name in nodes and "pos" in obj:
             x, y = (float(v) for v in obj["pos"].split(","))
-            pos[obj["name"]] = (x, y)
+            pos[name] = (x, y)
     return _normalise(pos, flip_y=True)  # graphviz's y axis points up
 
 
