@@ -14,16 +14,42 @@ and what goes to standard output (``--json``, ``template`` without
 ``-o``), which is the shell's to redirect. tests/test_resume.py fills
 the disk at the last moment and fails a PNML half-way: the old file
 stays, and no partial or temporary file is left.
+
+A temporary file is named ``.NAME.mcl2pnml-PID-RANDOM.tmp``: hidden, next to
+its target NAME, recognisably ours, with the writer's process id. A writer
+killed outright (SIGKILL, the OOM killer, a power cut) cannot remove its
+own; the next write of the same target removes those whose process is
+gone, and nothing else (another name, a live process's, a file that is not
+a regular file). For tests only: with ``MCL2PNML_WRITE_KILL=1`` in the
+environment, the process kills itself (SIGKILL) once an output is whole in
+its temporary file, before it is moved into place, as a kill at that
+moment would.
+
+Every input is read through here too (:func:`read_bytes`, :func:`read_text`,
+:func:`open_regular`), and only a regular file is read: a FIFO would block
+the command for ever, a device may never end, a directory is no input.
+And an output must not be an input of the same command, nor another of its
+outputs (:func:`check_outputs`): writing it would destroy what is read.
 """
 from __future__ import annotations
 
 import os
+import re
+import signal
+import stat
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
-from typing import BinaryIO, Iterator
+from typing import BinaryIO, Iterable, Iterator
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+
+#: The test hook: kill the process once an output is whole in its temporary file.
+KILL_BEFORE_REPLACE = "MCL2PNML_WRITE_KILL"
+#: What marks a temporary file as ours, between the target's name and the writer's pid.
+TEMP_MARK = ".mcl2pnml-"
+#: A temporary file keeps this much of its target's name (a name has at most 255 bytes).
+TEMP_NAME_KEPT = 100
 
 
 @contextmanager
@@ -40,7 +66,8 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
     tmp = None
     try:
         directory.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+        remove_stale_temporaries(path)
+        fd, tmp = tempfile.mkstemp(prefix=_temp_prefix(path.name), suffix=".tmp", dir=directory)
         with os.fdopen(fd, "wb") as f:
             yield f
             f.flush()
@@ -48,6 +75,8 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
             # open() would, or the one of the file it replaces
             os.fchmod(f.fileno(), _mode_for(path))
             os.fsync(f.fileno())
+        if os.environ.get(KILL_BEFORE_REPLACE):
+            os.kill(os.getpid(), signal.SIGKILL)
         os.replace(tmp, path)
     except BaseException as e:
         if tmp is not None:
@@ -59,6 +88,62 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
             reason = e.strerror or str(e)
             raise Mcl2PnmlError(f"cannot write: {reason}", Location(str(path))) from None
         raise
+
+
+def _temp_prefix(name: str) -> str:
+    return f".{name[:TEMP_NAME_KEPT]}{TEMP_MARK}{os.getpid()}-"
+
+
+def _temp_pattern(name: str) -> re.Pattern[str]:
+    """Our temporary files for a target ``name``; group 1 is the writer's pid.
+
+    The random part is mkstemp's (lower-case letters, digits, ``_``).
+    """
+    return re.compile(re.escape(f".{name[:TEMP_NAME_KEPT]}{TEMP_MARK}")
+                      + r"([1-9][0-9]{0,9})-[a-z0-9_]+\.tmp")
+
+
+def _alive(pid: int) -> bool:
+    """Is there a process ``pid``? In doubt (another user's, a pid out of range), yes."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError, OSError):
+        return True
+    return True
+
+
+def remove_stale_temporaries(path: str | Path) -> list[Path]:
+    """Remove the temporary files of writes of ``path`` whose writer is dead; the removed.
+
+    Only names of our pattern for this very target, only regular files, only
+    when the pid they carry is no live process (a pid reused since by another
+    process keeps its file: that is the safe side). Not our own pid's either:
+    a temporary of this process is a write in progress.
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    pattern, removed = _temp_pattern(path.name), []
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = pattern.fullmatch(entry.name)
+        if match is None:
+            continue
+        pid = int(match.group(1))
+        if pid == os.getpid() or _alive(pid):
+            continue
+        try:
+            if not entry.is_file(follow_symlinks=False):
+                continue
+            os.unlink(entry.path)
+            removed.append(Path(entry.path))
+        except OSError:
+            pass     # gone already, or not ours to remove: leave it
+    return removed
 
 
 def _mode_for(path: Path) -> int:
@@ -81,21 +166,106 @@ def atomic_write_text(path: str | Path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
 
 
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISSOCK, "a socket"), (stat.S_ISCHR, "a character device"),
+          (stat.S_ISBLK, "a block device"))
+
+
+def _not_regular(mode: int) -> str | None:
+    """What a file of this mode is, when it is not a regular file."""
+    if stat.S_ISREG(mode):
+        return None
+    return next((kind for test, kind in _KINDS if test(mode)), "not a regular file")
+
+
+def open_regular(path: str | Path, what: str | None = None, flags: int = os.O_RDONLY) -> int:
+    """A descriptor of the regular file at ``path``, or one error naming it.
+
+    A FIFO, a device, a socket or a directory is refused before it is read:
+    reading a FIFO blocks until someone writes, a device may never end. The
+    type is checked before opening (opening a FIFO may block, a tape device
+    may rewind) and again on the descriptor, opened without blocking, so
+    that a file swapped in between is caught too.
+    """
+    cannot = f"cannot read the {what}" if what else "cannot read"
+
+    def refused(kind: str) -> Mcl2PnmlError:
+        return Mcl2PnmlError(f"{cannot}: this is {kind}, not a regular file",
+                             Location(str(path)))
+    try:
+        kind = _not_regular(os.stat(path).st_mode)
+        if kind is not None:
+            raise refused(kind)
+        fd = os.open(path, flags | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as e:
+        raise Mcl2PnmlError(f"{cannot}: {e.strerror or e}", Location(str(path))) from None
+    kind = _not_regular(os.fstat(fd).st_mode)
+    if kind is not None:
+        os.close(fd)
+        raise refused(kind)
+    return fd
+
+
+def _read(path: str | Path, what: str | None) -> bytes:
+    fd = open_regular(path, what)
+    try:
+        with os.fdopen(fd, "rb") as f:
+            return f.read()
+    except OSError as e:
+        reason = e.strerror or str(e)
+        the = f" the {what}" if what else ""
+        raise Mcl2PnmlError(f"cannot read{the}: {reason}", Location(str(path))) from None
+
+
 def read_text(path: str | Path, what: str) -> str:
     """A UTF-8 text file, or one error naming it: "FILE: cannot read the WHAT: why"."""
+    data = _read(path, what)
     try:
-        return Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as e:
-        reason = getattr(e, "strerror", None) or str(e)
-        raise Mcl2PnmlError(f"cannot read the {what}: {reason}", Location(str(path))) from None
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise Mcl2PnmlError(f"cannot read the {what}: {e}", Location(str(path))) from None
 
 
-def read_bytes(path: str | Path) -> bytes:
-    """A file's bytes; a file that cannot be read is one error naming it."""
+def read_bytes(path: str | Path, what: str | None = None) -> bytes:
+    """A file's bytes; a file that cannot be read, or is no regular file, is one error naming it."""
+    return _read(path, what)
+
+
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """Do ``a`` and ``b`` name one file: the same resolved path, or (both existing) the
+    same inode, through a hard link, a symbolic link or a bind mount."""
     try:
-        return Path(path).read_bytes()
-    except OSError as e:
-        raise Mcl2PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
+        if Path(a).resolve() == Path(b).resolve():
+            return True
+    except (OSError, RuntimeError):   # a symbolic link loop: compare what exists
+        pass
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
+
+
+def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
+                  inputs: Iterable[tuple[str, str | Path | None]] = ()) -> None:
+    """Refuse an output that is an input of the same command, or another of its outputs.
+
+    ``outputs`` are (option, path) pairs (``("-o", ...)``, ``("--log", ...)``),
+    ``inputs`` (what it is, path) pairs (``("the mission", ...)``); None is an
+    option not given. Writing an output that is also an input destroys the
+    input (``compile s.mcl -o s.mcl``); two outputs in one file keep the last.
+    One :class:`~mcl2pnml.core.errors.OptionError` naming the option.
+    """
+    given_outputs = [(o, Path(p)) for o, p in outputs if p is not None]
+    given_inputs = [(w, Path(p)) for w, p in inputs if p is not None]
+    for i, (option, path) in enumerate(given_outputs):
+        for what, source in given_inputs:
+            if same_file(path, source):
+                raise OptionError(option, f"'{path}' is {what}, which this command reads: "
+                                          "writing there would destroy it; give another file")
+        for other, earlier in given_outputs[:i]:
+            if same_file(path, earlier):
+                raise OptionError(option, f"'{path}' is also the file of {other}: give each "
+                                          "output a file of its own")
 
 
 def decode_text(data: bytes, filename: str, what: str) -> str:

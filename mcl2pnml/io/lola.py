@@ -34,6 +34,7 @@ from mcl2pnml.core.version import __version__
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
 from mcl2pnml.core.files import atomic_write_text, decode_text, read_bytes
 from mcl2pnml.core.net import ArcKind, Net, NetBuilder
+from mcl2pnml.core.bounds import MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
 from mcl2pnml.io import ids
 from mcl2pnml.io.text import syntax_error
 
@@ -152,11 +153,21 @@ def parse_lola(text: str, filename: str = "<lola>") -> Net:
         src = lines[token.line - 1] if 0 < token.line <= len(lines) else None
         return Mcl2PnmlError(message, Location(filename, token.line, token.column, src))
 
+    def count(n: Token | None) -> int:
+        """A marking or a weight, at most :data:`MAX_TOKENS`."""
+        if n is None:
+            return 1
+        value = natural_at_most(str(n), MAX_TOKENS)
+        if value is None:
+            shown = str(n) if len(n) <= 30 else f"a number of {len(n):,} digits"
+            raise at(n, f"{shown} is too large: markings and weights go up to "
+                        f"{MAX_TOKENS_TEXT}")
+        return value
+
     def pairs(counts) -> list[tuple[Token, int]]:
         if counts is None:
             return []
-        return [(name, 1 if n is None else int(n)) for name, n in
-                (c.children for c in counts.children)]
+        return [(name, count(n)) for name, n in (c.children for c in counts.children)]
 
     b = NetBuilder(Path(filename).stem or "net")
     places: set[str] = set()
@@ -174,6 +185,8 @@ def parse_lola(text: str, filename: str = "<lola>") -> Net:
         if p not in places:
             raise at(token, f"the marking names '{p}', which is not a declared place")
         marking[p] = marking.get(p, 0) + n
+        if marking[p] > MAX_TOKENS:   # a place named twice: its counts add up
+            raise at(token, f"place '{p}' is given more than {MAX_TOKENS_TEXT} tokens in all")
     seen: set[str] = set()
     for tr in transitions:
         token, _, consume, produce = tr.children

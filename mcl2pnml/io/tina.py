@@ -50,6 +50,7 @@ from pathlib import Path
 from lark import Lark, Token, UnexpectedInput
 
 from mcl2pnml.core.version import __version__
+from mcl2pnml.core.bounds import MAX_SECONDS, MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
 from mcl2pnml.core.files import atomic_write_text, decode_text, read_bytes
 from mcl2pnml.core.net import ArcKind, Net, NetBuilder, Timing, thaw
@@ -196,10 +197,12 @@ def _text(token: Token) -> str:
     return str(token)
 
 
-def _number(token: Token) -> int:
+def _number(token: Token) -> int | None:
+    """A marking or weight (``3``, ``2K``, ``5M``); None past :data:`MAX_TOKENS`."""
     text = str(token)
     scale = {"K": 1_000, "M": 1_000_000}.get(text[-1], 1)
-    return int(text.rstrip("KM")) * scale
+    value = natural_at_most(text.rstrip("KM"), MAX_TOKENS)
+    return None if value is None or value * scale > MAX_TOKENS else value * scale
 
 
 class _Reader:
@@ -216,7 +219,13 @@ class _Reader:
         self.timing: dict[str, Timing | None] = {}
         self.arcs: dict[tuple[str, str, ArcKind], int] = {}
         match = _UNIT.search(text)
-        self.unit = Fraction(int(match.group(1)), int(match.group(2) or 1)) if match else 1
+        self.unit: Fraction | int = 1
+        if match:
+            # a unit of absurd size is no unit of ours: counted in seconds, as TINA does
+            num, den = (natural_at_most(match.group(1), MAX_SECONDS),
+                        natural_at_most(match.group(2) or "1", MAX_SECONDS))
+            if num and den:
+                self.unit = Fraction(num, den)
 
     def at(self, item, message: str) -> Mcl2PnmlError:
         line = getattr(item, "line", None) or getattr(getattr(item, "meta", None), "line", None)
@@ -235,17 +244,30 @@ class _Reader:
             raise self.at(token, f"'{node}' is declared as a {seen} and used as a {kind}")
         return node
 
+    def number(self, token: Token, what: str) -> int:
+        """A marking or an arc weight, at most :data:`MAX_TOKENS`."""
+        value = _number(token)
+        if value is None:
+            shown = f" {token}" if len(token) <= 30 else f", a number of {len(token):,} digits,"
+            raise self.at(token, f"{what}{shown} is too large: markings and weights go up "
+                                 f"to {MAX_TOKENS_TEXT}")
+        return value
+
     def arc(self, place: str, transition: str, kind: ArcKind, weight: int,
-            into_transition: bool) -> None:
+            into_transition: bool, where) -> None:
         key = (place, transition, kind) if into_transition else (transition, place, kind)
-        self.arcs[key] = self.arcs.get(key, 0) + weight
+        total = self.arcs.get(key, 0) + weight
+        if total > MAX_TOKENS:   # arcs of one pair add up
+            raise self.at(where, f"the arcs between '{place}' and '{transition}' weigh more "
+                                 f"than {MAX_TOKENS_TEXT} together")
+        self.arcs[key] = total
 
     def weighted(self, arc) -> tuple[Token, ArcKind, int]:
         target, *rest = arc.children
         if not rest:
             return target, ArcKind.NORMAL, 1
         op, count = rest
-        weight = _number(count)
+        weight = self.number(count, "the weight")
         if weight == 0:
             raise self.at(count, "an arc's weight must be at least 1")
         if op.type in ("INHIBIT", "STOPWATCH", "STOPINH"):
@@ -289,7 +311,7 @@ class _Reader:
                     if kind is ArcKind.READ and not inputs:
                         raise self.at(arc, "a test arc ('?') goes from a place to a "
                                            "transition: put it before '->'")
-                    self.arc(self.node(target, "place"), t, kind, weight, inputs)
+                    self.arc(self.node(target, "place"), t, kind, weight, inputs, arc)
 
     def place(self, tree) -> None:
         head, *rest = tree.children
@@ -298,7 +320,7 @@ class _Reader:
             if item.data == "label":
                 self.labels[p] = _text(item.children[0])
             elif item.data == "marking":
-                tokens = _number(item.children[0])
+                tokens = self.number(item.children[0], "the marking")
                 if p in self.marking and self.marking[p] != tokens:
                     raise self.at(item, f"place '{p}' is given {self.marking[p]} and then "
                                         f"{tokens} tokens")
@@ -314,7 +336,8 @@ class _Reader:
                     if kind is ArcKind.READ and inputs:
                         raise self.at(arc, "a test arc ('?') goes from a place to a "
                                            "transition: put it after '->'")
-                    self.arc(p, self.node(target, "transition"), kind, weight, not inputs)
+                    self.arc(p, self.node(target, "transition"), kind, weight, not inputs,
+                             arc)
 
     def interval(self, t: str, token: Token) -> None:
         text = re.sub(r"\s", "", str(token))
@@ -323,8 +346,14 @@ class _Reader:
                                                                   text[-1] == "]"):
             raise self.at(token, f"the interval {text} has an open bound; mcl2pnml's "
                                  "timings are closed intervals ([a,b] or [a,w[)")
-        lo = Fraction(int(low)) * self.unit
-        hi = None if high == "w" else Fraction(int(high)) * self.unit
+        bounds = [natural_at_most(b, MAX_SECONDS * 10 ** _DIGITS) for b in (low, high)
+                  if b != "w"]
+        if None in bounds or any(b * self.unit > MAX_SECONDS for b in bounds):
+            shown = text if len(text) <= 40 else f"of {len(text) - 3:,} characters"
+            raise self.at(token, f"the interval {shown} is too long: time bounds go up "
+                                 f"to {MAX_SECONDS:,} s")
+        lo = Fraction(bounds[0]) * self.unit
+        hi = None if high == "w" else Fraction(bounds[1]) * self.unit
         if hi is not None and hi < lo:
             raise self.at(token, f"the interval {text} is empty")
         self.timing[t] = None if (lo == 0 and hi is None) else Timing(float(lo), None if hi is None

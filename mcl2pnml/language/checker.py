@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable
 
 from mcl2pnml.language import ast
+from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
 from mcl2pnml.language.library import Library, default_library
 from mcl2pnml.language.template_parser import Template, TemplateKind
@@ -182,9 +183,11 @@ class _Checker:
                     continue
                 self.arity(call.pos, "primitive", call.name, prim.params, len(call.args))
                 self.check_args(call.args, task.params, where)
-            if task.timeout is not None and not task.timeout.value > 0:
+            # a time-out the engines and the net's timing can all hold: finite (the
+            # parser refuses 1e309) and within MAX_SECONDS
+            if task.timeout is not None and not 0 < task.timeout.value <= MAX_SECONDS:
                 self.error(task.timeout.pos, f"a timeout is a positive number of seconds, "
-                                             f"not {task.timeout.text}")
+                                             f"at most {MAX_SECONDS:,}, not {task.timeout.text}")
         return out
 
     # -- statements ----------------------------------------------------------------------
@@ -239,31 +242,39 @@ class _Checker:
             graph[f.name] = calls
         for m in self.p.of(ast.Mission):
             self.statements(m.body, (), "the mission", [])
-        # recursion, direct or not: a depth-first search for a cycle
+        # recursion, direct or not: a depth-first search for a cycle, with an explicit
+        # stack (a chain of thousands of functions each calling the next is a
+        # legitimate program, far deeper than Python's recursion limit)
         order: list[str] = []
-        state: dict[str, int] = {}
+        state: dict[str, int] = {}         # 1: on the current path, 2: done
         reported: set[frozenset[str]] = set()
-
-        def visit(name: str, path: list[str]) -> None:
-            state[name] = 1
-            for callee in graph.get(name, ()):
-                if state.get(callee) == 1:
-                    cycle = path[path.index(callee):] + [callee]
-                    key = frozenset(cycle)
-                    if key not in reported:
-                        reported.add(key)
-                        f = self.names[callee]
-                        self.error(f.pos, "recursion: " + " calls ".join(cycle)
-                                   + "; a mission must be finite, so functions may not call "
-                                     "themselves, directly or not")
-                elif callee in graph and state.get(callee) is None:
-                    visit(callee, path + [callee])
-            state[name] = 2
-            order.append(name)
-
-        for name in graph:
-            if state.get(name) is None:
-                visit(name, [name])
+        for root in graph:
+            if state.get(root) is not None:
+                continue
+            state[root] = 1
+            path = [root]
+            stack = [iter(graph[root])]
+            while stack:
+                for callee in stack[-1]:
+                    if state.get(callee) == 1:
+                        cycle = path[path.index(callee):] + [callee]
+                        key = frozenset(cycle)
+                        if key not in reported:
+                            reported.add(key)
+                            f = self.names[callee]
+                            self.error(f.pos, "recursion: " + " calls ".join(cycle)
+                                       + "; a mission must be finite, so functions may not "
+                                         "call themselves, directly or not")
+                    elif callee in graph and state.get(callee) is None:
+                        state[callee] = 1
+                        path.append(callee)
+                        stack.append(iter(graph[callee]))
+                        break
+                else:   # every callee done: this function comes after them
+                    name = path.pop()
+                    stack.pop()
+                    state[name] = 2
+                    order.append(name)
         return tuple(order)
 
 

@@ -11,6 +11,7 @@ UTF-8 text (or is binary) is refused the same way, at the first bad byte.
 """
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharact
                   UnexpectedEOF, UnexpectedInput)
 
 from mcl2pnml.language import ast
+from mcl2pnml.core.bounds import MAX_INTEGER, natural_at_most
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
 from mcl2pnml.core.files import decode_text, read_bytes
 from mcl2pnml.core.gcpause import without_gc
@@ -88,6 +90,28 @@ def _describe(terminal: str) -> str:
     return f"'{pattern.value}'" if pattern.type == "str" else terminal.lower()
 
 
+def _number_value(text: str) -> int | float | str:
+    """A NUMBER's value, or why it is out of range (:mod:`mcl2pnml.core.bounds`).
+
+    An integer is at most :data:`MAX_INTEGER` in size (judged by its length
+    before it is converted: Python converts no more than 4,300 digits); a
+    decimal is a finite double (``1e309`` is not).
+    """
+    if not any(c in text for c in ".eE"):
+        sign = -1 if text.startswith("-") else 1
+        value = natural_at_most(text.lstrip("+-"), MAX_INTEGER)
+        if value is None:
+            shown = text if len(text) <= 30 else f"an integer of {len(text):,} digits"
+            return (f"{shown} is too large: an integer is at most 2^63-1 in size; a larger "
+                    "number is a decimal, e.g. 1e30")
+        return sign * value
+    value = float(text)
+    if not math.isfinite(value):
+        shown = text if len(text) <= 30 else f"a number of {len(text):,} characters"
+        return f"{shown} is too large: a decimal is at most 1.7976931348623157e308 in size"
+    return value
+
+
 def _pos(item) -> ast.Pos:
     if isinstance(item, Token):
         return ast.Pos(item.line, item.column)
@@ -113,7 +137,10 @@ class _Build(Transformer_NonRecursive):
     def number(self, items):
         (tok,) = items
         text = str(tok)
-        value = float(text) if any(c in text for c in ".eE") else int(text)
+        value = _number_value(text)
+        if isinstance(value, str):
+            # out of range: the slow path locates it (:func:`_check_nesting`)
+            raise ValueError(value)
         return ast.Number(value, text, _pos(tok))
 
     def string(self, items):
@@ -266,7 +293,8 @@ _NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall",
 
 
 def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
-    """Refuse nesting deeper than :data:`MAX_NESTING`, and keywords used as names.
+    """Refuse nesting deeper than :data:`MAX_NESTING`, keywords used as names, and numbers
+    out of range (:func:`_number_value`).
 
     One walk in source order, with a stack rather than recursion (a file
     nested 3,000 deep must get this message, not overflow Python's stack);
@@ -276,6 +304,10 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
     while stack:
         node, depth = stack.pop()
         if isinstance(node, Token):
+            if node.type == "NUMBER" and isinstance(_number_value(str(node)), str):
+                src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
+                raise Mcl2PnmlError(_number_value(str(node)),
+                                    Location(filename, node.line, node.column, src))
             if node.type == "NAME" and str(node) in KEYWORDS:
                 # the contextual lexer lets a keyword through as a name
                 src = lines[node.line - 1] if 0 < node.line <= len(lines) else None

@@ -77,6 +77,8 @@ class ReferenceEngine(Engine):
                     f"'{task.name}' uses '{task.pattern}' (run it with --engine petri)")
         self.now = 0.0
         self.steps: deque[Callable[[], None]] = deque()
+        #: results reported and not yet delivered to the parents (see :meth:`_Node.end`)
+        self.reports: deque[tuple["_Node", Outcome]] = deque()
         self.actions: list[Action] = []
         self.prims = {name: _Primitive(name) for name in checked.primitives}
         self.busy: set[str] = set()                # tasks, functions and primitives in use
@@ -332,10 +334,29 @@ class _Node(ABC):
         self.on_child_end(child, result)
 
     def end(self, result: Outcome) -> None:
-        """Report the result to the parent; any later end is ignored: one result each."""
-        if self.phase is not Phase.ENDED:
-            self.phase = Phase.ENDED
-            self.done_cb(self, result)
+        """Report the result to the parent; any later end is ignored: one result each.
+
+        The report goes up the chain of callers without recursion: a chain of
+        thousands of functions, each calling the next, ends as thousands of
+        nested statements, far deeper than Python's stack. Every ``end`` is the
+        last thing its caller does (a tail call), so a report made while
+        another is being delivered can wait until that one returns: the order
+        of effects is the one direct calls would give.
+        """
+        if self.phase is Phase.ENDED:
+            return
+        self.phase = Phase.ENDED
+        pending = self.e.reports
+        pending.append((self, result))
+        if len(pending) > 1:
+            return           # an outer end is delivering: this report is next
+        try:
+            while pending:
+                node, outcome = pending[0]
+                node.done_cb(node, outcome)
+                pending.popleft()
+        finally:
+            pending.clear()
 
     # -- what the statements use ---------------------------------------------------------
 

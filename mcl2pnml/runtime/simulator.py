@@ -61,32 +61,35 @@ class World:
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<world>") -> "World":
-        """A world file: any of the fields above, as JSON (``"cross": null`` for none)."""
+        """A world file: any of the fields above, as JSON (``"cross": null`` for none).
+
+        Every field is checked, each fault one message at the field's line and
+        column: its type, that its numbers are finite and in range (:data:`RANGES`;
+        the time step ``dt`` from :data:`MIN_DT` to :data:`MAX_DT` s, so that a
+        run takes a bounded number of steps), the shapes of ``tank``, ``start``
+        and ``cross``, and that the start and the cross are inside the tank.
+        Angles are in degrees in the file, radians inside.
+        """
         try:
             data = json.loads(text)
         except json.JSONDecodeError as e:
             raise Mcl2PnmlError(f"not a world file: {e.msg}",
                                 Location(filename, e.lineno, e.colno)) from None
+        except (ValueError, RecursionError) as e:   # a number past Python's digit limit
+            reason = ("arrays or objects nested too deeply" if isinstance(e, RecursionError)
+                      else "a number of more than 4,300 digits" if "digits" in str(e)
+                      else str(e))
+            raise Mcl2PnmlError(f"not a world file: {reason}", Location(filename)) from None
         valid = set(cls.__dataclass_fields__)
         if not isinstance(data, dict):
             raise Mcl2PnmlError("a world file is a JSON object with some of: "
                                 + ", ".join(sorted(valid)), Location(filename))
+        where = _field_locations(text, filename)
         unknown = sorted(set(data) - valid)
         if unknown:
             raise Mcl2PnmlError(f"unknown world setting '{unknown[0]}'; valid: "
-                                + ", ".join(sorted(valid)), Location(filename))
-        fields: dict[str, Any] = {}
-        for key, value in data.items():
-            if isinstance(value, list):
-                value = tuple(value)
-            fields[key] = value
-        for key in ("start_yaw", "max_turn", "heading_band", "camera_half_angle"):
-            if key in fields:   # degrees in the file, radians inside
-                fields[key] = math.radians(fields[key])
-        try:
-            return cls(**fields)
-        except TypeError as e:
-            raise Mcl2PnmlError(f"bad world file: {e}", Location(filename)) from None
+                                + ", ".join(sorted(valid)), where(unknown[0]))
+        return cls(**_checked_fields(data, where))
 
     @classmethod
     def load(cls, path: str | Path) -> "World":
@@ -315,3 +318,122 @@ class AUVSimulator(Vehicle):
             step = min(dt, t - self.state.t)
             self.state = self._step(self.state, step, self.rng)
             self.trajectory.append((self.state.t, self.state.x, self.state.y, self.state.z))
+
+
+#: The time step's range, in seconds: the simulator integrates in steps of ``dt``
+#: and looks ahead :attr:`AUVSimulator.HORIZON` seconds for the next event, so
+#: that a look-ahead takes at most HORIZON / MIN_DT steps (360,000).
+MIN_DT, MAX_DT = 0.01, 10.0
+#: How large a length, in metres, may be (tank extents, bands, radii).
+MAX_LENGTH = 1e6
+#: The numbers of a world file: what each is, its lowest and highest value, and
+#: whether the lowest is allowed (False: only values above it). Angles in degrees.
+RANGES: dict[str, tuple[str, float, bool, float]] = {
+    "start_yaw": ("the heading at the start in degrees", -360.0, True, 360.0),
+    "max_speed": ("the top surge speed in m/s", 0.0, False, 100.0),
+    "max_heave": ("the top heave speed in m/s", 0.0, False, 100.0),
+    "max_turn": ("the top turn rate in degrees/s", 0.0, False, 3600.0),
+    "tau": ("the time constant of the speeds in seconds", 0.0, False, 3600.0),
+    "acceptance": ("the radius of a waypoint's sphere in metres", 0.0, False, MAX_LENGTH),
+    "depth_band": ("the depth band in metres", 0.0, False, MAX_LENGTH),
+    "heading_band": ("the heading band in degrees", 0.0, False, 180.0),
+    "camera_half_angle": ("the camera's half angle in degrees", 0.0, False, 89.0),
+    "release_time": ("the time a marker takes to go in seconds", 0.0, True, 3600.0),
+    "noise": ("the random walk of the position in m/sqrt(s)", 0.0, True, 100.0),
+    "dt": ("the time step in seconds", MIN_DT, True, MAX_DT),
+}
+_DEGREES = ("start_yaw", "max_turn", "heading_band", "camera_half_angle")
+_SEED_LIMIT = 2 ** 63
+
+
+def _number(value: Any) -> bool:
+    """A JSON number that is finite (JSON's ``true`` is no number here)."""
+    return (isinstance(value, (int, float)) and not isinstance(value, bool)
+            and math.isfinite(value))
+
+
+def _range_text(low: float, low_allowed: bool, high: float) -> str:
+    return f"from {low:g} to {high:g}" if low_allowed else f"above {low:g}, up to {high:g}"
+
+
+def _field_locations(text: str, filename: str):
+    """``where(key)``: the location of a top-level field's value in a world file's text.
+
+    Walks the object as JSON does (the text has parsed already), noting where
+    each value starts; a key given twice is located where JSON takes it, the
+    last time.
+    """
+    decoder = json.JSONDecoder()
+    lines = text.split("\n")
+    starts: dict[str, int] = {}
+    i = text.index("{") + 1
+    blank = " \t\r\n"
+    while True:
+        while text[i] in blank:
+            i += 1
+        if text[i] == "}":
+            break
+        key, i = json.decoder.scanstring(text, i + 1)
+        while text[i] in blank + ":":
+            i += 1
+        starts[key] = i
+        _, i = decoder.raw_decode(text, i)
+        while text[i] in blank + ",":
+            i += 1
+        if text[i] == "}":
+            break
+
+    def where(key: str) -> Location:
+        if key not in starts:
+            return Location(filename)
+        line = text.count("\n", 0, starts[key])
+        column = starts[key] - (text.rfind("\n", 0, starts[key]) + 1) + 1
+        return Location(filename, line + 1, column, lines[line][:400])
+    return where
+
+
+def _checked_fields(data: dict[str, Any], where) -> dict[str, Any]:
+    """The world's fields from a file's object, each checked (see :meth:`World.from_json`)."""
+    def bad(key: str, message: str) -> Mcl2PnmlError:
+        return Mcl2PnmlError(f'world setting "{key}" is {message}, not '
+                             f"{json.dumps(data[key])[:80]}", where(key))
+
+    def point(key: str, size: int, what: str, inside: tuple[float, ...] | None) -> tuple:
+        value = data[key]
+        if not isinstance(value, list) or len(value) != size or not all(map(_number, value)):
+            raise bad(key, f"{what}: a list of {size} finite numbers")
+        if inside is None:
+            if not all(0 < v <= MAX_LENGTH for v in value):
+                raise bad(key, f"{what}: each above 0, up to {MAX_LENGTH:,.0f}")
+        elif not all(0 <= v <= limit for v, limit in zip(value, inside)):
+            sizes = " x ".join(f"{v:g}" for v in inside)
+            raise bad(key, f"{what}: inside the {sizes} m tank (each from 0 to its extent)")
+        return tuple(float(v) for v in value)
+
+    fields: dict[str, Any] = {}
+    if "tank" in data:
+        fields["tank"] = point("tank", 3, "the tank's extents x, y and depth in metres", None)
+    tank = fields.get("tank", World.tank)
+    if "start" in data:
+        fields["start"] = point("start", 3, "where the vehicle starts, x, y and depth", tank)
+    elif not all(0 <= v <= limit for v, limit in zip(World.start, tank)):
+        raise Mcl2PnmlError(f"the default start {World.start} is outside this tank: give "
+                            '"start" too', where("tank"))
+    if "cross" in data:
+        fields["cross"] = None if data["cross"] is None else point(
+            "cross", 2, "where the cross is on the floor, x and y (or null)", tank[:2])
+    if "seed" in data:
+        seed = data["seed"]
+        if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)
+                                 or abs(seed) >= _SEED_LIMIT):
+            raise bad("seed", "the seed of the noise: an integer below 2^63 in size, or null")
+        fields["seed"] = seed
+    for key, (what, low, low_allowed, high) in RANGES.items():
+        if key not in data:
+            continue
+        value = data[key]
+        if not _number(value) or not (low <= value if low_allowed else low < value) \
+                or value > high:
+            raise bad(key, f"{what}: a number {_range_text(low, low_allowed, high)}")
+        fields[key] = math.radians(value) if key in _DEGREES else float(value)
+    return fields

@@ -37,6 +37,8 @@ from lxml import etree
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all, source_lines
 from mcl2pnml.core.gcpause import without_gc
+from mcl2pnml.core.bounds import MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
+from mcl2pnml.core.files import read_bytes
 from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml.tapaal import is_tapaal, parse_tapaal
@@ -210,13 +212,21 @@ class _Reader:
         text = self._label_text(el, label)
         if text is None:
             return None
-        try:
-            n = int(text)
-        except ValueError:
-            n = None
+        digits = text.strip()
+        n = natural_at_most(digits, MAX_TOKENS) if digits.isdigit() and digits.isascii() \
+            else None
+        if n is None and digits.isdigit() and digits.isascii():
+            shown = digits if len(digits) <= 30 else f"(a number of {len(digits):,} digits)"
+            self.error(_child(el, label), f"{what}: {label} {shown} is too large: markings "
+                                          f"and weights go up to {MAX_TOKENS_TEXT}")
+            return None
+        if n is None and digits[:1] in "+-" and digits[1:].isdigit() and digits[1:].isascii() \
+                and len(digits) <= 30:
+            n = int(digits)   # a sign, as int() took it: -1 is refused below, +2 is 2
         if n is None or n < minimum:
             kind = "a natural number" if minimum == 0 else "a positive integer"
-            self.error(_child(el, label), f"{what}: {label} must be {kind}, not '{text}'")
+            self.error(_child(el, label), f"{what}: {label} must be {kind}, not "
+                                          f"'{text[:40]}{'...' if len(text) > 40 else ''}'")
             return None
         return n
 
@@ -574,11 +584,12 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
 
 
 def read_file(path: str | Path) -> bytes:
-    """A file's bytes, or a :class:`PnmlError` that names it."""
+    """A file's bytes, or a :class:`PnmlError` that names it (a FIFO, a device or a
+    directory is refused unread: :func:`mcl2pnml.core.files.read_bytes`)."""
     try:
-        return Path(path).read_bytes()
-    except OSError as e:
-        raise PnmlError(f"cannot read: {e.strerror}", Location(str(path))) from None
+        return read_bytes(path)
+    except Mcl2PnmlError as e:
+        raise PnmlError(e.message, e.location) from None
 
 
 def load_pnml(path: str | Path, net_id: str | None = None) -> Net:

@@ -22,6 +22,7 @@ TAPAAL).
 from __future__ import annotations
 
 from mcl2pnml.core.errors import PnmlError, raise_all
+from mcl2pnml.core.bounds import MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
 from mcl2pnml.core.net import Arc, Marking, Net, Place, Transition
 
 NAMESPACE = "http://www.informatik.hu-berlin.de/top/pnml/ptNetb"
@@ -79,8 +80,14 @@ class _Tapaal:
         text = el.get(attr)
         if text is None:
             return default
+        digits = text.strip()
+        if digits.isdigit() and digits.isascii() and natural_at_most(digits, MAX_TOKENS) is None:
+            shown = digits if len(digits) <= 30 else f"(a number of {len(digits):,} digits)"
+            self.error(el, f"{_local(el)} '{el.get('id')}': {attr} {shown} is too large: "
+                           f"markings and weights go up to {MAX_TOKENS_TEXT}")
+            return default
         try:
-            n = int(text.strip())
+            n = int(digits) if len(digits) <= 30 else -1
         except ValueError:
             n = -1
         if n < minimum:

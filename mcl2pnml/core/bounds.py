@@ -1,0 +1,41 @@
+"""The largest numbers mcl2pnml reads, and how a reader checks a number's text against them.
+
+A number is bounded where it is read, so that every later stage sees only
+values it can hold, and a number too large is one message at its place in
+the file, not a failure deep inside (Python refuses to turn an integer of
+more than 4,300 digits into text or back, and an unbounded one would pass
+through the analysis's 64-bit counters):
+
+* markings and arc weights (PNML, TINA, LoLA): at most :data:`MAX_TOKENS`,
+  2^63 - 1, what the analysis's counters hold (``analysis.counterspace``
+  counts tokens in signed 64-bit integers);
+* time-outs (MCL) and time bounds (TINA): finite, at most
+  :data:`MAX_SECONDS` seconds of virtual time (about 31.7 years), far
+  beyond any mission and still exact as a float to the microsecond that
+  the TINA writer counts in;
+* any other number in MCL: an integer of at most :data:`MAX_INTEGER` in
+  size, or a finite decimal (a double).
+"""
+from __future__ import annotations
+
+#: The largest marking of a place and weight of an arc.
+MAX_TOKENS = 2 ** 63 - 1
+#: How the messages write it.
+MAX_TOKENS_TEXT = "2^63-1 (9,223,372,036,854,775,807)"
+#: The longest time-out and time bound, in seconds.
+MAX_SECONDS = 1_000_000_000
+#: The largest integer literal of MCL, in size (a decimal may be larger, up to a double's).
+MAX_INTEGER = 2 ** 63 - 1
+
+
+def natural_at_most(digits: str, limit: int) -> int | None:
+    """The value of a text of decimal digits, or None if it is more than ``limit``.
+
+    The length is judged first: a text of 5,000 digits is never turned into
+    an integer (Python refuses to beyond 4,300 digits, and it costs time).
+    """
+    significant = digits.lstrip("0")
+    if len(significant) > len(str(limit)):
+        return None
+    value = int(significant or "0")
+    return value if value <= limit else None

@@ -1,0 +1,369 @@
+"""Hostile offline inputs: each is one clear message and exit status 2, never a traceback,
+a hang, a destroyed input or a file left behind (docs/faults.md, "Bad offline inputs").
+
+A journal edited by hand, a FIFO where a file is expected, two resumes of one
+journal at once, an output that is an input, a finished run resumed, a write
+killed outright, a world that would never end, a chain of thousands of
+functions, numbers past what the readers can hold, and graphviz missing.
+The messages of the invalid files are golden, under tests/data (``journal/``,
+``world/``, and beside the others in ``mcl/``, ``formats/``, ``pnml/``).
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+
+import pytest
+
+from helpers import DATA, ROOT, assert_error_golden, run_cli
+from mcl2pnml.core.errors import Mcl2PnmlError
+
+SAUCE = ROOT / "examples" / "sauce.mcl"
+FOUND = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
+         "KeepDepth": ["ok@5", "ok@6"], "ReleaseMarker": ["ok@1"]}
+JOURNALS = sorted((DATA / "journal" / "invalid").glob("*.journal"))
+WORLDS = sorted((DATA / "world" / "invalid").glob("*.json"))
+TOO_LARGE = [DATA / "mcl" / "invalid" / "huge_timeout.mcl",
+             DATA / "mcl" / "invalid" / "infinite_timeout.mcl",
+             DATA / "mcl" / "invalid" / "timeout_too_long.mcl",
+             DATA / "formats" / "invalid" / "huge_marking.net",
+             DATA / "formats" / "invalid" / "huge_weight.net",
+             DATA / "formats" / "invalid" / "huge_interval.net",
+             DATA / "formats" / "invalid" / "huge_tokens.lola",
+             DATA / "formats" / "invalid" / "huge_consume.lola",
+             DATA / "pnml" / "invalid" / "huge_marking.pnml",
+             DATA / "pnml" / "invalid" / "huge_weight.pnml"]
+
+
+def cli(*args):
+    """The command in this process (click's runner): fast, and its exit status."""
+    from click.testing import CliRunner
+
+    from mcl2pnml.cli import main
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def one_error(out, *pieces: str) -> str:
+    """Exit status 2, one message (its first line holds ``pieces``), no traceback."""
+    text = getattr(out, "output", None) or out.stderr
+    code = getattr(out, "exit_code", None)
+    code = out.returncode if code is None else code
+    assert code == 2, text
+    assert "Traceback" not in text and getattr(out, "exception", None) is None \
+        or isinstance(out.exception, SystemExit), text
+    first = text.strip().splitlines()[0]
+    for piece in pieces:
+        assert piece in first, text
+    return text
+
+
+@pytest.fixture
+def script(tmp_path):
+    path = tmp_path / "vehicle.json"
+    path.write_text(json.dumps(FOUND))
+    return path
+
+
+def killed_journal(tmp_path, script, lines: int = 10):
+    """A journal of a run of sauce killed after ``lines`` lines: one to resume."""
+    journal = tmp_path / "run.journal"
+    env = {**os.environ, "MCL2PNML_JOURNAL_KILL_AFTER": str(lines)}
+    out = run_cli("run", SAUCE, "--vehicle", script, "--journal", journal, env=env, timeout=60)
+    assert out.returncode == -signal.SIGKILL, out.stderr
+    return journal
+
+
+# -- 1. a journal's header, checked field by field ------------------------------------------
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("path", JOURNALS, ids=lambda p: p.stem)
+def test_a_bad_journal_is_one_located_message(path, monkeypatch):
+    from mcl2pnml.runtime.journal import load
+    before = path.read_bytes()
+    monkeypatch.chdir(path.parent)
+    with pytest.raises(Mcl2PnmlError) as info:
+        load(path.name)
+    assert_error_golden(path, info.value)
+    assert path.read_bytes() == before
+
+
+@pytest.mark.timeout(60)
+def test_a_tampered_header_through_the_cli(tmp_path, script):
+    journal = killed_journal(tmp_path, script)
+    header, rest = journal.read_text().split("\n", 1)
+    journal.write_text(json.dumps({**json.loads(header), "engine": "fast"}) + "\n" + rest)
+    before = journal.read_bytes()
+    out = run_cli("run", SAUCE, "--resume", journal, timeout=60)
+    one_error(out, f"{journal}:1:", "unknown engine 'fast'; valid: petri, reference")
+    assert journal.read_bytes() == before
+
+
+# -- 2. only regular files are read ----------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_resume_of_a_fifo_is_refused_not_waited_on(tmp_path):
+    fifo = tmp_path / "run.journal"
+    os.mkfifo(fifo)
+    out = run_cli("run", SAUCE, "--resume", fifo, timeout=30)
+    one_error(out, f"{fifo}: cannot read the journal: this is a FIFO")
+
+
+def _fifo_cases(tmp_path, script):
+    fifos = {}
+    for name in ("m.mcl", "n.pnml", "n.net", "n.lola", "world.json", "script.json",
+                 "log.jsonl", "map.json"):
+        fifos[name] = tmp_path / name
+        os.mkfifo(fifos[name])
+    return fifos, [
+        (("check", fifos["m.mcl"]), "m.mcl: cannot read: this is a FIFO"),
+        (("functional", fifos["m.mcl"]), "m.mcl: cannot read: this is a FIFO"),
+        (("analyze", fifos["n.pnml"]), "n.pnml: cannot read: this is a FIFO"),
+        (("validate", fifos["n.pnml"]), "n.pnml: cannot read: this is a FIFO"),
+        (("analyze", fifos["n.net"]), "n.net: cannot read: this is a FIFO"),
+        (("analyze", fifos["n.lola"]), "n.lola: cannot read: this is a FIFO"),
+        (("run", SAUCE, "--world", fifos["world.json"]),
+         "world.json: cannot read the world file: this is a FIFO"),
+        (("run", SAUCE, "--vehicle", fifos["script.json"]),
+         "script.json: cannot read the vehicle script: this is a FIFO"),
+        (("show", SAUCE, "--run", fifos["log.jsonl"], "-o", tmp_path / "page.html"),
+         "log.jsonl: cannot read the run log: this is a FIFO"),
+        (("run", SAUCE, "--vehicle", f"bridge:{fifos['map.json']}", "--connect", "localhost:9"),
+         "map.json: cannot read the mapping file: this is a FIFO"),
+        (("check", "/dev/null"), "/dev/null: cannot read: this is a character device"),
+    ]
+
+
+@pytest.mark.timeout(60)
+def test_every_input_refuses_what_is_not_a_regular_file(tmp_path, script):
+    fifos, cases = _fifo_cases(tmp_path, script)
+    for args, message in cases:
+        one_error(cli(*args), message)
+    assert not (tmp_path / "page.html").exists()
+
+
+# -- 3. one run at a time on a journal --------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_a_second_resume_of_a_journal_in_use_is_refused(tmp_path, script):
+    from mcl2pnml.runtime import journal as journals
+    journal = killed_journal(tmp_path, script)
+    before = journal.read_bytes()
+    held = journals.load(journal)       # the first resume, still running
+    try:
+        out = run_cli("run", SAUCE, "--resume", journal, timeout=60)
+        one_error(out, f"{journal}: the journal is in use by another run")
+        assert journal.read_bytes() == before
+    finally:
+        os.close(held.fd)
+    out = run_cli("run", SAUCE, "--resume", journal, "--json", timeout=60)
+    assert out.returncode == 0, out.stderr     # free again once the first has ended
+
+
+@pytest.mark.timeout(60)
+def test_a_new_journal_is_locked_from_its_creation(tmp_path):
+    from mcl2pnml.runtime import journal as journals
+    path = tmp_path / "new.journal"
+    writer = journals.create(path, {"mission": "sauce.mcl", "engine": "petri",
+                                    "vehicle": "sim", "world": None, "max_time": 10.0,
+                                    "mission_sha256": "0" * 64})
+    try:
+        with pytest.raises(Mcl2PnmlError, match="the journal is in use by another run"):
+            journals.load(path)
+    finally:
+        writer.close()
+
+
+# -- 4. no output is an input, nor another output --------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_an_output_that_is_an_input_is_refused(tmp_path, script):
+    mission = tmp_path / "s.mcl"
+    mission.write_bytes(SAUCE.read_bytes())
+    os.link(mission, tmp_path / "hard.pnml")
+    os.symlink(mission, tmp_path / "soft.pnml")
+    run_log = tmp_path / "run.jsonl"
+    run_log.write_text("")
+    journal = killed_journal(tmp_path, script)
+    kept = {p: p.read_bytes() for p in (mission, script, journal, run_log)}
+    cases = [
+        (("compile", mission, "-o", mission), "-o: 's.mcl' is the mission"),
+        (("compile", mission, "-o", tmp_path / "hard.pnml"), "-o: 'hard.pnml' is the mission"),
+        (("compile", mission, "-o", tmp_path / "soft.pnml"), "-o: 'soft.pnml' is the mission"),
+        (("compile", mission, "-o", tmp_path / "x" / ".." / "s.mcl"), "is the mission"),
+        (("run", mission, "--vehicle", script, "--journal", tmp_path / "j", "--log",
+          tmp_path / "j"), "--log: 'j' is also the file of --journal"),
+        (("run", mission, "--vehicle", script, "--log", script),
+         "--log: 'vehicle.json' is the vehicle script (--vehicle)"),
+        (("run", mission, "--vehicle", script, "--log", mission), "--log: 's.mcl' is the mission"),
+        (("run", mission, "--vehicle", script, "--journal", mission),
+         "--journal: 's.mcl' is the mission"),
+        (("run", SAUCE, "--resume", journal, "--log", journal),
+         "--log: 'run.journal' is the journal it resumes (--resume)"),
+        (("show", mission, "-o", mission), "-o: 's.mcl' is the net or mission"),
+        (("show", mission, "--run", run_log, "-o", run_log),
+         "-o: 'run.jsonl' is the run log (--run)"),
+    ]
+    for args, message in cases:
+        text = one_error(_in(tmp_path, args), message)
+        assert "Invalid value for" in text
+    for path, data in kept.items():
+        assert path.read_bytes() == data, path
+    assert not (tmp_path / "j").exists()
+
+
+def _in(directory, args):
+    """The command run in ``directory``, its files named relative to it as a user would."""
+    cwd = os.getcwd()
+    os.chdir(directory)
+    try:
+        return cli(*[os.path.relpath(a, directory) if isinstance(a, os.PathLike)
+                     and str(a).startswith(str(directory)) else a for a in args])
+    finally:
+        os.chdir(cwd)
+
+
+# -- 5. a finished run is not resumed ---------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_resuming_a_finished_run_says_so(tmp_path, script):
+    journal = tmp_path / "done.journal"
+    out = cli("run", SAUCE, "--vehicle", script, "--journal", journal, "--json")
+    assert out.exit_code == 0, out.output
+    before = journal.read_bytes()
+    time = json.loads(out.output.strip().splitlines()[-1])["time"]
+    out = cli("run", SAUCE, "--resume", journal)
+    one_error(out, f"{journal}: this run has ended (OK at t={time:g} s", "nothing to resume")
+    assert journal.read_bytes() == before
+
+
+# -- 6. a write killed outright leaves a temporary that the next write removes ----------------
+
+TEMPORARY = re.compile(r"\.sauce\.pnml\.mcl2pnml-(\d+)-[a-z0-9_]+\.tmp")
+
+
+@pytest.mark.timeout(60)
+def test_a_killed_write_leaves_a_temporary_the_next_write_removes(tmp_path):
+    target = tmp_path / "sauce.pnml"
+    env = {**os.environ, "MCL2PNML_WRITE_KILL": "1"}
+    out = run_cli("compile", SAUCE, "--layout", "none", "-o", target, env=env, timeout=60)
+    assert out.returncode == -signal.SIGKILL, out.stderr
+    left = [p for p in tmp_path.iterdir() if TEMPORARY.fullmatch(p.name)]
+    assert len(left) == 1 and not target.exists()
+    assert left[0].stat().st_size > 10_000     # the whole net, never moved into place
+    # what is not ours, or not dead, stays: another name, a live process's temporary
+    strangers = [tmp_path / ".sauce.pnml.other-1-abc.tmp",
+                 tmp_path / f".sauce.pnml.mcl2pnml-{os.getpid()}-abc.tmp",
+                 tmp_path / f".other.pnml.mcl2pnml-{left[0].name.split('-')[1]}-abc.tmp"]
+    for p in strangers:
+        p.write_text("not yours")
+    out = run_cli("compile", SAUCE, "--layout", "none", "-o", target, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert not left[0].exists()
+    assert all(p.exists() for p in strangers)
+    from mcl2pnml.io.pnml.reader import load_pnml
+    assert len(load_pnml(target).places) > 0
+
+
+# -- 7. world files ---------------------------------------------------------------------------
+
+@pytest.mark.timeout(30)
+@pytest.mark.parametrize("path", WORLDS, ids=lambda p: p.stem)
+def test_a_bad_world_is_one_located_message(path, monkeypatch):
+    from mcl2pnml.runtime.simulator import World
+    monkeypatch.chdir(path.parent)
+    with pytest.raises(Mcl2PnmlError) as info:
+        World.load(path.name)
+    assert_error_golden(path, info.value)
+
+
+@pytest.mark.timeout(60)
+def test_a_world_whose_step_is_zero_is_refused_not_run_for_ever(tmp_path):
+    world = tmp_path / "world.json"
+    world.write_text('{"dt": 0}\n')
+    out = run_cli("run", SAUCE, "--world", world, timeout=30)
+    one_error(out, f"{world}:1:8:", '"dt" is the time step in seconds', "from 0.01 to 10")
+
+
+def test_a_good_world_still_runs():
+    from mcl2pnml.runtime.simulator import World
+    world = World.from_json('{"tank": [20, 10, 6], "start": [1, 1, 0], "cross": null, '
+                            '"start_yaw": 90, "dt": 0.05, "seed": null}')
+    assert world.tank == (20.0, 10.0, 6.0) and world.cross is None and world.seed is None
+    assert abs(world.start_yaw - 3.141592653589793 / 2) < 1e-12
+
+
+# -- 8. deep chains of calls ------------------------------------------------------------------
+
+def chain(n: int) -> str:
+    """A mission whose functions F0 ... F(n-1) each call the next; the last calls a task."""
+    lines = ["primitive P();", "task T() = AchieveGoal(P());"]
+    lines += [f"function F{i}() {{ F{i + 1}(); }}" for i in range(n - 1)]
+    lines += [f"function F{n - 1}() {{ T(); }}", "mission { F0(); }"]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("n", [1000, 5000])
+def test_a_deep_chain_of_functions_checks_compiles_and_runs(tmp_path, n):
+    from mcl2pnml import pipeline
+    mission = tmp_path / f"chain{n}.mcl"
+    mission.write_text(chain(n))
+    out = cli("check", mission)
+    assert out.exit_code == 0 and f"{n} functions" in out.output, out.output
+    checked = pipeline.check_file(mission)
+    assert checked.function_order[0] == f"F{n - 1}" and checked.function_order[-1] == "F0"
+    lines = pipeline.functional_form(checked, functions=True)
+    assert lines[-1] == "F0()" and len(lines) == n + 1
+    net = pipeline.compile_checked(checked)
+    assert net.initial["mission.B"] == 1
+    script = tmp_path / "vehicle.json"
+    script.write_text('{"P": ["ok@1"]}')
+    for engine in ("petri", "reference"):
+        result = pipeline.run_mission(mission, pipeline.RunOptions(engine=engine,
+                                                                   vehicle=str(script)))
+        assert result.outcome.value == "OK" and result.time == 1, engine
+
+
+def test_recursion_in_a_long_chain_is_still_found(tmp_path):
+    from mcl2pnml import pipeline
+    text = chain(2000).replace("function F1999() { T(); }", "function F1999() { F3(); }")
+    with pytest.raises(Mcl2PnmlError, match=r"recursion: F3 calls F4 calls .* calls F3"):
+        pipeline.check_source(text, "loop.mcl")
+
+
+# -- 9, 10. numbers past what the readers hold ------------------------------------------------
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("path", TOO_LARGE, ids=lambda p: p.name)
+def test_numbers_too_large_are_one_located_message(path):
+    command = "check" if path.suffix == ".mcl" else "analyze"
+    text = one_error(cli(command, path), f"{path}:")
+    assert re.search(r"too large|too long|at most", text.splitlines()[0]), text
+    assert "^" in text      # the line, and a caret under the number
+
+
+@pytest.mark.timeout(60)
+def test_an_infinite_timeout_is_refused_by_check_before_any_engine_sees_it():
+    path = DATA / "mcl" / "invalid" / "infinite_timeout.mcl"
+    for command in (("check",), ("compile", "-o", os.devnull), ("functional",)):
+        one_error(cli(command[0], path, *command[1:]), f"{path}:3:37: 1e309 is too large")
+
+
+# -- 11. graphviz missing ---------------------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_a_missing_dot_is_one_message_saying_how_to_get_it(tmp_path):
+    empty = tmp_path / "bin"
+    empty.mkdir()
+    env = {**os.environ, "PATH": str(empty)}
+    out = run_cli("compile", SAUCE, "--layout", "dot", "-o", tmp_path / "s.pnml", env=env,
+                  timeout=60)
+    one_error(out, "--layout", "graphviz's 'dot' program is not installed",
+              "apt-get install graphviz", "layers and none work without it")
+    out = run_cli("compile", SAUCE, "--format", "svg", "-o", tmp_path / "s.svg", env=env,
+                  timeout=60)
+    one_error(out, "--format", "graphviz's 'dot' program is not installed",
+              "pnml, tina, lola and dot (the source) work without it")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin"]
