@@ -333,6 +333,20 @@ def test_recursion_in_a_long_chain_is_still_found(tmp_path):
         pipeline.check_source(text, "loop.mcl")
 
 
+def test_a_long_chain_of_consts_resolves_and_a_cycle_in_it_is_found():
+    from mcl2pnml import pipeline
+    n = 5000
+    consts = [f"const C{i} = C{i + 1};" for i in range(n - 1)] + [f"const C{n - 1} = (1, 2);"]
+    text = "\n".join(["primitive P(x);", *consts, "task T() = AchieveGoal(P(C0));",
+                      "mission { T(); }"]) + "\n"
+    checked = pipeline.check_source(text, "consts.mcl")
+    assert checked.consts["C0"] == (1, 2) and len(checked.consts) == n
+    looped = text.replace(f"const C{n - 1} = (1, 2);", f"const C{n - 1} = (1, C7);")
+    with pytest.raises(Mcl2PnmlError, match=r"const 'C7' is defined in terms of itself: "
+                                            r"C7 -> C8 -> .* -> C4999 -> C7"):
+        pipeline.check_source(looped, "consts.mcl")
+
+
 # -- 9, 10. numbers past what the readers hold ------------------------------------------------
 
 @pytest.mark.timeout(60)

@@ -89,35 +89,62 @@ class _Checker:
     # -- values ------------------------------------------------------------------------
 
     def const_values(self) -> dict[str, Any]:
+        """The value of every const, each const resolved once, in declaration order.
+
+        A const may name another (``const A = B;``), in chains of any length:
+        the chain is followed with an explicit stack of evaluations, not by
+        recursion, each evaluation a generator that asks for the consts it
+        names and is sent their values. A cycle is one error, at the const
+        met again.
+        """
         values: dict[str, Any] = {}
         visiting: list[str] = []
 
-        def value_of(v: ast.Value, where: str) -> Any:
+        def evaluate(v: ast.Value, where: str):
             if isinstance(v, ast.Number):
                 return v.value
             if isinstance(v, ast.String):
                 return v.value
-            if isinstance(v, ast.Tuple):
-                return tuple(value_of(i, where) for i in v.items)
+            if isinstance(v, ast.Tuple):   # nested at most MAX_NESTING deep (the parser)
+                items = []
+                for i in v.items:
+                    items.append((yield from evaluate(i, where)))
+                return tuple(items)
             target = self.names.get(v.name)
             if not isinstance(target, ast.Const):
                 self.unknown_value(v, "const " + where, ())
                 return None
-            return resolve(target)
+            return (yield target)
 
-        def resolve(c: ast.Const) -> Any:
-            if c.name in values:
-                return values[c.name]
-            if c.name in visiting:
-                cycle = visiting[visiting.index(c.name):] + [c.name]
-                self.error(c.pos, f"const '{c.name}' is defined in terms of itself: "
-                                  + " -> ".join(cycle))
-                values[c.name] = None
-                return None
-            visiting.append(c.name)
-            values[c.name] = value_of(c.value, c.name)
-            visiting.pop()
-            return values[c.name]
+        def resolve(root: ast.Const) -> None:
+            stack: list[tuple[ast.Const, Any]] = []
+
+            def enter(c: ast.Const) -> tuple[bool, Any]:
+                """(known, its value), or (False, None) when its evaluation is pushed."""
+                if c.name in values:
+                    return True, values[c.name]
+                if c.name in visiting:
+                    cycle = visiting[visiting.index(c.name):] + [c.name]
+                    self.error(c.pos, f"const '{c.name}' is defined in terms of itself: "
+                                      + " -> ".join(cycle))
+                    values[c.name] = None
+                    return True, None
+                visiting.append(c.name)
+                stack.append((c, evaluate(c.value, c.name)))
+                return False, None
+
+            enter(root)
+            sent: Any = None
+            while stack:
+                c, evaluation = stack[-1]
+                try:
+                    wanted = evaluation.send(sent)
+                except StopIteration as done:
+                    stack.pop()
+                    visiting.pop()
+                    values[c.name] = sent = done.value
+                    continue
+                _, sent = enter(wanted)   # pushed: its evaluation starts with None
 
         for c in self.p.of(ast.Const):
             if self.names.get(c.name) is c:
