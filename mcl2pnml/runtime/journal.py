@@ -151,7 +151,13 @@ def load(path: str | Path) -> Loaded:
     journal another run holds, and a run that has ended.
     """
     path = Path(path)
-    fd = open_regular(path, "journal", os.O_RDWR)
+    try:
+        fd = open_regular(path, "journal", os.O_RDWR)
+    except Mcl2PnmlError:
+        if os.path.isfile(path) and os.access(path, os.R_OK) and not os.access(path, os.W_OK):
+            raise Mcl2PnmlError("cannot resume the journal: it is read-only, and a resumed "
+                                "run appends to it", Location(str(path))) from None
+        raise
     try:
         _lock(fd, path)
         with os.fdopen(os.dup(fd), "rb") as f:
