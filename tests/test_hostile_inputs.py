@@ -359,6 +359,23 @@ def test_numbers_too_large_are_one_located_message(path):
 
 
 @pytest.mark.timeout(60)
+def test_json_inputs_with_a_number_past_the_digit_limit_are_one_message(tmp_path):
+    big = "9" * 5000
+    script = tmp_path / "script.json"
+    script.write_text('{"GoToWayPoint": ["ok@1"], "x": ' + big + "}")
+    mapping = tmp_path / "map.json"
+    mapping.write_text('{"primitives": ' + big + "}")
+    one_error(cli("run", SAUCE, "--vehicle", script),
+              f"{script}: not a vehicle script: a number of more than 4,300 digits")
+    one_error(cli("run", SAUCE, "--vehicle", f"bridge:{mapping}", "--connect", "localhost:9"),
+              f"{mapping}: not a mapping file: a number of more than 4,300 digits")
+    one_error(cli("analyze", SAUCE, "--initial", f"mission.B*{big}"),
+              "--initial", "a place holds at most 2^63-1")
+    one_error(cli("analyze", SAUCE, "--initial", f"mission.B*{2 ** 63 - 1},mission.B"),
+              "--initial", "too many tokens")
+
+
+@pytest.mark.timeout(60)
 def test_an_infinite_timeout_is_refused_by_check_before_any_engine_sees_it():
     path = DATA / "mcl" / "invalid" / "infinite_timeout.mcl"
     for command in (("check",), ("compile", "-o", os.devnull), ("functional",)):

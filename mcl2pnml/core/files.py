@@ -268,6 +268,22 @@ def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
                                           "output a file of its own")
 
 
+def json_fault(error: ValueError | RecursionError) -> str:
+    """Why ``json.loads`` refused a text, in the words of a message.
+
+    Besides bad JSON (:class:`json.JSONDecodeError`, which has its own
+    position), ``json.loads`` raises a bare ValueError for an integer past
+    Python's 4,300 digits, and RecursionError for arrays or objects nested
+    thousands deep: an input file of ours must give a message for those too.
+    """
+    if isinstance(error, RecursionError):
+        return "arrays or objects nested too deeply"
+    msg = getattr(error, "msg", None)
+    if msg:
+        return msg
+    return "a number of more than 4,300 digits" if "digits" in str(error) else str(error)
+
+
 def decode_text(data: bytes, filename: str, what: str) -> str:
     """A source as text; not UTF-8, or binary, is an error located at the first bad
     byte, with the line shown as far as it can be. ``what`` names the kind of

@@ -49,7 +49,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
-from mcl2pnml.core.files import open_regular, read_bytes
+from mcl2pnml.core.files import json_fault, open_regular, read_bytes
 
 VERSION = 1
 KILL_AFTER = "MCL2PNML_JOURNAL_KILL_AFTER"
@@ -184,11 +184,7 @@ def _parse(path: Path, data: bytes) -> Loaded:
         except (ValueError, RecursionError) as e:
             # ValueError: not JSON, not UTF-8, or an integer past Python's digit limit;
             # RecursionError: arrays nested thousands deep
-            reason = (getattr(e, "msg", None) if isinstance(e, json.JSONDecodeError)
-                      else "arrays or objects nested too deeply" if isinstance(e, RecursionError)
-                      else "a number of more than 4,300 digits" if "digits" in str(e)
-                      else str(e))
-            raise Mcl2PnmlError(f"not a journal line: {reason}",
+            raise Mcl2PnmlError(f"not a journal line: {json_fault(e)}",
                                 Location(str(path), n, 1,
                                          line[:200].decode(errors="replace"))) from None
         if not isinstance(obj, dict):

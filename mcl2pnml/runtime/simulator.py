@@ -33,7 +33,7 @@ from typing import Any
 
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Vehicle
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
-from mcl2pnml.core.files import read_text
+from mcl2pnml.core.files import json_fault, read_text
 
 PRIMITIVES = ("GoToWayPoint", "KeepDepth", "KeepHeading", "DetectCross", "ReleaseMarker")
 
@@ -76,10 +76,8 @@ class World:
             raise Mcl2PnmlError(f"not a world file: {e.msg}",
                                 Location(filename, e.lineno, e.colno)) from None
         except (ValueError, RecursionError) as e:   # a number past Python's digit limit
-            reason = ("arrays or objects nested too deeply" if isinstance(e, RecursionError)
-                      else "a number of more than 4,300 digits" if "digits" in str(e)
-                      else str(e))
-            raise Mcl2PnmlError(f"not a world file: {reason}", Location(filename)) from None
+            raise Mcl2PnmlError(f"not a world file: {json_fault(e)}", Location(filename)) \
+                from None
         valid = set(cls.__dataclass_fields__)
         if not isinstance(data, dict):
             raise Mcl2PnmlError("a world file is a JSON object with some of: "
