@@ -48,7 +48,7 @@ from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 KILL_BEFORE_REPLACE = "MCL2PNML_WRITE_KILL"
 #: What marks a temporary file as ours, between the target's name and the writer's pid.
 TEMP_MARK = ".mcl2pnml-"
-#: A temporary file keeps this much of its target's name (a name has at most 255 bytes).
+#: A temporary file keeps this many bytes of its target's name (a name has at most 255).
 TEMP_NAME_KEPT = 100
 
 
@@ -90,8 +90,14 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
         raise
 
 
+def _kept(name: str) -> str:
+    """The part of a target's name its temporary file keeps: at most TEMP_NAME_KEPT
+    bytes, so that the temporary's name stays within the file system's 255."""
+    return name.encode("utf-8", "surrogateescape")[:TEMP_NAME_KEPT].decode("utf-8", "ignore")
+
+
 def _temp_prefix(name: str) -> str:
-    return f".{name[:TEMP_NAME_KEPT]}{TEMP_MARK}{os.getpid()}-"
+    return f".{_kept(name)}{TEMP_MARK}{os.getpid()}-"
 
 
 def _temp_pattern(name: str) -> re.Pattern[str]:
@@ -99,7 +105,7 @@ def _temp_pattern(name: str) -> re.Pattern[str]:
 
     The random part is mkstemp's (lower-case letters, digits, ``_``).
     """
-    return re.compile(re.escape(f".{name[:TEMP_NAME_KEPT]}{TEMP_MARK}")
+    return re.compile(re.escape(f".{_kept(name)}{TEMP_MARK}")
                       + r"([1-9][0-9]{0,9})-[a-z0-9_]+\.tmp")
 
 
