@@ -90,6 +90,51 @@ def test_a_bad_journal_is_one_located_message(path, monkeypatch):
     assert path.read_bytes() == before
 
 
+HEADER = {"journal": 1, "mission": "sauce.mcl", "engine": "petri", "vehicle": "vehicle.json",
+          "world": None, "max_time": 86400.0, "mission_sha256": "0" * 64,
+          "vehicle_sha256": "1" * 64}
+HOSTILE = [None, True, 0, -1, 1.5, 1e308, "", "x", "sim", "bridge:m.json", [], {}, [1, 2],
+           {"a": 1}, "f" * 64]
+
+
+def _load_header(path, header) -> None:
+    from mcl2pnml.runtime.journal import load
+    path.write_text(json.dumps(header) + "\n")
+    try:
+        loaded = load(path)
+    except Mcl2PnmlError as e:
+        assert str(e).startswith(f"{path}:1:"), str(e)
+    else:       # a header that happens to be valid: its fields are what a resume takes
+        os.close(loaded.fd)
+        assert loaded.header["engine"] in ("petri", "reference")
+        assert isinstance(loaded.header["max_time"], (int, float))
+
+
+@pytest.mark.timeout(60)
+def test_every_field_of_a_header_with_every_hostile_value_is_our_error(tmp_path):
+    path = tmp_path / "run.journal"
+    for key in HEADER:
+        for value in HOSTILE:
+            _load_header(path, {**HEADER, key: value})
+        _load_header(path, {k: v for k, v in HEADER.items() if k != key})
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_random_headers_are_our_error(tmp_path):
+    import random
+    rng = random.Random(7)
+    path = tmp_path / "run.journal"
+    for _ in range(5000):
+        header = dict(HEADER)
+        for key in rng.sample(sorted(HEADER), rng.randint(1, 4)):
+            if rng.random() < 0.2:
+                header.pop(key)
+            else:
+                header[key] = rng.choice(HOSTILE)
+        _load_header(path, header)
+
+
 @pytest.mark.timeout(60)
 def test_a_tampered_header_through_the_cli(tmp_path, script):
     journal = killed_journal(tmp_path, script)
@@ -268,6 +313,23 @@ def test_a_bad_world_is_one_located_message(path, monkeypatch):
     with pytest.raises(Mcl2PnmlError) as info:
         World.load(path.name)
     assert_error_golden(path, info.value)
+
+
+@pytest.mark.timeout(60)
+def test_every_world_field_with_every_hostile_value_is_our_error():
+    from mcl2pnml.runtime.simulator import MAX_DT, MIN_DT, World
+    values = [*HOSTILE, 1e-9, 0.5, 1e400, -1e400, [0, 0, 0], [1, 1], [1e400, 1, 1],
+              [True, 1, 1], ["1", 1, 1], [3, 3, 3, 3]]
+    for key in World.__dataclass_fields__:
+        for value in values:
+            text = json.dumps({key: value})
+            try:
+                world = World.from_json(text, "w.json")
+            except Mcl2PnmlError as e:
+                assert str(e).startswith("w.json:"), str(e)
+                assert f'"{key}"' in str(e) or "default start" in str(e), str(e)
+            else:
+                assert MIN_DT <= world.dt <= MAX_DT and all(v > 0 for v in world.tank)
 
 
 @pytest.mark.timeout(60)
