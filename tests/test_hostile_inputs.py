@@ -34,7 +34,9 @@ TOO_LARGE = [DATA / "mcl" / "invalid" / "huge_timeout.mcl",
              DATA / "formats" / "invalid" / "huge_tokens.lola",
              DATA / "formats" / "invalid" / "huge_consume.lola",
              DATA / "pnml" / "invalid" / "huge_marking.pnml",
-             DATA / "pnml" / "invalid" / "huge_weight.pnml"]
+             DATA / "pnml" / "invalid" / "huge_weight.pnml",
+             DATA / "pnml" / "invalid" / "timing_too_long.pnml",
+             DATA / "pnml" / "invalid" / "payload_too_deep.pnml"]
 
 
 def cli(*args):
@@ -408,7 +410,8 @@ def test_a_long_chain_of_consts_resolves_and_a_cycle_in_it_is_found():
 def test_numbers_too_large_are_one_located_message(path):
     command = "check" if path.suffix == ".mcl" else "analyze"
     text = one_error(cli(command, path), f"{path}:")
-    assert re.search(r"too large|too long|at most", text.splitlines()[0]), text
+    assert re.search(r"too large|too long|too deeply|at most|go up to", text.splitlines()[0]), \
+        text
     assert "^" in text      # the line, and a caret under the number
 
 

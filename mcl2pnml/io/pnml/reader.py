@@ -37,8 +37,8 @@ from lxml import etree
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all, source_lines
 from mcl2pnml.core.gcpause import without_gc
-from mcl2pnml.core.bounds import MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
-from mcl2pnml.core.files import read_bytes
+from mcl2pnml.core.bounds import MAX_SECONDS, MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
+from mcl2pnml.core.files import json_fault, read_bytes
 from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml.tapaal import is_tapaal, parse_tapaal
@@ -250,7 +250,9 @@ class _Reader:
             if p is not None:
                 try:
                     return freeze(json.loads(p.text or "null"))
-                except (ValueError, Mcl2PnmlError) as e:
+                except (ValueError, RecursionError) as e:
+                    self.error(p, f"payload is not JSON data: {json_fault(e)}")
+                except Mcl2PnmlError as e:
                     self.error(p, f"payload is not JSON data: {e}")
         return None
 
@@ -324,6 +326,12 @@ class _Reader:
                                     None if latest is None else float(latest))
                 except (ValueError, Mcl2PnmlError) as e:
                     self.error(t, f"transition '{xml_id}': bad timing: {e}")
+                    continue
+                longest = max(timing.earliest, timing.latest or 0.0)
+                if longest > MAX_SECONDS:
+                    self.error(t, f"transition '{xml_id}': bad timing: time bounds go up to "
+                                  f"{MAX_SECONDS:,} s, not {longest:g}")
+                    timing = None
         self.raw.transitions[xml_id] = Transition(
             self.decode(xml_id), self._label_text(el, "name"), timing,
             self._payload(el), self._position(el))
