@@ -465,6 +465,16 @@ def test_the_example_server_refuses_a_key_file_others_can_read(tmp_path, capsys)
 
 
 @pytest.mark.timeout(20)
+def test_a_key_file_that_is_a_fifo_is_refused_before_it_blocks(tmp_path):
+    import os
+    from mcl2pnml.runtime.link import read_secret
+    fifo = tmp_path / "key"
+    os.mkfifo(fifo, 0o600)
+    with pytest.raises(Mcl2PnmlError, match="FIFO"):
+        read_secret(fifo)
+
+
+@pytest.mark.timeout(20)
 def test_the_example_server_refuses_a_second_client(server):
     s = server()
     first = TcpTransport(address(s), FAST)

@@ -61,6 +61,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.files import read_bytes
 
 PROTOCOL = 1
 #: Seconds between heartbeats, from each end.
@@ -174,9 +175,9 @@ class _Lines:
 def read_secret(path: Path, option: str = "--secret") -> bytes:
     """The shared secret in ``path``: a file only its owner can read, of 16 bytes or more."""
     where = Location(str(path))
+    key = read_bytes(path, "key file").strip()    # a regular file only: a FIFO would block
     try:
         mode = os.stat(path).st_mode
-        key = Path(path).read_bytes().strip()
     except OSError as e:
         raise OptionError(option, f"cannot read the key file {path}: {e.strerror or e}") \
             from None
