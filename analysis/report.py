@@ -13,11 +13,19 @@ whose number can grow exponentially) are reported as ``null`` with the
 reason under ``"limits"``, never silently left out; the structural results
 are computed first, so they are there when the state space is too large,
 with ``"partial"``: the markings explored and whether a dead one was met.
+
+The memory budget (``--max-memory``) is the whole process's: each stage is
+estimated before it runs and left out when it would not fit, and runs under
+:func:`mcl2pnml.core.memory.guard`, which stops it at the budget; what the
+budget left out is under ``"partial"`` too (``"left_out"``), so that the
+answer is partial (exit status 3) rather than the process killed.
 """
 from __future__ import annotations
 
 from typing import Any
 
+from mcl2pnml.core.memory import (NEGLIGIBLE, Budget, BudgetExceeded, guard, margin, release,
+                                  resident, size_text)
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
@@ -27,7 +35,7 @@ from analysis.invariants import (AnalysisLimit, format_invariant, minimal_semipo
                          minimal_semipositive_t_invariants, p_invariant_basis,
                          t_invariant_basis)
 from analysis.siphons import minimal_siphons, minimal_traps, siphon_control
-from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore, resident
+from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
@@ -38,11 +46,54 @@ SIPHON_LIMIT = 20_000
 #: wide net. 20,000 rows of a 20,000-place net took 50 s; a million places
 #: would never end, nor fit in memory.
 WORK_LIMIT = 20_000_000
+#: The places the siphon (or trap) enumeration may look at in all, some seconds'
+#: work: a minimal siphon of k places costs about 2k^2 to shrink and test (a ring
+#: of 20,000 places, 8 * 10^8: minutes), a subproblem a copy of its parent's set.
+SIPHON_WORK = 50_000_000
+
+# What the stages hold, in bytes, measured on the nets of tests/bignets.py at
+# 10^5 places and rounded up: the estimates a stage is refused or left out by.
+#: the structure (pre, post, incidence both ways, pre- and post-sets) per arc and per node
+STRUCTURE_ARC, STRUCTURE_NODE = 900, 700
+#: the exact elimination (sympy's sparse rationals) per nonzero of C, before fill-in
+ELIMINATION_ENTRY = 600
+#: a Farkas row, per entry of its two parts
+FARKAS_ENTRY = 250
+#: an answer printed (as JSON with indentation, or as the report's tables), per entry
+#: of a vector or set: the objects, the text and the pieces it is joined from
+OUTPUT_ENTRY = 160
 
 
 def _limit(count: int, width: int) -> int:
     """The count limit of an enumeration whose items are ``width`` entries wide."""
     return max(1, min(count, WORK_LIMIT // max(1, width)))
+
+
+def structure_estimate(net: Net) -> int:
+    """Bytes the indexed structure of ``net`` holds (:func:`mcl2pnml.core.structure.structure`)."""
+    return (len(net.arcs) * STRUCTURE_ARC
+            + (len(net.places) + len(net.transitions)) * STRUCTURE_NODE)
+
+
+def elimination_estimate(s) -> int:
+    """Bytes an invariant basis's elimination holds at least: the nonzeros of C as
+    rationals, twice (the integer matrix and its rational copy). Fill-in may add
+    more, which no estimate tells: the elimination also runs under the budget's guard."""
+    return 2 * ELIMINATION_ENTRY * sum(len(col) for col in s.incidence)
+
+
+def farkas_rows(s, free: int, transposed: bool = False) -> int:
+    """How many Farkas rows fit in ``free`` bytes: each starts as a row of C (its
+    nonzeros) and one entry of y, and a new row is about as long as two of them."""
+    rows = s.incidence if transposed else s.incidence_rows
+    nonzeros = sum(len(r) for r in rows)
+    entry = FARKAS_ENTRY * (2 * max(1, nonzeros // max(1, len(rows))) + 2)
+    return max(1, free // entry)
+
+
+def output_estimate(vectors) -> int:
+    """Bytes printing a list of vectors or sets takes: its entries, with their names."""
+    return sum(len(v) * OUTPUT_ENTRY + sum(map(len, v)) * 2 for v in vectors)
 
 
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
@@ -56,32 +107,96 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     budget still ends in a partial answer: ``"partial"`` says how many
     markings were explored and whether a dead marking was met among them.
     """
+    # the budget is the whole process's: what the net and the structural results
+    # hold counts against it (the default, half of what is free now, comes on top
+    # of what the process holds already)
+    budget = Budget(max_memory)
     if initial is not None:
         net = net.with_initial(initial)
+    budget.check(structure_estimate(net), f"net '{net.name}': {len(net.places):,} places, "
+                 f"{len(net.transitions):,} transitions and {len(net.arcs):,} arcs to analyse")
     s = structure(net)
     limits: dict[str, str] = {}
-    structural = {} if state_space_only else _structural(s, limits)
+    left_out: dict[str, str] = {}
+    structural = {} if state_space_only else _structural(s, limits, left_out, budget)
     partial = None
+    release()
     try:
-        # a budget given is the whole process's: what the net and the structural
-        # results hold counts against it (the default, half of what is free now,
-        # leaves it out already)
-        space = explore(s, max_states=max_states, progress=progress, backend=explorer,
-                        max_memory=max_memory, held=0 if max_memory is None else resident())
+        with guard(_floored(budget), "the exploration"):
+            space = explore(s, max_states=max_states, progress=progress, backend=explorer,
+                            max_memory=budget.limit,
+                            held=resident() + 2 * margin(budget.limit))
+            facts = _state_space_facts(net, s, space)
+    except BudgetExceeded as e:
+        # an explorer's estimate of its markings fell short (or what follows the
+        # exploration did not fit): the markings found are lost with it
+        limits["states"] = e.message
+        partial = {"markings_explored": None, "deadlock_found": None}
+        facts = _state_space_facts(net, s, None)
     except ExplorationLimit as e:
         if state_space_only and not isinstance(e, MemoryLimit):
             raise
-        space = None
         limits["states"] = e.message
         partial = {"markings_explored": e.explored,
                    "deadlock_found": None if e.deadlocks is None else e.deadlocks > 0}
-    result = _state_space_facts(net, s, space)
+        facts = _state_space_facts(net, s, None)
+    result = facts
     result.update(structural)
+    _fit_output(result, limits, left_out, budget)
+    if left_out:
+        partial = partial or {}
+        partial["left_out"] = left_out
     if partial is not None:
         result["partial"] = partial
     if limits:
         result["limits"] = limits
     return result
+
+
+def _floored(budget: Budget) -> Budget:
+    """``budget``, or a little above what the process holds now when that is more:
+    a budget smaller than the process can only stop what grows."""
+    floor = resident() + NEGLIGIBLE
+    if budget.limit >= floor:
+        return budget
+    raised = Budget(floor)
+    raised.given, raised.limit = budget.given, floor
+    return raised
+
+
+#: The lists of the answer that can be left out when printing them would not fit,
+#: largest first among them.
+_PRINTED = ("siphon_control", "traps", "siphons", "semipositive_t_invariants",
+            "semipositive_p_invariants", "t_invariants", "p_invariants")
+
+
+def _fit_output(result: dict[str, Any], limits: dict[str, str], left_out: dict[str, str],
+                budget: Budget) -> None:
+    """Leave out, largest first, the lists that printing would not fit in the budget.
+
+    Printing (``--json`` or the report) builds the text whole before writing it:
+    about :data:`OUTPUT_ENTRY` bytes an entry. The number of vectors left out is
+    said, so that a reader still knows the dimension of an invariant space.
+    """
+    sizes = {}
+    for key in _PRINTED:
+        value = result.get(key)
+        if value:
+            entries = [c["siphon"] for c in value] if key == "siphon_control" else value
+            sizes[key] = output_estimate(entries)
+    free = budget.free()
+    total = sum(sizes.values())
+    for key in sorted(sizes, key=sizes.get, reverse=True):
+        if total <= max(free, NEGLIGIBLE):
+            break
+        n = len(result[key])
+        why = (f"{n:,} {'vectors' if 'invariants' in key else 'sets'}, not printed: printing "
+               f"them would need about {size_text(sizes[key])}; {budget.says()}")
+        result[key] = None
+        limits[key] = left_out[key] = why
+        total -= sizes[key]
+        if key == "siphons":
+            result["siphon_control"] = result["siphons_controlled"] = None
 
 
 def _state_space_facts(net: Net, s, space) -> dict[str, Any]:
@@ -113,28 +228,61 @@ def _state_space_facts(net: Net, s, space) -> dict[str, Any]:
     }
 
 
-def _structural(s, limits: dict[str, str]) -> dict[str, Any]:
-    """Invariants, siphons and traps, each within its limit (past it: None and the reason)."""
+#: What each structural stage computes, as its messages name it.
+STAGES = {
+    "p_invariants": "the P-invariant basis (exact elimination)",
+    "t_invariants": "the T-invariant basis (exact elimination)",
+    "semipositive_p_invariants": "the minimal semi-positive P-invariants (Farkas)",
+    "semipositive_t_invariants": "the minimal semi-positive T-invariants (Farkas)",
+    "siphons": "the minimal siphons",
+    "traps": "the minimal traps",
+    "siphon_control": "the control of the siphons",
+}
+
+
+def _structural(s, limits: dict[str, str], left_out: dict[str, str],
+                budget: Budget) -> dict[str, Any]:
+    """Invariants, siphons and traps, each within its limit (past it: None and the reason).
+
+    Each stage is estimated first and left out when its estimate does not fit
+    in what is left of ``budget``; it then runs under the budget's guard. What
+    the budget left out is also in ``left_out``: the answer is partial.
+    """
     width = len(s.places) + len(s.transitions)
 
-    def bounded_run(key: str, fn, *args):
+    def bounded_run(key: str, fn, *args, need: int = 0):
+        what = STAGES[key]
         try:
-            return fn(*args)
+            budget.check(need, what)
+            with guard(_floored(budget), what):
+                return fn(*args)
+        except BudgetExceeded as e:
+            limits[key] = left_out[key] = e.message
         except AnalysisLimit as e:
             limits[key] = e.message
-            return None
+        finally:
+            release()   # what a stage built and dropped is not the next stage's to pay
+        return None
 
+    if len(s.places) > 0:
+        import sympy  # noqa: F401  (loaded before the guard: the module is not the stage's)
+    elimination = elimination_estimate(s)
+    p_basis = bounded_run("p_invariants", p_invariant_basis, s, need=elimination)
+    t_basis = bounded_run("t_invariants", t_invariant_basis, s, need=elimination)
+    free = max(budget.free(), NEGLIGIBLE)
     semi_p = bounded_run("semipositive_p_invariants", minimal_semipositive_p_invariants,
-                         s, _limit(FARKAS_LIMIT, width))
+                         s, min(_limit(FARKAS_LIMIT, width), farkas_rows(s, free)))
     semi_t = bounded_run("semipositive_t_invariants", minimal_semipositive_t_invariants,
-                         s, _limit(FARKAS_LIMIT, width))
-    siphons = bounded_run("siphons", minimal_siphons, s, _limit(SIPHON_LIMIT, len(s.places)))
-    traps = bounded_run("traps", minimal_traps, s, _limit(SIPHON_LIMIT, len(s.places)))
-    control = (siphon_control(s, siphons, semi_p or [])
+                         s, min(_limit(FARKAS_LIMIT, width), farkas_rows(s, free, True)))
+    siphons = bounded_run("siphons", minimal_siphons, s, _limit(SIPHON_LIMIT, len(s.places)),
+                          SIPHON_WORK)
+    traps = bounded_run("traps", minimal_traps, s, _limit(SIPHON_LIMIT, len(s.places)),
+                        SIPHON_WORK)
+    control = (bounded_run("siphon_control", siphon_control, s, siphons, semi_p or [])
                if siphons is not None else None)
     return {
-        "p_invariants": p_invariant_basis(s),
-        "t_invariants": t_invariant_basis(s),
+        "p_invariants": p_basis,
+        "t_invariants": t_basis,
         "semipositive_p_invariants": semi_p,
         "semipositive_t_invariants": semi_t,
         "siphons": None if siphons is None else [s.names(x) for x in siphons],
@@ -201,10 +349,14 @@ def render_text(r: dict[str, Any]) -> str:
         out += ["", f"Terminal markings ({len(r['terminal_markings'])}):"]
         out += [f"  {{{', '.join(m)}}}" for m in r["terminal_markings"]] or ["  none"]
     if "p_invariants" in r:
-        out += ["", f"P-invariants (a basis of {len(r['p_invariants'])}):"]
-        rows = [[str(sum(c * _count(r, p) for p, c in y.items())), format_invariant(y)]
-                for y in r["p_invariants"]]
-        out.append(_table(["value at M0", "invariant"], rows) if rows else "  none")
+        if r["p_invariants"] is None:
+            out += ["", "P-invariants: not computed (see below)"]
+        else:
+            out += ["", f"P-invariants (a basis of {len(r['p_invariants'])}):"]
+            m0 = _tokens(r)
+            rows = [[str(sum(c * m0.get(p, 0) for p, c in y.items())), format_invariant(y)]
+                    for y in r["p_invariants"]]
+            out.append(_table(["value at M0", "invariant"], rows) if rows else "  none")
         if r.get("siphon_control") is not None:
             out += ["", f"Minimal siphons ({len(r['siphon_control'])}):"]
             rows = [["{" + ", ".join(c["siphon"]) + "}", _yes(c["marked"]),
@@ -215,12 +367,17 @@ def render_text(r: dict[str, Any]) -> str:
         if r.get("t_invariants") is not None:
             out += ["", f"T-invariants (a basis of {len(r['t_invariants'])}):"]
             out += [f"  {format_invariant(x)}" for x in r["t_invariants"]] or ["  none"]
-    if r.get("partial"):
-        found = r["partial"]["deadlock_found"]
-        out += ["", f"Partial answer: {r['partial']['markings_explored']:,} markings explored; "
+    partial = r.get("partial") or {}
+    if "markings_explored" in partial:
+        found, explored = partial["deadlock_found"], partial["markings_explored"]
+        out += ["", "Partial answer: " + ("the markings explored are lost; " if explored is None
+                                          else f"{explored:,} markings explored; ")
                 + {True: "a dead marking was already found among them.",
                    False: "no dead marking among those expanded.",
                    None: "dead markings not checked."}[found]]
+    if partial.get("left_out"):
+        out += ["", "Partial answer: left out to stay within the memory budget: "
+                + ", ".join(k.replace("_", " ") for k in partial["left_out"]) + "."]
     if r.get("deadlocks") and r.get("interface") != "none":
         out += ["", "Dead markings that are not a proper end:"]
         out += [f"  {{{', '.join(m)}}}" for m in r["deadlocks"]]
@@ -229,9 +386,11 @@ def render_text(r: dict[str, Any]) -> str:
     return "\n".join(out)
 
 
-def _count(r: dict[str, Any], place: str) -> int:
+def _tokens(r: dict[str, Any]) -> dict[str, int]:
+    """The initial marking of the answer, place -> tokens (read once: a scan per
+    place would be quadratic on a net marked everywhere)."""
+    tokens = {}
     for entry in r.get("initial_marking", []):
         name, _, n = entry.partition("*")
-        if name == place:
-            return int(n) if n else 1
-    return 0
+        tokens[name] = int(n) if n else 1
+    return tokens

@@ -141,7 +141,7 @@ def _grown_within(sides: _Sides, within: frozenset[int],
 
 
 def _minimal_sets(sides: _Sides, nplaces: int, limit: int | None,
-                  what: str) -> list[frozenset[int]]:
+                  what: str, work: int | None = None) -> list[frozenset[int]]:
     """Every minimal set of the kind ``sides`` describes, each exactly once.
 
     A subproblem (P', R) asks for the minimal sets N with R ⊆ N ⊆ P'
@@ -154,6 +154,11 @@ def _minimal_sets(sides: _Sides, nplaces: int, limit: int | None,
     first such place, p_i, puts N in exactly one subproblem
     (P' - {p_i}, R + {p_1 ... p_i-1}). So the subproblems partition the
     rest, and nothing is found twice.
+
+    ``limit`` bounds the subproblems, ``work`` the places they look at: a
+    subproblem copies its parent's largest set, and shrinking a set of k
+    places looks at k sets of up to k places, so a single siphon of a
+    million places would take 10^12 steps before it is found.
     """
     found: list[frozenset[int]] = []
     # a subproblem: (the parent's largest set and its input counts, the
@@ -161,24 +166,42 @@ def _minimal_sets(sides: _Sides, nplaces: int, limit: int | None,
     # the largest inside the parent's largest minus p_i, so it is that set
     # with p_i removed and the removal followed through: a dict copy (fast)
     # and a walk over what leaves, not a pass over the whole net.
+    # The places p_1 ... p_k of a subproblem's M \ R are kept once, as a tuple its
+    # k children share, each child with its i: R + {p_1 ... p_i-1} is made when the
+    # child is taken, not when it is pushed (k children holding their own sets
+    # would be k^2/2 entries: 10^5 places of one siphon, 40 GB).
     root, root_count = _largest(sides, range(nplaces))
-    stack: list[tuple[frozenset[int], dict[int, int], int | None, frozenset[int]]] = [
-        (root, root_count, None, frozenset())]
-    visited = 0
+    stack: list[tuple[frozenset[int], dict[int, int], tuple[int, ...], int, frozenset[int]]] = [
+        (root, root_count, (), -1, frozenset())]
+    visited, steps = 0, 0
+
+    def spend(n: int) -> None:
+        nonlocal steps
+        steps += n
+        if work is not None and steps > work:
+            raise AnalysisLimit(f"more than {work:,} steps enumerating the minimal {what} "
+                                f"({visited:,} subproblems, {len(found):,} found)")
+
+    spend(nplaces)
     while stack:
-        parent, count, leave, required = stack.pop()
+        parent, count, order, i, required = stack.pop()
         visited += 1
         if limit is not None and visited > limit:
             raise AnalysisLimit(f"more than {limit:,} subproblems enumerating the minimal "
                                 f"{what}")
         largest = parent
-        if leave is not None:
+        if i >= 0:
+            leave = order[i]
+            required = required | frozenset(order[:i])
+            spend(len(parent) + len(count) + i)
             inside, count = set(parent), dict(count)
             _collapse(sides, inside, count, [leave])
             largest = frozenset(inside)
         if not largest or not required <= largest:
             continue
         current = _grown_within(sides, largest, required)
+        # the shrinking below and the minimality test: two sets per place of current
+        spend(2 * len(current) * len(current))
         # Shrink while the required places stay. One pass is enough: a place
         # whose removal loses R once loses it from every smaller set too.
         for p in sorted(current - required):
@@ -189,31 +212,32 @@ def _minimal_sets(sides: _Sides, nplaces: int, limit: int | None,
         # minimal among the sets holding R; minimal outright if no place can go
         if all(not _max_within(sides, current - {p}) for p in current):
             found.append(current)
-        before: list[int] = []
-        for p in sorted(current - required):
-            stack.append((largest, count, p, required | frozenset(before)))
-            before.append(p)
+        order = tuple(sorted(current - required))
+        stack.extend((largest, count, order, i, required) for i in range(len(order)))
     return sorted(found, key=lambda x: (len(x), sorted(x)))
 
 
-def minimal_siphons(s: Structure, limit: int | None = None) -> list[frozenset[int]]:
+def minimal_siphons(s: Structure, limit: int | None = None,
+                    work: int | None = None) -> list[frozenset[int]]:
     """Every minimal siphon, as a set of place indices (``s.names`` gives names).
 
     Exact enumeration by partitioning the search space (Cordone, Ferrarini
     and Piroddi 2005), each siphon found once; sorted by size, then by place
     order. There can be exponentially many: past ``limit`` subproblems it
-    raises :class:`~analysis.invariants.AnalysisLimit`.
+    raises :class:`~analysis.invariants.AnalysisLimit`, and past ``work``
+    places looked at (see :func:`_minimal_sets`).
     """
-    return _minimal_sets(_siphon_sides(s), len(s.places), limit, "siphons")
+    return _minimal_sets(_siphon_sides(s), len(s.places), limit, "siphons", work)
 
 
-def minimal_traps(s: Structure, limit: int | None = None) -> list[frozenset[int]]:
+def minimal_traps(s: Structure, limit: int | None = None,
+                  work: int | None = None) -> list[frozenset[int]]:
     """Every minimal trap, as a set of place indices.
 
     As :func:`minimal_siphons` (Cordone, Ferrarini and Piroddi 2005), with
     the directions of the arcs reversed.
     """
-    return _minimal_sets(_trap_sides(s), len(s.places), limit, "traps")
+    return _minimal_sets(_trap_sides(s), len(s.places), limit, "traps", work)
 
 
 def _around(sets: Sets, places: set[int]) -> set[int]:

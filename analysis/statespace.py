@@ -57,6 +57,7 @@ The names the callers use with :func:`explore` (:class:`StateSpace`,
 from __future__ import annotations
 
 from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.memory import default_memory, resident, size_text
 from mcl2pnml.core.structure import Structure, structure as make_structure
 
 from analysis import compiledspace
@@ -99,30 +100,6 @@ a net that is not safe (when numba is installed but not loaded yet)."""
 
 class _HandOver(Exception):
     """The explorer passed its hand-over count: a compiled one starts again."""
-
-
-def resident() -> int:
-    """The bytes this process holds now (VmRSS), or 0 where that is unknown."""
-    try:
-        with open("/proc/self/status") as f:
-            for line in f:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return 0
-
-
-def default_memory() -> int:
-    """Half of the memory available now (``MemAvailable``), or 2 GiB where that is unknown."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024 // 2
-    except OSError:
-        pass
-    return 2 << 30
 
 
 def explore(net_or_structure, initial: dict[str, int] | None = None, *,
@@ -205,16 +182,9 @@ class _Budget:
         if self.states < self.max_states:
             return MemoryLimit(
                 f"the exploration stopped at {self.states:,} markings, its memory budget of "
-                f"{_size(self.max_memory)} ({per:,} bytes a marking); raise the budget "
+                f"{size_text(self.max_memory)} ({per:,} bytes a marking); raise the budget "
                 "(--max-memory) or analyse a smaller net")
         return _limit(self.max_states)
-
-
-def _size(n: int) -> str:
-    for unit, shift in (("G", 30), ("M", 20), ("K", 10)):
-        if n >= 1 << shift:
-            return f"{n / (1 << shift):.1f} {unit}B"
-    return f"{n} bytes"
 
 
 def _explore_safe(s: Structure, m0, backend: str, budget: _Budget, progress) -> StateSpace:
