@@ -15,9 +15,11 @@ import click
 from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
+from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
+from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
@@ -144,6 +146,7 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
     if queries is not None and queries.resolve() == output.resolve():
         raise click.BadParameter("the queries go in a file of their own, not the net's",
                                  param_hint="--queries")
+    check_outputs([("-o", output), ("--queries", queries)], [("the mission", mission)])
     net = pipeline.compile_file(mission)
     pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
@@ -162,7 +165,26 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
               metavar="|".join(kind.name for kind in VEHICLES),
               help="The AUV simulator, a real vehicle through a mapping file and a bridge "
               '(see --connect), or a script ({"PRIMITIVE": ["ok@5", "fail@3", "never"]}).')
-@click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge:.")
+@click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge: "
+              "(a host name, an IPv4 address, or an IPv6 one in brackets: [::1]:7777).")
+@click.option("--secret", type=FILE, help="Authenticate every line of the bridge's link, both "
+              "ways (HMAC-SHA256), with the shared secret in this file (mode 600, 16 bytes or "
+              "more); the bridge server gets the same file.")
+@click.option("--tls-ca", type=FILE, help="Talk TLS to the bridge, checking its certificate "
+              "against this authority (PEM).")
+@click.option("--tls-cert", type=FILE, help="With --tls-ca: this end's certificate (PEM), for "
+              "a bridge that requires one.")
+@click.option("--tls-key", type=FILE, help="The private key of --tls-cert (PEM).")
+@click.option("--heartbeat", type=click.FloatRange(min=0, min_open=True), default=HEARTBEAT,
+              show_default=True, help="Seconds between the heartbeats sent to the bridge.")
+@click.option("--liveness", type=click.FloatRange(min=0, min_open=True), default=LIVENESS,
+              show_default=True, help="Seconds without a line from the bridge (its heartbeats "
+              "included) after which the link is lost: the run stops, with its safe stop.")
+@click.option("--send-timeout", type=click.FloatRange(min=0, min_open=True),
+              default=SEND_TIMEOUT, show_default=True, help="Seconds a line to the bridge may "
+              "take to send before the link is lost (a bridge that does not read).")
+@click.option("--max-line", type=click.IntRange(min=256), default=MAX_LINE, show_default=True,
+              help="The longest line (bytes) the bridge may send; a longer one loses the link.")
 @click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace}.")
 @click.option("--log", "log_path", type=OUTPUT, help="Also log the run here as JSON lines.")
 @click.option("--world", type=FILE, help="The simulator's world (JSON: tank, start, cross, "
@@ -274,6 +296,8 @@ def show(what: str, output: Path | None, run_log: Path | None, net_id: str | Non
     """
     title, nets = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id)
     output = output or Path(f"{title}.html")
+    check_outputs([("-o", output)], [("the run log (--run)", run_log),
+                                     ("the net or mission", what if Path(what).is_file() else None)])
     pipeline.save_show_page(output, title, nets, run_log)
     click.echo(f"wrote {output}: {nets[0][0].summary()}", err=True)
     return 0
@@ -307,7 +331,7 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml, .net, .lola).
     Exit status 3: a partial answer (the memory budget was reached).
     """
-    net = pipeline.load_net(file, net_id)
+    net = pipeline.load_net(file, net_id, max_memory)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress
     result = pipeline.analyze(net, start, state_space_only=state_space, max_states=max_states,

@@ -86,13 +86,23 @@ def functional_form(checked, *, functions: bool = False) -> list[str]:
 
 # -- nets in files -------------------------------------------------------------------------
 
-def load_net(path: str | Path, net_id: str | None = None) -> Net:
+def load_net(path: str | Path, net_id: str | None = None,
+             max_memory: int | str | None = None) -> Net:
     """A net from any file: a mission (``.mcl``, compiled) or a format of the table.
 
-    ``net_id`` chooses one net of a file that holds several (PNML).
+    ``net_id`` chooses one net of a file that holds several (PNML). A net file
+    that reading could not hold within ``max_memory`` (bytes, or as
+    ``--max-memory`` takes it; default half the memory available) is refused
+    before it is read (:func:`mcl2pnml.core.memory.check_load`).
     """
     if Path(path).suffix != ".mcl":
-        return reader_of(path).load(path, net_id)
+        from mcl2pnml.core.memory import Budget, check_load, release
+        if isinstance(max_memory, str):
+            max_memory = parse_size(max_memory)
+        check_load(path, Budget(max_memory))
+        net = reader_of(path).load(path, net_id)
+        release()   # the parsed file is freed: what the analysis may use is back
+        return net
     if net_id is not None:
         raise OptionError("--net", "a mission compiles to one net; leave out --net")
     return compile_file(path)
@@ -145,8 +155,10 @@ def validate_pnml(path: str | Path, grammar: str | Path | None = None,
     """The verdict on a PNML file of our schema, of the official grammar when ``grammar``
     gives it (or it is found: :func:`mcl2pnml.io.pnml.grammar.find_grammar`) and of the
     reader's rules; and the net when it is valid."""
+    from mcl2pnml.core.memory import Budget, check_load
     from mcl2pnml.io.pnml.grammar import validate
     from mcl2pnml.io.pnml.reader import load_pnml
+    check_load(path, Budget())   # the schemas read the file whole too
     verdict = validate(path, grammar, net_id)
     return verdict, (load_pnml(path, net_id) if verdict.valid else None)
 
@@ -193,13 +205,18 @@ def parse_size(text: str, option: str = "--max-memory") -> int:
 
 def parse_marking(text: str, net: Net, where: str = "") -> dict[str, int]:
     """A marking written ``P,Q*2`` (``analyze --initial``): place -> tokens."""
+    from mcl2pnml.core.bounds import MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
     from mcl2pnml.core.errors import did_you_mean
     marking: dict[str, int] = {}
     for item in filter(None, (i.strip() for i in text.split(","))):
         place, _, count = item.partition("*")
-        if count and not count.isdigit():
-            raise OptionError("--initial", f"'{item}': a count is a natural number (P*2)")
-        marking[place] = marking.get(place, 0) + (int(count) if count else 1)
+        if count and not (count.isdigit() and count.isascii()):
+            raise OptionError("--initial", f"'{item[:40]}': a count is a natural number (P*2)")
+        tokens = natural_at_most(count, MAX_TOKENS) if count else 1
+        if tokens is None or marking.get(place, 0) + tokens > MAX_TOKENS:
+            raise OptionError("--initial", f"'{item[:40]}': too many tokens; a place holds "
+                                           f"at most {MAX_TOKENS_TEXT}")
+        marking[place] = marking.get(place, 0) + tokens
     unknown = sorted(p for p in marking if p not in net.place_index)
     if unknown:
         raise OptionError("--initial", f"no place {', '.join(unknown)} in {where or net.name}"
@@ -227,7 +244,9 @@ def _engine_for(mission: Path, net_id: str | None) -> Callable[[str], Any]:
         if kind == "reference":
             raise OptionError("--engine", "the reference engine reads MCL, not a net; give "
                                           "the .mcl file")
+        from mcl2pnml.core.memory import Budget, check_load
         from mcl2pnml.io.pnml.reader import load_pnml
+        check_load(mission, Budget())
         return PetriEngine(load_pnml(mission, net_id))
     return make
 

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
-from mcl2pnml.core.files import read_text
+from mcl2pnml.core.files import json_fault, read_text
 # The kinds of actions and events are what a compiled net's payloads say, so
 # they are defined with the payload records in core (which may not import
 # runtime) and re-exported here, where the vehicle's side of the layer uses them.
@@ -232,6 +232,8 @@ class ScriptedVehicle(Vehicle):
             data = json.loads(text, object_pairs_hook=_no_duplicates)
         except json.JSONDecodeError as e:
             raise fail(f"not a vehicle script: {e.msg}", e.lineno, e.colno) from None
+        except (ValueError, RecursionError) as e:   # a number of 5,000 digits, deep nesting
+            raise fail(f"not a vehicle script: {json_fault(e)}") from None
         except _Duplicate as e:
             raise fail(f"'{e.args[0]}' is scripted twice", *_string_at(text, e.args[0], 2)) \
                 from None

@@ -47,7 +47,7 @@ from typing import Any, Iterable, Mapping
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
                                   VehicleInputError, _strings)
 from mcl2pnml.core.errors import LISTED, Location, Mcl2PnmlError
-from mcl2pnml.core.files import read_text
+from mcl2pnml.core.files import json_fault, read_text
 from mcl2pnml.runtime.link import (BadLine, Link, LinkBroken, LinkOptions, Side, client_tls,
                                    parse_address, quote_line, read_secret)
 
@@ -95,6 +95,8 @@ class VehicleMapping:
             data = json.loads(text)
         except json.JSONDecodeError as e:
             raise fail(f"not a mapping file: {e.msg}", e.lineno, e.colno) from None
+        except (ValueError, RecursionError) as e:   # a number of 5,000 digits, deep nesting
+            raise fail(f"not a mapping file: {json_fault(e)}") from None
         if not isinstance(data, dict) or not isinstance(data.get("primitives"), dict):
             raise fail('a mapping file is a JSON object with "primitives": '
                        '{"NAME": {"enable": ..., "disable": ..., "events": ...}}')

@@ -135,6 +135,15 @@ class Engine(ABC):
     def waiting(self) -> list[str]:
         """What the mission waits for now, in words (for a run that stalls)."""
 
+    def enable_arguments(self) -> dict[str, list[tuple]] | None:
+        """Every argument tuple each primitive may be enabled with, known before the run.
+
+        A real vehicle's mapping is checked against them before anything is
+        sent (:meth:`~mcl2pnml.runtime.aal.LiveVehicle.check_enables`). None:
+        this engine cannot tell (each command is then checked as it is made).
+        """
+        return None
+
     @abstractmethod
     def primitives_used(self) -> set[str]:
         """The primitives the mission may enable: the vehicle must offer every one.

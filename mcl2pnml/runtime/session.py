@@ -12,14 +12,17 @@ mission (MCL or a compiled net): this layer does not.
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import IO, Callable
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
-from mcl2pnml.core.files import atomic_write_text
+from mcl2pnml.core.files import atomic_write_text, check_outputs
 from mcl2pnml.runtime import journal as journals
+from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
+from mcl2pnml.runtime.link import (HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT,
+                                   LinkOptions)
 from mcl2pnml.runtime.runlog import RunLog
 from mcl2pnml.runtime.vehicles import VehicleKind, kind_of
 
@@ -40,6 +43,17 @@ class RunOptions:
     transitions: bool = False
     journal: Path | None = None
     resume: Path | None = None
+    #: the live link to a real vehicle (mcl2pnml.runtime.link): its shared
+    #: secret, TLS files, heartbeat period, liveness and send time-outs (s),
+    #: and longest line (bytes)
+    secret: Path | None = None
+    tls_ca: Path | None = None
+    tls_cert: Path | None = None
+    tls_key: Path | None = None
+    heartbeat: float = HEARTBEAT
+    liveness: float = LIVENESS
+    send_timeout: float = SEND_TIMEOUT
+    max_line: int = MAX_LINE
     #: the options the user gave (a resumed run must not contradict its journal on them)
     explicit: frozenset[str] = field(default_factory=frozenset)
 
@@ -72,7 +86,19 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
                           "vehicle's run cannot be replayed")
     if options.world and not kind.takes_world:
         raise OptionError("--world", "a world is for the simulator (--vehicle sim)")
-    return kind, kind.build(options.vehicle, options.connect, options.world)
+    if not kind.realtime:
+        for name in ("connect",) + _LINK:
+            if getattr(options, name) != _DEFAULTS[name]:
+                raise OptionError(f"--{name.replace('_', '-')}", "only for a real vehicle "
+                                  "(--vehicle bridge:MAPPING.json --connect HOST:PORT)")
+    link = LinkOptions(**{name: getattr(options, name) for name in _LINK})
+    return kind, kind.build(options.vehicle, options.connect, options.world, link)
+
+
+#: The options of the live link, as RunOptions and LinkOptions both name them.
+_LINK = ("secret", "tls_ca", "tls_cert", "tls_key", "heartbeat", "liveness", "send_timeout",
+         "max_line")
+_DEFAULTS = {f.name: f.default for f in fields(RunOptions)}
 
 
 def _check_primitives(engine: Engine, vehicle) -> None:
@@ -84,6 +110,8 @@ def _check_primitives(engine: Engine, vehicle) -> None:
         raise OptionError("--vehicle", f"the mission uses '{missing}', which this vehicle "
                                        f"does not offer; it offers {', '.join(sorted(offered))}")
     vehicle.check_primitives(needed)
+    if isinstance(vehicle, LiveVehicle):    # before anything is sent to a real vehicle
+        vehicle.check_enables(engine.enable_arguments())
 
 
 def _journal(mission: Path, options: RunOptions, kind: VehicleKind,
@@ -119,6 +147,11 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     safe stop has disabled every primitive still enabled.
     """
     options, loaded = resumed(options)
+    # no output may be a file the run reads, nor the other output (--journal j --log j)
+    check_outputs([("--journal", options.journal), ("--log", log_path)],
+                  [("the mission", mission), ("the world (--world)", options.world),
+                   ("the vehicle script (--vehicle)", kind_of(options.vehicle).source(
+                       options.vehicle)), ("the journal it resumes (--resume)", options.resume)])
     if loaded is not None and loaded.torn:
         note(loaded.torn)
     kind, vehicle = _vehicle(options)
@@ -137,8 +170,14 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
             log.ignored(event, reason)
         seen = len(engine.ignored)
 
-    loop = run_realtime if kind.realtime else drive
-    result = loop(engine, vehicle, listener=listener, max_time=options.max_time)
+    if kind.realtime:
+        vehicle.open()              # connect only now: the mission and mapping are checked
+        try:
+            result = run_realtime(engine, vehicle, listener=listener, max_time=options.max_time)
+        finally:
+            vehicle.close()
+    else:
+        result = drive(engine, vehicle, listener=listener, max_time=options.max_time)
     for event, reason in result.ignored[seen:]:
         log.ignored(event, reason)
     log.end(result.time, result.outcome)
