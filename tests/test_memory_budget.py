@@ -225,14 +225,17 @@ def test_a_million_places_are_refused_by_every_command_before_reading(million, t
 
 @pytest.mark.slow
 @pytest.mark.timeout(1800)
-@pytest.mark.parametrize("shape", ["ring", "components", "siphons", "dense"])
-def test_every_shape_of_a_hundred_thousand_places_ends_within_its_budget(tmp_path, shape):
-    """Read, then each stage within 1.5 GB: what does not fit is left out and said."""
+@pytest.mark.parametrize("shape, budget", [("ring", 1500), ("components", 1500),
+                                           ("siphons", 1500), ("dense", 800)])
+def test_every_shape_of_a_hundred_thousand_places_ends_within_its_budget(tmp_path, shape,
+                                                                         budget):
+    """Read, then each stage within its budget: what does not fit is left out and said.
+    (The dense net's elimination fills in slowly: a smaller budget stops it sooner.)"""
     path = write_pnml(tmp_path / f"{shape}.pnml", shape, 100_000)
-    out, peak = run_measured("analyze", path, "--json", "--max-memory", "1500M",
+    out, peak = run_measured("analyze", path, "--json", "--max-memory", f"{budget}M",
                              limit=6 << 30, timeout=1700)
     assert out.returncode in (0, 3), out.stderr[-2000:]
-    assert peak < 1500 * MB
+    assert peak < budget * MB
     r = json.loads(out.stdout)
     assert r["places"] in (99_999, 100_000)
     assert (out.returncode == 3) == ("partial" in r)
