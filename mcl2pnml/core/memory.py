@@ -11,8 +11,8 @@ partial answer or a refusal, before the kernel kills it.
 
 The estimates of :func:`load_estimate` are what reading takes per element
 of the file, measured on PNML, TINA and LoLA files of 10^5 and 10^6 places
-(``tests/bignets.py`` writes them) and rounded up: a parsed XML element and
-the node or arc it becomes cost about 1.5 KB.
+(``tests/bignets.py`` writes them) and on compiled missions, and rounded up:
+a parsed XML element and the node or arc it becomes cost 1 to 2 KB.
 """
 from __future__ import annotations
 
@@ -27,14 +27,21 @@ from typing import Iterator
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import open_regular
 
-#: Bytes that reading costs per place, transition or arc element of a PNML file
-#: (the XML tree, then the net: 1.4 to 1.6 KB measured), and per other element
-#: (names, markings, graphics: about 110 bytes measured).
-PNML_NODE = 1_800
-PNML_OTHER = 150
+#: Bytes that reading costs per place or transition element of a PNML file and
+#: per arc (the XML tree, then the net: fitted to 0.95 and 1.9 KB on generated
+#: nets), per payload of our tool data (decoded JSON: 2.3 KB on a compiled
+#: mission of 90,000 places), and per other element (names, markings,
+#: graphics: about 200 bytes).
+PNML_NODE = 1_000
+PNML_ARC = 2_000
+PNML_PAYLOAD = 3_000
+PNML_OTHER = 200
 #: Bytes that reading costs per word (a run of characters between blanks) of a
 #: text format: measured 1.05 KB for TINA, 0.37 KB for LoLA.
 TEXT_WORD = {".net": 1_200, ".lola": 450, ".ll": 450}
+#: The estimates are the fitted costs times this, in percent: the fits are within
+#: 3% of what was measured, nets of other shapes may differ more.
+SAFETY = 110
 #: What the interpreter and the modules a command imports hold at least, beyond
 #: which a budget is useful: a smaller one is refused outright.
 FLOOR = 64 << 20
@@ -188,14 +195,15 @@ def load_estimate(path: str | Path) -> tuple[int, str]:
     if suffix in TEXT_WORD:
         blanks, newlines = _counts(path, (b" ", b"\n"))
         words = blanks + newlines
-        return size + words * TEXT_WORD[suffix], f"{words:,} words"
-    places, transitions, arcs, opens, closes, heads = _counts(
-        path, (b"<place", b"<transition", b"<arc", b"<", b"</", b"<?"))
-    nodes = places + transitions + arcs
-    other = max(0, opens - closes - heads - nodes)
-    what = (f"{places:,} places, {transitions:,} transitions and {arcs:,} arcs" if nodes
-            else f"{size:,} bytes")
-    return size + nodes * PNML_NODE + other * PNML_OTHER, what
+        return (size + words * TEXT_WORD[suffix]) * SAFETY // 100, f"{words:,} words"
+    places, transitions, arcs, payloads, opens, closes, heads = _counts(
+        path, (b"<place", b"<transition", b"<arc", b"<payload", b"<", b"</", b"<?"))
+    other = max(0, opens - closes - heads - places - transitions - arcs - payloads)
+    what = (f"{places:,} places, {transitions:,} transitions and {arcs:,} arcs"
+            if places + transitions + arcs else f"{size:,} bytes")
+    need = (size + (places + transitions) * PNML_NODE + arcs * PNML_ARC
+            + payloads * PNML_PAYLOAD + other * PNML_OTHER)
+    return need * SAFETY // 100, what
 
 
 def check_load(path: str | Path, budget: Budget) -> None:
