@@ -165,19 +165,19 @@ _CHUNK = 16 << 20
 def _counts(path: Path, patterns: tuple[bytes, ...]) -> list[int]:
     """How often each pattern occurs in the file, read a chunk at a time (nothing held)."""
     counts = [0] * len(patterns)
-    keep = max(len(p) for p in patterns) - 1
-    tail = b""
+    # each pattern is counted in the chunk with the end of the one before, one byte
+    # shorter than the pattern: an occurrence across the cut is seen once, none twice
+    tails = [b""] * len(patterns)
     # through the readers' one check: a FIFO or a device is refused, not waited on
     with os.fdopen(open_regular(path), "rb") as f:
         while True:
             chunk = f.read(_CHUNK)
             if not chunk:
                 break
-            data = tail + chunk
             for i, p in enumerate(patterns):
-                # the kept tail is shorter than any pattern: nothing is counted twice
+                data = tails[i] + chunk
                 counts[i] += data.count(p)
-            tail = data[-keep:] if keep else b""
+                tails[i] = data[len(data) - len(p) + 1:] if len(p) > 1 else b""
     return counts
 
 
