@@ -135,8 +135,10 @@ def functional(mission: Path, with_functions: bool) -> int:
 @click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)), default="verifypn",
               show_default=True, help="How --queries writes a deadlock inside a formula: "
               + "; ".join(f"{name}: {form}" for name, form in QUERY_TOOLS.items()))
+@click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half "
+              "free). A mission whose net would not fit is one message, exit 2.")
 def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
-             queries: Path | None, tool: str) -> int:
+             queries: Path | None, tool: str, max_memory: str | None) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
@@ -147,7 +149,7 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
         raise click.BadParameter("the queries go in a file of their own, not the net's",
                                  param_hint="--queries")
     check_outputs([("-o", output), ("--queries", queries)], [("the mission", mission)])
-    net = pipeline.compile_file(mission)
+    net = pipeline.compile_file(mission, max_memory=max_memory)
     pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     if queries is not None:

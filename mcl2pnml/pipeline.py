@@ -62,8 +62,22 @@ def compile_checked(checked, *, reduced: bool = False) -> Net:
     return compile_(checked, reduced=reduced)
 
 
-def compile_file(path: str | Path, *, reduced: bool = False) -> Net:
-    return compile_checked(check_file(path), reduced=reduced)
+def compile_file(path: str | Path, *, reduced: bool = False,
+                 max_memory: int | str | None = None) -> Net:
+    """The mission in ``path`` compiled to one net, within the memory budget.
+
+    A mission's net is about as large as its text is long, but only the
+    compiling tells how large: it runs under the budget's guard
+    (:func:`mcl2pnml.core.memory.guard`; ``max_memory`` in bytes or as
+    ``--max-memory`` takes it, default half the memory available), which
+    stops it with one message instead of the kernel killing the process.
+    """
+    from mcl2pnml.core.memory import Budget, guard
+    if isinstance(max_memory, str):
+        max_memory = parse_size(max_memory)
+    checked = check_file(path)
+    with guard(Budget(max_memory), f"compiling {path}"):
+        return compile_checked(checked, reduced=reduced)
 
 
 def compile_source(text: str, filename: str = "<mcl>", *, reduced: bool = False) -> Net:
@@ -105,7 +119,7 @@ def load_net(path: str | Path, net_id: str | None = None,
         return net
     if net_id is not None:
         raise OptionError("--net", "a mission compiles to one net; leave out --net")
-    return compile_file(path)
+    return compile_file(path, max_memory=max_memory)
 
 
 def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",

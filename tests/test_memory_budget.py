@@ -191,6 +191,22 @@ def test_analyze_past_its_budget_gives_a_partial_answer_within_it(tmp_path, opti
         assert "steps enumerating the minimal siphons" in r["limits"]["siphons"]
 
 
+@pytest.mark.timeout(120)
+def test_compile_stops_at_its_budget_with_one_message_and_no_file(tmp_path):
+    """A mission of 20,000 calls compiles to 360,000 places (870 MB): within 200 MB it
+    is one message, exit 2, no output file, and the child stays under its budget."""
+    mission = tmp_path / "calls.mcl"
+    mission.write_text("primitive P(x);\ntask T(x) = AchieveGoal(P(x)) timeout 10;\nmission {\n"
+                       + "".join(f"    T({i});\n" for i in range(20_000)) + "}\n")
+    output = tmp_path / "calls.pnml"
+    out, peak = run_measured("compile", mission, "-o", output, "--layout", "none",
+                             "--max-memory", "200M")
+    assert out.returncode == 2, out.stderr
+    assert out.stderr == f"compiling {mission} stopped at the memory budget of 200.0 MB"
+    assert not output.exists() and not list(tmp_path.glob(".calls.pnml*"))
+    assert peak < 200 * MB
+
+
 # -- a million places: every command, under a hard cap ------------------------------------------
 
 #: The address space each child may take at most: a command that read the million-place
