@@ -14,7 +14,7 @@ import click
 
 from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
-from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
@@ -241,8 +241,8 @@ def validate(file: Path, grammar: Path | None, net_id: str | None) -> int:
     """
     verdict, net = pipeline.validate_pnml(file, grammar, net_id)
     if not verdict.valid:
-        for error in verdict.errors:
-            click.echo(str(error), err=True)
+        for line in shown(verdict.errors):
+            click.echo(line, err=True)
         n = len(verdict.errors)
         click.echo(f"{file}: invalid PNML ({n} problem{'s' * (n != 1)}; {verdict.judges()})",
                    err=True)

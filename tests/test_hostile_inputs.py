@@ -455,3 +455,22 @@ def test_a_missing_dot_is_one_message_saying_how_to_get_it(tmp_path):
     one_error(out, "--format", "graphviz's 'dot' program is not installed",
               "pnml, tina, lola and dot (the source) work without it")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bin"]
+
+
+# -- a file broken everywhere: a screenful and a count ---------------------------------------
+
+def test_a_file_broken_everywhere_shows_its_first_errors_and_how_many_more(tmp_path):
+    from mcl2pnml.core.errors import SHOWN_ERRORS
+    arcs = "".join(f'<arc id="a{i}" source="nowhere{i}" target="p"/>' for i in range(200))
+    net = tmp_path / "broken.pnml"
+    net.write_text('<?xml version="1.0"?><pnml xmlns="http://www.pnml.org/version-2009/grammar/'
+                   'pnml"><net id="n" type="http://www.pnml.org/version-2009/grammar/ptnet">'
+                   f'<page id="g"><place id="p"/>{arcs}</page></net></pnml>')
+    for command in ("analyze", "validate"):
+        out = run_cli(command, net)
+        assert out.returncode == 2 and "Traceback" not in out.stderr
+        lines = out.stderr.splitlines()
+        located = [line for line in lines if line.startswith(f"{net}:")]
+        assert len(located) <= SHOWN_ERRORS + 1, (command, len(located))
+        assert any(re.fullmatch(r"\.\.\. and [\d,]+ more errors \(the first 50 are shown\)",
+                                line) for line in lines), (command, lines[-3:])

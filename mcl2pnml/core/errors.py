@@ -92,15 +92,30 @@ class PnmlError(Mcl2PnmlError):
     """A PNML document that cannot be read as a P/T net."""
 
 
+#: The most errors of one file shown at once: a file broken everywhere (a net of
+#: 10^5 bad arcs) is a screenful and a count, not 150,000 lines.
+SHOWN_ERRORS = 50
+
+
+def shown(errors: Sequence[object]) -> list[str]:
+    """The errors as lines to print: the first :data:`SHOWN_ERRORS`, then how many more."""
+    lines = [str(e) for e in errors[:SHOWN_ERRORS]]
+    if len(errors) > SHOWN_ERRORS:
+        lines.append(f"... and {len(errors) - SHOWN_ERRORS:,} more errors "
+                     f"(the first {SHOWN_ERRORS} are shown)")
+    return lines
+
+
 class ErrorList(Mcl2PnmlError):
-    """Several errors found in one file, reported together."""
+    """Several errors found in one file, reported together (the first
+    :data:`SHOWN_ERRORS` of them, and how many more)."""
 
     def __init__(self, errors: Sequence[Mcl2PnmlError]):
         self.errors = tuple(errors)
-        super().__init__("\n".join(str(e) for e in self.errors))
+        super().__init__(str(self))
 
     def __str__(self) -> str:
-        return "\n".join(str(e) for e in self.errors)
+        return "\n".join(shown(self.errors))
 
 
 def raise_all(errors: Iterable[Mcl2PnmlError]) -> None:
