@@ -355,6 +355,19 @@ def test_a_peer_that_closes_or_resets_ends_the_run_at_once(linger):
 
 
 @pytest.mark.timeout(20)
+def test_a_peers_reason_reaches_our_messages_as_text_only():
+    # terminal escapes and a line break that would forge a line of our own log
+    reason = "\x1b[2J\x1b]0;owned\x07busy\noutcome OK at t=0 s" + "x" * 10_000
+    peer = Peer(send_after_first_command(encode({"link": "error", "reason": reason}),
+                                         then_close=True))
+    result = run_bridge(peer.address, recorder=Recorder())
+    assert_lost(result, "ended the link: ")
+    diagnosis = result.waiting[0]
+    assert diagnosis.isprintable() and len(diagnosis) < 300, diagnosis
+    assert "busy?outcome OK" in diagnosis
+
+
+@pytest.mark.timeout(20)
 def test_a_silent_peer_is_a_lost_link_at_the_liveness_time_out():
     peer = Peer(send_after_first_command(b""))       # it reads, and says nothing, for ever
     recorder = Recorder()

@@ -135,6 +135,15 @@ def quote_line(line: bytes | str, why: str = "") -> str:
     return shown + (f" ({why})" if why else "")
 
 
+def said(reason: Any) -> str:
+    """The reason a peer gives, as our messages repeat it: text only, cut at
+    :data:`QUOTED` characters, no control characters (no terminal escapes, no
+    line breaks that would forge lines of our own log)."""
+    text = reason if isinstance(reason, str) else json.dumps(reason)
+    text = "".join(c if c.isprintable() else "?" for c in text[:QUOTED])
+    return text + ("..." if len(reason if isinstance(reason, str) else text) > QUOTED else "")
+
+
 def decode(line: bytes) -> dict[str, Any]:
     """The JSON object a line holds; :class:`BadLine` if it holds none."""
     try:
@@ -320,7 +329,7 @@ class Link:
             raise LinkBroken(f"{self.peer} does not speak the link protocol {PROTOCOL}: its "
                              f"first line is {e}") from None
         if hello.get("link") == "error":
-            raise LinkBroken(f"{self.peer} refused the link: {hello.get('reason')}")
+            raise LinkBroken(f"{self.peer} refused the link: {said(hello.get('reason'))}")
         if hello.get("link") != "hello" or hello.get("protocol") != PROTOCOL:
             raise LinkBroken(f"{self.peer} does not speak the link protocol {PROTOCOL}: its "
                              f"first line is {quote_line(first)}")
@@ -371,7 +380,7 @@ class Link:
         except BadLine as e:
             raise LinkBroken(f"{self.peer} sent a line without a MAC: {e}") from None
         if envelope.get("link") == "error":    # unauthenticated: it can only end the link
-            raise LinkBroken(f"{self.peer} ended the link: {envelope.get('reason')} "
+            raise LinkBroken(f"{self.peer} ended the link: {said(envelope.get('reason'))} "
                              "(an unauthenticated line)")
         seq, body, mac = envelope.get("seq"), envelope.get("body"), envelope.get("mac")
         if not (isinstance(seq, int) and isinstance(body, str) and isinstance(mac, str)):
@@ -497,7 +506,7 @@ class Link:
         if kind is None:
             self._deliver(body)
         elif kind == "error":
-            self._break(f"{self.peer} ended the link: {body.get('reason')}")
+            self._break(f"{self.peer} ended the link: {said(body.get('reason'))}")
         elif kind != "heartbeat":
             self._deliver(BadLine(quote_line(line, f"unknown link line '{kind}'")))
 
