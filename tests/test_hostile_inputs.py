@@ -361,7 +361,7 @@ def chain(n: int) -> str:
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.parametrize("n", [1000, 5000])
+@pytest.mark.parametrize("n", [1000, pytest.param(5000, marks=pytest.mark.slow)])
 def test_a_deep_chain_of_functions_checks_compiles_and_runs(tmp_path, n):
     from mcl2pnml import pipeline
     mission = tmp_path / f"chain{n}.mcl"
