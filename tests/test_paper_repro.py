@@ -68,6 +68,14 @@ def test_python_m_paper_repro_writes_the_report_and_exits_0():
                for e in report["equations"].values())
     md = (ROOT / "paper_repro" / "out" / "report.md").read_text()
     assert "26/26 equations match" in md and "reading:" in md
+    # the headline says what the match rests on: templates we rebuilt from the text
+    headline = next(line for line in md.splitlines() if "equations match" in line)
+    assert "templates rebuilt from the paper's text" in headline
+    # a row's claim is what is checked: the literal task is expected not to be 1-safe
+    literal = [r for r in report["checks"]["Called again (the mutex and the abort problem)"]
+               if r["net"] != "task"]
+    assert literal and all(r["claim"].startswith("the literal task") and "not 1-safe"
+                           in r["claim"] and r["holds"] for r in literal)
     for n in range(1, 5):
         for fmt in ("svg", "png"):
             assert (ROOT / "paper_repro" / "out" / f"fig{n}.{fmt}").stat().st_size > 1000
