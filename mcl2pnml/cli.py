@@ -20,6 +20,7 @@ from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
+from mcl2pnml.runtime.simulator import PRIMITIVES as SIMULATED
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
@@ -165,8 +166,10 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
               "reference: MCL interpreted directly. Both must give the same result.")
 @click.option("--vehicle", default="sim", show_default=True,
               metavar="|".join(kind.name for kind in VEHICLES),
-              help="The AUV simulator, a real vehicle through a mapping file and a bridge "
-              '(see --connect), or a script ({"PRIMITIVE": ["ok@5", "fail@3", "never"]}).')
+              help="The AUV simulator (it offers " + ", ".join(SIMULATED) + "), a real vehicle "
+              "through a mapping file and a bridge (see --connect), or a script "
+              '({"PRIMITIVE": ["ok@5", "fail@3", "never"]}; each example of examples/ '
+              "that the simulator cannot fly has one beside it, NAME.vehicle.json).")
 @click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge: "
               "(a host name, an IPv4 address, or an IPv6 one in brackets: [::1]:7777).")
 @click.option("--secret", type=FILE, help="Authenticate every line of the bridge's link, both "

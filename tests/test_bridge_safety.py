@@ -660,7 +660,8 @@ def test_an_altered_replayed_or_unsigned_line_ends_the_run(tmp_path, attack, why
 
 @pytest.mark.timeout(20)
 def test_the_server_never_acts_on_an_unauthenticated_command(server, tmp_path):
-    s = server(secret=b"k" * 32)
+    # a raw client sends no heartbeats: a liveness time-out that a loaded machine cannot trip
+    s = server(secret=b"k" * 32, options=LinkOptions(**{**FAST.__dict__, "liveness": 5.0}))
     sock, message = raw_client(s, {"link": "hello", "protocol": 1, "auth": "hmac-sha256",
                                    "nonce": "1" * 32, "heartbeat": 0.05})
     assert message()["auth"] == "hmac-sha256"

@@ -101,14 +101,29 @@ _LINK = ("secret", "tls_ca", "tls_cert", "tls_key", "heartbeat", "liveness", "se
 _DEFAULTS = {f.name: f.default for f in fields(RunOptions)}
 
 
-def _check_primitives(engine: Engine, vehicle) -> None:
+#: A mission's vehicle script, by convention: beside it, ``NAME.vehicle.json``
+#: (every example of ``examples/`` but the paper's, which the simulator runs, has one).
+SCRIPT_SUFFIX = ".vehicle.json"
+
+
+def _check_primitives(engine: Engine, vehicle, mission: Path, options: RunOptions) -> None:
     """The vehicle must offer every primitive the mission uses (section 2.1)."""
     needed = engine.primitives_used()
     offered = vehicle.primitives
     if offered is not None and needed - offered:
         missing = sorted(needed - offered)[0]
-        raise OptionError("--vehicle", f"the mission uses '{missing}', which this vehicle "
-                                       f"does not offer; it offers {', '.join(sorted(offered))}")
+        message = (f"the mission uses '{missing}', which this vehicle does not offer; it "
+                   f"offers {', '.join(sorted(offered))}")
+        if "vehicle" not in options.explicit:
+            # the user never chose the simulator: say it was the default, and what to give
+            script = mission.with_name(mission.name.split(".")[0] + SCRIPT_SUFFIX)
+            message = (f"the mission uses '{missing}', which the simulator (the default "
+                       f"vehicle) does not offer; it offers {', '.join(sorted(offered))}. "
+                       "Run it against a vehicle script: "
+                       + (f"--vehicle {script}" if script.is_file() else
+                          '--vehicle SCRIPT.json ({"PRIMITIVE": ["ok@5", "fail@3", '
+                          '"never"]})'))
+        raise OptionError("--vehicle", message)
     vehicle.check_primitives(needed)
     if isinstance(vehicle, LiveVehicle):    # before anything is sent to a real vehicle
         vehicle.check_enables(engine.enable_arguments())
@@ -156,7 +171,7 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
         note(loaded.torn)
     kind, vehicle = _vehicle(options)
     engine = make_engine(options.engine)
-    _check_primitives(engine, vehicle)
+    _check_primitives(engine, vehicle, mission, options)
     sink = _journal(mission, options, kind, loaded)
     jsonl = io.StringIO() if log_path else None
     log = RunLog(text, jsonl, options.transitions, sink)
