@@ -256,6 +256,13 @@ def send_after_first_command(payload: bytes, then_close: bool = False, linger: b
         if linger:      # a reset, not an orderly close
             conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\1\0\0\0\0\0\0\0")
         if then_close:
+            if not linger:
+                # an orderly close: closing with our heartbeats unread would make the
+                # kernel send a reset instead, so end our side, then read to the end
+                conn.shutdown(socket.SHUT_WR)
+                conn.settimeout(5)
+                while conn.recv(65536):
+                    pass
             return
         peer.read_lines(conn, until=lambda p: "stop_GoToWayPoint" in p.commands())
     return script
@@ -668,7 +675,7 @@ def test_the_server_never_acts_on_an_unauthenticated_command(server, tmp_path):
     sock.sendall(encode({"seq": 1, "body": json.dumps({"command": "start_DetectCross"}),
                          "mac": "0" * 64}))
     reply = message()
-    assert reply["link"] == "error" and "failed authentication" in reply["reason"]
+    assert reply["link"] == "error" and "failed authentication" in reply["reason"], reply
     assert message() is None               # and it hung up
     assert s.served[0].commands == []
     # a controller without the secret is told so when it connects

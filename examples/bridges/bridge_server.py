@@ -111,6 +111,10 @@ class BridgeServer(socketserver.ThreadingTCPServer):
         return MoosMiddleware(reply)
 
 
+#: Seconds a new connection waits for the one being served to finish closing.
+RECONNECT_GRACE = 1.0
+
+
 class Handler(socketserver.BaseRequestHandler):
     """One connection: refused if another is served, else its commands to the middleware."""
 
@@ -127,15 +131,17 @@ class Handler(socketserver.BaseRequestHandler):
                 return
         link = Link(sock, Side.BRIDGE, server.options, server.secret,
                     peer="the mission's controller")
-        if not server.busy.acquire(blocking=False):
+        # a controller reconnecting right after its link dropped may find the bridge
+        # still closing the old one (its failsafe, the socket): it waits that long
+        if not server.busy.acquire(timeout=RECONNECT_GRACE):
             link.refuse("busy: this bridge serves one client at a time, and one is connected")
             link.close()
             return
         try:
             self.serve(link)
         finally:
-            link.close()
             server.busy.release()
+            link.close()
 
     def serve(self, link: Link) -> None:
         try:
