@@ -304,10 +304,10 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
     while stack:
         node, depth = stack.pop()
         if isinstance(node, Token):
-            if node.type == "NUMBER" and isinstance(_number_value(str(node)), str):
+            value = _number_value(str(node)) if node.type == "NUMBER" else None
+            if isinstance(value, str):      # out of range: the value is why
                 src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
-                raise Mcl2PnmlError(_number_value(str(node)),
-                                    Location(filename, node.line, node.column, src))
+                raise Mcl2PnmlError(value, Location(filename, node.line, node.column, src))
             if node.type == "NAME" and str(node) in KEYWORDS:
                 # the contextual lexer lets a keyword through as a name
                 src = lines[node.line - 1] if 0 < node.line <= len(lines) else None

@@ -112,17 +112,16 @@ def _check_primitives(engine: Engine, vehicle, mission: Path, options: RunOption
     offered = vehicle.primitives
     if offered is not None and needed - offered:
         missing = sorted(needed - offered)[0]
-        message = (f"the mission uses '{missing}', which this vehicle does not offer; it "
-                   f"offers {', '.join(sorted(offered))}")
+        who, hint = "this vehicle", ""
         if "vehicle" not in options.explicit:
             # the user never chose the simulator: say it was the default, and what to give
-            script = mission.with_name(mission.name.split(".")[0] + SCRIPT_SUFFIX)
-            message = (f"the mission uses '{missing}', which the simulator (the default "
-                       f"vehicle) does not offer; it offers {', '.join(sorted(offered))}. "
-                       "Run it against a vehicle script: "
-                       + (f"--vehicle {script}" if script.is_file() else
-                          '--vehicle SCRIPT.json ({"PRIMITIVE": ["ok@5", "fail@3", '
-                          '"never"]})'))
+            script = mission.with_name(mission.stem + SCRIPT_SUFFIX)
+            who = "the simulator (the default vehicle)"
+            hint = (". Run it against a vehicle script: "
+                    + (f"--vehicle {script}" if script.is_file() else
+                       '--vehicle SCRIPT.json ({"PRIMITIVE": ["ok@5", "fail@3", "never"]})'))
+        message = (f"the mission uses '{missing}', which {who} does not offer; it offers "
+                   f"{', '.join(sorted(offered))}{hint}")
         raise OptionError("--vehicle", message)
     vehicle.check_primitives(needed)
     if isinstance(vehicle, LiveVehicle):    # before anything is sent to a real vehicle

@@ -213,15 +213,15 @@ class _Reader:
         if text is None:
             return None
         digits = text.strip()
-        n = natural_at_most(digits, MAX_TOKENS) if digits.isdigit() and digits.isascii() \
-            else None
-        if n is None and digits.isdigit() and digits.isascii():
-            shown = digits if len(digits) <= 30 else f"(a number of {len(digits):,} digits)"
-            self.error(_child(el, label), f"{what}: {label} {shown} is too large: markings "
-                                          f"and weights go up to {MAX_TOKENS_TEXT}")
-            return None
-        if n is None and digits[:1] in "+-" and digits[1:].isdigit() and digits[1:].isascii() \
-                and len(digits) <= 30:
+        n = None
+        if _plain_digits(digits):
+            n = natural_at_most(digits, MAX_TOKENS)
+            if n is None:
+                shown = digits if len(digits) <= 30 else f"(a number of {len(digits):,} digits)"
+                self.error(_child(el, label), f"{what}: {label} {shown} is too large: "
+                                              f"markings and weights go up to {MAX_TOKENS_TEXT}")
+                return None
+        elif digits[:1] in "+-" and _plain_digits(digits[1:]) and len(digits) <= 30:
             n = int(digits)   # a sign, as int() took it: -1 is refused below, +2 is 2
         if n is None or n < minimum:
             kind = "a natural number" if minimum == 0 else "a positive integer"
@@ -589,6 +589,11 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
         return reader.build(name or net_el.get("id") or "net")
     except NetError as e:  # a rule of the core, e.g. reading and consuming one place
         raise PnmlError(e.message, Location(filename)) from None
+
+
+def _plain_digits(text: str) -> bool:
+    """ASCII decimal digits only (``str.isdigit`` also takes other scripts' digits)."""
+    return text.isdigit() and text.isascii()
 
 
 def read_file(path: str | Path) -> bytes:
