@@ -52,9 +52,10 @@ def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
                   else "layers" if nodes <= LAYERS_LIMIT else "none")
     if engine == "dot":
         pos = _dot_layout(net)
-        if pos is not None:
+        if pos is not None and len(pos) == nodes:
             return pos
-        # dot failed or ran out of time: the layered layout is linear and always ends
+        # dot failed, ran out of time or left a node out (every node has a position,
+        # whoever asks): the layered layout is linear, always ends, places every node
     if engine in ("dot", "layers"):
         return _layered_layout(net)
     return {}

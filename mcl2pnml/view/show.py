@@ -81,10 +81,6 @@ def variant(net: Net, label: str) -> dict[str, Any]:
         raise Mcl2PnmlError(f"net '{net.name}' has {nodes:,} nodes; a page draws at most "
                             f"{MAX_NODES:,} (compile it to PNML or DOT instead)")
     pos = layout(net, "auto")
-    if len(pos) < nodes:
-        # dot left a node out: graphviz reads an id written <...> as its own HTML
-        # markup, under another name; the layered layout places every node
-        pos = layout(net, "layers")
     boxes = instance_clusters(net)
     kept = border_out(net, boxes)
     box_of = {n: name for name, members in kept.items() for n in members}
