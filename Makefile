@@ -60,11 +60,15 @@ demo: setup
 	@echo "  paper_repro/out/fig1-4.svg/.png  Figs. 1 to 4 redrawn from the templates"
 	@echo "  paper_repro/out/fig5.png         Fig. 5: the mission on the simulated AUV, with and without the cross"
 
+# the tests are spread over the cores (up to four: each worker loads numba and a
+# browser); a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
+TEST_WORKERS := -n auto --maxprocesses=4
+
 test: setup
-	$(PY) -m pytest
+	$(PY) -m pytest $(TEST_WORKERS)
 
 test-slow: setup
-	$(PY) -m pytest -m slow
+	$(PY) -m pytest $(TEST_WORKERS) -m slow
 
 bench: setup
 	$(PY) -m bench.suite
