@@ -289,22 +289,34 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
 @click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE")
 @click.option("-o", "--output", type=OUTPUT, help="Write the page here (default: NAME.html).")
 @click.option("--run", "run_log", type=FILE, help="A run to follow: a log of `run --log`.")
+@click.option("--graph-json", "graph_json", type=OUTPUT,
+              help="Also write the reachability graph the page draws as JSON (up to 2,000 "
+                   "markings; above, why there is none).")
 @NET_OPTION
-def show(what: str, output: Path | None, run_log: Path | None, net_id: str | None) -> int:
+def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path | None,
+         net_id: str | None) -> int:
     """Write one self-contained HTML page to play the token game on a net.
 
     WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
     template (see `template --list`). Click an enabled transition to fire it;
     step back, reset; see the marking and every P-invariant at each step,
-    the reduced model (Fig. 3), a recorded run step by step. The page needs
-    no server and fetches nothing.
+    the reduced model (Fig. 3), a recorded run step by step on a clock, the
+    mission's tree, the reachability graph. The page needs no server and
+    fetches nothing.
     """
-    title, nets = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id)
-    output = output or Path(f"{title}.html")
-    check_outputs([("-o", output)], [("the run log (--run)", run_log),
-                                     ("the net or mission", what if Path(what).is_file() else None)])
-    pipeline.save_show_page(output, title, nets, run_log)
-    click.echo(f"wrote {output}: {nets[0][0].summary()}", err=True)
+    shown = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id)
+    output = output or Path(f"{shown.title}.html")
+    check_outputs([("-o", output), ("--graph-json", graph_json)],
+                  [("the run log (--run)", run_log),
+                   ("the net or mission", what if Path(what).is_file() else None)])
+    pipeline.save_show_page(output, shown, run_log)
+    click.echo(f"wrote {output}: {shown.nets[0][0].summary()}", err=True)
+    if graph_json is not None:
+        graph = pipeline.save_reachability_json(shown.nets[0][0], graph_json)
+        click.echo(f"wrote {graph_json}: " + (f"{len(graph['markings']):,} markings, "
+                                              f"{len(graph['edges']):,} edges"
+                                              if "markings" in graph else graph["reason"]),
+                   err=True)
     return 0
 
 

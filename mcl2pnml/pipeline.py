@@ -14,6 +14,7 @@ fast.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, Callable
 
@@ -22,6 +23,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.io.formats import FORMATS, SaveOptions, reader_of
 
 if TYPE_CHECKING:
+    from mcl2pnml.language.functional import Instance
     from mcl2pnml.runtime.session import RunOptions
 
 
@@ -37,6 +39,7 @@ __all__ = [
     "check_file", "check_source", "compile_file", "compile_source", "functional_form",
     "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "templates",
     "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
+    "Shown", "save_reachability_json",
 ]
 
 
@@ -281,14 +284,25 @@ def run_mission(mission: str | Path, options: "RunOptions | None" = None, *,
 
 # -- the token game ------------------------------------------------------------------------
 
-def show_nets(what: str, *, with_run: bool = False,
-              net_id: str | None = None) -> tuple[str, list[tuple[Net, str]]]:
-    """The page's title and the nets it shows for ``what``, each with its label.
+@dataclass(frozen=True)
+class Shown:
+    """What the token-game page shows: its title, its nets with their labels (the first
+    the one a recorded run plays on), and a mission's functional form (Algorithm 2):
+    the mission's tree, then each function's, each node named after its instance."""
 
-    A mission: the mission and its reduced model (Fig. 3); a net file: the
-    net; a pattern: the task with its primitive (Fig. 2) and the reduced
-    task; a structure: as the paper analyses it. ``with_run``: a recorded run
-    will be followed, which only a mission or its net can have.
+    title: str
+    nets: list[tuple[Net, str]]
+    trees: list[tuple[str, list["Instance"]]] = field(default_factory=list)
+
+
+def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None) -> Shown:
+    """The page's title, the nets it shows for ``what``, each with its label, and the tree.
+
+    A mission: the mission and its reduced model (Fig. 3), and its
+    functional form; a net file: the net; a pattern: the task with its
+    primitive (Fig. 2) and the reduced task; a structure: as the paper
+    analyses it. ``with_run``: a recorded run will be followed, which only a
+    mission or its net can have.
     """
     from mcl2pnml.io.formats import SUFFIXES
     path = Path(what)
@@ -299,11 +313,17 @@ def show_nets(what: str, *, with_run: bool = False,
         if not path.is_file():
             raise OptionError("MISSION.mcl|NET|TEMPLATE", f"no file '{what}'")
         if path.suffix != ".mcl":
-            return path.stem, [(load_net(path, net_id), "the net")]
+            return Shown(path.stem, [(load_net(path, net_id), "the net")])
+        from mcl2pnml.core.payloads import MISSION
+        from mcl2pnml.language.functional import (function_expression, instances,
+                                                  mission_expression)
         checked = check_file(path)
-        return path.stem, [(compile_checked(checked), "the mission"),
-                           (compile_checked(checked, reduced=True),
-                            "the mission, every task reduced (Fig. 3)")]
+        trees = [(MISSION, instances(mission_expression(checked.mission), MISSION, ""))]
+        trees += [(name, instances(function_expression(checked.functions[name]), name, name))
+                  for name in checked.function_order]
+        return Shown(path.stem, [(compile_checked(checked), "the mission"),
+                                 (compile_checked(checked, reduced=True),
+                                  "the mission, every task reduced (Fig. 3)")], trees)
     if with_run:
         raise OptionError("--run", "a run is of a mission: give the mission's .mcl or its "
                                    "compiled net, not a template")
@@ -312,18 +332,35 @@ def show_nets(what: str, *, with_run: bool = False,
     lib = default_library()
     template = lib.get(what)   # unknown: the error lists the templates
     if template.kind is TemplateKind.PATTERN:
-        return what, [(lib.composed(what), f"{what} with its primitive (Fig. 2)"),
-                      (lib.composed(lib.reduced.name), "its reduced model (Fig. 3)")]
-    return what, [(lib.composed(what), f"{what}, as the paper analyses it")]
+        return Shown(what, [(lib.composed(what), f"{what} with its primitive (Fig. 2)"),
+                            (lib.composed(lib.reduced.name), "its reduced model (Fig. 3)")])
+    return Shown(what, [(lib.composed(what), f"{what}, as the paper analyses it")])
 
 
-def save_show_page(path: str | Path, title: str, nets: list[tuple[Net, str]],
+def save_show_page(path: str | Path, shown: Shown,
                    run_log: str | Path | None = None) -> Path:
-    """The token-game page of ``nets``, following the run of ``run_log`` if given."""
-    from mcl2pnml.view.show import check_run, read_run, save_page, variant
+    """The token-game page of ``shown``, following the run of ``run_log`` if given."""
+    from mcl2pnml.view.show import check_run, read_run, save_page, tree_data, variant
     entries = None
     if run_log is not None:
         entries = read_run(run_log)
-        check_run(nets[0][0], entries, str(run_log))
-    save_page(path, title, [variant(net, label) for net, label in nets], entries)
+        check_run(shown.nets[0][0], entries, str(run_log))
+    tree = tree_data(shown.trees)
+    save_page(path, shown.title, [variant(net, label, tree) for net, label in shown.nets],
+              entries, tree)
     return Path(path)
+
+
+def save_reachability_json(net: Net, path: str | Path) -> dict[str, Any]:
+    """Write the reachability graph the page draws (:mod:`mcl2pnml.view.reachability`)
+    to ``path`` as JSON, with the place and transition ids its indices refer to, or
+    why there is none (``reason``); returns what was written."""
+    import json
+
+    from mcl2pnml.core.files import atomic_write_text
+    from mcl2pnml.view.reachability import reachability_graph
+    graph = reachability_graph(net).to_json()
+    graph["places"] = [p.id for p in net.places]
+    graph["transitions"] = [t.id for t in net.transitions]
+    atomic_write_text(path, json.dumps(graph, ensure_ascii=False) + "\n")
+    return graph

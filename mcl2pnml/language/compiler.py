@@ -51,7 +51,8 @@ from mcl2pnml.core import payloads
 from mcl2pnml.core.compose import compose
 from mcl2pnml.core.payloads import (ENTER, MISSION, ActionKind, ActionSpec, Arg, CallEntry,
                                     MissionPlace, Param, TimeOut, TransitionPayload, Value)
-from mcl2pnml.language.functional import FCall, FNode, NULL_KIND, function_expression, mission_expression
+from mcl2pnml.language.functional import (FCall, FNode, NULL_KIND, function_expression,
+                                          instances, mission_expression)
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.language.checker import Checked
 from mcl2pnml.core.net import Marking, Net, NetBuilder, Place, Timing, Transition, freeze
@@ -94,13 +95,6 @@ class _Assembly:
 
     parts: list[tuple[str, Net]] = field(default_factory=list)
     groups: list[list[str]] = field(default_factory=list)
-    counters: dict[str, int] = field(default_factory=dict)
-
-    def name(self, scope: str, stem: str) -> str:
-        key = f"{scope}/{stem}"
-        self.counters[key] = self.counters.get(key, 0) + 1
-        local = f"{stem}-{self.counters[key]}"
-        return f"{scope}.{local}" if scope else local
 
 
 class Compiler:
@@ -193,6 +187,8 @@ class Compiler:
         statements is n nested sequences, and missions of 10,000 calls are
         real (long surveys).
         """
+        # the names of the instances: one rule, shared with the page's tree view
+        names = {id(i.node): i.name for i in instances(root, root_name, scope)}
         # a frame: [node, its instance name, its template, next child, last child's name]
         stack: list[list[Any]] = [[root, root_name, None, 0, None]]
         while stack:
@@ -209,8 +205,7 @@ class Compiler:
                                   for p in CONTROL]
             if i < min(len(template.children), len(node.children)):
                 child = node.children[i]
-                kind = child.name if isinstance(child, FCall) else child.kind
-                child_name = self.a.name(scope, kind)
+                child_name = names[id(child)]
                 frame[3], frame[4] = i + 1, child_name
                 stack.append([child, child_name, None, 0, None])
             else:

@@ -17,7 +17,7 @@ The paper's Algorithm 1 gives, character for character, the string that
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Union
 
 from mcl2pnml.language import ast
@@ -121,3 +121,62 @@ def mission_expression(mission: ast.Mission) -> FNode:
 
 def function_expression(function: ast.Function) -> FNode:
     return to_functional(function.body)
+
+
+@dataclass(frozen=True)
+class Instance:
+    """A node of the functional form with the name of its instance in the compiled net.
+
+    The compiler (:mod:`mcl2pnml.language.compiler`) makes one template
+    instance per structure and one call site per call (section 2.5), each
+    prefixing its nodes' ids (``mission.sequence-1.t2``, ``Goto-1.IN``);
+    ``name`` is that prefix. ``parent`` is the index of the parent in the
+    list :func:`instances` returns (-1 for the root), ``size`` the number of
+    nodes in this one's subtree, itself included: in pre-order they are the
+    ``size`` entries from this one on.
+    """
+
+    name: str
+    kind: str          # "call", or a structure: sequence, parallel, ..., NULL
+    label: str         # the call as written (``Goto((10.0, 5.0, 5.0))``), or the kind
+    line: int
+    parent: int
+    depth: int
+    size: int
+    node: "FNode" = field(compare=False, repr=False, default=None)
+
+
+def instances(root: FNode, root_name: str, scope: str) -> list[Instance]:
+    """The nodes of ``root`` in pre-order, each named as the compiler names its instance.
+
+    The root is ``root_name``; a child is ``scope.STEM-k`` (``STEM-k`` in the
+    mission, whose scope is empty), STEM its kind or its callee, ``k``
+    counting that stem's instances of the scope in pre-order. This is the one
+    naming rule: the compiler takes its names from here. Iterative (a block
+    of 10,000 statements nests 10,000 sequences).
+    """
+    counters: dict[str, int] = {}
+    out: list[Instance] = []
+    sizes: list[int] = []
+    # a frame: (node, parent index, depth); a node is named when it is reached,
+    # as the compiler names a child when it descends into it: the counts follow
+    # the order in which the compiler meets the nodes
+    stack: list[tuple[FNode, int, int]] = [(root, -1, 0)]
+    while stack:
+        node, parent, depth = stack.pop()
+        if isinstance(node, FCall):
+            kind, stem, label, children = "call", node.name, format_node(node), ()
+        else:
+            kind, stem, label, children = node.kind, node.kind, node.kind, node.children
+        if parent < 0:
+            name = root_name
+        else:
+            counters[stem] = counters.get(stem, 0) + 1
+            name = f"{scope}.{stem}-{counters[stem]}" if scope else f"{stem}-{counters[stem]}"
+        index = len(out)
+        out.append(Instance(name, kind, label, node.pos.line, parent, depth, 1, node))
+        sizes.append(1)
+        stack.extend((child, index, depth + 1) for child in reversed(children))
+    for k in range(len(out) - 1, 0, -1):   # children after parents: sizes bottom-up
+        sizes[out[k].parent] += sizes[k]
+    return [replace(i, size=s) for i, s in zip(out, sizes)]

@@ -56,7 +56,7 @@ import math
 import re
 from importlib import resources
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Iterable, Protocol, Sequence
 
 from mcl2pnml.io.dot import border_out, instance_clusters
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
@@ -64,6 +64,7 @@ from mcl2pnml.core.files import atomic_write_text, read_text
 from mcl2pnml.view.layout import layout
 from mcl2pnml.core.net import Net, thaw
 from mcl2pnml.core.payloads import doc_of, read_transition
+from mcl2pnml.view.reachability import reachability_graph
 
 #: Above this many nodes the page would be a heap nobody can read: refused.
 MAX_NODES = 5_000
@@ -71,8 +72,69 @@ MAX_NODES = 5_000
 MAX_INVARIANTS = 400
 
 
-def variant(net: Net, label: str) -> dict[str, Any]:
-    """One net as the page draws it: nodes with positions, arcs by index, boxes, invariants."""
+class TreeNode(Protocol):
+    """A node of a mission's functional form (the paper's Algorithm 2), as the page's tree
+    view shows it: :class:`mcl2pnml.language.functional.Instance` is one. The facade
+    hands these over; the view does not import the language."""
+
+    name: str      # the prefix of its instance's node ids in the compiled net
+    kind: str      # "call", or the structure (sequence, parallel, ...)
+    label: str
+    line: int
+    parent: int    # index in its list, -1 for a root
+    depth: int
+    size: int      # nodes in its subtree: in pre-order, this one and the next size-1
+
+
+#: The places by which the page tells an instance's state (section 2.3: every
+#: structure and call site has the reduced task's control interface).
+RESULTS = ("OK", "FAIL", "ABORTED")
+
+
+def tree_data(trees: Sequence[tuple[str, Sequence[TreeNode]]]) -> list[dict[str, Any]]:
+    """The functional forms, mission first, as one flat list in pre-order (a list, not
+    nested objects: a block of 10,000 statements would nest JSON 10,000 deep)."""
+    out: list[dict[str, Any]] = []
+    for root, nodes in trees:
+        base = len(out)
+        out += [{"name": n.name, "kind": n.kind, "label": n.label, "line": n.line,
+                 "parent": n.parent + base if n.parent >= 0 else -1, "depth": n.depth,
+                 "size": n.size, "root": root} for n in nodes]
+    return out
+
+
+def tree_parts(net: Net, tree: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Where each node of the tree is in ``net``: its instance's places and transitions
+    (by index), and the indices of its B and result places.
+
+    The compiler prefixes an instance's node ids with its name and composes
+    children before parents, so a fused control place keeps the child's id
+    (``Goto-1.OK``, not its parent's slot ``mission.T1_OK``): the node
+    ``mission.sequence-1.t2`` is the instance ``mission.sequence-1``'s, as
+    :func:`~mcl2pnml.io.dot.instance_clusters` groups them. The page tells a
+    node's state from these alone, so it is right in the full model and in
+    the reduced one (Fig. 3), whose tasks differ but whose instances do not.
+    """
+    places: dict[str, list[int]] = {}
+    transitions: dict[str, list[int]] = {}
+    index = {p.id: k for k, p in enumerate(net.places)}
+    for k, p in enumerate(net.places):
+        places.setdefault(p.id.rpartition(".")[0], []).append(k)
+    for k, t in enumerate(net.transitions):
+        transitions.setdefault(t.id.rpartition(".")[0], []).append(k)
+    out = []
+    for node in tree:
+        name = node["name"]
+        part = {"places": places.get(name, []), "transitions": transitions.get(name, [])}
+        for role in ("B", *RESULTS):
+            part[role] = index.get(f"{name}.{role}")
+        out.append(part)
+    return out
+
+
+def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = ()) -> dict[str, Any]:
+    """One net as the page draws it: nodes with positions, arcs by index, boxes, invariants,
+    where the nodes of ``tree`` (:func:`tree_data`) are, and its reachability graph."""
     from analysis.invariants import p_invariant_basis
     from mcl2pnml.core.structure import structure
 
@@ -100,6 +162,9 @@ def variant(net: Net, label: str) -> dict[str, Any]:
         transitions.append({
             "id": t.id, "label": t.label, "x": pos[t.id][0], "y": pos[t.id][1],
             "timing": str(t.timing) if t.timing is not None else None, "kind": kind,
+            # the timed token game's delay: enabled this long before it may fire
+            "delay": t.timing.earliest if t.timing is not None else 0,
+            "latest": t.timing.latest if t.timing is not None else None,
             "group": box_of.get(t.id), "doc": _text(payload.doc),
             "pre": [[index[a.source], a.weight] for a in net.pre[t.id]
                     if a.kind.value == "normal"],
@@ -110,7 +175,8 @@ def variant(net: Net, label: str) -> dict[str, Any]:
     invariants = [{"terms": [[index[p], c] for p, c in y.items()],
                    "value": sum(c * net.initial[p] for p, c in y.items())} for y in basis]
     return {"label": label, "name": net.name, "places": places, "transitions": transitions,
-            "groups": sorted(kept), "invariants": invariants}
+            "groups": sorted(kept), "invariants": invariants, "tree": tree_parts(net, tree),
+            "graph": reachability_graph(net).to_json()}
 
 
 def _text(doc: Any) -> str | None:
@@ -260,10 +326,12 @@ def fill(html: str, slots: dict[str, str]) -> str:
 
 
 def page(title: str, variants: list[dict[str, Any]],
-         run: list[dict[str, Any]] | None = None) -> str:
+         run: list[dict[str, Any]] | None = None,
+         tree: Sequence[dict[str, Any]] = ()) -> str:
     """The HTML page: the template with the data inside it."""
     try:
-        data = json_for_html({"title": title, "variants": variants, "run": run})
+        data = json_for_html({"title": title, "variants": variants, "run": run,
+                              "tree": list(tree)})
     except ValueError as e:   # read_run and variant let no NaN through: a bug of ours
         raise Mcl2PnmlError(f"the page's data is not JSON: {e}") from None
     html = template()
@@ -271,7 +339,8 @@ def page(title: str, variants: list[dict[str, Any]],
 
 
 def save_page(path: str | Path, title: str, variants: list[dict[str, Any]],
-              run: list[dict[str, Any]] | None = None) -> Path:
+              run: list[dict[str, Any]] | None = None,
+              tree: Sequence[dict[str, Any]] = ()) -> Path:
     """Write the page, whole or not at all."""
-    atomic_write_text(path, page(title, variants, run))
+    atomic_write_text(path, page(title, variants, run, tree))
     return Path(path)
