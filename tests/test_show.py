@@ -108,16 +108,23 @@ def test_the_task_played_by_clicking(tmp_path, page_of):
     assert page.text_content("#enabled") == "none: a dead marking"
 
 
-def test_a_recorded_run_followed_step_by_step(tmp_path, page_of):
-    mission = tmp_path / "two.mcl"
+def two_tasks_run(directory: Path) -> tuple[Path, Path, list[str]]:
+    """The two-task mission in ``directory``, run on a scripted vehicle: the mission,
+    its log, and the transitions the run fired."""
+    mission = directory / "two.mcl"
     mission.write_text(TWO_TASKS)
-    script = tmp_path / "vehicle.json"
+    script = directory / "vehicle.json"
     script.write_text(json.dumps({"KeepDepth": ["ok@5"], "GoToWayPoint": ["ok@20"]}))
-    log = tmp_path / "run.jsonl"
+    log = directory / "run.jsonl"
     done = run("run", mission, "--vehicle", script, "--log", log)
     assert done.returncode == 0, done.stderr
     fired = [json.loads(line)["fire"] for line in log.read_text().splitlines()
              if '"fire"' in line]
+    return mission, log, fired
+
+
+def test_a_recorded_run_followed_step_by_step(tmp_path, page_of):
+    mission, log, fired = two_tasks_run(tmp_path)
     out = run("show", mission, "--run", log, "-o", tmp_path / "two.html")
     assert out.returncode == 0, out.stderr
     page = page_of(tmp_path / "two.html")

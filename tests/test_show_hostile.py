@@ -192,6 +192,37 @@ def test_a_hostile_net_is_drawn_and_played_as_text(tmp_path, browser, listener, 
     assert page.text_content("#marking") == evil[2]
     page.click("#back")
     assert page.text_content("#marking") == evil[1]
+    # the reachability graph: a marking per place of the chain, named by its place's id
+    page.select_option("#view-kind", "graph")
+    markings = page.locator("#graph g.marking > title").all_text_contents()
+    assert markings == [f"M{k}: {e}" for k, e in enumerate(evil[:-1])] + [f"M{len(evil) - 1} (dead): {evil[-1]}"]
+    assert page.locator("#graph line.edge > title").all_text_contents() == [f"{e} t" for e in evil[:-1]]
+    page.click('#graph g.marking[data-index="2"] circle')
+    assert page.text_content("#marking") == evil[2]
+    w.assert_nothing_happened(heard)
+
+
+def mcl_string(text: str) -> str:
+    """An MCL string literal (the functional form prints it so: language.functional)."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+@pytest.mark.timeout(60)
+def test_a_hostile_mission_tree_is_text(tmp_path, browser, listener):
+    """A mission's string arguments reach the tree view as text (the lines U+2028 and
+    U+2029 aside: MCL's strings are read with Python's unicode_escape)."""
+    port, heard = listener
+    evil = [e for e in payloads(port) if e.isascii()]
+    calls = "".join(f"    T({mcl_string(e)});\n" for e in evil)
+    mission = tmp_path / "evil.mcl"
+    mission.write_text(f"primitive P(x);\ntask T(x) = AchieveGoal(P(x));\nmission {{\n{calls}}}\n")
+    out = run("show", mission, "-o", tmp_path / "page.html")
+    assert out.returncode == 0, out.stderr
+    w = Witnessed(browser, tmp_path / "page.html")
+    labels = w.page.locator("#tree div.call > span:first-child").all_text_contents()
+    assert labels == [f"T({mcl_string(e)})" for e in evil]
+    w.page.click("#tree div.call >> nth=0")
+    assert w.page.locator("#net .focus").count() > 0
     w.assert_nothing_happened(heard)
 
 
