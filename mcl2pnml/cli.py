@@ -130,6 +130,9 @@ def functional(mission: Path, with_functions: bool) -> int:
               show_default=True,
               help="Node positions in the PNML: graphviz dot, BFS layers, or none "
                    f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,}).")
+@click.option("--expand", metavar="NAME[,NAME...]|all", default="",
+              help="For a drawing (svg, png, dot): the calls drawn open, by the names on "
+                   "their boxes, or all; the others are drawn shut, one box each.")
 @click.option("--queries", type=OUTPUT, metavar="FILE.xml",
               help="Also write the mission's properties (deadlock, an end always reachable) "
                    "in the Model Checking Contest's XML, for the tools that read the PNML.")
@@ -138,7 +141,7 @@ def functional(mission: Path, with_functions: bool) -> int:
               + "; ".join(f"{name}: {form}" for name, form in QUERY_TOOLS.items()))
 @click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half "
               "free). A mission whose net would not fit is one message, exit 2.")
-def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
+def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, expand: str,
              queries: Path | None, tool: str, max_memory: str | None) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
@@ -149,9 +152,14 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str,
     if queries is not None and queries.resolve() == output.resolve():
         raise click.BadParameter("the queries go in a file of their own, not the net's",
                                  param_hint="--queries")
+    if expand and "expand" not in FORMATS[fmt].options:
+        raise click.BadParameter(f"only a drawing has boxes to open, not {fmt}: --format "
+                                 "svg, png or dot", param_hint="--expand")
     check_outputs([("-o", output), ("--queries", queries)], [("the mission", mission)])
     net = pipeline.compile_file(mission, max_memory=max_memory)
-    pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True)
+    opened = None if expand == "all" else tuple(n for n in expand.split(",") if n)
+    pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True,
+                      expand=opened)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     if queries is not None:
         written = pipeline.save_queries(net, queries, tool)
@@ -280,7 +288,7 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
         click.echo(pipeline.to_pnml_bytes(net).decode(), nl=False)
         return 0
     output = output or Path(name + FORMATS[fmt].suffixes[0])
-    pipeline.save_net(net, output, fmt)
+    pipeline.save_net(net, output, fmt, clusters=pipeline.template_clusters(name), expand=None)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any, Callable
+from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
 from mcl2pnml.core.errors import OptionError
 from mcl2pnml.core.net import Net
@@ -37,7 +37,7 @@ def __getattr__(name: str) -> Any:
 
 __all__ = [
     "check_file", "check_source", "compile_file", "compile_source", "functional_form",
-    "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "templates",
+    "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "template_clusters", "templates",
     "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
     "Shown", "save_reachability_json",
 ]
@@ -126,18 +126,25 @@ def load_net(path: str | Path, net_id: str | None = None,
 
 
 def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
-             title: str | None = None, mission: bool = False) -> Path:
+             title: str | None = None, mission: bool = False,
+             clusters: Mapping[str, Sequence[str]] | None = None,
+             expand: Sequence[str] | None = ()) -> Path:
     """Write ``net`` to ``path`` in format ``fmt`` (a name of the format table).
 
     ``layout`` places the nodes where the format keeps positions (PNML):
-    ``auto``, ``dot``, ``layers`` or ``none``. ``mission``: a compiled
-    mission, whose TINA file follows the executor's timing.
+    ``auto``, ``dot``, ``layers`` or ``none``; with dot, the arcs' bend points
+    too. ``mission``: a compiled mission, whose TINA file follows the
+    executor's timing. A drawing (svg, png, dot) shows ``clusters`` as boxes
+    (None: a mission's calls, :func:`template_clusters` for a template) and
+    opens those ``expand`` names (None: all).
     """
     form = FORMATS.get(fmt)
     if form is None:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
-    positions = _positions(net, layout) if "positions" in form.options else None
-    form.save(net, path, SaveOptions(positions=positions, title=title, urgent=mission))
+    drawn = _drawn(net, layout) if "positions" in form.options else None
+    form.save(net, path, SaveOptions(positions=drawn and drawn.positions,
+                                     bends=drawn and drawn.bends, title=title,
+                                     urgent=mission, clusters=clusters, expand=expand))
     return Path(path)
 
 
@@ -156,15 +163,17 @@ def save_queries(net: Net, path: str | Path, tool: str = "verifypn"):
 def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
     """``net`` as a PNML document, laid out by ``layout_engine``."""
     from mcl2pnml.io.pnml.writer import to_pnml_bytes as write
-    return write(net, _positions(net, layout_engine))
+    drawn = _drawn(net, layout_engine)
+    return write(net, drawn and drawn.positions, drawn and drawn.bends)
 
 
-def _positions(net: Net, layout: str):
-    """Node positions from ``layout``; ``none`` computes none (nor imports the view)."""
+def _drawn(net: Net, layout: str):
+    """Node positions and arc bend points from ``layout`` (None for ``none``, which
+    imports nothing of the view)."""
     if layout == "none":
         return None
-    from mcl2pnml.view.layout import positions
-    return positions(net, layout)
+    from mcl2pnml.view.layout import drawn_layout
+    return drawn_layout(net, layout)
 
 
 def validate_pnml(path: str | Path, grammar: str | Path | None = None,
@@ -192,6 +201,13 @@ def template_net(name: str) -> Net:
     """Template ``name`` composed as the paper analyses it, from its M0."""
     from mcl2pnml.language.library import default_library
     return default_library().composed(name)
+
+
+def template_clusters(name: str) -> dict[str, list[str]]:
+    """The boxes of template ``name``'s drawing: the nodes each slot brings in (the
+    primitive of a task, T1 and T2 of a structure), as Figs. 2 and 4 draw them."""
+    from mcl2pnml.language.library import default_library
+    return default_library().slots(name)
 
 
 # -- analysis ------------------------------------------------------------------------------

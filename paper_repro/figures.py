@@ -1,9 +1,14 @@
-"""Figs. 1 to 4 of the paper, redrawn from the templates (graphviz, SVG and PNG)."""
+"""Figs. 1 to 4 of the paper, redrawn from the templates (graphviz, SVG and PNG).
+
+The same drawing as ``mcl2pnml template NAME --format svg``: each slot's net
+(the primitive of Fig. 2, T1 and T2 of Fig. 4) in its own box, the fusion
+places between the boxes, tokens flowing from B at the top to the results.
+"""
 from __future__ import annotations
 
 from pathlib import Path
 
-from mcl2pnml.io.dot import render, to_dot
+from mcl2pnml.io.dot import drawing, render
 from mcl2pnml.language.library import Library
 
 FIGURES = {
@@ -14,24 +19,17 @@ FIGURES = {
 }
 
 
-def clusters(lib: Library, name: str) -> dict[str, list[str]]:
-    """What each slot brings in, its fusion places included: the primitive of
-    a task, T1 and T2 of a structure."""
-    t = lib.get(name)
-    if t.primitives:
-        prim = lib.primitive.net
-        return {("primitive " + slot if slot else "primitive"):
-                [f"{slot}_{n.id}" if slot else n.id for n in (*prim.places, *prim.transitions)]
-                for slot in t.primitives}
-    child = lib.reduced.net
-    return {slot: [f"{slot}_{n.id}" for n in (*child.places, *child.transitions)]
-            for slot in t.children}
+def figure(lib: Library, number: int):
+    """Fig. ``number`` (1-4) as a graphviz graph: the template composed as the paper
+    analyses it, every slot's box open."""
+    name, title = FIGURES[number]
+    return drawing(lib.composed(name), title, clusters=lib.slots(name), expand=None)
 
 
 def draw_all(lib: Library, out: Path) -> list[Path]:
     written = []
-    for number, (name, title) in FIGURES.items():
-        graph = to_dot(lib.composed(name), clusters=clusters(lib, name), title=title)
+    for number in FIGURES:
+        graph = figure(lib, number)
         for fmt in ("svg", "png"):
             path = out / f"fig{number}.{fmt}"
             render(graph, str(path), fmt)

@@ -36,11 +36,18 @@ def test_default_output_is_next_to_the_mission(tmp_path):
 
 
 def test_dot_source_draws_each_instance_in_a_box(tmp_path):
+    """Shut by default, one node each (the overview); open with --expand."""
     out = run("compile", SAUCE, "--format", "dot", "-o", tmp_path / "sauce.dot")
     assert out.returncode == 0, out.stderr
     text = (tmp_path / "sauce.dot").read_text()
-    assert text.startswith("digraph")
+    assert text.startswith("digraph") and "subgraph cluster_AchieveDepth " not in text
     for instance in ("AchieveDepth", "Survey", "KeepDepth"):  # a task, a function, a primitive
+        assert f'[label="{instance}\n(' in text and "class=box" in text
+    out = run("compile", SAUCE, "--format", "dot", "--expand", "all", "-o",
+              tmp_path / "open.dot")
+    assert out.returncode == 0, out.stderr
+    text = (tmp_path / "open.dot").read_text()
+    for instance in ("AchieveDepth", "Survey", "KeepDepth"):
         assert f"subgraph cluster_{instance} " in text
 
 

@@ -198,9 +198,12 @@ def net_from_dot(text: str) -> tuple[dict, dict]:
             places[n] = (last.count(TOKEN) if set(last) == {TOKEN}
                          else int(last[:-1]) if last.endswith(TOKEN) else 0)
         elif kinds[n] == "transition":
-            m = re.search(r" \[([\d.]+), ([\d.]+|inf)\]$", a.get("xlabel", ""))
-            transitions[n] = m and (float(m.group(1)),
-                                    None if m.group(2) == "inf" else float(m.group(2)))
+            # a delay is drawn "◷ 300 s", an interval "◷ [2, 5] s"
+            m = re.search(r"\u25f7 (?:([\d.]+)|\[([\d.]+), ([\d.]+|inf)\]) s$",
+                          a.get("label", ""))
+            transitions[n] = m and ((float(m.group(1)), float(m.group(1))) if m.group(1) else
+                                    (float(m.group(2)),
+                                     None if m.group(3) == "inf" else float(m.group(3))))
     for a, b, attrs in dot["edges"]:
         if "legend" in (kinds[a], kinds[b]):
             continue

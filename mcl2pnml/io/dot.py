@@ -22,11 +22,11 @@ from __future__ import annotations
 
 import contextlib
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Collection, Mapping, Sequence
 
 import graphviz
 
-from mcl2pnml.core.errors import OptionError
+from mcl2pnml.core.errors import OptionError, did_you_mean
 from mcl2pnml.core.files import atomic_write_bytes, atomic_write_text
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import read_transition
@@ -37,9 +37,52 @@ TOKEN = "\u25cf"
 #: takes 45 s on the paper's mission (421 nodes). ``newrank`` ranks the
 #: instance boxes together, which is faster still and avoids graphviz 2.43's
 #: "trouble in init_rank" on missions of 50 calls and more.
+#: Top down: tokens flow from B at the top to OK, FAIL and ABORTED at the bottom, and
+#: the nets joined by fusion (a task and its primitive, a structure's two tasks) stand
+#: side by side, the page as wide as the net is parallel rather than as long as it is deep.
+RANKDIR = "TB"
 DOT_SPEED = {"nslimit": "2", "nslimit1": "2", "mclimit": "0.5", "newrank": "true"}
 #: A place that this many arcs return tokens to is drawn again beside each of them.
 COPY_RETURNS = 3
+
+
+#: The mark of a time-out (a clock face; DejaVu and Liberation fonts have it).
+CLOCK = "\u25f7"
+
+
+def timeout_text(t) -> str | None:
+    """What a time-out transition says of its delay (``◷ 300 s``), None for the others.
+
+    A compiled task's ``t03`` carries its delay (section 2.3); the pattern's
+    own ``t03`` is a time-out of no set length yet.
+    """
+    if t.timing is not None:
+        lo, hi = t.timing.earliest, t.timing.latest
+        return f"{CLOCK} {lo:g} s" if hi == lo else f"{CLOCK} {t.timing} s"
+    if read_transition(t).timeout is not None:
+        return f"{CLOCK} time-out"
+    return None
+
+
+def transition_label(t, box_name: str | None = None) -> str:
+    """A transition's text, drawn inside its box: its name, and its delay if it is timed.
+
+    Inside, not beside (an ``xlabel``): dot places an external label after
+    routing the arcs, on top of them; a label inside the node is a node's
+    width that dot keeps clear of every arc and every other node.
+    """
+    name = _inside(t.label, box_name)
+    delay = timeout_text(t)
+    return name if delay is None else f"{name}\n{delay}"
+
+
+def transition_style(t) -> dict[str, str]:
+    """A transition's box: light, or dark with white text for a time-out."""
+    style = {"shape": "box", "style": "filled", "fillcolor": "gray94", "height": "0.3",
+             "width": "0.3", "margin": "0.06,0.03", "fontsize": "9"}
+    if timeout_text(t) is not None:
+        style.update(fillcolor="gray25", fontcolor="white", style="filled,bold")
+    return style
 
 
 def _tokens(n: int) -> str:
@@ -82,38 +125,50 @@ def _text(label: str) -> str:
 
 def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
            clusters: Mapping[str, Sequence[str]] | None = None, title: str | None = None,
-           legend: bool = True) -> graphviz.Digraph:
-    """The net as a graphviz graph (``.source`` for the text, ``.pipe()`` to render)."""
+           legend: bool = True, expand: Collection[str] | None = None,
+           box_sizes: Mapping[str, tuple[float, float]] | None = None) -> graphviz.Digraph:
+    """The net as a graphviz graph (``.source`` for the text, ``.pipe()`` to render).
+
+    ``expand`` names the boxes drawn open; every other box of ``clusters`` is
+    drawn shut, as one node (:func:`box_node`) that the arcs of its nodes
+    lead to, once per place and direction. None: every box open.
+    ``box_sizes`` (points) makes a shut box as large as its inside laid out
+    (:mod:`mcl2pnml.view.layout` places the nodes of a mission so).
+    """
     marking = net.initial if marking is None else marking
     g = graphviz.Digraph(net.name, graph_attr={
-        "rankdir": "LR", "nodesep": "0.35", "ranksep": "0.55", "fontname": "Helvetica",
-        "fontsize": "12", "label": title or "", "labelloc": "t", **DOT_SPEED},
+        "rankdir": RANKDIR, "nodesep": "0.3" if expand is None else "0.15", "ranksep": "0.45",
+        "fontname": "Helvetica",
+        "fontsize": "12", "label": title or "", "labelloc": "t",
+        **(DOT_SPEED if expand is None else {"newrank": "true"})},
         node_attr={"fontname": "Helvetica", "fontsize": "10"},
         edge_attr={"arrowsize": "0.6"})
     clusters = border_out(net, clusters or {})
+    shut = set() if expand is None else set(clusters) - set(check_expand(clusters, expand))
     box = {n: name for name, members in clusters.items() for n in members}
     clustered = set(box)
+    # where each node is drawn: itself, or the box it is shut in
+    drawn = {n: box_node(box[n]) for n in clustered if box[n] in shut}
 
     def add_place(target, p, box_name: str | None = None) -> None:
         tokens = marking.get(p.id, 0)
-        shown = _inside(p.label, box_name)
+        owner = p.id.rpartition(".")[0]
+        # a place on the border of a shut box is named as inside it (B, OK...): its
+        # arc to the box says whose it is, and the overview stays small
+        shown = _inside(p.label, owner if owner in shut else box_name)
         label = shown + (f"\n{_tokens(tokens)}" if tokens else "")
         # circles all of one size read best; long names get a larger one
-        width = max(0.75, 0.085 * len(shown) + 0.15)
+        small = owner in shut       # the overview's places: only their short names
+        width = (max(0.4, 0.06 * len(shown) + 0.12) if small
+                 else max(0.55, 0.075 * len(shown) + 0.15))
         target.node(node_name(p.id), _text(label), shape="circle", width=f"{width:.2f}",
-                    fixedsize="true",
+                    fixedsize="true", fontsize="7" if small else "9",
                     peripheries="2" if p.interface is not None else "1",
                     **{"class": "place"})
 
     def add_transition(target, t, box_name: str | None = None) -> None:
-        label = _inside(t.label, box_name)
-        attrs = {"shape": "box", "height": "0.5", "width": "0.12", "style": "filled",
-                 "fillcolor": "white", "xlabel": _text(label), "label": "",
-                 "class": "transition"}
-        if t.timing is not None or read_transition(t).timeout is not None:
-            delay = f" {t.timing}" if t.timing is not None else " (time-out)"
-            attrs.update(fillcolor="gray35", xlabel=_text(label + delay))
-        target.node(node_name(t.id), **attrs)
+        target.node(node_name(t.id), _text(transition_label(t, box_name)),
+                    **transition_style(t), **{"class": "transition"})
 
     for p in net.places:
         if p.id not in clustered:
@@ -121,7 +176,19 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     for t in net.transitions:
         if t.id not in clustered:
             add_transition(g, t)
+    for name in clusters:
+        if name in shut:
+            size = len(clusters[name])
+            fixed = {}
+            if box_sizes and name in box_sizes:
+                w, h = box_sizes[name]
+                fixed = {"width": f"{w / 72:.2f}", "height": f"{h / 72:.2f}", "fixedsize": "true"}
+            g.node(box_node(name), _text(f"{name}\n({size} nodes)"), shape="box",
+                   style="rounded,dashed,filled", fillcolor="gray97", color="gray40",
+                   fontsize="10", margin="0.15,0.08", **fixed, **{"class": "box"})
     for name, members in clusters.items():
+        if name in shut:
+            continue
         with g.subgraph(name=f"cluster_{name}") as c:
             c.attr(label=_text(name), style="rounded,dashed", color="gray50", fontsize="11")
             for m in members:   # net order within the cluster, as given
@@ -132,25 +199,41 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     # where tokens come in on the left, where results come out on the right
     written = {a.target for a in net.arcs if a.target in net.place_index}
     read_or_taken = {a.source for a in net.arcs if a.source in net.place_index}
-    first = [p.id for p in net.places if p.id not in clustered
-             and (p.id not in written or (p.interface is not None and p.id in net.initial))]
-    last = [p.id for p in net.places if p.id not in clustered and p.id not in read_or_taken]
+    # (only what nothing writes: a marked place that tokens come back to, like
+    # the primitive's OFF, sits where its arcs put it, not at the far left)
+    first = [p.id for p in net.places if p.id not in clustered and p.id not in written]
+    # (a place no arc touches is a start, not also an end: dot would rank the two as one)
+    last = [p.id for p in net.places if p.id not in clustered and p.id not in read_or_taken
+            and p.id in written]
     for rank, members in (("source", first), ("sink", last)):
-        if members:
+        if members and not shut:    # an overview is ranked by its calls (_call_edge)
             with g.subgraph() as r:
                 r.attr(rank=rank)
                 for m in members:
                     r.node(node_name(m))
     depth = flow_depth(net)
-    back = {a for a in net.arcs if a.kind is ArcKind.NORMAL
-            and depth.get(a.target, 0) <= depth.get(a.source, 0)}
+    # an arc into a result (a place nothing takes from: OK, FAIL, ABORTED) is
+    # forward, however early a short path reaches the result: results stay
+    # at the end of the flow, one node each, not copied beside every ending
+    outputs = set(last)
+    back = {a for a in net.arcs if a.kind is ArcKind.NORMAL and a.target not in outputs
+            and depth.get(a.target, -1) <= depth.get(a.source, -1) and a.target in depth}
     returns: dict[str, int] = {}
     for a in back:
         if a.target in net.place_index:
             returns[a.target] = returns.get(a.target, 0) + 1
     copies = 0
+    joined: set = set()        # the arcs to and from a shut box, drawn once each
+    levels = box_levels(net, clusters) if shut else ({}, {})
     for a in net.arcs:
         attrs = {}
+        if a.source in drawn or a.target in drawn:
+            ends = (drawn.get(a.source, node_name(a.source)),
+                    drawn.get(a.target, node_name(a.target)), a.kind)
+            if ends[0] != ends[1] and ends not in joined:   # inside the box: hidden
+                joined.add(ends)
+                _call_edge(g, a, ends, box, levels)
+            continue
         target = node_name(a.target)
         if a.weight != 1:
             attrs["label"] = str(a.weight)
@@ -170,7 +253,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             shown = _inside(place.label, name)
             with where as c:
                 c.node(target, _text(shown), shape="circle", fixedsize="true", style="dashed",
-                       width=f"{max(0.55, 0.07 * len(shown) + 0.15):.2f}", fontsize="8",
+                       width=f"{max(0.4, 0.065 * len(shown) + 0.12):.2f}", fontsize="7",
                        **{"class": "copy"})
         elif a in back:
             # a token going back (a primitive switched off): drawn, but the
@@ -185,14 +268,86 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
                    fixedsize="true", fontsize="8")
             k.node("legend_iface", "fusion\nplace", shape="circle", width="0.6",
                    fixedsize="true", peripheries="2", fontsize="8")
-            k.node("legend_t", "", shape="box", height="0.4", width="0.1", xlabel="transition",
+            k.node("legend_t", "transition", shape="box", style="filled", fillcolor="gray94",
+                   height="0.3", margin="0.06,0.03", fontsize="8")
+            k.node("legend_timed", f"time-out\n{CLOCK} delay", shape="box", style="filled,bold",
+                   fillcolor="gray25", fontcolor="white", height="0.3", margin="0.06,0.03",
                    fontsize="8")
-            k.node("legend_timed", "", shape="box", height="0.4", width="0.1", style="filled",
-                   fillcolor="gray35", xlabel="time-out", fontsize="8")
-            k.edge("legend_place", "legend_t", label="arc", fontsize="8")
-            k.edge("legend_iface", "legend_timed", label="read arc", style="dashed",
-                   arrowhead="none", fontsize="8")
+            k.edge("legend_place", "legend_t")
+            k.edge("legend_iface", "legend_timed", style="dashed", arrowhead="none")
+            # the arcs explained in a node of text, not in edge labels, which dot
+            # lays against their own arc
+            k.node("legend_arcs", "solid: arc, tokens flow\ndashed: read arc, the token stays",
+                   shape="plaintext", fontsize="8")
     return g
+
+
+def _call_edge(g: graphviz.Digraph, a, ends: tuple[str, str, ArcKind], box: Mapping[str, str],
+               levels: tuple[Mapping[str, int], Mapping[str, int]]) -> None:
+    """An arc of a shut box, drawn between the box and a place on its border, ranked by
+    the call hierarchy rather than by the flow of tokens.
+
+    A call's places (B, A, OK, FAIL, ABORTED...) sit below the box that calls
+    and above the box called, whichever way their tokens go (``dir=back`` draws
+    an arc against its rank order): the overview reads top down as the
+    mission's calls, and is as deep as the hierarchy, not as the flow.
+    """
+    level, place_level = levels
+    into_place = a.source in box and box[a.source] != box.get(a.target)
+    transition, place = (a.source, a.target) if into_place else (a.target, a.source)
+    where = box.get(transition)
+    # the box called is deeper than the shallowest box the place touches (its caller)
+    # (a place inside another shut box, a primitive's LOCK taken by one call site: at
+    # that box's depth)
+    box_first = level.get(where, 0) <= place_level.get(place, level.get(box.get(place), 0))
+    tail, head = (ends[0], ends[1]) if into_place == box_first else (ends[1], ends[0])
+    if a.kind is ArcKind.READ:
+        g.edge(tail, head, style="dashed", dir="none")
+    elif tail == ends[0]:
+        g.edge(tail, head)
+    else:
+        g.edge(tail, head, dir="back")
+
+
+def box_levels(net: Net, clusters: Mapping[str, Sequence[str]]
+               ) -> tuple[dict[str, int], dict[str, int]]:
+    """How deep each box is in the call hierarchy, and each place between boxes: the
+    shallowest box it touches.
+
+    Breadth-first over the boxes, two boxes adjacent when a place joins
+    them, from the box of the mission's ``B`` (the marked place nothing
+    writes), else from the first box; a box it cannot reach starts again.
+    """
+    box = {n: name for name, members in clusters.items() for n in members}
+    touches: dict[str, set[str]] = {}
+    for a in net.arcs:
+        place, transition = ((a.source, a.target) if a.source in net.place_index
+                             else (a.target, a.source))
+        if place not in box and transition in box:
+            touches.setdefault(place, set()).add(box[transition])
+    near: dict[str, set[str]] = {name: set() for name in clusters}
+    for boxes in touches.values():
+        for b in boxes:
+            near[b] |= boxes - {b}
+    written = {a.target for a in net.arcs}
+    # the mission's begin place B first (the paper's entry to every net), then
+    # the other marked places nothing writes (a NULL's MTX, say)
+    entries = sorted((p for p in net.initial if p not in written),
+                     key=lambda p: (net.place_index[p].label.rpartition(".")[2] != "B", p))
+    starts = [b for p in entries for b in ([box[p]] if p in box else sorted(touches.get(p, ())))]
+    level: dict[str, int] = {}
+    for root in [*starts, *clusters]:
+        if root in level:
+            continue
+        level[root] = depth = max(level.values(), default=-1) + 1
+        frontier = [root]
+        while frontier:
+            depth += 1
+            frontier = [m for b in frontier for m in sorted(near[b]) if m not in level]
+            for m in frontier:
+                level.setdefault(m, depth)
+    place_level = {p: min(level[b] for b in boxes) for p, boxes in touches.items()}
+    return level, place_level
 
 
 def flow_depth(net: Net) -> dict[str, int]:
@@ -246,6 +401,27 @@ def border_out(net: Net, clusters: Mapping[str, Sequence[str]]) -> dict[str, lis
     return {name: members for name, members in kept.items() if members}
 
 
+def box_node(name: str) -> str:
+    """The DOT name of a shut box: ``~box`` and the box's name in hex, which no id of
+    the net is drawn as (:func:`node_name` encodes every id starting with ``~x``, and
+    :func:`node_id` reads this as no node)."""
+    return "~box" + name.encode().hex()
+
+
+#: What ``--expand`` takes to open every box.
+EXPAND_ALL = "all"
+
+
+def check_expand(clusters: Mapping[str, Sequence[str]], expand: Collection[str]) -> list[str]:
+    """The boxes ``expand`` names, each one of ``clusters``; a name of none is an
+    :class:`OptionError` naming the boxes there are."""
+    for name in expand:
+        if name not in clusters:
+            raise OptionError("--expand", f"no box {name!r} in this drawing"
+                              + did_you_mean(name, clusters, "boxes"))
+    return list(expand)
+
+
 def instance_clusters(net: Net) -> dict[str, list[str]]:
     """Nodes grouped by instance: the part of their id before the last dot.
 
@@ -283,19 +459,35 @@ def render(graph: graphviz.Digraph, path: str, fmt: str) -> None:
     atomic_write_bytes(path, data)
 
 
-def drawing(net: Net, title: str | None = None) -> graphviz.Digraph:
-    """The figure of ``net``: each instance in its box, titled, with the legend."""
-    return to_dot(net, clusters=instance_clusters(net), title=title or net.name, legend=True)
+def drawing(net: Net, title: str | None = None, *,
+            clusters: Mapping[str, Sequence[str]] | None = None,
+            expand: Collection[str] | None = ()) -> graphviz.Digraph:
+    """The figure of ``net``, titled, with the legend.
+
+    ``clusters`` are its boxes (a template's slots: the primitive of a task,
+    T1 and T2 of a structure); None, one box per instance of a compiled
+    mission (:func:`instance_clusters`). ``expand`` names the boxes drawn
+    open: by default none, so a mission is drawn as its calls, one box each;
+    None opens them all.
+    """
+    boxes = instance_clusters(net) if clusters is None else clusters
+    return to_dot(net, clusters=boxes, title=title or net.name, legend=True, expand=expand)
 
 
-def save_dot(net: Net, path: str | Path, *, title: str | None = None) -> None:
+def save_dot(net: Net, path: str | Path, *, title: str | None = None,
+             clusters: Mapping[str, Sequence[str]] | None = None,
+             expand: Collection[str] | None = ()) -> None:
     """The drawing's DOT source, to ``path``, whole or not at all."""
-    atomic_write_text(path, drawing(net, title).source)
+    atomic_write_text(path, drawing(net, title, clusters=clusters, expand=expand).source)
 
 
-def save_svg(net: Net, path: str | Path, *, title: str | None = None) -> None:
-    render(drawing(net, title), str(path), "svg")
+def save_svg(net: Net, path: str | Path, *, title: str | None = None,
+             clusters: Mapping[str, Sequence[str]] | None = None,
+             expand: Collection[str] | None = ()) -> None:
+    render(drawing(net, title, clusters=clusters, expand=expand), str(path), "svg")
 
 
-def save_png(net: Net, path: str | Path, *, title: str | None = None) -> None:
-    render(drawing(net, title), str(path), "png")
+def save_png(net: Net, path: str | Path, *, title: str | None = None,
+             clusters: Mapping[str, Sequence[str]] | None = None,
+             expand: Collection[str] | None = ()) -> None:
+    render(drawing(net, title, clusters=clusters, expand=expand), str(path), "png")

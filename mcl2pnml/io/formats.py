@@ -17,7 +17,7 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Callable, Mapping, Sequence
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 from mcl2pnml.core.net import Net
@@ -33,6 +33,12 @@ class SaveOptions:
     title: str | None = None
     #: a compiled mission: what the vehicle does not fire fires at once (TINA's [0,0])
     urgent: bool = False
+    #: (source, target) of an arc -> its bend points, PNML's arc ``<graphics>``
+    bends: Mapping[tuple[str, str], Sequence[tuple[float, float]]] | None = None
+    #: a drawing's boxes: name -> node ids (None: one box per instance of a compiled mission)
+    clusters: Mapping[str, Sequence[str]] | None = None
+    #: the boxes a drawing shows open, the others shut, one node each (None: all open)
+    expand: Sequence[str] | None = ()
 
 
 @dataclass(frozen=True)
@@ -78,17 +84,17 @@ class Format:
 FORMATS: dict[str, Format] = {f.name: f for f in (
     Format("pnml", "PNML", (".pnml", ".xml"),
            "PNML (ISO/IEC 15909-2), with time-outs and bindings as toolspecific data",
-           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions",), several=True),
+           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions", "bends"), several=True),
     Format("tina", "TINA", (".net",), "TINA's .net: a time Petri net, time-outs as intervals",
            "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
     Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
            "mcl2pnml.io.lola", "load_lola", "save_lola"),
     Format("dot", "DOT", (".dot",), "graphviz's DOT source of the drawing",
-           "mcl2pnml.io.dot", None, "save_dot", ("title",)),
+           "mcl2pnml.io.dot", None, "save_dot", ("title", "clusters", "expand")),
     Format("svg", "SVG", (".svg",), "the drawing as SVG", "mcl2pnml.io.dot", None, "save_svg",
-           ("title",)),
+           ("title", "clusters", "expand")),
     Format("png", "PNG", (".png",), "the drawing as PNG", "mcl2pnml.io.dot", None, "save_png",
-           ("title",)),
+           ("title", "clusters", "expand")),
 )}
 
 #: Suffix -> the format that reads it.

@@ -108,6 +108,22 @@ class Library:
         seen = {id(t): t for t in self.templates.values()}
         return sorted(seen.values(), key=lambda t: (order[t.kind], t.name.lower()))
 
+    def slots(self, name: str) -> dict[str, list[str]]:
+        """The nodes each slot of template ``name`` brings into :meth:`composed`, its
+        fusion places included: the primitive of a task (Fig. 2), T1 and T2 of a
+        structure (Fig. 4); the boxes of the template's drawing."""
+        t = self.get(name)
+        if t.kind is TemplateKind.PATTERN:
+            prim = self.primitive.net
+            return {("primitive " + slot if slot else "primitive"):
+                    [f"{slot}_{n.id}" if slot else n.id for n in (*prim.places, *prim.transitions)]
+                    for slot in t.primitives}
+        if t.kind is TemplateKind.STRUCTURE:
+            child = self.reduced.net
+            return {slot: [f"{slot}_{n.id}" for n in (*child.places, *child.transitions)]
+                    for slot in t.children}
+        return {}
+
     def composed(self, name: str) -> Net:
         """The net the paper analyses for template ``name``, from the paper's M0."""
         t = self.get(name)

@@ -17,9 +17,9 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-from typing import Mapping
+from dataclasses import dataclass, field
 
-from mcl2pnml.core.net import Net
+from mcl2pnml.core.net import Marking, Net
 
 #: Above this many nodes, ``dot`` is too slow and the layered layout is used.
 DOT_LIMIT = 1500
@@ -37,12 +37,37 @@ def dot_available() -> bool:
     return shutil.which("dot") is not None
 
 
+@dataclass(frozen=True)
+class Drawn:
+    """Where a net is drawn: each node's position and each arc's bend points.
+
+    ``bends`` maps an arc's (source, target) to the points its line passes
+    through between its ends, in order from the source (PNML's arc
+    ``<graphics>``); an arc without bends is a straight line.
+    """
+
+    positions: dict[str, tuple[float, float]]
+    bends: dict[tuple[str, str], list[tuple[float, float]]] = field(default_factory=dict)
+
+
 def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
     """Node id -> (x, y), for every node or (engine ``"none"``) for none.
 
     ``engine`` is one of :data:`ENGINES`; ``"auto"`` picks ``dot`` up to
     :data:`DOT_LIMIT` nodes (when graphviz is installed), ``layers`` up to
     :data:`LAYERS_LIMIT`, and ``none`` above.
+    """
+    return drawn_layout(net, engine).positions
+
+
+def drawn_layout(net: Net, engine: str = "auto") -> Drawn:
+    """Positions for every node and, laid out by dot, bend points for the arcs.
+
+    A net of instances (a compiled mission) is laid out in two levels, as its
+    overview drawing shows it (:func:`mcl2pnml.io.dot.to_dot` with every box
+    shut): each instance's nodes compactly in its box, the boxes and the
+    places between them ranked by the calls. Another net (a template) is
+    laid out as its drawing. The layered layout gives no bend points.
     """
     if engine not in ENGINES:
         raise ValueError(f"unknown layout engine {engine!r}; one of {', '.join(ENGINES)}")
@@ -51,44 +76,152 @@ def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
         engine = ("dot" if nodes <= DOT_LIMIT and dot_available()
                   else "layers" if nodes <= LAYERS_LIMIT else "none")
     if engine == "dot":
-        pos = _dot_layout(net)
-        if pos is not None and len(pos) == nodes:
-            return pos
+        drawn = _dot_drawn(net)
+        if drawn is not None and len(drawn.positions) == nodes:
+            return drawn
         # dot failed, ran out of time or left a node out (every node has a position,
         # whoever asks): the layered layout is linear, always ends, places every node
     if engine in ("dot", "layers"):
-        return _layered_layout(net)
-    return {}
+        return Drawn(_layered_layout(net))
+    return Drawn({})
 
 
 def _dot_layout(net: Net) -> dict[str, tuple[float, float]] | None:
-    """Where dot puts each node in the drawing of :mod:`mcl2pnml.io.dot` (None: dot failed).
+    """Where dot puts each node (None: dot failed)."""
+    drawn = _dot_drawn(net)
+    return None if drawn is None else drawn.positions
 
-    The same graph as ``compile --format svg``, so the PNML opens as that
-    picture; its boxes around instances also make dot fast (0.2 s instead
-    of 18 s on a 600-node mission).
-    """
-    from mcl2pnml.io.dot import (dot_missing, instance_clusters, node_id,   # imports graphviz:
-                                 to_dot)                                # only now
-    if not dot_available():
-        raise dot_missing("--layout", "the layouts layers and none work without it, and auto "
-                                      "lays out in layers when it is missing")
 
-    source = to_dot(net, clusters=instance_clusters(net), legend=False).source
+def _run_dot(source: str) -> dict | None:
+    """dot's layout of ``source`` as its JSON (``-Tjson``), None if dot failed or took
+    longer than :data:`DOT_TIMEOUT`."""
     try:
-        result = subprocess.run(["dot", "-Tjson0"], input=source.encode(),
+        result = subprocess.run(["dot", "-Tjson"], input=source.encode(),
                                 capture_output=True, check=True, timeout=DOT_TIMEOUT)
     except (subprocess.TimeoutExpired, subprocess.CalledProcessError):
         return None   # too slow, or one of dot's internal failures: lay out in layers
-    graph = json.loads(result.stdout)
-    nodes = {n.id for n in (*net.places, *net.transitions)}
-    pos: dict[str, tuple[float, float]] = {}
-    for obj in graph.get("objects", []):
-        name = node_id(obj.get("name", ""))     # the id, where DOT needed it encoded
-        if name in nodes and "pos" in obj:
-            x, y = (float(v) for v in obj["pos"].split(","))
-            pos[name] = (x, y)
-    return _normalise(pos, flip_y=True)  # graphviz's y axis points up
+    return json.loads(result.stdout)
+
+
+def _dot_drawn(net: Net) -> Drawn | None:
+    from mcl2pnml.io.dot import (border_out, dot_missing, instance_clusters,  # graphviz:
+                                 to_dot)                                      # only now
+    if not dot_available():
+        raise dot_missing("--layout", "the layouts layers and none work without it, and auto "
+                                      "lays out in layers when it is missing")
+    boxes = border_out(net, instance_clusters(net))
+    if not boxes:
+        graph = _run_dot(to_dot(net, legend=False, expand=None).source)
+        if graph is None:
+            return None
+        frame = _Frame(graph)
+        nodes, splines = _read(graph)
+        drawn = Drawn({n: frame(*p) for n, p in nodes.items()},
+                      {arc: [frame(*p) for p in pts] for arc, pts in splines.items()})
+    else:
+        drawn = _two_levels(net, boxes, to_dot)
+    return drawn and _of(net, drawn)
+
+
+def _of(net: Net, drawn: Drawn) -> Drawn:
+    """Only the net's nodes and arcs: not a box, nor a copy of a place drawn beside a
+    transition (whose arc in the net goes to the place itself, in a straight line)."""
+    ids = net.place_index.keys() | net.transition_index.keys()
+    arcs = {(a.source, a.target) for a in net.arcs}
+    return Drawn({n: p for n, p in drawn.positions.items() if n in ids},
+                 {arc: pts for arc, pts in drawn.bends.items() if arc in arcs and pts})
+
+
+def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
+    """A net of boxes laid out as its overview: each box's inside laid out on its own
+    (one dot run, every box a component), then the overview with each shut box as
+    large as its inside (a second run); each node placed in its box."""
+    from mcl2pnml.io.dot import box_node
+    box = {n: name for name, members in boxes.items() for n in members}
+    inside = Net(net.name, tuple(p for p in net.places if p.id in box),
+                 tuple(t for t in net.transitions if t.id in box),
+                 tuple(a for a in net.arcs if a.source in box and box[a.source] == box.get(a.target)),
+                 Marking({p: k for p, k in net.initial.items() if p in box}))
+    inner = _run_dot(to_dot(inside, clusters=boxes, legend=False, expand=None).source)
+    if inner is None:
+        return None
+    extent = {o["name"][len("cluster_"):]: [float(v) for v in o["bb"].split(",")]
+              for o in inner.get("objects", []) if o.get("name", "").startswith("cluster_")}
+    sizes = {name: (x1 - x0, y1 - y0) for name, (x0, y0, x1, y1) in extent.items()}
+    outer = _run_dot(to_dot(net, clusters=boxes, legend=False, expand=(),
+                            box_sizes=sizes).source)
+    if outer is None:
+        return None
+    frame = _Frame(outer)
+    centres = {o["name"]: [float(v) for v in o["pos"].split(",")]
+               for o in outer.get("objects", []) if "pos" in o}
+    nodes, splines = _read(inner)
+    positions, bends = {}, {}
+    shift = {}
+    for name, (x0, y0, x1, y1) in extent.items():
+        cx, cy = centres[box_node(name)]
+        shift[name] = (cx - (x0 + x1) / 2, cy - (y0 + y1) / 2)
+    for n, (x, y) in nodes.items():
+        if n in box:
+            dx, dy = shift[box[n]]
+            positions[n] = frame(x + dx, y + dy)
+    for (a, b), pts in splines.items():
+        dx, dy = shift[box[a]]
+        bends[(a, b)] = [frame(x + dx, y + dy) for x, y in pts]
+    loose, drawn = _read(outer)
+    for n, p in loose.items():
+        positions.setdefault(n, frame(*p))
+    # an arc between a box and a place outside it runs along the overview's arc to the box
+    for arc in net.arcs:
+        ends = (arc.source if arc.source not in box else box_node(box[arc.source]),
+                arc.target if arc.target not in box else box_node(box[arc.target]))
+        if ends[0] == ends[1] or (arc.source, arc.target) in bends:
+            continue
+        pts = drawn.get(ends) or list(reversed(drawn.get(ends[::-1], [])))
+        if pts:
+            bends[(arc.source, arc.target)] = [frame(*p) for p in pts]
+    return Drawn(positions, bends)
+
+
+class _Frame:
+    """graphviz's points to PNML's: y downwards, the drawing's box moved to the margin."""
+
+    def __init__(self, graph: dict):
+        x0, y0, _, y1 = (float(v) for v in graph.get("bb", "0,0,0,0").split(","))
+        self.x0, self.y1 = x0, y1
+
+    def __call__(self, x: float, y: float) -> tuple[float, float]:
+        return (round(x - self.x0 + MARGIN, 1), round(self.y1 - y + MARGIN, 1))
+
+
+def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
+                                dict[tuple[str, str], list[tuple[float, float]]]]:
+    """The nodes' positions and the arcs' bend points in dot's JSON, by the ids of the
+    net (a box's name or a copy of a place is kept under its DOT name).
+
+    The bend points of an arc are points on dot's spline between its ends:
+    each Bézier piece's middle and end, the last end (at the node) left out.
+    """
+    from mcl2pnml.io.dot import node_id
+    objects = graph.get("objects", [])
+    names = {o["_gvid"]: (node_id(o["name"]) or o["name"]) for o in objects if "pos" in o}
+    nodes = {names[o["_gvid"]]: tuple(float(v) for v in o["pos"].split(","))
+             for o in objects if "pos" in o}
+    splines = {}
+    for e in graph.get("edges", []):
+        pts = next((op["points"] for op in e.get("_draw_", ()) if op["op"] in ("b", "B")), None)
+        if not pts or e["tail"] not in names or e["head"] not in names:
+            continue
+        on_curve = []
+        for k in range(0, len(pts) - 3, 3):
+            (x0, y0), (x1, y1), (x2, y2), (x3, y3) = pts[k:k + 4]
+            on_curve.append(((x0 + 3 * x1 + 3 * x2 + x3) / 8, (y0 + 3 * y1 + 3 * y2 + y3) / 8))
+            on_curve.append((x3, y3))
+        tail, head = names[e["tail"]], names[e["head"]]
+        if e.get("dir") == "back":    # drawn from head to tail: the arc runs that way
+            tail, head, on_curve = head, tail, [*reversed(on_curve[:-1]), pts[0]]
+        splines[(tail, head)] = on_curve[:-1]
+    return nodes, splines
 
 
 def _layered_layout(net: Net) -> dict[str, tuple[float, float]]:
@@ -125,7 +258,7 @@ def _layered_layout(net: Net) -> dict[str, tuple[float, float]]:
         first = depth
     # rows fill each column from the top, in net order, which keeps the nodes
     # of one component together; columns and rows start at 0, so this is
-    # already the normal form (no need for _normalise)
+    # already the normal form: x and y from the margin, y downwards
     rows: dict[int, int] = {}
     pos: dict[str, tuple[float, float]] = {}
     for n in successors:
@@ -134,19 +267,6 @@ def _layered_layout(net: Net) -> dict[str, tuple[float, float]]:
         rows[col] = row + 1
         pos[n] = (col * SPACING + MARGIN, row * SPACING + MARGIN)
     return pos
-
-
-def _normalise(pos: Mapping[str, tuple[float, float]], flip_y: bool) -> dict[str, tuple[float, float]]:
-    if not pos:
-        return {}
-    xs = [x for x, _ in pos.values()]
-    ys = [y for _, y in pos.values()]
-    x0, y0, y1 = min(xs), min(ys), max(ys)
-    out = {}
-    for n, (x, y) in pos.items():
-        y = (y1 - y) if flip_y else (y - y0)
-        out[n] = (round(x - x0 + MARGIN, 1), round(y + MARGIN, 1))
-    return out
 
 
 def positions(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:

@@ -38,7 +38,7 @@ from functools import lru_cache
 from itertools import compress, repeat
 from operator import attrgetter, is_
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, BinaryIO, Callable, Iterator, Mapping
+from typing import TYPE_CHECKING, Any, BinaryIO, Callable, Iterator, Mapping, Sequence
 
 from mcl2pnml.core.version import __version__
 from mcl2pnml.core.files import atomic_writer
@@ -75,6 +75,12 @@ def _attr(value: str) -> str:
 @lru_cache(maxsize=1 << 16)   # positions repeat: layouts put nodes on a grid
 def _graphics(x: float, y: float) -> str:
     return f'<graphics><position x="{_fmt(x)}" y="{_fmt(y)}"/></graphics>'
+
+
+def _bend_graphics(points) -> str:
+    """An arc's bend points, PNML's arc ``<graphics>``: one ``<position>`` each."""
+    inner = "".join(f'<position x="{_fmt(x)}" y="{_fmt(y)}"/>' for x, y in points)
+    return f"<graphics>{inner}</graphics>"
 
 
 def _fmt(x: float) -> str:
@@ -199,6 +205,8 @@ _ID, _NAME, _PAYLOAD = attrgetter("id"), attrgetter("name"), attrgetter("payload
 
 
 Positions = Mapping[str, "tuple[float, float]"]
+#: (source, target) of an arc -> its bend points, from the source
+Bends = Mapping["tuple[str, str]", "Sequence[tuple[float, float]]"]
 
 
 def own_positions(net: Net) -> dict[str, tuple[float, float]] | None:
@@ -209,7 +217,8 @@ def own_positions(net: Net) -> dict[str, tuple[float, float]] | None:
     return None
 
 
-def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
+def _chunks(net: Net, xid: _Ids, positions: Positions | None,
+            bends: Bends | None = None) -> Iterator[str]:
     """The page, one line per place, transition and arc, in chunks of :data:`CHUNK` lines."""
     pos = own_positions(net) if positions is None else positions
     pos = pos or {}
@@ -241,12 +250,20 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
         rows = [(s, d, w, k, own.get((s, d), 0))
                 for s, d, w, k in zip(sources, targets, weights, kinds) if (d, s) not in own]
         sources, targets, weights, kinds, extras = map(list, zip(*rows))
+    # bend points by the written arc's ends, before ids are escaped; a read arc's return
+    # runs back along its line
+    bent = {}
+    for (a, b), pts in (bends or {}).items():
+        if pts:
+            bent[(a, b)] = _bend_graphics(pts)
+            bent.setdefault((b, a), _bend_graphics(pts[::-1]))
+    lines = list(zip(sources, targets)) if bent else None
     if node is not None:
         sources, targets = [node[s] for s in sources], [node[t] for t in targets]
     number = 0
     for start in range(0, len(sources), CHUNK):
         stop = min(start + CHUNK, len(sources))
-        if (weights[start:stop].count(1) == stop - start
+        if (not bent and weights[start:stop].count(1) == stop - start
                 and kinds[start:stop].count(ArcKind.NORMAL) == stop - start):
             yield "".join([f'<arc id="{stem}{k}" source="{a}" target="{b}"/>\n'
                            for k, a, b in zip(range(number + 1, number + 1 + stop - start),
@@ -254,25 +271,29 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None) -> Iterator[str]:
             number += stop - start
             continue
         chunk = []
-        for src, dst, weight, kind, extra in zip(sources[start:stop], targets[start:stop],
-                                                 weights[start:stop], kinds[start:stop],
-                                                 extras[start:stop] if own else extras):
+        for k, (src, dst, weight, kind, extra) in enumerate(
+                zip(sources[start:stop], targets[start:stop], weights[start:stop],
+                    kinds[start:stop], extras[start:stop] if own else extras), start):
             number += 1
             inscription = (f"<inscription><text>{weight}</text></inscription>"
                            if weight != 1 else "")
+            there = back = ""
+            if bent:
+                there = bent.get(lines[k], "")
+                back = bent.get(lines[k][::-1], "")
             if kind is ArcKind.NORMAL:
                 chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
-                             f"{inscription}</arc>\n" if inscription else
+                             f"{inscription}{there}</arc>\n" if inscription or there else
                              f'<arc id="{stem}{number}" source="{src}" target="{dst}"/>\n')
             else:
                 # a read arc is a self-loop to P/T tools, each half marked as read
                 chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
-                             f"{inscription}{_READ}</arc>\n")
+                             f"{inscription}{there}{_READ}</arc>\n")
                 number += 1
                 if extra:
                     inscription = f"<inscription><text>{weight + extra}</text></inscription>"
                 chunk.append(f'<arc id="{stem}{number}" source="{dst}" target="{src}">'
-                             f"{inscription}{_READ}</arc>\n")
+                             f"{inscription}{back}{_READ}</arc>\n")
         yield "".join(chunk)
 
 
@@ -293,11 +314,15 @@ def _into_read_places(sources, targets, weights, kinds) -> dict[tuple[str, str],
 
 
 @without_gc
-def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None) -> None:
+def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None,
+               bends: Bends | None = None) -> None:
     """Stream ``net`` as a PNML document into a binary file object.
 
     ``positions`` (node id -> x, y) go into ``<graphics>``; None: the nodes'
     own positions if every node has one, else no positions at all.
+    ``bends`` ((source, target) of an arc -> points) go into the arc's
+    ``<graphics>`` as ``<position>`` elements, the standard's bend points, in
+    order from the source; a read arc's return runs back through them.
     """
     if positions is not None and not isinstance(positions, Mapping):
         # a layout engine's name belongs to the caller, which lays out: writing never does
@@ -310,26 +335,28 @@ def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None) -> N
                f'<net id="{net_id}" type="{PTNET}">\n'
                f"<name><text>{_text(net.name or 'net')}</text></name>\n"
                f'<page id="{page_id}">\n').encode())
-    for chunk in _chunks(net, xid, positions):
+    for chunk in _chunks(net, xid, positions, bends):
         out.write(chunk.encode())
     out.write(("</page>\n"
                f'{_TOOL_OPEN}<ids encoding="xml-name-escapes"/></toolspecific>\n'
                "</net>\n</pnml>\n").encode())
 
 
-def to_pnml_bytes(net: Net, positions: Positions | None = None) -> bytes:
+def to_pnml_bytes(net: Net, positions: Positions | None = None,
+                  bends: Bends | None = None) -> bytes:
     buf = io.BytesIO()
-    write_pnml(net, buf, positions)
+    write_pnml(net, buf, positions, bends)
     return buf.getvalue()
 
 
-def save_pnml(net: Net, path: str | Path, positions: Positions | None = None) -> Path:
+def save_pnml(net: Net, path: str | Path, positions: Positions | None = None,
+              bends: Bends | None = None) -> Path:
     """Write ``net`` to ``path`` atomically; returns the path."""
     with atomic_writer(path) as out:
-        write_pnml(net, out, positions)
+        write_pnml(net, out, positions, bends)
     return Path(path)
 
 
 def save(net: Net, path: str | Path, options: "SaveOptions") -> None:
     """The format table's entry point (:mod:`mcl2pnml.io.formats`)."""
-    save_pnml(net, path, options.positions)
+    save_pnml(net, path, options.positions, options.bends)

@@ -1,0 +1,223 @@
+"""Drawings a student can read: no label on an arc, a node or another label, no node on a
+box's border, a mission's overview on a page, and PNML positions that draw the same picture.
+
+Every check reads graphviz's own layout (``dot -Tjson``, :mod:`drawcheck`):
+the templates as ``mcl2pnml template NAME --format svg`` draws them, Figs. 1-4
+as ``python -m paper_repro`` does, every example mission as ``compile
+--format svg`` does (each call shut in its box).
+"""
+from __future__ import annotations
+
+import glob
+import math
+import shutil
+import struct
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+from lxml import etree
+
+from drawcheck import layout_json, problems
+from helpers import ROOT, run_cli
+from mcl2pnml import pipeline
+from mcl2pnml.io.dot import box_node, drawing, instance_clusters, to_dot
+from mcl2pnml.language.library import default_library
+from paper_repro.figures import FIGURES, figure
+
+pytestmark = pytest.mark.skipif(shutil.which("dot") is None,
+                                reason="graphviz's dot is not installed")
+
+EXAMPLES = sorted(Path(p).name for p in glob.glob(str(ROOT / "examples" / "*.mcl")))
+TEMPLATES = sorted({t.names[0] for t in default_library().unique()})
+#: The largest page an example's overview may take, in pixels (PNG at 96 dpi).
+PAGE = 4000
+NS = "{http://www.pnml.org/version-2009/grammar/pnml}"
+
+
+@lru_cache(maxsize=None)
+def mission(name: str):
+    return pipeline.compile_file(ROOT / "examples" / name)
+
+
+@lru_cache(maxsize=None)
+def overview(name: str) -> dict:
+    """The example's drawing as ``compile --format svg`` makes it, laid out by dot."""
+    return layout_json(drawing(mission(name), name).source)
+
+
+@pytest.mark.parametrize("name", TEMPLATES)
+def test_a_template_is_drawn_without_overlaps(name):
+    graph = drawing(pipeline.template_net(name), name,
+                    clusters=pipeline.template_clusters(name), expand=None)
+    assert problems(layout_json(graph.source)) == []
+
+
+@pytest.mark.parametrize("number", sorted(FIGURES))
+def test_the_papers_figures_are_drawn_without_overlaps(number):
+    assert problems(layout_json(figure(default_library(), number).source)) == []
+
+
+def test_a_task_is_drawn_beside_its_primitive_with_the_fusion_places_between():
+    """Fig. 2: the primitive in its box, the fusion places outside every box, the
+    time-out dark and saying so."""
+    graph = layout_json(figure(default_library(), 2).source)
+    boxes = {o["name"]: o for o in graph["objects"] if o["name"].startswith("cluster")}
+    assert set(boxes) == {"cluster_primitive", "cluster_legend"}
+    x0, y0, x1, y1 = map(float, boxes["cluster_primitive"]["bb"].split(","))
+    at = {o["name"]: tuple(map(float, o["pos"].split(","))) for o in graph["objects"]
+          if "pos" in o}
+    for fused in ("E", "D", "OFF", "ON", "S1", "S2"):
+        x, y = at[fused]
+        assert not (x0 <= x <= x1 and y0 <= y <= y1), fused
+    t03 = next(o for o in graph["objects"] if o["name"] == "t03")
+    assert t03["fillcolor"] == "gray25" and "\u25f7 time-out" in t03["label"]
+
+
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_an_example_is_drawn_as_its_calls_on_one_page(name):
+    graph = overview(name)
+    assert problems(graph) == []
+    png = drawing(mission(name), name).pipe(format="png")
+    width, height = struct.unpack(">II", png[16:24])
+    assert width <= PAGE and height <= PAGE, (width, height)
+    # one box per instance, shut
+    shut = {o["name"] for o in graph["objects"] if o.get("class") == "box"}
+    assert shut == {box_node(b) for b in instance_clusters(mission(name))
+                    if any(o["name"] == box_node(b) for o in graph["objects"])}
+    assert len(shut) >= 10
+
+
+def test_a_call_opened_on_demand(tmp_path):
+    net = mission("sauce.mcl")
+    graph = layout_json(drawing(net, expand=["Survey", "monitor-1"]).source)
+    opened = {o["name"] for o in graph["objects"] if o["name"].startswith("cluster_")}
+    assert opened == {"cluster_Survey", "cluster_monitor-1", "cluster_legend"}
+    assert problems(graph) == []
+    out = run_cli("compile", ROOT / "examples" / "sauce.mcl", "--format", "svg",
+                  "--expand", "Survey,monitor-1", "-o", tmp_path / "s.svg")
+    assert out.returncode == 0, out.stderr
+    assert b"cluster_Survey" in (tmp_path / "s.svg").read_bytes()
+    bad = run_cli("compile", ROOT / "examples" / "sauce.mcl", "--format", "svg",
+                  "--expand", "Survy", "-o", tmp_path / "t.svg")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "did you mean 'Survey'?" in bad.stderr
+    wrong = run_cli("compile", ROOT / "examples" / "sauce.mcl", "--expand", "all",
+                    "-o", tmp_path / "t.pnml")
+    assert wrong.returncode == 2 and "only a drawing" in wrong.stderr
+
+
+# -- the checker finds what a reader would see ---------------------------------------------
+
+def test_the_checker_sees_a_label_on_an_arc_a_node_across_a_border_and_an_arc_through_a_node():
+    """The checks are not vacuous: yesterday's drawings failed them (an external label
+    on an arc, a fusion place on a box's border, an arc through a node)."""
+    on_arc = layout_json('digraph { rankdir=LR; a -> b; c [xlabel="t04"] }')
+    assert problems(on_arc) == []
+    a, b = (next(o for o in on_arc["objects"] if o["name"] == n) for n in "ab")
+    (ax, ay), (bx, by) = (map(float, a["pos"].split(",")), map(float, b["pos"].split(",")))
+    c = next(o for o in on_arc["objects"] if o["name"] == "c")
+    for op in c["_ldraw_"]:      # the external label where dot 2.43 put T1_t4's: on an arc
+        if op["op"] == "T" and op["text"] == "t04":
+            op["pt"] = [(ax + bx) / 2, (ay + by) / 2 - 3]
+    assert problems(on_arc) == ["label 't04' of node c on arc a->b"]
+    border = layout_json('digraph { subgraph cluster_x { a; b } '
+                         'p [pos="0,0"]; a -> b; p -> a [constraint=false] }')
+    graph = dict(border)
+    # move the loose node onto the box's border, as newrank did to fusion places
+    x0, y0, x1, y1 = map(float, next(o for o in graph["objects"]
+                                     if o["name"] == "cluster_x")["bb"].split(","))
+    for o in graph["objects"]:
+        if o["name"] == "p":
+            o["pos"] = f"{x1},{(y0 + y1) / 2}"
+    assert any("on the border" in p for p in problems(graph))
+    through = layout_json('digraph { a -> b -> c; a -> c [constraint=false] }')
+    for o in through["objects"]:           # put b on the straight line from a to c
+        if o["name"] == "b":
+            a = next(p for p in through["objects"] if p["name"] == "a")["pos"]
+            c = next(p for p in through["objects"] if p["name"] == "c")["pos"]
+            (ax, ay), (cx, cy) = (map(float, a.split(",")), map(float, c.split(",")))
+            o["pos"] = f"{(ax + cx) / 2},{(ay + cy) / 2}"
+    for e in through["edges"]:
+        if e["tail"] == 0 and e["head"] == 2:
+            e["_draw_"] = [{"op": "b", "points": [[ax, ay], [ax, ay], [cx, cy], [cx, cy]]}]
+    assert any("through node b" in p for p in problems(through))
+
+
+# -- PNML: positions and bend points are the picture --------------------------------------
+
+def _arcs(path: Path) -> dict[tuple[str, str], list[tuple[float, float]]]:
+    doc = etree.parse(str(path))
+    return {(a.get("source"), a.get("target")):
+            [(float(p.get("x")), float(p.get("y"))) for p in a.iterfind(f"{NS}graphics/{NS}position")]
+            for a in doc.iter(f"{NS}arc")}
+
+
+def _nodes(path: Path) -> dict[str, tuple[float, float]]:
+    doc = etree.parse(str(path))
+    return {n.get("id"): (float(p.get("x")), float(p.get("y")))
+            for tag in ("place", "transition") for n in doc.iter(f"{NS}{tag}")
+            for p in n.iterfind(f"{NS}graphics/{NS}position")}
+
+
+def _bezier(points, t: float) -> tuple[float, float]:
+    """The point at ``t`` of a cubic Bézier piece (dot's splines are made of them)."""
+    (x0, y0), (x1, y1), (x2, y2), (x3, y3) = points
+    u = 1 - t
+    return (u ** 3 * x0 + 3 * u * u * t * x1 + 3 * u * t * t * x2 + t ** 3 * x3,
+            u ** 3 * y0 + 3 * u * u * t * y1 + 3 * u * t * t * y2 + t ** 3 * y3)
+
+
+def test_a_templates_bend_points_lie_on_the_arcs_of_its_drawing(tmp_path):
+    net = pipeline.template_net("task")
+    path = pipeline.save_net(net, tmp_path / "task.pnml")
+    verdict, _ = pipeline.validate_pnml(path)       # our schema and the official grammar
+    assert verdict.valid, verdict
+    assert pipeline.load_net(path) == net          # the reader takes bend points in its stride
+    bends = _arcs(path)
+    assert sum(1 for pts in bends.values() if pts) >= 40
+    graph = layout_json(to_dot(net, legend=False, expand=None).source)
+    x0, _, _, y1 = map(float, graph["bb"].split(","))
+    names = {o["_gvid"]: o["name"] for o in graph["objects"] if "pos" in o}
+    for e in graph["edges"]:
+        ends = (names[e["tail"]], names[e["head"]])
+        if ends not in bends or not bends[ends]:
+            continue
+        pts = next(op["points"] for op in e["_draw_"] if op["op"] == "b")
+        # the curve as dot draws it, in short straight pieces
+        line = [_bezier(pts[k:k + 4], t / 16) for k in range(0, len(pts) - 3, 3)
+                for t in range(17)]
+        for x, y in bends[ends]:
+            gx, gy = x - 40 + x0, y1 - (y - 40)   # back to graphviz's frame (layout.MARGIN)
+            assert min(math.dist((gx, gy), v) for v in line) < 1.0, (ends, (x, y))
+    # every node where the drawing puts it
+    for o in graph["objects"]:
+        if "pos" in o and o["name"] in _nodes(path):
+            gx, gy = map(float, o["pos"].split(","))
+            assert _nodes(path)[o["name"]] == pytest.approx((gx - x0 + 40, y1 - gy + 40),
+                                                             abs=0.11)
+
+
+@pytest.mark.parametrize("name", ["sauce.mcl", "multi_leg.mcl"])
+def test_a_missions_positions_group_each_call_in_its_box(tmp_path, name):
+    net = mission(name)
+    path = pipeline.save_net(net, tmp_path / "m.pnml")
+    verdict, read = pipeline.validate_pnml(path)
+    assert verdict.valid and read.arcs == net.arcs, verdict
+    pos = _nodes(path)
+    assert len(pos) == len(net.places) + len(net.transitions)
+    xs, ys = [x for x, _ in pos.values()], [y for _, y in pos.values()]
+    width, height = max(xs) - min(xs), max(ys) - min(ys)
+    # not one tall column: the whole mission within a few screens, neither side 10 x the other
+    assert width * height < 8000 * 8000 and max(width, height) < 10 * min(width, height)
+    # the nodes of two calls never share ground: each call is a compact block of its own
+    from mcl2pnml.io.dot import border_out
+    boxes = border_out(net, instance_clusters(net))
+    extent = {b: (min(pos[n][0] for n in m), min(pos[n][1] for n in m),
+                  max(pos[n][0] for n in m), max(pos[n][1] for n in m)) for b, m in boxes.items()}
+    names = sorted(extent)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            (ax0, ay0, ax1, ay1), (bx0, by0, bx1, by1) = extent[a], extent[b]
+            assert ax1 < bx0 or bx1 < ax0 or ay1 < by0 or by1 < ay0, (a, b)
+    assert sum(1 for pts in _arcs(path).values() if pts) > len(net.arcs) // 2
