@@ -6,9 +6,9 @@ through the Petri-net executor, twice: with the cross on the floor under
 the survey path, and without it. With the cross, the survey is aborted when
 the camera sees it, the vehicle dives, drops the marker and surfaces;
 without it, it surfaces at the end of the survey. Fig. 5 plots the vehicle's
-3-D trajectory against the desired one (the path through the set points the
+trajectory against the desired one (the path through the set points the
 mission gave: the waypoints, then the depths), as the paper's Fig. 5 does
-with the DVL's estimate.
+with the DVL's estimate: seen from above and as depth over time.
 """
 from __future__ import annotations
 
@@ -54,40 +54,74 @@ def trials() -> list[Trial]:
     return [trial(CROSS, "cross on the survey path"), trial(None, "no cross")]
 
 
+#: The survey's waypoints, ``WayPoint_1`` and ``WayPoint_2`` of examples/sauce.mcl (x, y).
+WAYPOINTS = ((10.0, 0.0), (10.0, 8.0))
+
+
 def plot(runs: list[Trial], path: Path) -> Path:
-    """Fig. 5: the 3-D trajectory of each run against the desired one (depth downwards)."""
+    """Fig. 5, one row per run: the top view (x-y, to scale: the tank, the waypoints,
+    the cross, the markers dropped) and the depth over time (depth downwards), the
+    vehicle against what it was asked (the set points of section 3).
+
+    Two flat views rather than one 3-D perspective, in which a 2 m depth read as
+    4.5 m: each axis here is read off its own scale.
+    """
     import matplotlib
     matplotlib.use("Agg")   # files only, no display
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
 
-    fig = plt.figure(figsize=(11, 5))
-    for k, r in enumerate(runs):
-        ax = fig.add_subplot(1, len(runs), k + 1, projection="3d")
-        xs, ys, zs = zip(*[(x, y, z) for _, x, y, z in r.trajectory])
-        ax.plot(xs, ys, zs, color="tab:blue", lw=1.5, label="vehicle (simulated)")
+    width, length, depth = World().tank
+    fig, axes = plt.subplots(len(runs), 2, figsize=(12, 4.2 * len(runs)), squeeze=False,
+                             gridspec_kw={"width_ratios": [1.25, 1]})
+    for (top, side), r in zip(axes, runs):
+        ts, xs, ys, zs = zip(*r.trajectory)
         # desired: from where the vehicle was when each set point was given, straight to it
-        times = [t for t, *_ in r.trajectory]
-        for k, (t0, x, y, z) in enumerate(r.setpoints[1:]):
-            _, px, py, pz = r.trajectory[min(bisect.bisect_left(times, t0), len(times) - 1)]
-            ax.plot([px, x], [py, y], [pz, z], color="tab:red", ls="--", lw=1, marker="o",
-                    ms=3, label="desired" if k == 0 else None)
+        legs = []
+        for t0, x, y, z in r.setpoints[1:]:
+            k = min(bisect.bisect_left(ts, t0), len(ts) - 1)
+            legs.append(((xs[k], ys[k]), (x, y), t0, z))
+        top.add_patch(Rectangle((0, 0), width, length, fill=False, lw=1.2, color="gray",
+                                label=f"tank {width:g} x {length:g} m"))
+        for k, ((px, py), (x, y), _, _) in enumerate(legs):
+            top.plot([px, x], [py, y], color="tab:red", ls="--", lw=1,
+                     label="desired" if k == 0 else None)
+        top.plot(xs, ys, color="tab:blue", lw=1.5, label="vehicle (simulated)")
+        top.plot([xs[0]], [ys[0]], "o", color="tab:blue", ms=5)
+        for k, (wx, wy) in enumerate(WAYPOINTS, 1):
+            top.plot([wx], [wy], "D", color="tab:red", ms=6, label="waypoints" if k == 1 else None)
+            top.annotate(f"WayPoint_{k}", (wx, wy), textcoords="offset points",
+                         xytext=(6, 6 if wy < length / 2 else -12), fontsize=8)
         if r.cross is not None:
-            ax.scatter([r.cross[0]], [r.cross[1]], [5.0], marker="x", s=80, color="black",
-                       label="cross (floor)")
-        for mx, my in r.markers:
-            ax.scatter([mx], [my], [5.0], marker="v", s=50, color="tab:green", label="marker")
-        ax.set_xlim(0, 16)
-        ax.set_ylim(0, 8)
-        ax.set_zlim(5, 0)           # depth grows downwards
-        ax.set_xlabel("x (m)")
-        ax.set_ylabel("y (m)")
-        ax.set_zlabel("depth (m)")
-        ax.set_title(f"{r.label}: {r.outcome.value} at t={r.time:.1f} s", fontsize=10)
-        ax.legend(fontsize=7, loc="upper left")
+            top.plot([r.cross[0]], [r.cross[1]], "x", ms=10, mew=2.5, color="black",
+                     label="cross (on the floor)")
+        for k, (mx, my) in enumerate(r.markers):
+            top.plot([mx], [my], "v", ms=8, color="tab:green",
+                     label="marker dropped" if k == 0 else None)
+        top.set_xlim(-0.5, width + 0.5)
+        top.set_ylim(-0.5, length + 0.5)
+        top.set_aspect("equal")
+        top.set_xlabel("x (m)")
+        top.set_ylabel("y (m)")
+        top.set_title(f"{r.label}: top view", fontsize=10)
+        top.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
+        # depth over time, the set depths as steps from the time each was given
+        side.plot(ts, zs, color="tab:blue", lw=1.5, label="vehicle (simulated)")
+        steps_t = [t0 for _, _, t0, _ in legs] + [ts[-1]]
+        steps_z = [z for *_, z in legs]
+        side.step(steps_t, steps_z + steps_z[-1:], where="post", color="tab:red", ls="--",
+                  lw=1, label="desired depth")
+        side.set_ylim(depth, 0)           # depth grows downwards
+        side.set_xlim(0, ts[-1])
+        side.set_xlabel("time (s)")
+        side.set_ylabel("depth (m)")
+        side.set_title(f"depth: {r.outcome.value} at t = {r.time:.1f} s", fontsize=10)
+        side.grid(alpha=0.3)
+        side.legend(fontsize=7, loc="lower right")
     fig.suptitle("Fig. 5. The SAUC-E mission (Algorithm 1) on the simulated AUV, "
-                 "16 x 8 x 5 m tank", fontsize=11)
+                 f"{width:g} x {length:g} x {depth:g} m tank", fontsize=11)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
 
