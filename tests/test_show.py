@@ -182,13 +182,27 @@ def test_the_paper_mission_followed_to_its_end(tmp_path, page_of):
     assert out.returncode == 0, out.stderr
     page = page_of(tmp_path / "sauce.html")
     SHOTS.mkdir(parents=True, exist_ok=True)
-    page.screenshot(path=str(SHOTS / "show_sauce.png"))
+    page.screenshot(path=str(SHOTS / "show_sauce.png"))     # fitted: the whole mission
+    for _ in range(12):                                      # the view follows the run
+        page.click("#run-next")
+    page.screenshot(path=str(SHOTS / "show_sauce_follow.png"))
     page.click("#run-end")
     assert "mission.OK" in marking(page)
     assert page.text_content("#run-message") == ""
     fired = sum('"fire"' in line for line in log.read_text().splitlines())
     assert page.locator("#history li").count() == fired
     page.screenshot(path=str(SHOTS / "show_sauce_run.png"))
+    # the monitor's part of the net; the cross was found, so the survey was aborted
+    page.click('#tree div.node[data-name="monitor-1"]')
+    states = page.locator("#tree div.node").evaluate_all(
+        "(d) => Object.fromEntries(d.map((e) => [e.dataset.name, e.dataset.state]))")
+    assert states["monitor-1"] == "OK" and states["Survey-1"] == "ABORTED"
+    assert states["NULL-1"] == "idle" and states["mission"] == "OK"
+    page.screenshot(path=str(SHOTS / "show_sauce_tree.png"))
+    page.select_option("#view-kind", "graph")                # the end: a dead marking
+    assert page.locator("#graph g.marking.current.dead").count() == 1
+    page.screenshot(path=str(SHOTS / "show_sauce_graph.png"))
+    page.select_option("#view-kind", "net")
     # the reduced mission: every task is Fig. 3's, and the run does not apply
     page.select_option("#variant", "1")
     assert "mission.B" in marking(page)

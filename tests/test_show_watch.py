@@ -115,6 +115,11 @@ def test_places_and_invariants_filtered(page_of, mission):
     assert marking(page) == ["KeepDepth.C", "KeepDepth.LOCK", "KeepDepth.OFF"]
     assert page.locator("#net g.place.match").count() == 8        # marked or not
     page.fill("#place-filter", "")
+    page.check("#away")                                # the tokens at rest left out
+    assert page.text_content("#marking") == ""
+    page.click('#enabled button[data-id="mission.t1"]')
+    assert "mission.B*0" in marking(page) and "KeepDepth.OFF" not in marking(page)
+    page.uncheck("#away")
     # folded to one line, so that the recorded run stays in sight
     status = page.text_content("#invariants-status")
     n = int(status.split()[0])
