@@ -235,3 +235,22 @@ def test_no_graph_of_a_large_or_unbounded_net():
     b.transition("t")
     b.arc("t", "p")
     assert "unbounded" in reachability_graph(b.build()).reason
+
+
+def test_the_graph_is_the_general_explorers(mission):
+    """Whichever explorer made it, the graph has the general explorer's markings, firings
+    and dead markings (compared as markings: the explorers number them differently)."""
+    net = pipeline.compile_file(mission["source"])
+    graph = reachability_graph(net)
+    general = explore(net, backend="general")
+
+    def sparse(k):
+        return tuple((p, int(n)) for p, n in enumerate(general.markings[k]) if n)
+
+    assert graph.markings[0] == sparse(0)                        # M0 first
+    assert set(graph.markings) == {sparse(k) for k in range(general.states)}
+    assert {(graph.markings[a], t, graph.markings[b]) for a, b, t in graph.edges} == \
+        {(sparse(a), t, sparse(b)) for a, t, b in zip(general.src, general.trans, general.dst)}
+    assert {graph.markings[k] for k in graph.dead} == {sparse(k) for k in general.terminal}
+    assert graph.layers[0] == 0 and all(
+        graph.layers[b] <= graph.layers[a] + 1 for a, b, _ in graph.edges)

@@ -2,9 +2,9 @@
 
 A node is a reachable marking, an edge a firing (section 2.3 of the paper
 reads a net's behaviour off this graph: its dead markings, whether the
-proper end is always reached). The graph is computed here with our general
-explorer (:mod:`analysis.generalspace`, which keeps every edge), not in the
-page, so that the page shows the markings the analysis counts; above
+proper end is always reached). The graph is computed here, by the explorer
+``analyze`` chooses (:func:`analysis.statespace.explore`), not in the page,
+so that the page shows the markings the analysis counts; above
 :data:`GRAPH_LIMIT` markings a drawing would be a heap nobody can read, and
 the page says so instead.
 
@@ -54,15 +54,16 @@ def reachability_graph(net: Net, limit: int = GRAPH_LIMIT) -> Graph:
     from analysis.statespace import ExplorationLimit, explore
 
     try:
-        # the general explorer keeps its edges; the others recompute them
-        space = explore(net, backend="general", max_states=limit)
+        # the explorer analyze chooses (for a safe net, the native one: milliseconds where
+        # the general one takes seconds), so the graph has the markings analyze counts
+        space = explore(net, max_states=limit)
     except ExplorationLimit:
         return Graph(reason=f"more than {limit:,} reachable markings: the page draws the "
                             f"graph of smaller nets only (analyze counts them)")
     if space.coverability:
         return Graph(reason="the net is unbounded: its markings are infinitely many "
                             "(analyze gives its coverability graph)")
-    edges = tuple(zip(space.src, space.dst, space.trans))
+    edges = tuple((int(a), int(b), int(t)) for a, b, t in zip(space.src, space.dst, space.trans))
     after: list[list[int]] = [[] for _ in range(space.states)]
     for a, b, _ in edges:
         after[a].append(b)
@@ -77,4 +78,4 @@ def reachability_graph(net: Net, limit: int = GRAPH_LIMIT) -> Graph:
                     nxt.append(b)
         frontier = nxt
     markings = tuple(tuple((p, int(n)) for p, n in enumerate(m) if n) for m in space.markings)
-    return Graph(markings, edges, tuple(layers), tuple(space.terminal))
+    return Graph(markings, edges, tuple(layers), tuple(int(k) for k in space.terminal))

@@ -12,12 +12,30 @@ the vehicle's actions and events beside the firings; and a mission or a
 task can be switched to its reduced model (Fig. 3 of the paper: every task
 started by B, ending in OK, FAIL or ABORTED, without its primitive).
 
+Watching a whole mission. The page opens on the whole net (*Fit* comes
+back to it) and, while a run is replayed, *follows* each firing: the view
+moves to the transition and the places it took from and gave to. The
+places the last firing changed are ringed and listed + or −; the marking
+and the P-invariants can be filtered, and the invariants are one summary
+line until opened. Beside the net, a mission's functional form (the
+paper's Algorithm 2, section 3.2) is a tree (:func:`tree_data`) whose
+nodes the page colours by state, computed from the marking and the firings
+alone (:func:`tree_parts`: every structure and call site has the reduced
+task's control interface, section 2.3 and Fig. 3), so it holds in the full
+and the reduced model alike. A clock plays virtual time as TINA's stepper
+does: a time-out (``Timing``, the task's ``t03``) may fire only once it
+has been enabled for its delay; a replayed run sets the clock from its log.
+And the reachability graph of a net of up to 2,000 markings
+(:mod:`mcl2pnml.view.reachability`) is drawn, a marking clicked to play
+from it.
+
 Everything the page needs is inside it: the data as JSON, the script and
 the style; it fetches nothing, so it opens from a file, offline, in any
 browser. The page itself is ``show_page.html`` beside this module.
 
 Security. Everything that comes from the input (file names, node ids and
-names, doc lines, run logs) is data, never markup or code, whoever wrote
+names, doc lines, run logs, a mission's arguments in its tree, the places a
+marking of the graph names) is data, never markup or code, whoever wrote
 it; the page trusts only its own template, script and style:
 
 * the template is filled in one pass (:func:`fill`): a regular expression
