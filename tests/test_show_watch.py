@@ -13,7 +13,7 @@ import re
 
 import pytest
 
-from helpers import run_cli as run
+from helpers import ROOT, run_cli as run
 from test_show import SHOTS, browser, marking, page_of, two_tasks_run  # noqa: F401 (fixtures)
 
 from analysis.statespace import explore
@@ -254,3 +254,18 @@ def test_the_graph_is_the_general_explorers(mission):
     assert {graph.markings[k] for k in graph.dead} == {sparse(k) for k in general.terminal}
     assert graph.layers[0] == 0 and all(
         graph.layers[b] <= graph.layers[a] + 1 for a, b, _ in graph.edges)
+
+
+@pytest.mark.parametrize("example", ["sauce", "multi_leg", "dam_inspection"])
+def test_every_tree_node_is_an_instance_of_both_models(example):
+    """The tree's names are the compiler's (one rule, language.functional.instances): each
+    node has its instance's places in the mission and in its reduced model, with the
+    control interface the page reads its state from (B, OK, FAIL, ABORTED)."""
+    from mcl2pnml.view.show import tree_data, tree_parts
+    shown = pipeline.show_nets(str(ROOT / "examples" / f"{example}.mcl"))
+    tree = tree_data(shown.trees)
+    assert tree[0]["name"] == "mission" and len(tree) > 3
+    for net, _ in shown.nets:
+        for node, part in zip(tree, tree_parts(net, tree)):
+            assert part["places"] and all(part[r] is not None
+                                          for r in ("B", "OK", "FAIL", "ABORTED")), node
