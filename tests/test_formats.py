@@ -222,7 +222,9 @@ def test_dot_shows_the_net_and_its_instances(name, net):
     boxes = instance_clusters(net)
     source = to_dot(net, clusters=boxes).source
     seen, clusters = net_from_dot(source)
-    marked_by = {b: a for a, b, _ in read_dot(source)["edges"]}
+    # the transition a copy of a place is drawn beside: the one it marks or is read by
+    beside = {**{b: a for a, b, _ in read_dot(source)["edges"]},
+              **{a: b for a, b, _ in read_dot(source)["edges"] if "~" in a}}
     want = plain(net, read_as="test")
     assert seen["places"] == want["places"]
     assert set(seen["transitions"]) == want["transitions"]
@@ -238,8 +240,8 @@ def test_dot_shows_the_net_and_its_instances(name, net):
     for box, members in clusters.items():
         for m in members:
             if "~" in m and m.rpartition("~")[0] in net.place_index:
-                # a copy of a place is drawn beside the transition that marks it
-                assert box_of[marked_by[m]] == box, m
+                # a copy of a place is drawn beside the transition that marks or reads it
+                assert box_of[beside[m]] == box, m
             else:
                 assert m.startswith(box + "."), (box, m)
     assert not boxes or clusters, "a net drawn in boxes has nodes inside them"

@@ -2,21 +2,35 @@
 
 Conventions of the drawings (a legend is part of every figure):
 
+* tokens flow top down, from the places nothing writes (B, A: where the
+  structure above starts and aborts) to the results (OK, FAIL, ABORTED),
+  which are drawn once each at the bottom;
 * places are circles with their name and their tokens (``●``); interface
   (fusion) places have a double border;
-* transitions are bars with their name; a timed transition (a time-out) is
-  drawn filled, with its delay;
-* arcs run left to right, the way tokens flow; a read arc (the transition
-  tests the place and leaves its token) is dashed and has no arrow head;
+* transitions are boxes with their name inside: dot keeps a node clear of
+  every arc and every other node, where an external label (``xlabel``) is
+  placed after the arcs and lands on them; a time-out is dark, with its
+  delay (``◷ 300 s``; the task pattern's ``t03``, section 2.3);
+* a read arc (the transition tests the place and leaves its token) is
+  dashed and has no arrow head; a token going back (a primitive switched
+  off) is grey and does not rank the nodes;
 * ``clusters`` group the nodes of one component (the primitive in the task,
-  each subordinate structure in a control structure, each task, structure
-  and call site of a mission), named inside their box without the box's
-  name; the places where boxes meet (fusion places) are drawn outside
-  every box, between the boxes they join;
-* every node has a ``class`` (``place``, ``transition``, ``copy``,
+  Fig. 2; T1 and T2 in a structure, Fig. 4; each task, structure and call
+  site of a mission), named inside their box without the box's name; the
+  places where boxes meet (fusion places) are drawn outside every box,
+  between the boxes they join;
+* a mission is drawn as its calls: each box shut, one node, its border
+  places (B, A, OK, FAIL, ABORTED...) between it and the box that calls it,
+  ranked by the call hierarchy rather than the flow, so that the overview
+  is as deep as the hierarchy; ``expand`` opens the boxes it names;
+* every node has a ``class`` (``place``, ``transition``, ``copy``, ``box``,
   ``legend``), which SVG keeps, so that a page or a script can find them;
 * a place that many transitions give tokens back to (a mutex) is drawn again,
   dashed and small, beside each of them, like PNML's reference places.
+
+``tests/test_drawings.py`` holds every template, Figs. 1-4 and every example
+to dot's own layout: no label on an arc, a node or another label, no node on
+a box's border, no arc through a node.
 """
 from __future__ import annotations
 
@@ -28,7 +42,7 @@ import graphviz
 
 from mcl2pnml.core.errors import OptionError, did_you_mean
 from mcl2pnml.core.files import atomic_write_bytes, atomic_write_text
-from mcl2pnml.core.net import ArcKind, Net
+from mcl2pnml.core.net import Arc, ArcKind, Net, Transition
 from mcl2pnml.core.payloads import read_transition
 
 TOKEN = "\u25cf"
@@ -42,6 +56,9 @@ TOKEN = "\u25cf"
 #: side by side, the page as wide as the net is parallel rather than as long as it is deep.
 RANKDIR = "TB"
 DOT_SPEED = {"nslimit": "2", "nslimit1": "2", "mclimit": "0.5", "newrank": "true"}
+#: Nets up to this many nodes (every template, a small mission, an overview) are laid out
+#: with dot's full effort: a second at most, and the arcs straighter.
+FAST_ABOVE = 300
 #: A place that this many arcs return tokens to is drawn again beside each of them.
 COPY_RETURNS = 3
 
@@ -50,7 +67,7 @@ COPY_RETURNS = 3
 CLOCK = "\u25f7"
 
 
-def timeout_text(t) -> str | None:
+def timeout_text(t: Transition) -> str | None:
     """What a time-out transition says of its delay (``◷ 300 s``), None for the others.
 
     A compiled task's ``t03`` carries its delay (section 2.3); the pattern's
@@ -64,7 +81,7 @@ def timeout_text(t) -> str | None:
     return None
 
 
-def transition_label(t, box_name: str | None = None) -> str:
+def transition_label(t: Transition, box_name: str | None = None) -> str:
     """A transition's text, drawn inside its box: its name, and its delay if it is timed.
 
     Inside, not beside (an ``xlabel``): dot places an external label after
@@ -76,7 +93,7 @@ def transition_label(t, box_name: str | None = None) -> str:
     return name if delay is None else f"{name}\n{delay}"
 
 
-def transition_style(t) -> dict[str, str]:
+def transition_style(t: Transition) -> dict[str, str]:
     """A transition's box: light, or dark with white text for a time-out."""
     style = {"shape": "box", "style": "filled", "fillcolor": "gray94", "height": "0.3",
              "width": "0.3", "margin": "0.06,0.03", "fontsize": "9"}
@@ -140,7 +157,8 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         "rankdir": RANKDIR, "nodesep": "0.3" if expand is None else "0.15", "ranksep": "0.45",
         "fontname": "Helvetica",
         "fontsize": "12", "label": title or "", "labelloc": "t",
-        **(DOT_SPEED if expand is None else {"newrank": "true"})},
+        **(DOT_SPEED if expand is None and len(net.places) + len(net.transitions) > FAST_ABOVE
+           else {"newrank": "true"})},
         node_attr={"fontname": "Helvetica", "fontsize": "10"},
         edge_attr={"arrowsize": "0.6"})
     clusters = border_out(net, clusters or {})
@@ -222,6 +240,23 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     for a in back:
         if a.target in net.place_index:
             returns[a.target] = returns.get(a.target, 0) + 1
+    reads: dict[str, int] = {}
+    for a in net.arcs:
+        if a.kind is ArcKind.READ:
+            reads[a.source] = reads.get(a.source, 0) + 1
+
+    def add_copy(number: int, place, box_name: str | None) -> str:
+        """A copy of ``place``, dashed and small, in the box ``box_name`` (the box of the
+        transition it is drawn beside), if any: its DOT name."""
+        name = f"{node_name(place.id)}~{number}"
+        where = g.subgraph(name=f"cluster_{box_name}") if box_name else contextlib.nullcontext(g)
+        shown = _inside(place.label, box_name)
+        with where as c:
+            c.node(name, _text(shown), shape="circle", fixedsize="true", style="dashed",
+                   width=f"{max(0.4, 0.065 * len(shown) + 0.12):.2f}", fontsize="7",
+                   **{"class": "copy"})
+        return name
+
     copies = 0
     joined: set = set()        # the arcs to and from a shut box, drawn once each
     levels = box_levels(net, clusters) if shut else ({}, {})
@@ -234,10 +269,17 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
                 joined.add(ends)
                 _call_edge(g, a, ends, box, levels)
             continue
-        target = node_name(a.target)
+        source, target = node_name(a.source), node_name(a.target)
         if a.weight != 1:
             attrs["label"] = str(a.weight)
-        if a.kind is ArcKind.READ:
+        if a.kind is ArcKind.READ and reads.get(a.source, 0) >= COPY_RETURNS:
+            # a place many transitions test (a primitive's ON and OFF): each test
+            # reads a copy of the place drawn beside its transition, instead of
+            # dashed arcs across the whole drawing
+            copies += 1
+            source = add_copy(copies, net.place_index[a.source], box.get(a.target))
+            attrs.update(style="dashed", arrowhead="none")
+        elif a.kind is ArcKind.READ:
             # a test is not a flow of tokens: it must not bend the layout
             attrs.update(style="dashed", arrowhead="none", constraint="false")
         elif a in back and returns.get(a.target, 0) >= COPY_RETURNS:
@@ -246,20 +288,12 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             # transition, as PNML's reference places do, instead of crossing
             # the whole drawing
             copies += 1
-            target = f"{target}~{copies}"
-            place = net.place_index[a.target]
-            name = box.get(a.source)   # in its transition's box, if it has one
-            where = g.subgraph(name=f"cluster_{name}") if name else contextlib.nullcontext(g)
-            shown = _inside(place.label, name)
-            with where as c:
-                c.node(target, _text(shown), shape="circle", fixedsize="true", style="dashed",
-                       width=f"{max(0.4, 0.065 * len(shown) + 0.12):.2f}", fontsize="7",
-                       **{"class": "copy"})
+            target = add_copy(copies, net.place_index[a.target], box.get(a.source))
         elif a in back:
             # a token going back (a primitive switched off): drawn, but the
-            # left-to-right order follows the forward flow
+            # top-down order follows the forward flow
             attrs.update(constraint="false", color="gray40")
-        g.edge(node_name(a.source), target, **attrs)
+        g.edge(source, target, **attrs)
     if legend:
         with g.subgraph(name="cluster_legend") as k:
             k.attr(label="legend", fontsize="9", style="rounded", color="gray70")
@@ -282,7 +316,7 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     return g
 
 
-def _call_edge(g: graphviz.Digraph, a, ends: tuple[str, str, ArcKind], box: Mapping[str, str],
+def _call_edge(g: graphviz.Digraph, a: Arc, ends: tuple[str, str, ArcKind], box: Mapping[str, str],
                levels: tuple[Mapping[str, int], Mapping[str, int]]) -> None:
     """An arc of a shut box, drawn between the box and a place on its border, ranked by
     the call hierarchy rather than by the flow of tokens.

@@ -1,9 +1,14 @@
 """Positions for drawing a net, so that PNML opens as a picture, not a heap.
 
 PIPE, TAPAAL, WoPeD and TINA's nd draw a net where its ``<graphics>`` say.
-Small nets (the paper's templates, most missions) are laid out by graphviz
-``dot``: left to right, in the direction tokens flow. Large nets, where
-``dot`` would take minutes, are laid out in columns by their breadth-first
+Small nets are laid out by graphviz ``dot`` as :mod:`mcl2pnml.io.dot` draws
+them, top down in the direction tokens flow, and each arc gets the points
+of dot's curve as its bend points (PNML's arc ``<graphics>``), so that an
+editor draws the arcs around the nodes as the SVG does. A compiled mission
+is laid out in two levels, as its overview: each call's nodes compactly in
+its box, the boxes and the places between them by the call hierarchy (a
+few screens, not one column 25,000 points long). Large nets, where ``dot``
+would take minutes, are laid out in columns by their breadth-first
 distance from the initially marked places, which is linear in the size of
 the net and still shows the flow from start to end. Above
 :data:`LAYERS_LIMIT` nodes no editor draws a net usefully, so ``auto`` gives
