@@ -269,3 +269,19 @@ def test_every_tree_node_is_an_instance_of_both_models(example):
         for node, part in zip(tree, tree_parts(net, tree)):
             assert part["places"] and all(part[r] is not None
                                           for r in ("B", "OK", "FAIL", "ABORTED")), node
+
+
+def test_a_block_is_a_column_in_the_tree(tmp_path, page_of):
+    """Algorithm 2 nests a block's sequences to the right: drawn as a column, not a
+    staircase (the nested sequences keep their place and their state)."""
+    calls = "".join(f"    Goto(({k}.0, 0.0, 0.0));\n" for k in range(1, 7))
+    mission = tmp_path / "block.mcl"
+    mission.write_text("primitive GoToWayPoint(wp);\ntask Goto(wp) = AchieveGoal(GoToWayPoint(wp));"
+                       f"\nmission {{\n{calls}}}\n")
+    out = run("show", mission, "-o", tmp_path / "block.html")
+    assert out.returncode == 0, out.stderr
+    page = page_of(tmp_path / "block.html")
+    left = page.locator("#tree div.node").evaluate_all(
+        "(d) => d.map((e) => [e.firstChild.textContent, e.getBoundingClientRect().left])")
+    assert [label for label, _ in left].count("sequence") == 4      # and the root
+    assert len({x for _, x in left[1:]}) == 1                    # one column under the root
