@@ -153,12 +153,13 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     (:mod:`mcl2pnml.view.layout` places the nodes of a mission so).
     """
     marking = net.initial if marking is None else marking
+    # dot's speed limits only where a flat drawing is large: an overview has a node
+    # per call, a template a few dozen; the overview's small places sit closer
+    large = expand is None and len(net.places) + len(net.transitions) > FAST_ABOVE
     g = graphviz.Digraph(net.name, graph_attr={
         "rankdir": RANKDIR, "nodesep": "0.3" if expand is None else "0.15", "ranksep": "0.45",
-        "fontname": "Helvetica",
-        "fontsize": "12", "label": title or "", "labelloc": "t",
-        **(DOT_SPEED if expand is None and len(net.places) + len(net.transitions) > FAST_ABOVE
-           else {"newrank": "true"})},
+        "fontname": "Helvetica", "fontsize": "12", "label": title or "", "labelloc": "t",
+        **(DOT_SPEED if large else {"newrank": "true"})},
         node_attr={"fontname": "Helvetica", "fontsize": "10"},
         edge_attr={"arrowsize": "0.6"})
     clusters = border_out(net, clusters or {})
@@ -343,43 +344,56 @@ def _call_edge(g: graphviz.Digraph, a: Arc, ends: tuple[str, str, ArcKind], box:
         g.edge(tail, head, dir="back")
 
 
+#: The interface places through which a box calls another: a structure or call site
+#: starts its callee through the callee's B, a task its primitive through E.
+CALLS = ("B", "E")
+
+
 def box_levels(net: Net, clusters: Mapping[str, Sequence[str]]
                ) -> tuple[dict[str, int], dict[str, int]]:
     """How deep each box is in the call hierarchy, and each place between boxes: the
     shallowest box it touches.
 
-    Breadth-first over the boxes, two boxes adjacent when a place joins
-    them, from the box of the mission's ``B`` (the marked place nothing
-    writes), else from the first box; a box it cannot reach starts again.
+    A box calls another when its transitions mark the other's begin place B
+    (or a task its primitive's E). A box's depth is the longest chain of calls
+    above it, so that a shared net (a task, a function, a primitive, entered
+    from every call site) sits below all its call sites, not beside the first
+    one found; a box no call reaches is at the top, and a box on a circle of
+    calls (not from MCL, which has no recursion) below all the others.
     """
     box = {n: name for name, members in clusters.items() for n in members}
     touches: dict[str, set[str]] = {}
+    writers: dict[str, set[str]] = {}
+    readers: dict[str, set[str]] = {}
     for a in net.arcs:
         place, transition = ((a.source, a.target) if a.source in net.place_index
                              else (a.target, a.source))
         if place not in box and transition in box:
             touches.setdefault(place, set()).add(box[transition])
-    near: dict[str, set[str]] = {name: set() for name in clusters}
-    for boxes in touches.values():
-        for b in boxes:
-            near[b] |= boxes - {b}
-    written = {a.target for a in net.arcs}
-    # the mission's begin place B first (the paper's entry to every net), then
-    # the other marked places nothing writes (a NULL's MTX, say)
-    entries = sorted((p for p in net.initial if p not in written),
-                     key=lambda p: (net.place_index[p].label.rpartition(".")[2] != "B", p))
-    starts = [b for p in entries for b in ([box[p]] if p in box else sorted(touches.get(p, ())))]
-    level: dict[str, int] = {}
-    for root in [*starts, *clusters]:
-        if root in level:
-            continue
-        level[root] = depth = max(level.values(), default=-1) + 1
-        frontier = [root]
-        while frontier:
-            depth += 1
-            frontier = [m for b in frontier for m in sorted(near[b]) if m not in level]
-            for m in frontier:
-                level.setdefault(m, depth)
+        if a.kind is ArcKind.NORMAL and transition in box:
+            (writers if a.target == place else readers).setdefault(place, set()).add(
+                box[transition])
+    calls: dict[str, set[str]] = {name: set() for name in clusters}
+    for p in net.places:
+        if p.interface in CALLS:
+            for caller in writers.get(p.id, ()):
+                calls[caller] |= readers.get(p.id, set()) - {caller}
+    # longest chains by Kahn's algorithm: a box's level once all its callers have theirs
+    above = {name: 0 for name in clusters}
+    for callees in calls.values():
+        for c in callees:
+            above[c] += 1
+    level = {name: 0 for name, n in above.items() if n == 0}
+    ready = list(level)
+    while ready:
+        b = ready.pop()
+        for c in calls[b]:
+            level[c] = max(level.get(c, 0), level[b] + 1)
+            above[c] -= 1
+            if above[c] == 0:
+                ready.append(c)
+    bottom = max(level.values(), default=-1) + 1
+    level.update((name, bottom) for name in clusters if above[name] > 0)
     place_level = {p: min(level[b] for b in boxes) for p, boxes in touches.items()}
     return level, place_level
 

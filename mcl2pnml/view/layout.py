@@ -36,6 +36,8 @@ ENGINES = ("auto", "dot", "layers", "none")
 #: Distance between neighbouring columns and rows of the layered layout.
 SPACING = 80.0
 MARGIN = 40.0
+#: An overview this many times taller than wide is laid out left to right instead.
+TALL = 2.0
 
 
 def dot_available() -> bool:
@@ -153,10 +155,19 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
     extent = {o["name"][len("cluster_"):]: [float(v) for v in o["bb"].split(",")]
               for o in inner.get("objects", []) if o.get("name", "").startswith("cluster_")}
     sizes = {name: (x1 - x0, y1 - y0) for name, (x0, y0, x1, y1) in extent.items()}
-    outer = _run_dot(to_dot(net, clusters=boxes, legend=False, expand=(),
-                            box_sizes=sizes).source)
+    overview = to_dot(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes)
+    outer = _run_dot(overview.source)
     if outer is None:
         return None
+    _, _, w, h = (float(v) for v in outer["bb"].split(","))
+    if h > TALL * w:
+        # boxes as tall as their insides, one level of calls under another: a column
+        # no screen shows; the levels side by side instead, if that is less tall
+        overview.graph_attr["rankdir"] = "LR"
+        wide = _run_dot(overview.source)
+        if wide is not None:
+            _, _, w2, h2 = (float(v) for v in wide["bb"].split(","))
+            outer = wide if max(w2, h2) < max(w, h) else outer
     frame = _Frame(outer)
     centres = {o["name"]: [float(v) for v in o["pos"].split(",")]
                for o in outer.get("objects", []) if "pos" in o}
