@@ -88,6 +88,12 @@ def test_an_example_is_drawn_as_its_calls_on_one_page(name):
     assert len(shut) >= 10
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("name", EXAMPLES)
+def test_an_example_with_every_call_open_is_drawn_without_overlaps(name):
+    assert problems(layout_json(drawing(mission(name), name, expand=None).source)) == []
+
+
 def test_a_call_opened_on_demand(tmp_path):
     net = mission("sauce.mcl")
     graph = layout_json(drawing(net, expand=["Survey", "monitor-1"]).source)
