@@ -11,7 +11,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import NetBuilder, freeze
 from mcl2pnml.core.payloads import (ActionKind, ActionSpec, CallEntry, EventBinding, EventKind,
                                     MissionPlace, Param, PayloadError, TimeOut,
-                                    TransitionPayload, Value)
+                                    TransitionPayload, TupleOf, Value)
 from mcl2pnml.language.template_parser import parse_template
 from mcl2pnml.runtime import aal
 
@@ -52,6 +52,37 @@ def test_records_map_to_the_json_the_executor_has_always_read():
 def test_arguments_evaluate_as_the_vehicle_receives_them():
     assert Value((1.0, 2.0)).evaluate({}) == (1.0, 2.0)
     assert Param("wp").evaluate({"wp": [3, 4]}) == (3, 4)
+
+
+def test_a_tuple_naming_a_parameter_is_made_at_the_call_and_written_as_such():
+    arg = TupleOf((Param("a"), Value(0.0), TupleOf((Param("b"), Value("x")))))
+    assert arg.evaluate({"a": 1.5, "b": [2, 3]}) == (1.5, 0.0, ((2, 3), "x"))
+    record = TransitionPayload(entry=CallEntry("Leg", "Row", (("wp", arg),)))
+    assert payloads.read(record.to_json()) == record
+    deep: dict = {"param": "a"}
+    for _ in range(payloads.MAX_ARG_NESTING + 1):
+        deep = {"tuple": [deep]}
+    with pytest.raises(PayloadError, match="nest at most"):
+        payloads.read({"call": "Leg", "scope": "Row", "bind": {"wp": deep}})
+
+
+PARAMETER_IN_A_TUPLE = """\
+primitive GoToWayPoint(wp);
+task Go(wp) = AchieveGoal(GoToWayPoint(wp)) timeout 10;
+function Leg(wp) { Go(wp); }
+function Row(a, d) { Leg((a, 0.0, d)); Go((a, 1.0, d)); }
+mission { Row(1.0, 2.0); Row(3.0, 4.0); }
+"""
+
+
+def test_a_function_parameter_inside_a_tuple_argument_reaches_the_vehicle_on_both_engines():
+    from helpers import both
+    from mcl2pnml.pipeline import check_source
+    petri, reference = both(check_source(PARAMETER_IN_A_TUPLE, "row.mcl"),
+                            {"GoToWayPoint": ["ok@1"] * 4})
+    assert petri == reference and petri["outcome"] == "OK"
+    sent = [e["args"][0] for e in petri["trace"] if e.get("action") == "enable"]
+    assert sent == [[1.0, 0.0, 2.0], [1.0, 1.0, 2.0], [3.0, 0.0, 4.0], [3.0, 1.0, 4.0]]
 
 
 def test_unknown_keys_are_kept_and_bad_known_ones_refused():

@@ -146,7 +146,21 @@ class Value:
         return _argument(thaw(self.value))
 
 
-Arg = Param | Value
+@dataclass(frozen=True)
+class TupleOf:
+    """A tuple made when the call is made, because some of its items name
+    parameters: ``Leg((a, 0.0, 2.0))`` inside ``function Row(a)``. A tuple
+    of constants alone is a :class:`Value`."""
+
+    items: tuple["Arg", ...]
+
+    def evaluate(self, scope: Mapping[str, Any]) -> Any:
+        return tuple(item.evaluate(scope) for item in self.items)
+
+
+Arg = Param | Value | TupleOf
+#: How deep tuples of arguments may nest in a payload (MCL's parser allows less).
+MAX_ARG_NESTING = 64
 
 
 def _argument(value: Any) -> Any:
@@ -242,6 +256,8 @@ class TransitionPayload:
 
 
 def _arg_json(arg: Arg) -> dict[str, Any]:
+    if isinstance(arg, TupleOf):
+        return {"tuple": [_arg_json(item) for item in arg.items]}
     return {"param": arg.name} if isinstance(arg, Param) else {"value": arg.value}
 
 
@@ -341,13 +357,17 @@ def _items(value: Any, key: str) -> tuple:
     raise PayloadError(f"'{key}' is a list, not {thaw(value)!r}")
 
 
-def _arg(expr: Any) -> Arg:
+def _arg(expr: Any, depth: int = 0) -> Arg:
     if isinstance(expr, Mapping) and "param" in expr:
         return Param(_str(expr, "param"))
     if isinstance(expr, Mapping) and "value" in expr:
         return Value(freeze(expr["value"]))
-    raise PayloadError(f"an argument is {{\"param\": name}} or {{\"value\": v}}, "
-                       f"not {thaw(expr)!r}")
+    if isinstance(expr, Mapping) and "tuple" in expr:
+        if depth >= MAX_ARG_NESTING:
+            raise PayloadError(f"tuples of arguments nest at most {MAX_ARG_NESTING} deep")
+        return TupleOf(tuple(_arg(x, depth + 1) for x in _items(expr["tuple"], "tuple")))
+    raise PayloadError(f"an argument is {{\"param\": name}}, {{\"value\": v}} or "
+                       f"{{\"tuple\": [argument, ...]}}, not {thaw(expr)!r}")
 
 
 def _action(a: Any) -> ActionSpec:

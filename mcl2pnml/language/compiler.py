@@ -50,7 +50,8 @@ from mcl2pnml.language import ast
 from mcl2pnml.core import payloads
 from mcl2pnml.core.compose import compose
 from mcl2pnml.core.payloads import (ENTER, MISSION, ActionKind, ActionSpec, Arg, CallEntry,
-                                    MissionPlace, Param, TimeOut, TransitionPayload, Value)
+                                    MissionPlace, Param, TimeOut, TransitionPayload, TupleOf,
+                                    Value)
 from mcl2pnml.language.functional import (FCall, FNode, NULL_KIND, function_expression,
                                           instances, mission_expression)
 from mcl2pnml.core.gcpause import without_gc
@@ -67,10 +68,19 @@ STRUCTURE_TEMPLATE = {"sequence": "sequence", "parallel": "parallel", "if-then-e
 
 
 def _expr(value: ast.Value, params: tuple[str, ...], consts: dict[str, Any]) -> Arg:
-    """An argument: a value for what is known now (consts resolved), else the parameter."""
+    """An argument: a value for what is known now (consts resolved), else the
+    parameter, or a tuple made at the call of what names parameters."""
     if isinstance(value, ast.Ref) and value.name in params:
         return Param(value.name)
+    if isinstance(value, ast.Tuple) and _names_a_param(value, params):
+        return TupleOf(tuple(_expr(item, params, consts) for item in value.items))
     return Value(_value(value, consts))
+
+
+def _names_a_param(value: ast.Value, params: tuple[str, ...]) -> bool:
+    if isinstance(value, ast.Tuple):
+        return any(_names_a_param(item, params) for item in value.items)
+    return isinstance(value, ast.Ref) and value.name in params
 
 
 def _value(value: ast.Value, consts: dict[str, Any]) -> Any:
