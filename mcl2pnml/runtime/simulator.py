@@ -8,17 +8,15 @@ virtual time. Optional noise (a seeded random walk on the position, as
 currents and navigation drift do) makes runs differ; with the same seed
 they are identical.
 
-It offers the primitives of the paper's experiment (section 3, Fig. 5):
-
-* ``GoToWayPoint((x, y, z))``: steer there; achieved inside the acceptance
-  sphere; failed at once if the point is outside the tank;
-* ``KeepDepth(z)``: hold the depth; achieved inside the depth band, failed
-  (lost) when it drifts out of twice the band, achieved again back inside;
-* ``KeepHeading(degrees)``: hold the heading, with a heading band likewise;
-* ``DetectCross()``: the down-looking camera; achieved when the cross on
-  the tank floor is inside the camera's footprint;
-* ``ReleaseMarker()``: drops a marker; achieved when it is away
-  (:attr:`World.release_time` later), where it lands is recorded.
+What it can do is in :mod:`mcl2pnml.runtime.simprims`: each primitive's
+arguments, set points and reports, the paper's (GoToWayPoint, KeepDepth,
+KeepHeading, DetectCross, ReleaseMarker: section 3, Fig. 5) and those the
+examples declare, in one registry that a user's primitives join. Here is
+the dynamics, and the world they act in (:class:`World`, docs/simulator.md):
+the tank (from :attr:`World.origin`), and what is in the water (the cross,
+a dock, obstacles, plumes). Each set point channel (a point to steer to, a
+depth, a heading) follows the enabled primitive of highest priority that
+sets it.
 
 Enabling and disabling are acknowledged at once (``on``, ``off``).
 """
@@ -27,22 +25,29 @@ from __future__ import annotations
 import json
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Vehicle
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, read_text
+from mcl2pnml.runtime.simprims import Context, SimulatedPrimitive, built_in, installed
 
-PRIMITIVES = ("GoToWayPoint", "KeepDepth", "KeepHeading", "DetectCross", "ReleaseMarker")
-
+#: The built-in simulated primitives' names (:mod:`mcl2pnml.runtime.simprims` has the table).
+PRIMITIVES: tuple[str, ...] = tuple(sorted(built_in()))
 
 @dataclass(frozen=True)
 class World:
-    """The tank, the vehicle's limits and the target. Defaults: the paper's 16 x 8 x 5 m tank."""
+    """The tank, the vehicle's limits and what is in the water (docs/simulator.md).
 
-    tank: tuple[float, float, float] = (16.0, 8.0, 5.0)   # x, y, depth extents from 0
+    Defaults: the paper's 16 x 8 x 5 m tank with its cross; the settings of
+    the other primitives' world (dock, obstacles, plumes, GPS, payloads) are
+    there for every mission, so that any of them runs in the default world.
+    """
+
+    tank: tuple[float, float, float] = (16.0, 8.0, 5.0)   # x, y, depth extents from origin
+    origin: tuple[float, float] = (0.0, 0.0)             # the tank's corner of least x, y
     start: tuple[float, float, float] = (2.0, 4.0, 0.0)
     start_yaw: float = 0.0
     cross: tuple[float, float] | None = (10.0, 4.0)      # on the floor; None: no cross
@@ -53,8 +58,23 @@ class World:
     acceptance: float = 0.5         # m, radius of the waypoint's sphere
     depth_band: float = 0.2         # m
     heading_band: float = math.radians(5)
+    settle_time: float = 2.0        # s inside a keep-primitive's band before "achieved"
+    lost_after: float = 5.0         # s outside twice the band before "failed" (lost)
     camera_half_angle: float = math.radians(30)
     release_time: float = 1.0       # s
+    dock: tuple[float, float, float] | None = None   # where HomeToDock goes; None: no dock
+    dock_heading: float = 0.0       # rad: the direction of the dock's axis, into the dock
+    dock_drift: float = 0.0         # m/s sideways (to the axis's left) while homing ...
+    dock_drifts: int = 0            # ... on this many first homings
+    latch_time: float = 1.0         # s
+    obstacles: tuple[tuple[float, float, float, float], ...] = ()   # x, y, z, radius
+    sonar_half_angle: float = math.radians(30)
+    plumes: tuple[tuple[float, float, float, float, float], ...] = ()  # x, y, z, radius, peak
+    gps_depth: float = 0.3          # m: the antenna is out of the water above it
+    gps_time: float = 10.0          # s at the surface for a fix
+    acoustic_time: float = 5.0      # s to send a message
+    bottle_time: float = 3.0        # s to fire a bottle
+    bottles: int = 12
     noise: float = 0.0              # m/sqrt(s): random walk of the position
     seed: int | None = 0
     dt: float = 0.1                 # s
@@ -66,9 +86,10 @@ class World:
         Every field is checked, each fault one message at the field's line and
         column: its type, that its numbers are finite and in range (:data:`RANGES`;
         the time step ``dt`` from :data:`MIN_DT` to :data:`MAX_DT` s, so that a
-        run takes a bounded number of steps), the shapes of ``tank``, ``start``
-        and ``cross``, and that the start and the cross are inside the tank.
-        Angles are in degrees in the file, radians inside.
+        run takes a bounded number of steps), the shapes of the points and
+        lists, and that the start, the cross, the dock, the obstacles and the
+        plumes are inside the tank. Angles are in degrees in the file, radians
+        inside.
         """
         try:
             data = json.loads(text)
@@ -93,6 +114,45 @@ class World:
     def load(cls, path: str | Path) -> "World":
         return cls.from_json(read_text(path, "world file"), str(path))
 
+    # -- what the primitives ask of the world -------------------------------------
+
+    def inside(self, point: tuple[float, ...]) -> bool:
+        """Whether a point (x, y) or (x, y, depth) is in the tank."""
+        lows = (*self.origin, 0.0)
+        return all(lo <= v <= lo + size for v, lo, size in zip(point, lows, self.tank))
+
+    def tank_words(self) -> str:
+        words = " x ".join(f"{v:g}" for v in self.tank) + " m tank"
+        return words if self.origin == (0.0, 0.0) else \
+            words + f" from ({self.origin[0]:g}, {self.origin[1]:g})"
+
+    def concentration(self, s: "State") -> float:
+        """The plumes' concentration at the vehicle: each a Gaussian of its radius."""
+        return sum(peak * math.exp(-math.dist((s.x, s.y, s.z), (x, y, z)) ** 2 / (2 * r * r))
+                   for x, y, z, r, peak in self.plumes)
+
+    def sonar_range(self, s: "State") -> float:
+        """How far ahead the forward sonar sees something: an obstacle or the tank's side.
+
+        An obstacle counts inside the cone of :attr:`sonar_half_angle` about
+        the heading, at the distance to its surface; the side at the distance
+        along the heading to where it leaves the tank.
+        """
+        best = math.inf
+        for x, y, z, r in self.obstacles:
+            dx, dy = x - s.x, y - s.y
+            if abs(_angle(math.atan2(dy, dx) - s.yaw)) <= self.sonar_half_angle or \
+                    math.hypot(dx, dy) <= r:
+                best = min(best, max(0.0, math.dist((s.x, s.y, s.z), (x, y, z)) - r))
+        c, si = math.cos(s.yaw), math.sin(s.yaw)
+        for pos, lo, size, d in ((s.x, self.origin[0], self.tank[0], c),
+                                 (s.y, self.origin[1], self.tank[1], si)):
+            if d > 1e-12:
+                best = min(best, (lo + size - pos) / d)
+            elif d < -1e-12:
+                best = min(best, (lo - pos) / d)
+        return best
+
 
 @dataclass
 class State:
@@ -115,6 +175,9 @@ class _Active:
     since: float
     goal: str = "C"                 # C seeking, S1 failed or lost, S2 achieved
     bad: bool = False               # arguments it cannot use: it does nothing
+    enabling: int = 1
+    achieved: int = 0
+    memory: dict = field(default_factory=dict)
 
 
 def _angle(a: float) -> float:
@@ -122,12 +185,18 @@ def _angle(a: float) -> float:
 
 
 class AUVSimulator(Vehicle):
-    """The kinematic AUV as a :class:`~mcl2pnml.runtime.aal.Vehicle` (see the module's documentation)."""
+    """The kinematic AUV as a :class:`~mcl2pnml.runtime.aal.Vehicle` (see the module's documentation).
 
-    primitives = frozenset(PRIMITIVES)
+    ``primitives``: the simulated primitives it offers, by name (default: the
+    built-ins and those installed through the entry-point group,
+    :func:`mcl2pnml.runtime.simprims.installed`).
+    """
 
-    def __init__(self, world: World | None = None):
+    def __init__(self, world: World | None = None,
+                 primitives: Mapping[str, SimulatedPrimitive] | None = None):
         self.world = world or World()
+        self.table = dict(installed() if primitives is None else primitives)
+        self.primitives = frozenset(self.table)
         w = self.world
         self.state = State(0.0, *w.start, w.start_yaw)
         self.rng = random.Random(w.seed)
@@ -139,7 +208,9 @@ class AUVSimulator(Vehicle):
             (0.0, self.state.x, self.state.y, self.state.z)]
         self.markers: list[tuple[float, float]] = []
         self.problems: list[tuple[float, str, str]] = []   # (t, primitive, why it failed)
-        self._lookahead: tuple[float, Event] | None = None
+        self.enablings: dict[str, int] = {}
+        self.achievements: dict[str, int] = {}
+        self._lookahead: tuple[float, Event, dict[str, dict]] | None = None
 
     # -- actions ------------------------------------------------------------------
 
@@ -150,68 +221,70 @@ class AUVSimulator(Vehicle):
             self.active.pop(name, None)
             self.acks.append(Event(t, EventKind.OFF, name))
             return
-        self.active[name] = _Active(name, action.args, t)
+        self.enablings[name] = self.enablings.get(name, 0) + 1
+        act = self.active[name] = _Active(name, action.args, t, enabling=self.enablings[name],
+                                          achieved=self.achievements.get(name, 0))
         self.acks.append(Event(t, EventKind.ON, name))
-        problem = self._check_args(name, action.args)
+        problem = self.table[name].check(self._context(act, self.state))
         if problem:
             # the vehicle cannot do it: it says so at once, and does nothing
-            self.active[name].goal, self.active[name].bad = "S1", True
+            act.goal, act.bad = "S1", True
             self.acks.append(Event(t, EventKind.FAILED, name))
             self.problems.append((t, name, problem))
-        elif name == "GoToWayPoint":
-            self.setpoints.append((t, *map(float, action.args[0])))
-        elif name == "KeepDepth":
+            return
+        steer = self.table[name].steer(self._context(act, self.state))
+        if steer is not None and (steer.point is not None or steer.depth is not None):
             s = self.state
-            self.setpoints.append((t, s.x, s.y, float(action.args[0])))
+            x, y = steer.point or (s.x, s.y)
+            self.setpoints.append((t, x, y, s.z if steer.depth is None else steer.depth))
 
-    def _check_args(self, name: str, args: tuple) -> str | None:
-        w = self.world
-        number = lambda v: isinstance(v, (int, float)) and not isinstance(v, bool)
-        if name == "GoToWayPoint":
-            if len(args) != 1 or not isinstance(args[0], tuple) or len(args[0]) != 3 \
-                    or not all(map(number, args[0])):
-                return "GoToWayPoint takes one point (x, y, z)"
-            x, y, z = args[0]
-            if not (0 <= x <= w.tank[0] and 0 <= y <= w.tank[1] and 0 <= z <= w.tank[2]):
-                return f"({x}, {y}, {z}) is outside the {w.tank[0]:g} x {w.tank[1]:g} x " \
-                       f"{w.tank[2]:g} m tank"
-        elif name in ("KeepDepth", "KeepHeading"):
-            if len(args) != 1 or not number(args[0]):
-                return f"{name} takes one number"
-            if name == "KeepDepth" and not 0 <= args[0] <= w.tank[2]:
-                return f"depth {args[0]} is outside the tank (0 to {w.tank[2]:g} m)"
-        elif args:
-            return f"{name} takes no arguments"
-        return None
+    def _context(self, act: _Active, s: State, memory: dict | None = None) -> Context:
+        return Context(act.args, s, self.world, act.since, act.goal, act.enabling,
+                       act.achieved, act.memory if memory is None else memory)
 
     # -- dynamics -----------------------------------------------------------------
 
-    def _targets(self, s: State) -> tuple[float, float, float]:
-        """Set points: surge speed, depth and heading, from the active primitives."""
+    def _targets(self, s: State) -> tuple[float, float, float, tuple[float, float]]:
+        """Set points: surge speed, depth, heading and drift, from the active primitives.
+
+        Each channel is set by the primitive of highest priority that sets it
+        (ties by name); a point to steer to sets the heading and the speed.
+        """
         w = self.world
         speed, depth, heading = 0.0, s.z, s.yaw
-        usable = {n: a for n, a in self.active.items() if not a.bad}
-        go = usable.get("GoToWayPoint")
-        if go is not None:
-            x, y, z = go.args[0]
-            dx, dy = x - s.x, y - s.y
-            dist = math.hypot(dx, dy)
-            if dist > 0.05:
-                heading = math.atan2(dy, dx)
+        drift = [0.0, 0.0]
+        chosen: dict[str, tuple[int, float]] = {}
+        for name in sorted(self.active):
+            act = self.active[name]
+            if act.bad:
+                continue
+            prim = self.table[name]
+            steer = prim.steer(self._context(act, s))
+            if steer is None:
+                continue
+            drift[0] += steer.drift[0]
+            drift[1] += steer.drift[1]
+            if steer.point is not None and prim.priority > chosen.get("point", (-1, 0))[0]:
+                dx, dy = steer.point[0] - s.x, steer.point[1] - s.y
+                dist = math.hypot(dx, dy)
+                aim = math.atan2(dy, dx) if dist > 0.05 else s.yaw
                 # slow down near the point, and turn before speeding up
-                speed = min(w.max_speed, 0.5 * dist) * max(0.0, math.cos(_angle(heading - s.yaw)))
-            depth = z
-        keep = usable.get("KeepDepth")
-        if keep is not None:
-            depth = float(keep.args[0])
-        head = usable.get("KeepHeading")
-        if head is not None and go is None:
-            heading = math.radians(float(head.args[0]))
-        return speed, depth, heading
+                go = min(w.max_speed, 0.5 * dist) * max(0.0, math.cos(_angle(aim - s.yaw))) \
+                    if dist > 0.05 else 0.0
+                chosen["point"] = (prim.priority, go)
+                chosen["heading"] = max(chosen.get("heading", (-1, 0)), (prim.priority, aim),
+                                        key=lambda c: c[0])
+            for channel, value in (("depth", steer.depth), ("heading", steer.heading)):
+                if value is not None and prim.priority > chosen.get(channel, (-1, 0))[0]:
+                    chosen[channel] = (prim.priority, value)
+        speed = chosen["point"][1] if "point" in chosen else speed
+        depth = chosen["depth"][1] if "depth" in chosen else depth
+        heading = chosen["heading"][1] if "heading" in chosen else heading
+        return speed, depth, heading, (drift[0], drift[1])
 
     def _step(self, s: State, dt: float, rng: random.Random) -> State:
         w = self.world
-        speed, depth, heading = self._targets(s)
+        speed, depth, heading, drift = self._targets(s)
         k = 1 - math.exp(-dt / w.tau)
         heave = max(-w.max_heave, min(w.max_heave, (depth - s.z) / max(w.tau, dt)))
         turn = max(-w.max_turn, min(w.max_turn, _angle(heading - s.yaw) / max(w.tau, dt)))
@@ -219,50 +292,36 @@ class AUVSimulator(Vehicle):
         wv = s.w + (heave - s.w) * k
         r = s.r + (turn - s.r) * k
         yaw = _angle(s.yaw + r * dt)
-        x = s.x + u * math.cos(yaw) * dt
-        y = s.y + u * math.sin(yaw) * dt
+        x = s.x + (u * math.cos(yaw) + drift[0]) * dt
+        y = s.y + (u * math.sin(yaw) + drift[1]) * dt
         z = s.z + wv * dt
         if w.noise:
             sigma = w.noise * math.sqrt(dt)
             x += rng.gauss(0, sigma)
             y += rng.gauss(0, sigma)
             z += rng.gauss(0, sigma * 0.3)
-        x = min(max(x, 0.0), w.tank[0])
-        y = min(max(y, 0.0), w.tank[1])
-        z = min(max(z, 0.0), w.tank[2])
+        (ox, oy), (sx, sy, sz) = w.origin, w.tank
+        x = min(max(x, ox), ox + sx)
+        y = min(max(y, oy), oy + sy)
+        z = min(max(z, 0.0), sz)
         return State(s.t + dt, x, y, z, yaw, u, wv, r)
 
-    def _sensed(self, s: State, goals: dict[str, str]) -> list[tuple[str, EventKind]]:
-        """The primitives whose goal changes in state ``s``: (name, achieved|failed)."""
-        w = self.world
+    def _sensed(self, s: State, memories: dict[str, dict]) -> list[tuple[str, EventKind]]:
+        """The primitives whose goal changes in state ``s``: (name, achieved|failed), by name.
+
+        Every primitive is asked at every step, whether or not another
+        reports, so that the notes it keeps in ``memories`` are the same in
+        the look-ahead as in the real run.
+        """
         out = []
-        for name, act in self.active.items():
+        for name in sorted(self.active):
+            act = self.active[name]
             if act.bad:
                 continue
-            goal = goals[name]
-            if name == "GoToWayPoint":
-                x, y, z = act.args[0]
-                if goal == "C" and math.dist((s.x, s.y, s.z), (x, y, z)) <= w.acceptance:
-                    out.append((name, EventKind.ACHIEVED))
-            elif name in ("KeepDepth", "KeepHeading"):
-                if name == "KeepDepth":
-                    error, band = abs(s.z - float(act.args[0])), w.depth_band
-                else:
-                    error = abs(_angle(s.yaw - math.radians(float(act.args[0]))))
-                    band = w.heading_band
-                if goal in ("C", "S1") and error <= band:
-                    out.append((name, EventKind.ACHIEVED))
-                elif goal == "S2" and error > 2 * band:
-                    out.append((name, EventKind.FAILED))
-            elif name == "DetectCross":
-                if goal == "C" and w.cross is not None:
-                    footprint = (w.tank[2] - s.z) * math.tan(w.camera_half_angle)
-                    if math.hypot(s.x - w.cross[0], s.y - w.cross[1]) <= footprint:
-                        out.append((name, EventKind.ACHIEVED))
-            elif name == "ReleaseMarker":
-                if goal == "C" and s.t >= act.since + w.release_time - 1e-9:
-                    out.append((name, EventKind.ACHIEVED))
-        return sorted(out)
+            kind = self.table[name].sense(self._context(act, s, memories[name]))
+            if kind is not None and kind is not _REPORTED[act.goal]:
+                out.append((name, kind))
+        return out
 
     # -- the vehicle interface -------------------------------------------------------
 
@@ -275,21 +334,21 @@ class AUVSimulator(Vehicle):
         nxt = self._next_sensed()
         return None if nxt is None else nxt[0]
 
-    def _next_sensed(self) -> tuple[float, Event] | None:
+    def _next_sensed(self) -> tuple[float, Event, dict[str, dict]] | None:
         if self._lookahead is not None:
             return self._lookahead
         if not self.active:
             return None
         s, rng = self.state, random.Random()
         rng.setstate(self.rng.getstate())
-        goals = {n: a.goal for n, a in self.active.items()}
+        memories = {n: dict(a.memory) for n, a in self.active.items()}
         end = s.t + self.HORIZON
         while s.t < end:
             s = self._step(s, self.world.dt, rng)
-            sensed = self._sensed(s, goals)
+            sensed = self._sensed(s, memories)
             if sensed:
                 name, kind = sensed[0]
-                self._lookahead = (s.t, Event(s.t, kind, name))
+                self._lookahead = (s.t, Event(s.t, kind, name), memories)
                 return self._lookahead
         return None
 
@@ -298,24 +357,38 @@ class AUVSimulator(Vehicle):
             return self.acks.pop(0)
         nxt = self._next_sensed()
         assert nxt is not None, "no event is pending"
-        t, event = nxt
+        t, event, memories = nxt
         self.advance(t)
+        for name, memory in memories.items():   # the notes as of the event's step
+            self.active[name].memory = memory
         act = self.active[event.primitive]
         act.goal = "S2" if event.kind is EventKind.ACHIEVED else "S1"
-        if event.primitive == "ReleaseMarker" and event.kind is EventKind.ACHIEVED:
-            self.markers.append((self.state.x, self.state.y))
+        if event.kind is EventKind.ACHIEVED:
+            self.achievements[event.primitive] = self.achievements.get(event.primitive, 0) + 1
+        self.table[event.primitive].reported(self._context(act, self.state), event.kind, self)
         self._lookahead = None
         return event
 
     def advance(self, t: float) -> None:
-        """Integrate the real state up to time ``t`` (the look-ahead replays exactly)."""
+        """Integrate the real state up to time ``t`` (the look-ahead replays exactly).
+
+        The primitives' notes follow the real run step by step, as in the
+        look-ahead; at an event's instant :meth:`take_event` takes the
+        look-ahead's, which are the same.
+        """
         dt = self.world.dt
         if self._lookahead is not None and abs(self._lookahead[0] - t) > 1e-9:
             self._lookahead = None    # stopping off its grid: look again from there
+        memories = {n: a.memory for n, a in self.active.items()}
         while self.state.t < t - 1e-9:
             step = min(dt, t - self.state.t)
             self.state = self._step(self.state, step, self.rng)
+            self._sensed(self.state, memories)
             self.trajectory.append((self.state.t, self.state.x, self.state.y, self.state.z))
+
+
+#: The report that leaves each goal state as it is (Fig. 1: S2 achieved, S1 failed).
+_REPORTED = {"C": None, "S2": EventKind.ACHIEVED, "S1": EventKind.FAILED}
 
 
 #: The time step's range, in seconds: the simulator integrates in steps of ``dt``
@@ -337,10 +410,35 @@ RANGES: dict[str, tuple[str, float, bool, float]] = {
     "heading_band": ("the heading band in degrees", 0.0, False, 180.0),
     "camera_half_angle": ("the camera's half angle in degrees", 0.0, False, 89.0),
     "release_time": ("the time a marker takes to go in seconds", 0.0, True, 3600.0),
+    "settle_time": ("the time inside a keep-primitive's band before it is achieved, in "
+                    "seconds", 0.0, True, 3600.0),
+    "lost_after": ("the time outside twice a keep-primitive's band before it is lost, in "
+                   "seconds", 0.0, True, 3600.0),
+    "dock_heading": ("the direction of the dock's axis in degrees", -360.0, True, 360.0),
+    "dock_drift": ("the sideways drift while homing in m/s", -100.0, True, 100.0),
+    "latch_time": ("the time the latch takes to report in seconds", 0.0, True, 3600.0),
+    "sonar_half_angle": ("the sonar's half angle in degrees", 0.0, False, 180.0),
+    "gps_depth": ("the depth above which GPS is received in metres", 0.0, True, MAX_LENGTH),
+    "gps_time": ("the time at the surface for a GPS fix in seconds", 0.0, True, 3600.0),
+    "acoustic_time": ("the time an acoustic message takes in seconds", 0.0, True, 3600.0),
+    "bottle_time": ("the time a bottle takes to fire in seconds", 0.0, True, 3600.0),
     "noise": ("the random walk of the position in m/sqrt(s)", 0.0, True, 100.0),
     "dt": ("the time step in seconds", MIN_DT, True, MAX_DT),
 }
-_DEGREES = ("start_yaw", "max_turn", "heading_band", "camera_half_angle")
+_DEGREES = ("start_yaw", "max_turn", "heading_band", "camera_half_angle", "dock_heading",
+            "sonar_half_angle")
+#: The whole numbers of a world file: what each is and its highest value (the lowest is 0).
+COUNTS: dict[str, tuple[str, int]] = {
+    "dock_drifts": ("how many first homings drift", 1_000_000),
+    "bottles": ("how many bottles there are", 1_000_000),
+}
+#: The lists of a world file: what each item is, in words, and its numbers' count.
+LISTS: dict[str, tuple[str, int]] = {
+    "obstacles": ("an obstacle [x, y, depth, radius]", 4),
+    "plumes": ("a plume [x, y, depth, radius, peak concentration]", 5),
+}
+#: How many items a list of a world file may have (each is looked at every time step).
+MAX_ITEMS = 1000
 _SEED_LIMIT = 2 ** 63
 
 
@@ -396,36 +494,73 @@ def _checked_fields(data: dict[str, Any], where) -> dict[str, Any]:
         return Mcl2PnmlError(f'world setting "{key}" is {message}, not '
                              f"{json.dumps(data[key])[:80]}", where(key))
 
-    def point(key: str, size: int, what: str, inside: tuple[float, ...] | None) -> tuple:
-        value = data[key]
+    def numbers(key: str, value: Any, size: int, what: str) -> tuple[float, ...]:
         if not isinstance(value, list) or len(value) != size or not all(map(_number, value)):
             raise bad(key, f"{what}: a list of {size} finite numbers")
-        if inside is None:
-            if not all(0 < v <= MAX_LENGTH for v in value):
-                raise bad(key, f"{what}: each above 0, up to {MAX_LENGTH:,.0f}")
-        elif not all(0 <= v <= limit for v, limit in zip(value, inside)):
-            sizes = " x ".join(f"{v:g}" for v in inside)
-            raise bad(key, f"{what}: inside the {sizes} m tank (each from 0 to its extent)")
         return tuple(float(v) for v in value)
 
     fields: dict[str, Any] = {}
     if "tank" in data:
-        fields["tank"] = point("tank", 3, "the tank's extents x, y and depth in metres", None)
-    tank = fields.get("tank", World.tank)
+        fields["tank"] = numbers("tank", data["tank"], 3,
+                                 "the tank's extents x, y and depth in metres")
+        if not all(0 < v <= MAX_LENGTH for v in fields["tank"]):
+            raise bad("tank", f"the tank's extents x, y and depth in metres: each above 0, "
+                      f"up to {MAX_LENGTH:,.0f}")
+    if "origin" in data:
+        fields["origin"] = numbers("origin", data["origin"], 2,
+                                   "the tank's corner of least x and y in metres")
+        if not all(abs(v) <= MAX_LENGTH for v in fields["origin"]):
+            raise bad("origin", f"the tank's corner of least x and y in metres: each from "
+                      f"{-MAX_LENGTH:,.0f} to {MAX_LENGTH:,.0f}")
+    tank = World(tank=fields.get("tank", World.tank), origin=fields.get("origin", World.origin))
+
+    def inside(key: str, point: tuple[float, ...], what: str) -> None:
+        if not tank.inside(point):
+            sizes = " x ".join(f"{v:g}" for v in tank.tank[:len(point)])
+            start = "0" if tank.origin == (0.0, 0.0) else \
+                "the origin ({:g}, {:g}, 0)".format(*tank.origin)
+            raise bad(key, f"{what}: inside the {sizes} m tank (each from {start} to its "
+                      "extent)")
+
     if "start" in data:
-        fields["start"] = point("start", 3, "where the vehicle starts, x, y and depth", tank)
-    elif not all(0 <= v <= limit for v, limit in zip(World.start, tank)):
+        fields["start"] = numbers("start", data["start"], 3, "where the vehicle starts, x, y "
+                                  "and depth")
+        inside("start", fields["start"], "where the vehicle starts, x, y and depth")
+    elif not tank.inside(World.start):
         raise Mcl2PnmlError(f"the default start {World.start} is outside this tank: give "
-                            '"start" too', where("tank"))
-    if "cross" in data:
-        fields["cross"] = None if data["cross"] is None else point(
-            "cross", 2, "where the cross is on the floor, x and y (or null)", tank[:2])
+                            '"start" too', where("tank" if "tank" in data else "origin"))
+    for key, size, what in (("cross", 2, "where the cross is on the floor, x and y (or null)"),
+                            ("dock", 3, "where the dock is, x, y and depth (or null)")):
+        if key in data:
+            fields[key] = None if data[key] is None else numbers(key, data[key], size, what)
+            if fields[key] is not None:
+                inside(key, fields[key], what)
+    for key, (what, size) in LISTS.items():
+        if key not in data:
+            continue
+        items = data[key]
+        if not isinstance(items, list) or len(items) > MAX_ITEMS:
+            raise bad(key, f"a list of up to {MAX_ITEMS} items, each {what}")
+        checked = []
+        for item in items:
+            values = numbers(key, item, size, f"a list of items, each {what}")
+            inside(key, values[:3], f"a list of items, each {what}, inside the tank")
+            if not all(0 < v <= MAX_LENGTH for v in values[3:]):
+                raise bad(key, f"a list of items, each {what}, the radius (and peak) above 0")
+            checked.append(values)
+        fields[key] = tuple(checked)
     if "seed" in data:
         seed = data["seed"]
         if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)
                                  or abs(seed) >= _SEED_LIMIT):
             raise bad("seed", "the seed of the noise: an integer below 2^63 in size, or null")
         fields["seed"] = seed
+    for key, (what, high) in COUNTS.items():
+        if key in data:
+            value = data[key]
+            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= high:
+                raise bad(key, f"{what}: a whole number from 0 to {high:,}")
+            fields[key] = value
     for key, (what, low, low_allowed, high) in RANGES.items():
         if key not in data:
             continue
