@@ -20,7 +20,7 @@ from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
-from mcl2pnml.runtime.simulator import PRIMITIVES as SIMULATED
+from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
@@ -174,10 +174,12 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
               "reference: MCL interpreted directly. Both must give the same result.")
 @click.option("--vehicle", default="sim", show_default=True,
               metavar="|".join(kind.name for kind in VEHICLES),
-              help="The AUV simulator (it offers " + ", ".join(SIMULATED) + "), a real vehicle "
+              help="The AUV simulator (it offers " + ", ".join(sorted(simulated()))
+              + ", and those of --sim-primitives and installed packages; docs/simulator.md; "
+              "a world NAME.world.json beside the mission is its default), a real vehicle "
               "through a mapping file and a bridge (see --connect), or a script "
-              '({"PRIMITIVE": ["ok@5", "fail@3", "never"]}; each example of examples/ '
-              "that the simulator cannot fly has one beside it, NAME.vehicle.json).")
+              '({"PRIMITIVE": ["ok@5", "fail@3", "never"]}; each example of examples/ has one '
+              "beside it, NAME.vehicle.json).")
 @click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge: "
               "(a host name, an IPv4 address, or an IPv6 one in brackets: [::1]:7777).")
 @click.option("--secret", type=FILE, help="Authenticate every line of the bridge's link, both "
@@ -201,7 +203,12 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
 @click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace}.")
 @click.option("--log", "log_path", type=OUTPUT, help="Also log the run here as JSON lines.")
 @click.option("--world", type=FILE, help="The simulator's world (JSON: tank, start, cross, "
-              "noise, seed, limits). Default: the paper's 16 x 8 x 5 m tank, a cross at (10, 4).")
+              "dock, obstacles, plumes, noise, seed, limits; docs/simulator.md). Default: "
+              "NAME.world.json beside the mission if there is one, else the paper's "
+              "16 x 8 x 5 m tank, a cross at (10, 4).")
+@click.option("--sim-primitives", type=FILE, multiple=True, metavar="FILE.py",
+              help="Python file registering simulated primitives of your own "
+              "(@register on a SimulatedPrimitive, docs/simulator.md); may be repeated.")
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
               show_default=True, help="Stop a mission still running at this time (virtual, or "

@@ -1,9 +1,10 @@
-"""Every example runs: the paper's on the simulator, the others on the vehicle script beside them.
+"""Every example runs: on the vehicle script beside it, and on the simulator in its world.
 
-``examples/NAME.vehicle.json`` scripts a plausible run of each mission the
-simulator cannot fly (its primitives are the paper's experiment's); both
-engines must give the same run, and the default vehicle's refusal must say
-what to give instead.
+``examples/NAME.vehicle.json`` scripts a plausible run of a mission and
+``examples/NAME.world.json`` is the place it is written for, which the
+simulator takes by default (tests/test_simprims.py runs them there); both
+engines must give the same run, and the default vehicle's refusal of a
+primitive it does not simulate must say what to give instead.
 """
 from __future__ import annotations
 
@@ -40,11 +41,16 @@ def test_every_example_the_simulator_cannot_fly_has_a_script():
         assert used <= set(PRIMITIVES) or script.is_file(), mission.name
 
 
-def test_the_default_vehicle_says_it_is_the_simulator_and_names_the_script():
-    mission = EXAMPLES / "lawnmower.mcl"
+def test_the_default_vehicle_says_it_is_the_simulator_and_names_the_script(tmp_path):
+    # a primitive no simulated one answers to: the refusal names the script beside it
+    mission = tmp_path / "winch.mcl"
+    mission.write_text("primitive Winch(metres);\ntask Reel() = AchieveGoal(Winch(3.0));\n"
+                       "mission { Reel(); }\n")
+    script = tmp_path / "winch.vehicle.json"
+    script.write_text('{"Winch": ["ok@5"]}')
     out = run_cli("run", mission)
     assert out.returncode == 2 and "Traceback" not in out.stderr
-    assert "which the simulator (the default vehicle) does not offer" in out.stderr
-    assert f"--vehicle {EXAMPLES / 'lawnmower.vehicle.json'}" in out.stderr
+    assert "'Winch', which the simulator (the default vehicle) does not offer" in out.stderr
+    assert f"--vehicle {script}" in out.stderr
     chosen = run_cli("run", mission, "--vehicle", "sim")
     assert chosen.returncode == 2 and "which this vehicle does not offer" in chosen.stderr

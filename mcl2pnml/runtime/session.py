@@ -27,7 +27,7 @@ from mcl2pnml.runtime.runlog import RunLog
 from mcl2pnml.runtime.vehicles import VehicleKind, kind_of
 
 #: The options of a run that its journal's header records, and a resume reuses.
-JOURNALED = ("engine", "vehicle", "world", "max_time")
+JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives")
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,9 @@ class RunOptions:
     vehicle: str = "sim"
     connect: str | None = None
     world: Path | None = None
+    #: Python files of simulated primitives the simulator offers besides its own
+    #: (:mod:`mcl2pnml.runtime.simprims`)
+    sim_primitives: tuple[Path, ...] = ()
     max_time: float = 24 * 3600.0
     #: show fired transitions in the live log
     transitions: bool = False
@@ -67,15 +70,19 @@ def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
     loaded = journals.load(options.resume)
     header = loaded.header
     given = {"engine": options.engine, "vehicle": options.vehicle,
-             "world": options.world and str(options.world), "max_time": options.max_time}
+             "world": options.world and str(options.world), "max_time": options.max_time,
+             "sim_primitives": [str(p) for p in options.sim_primitives]}
     for key in JOURNALED:
-        if key in options.explicit and given[key] != header.get(key):
+        # a journal without simulated primitives of its own says nothing of them
+        recorded = header.get(key, [] if key == "sim_primitives" else None)
+        if key in options.explicit and given[key] != recorded:
             raise Mcl2PnmlError(f"the journal's run has --{key.replace('_', '-')} "
-                                f"{header.get(key)}, not {given[key]}",
+                                f"{recorded}, not {given[key]}",
                                 Location(str(options.resume), 1, 1))
     world = Path(header["world"]) if header.get("world") else None
     return replace(options, engine=header["engine"], vehicle=header["vehicle"],
-                   max_time=header["max_time"], world=world), loaded
+                   max_time=header["max_time"], world=world,
+                   sim_primitives=tuple(map(Path, header.get("sim_primitives", [])))), loaded
 
 
 def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
@@ -86,19 +93,49 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
                           "vehicle's run cannot be replayed")
     if options.world and not kind.takes_world:
         raise OptionError("--world", "a world is for the simulator (--vehicle sim)")
+    if options.sim_primitives and not kind.takes_world:
+        raise OptionError("--sim-primitives", "simulated primitives are for the simulator "
+                          "(--vehicle sim)")
     if not kind.realtime:
         for name in ("connect",) + _LINK:
             if getattr(options, name) != _DEFAULTS[name]:
                 raise OptionError(f"--{name.replace('_', '-')}", "only for a real vehicle "
                                   "(--vehicle bridge:MAPPING.json --connect HOST:PORT)")
     link = LinkOptions(**{name: getattr(options, name) for name in _LINK})
-    return kind, kind.build(options.vehicle, options.connect, options.world, link)
+    vehicle = kind.build(options.vehicle, options.connect, options.world, link)
+    if options.sim_primitives:
+        from mcl2pnml.runtime.simprims import load_file
+        table = dict(vehicle.table)
+        for path in options.sim_primitives:
+            table = load_file(path, table)
+        vehicle.offer(table)
+    return kind, vehicle
 
 
 #: The options of the live link, as RunOptions and LinkOptions both name them.
 _LINK = ("secret", "tls_ca", "tls_cert", "tls_key", "heartbeat", "liveness", "send_timeout",
          "max_line")
 _DEFAULTS = {f.name: f.default for f in fields(RunOptions)}
+
+
+#: A mission's world, by convention: beside it, ``NAME.world.json``; the
+#: simulator takes it when no ``--world`` is given (docs/simulator.md).
+WORLD_SUFFIX = ".world.json"
+
+
+def with_world(mission: Path, options: RunOptions) -> RunOptions:
+    """The options with the world beside the mission, for the simulator given none.
+
+    Each example of ``examples/`` has the place it is written for (a dock, a
+    dam, a patch of sea) beside it, as it has its vehicle script; a world
+    given, a resumed run (its journal names its own) or another vehicle
+    keep theirs.
+    """
+    beside = mission.with_name(mission.stem + WORLD_SUFFIX)
+    if options.world is not None or options.resume is not None \
+            or not kind_of(options.vehicle).takes_world or not beside.is_file():
+        return options
+    return replace(options, world=beside)
 
 
 #: A mission's vehicle script, by convention: beside it, ``NAME.vehicle.json``
@@ -135,7 +172,8 @@ def _journal(mission: Path, options: RunOptions, kind: VehicleKind,
         return None
     # the files the run depends on, as they are now: a resume needs them unchanged
     files = {"mission": mission, "vehicle": kind.source(options.vehicle),
-             "world": options.world}
+             "world": options.world,
+             **{f"sim_primitives_{i}": p for i, p in enumerate(options.sim_primitives)}}
     digests = {f"{k}_sha256": journals.digest(f) for k, f in files.items() if f}
     if loaded is not None:
         for key, value in digests.items():
@@ -147,6 +185,8 @@ def _journal(mission: Path, options: RunOptions, kind: VehicleKind,
     return journals.create(options.journal, {
         "mission": str(mission), "engine": options.engine, "vehicle": options.vehicle,
         "world": options.world and str(options.world), "max_time": options.max_time,
+        **({"sim_primitives": [str(p) for p in options.sim_primitives]}
+           if options.sim_primitives else {}),
         **digests})
 
 
@@ -160,7 +200,7 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     torn journal line dropped). However the run ends, the engine loop's
     safe stop has disabled every primitive still enabled.
     """
-    options, loaded = resumed(options)
+    options, loaded = resumed(with_world(mission, options))
     # no output may be a file the run reads, nor the other output (--journal j --log j)
     check_outputs([("--journal", options.journal), ("--log", log_path)],
                   [("the mission", mission), ("the world (--world)", options.world),

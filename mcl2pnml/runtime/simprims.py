@@ -26,8 +26,9 @@ KeepHeading            heading          settled: inside ``heading_band`` for    
 DetectCross            none             the floor's cross in the camera's footprint  never
 ReleaseMarker          none             ``release_time`` after enabling              never
 HomeToDock             none             within ``acceptance`` of ``dock``            at once: the world has no dock
-DetectMisalignment     max_error        sideways off the dock's axis by more than    at once: no dock, or max_error not above 0
-                                        max_error while homing
+DetectMisalignment     max_error        sideways off the homing's track (from where  at once: no dock, or max_error not above 0
+                                        it is enabled to the dock) by more than
+                                        max_error
 CheckLatch             none             ``latch_time`` after enabling, at the dock   ``latch_time`` after enabling, elsewhere
 DetectObstacle         range            an obstacle's surface or the tank's side     at once: range not above 0
                                         within range, inside the sonar's cone
@@ -61,14 +62,13 @@ import traceback
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import Any, Callable, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.payloads import EventKind
 
-if TYPE_CHECKING:   # the simulator imports this module: types only
-    from mcl2pnml.runtime.simulator import State, World
-
+# The simulator's ``State`` and ``World`` are named in annotations as text only:
+# the simulator imports this module, and the layers allow no circle of imports.
 #: The entry-point group through which an installed package adds simulated primitives.
 ENTRY_POINTS = "mcl2pnml.simulated_primitives"
 
@@ -331,7 +331,7 @@ class _Keep(SimulatedPrimitive):
         error, band = self.error(ctx)
         inside = _held(ctx, "inside", error <= band)
         outside = _held(ctx, "outside", error > 2 * band)
-        if ctx.goal != "S2" and inside >= ctx.world.settle_time - 1e-9:
+        if ctx.goal != "S2" and error <= band and inside >= ctx.world.settle_time - 1e-9:
             return EventKind.ACHIEVED
         if ctx.goal == "S2" and error > 2 * band and outside >= ctx.world.lost_after - 1e-9:
             return EventKind.FAILED
@@ -342,6 +342,7 @@ class _Keep(SimulatedPrimitive):
 class KeepDepth(_Keep):
     name, arguments, priority = "KeepDepth", "depth", 2
     achieves = "settled: inside depth_band for settle_time (again after a loss)"
+    fails = _Keep.fails + "; at once: the depth is outside the tank"
 
     def check(self, ctx):
         args, world = ctx.args, ctx.world
@@ -399,16 +400,23 @@ class HomeToDock(SimulatedPrimitive):
 @register
 class DetectMisalignment(_Above):
     name, arguments = "DetectMisalignment", "max_error"
-    achieves = "sideways off the dock's axis by more than max_error"
+    achieves = "sideways off the homing's track (from where it is enabled to the dock) by " \
+        "more than max_error"
     fails = "at once: no dock, or max_error not above 0"
 
     def check(self, ctx):
         return super().check(ctx) or _no_dock(ctx.world)
 
     def sense(self, ctx):
+        # the cross-track error of the homing: sideways from the straight line
+        # from where the detector was enabled to the dock (where the homing
+        # starts), not from the dock's axis, which a waypoint's acceptance
+        # sphere may leave by more than the largest error allowed
         w, s = ctx.world, ctx.state
-        dx, dy = s.x - w.dock[0], s.y - w.dock[1]
-        sideways = abs(-dx * math.sin(w.dock_heading) + dy * math.cos(w.dock_heading))
+        x0, y0 = ctx.memory.setdefault("from", (s.x, s.y))
+        track = math.atan2(w.dock[1] - y0, w.dock[0] - x0)
+        dx, dy = s.x - x0, s.y - y0
+        sideways = abs(-dx * math.sin(track) + dy * math.cos(track))
         return EventKind.ACHIEVED if sideways > float(ctx.args[0]) else None
 
 

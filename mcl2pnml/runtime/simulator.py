@@ -56,6 +56,7 @@ class World:
     max_turn: float = math.radians(30)   # rad/s
     tau: float = 1.5                # s, first-order lag of every speed
     acceptance: float = 0.5         # m, radius of the waypoint's sphere
+    hold_radius: float = 0.05       # m: this near a point across, only the depth is steered
     depth_band: float = 0.2         # m
     heading_band: float = math.radians(5)
     settle_time: float = 2.0        # s inside a keep-primitive's band before "achieved"
@@ -195,8 +196,7 @@ class AUVSimulator(Vehicle):
     def __init__(self, world: World | None = None,
                  primitives: Mapping[str, SimulatedPrimitive] | None = None):
         self.world = world or World()
-        self.table = dict(installed() if primitives is None else primitives)
-        self.primitives = frozenset(self.table)
+        self.offer(installed() if primitives is None else primitives)
         w = self.world
         self.state = State(0.0, *w.start, w.start_yaw)
         self.rng = random.Random(w.seed)
@@ -211,6 +211,11 @@ class AUVSimulator(Vehicle):
         self.enablings: dict[str, int] = {}
         self.achievements: dict[str, int] = {}
         self._lookahead: tuple[float, Event, dict[str, dict]] | None = None
+
+    def offer(self, primitives: Mapping[str, SimulatedPrimitive]) -> None:
+        """Offer these simulated primitives instead (before the run: a user's added)."""
+        self.table = dict(primitives)
+        self.primitives = frozenset(self.table)
 
     # -- actions ------------------------------------------------------------------
 
@@ -267,10 +272,11 @@ class AUVSimulator(Vehicle):
             if steer.point is not None and prim.priority > chosen.get("point", (-1, 0))[0]:
                 dx, dy = steer.point[0] - s.x, steer.point[1] - s.y
                 dist = math.hypot(dx, dy)
-                aim = math.atan2(dy, dx) if dist > 0.05 else s.yaw
+                near = dist <= w.hold_radius   # above the point: hold the heading, heave
+                aim = s.yaw if near else math.atan2(dy, dx)
                 # slow down near the point, and turn before speeding up
-                go = min(w.max_speed, 0.5 * dist) * max(0.0, math.cos(_angle(aim - s.yaw))) \
-                    if dist > 0.05 else 0.0
+                go = 0.0 if near else \
+                    min(w.max_speed, 0.5 * dist) * max(0.0, math.cos(_angle(aim - s.yaw)))
                 chosen["point"] = (prim.priority, go)
                 chosen["heading"] = max(chosen.get("heading", (-1, 0)), (prim.priority, aim),
                                         key=lambda c: c[0])
@@ -406,6 +412,8 @@ RANGES: dict[str, tuple[str, float, bool, float]] = {
     "max_turn": ("the top turn rate in degrees/s", 0.0, False, 3600.0),
     "tau": ("the time constant of the speeds in seconds", 0.0, False, 3600.0),
     "acceptance": ("the radius of a waypoint's sphere in metres", 0.0, False, MAX_LENGTH),
+    "hold_radius": ("the distance across to a point within which only the depth is steered, "
+                    "in metres", 0.0, True, MAX_LENGTH),
     "depth_band": ("the depth band in metres", 0.0, False, MAX_LENGTH),
     "heading_band": ("the heading band in degrees", 0.0, False, 180.0),
     "camera_half_angle": ("the camera's half angle in degrees", 0.0, False, 89.0),
@@ -544,7 +552,7 @@ def _checked_fields(data: dict[str, Any], where) -> dict[str, Any]:
         checked = []
         for item in items:
             values = numbers(key, item, size, f"a list of items, each {what}")
-            inside(key, values[:3], f"a list of items, each {what}, inside the tank")
+            inside(key, values[:3], f"a list of items, each {what}")
             if not all(0 < v <= MAX_LENGTH for v in values[3:]):
                 raise bad(key, f"a list of items, each {what}, the radius (and peak) above 0")
             checked.append(values)
