@@ -100,15 +100,30 @@ def traced(entry: Action | Event) -> bool:
 
 
 def canonical_trace(entries: Iterable[Action | Event]) -> list[dict[str, Any]]:
-    """The trace of cli.md, in one order both engines can agree on.
+    """The trace of cli.md, in causal order: the order the run loop recorded (docs/simulator.md).
 
-    Entries of one instant that concern different primitives happen at the
-    same virtual time and in no order that matters; they are listed by
-    primitive name. The entries of one primitive keep the order in which
-    they happened (a stable sort), which is causal: disable, off, enable.
+    The run loop (:mod:`mcl2pnml.runtime.engine`) takes one stimulus at a
+    time, in time order: the start, a vehicle event (in the order the vehicle
+    delivers them) or a timer's expiry. After each it records the actions the
+    stimulus caused at its instant, in zero time and transitively, and sends
+    them to the vehicle in that recorded order: by primitive name, each
+    primitive's own in the order they were caused (disable before enable).
+    So an ``achieved`` comes before the ``disable`` and ``enable`` it causes,
+    and the order depends on nothing an engine chooses: since both engines
+    cause the same actions per stimulus, the vehicle sees the same actions
+    in the same order and answers in the same order. The trace is those
+    entries as recorded, without the ``on`` events (cli.md).
     """
-    kept = [e for e in entries if traced(e)]
-    return [e.as_json() for e in sorted(kept, key=lambda e: (e.t, e.primitive))]
+    return [e.as_json() for e in entries if traced(e)]
+
+
+def causal_order(actions: Iterable[Action]) -> list[Action]:
+    """The actions one stimulus caused, as they are recorded and sent: by primitive name.
+
+    A stable sort: the actions of one primitive keep the order in which they
+    were caused (see :func:`canonical_trace`).
+    """
+    return sorted(actions, key=lambda a: a.primitive)
 
 
 class Vehicle(ABC):

@@ -13,7 +13,12 @@ The rules that make a run deterministic, for both engines alike:
 * stimuli in time order; at one instant, vehicle events before timers,
   events by primitive name, timers by the name of their task;
 * a vehicle answers an action at once if it can (the scripted vehicle's
-  ``on`` and ``off``), and those answers are stimuli of the same instant.
+  ``on`` and ``off``), and those answers are stimuli of the same instant;
+* the actions one stimulus causes are recorded and sent by primitive name,
+  each primitive's in the order they were caused
+  (:func:`~mcl2pnml.runtime.aal.causal_order`), so that the trace is in
+  causal order and the same for both engines
+  (:func:`~mcl2pnml.runtime.aal.canonical_trace`).
 """
 from __future__ import annotations
 
@@ -23,7 +28,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, LinkLost, SafeStop, Vehicle, VehicleInputError,
-                  _time, canonical_trace)
+                  _time, canonical_trace, causal_order)
 
 
 class Outcome(enum.Enum):
@@ -202,7 +207,8 @@ class _Driver:
         self.fault: str | None = None           # what the vehicle or its link did wrong
 
     def deliver(self, actions: list[Action]) -> None:
-        for action in actions:
+        """Record and send the actions one stimulus caused, in causal order (the trace's)."""
+        for action in causal_order(actions):
             self.entries.append(action)
             if self.listener:
                 self.listener(action)
