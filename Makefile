@@ -50,6 +50,20 @@ demo: setup
 	$(BIN)/mcl2pnml analyze $(OUT)/sauce.pnml --state-space
 	$(BIN)/mcl2pnml run examples/sauce.mcl --log $(OUT)/sauce-run.jsonl
 	$(BIN)/mcl2pnml show examples/sauce.mcl --run $(OUT)/sauce-run.jsonl -o $(OUT)/sauce.html
+	@# every example on the simulator (in the world beside it), with both engines: same --json
+	@echo; echo "every example on the simulator, both engines:"
+	@for mission in examples/*.mcl; do \
+	  for engine in petri reference; do \
+	    $(BIN)/mcl2pnml run $$mission --engine $$engine --json > $(OUT)/run-$$engine.json; \
+	    status=$$?; [ $$status -le 1 ] || { echo "  $$mission: $$engine exited $$status"; exit 1; }; \
+	  done; \
+	  cmp -s $(OUT)/run-petri.json $(OUT)/run-reference.json \
+	    || { echo "  $$mission: the engines disagree ($(OUT)/run-*.json)"; exit 1; }; \
+	  $(PY) -c 'import json, sys; r = json.load(open(sys.argv[2])); \
+	    print("  %-28s %-5s at t=%g s, %d entries, engines agree" \
+	          % (sys.argv[1], r["outcome"], r["time"], len(r["trace"])))' \
+	    $$mission $(OUT)/run-petri.json; \
+	done
 	@echo
 	@echo "outputs:"
 	@echo "  $(OUT)/task.pnml                 the task of Fig. 2 with its primitive, as PNML"
