@@ -2,7 +2,9 @@
 
 What ``mcl2pnml run`` does between reading its options and printing the
 outcome (shared/spec/cli.md, ``run``): resume a journal's run with the
-journal's own options, build the vehicle (:mod:`mcl2pnml.runtime.vehicles`),
+journal's own options, take the world beside the mission for the simulator
+given none (``NAME.world.json``), build the vehicle
+(:mod:`mcl2pnml.runtime.vehicles`) with the user's simulated primitives,
 check that it offers the primitives the mission uses, journal the run or
 replay a journal, drive the engine in virtual time or, against a real
 vehicle, on the wall clock (:mod:`mcl2pnml.runtime.engine`), and write the
@@ -139,7 +141,8 @@ def with_world(mission: Path, options: RunOptions) -> RunOptions:
 
 
 #: A mission's vehicle script, by convention: beside it, ``NAME.vehicle.json``
-#: (every example of ``examples/`` but the paper's, which the simulator runs, has one).
+#: (every example of ``examples/`` but the paper's has one), named when the simulator
+#: does not offer a primitive the mission uses.
 SCRIPT_SUFFIX = ".vehicle.json"
 
 
