@@ -16,6 +16,7 @@ from mcl2pnml.pipeline import check_source, run_mission
 from mcl2pnml.runtime.aal import canonical_trace
 from mcl2pnml.runtime.engine import Outcome, run
 from mcl2pnml.runtime.session import RunOptions
+from mcl2pnml.runtime import simprims
 from mcl2pnml.runtime.simprims import built_in, load_file, table_rows
 from mcl2pnml.runtime.simulator import AUVSimulator, World
 
@@ -48,6 +49,7 @@ def test_every_primitive_an_example_declares_is_simulated_and_documented():
     doc = (ROOT / "docs" / "simulator.md").read_text()
     for name, arguments, achieves, fails in table_rows(built_in()):
         assert f"| {name} | {arguments} | {achieves} | {fails} |" in doc, name
+        assert f"``{name}(" in simprims.__doc__, name
 
 
 KEEP = """primitive KeepHeading(h);
@@ -133,7 +135,6 @@ mission { D(1.0); G((6.0, 4.0, 1.0)); }
 
 def test_an_installed_packages_primitives_come_through_the_entry_point_group(monkeypatch):
     import importlib.metadata as metadata
-    from mcl2pnml.runtime import simprims
 
     class Point:    # an installed package's entry point, naming the user's module
         name, value = "winch", "winch_package:primitives"

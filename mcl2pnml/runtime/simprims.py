@@ -13,32 +13,37 @@ failed or lost). The simulator does the dynamics; this module the meaning.
 The built-in primitives (angles in degrees, lengths in metres, times in
 seconds; every time and place named is a world setting, docs/simulator.md):
 
-=====================  ===============  ===========================================  ============================================
-primitive              arguments        achieved                                     failed
-=====================  ===============  ===========================================  ============================================
-GoToWayPoint           (x, y, z)        inside the ``acceptance`` sphere             at once: the point is outside the tank
-GoToPoint              (x, y)           within ``acceptance`` of (x, y), any depth   at once: the point is outside the tank
-KeepDepth              depth            settled: inside ``depth_band`` for           lost: out of twice the band for
-                                        ``settle_time`` (again after a loss)         ``lost_after`` after achieving; at once:
-                                                                                     the depth is outside the tank
-KeepHeading            heading          settled: inside ``heading_band`` for         lost: out of twice the band for
-                                        ``settle_time`` (again after a loss)         ``lost_after`` after achieving
-DetectCross            none             the floor's cross in the camera's footprint  never
-ReleaseMarker          none             ``release_time`` after enabling              never
-HomeToDock             none             within ``acceptance`` of ``dock``            at once: the world has no dock
-DetectMisalignment     max_error        sideways off the homing's track (from where  at once: no dock, or max_error not above 0
-                                        it is enabled to the dock) by more than
-                                        max_error
-CheckLatch             none             ``latch_time`` after enabling, at the dock   ``latch_time`` after enabling, elsewhere
-DetectObstacle         range            an obstacle's surface or the tank's side     at once: range not above 0
-                                        within range, inside the sonar's cone
-GpsFix                 none             ``gps_time`` without a break above           never: under water it waits (the task's
-                                        ``gps_depth``                                time-out decides)
-SendAcoustic           message          ``acoustic_time`` after enabling             at once: the message is not a string
-DetectPlume            threshold        the concentration of ``plumes`` rises        at once: threshold not above 0
-                                        through the threshold
-FireBottle             none             ``bottle_time`` after enabling               at once: every one of ``bottles`` is fired
-=====================  ===============  ===========================================  ============================================
+* ``CheckLatch()``: achieved: latch_time after enabling, at the dock;
+  failed: latch_time after enabling, away from the dock (or no dock).
+* ``DetectCross()``: achieved: the floor's cross inside the down-looking
+  camera's footprint; failed: never.
+* ``DetectMisalignment(max_error)``: achieved: sideways off the homing's
+  track (from where it is enabled to the dock) by more than max_error;
+  failed: at once: no dock, or max_error not above 0.
+* ``DetectObstacle(range)``: achieved: an obstacle or the tank's side within
+  range, inside the sonar's cone; failed: at once: range not above 0.
+* ``DetectPlume(threshold)``: achieved: the concentration rises through the
+  threshold; failed: at once: threshold not above 0.
+* ``FireBottle()``: achieved: bottle_time after enabling; failed: at once:
+  every one of the world's bottles is fired.
+* ``GoToPoint((x, y))``: achieved: within the acceptance radius of (x, y),
+  at any depth; failed: at once: the point is outside the tank.
+* ``GoToWayPoint((x, y, z))``: achieved: inside the acceptance sphere;
+  failed: at once: the point is outside the tank.
+* ``GpsFix()``: achieved: gps_time without a break above gps_depth; failed:
+  never: under water it waits (the task's time-out decides).
+* ``HomeToDock()``: achieved: within the acceptance radius of the dock;
+  failed: at once: the world has no dock.
+* ``KeepDepth(depth)``: achieved: settled: inside depth_band for settle_time
+  (again after a loss); failed: lost: out of twice the band for lost_after
+  seconds after achieving; at once: the depth is outside the tank.
+* ``KeepHeading(heading)``: achieved: settled: inside heading_band for
+  settle_time (again after a loss); failed: lost: out of twice the band for
+  lost_after seconds after achieving.
+* ``ReleaseMarker()``: achieved: release_time after enabling (where it lands
+  is recorded); failed: never.
+* ``SendAcoustic(message)``: achieved: acoustic_time after enabling; failed:
+  at once: the message is not a string.
 
 A keep-primitive reports as a real one does (section 2.2 treats a lost
 goal as a transient state that can be regained): ``achieved`` only once the

@@ -230,14 +230,18 @@ class AUVSimulator(Vehicle):
         act = self.active[name] = _Active(name, action.args, t, enabling=self.enablings[name],
                                           achieved=self.achievements.get(name, 0))
         self.acks.append(Event(t, EventKind.ON, name))
-        problem = self.table[name].check(self._context(act, self.state))
+        prim = self.table.get(name)
+        # a run checks the primitives before it starts (session.py); called
+        # directly with one it does not offer, the vehicle says it cannot
+        problem = (f"the simulator does not offer {name}" if prim is None else
+                   prim.check(self._context(act, self.state)))
         if problem:
             # the vehicle cannot do it: it says so at once, and does nothing
             act.goal, act.bad = "S1", True
             self.acks.append(Event(t, EventKind.FAILED, name))
             self.problems.append((t, name, problem))
             return
-        steer = self.table[name].steer(self._context(act, self.state))
+        steer = prim.steer(self._context(act, self.state))
         if steer is not None and (steer.point is not None or steer.depth is not None):
             s = self.state
             x, y = steer.point or (s.x, s.y)
