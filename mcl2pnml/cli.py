@@ -216,7 +216,8 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
 @click.option("--journal", type=OUTPUT,
               help="Journal the run here as it happens (a new file), to resume it if killed.")
 @click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "
-              "engine, vehicle, world and time limit: replay, check, go on, append.")
+              "engine, vehicle, world, simulated primitives and time limit: replay, check, go on, "
+              "append.")
 @NET_OPTION
 @click.pass_context
 def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
