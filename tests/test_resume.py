@@ -175,7 +175,7 @@ def test_a_write_that_fails_half_way_leaves_no_file(tmp_path, monkeypatch):
     """A PNML streamed out fails after its first bytes: nothing appears at the target."""
     import mcl2pnml.io.pnml.writer as writer
 
-    def half(net, out, layout_engine="auto"):
+    def half(net, out, *drawing):
         out.write(b"<?xml version='1.0'?>\n<pnml")
         raise OSError(28, "No space left on device")
     monkeypatch.setattr(writer, "write_pnml", half)
