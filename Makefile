@@ -54,8 +54,10 @@ demo: setup
 	@echo; echo "every example on the simulator, both engines:"
 	@for mission in examples/*.mcl; do \
 	  for engine in petri reference; do \
-	    $(BIN)/mcl2pnml run $$mission --engine $$engine --json > $(OUT)/run-$$engine.json; \
-	    status=$$?; [ $$status -le 1 ] || { echo "  $$mission: $$engine exited $$status"; exit 1; }; \
+	    $(BIN)/mcl2pnml run $$mission --engine $$engine --json > $(OUT)/run-$$engine.json \
+	      2> $(OUT)/run-$$engine.err; \
+	    status=$$?; [ $$status -le 1 ] || { cat $(OUT)/run-$$engine.err; \
+	      echo "  $$mission: $$engine exited $$status"; exit 1; }; \
 	  done; \
 	  cmp -s $(OUT)/run-petri.json $(OUT)/run-reference.json \
 	    || { echo "  $$mission: the engines disagree ($(OUT)/run-*.json)"; exit 1; }; \

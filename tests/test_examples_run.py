@@ -54,3 +54,13 @@ def test_the_default_vehicle_says_it_is_the_simulator_and_names_the_script(tmp_p
     assert f"--vehicle {script}" in out.stderr
     chosen = run_cli("run", mission, "--vehicle", "sim")
     assert chosen.returncode == 2 and "which this vehicle does not offer" in chosen.stderr
+
+
+def test_the_world_beside_a_mission_is_named_when_it_is_taken():
+    out = run_cli("run", EXAMPLES / "docking.mcl", "--json")
+    assert out.returncode == 0, out.stderr
+    beside = EXAMPLES / "docking.world.json"
+    assert f"world: {beside}, the one beside the mission" in out.stderr
+    given = run_cli("run", EXAMPLES / "docking.mcl", "--json", "--world", beside)
+    assert given.returncode == 0 and "world:" not in given.stderr
+    assert json.loads(given.stdout) == json.loads(out.stdout)

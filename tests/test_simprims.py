@@ -24,8 +24,7 @@ from helpers import engines
 
 EXAMPLES = ROOT / "examples"
 DATA = ROOT / "tests" / "data" / "simprims"
-QUICK = ["sauce", "docking", "lawnmower", "dam_inspection"]
-LONG = ["multi_leg", "sampling"]   # missions of 20 to 26 minutes: a second or so each
+MISSIONS = sorted(p.stem for p in EXAMPLES.glob("*.mcl"))
 
 
 def _both(mission, **options) -> list[dict]:
@@ -33,8 +32,7 @@ def _both(mission, **options) -> list[dict]:
             for engine in ("petri", "reference")]
 
 
-@pytest.mark.parametrize("name", QUICK + [pytest.param(n, marks=pytest.mark.slow)
-                                          for n in LONG])
+@pytest.mark.parametrize("name", MISSIONS)
 def test_every_example_flies_on_the_simulator_and_the_engines_agree(name):
     petri, reference = _both(EXAMPLES / f"{name}.mcl")
     assert petri == reference

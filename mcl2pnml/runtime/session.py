@@ -203,7 +203,10 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     torn journal line dropped). However the run ends, the engine loop's
     safe stop has disabled every primitive still enabled.
     """
-    options, loaded = resumed(with_world(mission, options))
+    beside = with_world(mission, options)
+    if beside.world != options.world:   # the user named none: say which world is flown
+        note(f"world: {beside.world}, the one beside the mission (--world to give another)")
+    options, loaded = resumed(beside)
     # no output may be a file the run reads, nor the other output (--journal j --log j)
     check_outputs([("--journal", options.journal), ("--log", log_path)],
                   [("the mission", mission), ("the world (--world)", options.world),
