@@ -309,6 +309,9 @@ class Shown:
     title: str
     nets: list[tuple[Net, str]]
     trees: list[tuple[str, list["Instance"]]] = field(default_factory=list)
+    #: The boxes of each net's drawing by its label: a template's slots (the primitive of
+    #: Fig. 2's task, T1 and T2 of Fig. 4); a net without, each instance in its box.
+    boxes: dict[str, dict[str, list[str]]] = field(default_factory=dict)
 
 
 def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None) -> Shown:
@@ -348,9 +351,11 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None) -
     lib = default_library()
     template = lib.get(what)   # unknown: the error lists the templates
     if template.kind is TemplateKind.PATTERN:
-        return Shown(what, [(lib.composed(what), f"{what} with its primitive (Fig. 2)"),
-                            (lib.composed(lib.reduced.name), "its reduced model (Fig. 3)")])
-    return Shown(what, [(lib.composed(what), f"{what}, as the paper analyses it")])
+        full, reduced = f"{what} with its primitive (Fig. 2)", "its reduced model (Fig. 3)"
+        return Shown(what, [(lib.composed(what), full), (lib.composed(lib.reduced.name), reduced)],
+                     boxes={full: lib.slots(what), reduced: lib.slots(lib.reduced.name)})
+    label = f"{what}, as the paper analyses it"
+    return Shown(what, [(lib.composed(what), label)], boxes={label: lib.slots(what)})
 
 
 def save_show_page(path: str | Path, shown: Shown,
@@ -362,7 +367,8 @@ def save_show_page(path: str | Path, shown: Shown,
         entries = read_run(run_log)
         check_run(shown.nets[0][0], entries, str(run_log))
     tree = tree_data(shown.trees)
-    save_page(path, shown.title, [variant(net, label, tree) for net, label in shown.nets],
+    save_page(path, shown.title, [variant(net, label, tree, shown.boxes.get(label))
+                                  for net, label in shown.nets],
               entries, tree)
     return Path(path)
 

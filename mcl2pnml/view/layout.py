@@ -23,6 +23,7 @@ import json
 import shutil
 import subprocess
 from dataclasses import dataclass, field
+from typing import Mapping, Sequence
 
 from mcl2pnml.core.net import Marking, Net
 
@@ -48,13 +49,26 @@ def dot_available() -> bool:
 class Drawn:
     """Where a net is drawn: each node's position and each arc's bend points.
 
-    ``bends`` maps an arc's (source, target) to the points its line passes
-    through between its ends, in order from the source (PNML's arc
+    ``positions`` holds the net's own nodes only (what PNML's ``<graphics>``
+    say). ``bends`` maps an arc's (source, target) to the points its line
+    passes through between its ends, in order from the source (PNML's arc
     ``<graphics>``); an arc without bends is a straight line.
+
+    ``copies`` are the small dashed copies of a place that the drawing puts
+    beside each transition reading it or giving a token back to it (a
+    primitive's ON and OFF, a task's MTX: :mod:`mcl2pnml.io.dot`), by their
+    DOT name: the place they stand for and where. An arc drawn to a copy
+    has its bends under the copy's name instead of the place's, a key that
+    is no arc of the net, so that the PNML writer, which looks bends up by
+    the net's arcs, draws such an arc as a straight line to the place
+    itself. ``boxes`` are the boxes of the drawing (a task's primitive, a
+    structure's T1 and T2, a mission's calls): name -> (x0, y0, x1, y1).
     """
 
     positions: dict[str, tuple[float, float]]
     bends: dict[tuple[str, str], list[tuple[float, float]]] = field(default_factory=dict)
+    copies: dict[str, tuple[str, tuple[float, float]]] = field(default_factory=dict)
+    boxes: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
 
 
 def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
@@ -67,14 +81,17 @@ def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
     return drawn_layout(net, engine).positions
 
 
-def drawn_layout(net: Net, engine: str = "auto") -> Drawn:
+def drawn_layout(net: Net, engine: str = "auto",
+                 clusters: Mapping[str, Sequence[str]] | None = None) -> Drawn:
     """Positions for every node and, laid out by dot, bend points for the arcs.
 
     A net of instances (a compiled mission) is laid out in two levels, as its
     overview drawing shows it (:func:`mcl2pnml.io.dot.to_dot` with every box
     shut): each instance's nodes compactly in its box, the boxes and the
     places between them ranked by the calls. Another net (a template) is
-    laid out as its drawing. The layered layout gives no bend points.
+    laid out as its drawing, with ``clusters`` as its boxes (the primitive of
+    Fig. 2's task, T1 and T2 of Fig. 4's structures). The layered layout
+    gives no bend points.
     """
     if engine not in ENGINES:
         raise ValueError(f"unknown layout engine {engine!r}; one of {', '.join(ENGINES)}")
@@ -83,7 +100,7 @@ def drawn_layout(net: Net, engine: str = "auto") -> Drawn:
         engine = ("dot" if nodes <= DOT_LIMIT and dot_available()
                   else "layers" if nodes <= LAYERS_LIMIT else "none")
     if engine == "dot":
-        drawn = _dot_drawn(net)
+        drawn = _dot_drawn(net, clusters)
         if drawn is not None and len(drawn.positions) == nodes:
             return drawn
         # dot failed, ran out of time or left a node out (every node has a position,
@@ -110,33 +127,54 @@ def _run_dot(source: str) -> dict | None:
     return json.loads(result.stdout)
 
 
-def _dot_drawn(net: Net) -> Drawn | None:
+def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) -> Drawn | None:
     from mcl2pnml.io.dot import (border_out, dot_missing, instance_clusters,  # graphviz:
                                  to_dot)                                      # only now
     if not dot_available():
         raise dot_missing("--layout", "the layouts layers and none work without it, and auto "
                                       "lays out in layers when it is missing")
-    boxes = border_out(net, instance_clusters(net))
+    boxes = border_out(net, instance_clusters(net)) if clusters is None else {}
     if not boxes:
-        graph = _run_dot(to_dot(net, legend=False, expand=None).source)
+        graph = _run_dot(to_dot(net, clusters=clusters, legend=False, expand=None).source)
         if graph is None:
             return None
         frame = _Frame(graph)
-        nodes, splines = _read(graph)
+        nodes, splines, copies = _read(graph)
         drawn = Drawn({n: frame(*p) for n, p in nodes.items()},
-                      {arc: [frame(*p) for p in pts] for arc, pts in splines.items()})
+                      {arc: [frame(*p) for p in pts] for arc, pts in splines.items()},
+                      {c: (place, frame(*nodes[c])) for c, place in copies.items()},
+                      {name: _framed(frame, *bb) for name, bb in _cluster_boxes(graph).items()})
     else:
         drawn = _two_levels(net, boxes, to_dot)
     return drawn and _of(net, drawn)
 
 
+def _cluster_boxes(graph: dict) -> dict[str, tuple[float, float, float, float]]:
+    """The open boxes of dot's layout: name -> its rectangle in graphviz's points."""
+    return {o["name"][len("cluster_"):]: tuple(float(v) for v in o["bb"].split(","))
+            for o in graph.get("objects", []) if o.get("name", "").startswith("cluster_")
+            and "bb" in o}
+
+
+def _framed(frame: "_Frame", x0: float, y0: float, x1: float, y1: float
+            ) -> tuple[float, float, float, float]:
+    """A rectangle of graphviz's points as (left, top, right, bottom) in PNML's."""
+    (left, top), (right, bottom) = frame(x0, y1), frame(x1, y0)
+    return (left, top, right, bottom)
+
+
 def _of(net: Net, drawn: Drawn) -> Drawn:
-    """Only the net's nodes and arcs: not a box, nor a copy of a place drawn beside a
-    transition (whose arc in the net goes to the place itself, in a straight line)."""
+    """Only the net's nodes and arcs, and the copies of its places with their arcs: not
+    the nodes that stand for a shut box (their boxes are in ``boxes``)."""
     ids = net.place_index.keys() | net.transition_index.keys()
     arcs = {(a.source, a.target) for a in net.arcs}
+    copies = {c: (place, at) for c, (place, at) in drawn.copies.items() if place in ids}
+    # an arc drawn to a copy: the copy at one end, a transition of the net at the other
+    drawn_arcs = arcs | {(c, t) for (c, t) in drawn.bends if c in copies and t in ids} \
+        | {(t, c) for (t, c) in drawn.bends if c in copies and t in ids}
     return Drawn({n: p for n, p in drawn.positions.items() if n in ids},
-                 {arc: pts for arc, pts in drawn.bends.items() if arc in arcs and pts})
+                 {arc: pts for arc, pts in drawn.bends.items() if arc in drawn_arcs and pts},
+                 copies, drawn.boxes)
 
 
 def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
@@ -171,12 +209,19 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
     frame = _Frame(outer)
     centres = {o["name"]: [float(v) for v in o["pos"].split(",")]
                for o in outer.get("objects", []) if "pos" in o}
-    nodes, splines = _read(inner)
-    positions, bends = {}, {}
+    nodes, splines, copied = _read(inner)
+    positions, bends, copies, rects = {}, {}, {}, {}
     shift = {}
     for name, (x0, y0, x1, y1) in extent.items():
         cx, cy = centres[box_node(name)]
-        shift[name] = (cx - (x0 + x1) / 2, cy - (y0 + y1) / 2)
+        dx, dy = cx - (x0 + x1) / 2, cy - (y0 + y1) / 2
+        shift[name] = (dx, dy)
+        rects[name] = _framed(frame, x0 + dx, y0 + dy, x1 + dx, y1 + dy)
+    # a copy of a place is in the box of the transition it is drawn beside
+    for (a, b) in splines:
+        for c, t in ((a, b), (b, a)):
+            if c in copied and t in box:
+                box.setdefault(c, box[t])
     for n, (x, y) in nodes.items():
         if n in box:
             dx, dy = shift[box[n]]
@@ -184,7 +229,10 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
     for (a, b), pts in splines.items():
         dx, dy = shift[box[a]]
         bends[(a, b)] = [frame(x + dx, y + dy) for x, y in pts]
-    loose, drawn = _read(outer)
+    for c, place in copied.items():
+        if c in positions:
+            copies[c] = (place, positions.pop(c))
+    loose, drawn, _ = _read(outer)
     for n, p in loose.items():
         positions.setdefault(n, frame(*p))
     # an arc between a box and a place outside it runs along the overview's arc to the box
@@ -196,7 +244,7 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
         pts = drawn.get(ends) or list(reversed(drawn.get(ends[::-1], [])))
         if pts:
             bends[(arc.source, arc.target)] = [frame(*p) for p in pts]
-    return Drawn(positions, bends)
+    return Drawn(positions, bends, copies, rects)
 
 
 class _Frame:
@@ -211,9 +259,11 @@ class _Frame:
 
 
 def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
-                                dict[tuple[str, str], list[tuple[float, float]]]]:
+                                dict[tuple[str, str], list[tuple[float, float]]],
+                                dict[str, str]]:
     """The nodes' positions and the arcs' bend points in dot's JSON, by the ids of the
-    net (a box's name or a copy of a place is kept under its DOT name).
+    net (a box's name or a copy of a place is kept under its DOT name), and each copy's
+    place.
 
     The bend points of an arc are points on dot's spline between its ends:
     each Bézier piece's middle and end, the last end (at the node) left out.
@@ -221,6 +271,10 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
     from mcl2pnml.io.dot import node_id
     objects = graph.get("objects", [])
     names = {o["_gvid"]: (node_id(o["name"]) or o["name"]) for o in objects if "pos" in o}
+    # a copy is named after its place's DOT name and its number (``OFF~3``), and has
+    # the class copy: its name is never taken for a node of the net
+    copies = {names[o["_gvid"]]: node_id(o["name"].rpartition("~")[0])
+              for o in objects if "pos" in o and o.get("class") == "copy"}
     nodes = {names[o["_gvid"]]: tuple(float(v) for v in o["pos"].split(","))
              for o in objects if "pos" in o}
     splines = {}
@@ -237,7 +291,7 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
         if e.get("dir") == "back":    # drawn from head to tail: the arc runs that way
             tail, head, on_curve = head, tail, [*reversed(on_curve[:-1]), pts[0]]
         splines[(tail, head)] = on_curve[:-1]
-    return nodes, splines
+    return nodes, splines, copies
 
 
 def _layered_layout(net: Net) -> dict[str, tuple[float, float]]:

@@ -1,9 +1,14 @@
 """``mcl2pnml show``: a net as one self-contained HTML page, to play the token game.
 
-The page is for teaching Petri-net supervisors: it draws the net where its
-PNML ``<graphics>`` put it (:mod:`mcl2pnml.view.layout`), boxes the nodes of each
-instance (a task, a structure, a call site: :func:`~mcl2pnml.io.dot.instance_clusters`)
-and highlights the fusion places where they meet; a student clicks an
+The page is for teaching Petri-net supervisors: it draws the net as its
+static drawing does (:mod:`mcl2pnml.io.dot`, laid out by
+:func:`~mcl2pnml.view.layout.drawn_layout`): each arc along dot's route
+around the nodes (its bend points), a place that many transitions read or
+give back to (a primitive's ON and OFF, a task's MTX) as a small dashed
+copy beside each of them, the boxes of the drawing (the primitive of
+Fig. 2's task, T1 and T2 of Fig. 4's structures, each instance of a
+mission: :func:`~mcl2pnml.io.dot.instance_clusters`), and it highlights the
+fusion places where they meet; a student clicks an
 enabled transition to fire it, steps back, resets, and sees the marking and
 every P-invariant's value at each step (each must keep its value at M0: a
 broken one would be a bug of ours, and is shown in red). A recorded run (the
@@ -74,12 +79,12 @@ import math
 import re
 from importlib import resources
 from pathlib import Path
-from typing import Any, Iterable, Protocol, Sequence
+from typing import Any, Iterable, Mapping, Protocol, Sequence
 
 from mcl2pnml.io.dot import border_out, instance_clusters
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_text
-from mcl2pnml.view.layout import layout
+from mcl2pnml.view.layout import Drawn, drawn_layout
 from mcl2pnml.core.net import Net, thaw
 from mcl2pnml.core.payloads import doc_of, read_transition
 from mcl2pnml.view.reachability import reachability_graph
@@ -150,9 +155,16 @@ def tree_parts(net: Net, tree: Sequence[dict[str, Any]]) -> list[dict[str, Any]]
     return out
 
 
-def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = ()) -> dict[str, Any]:
-    """One net as the page draws it: nodes with positions, arcs by index, boxes, invariants,
-    where the nodes of ``tree`` (:func:`tree_data`) are, and its reachability graph."""
+def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
+            clusters: Mapping[str, Sequence[str]] | None = None) -> dict[str, Any]:
+    """One net as the page draws it: nodes with positions, arcs by index with their bend
+    points, copies of places, boxes, invariants, where the nodes of ``tree``
+    (:func:`tree_data`) are, and its reachability graph.
+
+    ``clusters`` are the boxes of a template's drawing (its slots: the
+    primitive of Fig. 2's task, T1 and T2 of Fig. 4); None, each instance
+    of a compiled mission in its box.
+    """
     from analysis.invariants import p_invariant_basis
     from mcl2pnml.core.structure import structure
 
@@ -160,8 +172,9 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = ()) -> dict[s
     if nodes > MAX_NODES:
         raise Mcl2PnmlError(f"net '{net.name}' has {nodes:,} nodes; a page draws at most "
                             f"{MAX_NODES:,} (compile it to PNML or DOT instead)")
-    pos = layout(net, "auto")
-    boxes = instance_clusters(net)
+    drawn = drawn_layout(net, "auto", clusters)
+    pos = drawn.positions
+    boxes = instance_clusters(net) if clusters is None else dict(clusters)
     kept = border_out(net, boxes)
     box_of = {n: name for name, members in kept.items() for n in members}
     index = {p.id: k for k, p in enumerate(net.places)}
@@ -170,7 +183,8 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = ()) -> dict[s
     places = [{"id": p.id, "label": p.label, "x": pos[p.id][0], "y": pos[p.id][1],
                "tokens": net.initial[p.id], "interface": p.interface,
                "fusion": p.id in border, "group": box_of.get(p.id),
-               "doc": _text(doc_of(p.payload))} for p in net.places]
+               "doc": _text(doc_of(p.payload)), "copies": []} for p in net.places]
+    lines = _lines(net, drawn, places, index)
     transitions = []
     for t in net.transitions:
         payload = read_transition(t)
@@ -188,13 +202,45 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = ()) -> dict[s
                     if a.kind.value == "normal"],
             "read": [[index[a.source], a.weight] for a in net.pre[t.id]
                      if a.kind.value == "read"],
-            "post": [[index[a.target], a.weight] for a in net.post[t.id]]})
+            "post": [[index[a.target], a.weight] for a in net.post[t.id]],
+            # how each arc of pre, read and post is drawn, in the same order
+            "lines": {"pre": [lines(a) for a in net.pre[t.id] if a.kind.value == "normal"],
+                      "read": [lines(a) for a in net.pre[t.id] if a.kind.value == "read"],
+                      "post": [lines(a) for a in net.post[t.id]]}})
     basis = p_invariant_basis(structure(net))[:MAX_INVARIANTS]
     invariants = [{"terms": [[index[p], c] for p, c in y.items()],
                    "value": sum(c * net.initial[p] for p, c in y.items())} for y in basis]
     return {"label": label, "name": net.name, "places": places, "transitions": transitions,
             "groups": sorted(kept), "invariants": invariants, "tree": tree_parts(net, tree),
+            "boxes": [[name, *drawn.boxes[name]] for name in sorted(kept) if name in drawn.boxes],
             "graph": reachability_graph(net).to_json()}
+
+
+def _lines(net: Net, drawn: Drawn, places: list[dict[str, Any]], index: dict[str, int]):
+    """Gives each place its copies' positions (``places[k]["copies"]``) and returns how an
+    arc is drawn: ``[copy, bends]``, the copy of its place it is drawn to (an index in
+    the place's copies, -1 for the place itself) and its bend points as one flat list
+    of numbers (x, y, x, y...) from the arc's source to its target."""
+    number: dict[str, int] = {}
+    for c, (place, (x, y)) in drawn.copies.items():
+        copies = places[index[place]]["copies"]
+        number[c] = len(copies)
+        copies.append([x, y])
+    # the arcs drawn to a copy: (place, transition) or (transition, place) -> the copy
+    to_copy: dict[tuple[str, str], str] = {}
+    for a, b in drawn.bends:
+        if a in drawn.copies:
+            to_copy[(drawn.copies[a][0], b)] = a
+        elif b in drawn.copies:
+            to_copy[(a, drawn.copies[b][0])] = b
+
+    def line(arc) -> list[Any]:
+        c = to_copy.get((arc.source, arc.target))
+        key = (arc.source, arc.target) if c is None else \
+            ((c, arc.target) if arc.target in net.transition_index else (arc.source, c))
+        return [-1 if c is None else number[c],
+                [v for point in drawn.bends.get(key, ()) for v in point]]
+    return line
 
 
 def _text(doc: Any) -> str | None:
