@@ -235,7 +235,10 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
     loose, drawn, _ = _read(outer)
     for n, p in loose.items():
         positions.setdefault(n, frame(*p))
-    # an arc between a box and a place outside it runs along the overview's arc to the box
+    # an arc between a box and a place outside it runs along the overview's arc to the
+    # box, then inside the box to its node (_way_in), not across the box's other nodes
+    sizes = _half_sizes(inner)
+    spots = {**positions, **{c: at for c, (_, at) in copies.items()}}   # a copy is in the way too
     for arc in net.arcs:
         ends = (arc.source if arc.source not in box else box_node(box[arc.source]),
                 arc.target if arc.target not in box else box_node(box[arc.target]))
@@ -243,8 +246,107 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
             continue
         pts = drawn.get(ends) or list(reversed(drawn.get(ends[::-1], [])))
         if pts:
-            bends[(arc.source, arc.target)] = [frame(*p) for p in pts]
+            pts = [frame(*p) for p in pts]
+            if arc.target in box:
+                pts += _way_in(rects[box[arc.target]], pts[-1], arc.target, spots, box, sizes)
+            if arc.source in box:
+                pts = _way_in(rects[box[arc.source]], pts[0], arc.source, spots, box,
+                              sizes)[::-1] + pts
+            bends[(arc.source, arc.target)] = pts
     return Drawn(positions, bends, copies, rects)
+
+
+#: How far inside its box an arc runs along the box's border (dot keeps the nodes 8
+#: points inside a box's border).
+INSET = 4.0
+
+
+def _half_sizes(graph: dict) -> dict[str, tuple[float, float]]:
+    """Each node's half width and half height in dot's layout, in points."""
+    from mcl2pnml.io.dot import node_id
+    return {node_id(o["name"]) or o["name"]: (float(o["width"]) * 36, float(o["height"]) * 36)
+            for o in graph.get("objects", []) if "pos" in o and "width" in o}
+
+
+def _way_in(rect: tuple[float, float, float, float], outside: tuple[float, float], node: str,
+            positions: Mapping[str, tuple[float, float]], box: Mapping[str, str],
+            sizes: Mapping[str, tuple[float, float]]) -> list[tuple[float, float]]:
+    """The points from the box's border, where the overview's arc from ``outside`` comes
+    in, to ``node`` inside the box: along the border (just inside it, where dot puts no
+    node) to a door on a side, then to the node by a way that passes no other node of
+    the box: straight from the door, or out of the node up or down into the gap between
+    dot's ranks and along it to the door; the shortest such way (the straight way from
+    the nearest side if none is clear)."""
+    x0, y0, x1, y1 = rect[0] + INSET, rect[1] + INSET, rect[2] - INSET, rect[3] - INSET
+    nx, ny = positions[node]
+    others = [(positions[m], sizes.get(m, (0.0, 0.0))) for m, b in box.items()
+              if b == box[node] and m != node and m in positions]
+
+    def clear(way):
+        return not any(_segment_meets(a, b, c, h) for a, b in zip(way, way[1:])
+                       for c, h in others)
+    ways = [[q] for q in ((nx, y0), (nx, y1), (x0, ny), (x1, ny))]
+    half = sizes.get(node, (0.0, 0.0))[1]
+    for step in range(4, 64, 4):
+        for y in (ny - half - step, ny + half + step):
+            if y0 < y < y1:
+                ways += [[(x0, y), (nx, y)], [(x1, y), (nx, y)]]
+
+    def length(way):
+        pts = [*way, (nx, ny)]
+        return sum(abs(a[0] - b[0]) + abs(a[1] - b[1]) for a, b in zip(pts, pts[1:]))
+    ways.sort(key=length)
+    way = next((w for w in ways if clear([*w, (nx, ny)])), ways[0])
+    entry = (min(max(outside[0], x0), x1), min(max(outside[1], y0), y1))
+    if x0 < entry[0] < x1 and y0 < entry[1] < y1:    # inside: to the nearest side
+        entry = min(((entry[0], y0), (entry[0], y1), (x0, entry[1]), (x1, entry[1])),
+                    key=lambda q: abs(q[0] - entry[0]) + abs(q[1] - entry[1]))
+    return [*_along((x0, y0, x1, y1), entry, way[0]), *way[1:]]
+
+
+def _segment_meets(a: tuple[float, float], b: tuple[float, float], centre: tuple[float, float],
+                   half: tuple[float, float]) -> bool:
+    """Whether the segment ab passes through the rectangle of ``half`` sizes around
+    ``centre`` (Liang-Barsky clipping)."""
+    lo, hi = 0.0, 1.0
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    for p, q in ((-dx, a[0] - (centre[0] - half[0])), (dx, centre[0] + half[0] - a[0]),
+                 (-dy, a[1] - (centre[1] - half[1])), (dy, centre[1] + half[1] - a[1])):
+        if p == 0:
+            if q < 0:
+                return False
+        elif p < 0:
+            lo = max(lo, q / p)
+        else:
+            hi = min(hi, q / p)
+        if lo > hi:
+            return False
+    return True
+
+
+def _along(rect: tuple[float, float, float, float], a: tuple[float, float],
+           b: tuple[float, float]) -> list[tuple[float, float]]:
+    """From ``a`` to ``b``, both on the rectangle's outline, along it the shorter way
+    round: ``a``, the corners passed, ``b``."""
+    x0, y0, x1, y1 = rect
+    w, h = x1 - x0, y1 - y0
+    perimeter = 2 * (w + h)
+
+    def s(q):   # distance along the outline, clockwise from the top left corner
+        x, y = q
+        return (x - x0 if y == y0 else w + y - y0 if x == x1 else
+                w + h + x1 - x if y == y1 else 2 * w + h + y1 - y)
+    corners = [(0.0, (x0, y0)), (w, (x1, y0)), (w + h, (x1, y1)), (2 * w + h, (x0, y1))]
+    sa, sb = s(a), s(b)
+    forward = (sb - sa) % perimeter
+    if forward <= perimeter / 2:
+        passed = sorted(((c - sa) % perimeter, q) for c, q in corners
+                        if 0 < (c - sa) % perimeter < forward)
+    else:
+        passed = sorted(((sa - c) % perimeter, q) for c, q in corners
+                        if 0 < (sa - c) % perimeter < perimeter - forward)
+    return [(round(a[0], 1), round(a[1], 1)), *(q for _, q in passed),
+            (round(b[0], 1), round(b[1], 1))]
 
 
 class _Frame:

@@ -1,0 +1,164 @@
+"""The token-game page draws a net as its static drawing does (Figs. 2-4): no arc through a
+node it does not connect.
+
+The check reads the data the page draws (the JSON inside the page ``mcl2pnml
+show`` writes) and follows the page's script: each arc a polyline from its
+source's border through its bend points to its target's border, to a copy of
+its place where the drawing has one; the nodes as the page draws them. The
+shapes are tested with :mod:`drawcheck`'s rules (an arc may graze a circle, not
+cut through it). The same data drawn the old way, straight lines from centre to
+centre and no copies, does cross nodes: the check would see it.
+"""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+from matplotlib.path import Path as Curve
+from matplotlib.transforms import Bbox
+
+from drawcheck import _core
+from helpers import ROOT
+from mcl2pnml import pipeline
+from test_show import TWO_TASKS, browser, page_of  # noqa: F401 (fixtures)
+
+pytestmark = pytest.mark.skipif(shutil.which("dot") is None,
+                                reason="graphviz's dot is not installed")
+
+#: The page's shapes (show_page.html): a place's radius, a copy's, a transition's bar.
+R, RC, TW, TH = 16, 10, 9, 20
+
+
+@lru_cache(maxsize=None)
+def page_data(what: str, directory: str) -> dict:
+    """The data of ``mcl2pnml show WHAT``'s page, read back from the page itself."""
+    path = Path(directory) / (Path(what).stem + ".html")
+    pipeline.save_show_page(path, pipeline.show_nets(what))
+    html = path.read_text()
+    return json.loads(re.search(r'<script type="application/json" id="data">(.*?)</script>',
+                                html, re.S).group(1))
+
+
+def nodes(v: dict) -> list[tuple[str, Bbox, bool]]:
+    """Every node the page draws: its name, its shape's box, whether it is round."""
+    out = []
+    for p in v["places"]:
+        out.append((f"place {p['id']}", _box(p["x"], p["y"], R, R), True))
+        out += [(f"place {p['id']} (copy {k})", _box(x, y, RC, RC), True)
+                for k, (x, y) in enumerate(p["copies"])]
+    out += [(f"transition {t['id']}", _box(t["x"], t["y"], TW / 2, TH / 2), False)
+            for t in v["transitions"]]
+    return out
+
+
+def _box(x: float, y: float, hw: float, hh: float) -> Bbox:
+    return Bbox([[x - hw, y - hh], [x + hw, y + hh]])
+
+
+def arcs(v: dict, straight: bool = False):
+    """Each arc as the page draws it: its name, the names of the two nodes it joins, its
+    points (``straight``: from centre to centre, as the page drew them before)."""
+    for t in v["transitions"]:
+        for role in ("pre", "read", "post"):
+            for (p, _), (copy, flat) in zip(t[role], t["lines"][role]):
+                place = v["places"][p]
+                if straight:
+                    copy, flat = -1, []
+                end = (f"place {place['id']}" if copy < 0
+                       else f"place {place['id']} (copy {copy})")
+                at = (place["x"], place["y"]) if copy < 0 else tuple(place["copies"][copy])
+                bends = list(zip(flat[::2], flat[1::2]))
+                ends = [at, (t["x"], t["y"])]
+                if role == "post":
+                    ends.reverse()
+                name = (f"{place['id']}->{t['id']}" if role != "post"
+                        else f"{t['id']}->{place['id']}")
+                yield name, {end, f"transition {t['id']}"}, [ends[0], *bends, ends[1]]
+
+
+def crossings(v: dict, straight: bool = False) -> list[str]:
+    """Every arc drawn through a node it does not join."""
+    shapes = nodes(v)
+    found = []
+    for name, ends, points in arcs(v, straight):
+        line = Curve(points)
+        for node, box, round_ in shapes:
+            if node not in ends and line.intersects_bbox(_core(box, round_), filled=False):
+                found.append(f"arc {name} through {node}")
+    return found
+
+
+def test_the_task_and_its_reduced_model_are_drawn_around_their_nodes(tmp_path_factory):
+    """Fig. 2's task with its primitive, and Fig. 3's reduced task (the page's model
+    switch): drawn straight, t3->MTX and t2->MTX ran through EXE and t1."""
+    task, reduced = page_data("task", str(tmp_path_factory.mktemp("task")))["variants"]
+    assert crossings(task) == []
+    assert crossings(reduced) == []
+    assert crossings(task, straight=True) != []
+    old = crossings(reduced, straight=True)
+    assert any(c.startswith(("arc t3->MTX", "arc t2->MTX")) for c in old), old
+    # the places many transitions read (ON, OFF) or get back (MTX) are drawn beside each
+    copies = {p["id"]: len(p["copies"]) for p in task["places"]}
+    assert copies["ON"] >= 3 and copies["OFF"] >= 3 and copies["MTX"] >= 2
+    # the primitive in its box, as Fig. 2 draws it
+    (name, x0, y0, x1, y1), = task["boxes"]
+    t = {t["id"]: t for t in task["transitions"]}
+    assert name == "primitive" and x0 < t["on"]["x"] < x1 and y0 < t["on"]["y"] < y1
+
+
+def test_the_sequence_is_drawn_around_its_nodes_with_t1_and_t2_boxed(tmp_path_factory):
+    """Fig. 4's sequence: T1 and T2 in their boxes, no arc through a node."""
+    v, = page_data("sequence", str(tmp_path_factory.mktemp("sequence")))["variants"]
+    assert crossings(v) == []
+    assert sorted(b[0] for b in v["boxes"]) == ["T1", "T2"]
+
+
+def test_a_mission_is_drawn_around_its_nodes(tmp_path_factory):
+    """A two-task mission, in full and reduced (its page's model switch)."""
+    directory = tmp_path_factory.mktemp("two")
+    (directory / "two.mcl").write_text(TWO_TASKS)
+    for v in page_data(str(directory / "two.mcl"), str(directory))["variants"]:
+        assert crossings(v) == [], v["label"]
+        # each box of the overview holds its nodes
+        where = {name: (x0, y0, x1, y1) for name, x0, y0, x1, y1 in v["boxes"]}
+        for n in [*v["places"], *v["transitions"]]:
+            if n["group"] is not None:
+                x0, y0, x1, y1 = where[n["group"]]
+                assert x0 <= n["x"] <= x1 and y0 <= n["y"] <= y1, n["id"]
+
+
+def test_the_page_draws_arcs_along_their_bends_and_copies_with_their_place(tmp_path, page_of):
+    """In the browser: an arc with bend points is a path through them, and a copy of a
+    place shows the place's tokens."""
+    pipeline.save_show_page(tmp_path / "task.html", pipeline.show_nets("task"))
+    page = page_of(tmp_path / "task.html")
+    points = page.locator('#net path.arc[data-from="t05"][data-to="W_OK"], '
+                          '#net path.arc[data-from="EXE"][data-to="t03"]').evaluate_all(
+        "(ps) => ps.map((p) => p.getAttribute('d').split('L').length)")
+    data = page_data("task", str(tmp_path))["variants"][0]
+    bent = {(t["id"], len(flat) // 2) for t in data["transitions"]
+            for _, flat in t["lines"]["post"] if flat}
+    assert bent, "no arc of the task has bends"
+    # every arc drawn with all its points: its two ends and each bend between them
+    counts = page.locator("#net path.arc").evaluate_all(
+        "(ps) => ps.map((p) => p.getAttribute('d').split('L').length)")
+    expected = sorted(2 + len(flat) // 2 for t in data["transitions"]
+                      for role in ("pre", "read", "post") for _, flat in t["lines"][role])
+    assert sorted(counts) == expected and max(counts) > 2 and points
+    # OFF and its copies hold its token; after t01 and on, ON's copies hold one
+    off = page.locator('#net g.place[data-id="OFF"]')
+    assert off.count() == 1 + len(next(p for p in data["places"] if p["id"] == "OFF")["copies"])
+    assert off.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
+        == [1] * off.count()
+    page.click('#net g.transition[data-id="t01"]')
+    page.click('#net g.transition[data-id="on"]')
+    assert off.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
+        == [0] * off.count()
+    on = page.locator('#net g.place[data-id="ON"]')
+    assert on.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
+        == [1] * on.count()
+    assert page.locator('#net g.place.copy[data-id="ON"].gained').count() == on.count() - 1
