@@ -24,6 +24,7 @@ from matplotlib.transforms import Bbox
 from drawcheck import _core
 from helpers import ROOT
 from mcl2pnml import pipeline
+from mcl2pnml.view.layout import drawn_layout
 from test_show import TWO_TASKS, browser, page_of  # noqa: F401 (fixtures)
 
 pytestmark = pytest.mark.skipif(shutil.which("dot") is None,
@@ -131,6 +132,20 @@ def test_a_mission_is_drawn_around_its_nodes(tmp_path_factory):
                 assert x0 <= n["x"] <= x1 and y0 <= n["y"] <= y1, n["id"]
 
 
+def test_the_copies_are_the_pages_alone_pnml_draws_the_nets_own_nodes():
+    """The copies of Fig. 2's ON, OFF and MTX are in the drawing, not in its PNML."""
+    from lxml import etree
+
+    net = pipeline.template_net("task")
+    drawn = drawn_layout(net, "dot", pipeline.template_clusters("task"))
+    assert drawn.copies and set(drawn.positions) == {n.id for n in (*net.places,
+                                                                     *net.transitions)}
+    assert {place for place, _ in drawn.copies.values()} == {"ON", "OFF", "MTX"}
+    root = etree.fromstring(pipeline.to_pnml_bytes(net, "dot"))
+    ids = {e.get("id") for e in root.iter() if e.tag.endswith(("}place", "}transition"))}
+    assert ids == set(drawn.positions)
+
+
 def test_the_page_draws_arcs_along_their_bends_and_copies_with_their_place(tmp_path, page_of):
     """In the browser: an arc with bend points is a path through them, and a copy of a
     place shows the place's tokens."""
@@ -150,7 +165,7 @@ def test_the_page_draws_arcs_along_their_bends_and_copies_with_their_place(tmp_p
                       for role in ("pre", "read", "post") for _, flat in t["lines"][role])
     assert sorted(counts) == expected and max(counts) > 2 and points
     # OFF and its copies hold its token; after t01 and on, ON's copies hold one
-    off = page.locator('#net g.place[data-id="OFF"]')
+    off = page.locator('#net g.place[data-id="OFF"], #net g.copy[data-id="OFF"]')
     assert off.count() == 1 + len(next(p for p in data["places"] if p["id"] == "OFF")["copies"])
     assert off.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
         == [1] * off.count()
@@ -158,7 +173,7 @@ def test_the_page_draws_arcs_along_their_bends_and_copies_with_their_place(tmp_p
     page.click('#net g.transition[data-id="on"]')
     assert off.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
         == [0] * off.count()
-    on = page.locator('#net g.place[data-id="ON"]')
+    on = page.locator('#net g.place[data-id="ON"], #net g.copy[data-id="ON"]')
     assert on.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
         == [1] * on.count()
-    assert page.locator('#net g.place.copy[data-id="ON"].gained').count() == on.count() - 1
+    assert page.locator('#net g.copy[data-id="ON"].gained').count() == on.count() - 1

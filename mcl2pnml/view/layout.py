@@ -7,7 +7,13 @@ of dot's curve as its bend points (PNML's arc ``<graphics>``), so that an
 editor draws the arcs around the nodes as the SVG does. A compiled mission
 is laid out in two levels, as its overview: each call's nodes compactly in
 its box, the boxes and the places between them by the call hierarchy (a
-few screens, not one column 25,000 points long). Large nets, where ``dot``
+few screens, not one column 25,000 points long); an arc between a place
+outside a box and a node inside runs along the overview's arc to the box,
+then inside it along its border to a way in that passes no other node
+(:func:`_way_in`). The token-game page (:mod:`mcl2pnml.view.show`) draws
+the same picture: it also takes the drawing's boxes and its copies of a
+place read or given back to by many transitions (Fig. 2's ON, OFF, MTX),
+which PNML has not. Large nets, where ``dot``
 would take minutes, are laid out in columns by their breadth-first
 distance from the initially marked places, which is linear in the size of
 the net and still shows the flow from start to end. Above
