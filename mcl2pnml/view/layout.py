@@ -245,6 +245,12 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
     # box, then inside the box to its node (_way_in), not across the box's other nodes
     sizes = _half_sizes(inner)
     spots = {**positions, **{c: at for c, (_, at) in copies.items()}}   # a copy is in the way too
+    lanes: dict[str, int] = {}       # arcs along each box's border so far
+
+    def way_in(name: str, outside: tuple[float, float], node: str) -> list[tuple[float, float]]:
+        # each arc along its own lane, so that arcs along one border stay apart
+        lane = lanes[name] = lanes.get(name, -1) + 1
+        return _way_in(rects[name], outside, node, spots, box, sizes, LANES[lane % len(LANES)])
     for arc in net.arcs:
         ends = (arc.source if arc.source not in box else box_node(box[arc.source]),
                 arc.target if arc.target not in box else box_node(box[arc.target]))
@@ -254,17 +260,16 @@ def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
         if pts:
             pts = [frame(*p) for p in pts]
             if arc.target in box:
-                pts += _way_in(rects[box[arc.target]], pts[-1], arc.target, spots, box, sizes)
+                pts += way_in(box[arc.target], pts[-1], arc.target)
             if arc.source in box:
-                pts = _way_in(rects[box[arc.source]], pts[0], arc.source, spots, box,
-                              sizes)[::-1] + pts
+                pts = way_in(box[arc.source], pts[0], arc.source)[::-1] + pts
             bends[(arc.source, arc.target)] = pts
     return Drawn(positions, bends, copies, rects)
 
 
-#: How far inside its box an arc runs along the box's border (dot keeps the nodes 8
-#: points inside a box's border).
-INSET = 4.0
+#: How far inside its box an arc runs along the box's border, one lane after another
+#: (dot keeps the nodes 8 points inside a box's border).
+LANES = (2.0, 4.0, 6.0)
 
 
 def _half_sizes(graph: dict) -> dict[str, tuple[float, float]]:
@@ -276,14 +281,14 @@ def _half_sizes(graph: dict) -> dict[str, tuple[float, float]]:
 
 def _way_in(rect: tuple[float, float, float, float], outside: tuple[float, float], node: str,
             positions: Mapping[str, tuple[float, float]], box: Mapping[str, str],
-            sizes: Mapping[str, tuple[float, float]]) -> list[tuple[float, float]]:
+            sizes: Mapping[str, tuple[float, float]], inset: float) -> list[tuple[float, float]]:
     """The points from the box's border, where the overview's arc from ``outside`` comes
     in, to ``node`` inside the box: along the border (just inside it, where dot puts no
     node) to a door on a side, then to the node by a way that passes no other node of
     the box: straight from the door, or out of the node up or down into the gap between
     dot's ranks and along it to the door; the shortest such way (the straight way from
-    the nearest side if none is clear)."""
-    x0, y0, x1, y1 = rect[0] + INSET, rect[1] + INSET, rect[2] - INSET, rect[3] - INSET
+    the nearest side if none is clear). The border is followed ``inset`` points inside."""
+    x0, y0, x1, y1 = rect[0] + inset, rect[1] + inset, rect[2] - inset, rect[3] - inset
     nx, ny = positions[node]
     others = [(positions[m], sizes.get(m, (0.0, 0.0))) for m, b in box.items()
               if b == box[node] and m != node and m in positions]
@@ -366,6 +371,10 @@ class _Frame:
         return (round(x - self.x0 + MARGIN, 1), round(self.y1 - y + MARGIN, 1))
 
 
+#: Where each Bézier piece of dot's spline is sampled, besides its end.
+_SAMPLES = (0.25, 0.5, 0.75)
+
+
 def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
                                 dict[tuple[str, str], list[tuple[float, float]]],
                                 dict[str, str]]:
@@ -374,7 +383,10 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
     place.
 
     The bend points of an arc are points on dot's spline between its ends:
-    each Bézier piece's middle and end, the last end (at the node) left out.
+    each Bézier piece's quarters and end, the last end (at the node) left out,
+    close enough to the curve that lines between them pass no node the curve
+    passes by (a piece's middle alone cut the corner of a long bend across a
+    node).
     """
     from mcl2pnml.io.dot import node_id
     objects = graph.get("objects", [])
@@ -393,7 +405,11 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
         on_curve = []
         for k in range(0, len(pts) - 3, 3):
             (x0, y0), (x1, y1), (x2, y2), (x3, y3) = pts[k:k + 4]
-            on_curve.append(((x0 + 3 * x1 + 3 * x2 + x3) / 8, (y0 + 3 * y1 + 3 * y2 + y3) / 8))
+            for t in _SAMPLES:
+                u = 1 - t
+                a, b, c, d = u * u * u, 3 * u * u * t, 3 * u * t * t, t * t * t
+                on_curve.append((a * x0 + b * x1 + c * x2 + d * x3,
+                                 a * y0 + b * y1 + c * y2 + d * y3))
             on_curve.append((x3, y3))
         tail, head = names[e["tail"]], names[e["head"]]
         if e.get("dir") == "back":    # drawn from head to tail: the arc runs that way
