@@ -56,7 +56,9 @@ it; the page trusts only its own template, script and style:
   refused, with the file, line and column (:func:`read_run`);
 * the script never makes markup from data: text goes in with
   ``textContent``, the drawing is SVG elements made one by one, and no
-  attribute it sets from data is a URL, a style or an event handler;
+  attribute it sets from data is a URL, a style or an event handler; the
+  drawing's geometry (positions, bend points, copies, boxes) is sent as
+  numbers only, and an arc's path is made of those numbers by the script;
 * a Content-Security-Policy (:func:`csp`) lets run only the page's one
   script and one style, named by their SHA-256 hashes computed here from the
   template (no ``'unsafe-inline'``), and nothing else: ``default-src 'none'``
