@@ -1,0 +1,165 @@
+"""Properties of a net's runs: the specification patterns and scopes, over markings.
+
+A mission engineer states what must (never) happen in a mission: "the marker
+is never released unless the cross was found", "after an abort, no primitive
+stays enabled". Such a statement is one of the property specification
+patterns catalogued by Dwyer, Avrunin and Corbett ("Patterns in property
+specifications for finite-state verification", ICSE 1999): a *pattern*
+(absence, universality, existence, bounded existence, precedence, response)
+applied within a *scope* (globally, before R, after Q, between Q and R,
+after Q until R).
+
+This module is the typed form every stage shares, and nothing else: the
+language compiles a mission's ``property`` declarations to it (its atoms,
+"KeepDepth is enabled", "the call Survey-1 ended ABORTED", become
+predicates on the places of the compiled net), :mod:`analysis.properties`
+checks it on the state space, and :mod:`mcl2pnml.io.mccquery` writes it in
+the Model Checking Contest's property language. So a predicate here is
+over a net's places only (token counts compared with constants), the one
+kind of atom every Petri-net tool reads.
+
+Semantics. A run is a maximal firing sequence from the initial marking,
+seen as the sequence of markings it passes through: a finite run ends in a
+dead marking (a mission's proper end is one), an infinite run loops. The
+patterns and scopes mean what Dwyer et al.'s LTL mappings say, read over
+these sequences, with a finite run taken as it is (no stuttering of its last
+marking is assumed: "eventually" must happen within it). A property holds
+when it holds on every run.
+"""
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from mcl2pnml.core.errors import Location
+
+
+# -- predicates on markings ---------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Tokens:
+    """The sum of the tokens in ``places`` is at least ``at_least``.
+
+    "A place is marked" is ``Tokens((p,), 1)``; "all of them empty" is
+    ``Not(Tokens(places, 1))``. Sums compared from below only, as the
+    contest's ``integer-le`` writes them.
+    """
+
+    places: tuple[str, ...]
+    at_least: int = 1
+
+
+@dataclass(frozen=True)
+class Not:
+    arg: "Predicate"
+
+
+@dataclass(frozen=True)
+class And:
+    args: tuple["Predicate", ...]
+
+
+@dataclass(frozen=True)
+class Or:
+    args: tuple["Predicate", ...]
+
+
+@dataclass(frozen=True)
+class Const:
+    """True or false in every marking (an empty conjunction, a scope never closed)."""
+
+    value: bool
+
+
+Predicate = Tokens | Not | And | Or | Const
+
+
+def holds(predicate: Predicate, marking) -> bool:
+    """Whether ``predicate`` holds in ``marking`` (a mapping: place id -> tokens)."""
+    if isinstance(predicate, Tokens):
+        return sum(marking.get(p, 0) for p in predicate.places) >= predicate.at_least
+    if isinstance(predicate, Not):
+        return not holds(predicate.arg, marking)
+    if isinstance(predicate, And):
+        return all(holds(a, marking) for a in predicate.args)
+    if isinstance(predicate, Or):
+        return any(holds(a, marking) for a in predicate.args)
+    return predicate.value
+
+
+def places_of(predicate: Predicate) -> frozenset[str]:
+    """Every place a predicate reads."""
+    if isinstance(predicate, Tokens):
+        return frozenset(predicate.places)
+    if isinstance(predicate, Not):
+        return places_of(predicate.arg)
+    if isinstance(predicate, (And, Or)):
+        return frozenset().union(*(places_of(a) for a in predicate.args))
+    return frozenset()
+
+
+# -- patterns and scopes (Dwyer, Avrunin and Corbett) --------------------------------------
+
+class Pattern(enum.Enum):
+    """What must happen, or not, inside the scope."""
+
+    ABSENCE = "absence"
+    """P never holds inside the scope ("never P")."""
+    UNIVERSALITY = "universality"
+    """P holds in every marking inside the scope ("always P")."""
+    EXISTENCE = "existence"
+    """P holds in some marking inside the scope ("eventually P")."""
+    BOUNDED_EXISTENCE = "bounded existence"
+    """P becomes true at most ``bound`` times inside the scope (a becoming
+    true is a marking where P holds after one where it did not, or the
+    scope's first marking where it holds)."""
+    PRECEDENCE = "precedence"
+    """S precedes P: inside the scope, P holds only after S has held
+    ("P only after S"; S need not happen if P never does)."""
+    RESPONSE = "response"
+    """S responds to P: inside the scope, every marking where P holds is
+    followed (there or later, inside the scope) by one where S holds."""
+
+
+class ScopeKind(enum.Enum):
+    """The part of a run a pattern speaks about."""
+
+    GLOBALLY = "globally"
+    """The whole run."""
+    BEFORE = "before"
+    """From the start up to (not including) the first marking where R holds;
+    the whole run if R never holds."""
+    AFTER = "after"
+    """From the first marking where Q holds to the end of the run."""
+    BETWEEN = "between"
+    """From each marking where Q holds (R not) to the next where R holds;
+    an interval that R never closes does not count."""
+    AFTER_UNTIL = "after until"
+    """As between, but an interval R never closes counts, to the end of the run."""
+
+
+@dataclass(frozen=True)
+class Scope:
+    kind: ScopeKind = ScopeKind.GLOBALLY
+    q: Predicate | None = None      # opens the scope: after, between, after-until
+    r: Predicate | None = None      # closes it: before, between, after-until
+
+
+@dataclass(frozen=True)
+class Property:
+    """One property of a net's runs: a pattern in a scope, named, where it was written.
+
+    ``p`` is the pattern's predicate (for precedence and response, the one
+    that needs S: "P only after S", "P leads to S"); ``s`` the second one
+    of precedence and response; ``bound`` the "at most" of bounded existence.
+    ``text`` is the property as its author wrote it, for reports.
+    """
+
+    name: str
+    pattern: Pattern
+    p: Predicate
+    s: Predicate | None = None
+    bound: int | None = None
+    scope: Scope = field(default_factory=Scope)
+    text: str = ""
+    location: Location | None = None
