@@ -23,6 +23,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.io.formats import FORMATS, SaveOptions, reader_of
 
 if TYPE_CHECKING:
+    from mcl2pnml.core.properties import Property
     from mcl2pnml.language.functional import Instance
     from mcl2pnml.runtime.session import RunOptions
 
@@ -36,7 +37,7 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
-    "check_file", "check_source", "compile_file", "compile_source", "functional_form",
+    "check_file", "check_source", "properties_of", "compile_file", "compile_source", "functional_form",
     "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "template_clusters", "templates",
     "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
     "Shown", "save_reachability_json",
@@ -63,6 +64,22 @@ def compile_checked(checked, *, reduced: bool = False) -> Net:
     """One composed net (step 2); ``reduced``: every task the paper's reduced model (Fig. 3)."""
     from mcl2pnml.language.compiler import compile_checked as compile_
     return compile_(checked, reduced=reduced)
+
+
+def properties_of(mission: Path, *, extra: Path | None = None,
+                  reduced: bool = False) -> tuple[Net, tuple["Property", ...]]:
+    """The compiled net of ``mission`` and its properties compiled to predicates on its
+    places (:mod:`mcl2pnml.language.properties`): those the mission declares, then those
+    of ``extra`` (a side file of ``property`` declarations), each with its location.
+    ``reduced``: on the reduced model (Fig. 3), where an atom on a primitive is an error."""
+    from mcl2pnml.language.parser import parse_file
+    from mcl2pnml.language.properties import check_side_file, compile_properties
+    checked = check_file(mission)
+    sources = [checked.program]
+    if extra is not None:
+        sources.append(check_side_file(parse_file(extra), checked.program))
+    net = compile_checked(checked, reduced=reduced)
+    return net, compile_properties(net, sources, reduced=reduced)
 
 
 def compile_file(path: str | Path, *, reduced: bool = False,

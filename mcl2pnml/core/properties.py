@@ -163,3 +163,21 @@ class Property:
     scope: Scope = field(default_factory=Scope)
     text: str = ""
     location: Location | None = None
+
+
+# -- reading them ---------------------------------------------------------------------------
+
+def describe(predicate: Predicate) -> str:
+    """A predicate as a place formula: ``KeepDepth.ON >= 1 and not (mission.OK >= 1)``."""
+    if isinstance(predicate, Tokens):
+        return f"{' + '.join(predicate.places) or '0'} >= {predicate.at_least}"
+    if isinstance(predicate, Not):
+        return f"not ({describe(predicate.arg)})"
+    if isinstance(predicate, (And, Or)):
+        if not predicate.args:
+            return "true" if isinstance(predicate, And) else "false"
+        word = " and " if isinstance(predicate, And) else " or "
+        # parentheses around every compound operand: no reader has to know precedence
+        return word.join(describe(a) if isinstance(a, (Tokens, Const)) else f"({describe(a)})"
+                         for a in predicate.args)
+    return "true" if predicate.value else "false"

@@ -158,7 +158,74 @@ class Mission:
     pos: Pos = _pos()
 
 
-Declaration = Union[Const, Primitive, Task, Function, Mission]
+# -- properties (docs/properties.md) --------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PropAtom:
+    """``KIND(ARG[, ARG])``: ``enabled(KeepDepth)``, ``ended(Survey, ABORTED)``.
+
+    The kind and its arguments are names here; the checker judges them
+    (:func:`mcl2pnml.language.properties.property_errors`), so that a
+    misspelt kind is one message with the known ones, not a syntax error.
+    """
+
+    kind: str
+    args: tuple[str, ...]
+    pos: Pos = _pos()
+    arg_pos: tuple[Pos, ...] = field(default=(), compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class PropTruth:
+    value: bool
+    pos: Pos = _pos()
+
+
+@dataclass(frozen=True)
+class PropNot:
+    arg: "PropExpr"
+    pos: Pos = _pos()
+
+
+@dataclass(frozen=True)
+class PropAnd:
+    args: tuple["PropExpr", ...]
+    pos: Pos = _pos()
+
+
+@dataclass(frozen=True)
+class PropOr:
+    args: tuple["PropExpr", ...]
+    pos: Pos = _pos()
+
+
+PropExpr = Union[PropAtom, PropTruth, PropNot, PropAnd, PropOr]
+
+
+@dataclass(frozen=True)
+class Property:
+    """``property NAME: PATTERN [SCOPE];`` (Dwyer, Avrunin and Corbett's patterns).
+
+    ``pattern`` is how it was written (``never``, ``always``, ``eventually``,
+    ``at most``, ``only after``, ``leads to``); ``p`` its first expression,
+    ``s`` the second of ``only after`` and ``leads to``; ``bound`` the K of
+    ``at most K times``. ``scope`` is ``globally``, ``before``, ``after``,
+    ``between`` or ``after until``, opened by ``q`` and closed by ``r``.
+    """
+
+    name: str
+    pattern: str
+    p: PropExpr
+    s: PropExpr | None = None
+    bound: Number | None = None
+    scope: str = "globally"
+    q: PropExpr | None = None
+    r: PropExpr | None = None
+    pos: Pos = _pos()
+
+
+Declaration = Union[Const, Primitive, Task, Function, Mission, Property]
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from mcl2pnml.language import ast
 from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
 from mcl2pnml.language.library import Library, default_library
+from mcl2pnml.language.properties import property_errors
 from mcl2pnml.language.template_parser import Template, TemplateKind
 
 KIND = {ast.Const: "const", ast.Primitive: "primitive", ast.Task: "task",
@@ -64,7 +65,7 @@ class _Checker:
     def declare(self) -> None:
         missions = self.p.of(ast.Mission)
         for d in self.p.declarations:
-            if isinstance(d, ast.Mission):
+            if isinstance(d, (ast.Mission, ast.Property)):   # properties: their own names
                 continue
             first = self.names.get(d.name)
             if first is not None:
@@ -312,7 +313,8 @@ def check(program: ast.Program, library: Library | None = None) -> Checked:
     consts = c.const_values()
     patterns = c.tasks()
     order = c.functions()
-    raise_all(c.errors)
+    # the properties' errors after the rest: they name what the declarations declare
+    raise_all(c.errors + property_errors(program, program.of(ast.Property)))
     return Checked(program, consts,
                    {d.name: d for d in program.of(ast.Primitive)},
                    {d.name: d for d in program.of(ast.Task)}, patterns,

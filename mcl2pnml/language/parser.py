@@ -27,7 +27,7 @@ from mcl2pnml.core.gcpause import without_gc
 GRAMMAR = r"""
 start: declaration*
 
-?declaration: const | primitive | task | function | mission
+?declaration: const | primitive | task | function | mission | property
 
 const: "const" NAME "=" value ";"
 primitive: "primitive" NAME "(" [names] ")" ";"
@@ -62,6 +62,34 @@ monitor: "monitor" "(" structure "," structure ")"
 if_: "if" "(" structure ")" ["then"] block ["else" block]
 while_: "while" "(" structure ")" ["do"] block
 
+// a property (docs/properties.md): its words are keywords only where they are
+// expected (the contextual lexer), so no mission that names a thing "before" breaks
+property: PROPERTY NAME ":" pattern [scope] ";"
+pattern: "never" pexpr                   -> never
+       | "always" pexpr                  -> always
+       | "eventually" pexpr              -> eventually
+       | "at" "most" NUMBER "times" pexpr -> at_most
+       | pexpr "only" "after" pexpr      -> only_after
+       | pexpr "leads" "to" pexpr        -> leads_to
+// between's first expression is one term: "between a and b" has one reading
+scope: "globally"                        -> globally
+     | "before" pexpr                    -> before
+     | "after" pexpr                     -> after
+     | "between" punary "and" pexpr      -> between
+     | "after" pexpr "until" pexpr       -> after_until
+?pexpr: pand ("or" pand)*
+?pand: punary ("and" punary)*
+?punary: NOT punary -> pnot
+       | patom
+?patom: TRUE -> ptrue
+      | FALSE -> pfalse
+      | NAME "(" NAME ("," NAME)* ")" -> patom
+      | "(" pexpr ")"
+
+PROPERTY: "property"
+NOT: "not"
+TRUE: "true"
+FALSE: "false"
 MISSION: "mission"
 NAME: /[A-Za-z_][A-Za-z0-9_]*/
 NUMBER: /[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?/
@@ -188,6 +216,68 @@ class _Build(Transformer_NonRecursive):
         keyword, body = items
         return ast.Mission(body, _pos(keyword))
 
+    # -- properties --------------------------------------------------------------
+
+    def property(self, items):
+        _, name, (pattern, p, s, bound), scope = items
+        kind, q, r = scope or ("globally", None, None)
+        return ast.Property(str(name), pattern, p, s, bound, kind, q, r, _pos(name))
+
+    def never(self, items):
+        return ("never", items[0], None, None)
+
+    def always(self, items):
+        return ("always", items[0], None, None)
+
+    def eventually(self, items):
+        return ("eventually", items[0], None, None)
+
+    def at_most(self, items):
+        bound, p = items
+        return ("at most", p, None, self.number([bound]))
+
+    def only_after(self, items):
+        return ("only after", items[0], items[1], None)
+
+    def leads_to(self, items):
+        return ("leads to", items[0], items[1], None)
+
+    def globally(self, items):
+        return ("globally", None, None)
+
+    def before(self, items):
+        return ("before", None, items[0])
+
+    def after(self, items):
+        return ("after", items[0], None)
+
+    def between(self, items):
+        return ("between", items[0], items[1])
+
+    def after_until(self, items):
+        return ("after until", items[0], items[1])
+
+    def pexpr(self, items):
+        return ast.PropOr(tuple(items), items[0].pos)
+
+    def pand(self, items):
+        return ast.PropAnd(tuple(items), items[0].pos)
+
+    def pnot(self, items):
+        keyword, arg = items
+        return ast.PropNot(arg, _pos(keyword))
+
+    def ptrue(self, items):
+        return ast.PropTruth(True, _pos(items[0]))
+
+    def pfalse(self, items):
+        return ast.PropTruth(False, _pos(items[0]))
+
+    def patom(self, items):
+        kind, *args = items
+        return ast.PropAtom(str(kind), tuple(str(a) for a in args), _pos(kind),
+                            tuple(_pos(a) for a in args))
+
     def block(self, items):
         return ast.Block(tuple(items), ast.Pos(0, 0))
 
@@ -289,7 +379,8 @@ def _parse_tree(text: str, filename: str) -> tuple[ast.Declaration, ...]:
 #: write nest a handful of levels; the limit keeps every later stage (some
 #: of which walk the program recursively) far from Python's stack limit.
 MAX_NESTING = 100
-_NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall", "tuple"}
+_NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall", "tuple",
+            "pexpr", "pand", "pnot"}
 
 
 def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
@@ -349,7 +440,7 @@ def _deepest(declarations: tuple[ast.Declaration, ...]) -> int:
 
 
 _NESTED = {ast.Block, ast.Parallel, ast.Monitor, ast.If, ast.While, ast.Call, ast.PrimCall,
-           ast.Tuple}
+           ast.Tuple, ast.PropOr, ast.PropAnd, ast.PropNot}
 _CHILDREN = {
     ast.Const: lambda n: (n.value,), ast.Task: lambda n: n.primitives,
     ast.PrimCall: lambda n: n.args, ast.Function: lambda n: (n.body,),
@@ -358,6 +449,8 @@ _CHILDREN = {
     ast.If: lambda n: (n.condition, n.then, n.otherwise),
     ast.While: lambda n: (n.condition, n.body), ast.Call: lambda n: n.args,
     ast.Tuple: lambda n: n.items,
+    ast.Property: lambda n: (n.p, n.s, n.q, n.r), ast.PropOr: lambda n: n.args,
+    ast.PropAnd: lambda n: n.args, ast.PropNot: lambda n: (n.arg,),
 }
 
 
