@@ -98,12 +98,35 @@ def main() -> None:
 
 @main.command(epilog=EXAMPLES)
 @click.argument("mission", type=FILE)
-def check(mission: Path) -> int:
-    """Parse and check MISSION (MCL): names, arities, patterns, recursion.
+@click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+              metavar="[FILE]", help="Also print each property compiled to place formulas "
+              "(docs/properties.md): the mission's, then FILE's (default: MISSION.props, "
+              "if there is one).")
+def check(mission: Path, properties: str | None) -> int:
+    """Parse and check MISSION (MCL): names, arities, patterns, recursion, properties.
 
     Every error of the file is reported at once, each with file:line:col.
     """
     click.echo(f"{mission}: ok ({pipeline.check_file(mission).summary()})")
+    if properties is not None:
+        from mcl2pnml.core.properties import describe
+        extra = Path(properties) if properties else mission.with_suffix(".props")
+        if properties and not extra.is_file():
+            raise OptionError("--properties", f"no file '{properties}'")
+        _, compiled = pipeline.properties_of(mission, extra=extra if extra.is_file() else None)
+        for prop in compiled:
+            click.echo(f"property {prop.name} ({prop.location.prefix()}): {prop.text}")
+            click.echo(f"  {prop.pattern.value}: P = {describe(prop.p)}"
+                       + (f"; S = {describe(prop.s)}" if prop.s is not None else "")
+                       + (f"; at most {prop.bound} times" if prop.bound is not None else ""))
+            scope = prop.scope
+            click.echo(f"  {scope.kind.value}"
+                       + (f": Q = {describe(scope.q)}" if scope.q is not None else "")
+                       + (f"; R = {describe(scope.r)}" if scope.r is not None and scope.q
+                          is not None else f": R = {describe(scope.r)}" if scope.r is not None
+                          else ""))
+        if not compiled:
+            click.echo("no properties")
     return 0
 
 
