@@ -94,7 +94,8 @@ def _atoms(expr: ast.PropExpr | None):
 
 
 def _expressions(prop: ast.Property):
-    return tuple(e for e in (prop.q, prop.p, prop.s, prop.r) if e is not None)
+    # in the order they are written: the pattern, then the scope
+    return tuple(e for e in (prop.p, prop.s, prop.q, prop.r) if e is not None)
 
 
 def property_errors(program: ast.Program, props: Sequence[ast.Property],
