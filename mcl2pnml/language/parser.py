@@ -2,7 +2,9 @@
 
 The grammar is ``shared/spec/mcl.md``'s: declarations in any order (const,
 primitive, task, function, mission), statements that are calls, blocks,
-``parallel``, ``monitor``, ``if``/``then``/``else`` and ``while``/``do``.
+``parallel``, ``monitor``, ``if``/``then``/``else`` and ``while``/``do``; and
+``property`` declarations (docs/properties.md), whose words are keywords only
+inside a property.
 Comments are ``// ...`` and ``/* ... */``.
 
 A syntax error is one :class:`Mcl2PnmlError` at the first fault, with the
