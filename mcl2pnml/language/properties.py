@@ -139,8 +139,10 @@ def property_errors(program: ast.Program, props: Sequence[ast.Property],
                 for kind, arg, pos in zip(kinds, atom.args, atom.arg_pos):
                     if arg not in names[kind]:
                         adjective = "unknown" if kind == "result" else "undeclared"
+                        # results are upper case: "Ok" is offered "OK"
+                        near = arg.upper() if kind == "result" else arg
                         errors.add(pos, f"{adjective} {what[kind]} '{arg}'"
-                                   + did_you_mean(arg, names[kind], listing[kind]))
+                                   + did_you_mean(near, names[kind], listing[kind]))
     return errors.errors
 
 
