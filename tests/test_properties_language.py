@@ -168,3 +168,12 @@ def test_check_prints_each_property_as_place_formulas():
     assert "  after: Q = mission.OK >= 1 or mission.FAIL >= 1 or mission.ABORTED >= 1" in lines
     missing = run("check", SAUCE, "--properties", "nowhere.props")
     assert missing.returncode == 2 and "no file 'nowhere.props'" in missing.stderr
+
+
+def test_the_fast_and_the_slow_parser_agree_on_properties():
+    from mcl2pnml.language.parser import _parse_tree
+    source = SAUCE.read_text() + SAUCE.with_suffix(".props").read_text()
+    fast = parse(source, "sauce.mcl").declarations
+    assert fast == _parse_tree(source, "sauce.mcl") and len(fast) > 15
+    assert [d.pos for d in fast if isinstance(d, ast.Property)] == \
+        [d.pos for d in _parse_tree(source, "sauce.mcl") if isinstance(d, ast.Property)]
