@@ -1,0 +1,335 @@
+"""Checking a property of a net's runs on its state space, with a shortest counterexample.
+
+A property (:mod:`mcl2pnml.core.properties`) is one of Dwyer, Avrunin and
+Corbett's specification patterns in one of their scopes ("Patterns in
+property specifications for finite-state verification", ICSE 1999), read
+over the runs of the net: maximal firing sequences from M0 seen as marking
+sequences, a finite run ending in a dead marking and taken as it is.
+
+Method: the product of the reachability graph with a small deterministic
+observer of the marking sequence. After each marking the observer is in one
+of three conditions:
+
+* ``BAD``: the prefix read already violates the property whatever follows
+  (a safety violation, or a scope interval closed with its obligation unmet);
+  absorbing;
+* *pending*: an obligation is open (existence not yet fulfilled, a response
+  owed) in a part of the scope that counts even if never closed; a finite
+  run that ends here violates the property, and so does an infinite run
+  that stays pending forever;
+* otherwise nothing is owed.
+
+So the property fails iff the product reaches a ``BAD`` state, or a pending
+state on a dead marking, or a cycle of pending states (a nontrivial strongly
+connected component of the pending part). Breadth first search gives the
+shortest prefix; a lasso's cycle is the shortest one back within the
+pending part, and the counterexample returned is the shortest of all.
+
+The observer's state is ``(scope, pattern)``:
+
+* scope: ``OUT`` (not in the scope yet, or between intervals), ``IN``
+  (inside), ``DONE`` (the scope is over for good: before's R met). Globally
+  starts ``IN``; before starts ``IN`` and goes ``DONE`` at the first R (the
+  R marking is outside); after goes ``IN`` at the first Q, for good; between
+  and after-until go ``IN`` at a marking with Q and not R and back ``OUT``
+  at the next R (outside too). Dwyer et al.'s mappings quantify over every
+  Q position (``[](Q & !R -> ...)``): a Q inside an open interval opens one
+  nested in it, ending at the same R. For absence, universality, bounded
+  existence and response the outer interval's obligation implies the inner
+  one's; for existence and precedence it does not, so a new Q re-arms them
+  (P needed again, S needed again).
+* pattern: ``seen`` (absence: P met; universality: not-P met; existence: P
+  met; precedence: S met), ``owed`` (response: a P not yet answered by S),
+  ``count`` and ``last`` (bounded existence: times P became true, capped at
+  bound + 1, and whether P held in the scope's previous marking), ``broken``
+  (between: the current interval already violates, which counts once R
+  closes it).
+
+The LTL mappings followed (Dwyer et al.'s catalogue), e.g. absence
+``[]!P``, ``<>Q -> ...``; existence between ``[](Q & !R -> (!R W (P & !R)))``
+read so that only R-closed intervals count; after-until
+``[](Q & !R -> (!R U ...))`` with unclosed intervals counting to the run's
+end. One departure, as the typed form (:class:`~mcl2pnml.core.properties.ScopeKind`)
+defines it: *before R* is the whole run when R never holds (Dwyer et al.'s
+``<>R -> ...`` would make it vacuous).
+"""
+from __future__ import annotations
+
+import enum
+from collections import deque
+from dataclasses import dataclass
+from typing import Iterable
+
+from mcl2pnml.core.net import Net
+from mcl2pnml.core.properties import Const, Pattern, Predicate, Property, ScopeKind, holds
+
+
+class Status(enum.Enum):
+    HOLDS = "holds"
+    FAILS = "fails"
+    UNKNOWN = "unknown"
+
+
+class Shape(enum.Enum):
+    """What a counterexample is."""
+
+    PREFIX = "prefix"   # a finite prefix that already violates (any continuation does)
+    FINITE = "finite"   # a whole finite run, ending in a dead marking
+    LASSO = "lasso"     # an infinite run: the prefix, then the cycle from ``loop`` forever
+
+
+Marked = tuple[tuple[str, int], ...]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The answer for one property.
+
+    For ``FAILS``: ``transitions`` the firing sequence from M0 (transition ids),
+    ``markings`` the markings it passes through (``len(transitions) + 1``, M0
+    first, each as its marked places); for a lasso, ``loop`` is the index in
+    ``markings`` where the cycle starts (the last marking equals it).
+    ``states`` is the number of product states explored (or, for ``UNKNOWN``,
+    the markings counted when the limit was met); ``reason`` says why unknown.
+    """
+
+    property: Property
+    status: Status
+    transitions: tuple[str, ...] = ()
+    markings: tuple[Marked, ...] = ()
+    shape: Shape | None = None
+    loop: int | None = None
+    states: int = 0
+    reason: str | None = None
+
+
+# -- the observer ------------------------------------------------------------------------------
+
+OUT, IN, DONE = 0, 1, 2
+BAD = ("BAD",)
+
+
+@dataclass(frozen=True)
+class _Obs:
+    scope: int
+    seen: bool = False
+    owed: bool = False
+    count: int = 0
+    last: bool = False
+    broken: bool = False
+
+
+def _initial(kind: ScopeKind) -> _Obs:
+    return _Obs(IN if kind in (ScopeKind.GLOBALLY, ScopeKind.BEFORE) else OUT)
+
+
+def step(prop: Property, obs, p: bool, s: bool, q: bool, r: bool):
+    """The observer's state after reading one marking where P, S, Q, R are as given."""
+    if obs is BAD:
+        return BAD
+    kind, pattern = prop.scope.kind, prop.pattern
+    # scope transitions first: R closes (its marking outside), Q opens (its marking inside)
+    if obs.scope == IN and r and kind in (ScopeKind.BEFORE, ScopeKind.BETWEEN,
+                                          ScopeKind.AFTER_UNTIL):
+        if obs.broken or (pattern is Pattern.EXISTENCE and not obs.seen) or obs.owed:
+            return BAD
+        obs = _Obs(DONE if kind is ScopeKind.BEFORE else OUT)
+    if kind in (ScopeKind.AFTER, ScopeKind.BETWEEN, ScopeKind.AFTER_UNTIL) and q and not (
+            r and kind is not ScopeKind.AFTER):
+        if obs.scope == OUT:
+            obs = _Obs(IN)
+        elif obs.scope == IN and kind is not ScopeKind.AFTER:
+            # a nested interval: existence and precedence are needed afresh in it
+            if pattern in (Pattern.EXISTENCE, Pattern.PRECEDENCE):
+                obs = _Obs(IN, seen=False, broken=obs.broken)
+    if obs.scope != IN:
+        return obs
+    violated = False
+    if pattern is Pattern.ABSENCE:
+        violated = p
+    elif pattern is Pattern.UNIVERSALITY:
+        violated = not p
+    elif pattern is Pattern.EXISTENCE:
+        obs = _Obs(IN, seen=obs.seen or p, broken=obs.broken)
+    elif pattern is Pattern.BOUNDED_EXISTENCE:
+        count = obs.count + (1 if p and not obs.last else 0)
+        violated = count > (prop.bound or 0)
+        obs = _Obs(IN, count=min(count, (prop.bound or 0) + 1), last=p, broken=obs.broken)
+    elif pattern is Pattern.PRECEDENCE:
+        seen = obs.seen or s
+        violated = p and not seen
+        obs = _Obs(IN, seen=seen, broken=obs.broken)
+    elif pattern is Pattern.RESPONSE:
+        obs = _Obs(IN, owed=(obs.owed or p) and not s, broken=obs.broken)
+    if violated:
+        if kind is ScopeKind.BETWEEN:
+            # counts only if R closes this interval: remembered until then
+            return _Obs(IN, obs.seen, obs.owed, obs.count, obs.last, broken=True)
+        return BAD
+    return obs
+
+
+def pending(prop: Property, obs) -> bool:
+    """Whether a run ending here, or staying in such states forever, violates the property."""
+    if obs is BAD:
+        return True
+    if obs.scope != IN or prop.scope.kind is ScopeKind.BETWEEN:
+        return False   # an interval R never closes does not count
+    if prop.pattern is Pattern.EXISTENCE:
+        return not obs.seen
+    return obs.owed
+
+
+# -- the product -----------------------------------------------------------------------------
+
+def _truths(prop: Property) -> tuple[Predicate, Predicate, Predicate, Predicate]:
+    f = Const(False)
+    return (prop.p, prop.s or f, prop.scope.q or f, prop.scope.r or f)
+
+
+def check(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
+    """Whether ``prop`` holds on every run of ``net``, with a shortest counterexample if not."""
+    from analysis.statespace import ExplorationLimit, explore
+
+    try:
+        space = explore(net, max_states=max_states)
+    except ExplorationLimit as e:
+        return Verdict(prop, Status.UNKNOWN, states=e.explored or max_states,
+                       reason=f"more than {max_states:,} reachable markings")
+    if space.coverability:
+        return Verdict(prop, Status.UNKNOWN, states=space.states,
+                       reason="the net is unbounded (its coverability graph is no run graph)")
+    ids = [pl.id for pl in net.places]
+    tids = [t.id for t in net.transitions]
+    marked = [tuple((ids[k], int(n)) for k, n in enumerate(m) if n) for m in space.markings]
+    after: list[list[tuple[int, int]]] = [[] for _ in range(space.states)]
+    for a, b, t in zip(space.src, space.dst, space.trans):
+        after[int(a)].append((int(b), int(t)))
+    preds = _truths(prop)
+    truth = [tuple(holds(x, dict(m)) for x in preds) for m in marked]
+    return _product(prop, marked, tids, after, truth, max_states)
+
+
+def _product(prop, marked, tids, after, truth, max_states) -> Verdict:
+    start = (0, step(prop, _initial(prop.scope.kind), *truth[0]))
+    parent: dict = {start: None}
+    order = [start]
+    dist = {start: 0}
+    queue = deque([start])
+    succ: dict = {}
+    best = None   # (length, shape, state) of the shortest violation so far
+    while queue:
+        node = queue.popleft()
+        m, obs = node
+        if obs is BAD:
+            if best is None or dist[node] < best[0]:
+                best = (dist[node], Shape.PREFIX, node)
+            succ[node] = []
+            continue
+        if not after[m] and pending(prop, obs):
+            if best is None or dist[node] < best[0]:
+                best = (dist[node], Shape.FINITE, node)
+        nxt = []
+        for b, t in after[m]:
+            child = (b, step(prop, obs, *truth[b]))
+            nxt.append((child, t))
+            if child not in parent:
+                if len(parent) >= max_states:
+                    return Verdict(prop, Status.UNKNOWN, states=len(parent),
+                                   reason=f"more than {max_states:,} product states")
+                parent[child] = (node, t)
+                dist[child] = dist[node] + 1
+                order.append(child)
+                queue.append(child)
+        succ[node] = nxt
+    lasso = _shortest_lasso(prop, order, succ, dist, best[0] if best else None)
+    if lasso is not None and (best is None or lasso[0] < best[0]):
+        length, node, cycle = lasso
+        path = _path(parent, node)
+        trans = path[1] + cycle[1]
+        ms = [m for m, _ in path[0] + cycle[0]]
+        loop = len(path[0]) - 1
+        # the same infinite run, its loop entered earlier where the markings allow: the
+        # observer may need a turn of the cycle to settle that the marking run does not
+        while loop > 0 and ms[loop - 1] == ms[-2] and trans[loop - 1] == trans[-1]:
+            loop -= 1
+            ms.pop()
+            trans.pop()
+        return Verdict(prop, Status.FAILS, tuple(tids[t] for t in trans),
+                       tuple(marked[m] for m in ms), Shape.LASSO, loop=loop, states=len(parent))
+    if best is None:
+        return Verdict(prop, Status.HOLDS, states=len(parent))
+    nodes, trans = _path(parent, best[2])
+    return Verdict(prop, Status.FAILS, tuple(tids[t] for t in trans),
+                   tuple(marked[m] for m, _ in nodes), best[1], states=len(parent))
+
+
+def _path(parent, node):
+    nodes, trans = [node], []
+    while parent[node] is not None:
+        node, t = parent[node]
+        nodes.append(node)
+        trans.append(t)
+    return nodes[::-1], trans[::-1]
+
+
+def _shortest_lasso(prop, order, succ, dist, bound):
+    """(prefix + cycle length, entry state, (cycle states after entry, transitions)) of
+    the shortest lasso whose cycle stays in pending states, or None."""
+    import networkx as nx
+
+    g = nx.DiGraph()
+    for node in order:
+        if node[1] is not BAD and pending(prop, node[1]):
+            g.add_node(node)
+            for child, _ in succ[node]:
+                if child[1] is not BAD and pending(prop, child[1]):
+                    g.add_edge(node, child)
+    on_cycle = set()
+    for comp in nx.strongly_connected_components(g):
+        if len(comp) > 1 or any(g.has_edge(n, n) for n in comp):
+            on_cycle |= comp
+    best = None
+    for node in sorted(on_cycle, key=dist.__getitem__):
+        if best is not None and dist[node] + 1 >= best[0]:
+            break   # every later entry is at least as far, and a cycle is one step at least
+        if bound is not None and dist[node] + 1 >= bound:
+            break
+        cycle = _shortest_cycle(node, succ, on_cycle)
+        if cycle is not None and (best is None or dist[node] + len(cycle[1]) < best[0]):
+            best = (dist[node] + len(cycle[1]), node, cycle)
+    return best
+
+
+def _shortest_cycle(start, succ, allowed):
+    back = {start: None}
+    queue = deque([start])
+    while queue:
+        node = queue.popleft()
+        for child, t in succ[node]:
+            if child not in allowed:
+                continue
+            if child == start:
+                trans = [t]
+                while back[node] is not None:
+                    node, u = back[node]
+                    trans.append(u)
+                return _cycle_states(start, trans[::-1], succ)
+            if child not in back:
+                back[child] = (node, t)
+                queue.append(child)
+    return None
+
+
+def _cycle_states(start, trans, succ):
+    """The product states after each transition of the cycle from ``start``."""
+    states, node = [], start
+    for t in trans:
+        node = next(c for c, u in succ[node] if u == t)
+        states.append(node)
+    return states, trans
+
+
+def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_000) -> list[Verdict]:
+    """Each property's verdict, in order."""
+    return [check(net, p, max_states) for p in properties]
