@@ -377,10 +377,14 @@ def _progress(states: int, frontier: int) -> None:
               help="; ".join(f"{e.name}: {e.doc}" for e in EXPLORER_TABLE.values())
               + ". auto: the fastest for the net's kind and size.")
 @click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half free).")
+@click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+              metavar="[FILE]", help="Check a mission's properties (docs/properties.md) on its "
+              "runs: the mission's, then FILE's (default: MISSION.props, if there is one); "
+              "exit 1 if one fails, 3 if one is unknown.")
 @NET_OPTION
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
             progress: bool | None, explorer: str, max_memory: str | None,
-            net_id: str | None) -> int:
+            net_id: str | None, properties: str | None = None) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
@@ -395,5 +399,45 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
                               max_memory=max_memory)
     if shown:
         click.echo("", err=True)
-    click.echo(json.dumps(result, indent=2) if as_json else pipeline.analysis_text(result))
-    return 3 if "partial" in result else 0
+    verdicts = None if properties is None else _check_properties(file, properties, net, start,
+                                                                 max_states)
+    if as_json:
+        if verdicts is not None:
+            result["properties"] = pipeline.verdicts_json(verdicts)
+        click.echo(json.dumps(result, indent=2))
+    else:
+        click.echo(pipeline.analysis_text(result))
+        for v in verdicts or ():
+            _print_verdict(v)
+    statuses = {v.status.value for v in verdicts or ()}
+    if "fails" in statuses:
+        return 1
+    return 3 if "partial" in result or "unknown" in statuses else 0
+
+
+def _check_properties(file: Path, properties: str, net, start, max_states: int) -> list:
+    """The verdicts of the mission's properties (and FILE's) on the analysed net."""
+    if file.suffix != ".mcl":
+        raise OptionError("--properties", "properties are a mission's (an .mcl file)")
+    extra = Path(properties) if properties else file.with_suffix(".props")
+    if properties and not extra.is_file():
+        raise OptionError("--properties", f"no file '{properties}'")
+    _, props = pipeline.properties_of(file, extra=extra if extra.is_file() else None)
+    if start is not None:
+        net = net.with_initial(start)
+    return pipeline.check_properties(net, props, max_states)
+
+
+def _print_verdict(v) -> None:
+    where = v.property.location.prefix() if v.property.location else "-"
+    line = f"property {v.property.name} ({where}): {v.status.value}"
+    if v.reason:
+        line += f" ({v.reason}, {v.states:,} states)"
+    click.echo(line)
+    if v.shape is not None:
+        click.echo(f"  counterexample ({v.shape.value}):")
+        for k, t in enumerate(v.transitions, 1):
+            loop = "  <- the cycle starts here" if v.loop is not None and k == v.loop + 1 else ""
+            click.echo(f"  {k:4}. {t}{loop}")
+        if v.loop is not None:
+            click.echo(f"  then again from step {v.loop + 1}, forever")

@@ -238,6 +238,24 @@ def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> 
     return run(net, initial, **options)
 
 
+def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
+    """Each property's :class:`analysis.properties.Verdict` on ``net``'s runs, in order:
+    holds, fails with a shortest counterexample, or unknown past ``max_states``."""
+    from analysis.properties import check
+    return [check(net, prop, max_states) for prop in properties]
+
+
+def verdicts_json(verdicts) -> list[dict[str, Any]]:
+    """Verdicts as ``analyze --json`` prints them."""
+    return [{"name": v.property.name, "text": v.property.text,
+             "location": v.property.location.prefix() if v.property.location else None,
+             "status": v.status.value, "states": v.states, "reason": v.reason,
+             "counterexample": None if v.shape is None else {
+                 "shape": v.shape.value, "transitions": list(v.transitions),
+                 "loop": v.loop, "markings": [dict(m) for m in v.markings]}}
+            for v in verdicts]
+
+
 def parse_size(text: str, option: str = "--max-memory") -> int:
     """A size in bytes written ``4G``, ``500M``, ``64K`` or ``1000000`` (powers of 1024)."""
     units = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}

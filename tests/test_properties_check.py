@@ -335,3 +335,37 @@ def test_every_combination_on_a_cycle_with_a_dead_end(kind, pattern):
                                         [at(1), at(2)], [at(0), at(3)]):
         prop = Property("x", pattern, p, s=s, bound=1, scope=Scope(kind, q=q, r=r))
         assert_agrees(net, prop)
+
+
+# -- the command line ---------------------------------------------------------------------------
+
+def test_analyze_properties_of_the_papers_mission(tmp_path):
+    import json
+    from pathlib import Path
+
+    from helpers import run_cli
+
+    sauce = Path(__file__).parent.parent / "examples" / "sauce.mcl"
+    out = run_cli("analyze", str(sauce), "--state-space", "--properties")
+    assert out.returncode == 1, out.stderr   # Ends fails on the untimed net
+    lines = out.stdout.splitlines()
+    assert any(l.startswith("property MarkerOnlyOverCross (") and l.endswith(": holds")
+               for l in lines)
+    ends = next(k for k, l in enumerate(lines) if l.startswith("property Ends ("))
+    assert "sauce.props:" in lines[ends] and lines[ends].endswith(": fails")
+    assert lines[ends + 1] == "  counterexample (lasso):" and lines[ends + 2].strip().startswith("1. ")
+    js = json.loads(run_cli("analyze", str(sauce), "--state-space", "--properties",
+                            "--json").stdout)
+    verdicts = {v["name"]: v for v in js["properties"]}
+    assert verdicts["Ends"]["status"] == "fails"
+    assert verdicts["Ends"]["counterexample"]["shape"] == "lasso"
+    assert {v["status"] for n, v in verdicts.items() if n != "Ends"} == {"holds"}
+    # only the holding ones: exit 0; a state limit met: exit 3
+    holding = tmp_path / "ok.props"
+    holding.write_text("property Never: never outcome(OK) and outcome(FAIL);\n")
+    assert run_cli("analyze", str(sauce), "--state-space", "--properties",
+                   str(holding)).returncode == 0
+    limited = run_cli("analyze", str(sauce), "--state-space", "--max-states", "50",
+                      "--properties", str(holding))
+    assert limited.returncode in (2, 3), limited.stderr
+    assert run_cli("analyze", str(sauce), "--properties", str(tmp_path / "no")).returncode == 2
