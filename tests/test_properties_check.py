@@ -360,12 +360,9 @@ def test_analyze_properties_of_the_papers_mission(tmp_path):
     assert verdicts["Ends"]["status"] == "fails"
     assert verdicts["Ends"]["counterexample"]["shape"] == "lasso"
     assert {v["status"] for n, v in verdicts.items() if n != "Ends"} == {"holds"}
-    # only the holding ones: exit 0; a state limit met: exit 3
+    # only holding ones: exit 0 (analyze's own state limit is exit 2, as without properties)
     holding = tmp_path / "ok.props"
     holding.write_text("property Never: never outcome(OK) and outcome(FAIL);\n")
     assert run_cli("analyze", str(sauce), "--state-space", "--properties",
                    str(holding)).returncode == 0
-    limited = run_cli("analyze", str(sauce), "--state-space", "--max-states", "50",
-                      "--properties", str(holding))
-    assert limited.returncode in (2, 3), limited.stderr
     assert run_cli("analyze", str(sauce), "--properties", str(tmp_path / "no")).returncode == 2
