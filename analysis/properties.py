@@ -49,9 +49,8 @@ The LTL mappings followed (Dwyer et al.'s catalogue), e.g. absence
 ``[]!P``, ``<>Q -> ...``; existence between ``[](Q & !R -> (!R W (P & !R)))``
 read so that only R-closed intervals count; after-until
 ``[](Q & !R -> (!R U ...))`` with unclosed intervals counting to the run's
-end. One departure, as the typed form (:class:`~mcl2pnml.core.properties.ScopeKind`)
-defines it: *before R* is the whole run when R never holds (Dwyer et al.'s
-``<>R -> ...`` would make it vacuous).
+end; *before R* ``<>R -> ...``: like an interval of between opened at M0, it
+counts only once R closes it, so a run where R never holds satisfies it.
 """
 from __future__ import annotations
 
@@ -162,7 +161,7 @@ def step(prop: Property, obs, p: bool, s: bool, q: bool, r: bool):
     elif pattern is Pattern.RESPONSE:
         obs = _Obs(IN, owed=(obs.owed or p) and not s, broken=obs.broken)
     if violated:
-        if kind is ScopeKind.BETWEEN:
+        if kind in (ScopeKind.BETWEEN, ScopeKind.BEFORE):
             # counts only if R closes this interval: remembered until then
             return _Obs(IN, obs.seen, obs.owed, obs.count, obs.last, broken=True)
         return BAD
@@ -173,7 +172,7 @@ def pending(prop: Property, obs) -> bool:
     """Whether a run ending here, or staying in such states forever, violates the property."""
     if obs is BAD:
         return True
-    if obs.scope != IN or prop.scope.kind is ScopeKind.BETWEEN:
+    if obs.scope != IN or prop.scope.kind in (ScopeKind.BETWEEN, ScopeKind.BEFORE):
         return False   # an interval R never closes does not count
     if prop.pattern is Pattern.EXISTENCE:
         return not obs.seen

@@ -29,8 +29,8 @@ def _intervals(word, kind, starts):
     if kind is ScopeKind.GLOBALLY:
         return [(0, n)]
     if kind is ScopeKind.BEFORE:
-        k = next((i for i, w in enumerate(word) if w[3]), n)
-        return [(0, k)]
+        k = next((i for i, w in enumerate(word) if w[3]), None)
+        return [] if k is None else [(0, k)]   # Dwyer et al.: <>R -> ...
     if kind is ScopeKind.AFTER:
         k = next((i for i, w in enumerate(word) if w[2]), None)
         return [] if k is None else [(k, n)]
@@ -366,3 +366,15 @@ def test_analyze_properties_of_the_papers_mission(tmp_path):
     assert run_cli("analyze", str(sauce), "--state-space", "--properties",
                    str(holding)).returncode == 0
     assert run_cli("analyze", str(sauce), "--properties", str(tmp_path / "no")).returncode == 2
+
+
+def test_before_a_scope_never_closed_holds_by_default():
+    # Dwyer et al.'s "<>R -> ...": a run where R never holds has nothing before R to speak of
+    net = chain(*range(5))
+    never_closed = Scope(ScopeKind.BEFORE, r=at(7))
+    for pattern in PATTERNS:
+        prop = Property("b", pattern, at(2), s=Const(False), bound=0, scope=never_closed)
+        assert assert_agrees(net, prop).status is Status.HOLDS, pattern
+    closed = Scope(ScopeKind.BEFORE, r=at(4))
+    v = assert_agrees(net, Property("b", Pattern.ABSENCE, at(2), scope=closed))
+    assert v.status is Status.FAILS and v.transitions == ("t0", "t1", "t2", "t3")

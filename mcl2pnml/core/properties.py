@@ -127,8 +127,12 @@ class ScopeKind(enum.Enum):
     GLOBALLY = "globally"
     """The whole run."""
     BEFORE = "before"
-    """From the start up to (not including) the first marking where R holds;
-    the whole run if R never holds."""
+    """From the start up to (not including) the first marking where R holds.
+
+    A run where R never holds has no such interval, so the property holds on
+    it by default, as Dwyer et al.'s mappings say (``<>R -> ...``): "never P
+    before R" speaks of what precedes R, and a run without R has nothing to
+    precede."""
     AFTER = "after"
     """From the first marking where Q holds to the end of the run."""
     BETWEEN = "between"
