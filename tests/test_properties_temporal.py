@@ -1,0 +1,66 @@
+"""The temporal forms of a property (core.temporal) against the observer's verdicts.
+
+On random small nets, a property's LTL formula, evaluated on every run the
+enumeration gives (finite runs stuttered, lassos), is true on all of them
+exactly when the observer says the property holds; its CTL and reachability
+forms, where it has them, are read on the same runs (the path quantifiers
+each on the one run, which for these formulas is the LTL reading). The
+peers' verdicts on the exported queries are tests/test_properties_peers.py.
+"""
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+
+from analysis.properties import Status, check
+from mcl2pnml.core.properties import Pattern, Property, Scope, ScopeKind
+from mcl2pnml.core.temporal import ctl, evaluate, ltl, reachability, show
+from test_properties_check import _graph, chain, at, props, runs, small_nets
+
+
+def _runs_satisfy(net, formula, length=7):
+    marks, edges = _graph(net)
+    for states, _, loop in runs(edges, length):
+        if loop is not None:
+            # runs() gives the lasso with its first state repeated last: word[loop] again
+            states = states[:-1]
+        if not evaluate(formula, [marks[m] for m in states], loop):
+            return False
+    return True
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(small_nets(), props())
+def test_the_ltl_form_means_what_the_observer_checks(net, prop):
+    verdict = check(net, prop)
+    formula = ltl(prop)
+    assert _runs_satisfy(net, formula) is (verdict.status is Status.HOLDS), show(formula)
+    for other in (ctl(prop), reachability(prop)):
+        if other is not None:
+            assert _runs_satisfy(net, other) is (verdict.status is Status.HOLDS), show(other)
+
+
+@pytest.mark.slow
+@settings(max_examples=3000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(small_nets(), props())
+def test_the_ltl_form_means_what_the_observer_checks_long(net, prop):
+    test_the_ltl_form_means_what_the_observer_checks.hypothesis.inner_test(net, prop)
+
+
+def test_every_pattern_has_an_ltl_form_and_the_invariants_a_reachability_one():
+    for pattern in Pattern:
+        for kind in ScopeKind:
+            prop = Property("x", pattern, at(1), s=at(2), bound=1,
+                            scope=Scope(kind, q=at(0), r=at(3)))
+            assert ltl(prop) is not None
+            expect = kind is ScopeKind.GLOBALLY and pattern in (Pattern.ABSENCE,
+                                                                 Pattern.UNIVERSALITY)
+            assert (reachability(prop) is not None) is expect
+
+
+def test_a_formula_reads_as_the_catalogue_writes_it():
+    response = Property("x", Pattern.RESPONSE, at(1), s=at(2))
+    assert show(ltl(response)) == "A [](!(m1 >= 1) | <>(m2 >= 1))"
+    assert show(ctl(response)) == "A [](!(m1 >= 1) | A <>(m2 >= 1))"
+    before = Property("x", Pattern.ABSENCE, at(1), scope=Scope(ScopeKind.BEFORE, r=at(3)))
+    assert show(ltl(before)) == "A (!<>(m3 >= 1) | (!(m1 >= 1) U (m3 >= 1)) | []!(m1 >= 1))"
