@@ -110,10 +110,7 @@ def check(mission: Path, properties: str | None) -> int:
     click.echo(f"{mission}: ok ({pipeline.check_file(mission).summary()})")
     if properties is not None:
         from mcl2pnml.core.properties import describe
-        extra = Path(properties) if properties else mission.with_suffix(".props")
-        if properties and not extra.is_file():
-            raise OptionError("--properties", f"no file '{properties}'")
-        _, compiled = pipeline.properties_of(mission, extra=extra if extra.is_file() else None)
+        _, compiled = pipeline.properties_of(mission, extra=_properties_file(mission, properties))
         for prop in compiled:
             click.echo(f"property {prop.name} ({prop.location.prefix()}): {prop.text}")
             click.echo(f"  {prop.pattern.value}: P = {describe(prop.p)}"
@@ -162,10 +159,16 @@ def functional(mission: Path, with_functions: bool) -> int:
 @click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)), default="verifypn",
               show_default=True, help="How --queries writes a deadlock inside a formula: "
               + "; ".join(f"{name}: {form}" for name, form in QUERY_TOOLS.items()))
+@click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+              metavar="[FILE]", help="Also write the mission's properties (its own, then "
+              "FILE's; default: MISSION.props, if there is one) in the Model Checking Contest's "
+              "categories beside the output, OUTPUT.LTLCardinality.xml, .CTLCardinality.xml "
+              "and .ReachabilityCardinality.xml (docs/properties.md).")
 @click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half "
               "free). A mission whose net would not fit is one message, exit 2.")
 def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, expand: str,
-             queries: Path | None, tool: str, max_memory: str | None) -> int:
+             queries: Path | None, tool: str, max_memory: str | None,
+             properties: str | None = None) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
@@ -179,7 +182,15 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
         raise click.BadParameter(f"only a drawing has boxes to open, not {fmt}: --format "
                                  "svg, png or dot", param_hint="--expand")
     check_outputs([("-o", output), ("--queries", queries)], [("the mission", mission)])
-    net = pipeline.compile_file(mission, max_memory=max_memory)
+    props = ()
+    if properties is None:
+        net = pipeline.compile_file(mission, max_memory=max_memory)
+    else:
+        net, props = pipeline.properties_of(
+            mission, extra=_properties_file(mission, properties), max_memory=max_memory)
+        if not props:
+            raise OptionError("--properties", f"{mission} declares no property, and there "
+                              f"is no {properties or mission.with_suffix('.props')} beside it")
     opened = None if expand == "all" else tuple(n for n in expand.split(",") if n)
     pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True,
                       expand=opened)
@@ -187,6 +198,11 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
     if queries is not None:
         written = pipeline.save_queries(net, queries, tool)
         click.echo(f"wrote {queries}: {', '.join(p.id for p in written)} (for {tool})", err=True)
+    if props:
+        stem = output.with_suffix("") if output.suffix else output
+        for path, qs in pipeline.save_property_queries(props, stem):
+            click.echo(f"wrote {path}: {len(qs)} {'query' if len(qs) == 1 else 'queries'}",
+                       err=True)
     return 0
 
 
@@ -419,13 +435,18 @@ def _check_properties(file: Path, properties: str, net, start, max_states: int) 
     """The verdicts of the mission's properties (and FILE's) on the analysed net."""
     if file.suffix != ".mcl":
         raise OptionError("--properties", "properties are a mission's (an .mcl file)")
-    extra = Path(properties) if properties else file.with_suffix(".props")
-    if properties and not extra.is_file():
-        raise OptionError("--properties", f"no file '{properties}'")
-    _, props = pipeline.properties_of(file, extra=extra if extra.is_file() else None)
+    _, props = pipeline.properties_of(file, extra=_properties_file(file, properties))
     if start is not None:
         net = net.with_initial(start)
     return pipeline.check_properties(net, props, max_states)
+
+
+def _properties_file(mission: Path, properties: str) -> Path | None:
+    """The side file of ``--properties [FILE]``: FILE, else MISSION.props if there is one."""
+    extra = Path(properties) if properties else mission.with_suffix(".props")
+    if properties and not extra.is_file():
+        raise OptionError("--properties", f"no file '{properties}'")
+    return extra if extra.is_file() else None
 
 
 def _print_verdict(v) -> None:

@@ -66,8 +66,8 @@ def compile_checked(checked, *, reduced: bool = False) -> Net:
     return compile_(checked, reduced=reduced)
 
 
-def properties_of(mission: Path, *, extra: Path | None = None,
-                  reduced: bool = False) -> tuple[Net, tuple["Property", ...]]:
+def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,
+                  max_memory: int | str | None = None) -> tuple[Net, tuple["Property", ...]]:
     """The compiled net of ``mission`` and its properties compiled to predicates on its
     places (:mod:`mcl2pnml.language.properties`): those the mission declares, then those
     of ``extra`` (a side file of ``property`` declarations), each with its location.
@@ -78,7 +78,11 @@ def properties_of(mission: Path, *, extra: Path | None = None,
     sources = [checked.program]
     if extra is not None:
         sources.append(check_side_file(parse_file(extra), checked.program))
-    net = compile_checked(checked, reduced=reduced)
+    from mcl2pnml.core.memory import Budget, guard
+    if isinstance(max_memory, str):
+        max_memory = parse_size(max_memory)
+    with guard(Budget(max_memory), f"compiling {mission}"):
+        net = compile_checked(checked, reduced=reduced)
     return net, compile_properties(net, sources, reduced=reduced)
 
 
@@ -175,6 +179,13 @@ def save_queries(net: Net, path: str | Path, tool: str = "verifypn"):
     Contest's XML (:mod:`mcl2pnml.io.mccquery`), with the ids of its PNML; returns them."""
     from mcl2pnml.io.mccquery import save_queries as save
     return save(net, path, tool)
+
+
+def save_property_queries(properties, stem: str | Path):
+    """A mission's properties in the Model Checking Contest's categories, one file each,
+    ``STEM.LTLCardinality.xml`` and so on (:mod:`mcl2pnml.io.mccquery`); the files written."""
+    from mcl2pnml.io.mccquery import save_property_queries as save
+    return save(properties, stem)
 
 
 def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:

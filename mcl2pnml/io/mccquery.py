@@ -35,6 +35,15 @@ places empty at rest take one atom, and a marked place one atom plus its
 share of one sum (every place at least its initial tokens, and all of them
 no more than the initial total: each exactly its own).
 
+A mission's own properties (``property`` declarations, docs/properties.md)
+go in the contest's categories, one file each as the contest lays them
+beside a model (``compile --properties``): every property in
+LTLCardinality, as the LTL formula of its pattern and scope
+(:mod:`mcl2pnml.core.temporal`); those a CTL formula states exactly in
+CTLCardinality; the invariants (absence, universality, globally) in
+ReachabilityCardinality. Their atoms are token counts, so the fireability
+categories have none.
+
 Place and transition ids are the PNML writer's (:func:`mcl2pnml.io.ids.encode`),
 so the file goes with the PNML ``compile`` writes of the same net (and with
 its LoLA file, whose names are the same for a compiled mission). Formulas
@@ -190,3 +199,86 @@ def save_queries(net: Net, path: str | Path, tool: str = "verifypn") -> tuple[Pr
     properties = mission_properties(net, tool)
     atomic_write_text(path, to_xml(properties))
     return properties
+
+
+# -- a mission's own properties (docs/properties.md) ------------------------------------------
+
+#: The contest's categories a property is written in, each its own file, as the contest
+#: gives them beside a model: the file's suffix, and which form of the property it takes.
+CATEGORIES = ("ReachabilityCardinality", "CTLCardinality", "LTLCardinality")
+
+
+def _predicate(p) -> Element:
+    """A predicate on places (:mod:`mcl2pnml.core.properties`) as the contest's state formula."""
+    from mcl2pnml.core.properties import And, Const, Not, Tokens
+    if isinstance(p, Tokens):
+        if not p.places:   # an empty sum is 0
+            return _constant(p.at_least <= 0)
+        return _e("integer-le", _int(p.at_least), _tokens(list(p.places)))
+    if isinstance(p, Not):
+        return _e("negation", _predicate(p.arg))
+    if isinstance(p, Const):
+        return _constant(p.value)
+    parts = [_predicate(a) for a in p.args]
+    if not parts:
+        return _constant(isinstance(p, And))
+    return parts[0] if len(parts) == 1 else _e(
+        "conjunction" if isinstance(p, And) else "disjunction", *parts)
+
+
+def _constant(value: bool) -> Element:
+    """True as ``0 <= 0``, false as ``1 <= 0``: LoLA refuses the contest's ``<true/>``."""
+    return _e("integer-le", _int(0 if value else 1), _int(0))
+
+
+def formula_element(f) -> Element:
+    """A temporal formula (:mod:`mcl2pnml.core.temporal`) as the contest's XML."""
+    from mcl2pnml.core import temporal as t
+    if isinstance(f, t.State):
+        return _predicate(f.predicate)
+    if isinstance(f, t.Neg):
+        return _e("negation", formula_element(f.arg))
+    if isinstance(f, (t.Conj, t.Disj)):
+        return _e("conjunction" if isinstance(f, t.Conj) else "disjunction",
+                  *(formula_element(a) for a in f.args))
+    if isinstance(f, t.Until):
+        return _e("until", _e("before", formula_element(f.before)),
+                  _e("reach", formula_element(f.reach)))
+    tag = {t.Globally: "globally", t.Finally: "finally", t.AllPaths: "all-paths",
+           t.ExistsPath: "exists-path"}[type(f)]
+    return _e(tag, formula_element(f.arg))
+
+
+def property_queries(props) -> dict[str, tuple[Property, ...]]:
+    """Each category's queries for a mission's properties (``core.properties.Property``):
+    every property in LTL; in CTL where a CTL formula means the same; in reachability
+    where it is an invariant (:mod:`mcl2pnml.core.temporal`). The query's id is the
+    property's name, the same in every category, and its description says what it is."""
+    from mcl2pnml.core import temporal
+    forms = {"ReachabilityCardinality": temporal.reachability, "CTLCardinality": temporal.ctl,
+             "LTLCardinality": temporal.ltl}
+    out: dict[str, tuple[Property, ...]] = {}
+    for category, form in forms.items():
+        queries = []
+        for prop in props:
+            f = form(prop)
+            if f is not None:
+                where = f" ({prop.location.prefix()})" if prop.location else ""
+                text = " ".join(prop.text.split()) or prop.name
+                queries.append(Property(prop.name, f"{text}{where}: {temporal.show(f)}",
+                                        formula_element(f)))
+        if queries:
+            out[category] = tuple(queries)
+    return out
+
+
+def save_property_queries(props, stem: str | Path) -> list[tuple[Path, tuple[Property, ...]]]:
+    """Write each category's queries to ``STEM.CATEGORY.xml``, whole or not at all; the
+    files written, with their queries."""
+    stem = Path(stem)
+    written = []
+    for category, queries in property_queries(props).items():
+        path = stem.with_name(f"{stem.name}.{category}.xml")
+        atomic_write_text(path, to_xml(queries))
+        written.append((path, queries))
+    return written
