@@ -142,3 +142,37 @@ def lola_queries(net: Path, queries: Path) -> dict[str, bool]:
     out = _run([str(need(LOLA)), "--pnmlnet", str(net), "--xmlformula", f"--formula={queries}"])
     table = out.partition("FINAL RESULTS")[2]
     return _verdicts(r"^\s*(\S+):.*?\s(true|false)\s", table)
+
+
+# -- a mission's own properties, one category file at a time (test_properties_peers.py) ----
+
+def verifypn_category(net: Path, queries: Path, count: int, ltl: bool) -> dict[str, bool]:
+    """verifypn's answer to each of the ``count`` queries of one category file (``ltl``: the
+    LTL category, which it reads only when told; otherwise CTL or reachability), with the
+    net reductions and stubborn sets a user gets (its defaults).
+
+    Its query simplification is off (``-q 0``): on some generated properties (a bounded
+    existence between two scopes' predicates) its linear programs run to their 30 s
+    time-out, and the whole call past two minutes, for an answer it gives in a tenth
+    of a second without them.
+    """
+    numbers = ",".join(str(i) for i in range(1, count + 1))
+    out = _run([str(need(VERIFYPN)), *(["-ltl"] if ltl else []), "-q", "0", "-x", numbers,
+                str(net), str(queries)])
+    return _verdicts(r"^FORMULA (\S+) (TRUE|FALSE)", out)
+
+
+def lola_each(net: Path, queries: Path, scratch: Path) -> dict[str, bool]:
+    """LoLA's answer to each query of ``queries``, one call per query: given several, this
+    build's portfolio idles for the time limit of one before it takes the next (85 s
+    on the paper's mission, for answers it has in a tenth of a second alone)."""
+    from lxml import etree
+    tree = etree.parse(str(queries))
+    answers: dict[str, bool] = {}
+    for k, prop in enumerate(tree.getroot()):
+        single = etree.Element(tree.getroot().tag, nsmap=tree.getroot().nsmap)
+        single.append(prop)
+        path = scratch / f"{queries.stem}.{k}.xml"
+        path.write_bytes(etree.tostring(single, xml_declaration=True, encoding="utf-8"))
+        answers.update(lola_queries(net, path))
+    return answers

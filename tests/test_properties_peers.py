@@ -1,0 +1,207 @@
+"""Mission properties checked elsewhere: verifypn and LoLA on the exported queries.
+
+``compile --properties`` writes a mission's properties in the Model Checking
+Contest's categories (LTLCardinality for every property, CTLCardinality and
+ReachabilityCardinality where they apply; mcl2pnml/io/mccquery.py,
+mcl2pnml/core/temporal.py). Here TAPAAL's verifypn and LoLA answer them, and
+each answer must be our checker's verdict (analysis/properties.py): on random
+small nets with every pattern in every scope, on every example mission with
+its properties (``NAME.props``, which hold, and ``NAME.false.props``, which
+do not), and on generated missions with generated properties (a few in
+``make test``, 1,000 behind ``slow``). Without the peers each test skips,
+saying why (tests/peers.py).
+"""
+from __future__ import annotations
+
+import random
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, Phase, given, settings, strategies as st
+
+from analysis.properties import Status, check
+from mcl2pnml import pipeline
+from mcl2pnml.io.mccquery import property_queries, to_xml
+
+import peers
+from helpers import ROOT
+from missions import missions
+from test_properties_check import props, small_nets
+
+EXAMPLES = ROOT / "examples"
+PROPERTY_FILES = sorted(EXAMPLES.glob("*.props"))
+#: A failing case is reported as drawn: shrinking one, with two tools run per try, takes
+#: longer than the whole suite.
+NO_SHRINK = (Phase.explicit, Phase.reuse, Phase.generate)
+#: The most markings of a generated mission compared: the peers' time grows with it.
+GENERATED_STATES = 5_000
+
+
+def _jobs(net, properties, folder: Path):
+    """(tool, category, call) of every peer's call for ``properties`` of ``net``; each call
+    returns {query id: answer}."""
+    folder.mkdir(parents=True, exist_ok=True)
+    pnml = folder / "net.pnml"
+    pipeline.save_pnml(net, pnml, "none")
+    jobs = []
+    for category, queries in property_queries(properties).items():
+        path = folder / f"net.{category}.xml"
+        path.write_text(to_xml(queries))
+        ltl = category.startswith("LTL")
+        jobs.append(("verifypn", category, queries,
+                     lambda path=path, n=len(queries), ltl=ltl:
+                     peers.verifypn_category(pnml, path, n, ltl=ltl)))
+        jobs.append(("lola", category, queries,
+                     lambda path=path: peers.lola_each(pnml, path, path.parent)))
+    return jobs
+
+
+def assert_peers_agree(cases, folder: Path, max_states: int = 1_000_000) -> list[dict]:
+    """For each (net, properties) case: our verdicts, each equal to every peer's answer to
+    every form of every property. The peers run side by side: LoLA waits for its
+    scheduler's first tick (5 s) on a formula its preprocessing decides, idle time that
+    adds up one call after another. A case with a property we cannot decide within
+    ``max_states`` is left out (None in the result)."""
+    ours, jobs = [], []
+    for k, (net, properties) in enumerate(cases):
+        verdicts = {p.name: check(net, p, max_states) for p in properties}
+        if any(v.status is Status.UNKNOWN for v in verdicts.values()):
+            ours.append(None)
+            continue
+        ours.append({name: v.status is Status.HOLDS for name, v in verdicts.items()})
+        jobs += [(k, *job) for job in _jobs(net, properties, folder / str(k))]
+    with ThreadPoolExecutor(max_workers=32) as pool:
+        answers = list(pool.map(lambda job: job[4](), jobs))
+    for (k, tool, category, queries, _), got in zip(jobs, answers):
+        for q in queries:   # every query answered: a silence is no agreement
+            assert q.id in got, (k, tool, category, q.id, "no answer")
+            assert got[q.id] == ours[k][q.id], (k, tool, category, q.id, "peer says", got[q.id],
+                                                cases[k])
+    return ours
+
+
+@pytest.fixture(autouse=True)
+def _peers_present():
+    peers.need(peers.VERIFYPN)
+    peers.need(peers.LOLA)
+
+
+#: Distinct cases: a list's first draw is otherwise forty copies of the simplest one.
+RANDOM_CASES = st.lists(st.tuples(small_nets(), props()).map(lambda c: (c[0], [c[1]])),
+                        min_size=40, max_size=40, unique_by=repr)
+
+
+@settings(max_examples=1, deadline=None, phases=NO_SHRINK,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(RANDOM_CASES)
+def test_peers_agree_on_random_nets_with_every_pattern_and_scope(cases):
+    with tempfile.TemporaryDirectory() as folder:
+        assert_peers_agree(cases, Path(folder))
+
+
+@pytest.mark.slow
+@settings(max_examples=25, deadline=None, phases=NO_SHRINK,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(RANDOM_CASES)
+def test_peers_agree_on_a_thousand_random_nets(cases):
+    with tempfile.TemporaryDirectory() as folder:
+        assert_peers_agree(cases, Path(folder))
+
+
+@pytest.mark.parametrize("props_file", PROPERTY_FILES, ids=lambda p: p.name)
+def test_peers_agree_on_every_example(props_file, tmp_path):
+    mission = EXAMPLES / (props_file.name.split(".")[0] + ".mcl")
+    net, properties = pipeline.properties_of(mission, extra=props_file)
+    assert properties
+    [ours] = assert_peers_agree([(net, properties)], tmp_path)
+    assert ours is not None, "an example's properties are decided"
+    if props_file.name.endswith(".false.props"):
+        assert not all(ours.values()), "a .false.props file states a false property"
+    else:
+        assert all(ours.values()), ours
+
+
+# -- generated missions, generated properties -----------------------------------------------
+
+PATTERNS = ("never {e}", "always {e}", "eventually {e}", "at most {k} times {e}",
+            "{e} only after {f}", "{e} leads to {f}")
+SCOPES = ("", " globally", " before {r}", " after {q}", " between ({q}) and {r}",
+          " after {q} until {r}")
+
+
+def _atoms(net) -> list[str]:
+    """The atoms whose places the mission's net has (a declared task it never calls has none)."""
+    atoms = [f"outcome({r})" for r in ("OK", "FAIL", "ABORTED")]
+    for p in ("Pa", "Pb", "Pc"):
+        if f"{p}.ON" in net.place_index:
+            atoms += [f"enabled({p})", f"achieved({p})", f"failed({p})"]
+    for t in ("T0", "T1", "T2", "F0", "F1"):
+        if f"{t}.GATE" in net.place_index:
+            atoms += [f"running({t})", f"ended({t}, OK)", f"ended({t}, FAIL)"]
+    return atoms
+
+
+def _expression(rng: random.Random, atoms: list[str], depth: int = 2) -> str:
+    roll = rng.random()
+    if depth == 0 or roll < 0.5:
+        return rng.choice(atoms)
+    if roll < 0.65:
+        return f"not ({_expression(rng, atoms, depth - 1)})"
+    word = rng.choice(("and", "or"))
+    return f"({_expression(rng, atoms, depth - 1)} {word} {_expression(rng, atoms, depth - 1)})"
+
+
+def generated_properties(net, seed: int, count: int = 3) -> str:
+    rng = random.Random(seed)
+    atoms = _atoms(net)
+    lines = []
+    for k in range(count):
+        e = {x: _expression(rng, atoms) for x in "efqr"}
+        text = rng.choice(PATTERNS).format(k=rng.randint(1, 3), **e) + \
+            rng.choice(SCOPES).format(**e)
+        lines.append(f"property G{k}: {text};")
+    return "\n".join(lines) + "\n"
+
+
+def _generated(batch, folder: Path) -> int:
+    """Our verdicts and the peers' on each (mission, seed) of ``batch``; how many were
+    compared (a mission over GENERATED_STATES markings is left out)."""
+    from analysis.statespace import ExplorationLimit, explore
+    cases = []
+    for k, (mission, seed) in enumerate(batch):
+        path = folder / f"m{k}.mcl"
+        path.write_text(mission)
+        net = pipeline.compile_file(path)
+        try:
+            explore(net, max_states=GENERATED_STATES)
+        except ExplorationLimit:
+            continue
+        side = path.with_suffix(".props")
+        side.write_text(generated_properties(net, seed))
+        cases.append(pipeline.properties_of(path, extra=side))
+    ours = assert_peers_agree(cases, folder)
+    return sum(o is not None for o in ours)
+
+
+GENERATED = st.lists(st.tuples(missions(depth=2, width=2, function_depth=1),
+                               st.integers(0, 2**32 - 1)), min_size=10, max_size=10,
+                     unique_by=lambda case: case[0])
+
+
+@settings(max_examples=1, deadline=None, phases=NO_SHRINK,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(GENERATED)
+def test_peers_agree_on_generated_missions(batch):
+    with tempfile.TemporaryDirectory() as folder:
+        assert _generated(batch, Path(folder)) >= len(batch) // 2
+
+
+@pytest.mark.slow
+@settings(max_examples=100, deadline=None, phases=NO_SHRINK,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(GENERATED)
+def test_peers_agree_on_a_thousand_generated_missions(batch):
+    with tempfile.TemporaryDirectory() as folder:
+        assert _generated(batch, Path(folder)) >= len(batch) // 2
