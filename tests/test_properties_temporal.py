@@ -64,3 +64,48 @@ def test_a_formula_reads_as_the_catalogue_writes_it():
     assert show(ctl(response)) == "A [](!(m1 >= 1) | A <>(m2 >= 1))"
     before = Property("x", Pattern.ABSENCE, at(1), scope=Scope(ScopeKind.BEFORE, r=at(3)))
     assert show(ltl(before)) == "A (!<>(m3 >= 1) | (!(m1 >= 1) U (m3 >= 1)) | []!(m1 >= 1))"
+
+
+# -- the exported files: compile --properties ------------------------------------------------
+
+def test_compile_writes_each_category_beside_the_net_with_the_pnml_ids(tmp_path):
+    from lxml import etree
+
+    from helpers import ROOT, run_cli
+    mission = tmp_path / "m.mcl"
+    mission.write_text((ROOT / "examples" / "sauce.mcl").read_text() + """
+property Never: never enabled(GoToWayPoint) and enabled(ReleaseMarker);
+property Responds: running(Survey) leads to ended(Survey, OK) or ended(Survey, FAIL)
+    or ended(Survey, ABORTED) after outcome(OK) until false;
+""")
+    r = run_cli("compile", mission, "-o", tmp_path / "out.pnml", "--properties")
+    assert r.returncode == 0, r.stderr
+    pnml = etree.parse(str(tmp_path / "out.pnml"))
+    places = {e.get("id") for e in pnml.iter("{*}place")}
+    ids = {}
+    for category in ("ReachabilityCardinality", "CTLCardinality", "LTLCardinality"):
+        path = tmp_path / f"out.{category}.xml"
+        assert f"wrote {path}" in r.stderr
+        tree = etree.parse(str(path))
+        ids[category] = [e.text for e in tree.iter("{http://mcc.lip6.fr/}id")]
+        named = {e.text for e in tree.iter("{http://mcc.lip6.fr/}place")}
+        assert named and named <= places, named - places
+    assert ids["LTLCardinality"] == ["Never", "Responds"]
+    assert ids["ReachabilityCardinality"] == ids["CTLCardinality"] == ["Never"]
+
+
+def test_compile_properties_errors_are_one_message_and_write_nothing(tmp_path):
+    from helpers import ROOT, run_cli
+    mission = tmp_path / "m.mcl"
+    mission.write_text("primitive P(x);\ntask T(x) = AchieveGoal(P(x));\nmission { T(1); }\n")
+    r = run_cli("compile", mission, "-o", tmp_path / "m.pnml", "--properties")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "declares no property" in r.stderr
+    r = run_cli("compile", mission, "-o", tmp_path / "m.pnml", "--properties", tmp_path / "no")
+    assert r.returncode == 2 and "no file" in r.stderr
+    side = tmp_path / "bad.props"
+    side.write_text("property X: never enabled(Q);\n")
+    r = run_cli("compile", mission, "-o", tmp_path / "m.pnml", "--properties", side)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert f"{side}:1:27: undeclared primitive 'Q'; declared primitives: P" in r.stderr
+    assert not list(tmp_path.glob("m.*.xml")) and not (tmp_path / "m.pnml").exists()
