@@ -188,25 +188,37 @@ def _truths(prop: Property) -> tuple[Predicate, Predicate, Predicate, Predicate]
 
 def check(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
     """Whether ``prop`` holds on every run of ``net``, with a shortest counterexample if not."""
+    return check_all(net, [prop], max_states)[0]
+
+
+def check_all(net: Net, properties: Iterable[Property],
+              max_states: int = 1_000_000) -> list[Verdict]:
+    """Each property's verdict, in order, on one exploration of the state space."""
     from analysis.statespace import ExplorationLimit, explore
 
+    properties = list(properties)
     try:
         space = explore(net, max_states=max_states)
     except ExplorationLimit as e:
-        return Verdict(prop, Status.UNKNOWN, states=e.explored or max_states,
-                       reason=f"more than {max_states:,} reachable markings")
+        return [Verdict(p, Status.UNKNOWN, states=e.explored or max_states,
+                        reason=f"more than {max_states:,} reachable markings") for p in properties]
     if space.coverability:
-        return Verdict(prop, Status.UNKNOWN, states=space.states,
-                       reason="the net is unbounded (its coverability graph is no run graph)")
+        return [Verdict(p, Status.UNKNOWN, states=space.states,
+                        reason="the net is unbounded (its coverability graph is no run graph)")
+                for p in properties]
     ids = [pl.id for pl in net.places]
     tids = [t.id for t in net.transitions]
     marked = [tuple((ids[k], int(n)) for k, n in enumerate(m) if n) for m in space.markings]
     after: list[list[tuple[int, int]]] = [[] for _ in range(space.states)]
     for a, b, t in zip(space.src, space.dst, space.trans):
         after[int(a)].append((int(b), int(t)))
-    preds = _truths(prop)
-    truth = [tuple(holds(x, dict(m)) for x in preds) for m in marked]
-    return _product(prop, marked, tids, after, truth, max_states)
+    as_dicts = [dict(m) for m in marked]
+    verdicts = []
+    for prop in properties:
+        preds = _truths(prop)
+        truth = [tuple(holds(x, m) for x in preds) for m in as_dicts]
+        verdicts.append(_product(prop, marked, tids, after, truth, max_states))
+    return verdicts
 
 
 def _product(prop, marked, tids, after, truth, max_states) -> Verdict:
@@ -327,8 +339,3 @@ def _cycle_states(start, trans, succ):
         node = next(c for c, u in succ[node] if u == t)
         states.append(node)
     return states, trans
-
-
-def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_000) -> list[Verdict]:
-    """Each property's verdict, in order."""
-    return [check(net, p, max_states) for p in properties]

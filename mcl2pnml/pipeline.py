@@ -251,9 +251,10 @@ def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> 
 
 def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
     """Each property's :class:`analysis.properties.Verdict` on ``net``'s runs, in order:
-    holds, fails with a shortest counterexample, or unknown past ``max_states``."""
-    from analysis.properties import check
-    return [check(net, prop, max_states) for prop in properties]
+    holds, fails with a shortest counterexample, or unknown past ``max_states``. The state
+    space is explored once for all of them."""
+    from analysis.properties import check_all
+    return check_all(net, properties, max_states)
 
 
 def verdicts_json(verdicts) -> list[dict[str, Any]]:
