@@ -1,0 +1,118 @@
+"""Each example's properties: those of ``NAME.props`` hold, those of ``NAME.false.props`` fail.
+
+``examples/NAME.props`` states what the mission's engineer guarantees, each
+property with why it holds; ``examples/NAME.false.props`` states mistakes
+easily made about the same mission, each with why it is false
+(docs/properties.md). Both are checked here through the facade, as
+``mcl2pnml analyze --properties`` checks them (``pipeline.properties_of``,
+then ``pipeline.check_properties``).
+
+The counterexample of each false property is kept as the command prints
+it, in ``tests/data/counterexamples/NAME.PROPNAME.txt``: the lines of that
+property in the output of
+``mcl2pnml analyze examples/NAME.mcl --state-space --properties examples/NAME.false.props``
+run from the repository's root. After a deliberate change to how a verdict
+is printed, rewrite every one of them (dam_inspection's included) with one
+command, then review the diff:
+
+    MCL2PNML_REGOLD=1 .venv/bin/python -m pytest tests/test_example_properties.py -m 'slow or not slow'
+
+dam_inspection's state space (197,331 markings; some 50 s for its
+properties) puts its cases behind the ``slow`` marker; the others take a
+few seconds together.
+"""
+from __future__ import annotations
+
+import functools
+import os
+from pathlib import Path
+
+import pytest
+
+from analysis.properties import Status
+from mcl2pnml import pipeline
+
+from helpers import DATA, ROOT, assert_golden
+
+EXAMPLES = ROOT / "examples"
+COUNTEREXAMPLES = DATA / "counterexamples"
+#: The examples whose properties take more than a few seconds to check.
+SLOW = {"dam_inspection"}
+
+
+def _examples() -> list:
+    return [pytest.param(m.stem, marks=[pytest.mark.slow] if m.stem in SLOW else [], id=m.stem)
+            for m in sorted(EXAMPLES.glob("*.mcl"))]
+
+
+@functools.lru_cache(maxsize=None)
+def _verdicts(name: str, suffix: str) -> tuple:
+    """The verdicts of ``examples/NAME.SUFFIX``'s properties (the mission declares none)."""
+    mission = EXAMPLES / f"{name}.mcl"
+    _, properties = pipeline.properties_of(mission, extra=EXAMPLES / f"{name}{suffix}")
+    assert properties and all(p.location.file.endswith(suffix) for p in properties)
+    return tuple(pipeline.check_properties(pipeline.compile_file(mission), properties))
+
+
+@functools.lru_cache(maxsize=None)
+def _printed(name: str) -> str:
+    """What ``mcl2pnml analyze --properties NAME.false.props`` prints, run from the root."""
+    from click.testing import CliRunner
+
+    from mcl2pnml.cli import main
+    here = Path.cwd()
+    os.chdir(ROOT)   # the locations printed are then examples/NAME.false.props:L:C
+    try:
+        out = CliRunner().invoke(main, ["analyze", f"examples/{name}.mcl", "--state-space",
+                                        "--no-progress", "--properties",
+                                        f"examples/{name}.false.props"])
+    finally:
+        os.chdir(here)
+    assert out.exit_code == 1, out.output   # a property fails
+    return out.stdout
+
+
+def _block(printed: str, prop: str) -> str:
+    """The lines the command prints for property ``prop``: its verdict, then its indented
+    counterexample."""
+    lines = printed.splitlines()
+    start = next(k for k, line in enumerate(lines) if line.startswith(f"property {prop} ("))
+    end = start + 1
+    while end < len(lines) and lines[end].startswith(" "):
+        end += 1
+    return "\n".join(lines[start:end]) + "\n"
+
+
+def test_every_example_has_both_files():
+    for mission in sorted(EXAMPLES.glob("*.mcl")):
+        assert mission.with_suffix(".props").is_file(), mission.name
+        assert mission.with_name(mission.stem + ".false.props").is_file(), mission.name
+
+
+@pytest.mark.parametrize("name", _examples())
+def test_every_property_of_the_props_file_holds(name):
+    verdicts = _verdicts(name, ".props")
+    assert len(verdicts) >= 3
+    assert {v.property.name: v.status for v in verdicts} == \
+        {v.property.name: Status.HOLDS for v in verdicts}
+
+
+@pytest.mark.parametrize("name", _examples())
+def test_every_property_of_the_false_file_fails_as_printed(name):
+    verdicts = _verdicts(name, ".false.props")
+    assert {v.property.name: v.status for v in verdicts} == \
+        {v.property.name: Status.FAILS for v in verdicts}
+    for v in verdicts:
+        assert v.transitions, v.property.name
+        block = _block(_printed(name), v.property.name)
+        assert block.splitlines()[0].endswith(": fails")
+        assert_golden(COUNTEREXAMPLES / f"{name}.{v.property.name}.txt", block)
+
+
+def test_every_pattern_and_every_scope_holds_in_some_example():
+    from mcl2pnml.core.properties import Pattern, ScopeKind
+    stated = []
+    for mission in sorted(EXAMPLES.glob("*.mcl")):
+        stated += pipeline.properties_of(mission, extra=mission.with_suffix(".props"))[1]
+    assert {p.pattern for p in stated} == set(Pattern)
+    assert {p.scope.kind for p in stated} == set(ScopeKind)
