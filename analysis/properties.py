@@ -339,3 +339,78 @@ def _cycle_states(start, trans, succ):
         node = next(c for c, u in succ[node] if u == t)
         states.append(node)
     return states, trans
+
+
+# -- a given run ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Shown:
+    """How one firing sequence shows a property violated (:func:`judge`).
+
+    ``step``: the number of firings after which it shows: the first marking
+    the observer reads as ``BAD`` (a prefix), the run's dead end (a finite
+    run), or the second visit of the cycle's first state (a lasso, whose
+    cycle starts after ``loop`` firings).
+    """
+
+    shape: Shape
+    step: int
+    loop: int | None = None
+
+
+def judge(net: Net, prop: Property, transitions: Iterable[str]) -> Shown | None:
+    """Whether the run that fires ``transitions`` from M0 shows ``prop`` violated, and how.
+
+    The same observer as :func:`check` reads the run's markings. It shows a
+    violation when the observer reaches ``BAD``; when the run ends in a dead
+    marking (no transition of the net enabled) with an obligation open; or
+    when it comes back to a state of the product (marking, observer) with an
+    obligation open at every marking in between: that cycle, repeated for
+    ever, is an infinite run that violates the property. A transition that
+    is not enabled where the run fires it is an error (ValueError): the
+    sequence is no run of the net.
+    """
+    from mcl2pnml.core.structure import structure
+
+    s = structure(net)
+    index = s.transition_index
+    m = list(s.initial_vector())
+    preds = _truths(prop)
+
+    def read() -> tuple[bool, ...]:
+        marking = {s.places[k]: n for k, n in enumerate(m) if n}
+        return tuple(holds(x, marking) for x in preds)
+
+    obs = step(prop, _initial(prop.scope.kind), *read())
+    seen = {(tuple(m), obs): 0}
+    open_since = 0 if pending(prop, obs) else None   # obligations open from this step on
+    k = 0
+    for k, tid in enumerate(transitions, 1):
+        if obs is BAD:
+            return Shown(Shape.PREFIX, k - 1)
+        if tid not in index:
+            raise ValueError(f"'{tid}' is no transition of '{net.name}'")
+        j = index[tid]
+        if any(m[p] < w for arcs in (s.pre[j], s.read[j]) for p, w in arcs.items()):
+            raise ValueError(f"'{tid}' is not enabled after {k - 1} firings")
+        for p, w in s.pre[j].items():
+            m[p] -= w
+        for p, w in s.post[j].items():
+            m[p] += w
+        obs = step(prop, obs, *read())
+        if not pending(prop, obs):
+            open_since = None
+        elif open_since is None:
+            open_since = k
+        state = (tuple(m), obs)
+        if obs is not BAD and state in seen and open_since is not None \
+                and seen[state] >= open_since:
+            return Shown(Shape.LASSO, k, loop=seen[state])
+        seen[state] = k    # the latest visit: the shortest cycle back to it
+    if obs is BAD:
+        return Shown(Shape.PREFIX, k)
+    dead = not any(all(m[p] >= w for arcs in (s.pre[j], s.read[j]) for p, w in arcs.items())
+                   for j in range(len(s.transitions)))
+    if dead and pending(prop, obs):
+        return Shown(Shape.FINITE, k)
+    return None

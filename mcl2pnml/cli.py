@@ -397,16 +397,30 @@ def _progress(states: int, frontier: int) -> None:
               metavar="[FILE]", help="Check a mission's properties (docs/properties.md) on its "
               "runs: the mission's, then FILE's (default: MISSION.props, if there is one); "
               "exit 1 if one fails, 3 if one is unknown.")
+@click.option("--counterexamples", "cex_dir", type=OUTPUT, metavar="DIR",
+              help="With --properties: for each failing property write DIR/NAME.txt (its run "
+                   "in the mission's terms), NAME.vehicle.json (a vehicle script that replays a "
+                   "violation on both engines), NAME.log and NAME.html (a page stepping "
+                   "through it).")
 @NET_OPTION
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
             progress: bool | None, explorer: str, max_memory: str | None,
-            net_id: str | None, properties: str | None = None) -> int:
+            net_id: str | None, properties: str | None = None,
+            cex_dir: Path | None = None) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
     PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml, .net, .lola).
     Exit status 3: a partial answer (the memory budget was reached).
     """
+    if cex_dir is not None and properties is None:
+        raise OptionError("--counterexamples", "counterexamples are of properties: add "
+                                               "--properties")
+    if cex_dir is not None and initial is not None:
+        raise OptionError("--counterexamples", "a replay starts the mission from its start: "
+                                               "leave out --initial")
+    if cex_dir is not None and cex_dir.exists() and not cex_dir.is_dir():
+        raise OptionError("--counterexamples", f"'{cex_dir}' is a file, not a folder")
     net = pipeline.load_net(file, net_id, max_memory)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress
@@ -417,14 +431,22 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
         click.echo("", err=True)
     verdicts = None if properties is None else _check_properties(file, properties, net, start,
                                                                  max_states)
+    # the mission's terms and the replay start from the mission's own start
+    witnesses = (pipeline.witnesses(file, net, verdicts)
+                 if verdicts is not None and start is None else None)
+    if cex_dir is not None:
+        for v, w in zip(verdicts, witnesses):
+            if w is not None:
+                for path in pipeline.save_witness(cex_dir, file, v, w):
+                    click.echo(f"wrote {path}", err=True)
     if as_json:
         if verdicts is not None:
-            result["properties"] = pipeline.verdicts_json(verdicts)
+            result["properties"] = pipeline.verdicts_json(verdicts, witnesses)
         click.echo(json.dumps(result, indent=2))
     else:
         click.echo(pipeline.analysis_text(result))
-        for v in verdicts or ():
-            _print_verdict(v)
+        for k, v in enumerate(verdicts or ()):
+            click.echo("\n".join(pipeline.witness_text(v, witnesses[k] if witnesses else None)))
     statuses = {v.status.value for v in verdicts or ()}
     if "fails" in statuses:
         return 1
@@ -447,18 +469,3 @@ def _properties_file(mission: Path, properties: str) -> Path | None:
     if properties and not extra.is_file():
         raise OptionError("--properties", f"no file '{properties}'")
     return extra if extra.is_file() else None
-
-
-def _print_verdict(v) -> None:
-    where = v.property.location.prefix() if v.property.location else "-"
-    line = f"property {v.property.name} ({where}): {v.status.value}"
-    if v.reason:
-        line += f" ({v.reason}, {v.states:,} states)"
-    click.echo(line)
-    if v.shape is not None:
-        click.echo(f"  counterexample ({v.shape.value}):")
-        for k, t in enumerate(v.transitions, 1):
-            loop = "  <- the cycle starts here" if v.loop is not None and k == v.loop + 1 else ""
-            click.echo(f"  {k:4}. {t}{loop}")
-        if v.loop is not None:
-            click.echo(f"  then again from step {v.loop + 1}, forever")

@@ -14,6 +14,7 @@ fast.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, Sequence
@@ -257,15 +258,92 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
     return check_all(net, properties, max_states)
 
 
-def verdicts_json(verdicts) -> list[dict[str, Any]]:
-    """Verdicts as ``analyze --json`` prints them."""
-    return [{"name": v.property.name, "text": v.property.text,
-             "location": v.property.location.prefix() if v.property.location else None,
-             "status": v.status.value, "states": v.states, "reason": v.reason,
-             "counterexample": None if v.shape is None else {
-                 "shape": v.shape.value, "transitions": list(v.transitions),
-                 "loop": v.loop, "markings": [dict(m) for m in v.markings]}}
+def witnesses(mission: Path, net: Net, verdicts) -> list:
+    """For each verdict, its :class:`~mcl2pnml.runtime.counterexample.Witness` when it fails
+    (the counterexample in the mission's terms, the vehicle script that replays a violation
+    on both engines, or why none does), else None. ``net`` is ``mission``'s compiled net."""
+    from mcl2pnml.runtime.counterexample import witness
+    checked = check_file(mission)
+    return [None if v.shape is None else
+            witness(net, checked, v.property, v.transitions, shape=v.shape.value, loop=v.loop)
             for v in verdicts]
+
+
+def verdicts_json(verdicts, witnesses=None) -> list[dict[str, Any]]:
+    """Verdicts as ``analyze --json`` prints them, each failing one with its witness if given."""
+    out = []
+    for k, v in enumerate(verdicts):
+        w = witnesses[k] if witnesses else None
+        cex = None if v.shape is None else {
+            "shape": v.shape.value, "transitions": list(v.transitions),
+            "loop": v.loop, "markings": [dict(m) for m in v.markings]}
+        if cex is not None and w is not None:
+            cex["mission"] = w.run.lines()
+            cex["vehicle_script"] = None if w.replayed is None else w.replayed.script
+            cex["replayed"] = None if w.replayed is None else {
+                "same_run": w.replayed is w.run, "mission": w.replayed.lines(),
+                "transitions": [s.transition for s in w.replayed.steps],
+                "detail": w.replay.detail}
+            cex["why_not"] = w.why_not
+        out.append({"name": v.property.name, "text": v.property.text,
+                    "location": v.property.location.prefix() if v.property.location else None,
+                    "status": v.status.value, "states": v.states, "reason": v.reason,
+                    "counterexample": cex})
+    return out
+
+
+def witness_text(v, w) -> list[str]:
+    """A verdict as ``analyze --properties`` prints it: the firing sequence, the same run in
+    the mission's terms, and the vehicle script that replays a violation, or why none does."""
+    where = v.property.location.prefix() if v.property.location else "-"
+    line = f"property {v.property.name} ({where}): {v.status.value}"
+    if v.reason:
+        line += f" ({v.reason}, {v.states:,} states)"
+    out = [line]
+    if v.shape is None:
+        return out
+    out.append(f"  counterexample ({v.shape.value}):")
+    for k, t in enumerate(v.transitions, 1):
+        loop = "  <- the cycle starts here" if v.loop is not None and k == v.loop + 1 else ""
+        out.append(f"  {k:4}. {t}{loop}")
+    if v.loop is not None:
+        out.append(f"  then again from step {v.loop + 1}, forever")
+    if w is None:
+        return out
+    out.append("  in the mission's terms (step numbers in brackets):")
+    out += [f"  {line}" for line in w.run.lines()]
+    if w.replayed is not None and w.replayed is not w.run:
+        out.append(f"  a vehicle script cannot lead the engines along it: {w.why_not}")
+        out.append(f"  a run the engines take that violates it too ({w.replayed.shape}, "
+                   f"{len(w.replayed.steps)} firings):")
+        out += [f"  {line}" for line in w.replayed.lines()]
+    if w.replayed is not None:
+        out.append("  vehicle script (run --vehicle; both engines reach the violation): "
+                   + json.dumps(w.replayed.script))
+    else:
+        out.append(f"  no vehicle script replays it: {w.why_not}")
+    return out
+
+
+def save_witness(folder: Path, mission: Path, v, w) -> list[Path]:
+    """A failing property's files in ``folder``: NAME.txt (:func:`witness_text`),
+    NAME.vehicle.json (the script, if any), NAME.log (the run as ``run --log`` writes it:
+    the replayed run if any, else the counterexample) and NAME.html (``show``'s page
+    following that run step by step)."""
+    from mcl2pnml.core.files import atomic_write_text
+    folder.mkdir(parents=True, exist_ok=True)
+    name = v.property.name
+    written = [folder / f"{name}.txt"]
+    atomic_write_text(written[0], "\n".join(witness_text(v, w)) + "\n")
+    shown = w.replayed or w.run
+    if w.replayed is not None:
+        written.append(folder / f"{name}.vehicle.json")
+        atomic_write_text(written[-1], w.replayed.script_json())
+    log = folder / f"{name}.log"
+    atomic_write_text(log, "".join(json.dumps(e) + "\n" for e in shown.run_log()))
+    page = folder / f"{name}.html"
+    save_show_page(page, show_nets(str(mission), with_run=True), log)
+    return [*written, log, page]
 
 
 def parse_size(text: str, option: str = "--max-memory") -> int:
