@@ -397,7 +397,8 @@ def _progress(states: int, frontier: int) -> None:
               metavar="[FILE]", help="Check a mission's properties (docs/properties.md) on its "
               "runs: the mission's, then FILE's (default: MISSION.props, if there is one); "
               "exit 1 if one fails, 3 if one is unknown.")
-@click.option("--counterexamples", "cex_dir", type=OUTPUT, metavar="DIR",
+@click.option("--counterexamples", "cex_dir", metavar="DIR",
+              type=click.Path(file_okay=False, path_type=Path),
               help="With --properties: for each failing property write DIR/NAME.txt (its run "
                    "in the mission's terms), NAME.vehicle.json (a vehicle script that replays a "
                    "violation on both engines), NAME.log and NAME.html (a page stepping "
@@ -419,8 +420,6 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if cex_dir is not None and initial is not None:
         raise OptionError("--counterexamples", "a replay starts the mission from its start: "
                                                "leave out --initial")
-    if cex_dir is not None and cex_dir.exists() and not cex_dir.is_dir():
-        raise OptionError("--counterexamples", f"'{cex_dir}' is a file, not a folder")
     net = pipeline.load_net(file, net_id, max_memory)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress

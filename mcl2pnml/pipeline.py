@@ -259,10 +259,10 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
 
 
 def witnesses(mission: Path, net: Net, verdicts) -> list:
-    """For each verdict, its :class:`~mcl2pnml.runtime.counterexample.Witness` when it fails
+    """For each verdict, its :class:`~mcl2pnml.counterexample.Witness` when it fails
     (the counterexample in the mission's terms, the vehicle script that replays a violation
     on both engines, or why none does), else None. ``net`` is ``mission``'s compiled net."""
-    from mcl2pnml.runtime.counterexample import witness
+    from mcl2pnml.counterexample import witness
     checked = check_file(mission)
     return [None if v.shape is None else
             witness(net, checked, v.property, v.transitions, shape=v.shape.value, loop=v.loop)
@@ -320,6 +320,10 @@ def witness_text(v, w) -> list[str]:
     if w.replayed is not None:
         out.append("  vehicle script (run --vehicle; both engines reach the violation): "
                    + json.dumps(w.replayed.script))
+        if w.replayed.loop is not None:
+            from mcl2pnml.counterexample import CYCLE_REPEATS
+            out.append(f"  (the cycle's replies {CYCLE_REPEATS} times over: a vehicle that goes "
+                       "on answering so keeps the mission in the cycle forever)")
     else:
         out.append(f"  no vehicle script replays it: {w.why_not}")
     return out

@@ -1,6 +1,8 @@
 """Hypothesis strategies for whole MCL missions and vehicle scripts, to run both engines on
-(with :func:`helpers.both`)."""
+(with :func:`helpers.both`), and properties generated for a mission's net."""
 from __future__ import annotations
+
+import random
 
 from hypothesis import strategies as st
 
@@ -84,3 +86,44 @@ replies = st.one_of(st.sampled_from(["never"]),
                               st.sampled_from([0, 1, 2, 5, 10])))
 scripts = st.fixed_dictionaries({p: st.lists(replies, max_size=6) for p in PRIMITIVES})
 
+
+# -- generated properties ---------------------------------------------------------------------
+
+PATTERNS = ("never {e}", "always {e}", "eventually {e}", "at most {k} times {e}",
+            "{e} only after {f}", "{e} leads to {f}")
+SCOPES = ("", " globally", " before {r}", " after {q}", " between ({q}) and {r}",
+          " after {q} until {r}")
+
+
+def _atoms(net) -> list[str]:
+    """The atoms whose places the mission's net has (a declared task it never calls has none)."""
+    atoms = [f"outcome({r})" for r in ("OK", "FAIL", "ABORTED")]
+    for p in ("Pa", "Pb", "Pc"):
+        if f"{p}.ON" in net.place_index:
+            atoms += [f"enabled({p})", f"achieved({p})", f"failed({p})"]
+    for t in ("T0", "T1", "T2", "F0", "F1"):
+        if f"{t}.GATE" in net.place_index:
+            atoms += [f"running({t})", f"ended({t}, OK)", f"ended({t}, FAIL)"]
+    return atoms
+
+
+def _expression(rng: random.Random, atoms: list[str], depth: int = 2) -> str:
+    roll = rng.random()
+    if depth == 0 or roll < 0.5:
+        return rng.choice(atoms)
+    if roll < 0.65:
+        return f"not ({_expression(rng, atoms, depth - 1)})"
+    word = rng.choice(("and", "or"))
+    return f"({_expression(rng, atoms, depth - 1)} {word} {_expression(rng, atoms, depth - 1)})"
+
+
+def generated_properties(net, seed: int, count: int = 3) -> str:
+    rng = random.Random(seed)
+    atoms = _atoms(net)
+    lines = []
+    for k in range(count):
+        e = {x: _expression(rng, atoms) for x in "efqr"}
+        text = rng.choice(PATTERNS).format(k=rng.randint(1, 3), **e) + \
+            rng.choice(SCOPES).format(**e)
+        lines.append(f"property G{k}: {text};")
+    return "\n".join(lines) + "\n"

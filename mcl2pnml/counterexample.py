@@ -35,6 +35,11 @@ a finite run's when the run ends with an obligation open; a lasso's (an
 infinite run) when the run comes back to the same marking with the same
 obligation open: the vehicle repeating its answers forever, the obligation
 is never met.
+
+It sits between the facade and the layers it joins, and may import
+:mod:`mcl2pnml.core`, :mod:`mcl2pnml.language` (the atoms' places),
+:mod:`analysis` (the observer) and :mod:`mcl2pnml.runtime` (the engines and
+the scripted vehicle); only :mod:`mcl2pnml.pipeline` imports it.
 """
 from __future__ import annotations
 
@@ -237,7 +242,7 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
         true_now = now
         kinds.append(kind)
         raw.append((tid, kind, text, acts, payload.event))
-    times, departs, why_not = schedule(net, transitions, kinds)
+    times, departs, why_not = schedule(net, transitions, kinds, loop)
     script, no_script = _script(raw, kinds)
     why_not = no_script or why_not
     steps = []
@@ -252,18 +257,20 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
     if why_not is not None:
         script = None
     elif times is not None:
-        script = _delays(script, raw, times)
+        script = _delays(script, raw, times, loop)
     return Counterexample(prop, shape, tuple(steps), loop, script, why_not, end, departs)
 
 
 # -- the schedule --------------------------------------------------------------------------------
 
-def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind]
-             ) -> tuple[list[Fraction] | None, str | None, str | None]:
+def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
+             loop: int | None = None) -> tuple[list[Fraction] | None, str | None, str | None]:
     """The earliest times, one per firing, at which the engines take the stimuli in the
     sequence's order (see the module's documentation), or None; where the sequence departs
     from what the engines do at once (a stimulus while a step of the supervisor is still to
-    fire), the first such place, in words; why no times exist, if none do."""
+    fire), the first such place, in words; why no times exist, if none do. A lasso (its
+    cycle from firing ``loop`` on) has none if a time-out runs all along the cycle: time
+    passing as the cycle repeats, it would expire."""
     import networkx as nx
 
     from mcl2pnml.core.structure import structure
@@ -297,6 +304,8 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind]
             if kind is StepKind.TIMEOUT:
                 fixed.append((current, set_at[j], timed[j]))
             before += [(current, at, timed[k]) for k, at in set_at.items() if k != j]
+        if n - 1 == loop:
+            at_loop = dict(set_at)
         stimulus_of.append(current)
         for p, w in s.pre[j].items():
             m[p] -= w
@@ -307,6 +316,11 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind]
                 set_at.setdefault(k, current)
             else:
                 set_at.pop(k, None)
+    if loop is not None:
+        kept = sorted(s.transitions[k] for k, at in set_at.items() if at_loop.get(k) == at)
+        if kept:
+            return None, departs, (f"the time-out {kept[0]} runs all along the cycle: repeated, "
+                                   "time passes and it expires")
     for epsilon in (Fraction(1), Fraction(1, 10), Fraction(1, 100), Fraction(1, 1000)):
         g = nx.DiGraph()
         g.add_nodes_from(range(current + 1))
@@ -367,16 +381,24 @@ def _script(raw, kinds) -> tuple[dict[str, list[tuple[int, int, EventKind | None
     return {p: [tuple(e) for e in es] for p, es in enablings.items()}, None
 
 
-def _delays(script, raw, times) -> dict[str, list[str]]:
+#: How many times a lasso's script gives the replies of its cycle: enough to see it repeat.
+CYCLE_REPEATS = 3
+
+
+def _delays(script, raw, times, loop: int | None) -> dict[str, list[str]]:
+    """The script's replies; a lasso's cycle (enablings from firing ``loop`` on) given
+    :data:`CYCLE_REPEATS` times, the vehicle answering each time round as the first."""
     out = {}
     for prim, enablings in sorted(script.items()):
-        replies = []
+        replies, cycle = [], []
         for enabled_at, reply_at, kind in enablings:
             if kind is None:
-                replies.append("never")
+                reply = "never"
             else:
                 delay = _time(float(times[reply_at] - times[enabled_at]))
-                replies.append(f"{'ok' if kind is EventKind.ACHIEVED else 'fail'}@{delay}")
+                reply = f"{'ok' if kind is EventKind.ACHIEVED else 'fail'}@{delay}"
+            (cycle if loop is not None and enabled_at >= loop else replies).append(reply)
+        replies += cycle * CYCLE_REPEATS
         while replies and replies[-1] == "never":   # past its list a primitive says never
             replies.pop()
         out[prim] = replies
@@ -432,8 +454,13 @@ def replay(cex: Counterexample, net: Net, checked) -> Replay:
 
 # -- a run the engines take ------------------------------------------------------------------------
 
+class SearchLimit(Exception):
+    """:func:`engine_run` met its bound before it could answer."""
+
+
 def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str, ...] | None:
-    """A shortest violating run that the Petri-net executor takes with some vehicle: or None.
+    """A shortest violating run that the Petri-net executor takes with some vehicle: or None
+    when it takes none (:class:`SearchLimit` past ``max_states`` states of the executor).
 
     The checker's counterexample is a run of the untimed net; the engines
     fire every step of the supervisor at once, in their own order, before
@@ -444,10 +471,14 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
     vehicle's acknowledgements, breadth first, the observer reading every
     marking the executor passes through. It finds a prefix that violates the
     property, or a run that ends (nothing enabled) with an obligation open;
-    an infinite run's cycle it does not look for. Time is left out here:
+    failing both, an infinite run: a cycle of the executor's states with an
+    obligation open at every marking along it, reached by the shortest
+    prefix (strongly connected components of those moves). Time is left out here:
     :func:`schedule` then finds the times, if any, that order the stimuli so.
     """
     from collections import deque
+
+    import networkx as nx
 
     from analysis.properties import BAD, _initial, _truths, pending, step
     from mcl2pnml.runtime.executor import PetriEngine
@@ -463,6 +494,7 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
         if box["obs"] is not BAD:
             marking = {places[k]: n for k, n in enumerate(box["engine"].marking) if n}
             box["obs"] = step(prop, box["obs"], *(holds(x, marking) for x in preds))
+            box["open"] = box.get("open", False) and pending(prop, box["obs"])
 
     def settle(engine: PetriEngine, actions: list[Action], replied: frozenset[str]):
         """The vehicle's acknowledgements, at once, in its order (by primitive name)."""
@@ -490,10 +522,13 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
 
     trail.clear()
     engine, replied = start()
-    nodes = {key(engine, box["obs"], replied): ()}
-    queue = deque([(tuple(trail), engine, box["obs"], replied)])
+    root_key = key(engine, box["obs"], replied)
+    nodes = {root_key: tuple(trail)}           # each state's shortest run from the start
+    loops = nx.DiGraph()                        # moves with an obligation open throughout
+    queue = deque([(root_key, engine, replied)])
     while queue:
-        path, engine, obs, replied = queue.popleft()
+        here, engine, replied = queue.popleft()
+        path, obs = nodes[here], here[1]
         if obs is BAD:
             return path
         stimuli = [("report", prim, kind) for (prim, kind), ts in sorted(
@@ -512,7 +547,7 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
         for what, a, b in stimuli:
             child = _clone(engine)
             trail.clear()
-            box["engine"], box["obs"] = child, obs
+            box["engine"], box["obs"], box["open"] = child, obs, pending(prop, obs)
             child.on_fire = watch
             if what == "report":
                 actions = child.on_event(Event(child.now, b, a))
@@ -522,13 +557,42 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
                 now_replied = replied
             now_replied = settle(child, actions, now_replied)
             k = key(child, box["obs"], now_replied)
+            if box["open"] and box["obs"] is not BAD:
+                loops.add_edge(here, k, firings=tuple(trail))
             if k in nodes:
                 continue
             if len(nodes) >= max_states:
-                return None
-            nodes[k] = ()
-            queue.append((path + tuple(trail), child, box["obs"], now_replied))
-    return None
+                raise SearchLimit(f"the executor's runs have more than {max_states:,} states")
+            nodes[k] = path + tuple(trail)
+            queue.append((k, child, now_replied))
+    return _engine_lasso(nodes, loops)
+
+
+def _engine_lasso(nodes, loops) -> tuple[str, ...] | None:
+    """The shortest prefix and cycle of the executor's states with an obligation open all
+    along the cycle (:func:`engine_run`'s infinite runs), as one firing sequence."""
+    import networkx as nx
+    best = None
+    for scc in nx.strongly_connected_components(loops):
+        inside = loops.subgraph(scc)
+        if not inside.number_of_edges():
+            continue
+        for start in scc:
+            lengths = nx.single_source_dijkstra_path_length(
+                inside, start, weight=lambda u, v, d: len(d["firings"]))
+            for u in inside.predecessors(start):
+                if u in lengths:
+                    size = len(nodes[start]) + lengths[u] + len(inside[u][start]["firings"])
+                    if best is None or size < best[0]:
+                        best = (size, start, u, inside)
+    if best is None:
+        return None
+    _, start, last, inside = best
+    hops = nx.dijkstra_path(inside, start, last, weight=lambda u, v, d: len(d["firings"]))
+    cycle: list[str] = []
+    for u, v in zip(hops, hops[1:] + [start]):
+        cycle += loops[u][v]["firings"]
+    return nodes[start] + tuple(cycle)
 
 
 def _clone(engine):
@@ -600,16 +664,16 @@ def witness(net: Net, checked, prop: Property, transitions: Sequence[str], *, sh
             cex, again, fault = replayed(tried.fired)
             if not fault:
                 return Witness(run_, cex, again, why)
-    own = engine_run(net, prop)
+    try:
+        own = engine_run(net, prop)
+    except SearchLimit as e:
+        return Witness(run_, None, None, f"{why}; the engines' own violating runs were not "
+                                         f"searched to the end: {e}")
     if own is not None:
         cex, again, fault = replayed(own)
         if not fault:
             return Witness(run_, cex, again, why)
         return Witness(run_, None, None, f"{why}; the engines' own violating run: {fault}")
-    if shape == "lasso":
-        return Witness(run_, None, None, f"{why}; the engines' own runs were searched for "
-                       "violations that end (a prefix, or a run that stops with the "
-                       "obligation open) and have none")
     return Witness(run_, None, None, f"{why}; no run the engines take, whatever the vehicle "
                    "reports and with the vehicle answering 'on' and 'off' at once (as a script "
                    "does), violates it: this violation is a run of the untimed net only, which "
