@@ -136,10 +136,13 @@ def verifypn_queries(net: Path, queries: Path, count: int) -> dict[str, bool]:
     return _verdicts(r"^FORMULA (\S+) (TRUE|FALSE)", out)
 
 
-def lola_queries(net: Path, queries: Path) -> dict[str, bool]:
+def lola_queries(net: Path, queries: Path, reductions: bool = True) -> dict[str, bool]:
     """LoLA's answer to each property of ``queries`` (``--xmlformula``), from its final table
-    (``  ID:  CATEGORY  true|false  PRODUCED BY``; ``unknown`` is left out)."""
-    out = _run([str(need(LOLA)), "--pnmlnet", str(net), "--xmlformula", f"--formula={queries}"])
+    (``  ID:  CATEGORY  true|false  PRODUCED BY``; ``unknown`` is left out); ``reductions``:
+    with its net reduction (its default) or without."""
+    off = [] if reductions else ["--netreduction=off"]
+    out = _run([str(need(LOLA)), "--pnmlnet", str(net), "--xmlformula", f"--formula={queries}",
+                *off])
     table = out.partition("FINAL RESULTS")[2]
     return _verdicts(r"^\s*(\S+):.*?\s(true|false)\s", table)
 
@@ -162,17 +165,21 @@ def verifypn_category(net: Path, queries: Path, count: int, ltl: bool) -> dict[s
     return _verdicts(r"^FORMULA (\S+) (TRUE|FALSE)", out)
 
 
-def lola_each(net: Path, queries: Path, scratch: Path) -> dict[str, bool]:
-    """LoLA's answer to each query of ``queries``, one call per query: given several, this
-    build's portfolio idles for the time limit of one before it takes the next (85 s
-    on the paper's mission, for answers it has in a tenth of a second alone)."""
+def lola_each(net: Path, queries: Path, scratch: Path, only: str | None = None,
+              reductions: bool = True) -> dict[str, bool]:
+    """LoLA's answer to each query of ``queries`` (``only``: to that one), one call per
+    query: given several, this build's portfolio idles for the time limit of one before it
+    takes the next (85 s on the paper's mission, for answers it has in a tenth of a second
+    alone). ``reductions``: with its net reduction (its default) or without."""
     from lxml import etree
     tree = etree.parse(str(queries))
     answers: dict[str, bool] = {}
     for k, prop in enumerate(tree.getroot()):
+        if only is not None and prop.findtext("{*}id") != only:
+            continue
         single = etree.Element(tree.getroot().tag, nsmap=tree.getroot().nsmap)
         single.append(prop)
-        path = scratch / f"{queries.stem}.{k}.xml"
+        path = scratch / f"{queries.stem}.{k}{'' if reductions else '.unreduced'}.xml"
         path.write_bytes(etree.tostring(single, xml_declaration=True, encoding="utf-8"))
-        answers.update(lola_queries(net, path))
+        answers.update(lola_queries(net, path, reductions))
     return answers
