@@ -13,7 +13,8 @@ enabled transition to fire it, steps back, resets, and sees the marking and
 every P-invariant's value at each step (each must keep its value at M0: a
 broken one would be a bug of ours, and is shown in red). A recorded run (the
 JSON-lines log of ``mcl2pnml run --log``) can be followed step by step, with
-the vehicle's actions and events beside the firings; and a mission or a
+the vehicle's actions and events beside the firings (and a counterexample's
+log, ``analyze --counterexamples``, with its notes in the mission's terms); and a mission or a
 task can be switched to its reduced model (Fig. 3 of the paper: every task
 started by B, ending in OK, FAIL or ABORTED, without its primitive).
 
