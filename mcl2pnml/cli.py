@@ -420,6 +420,8 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if cex_dir is not None and initial is not None:
         raise OptionError("--counterexamples", "a replay starts the mission from its start: "
                                                "leave out --initial")
+    if cex_dir is not None:     # before the analysis: a folder that cannot be is said at once
+        pipeline.make_folder(cex_dir)
     net = pipeline.load_net(file, net_id, max_memory)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress

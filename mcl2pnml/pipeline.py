@@ -329,13 +329,24 @@ def witness_text(v, w) -> list[str]:
     return out
 
 
+def make_folder(folder: Path) -> Path:
+    """``folder`` made if missing (with its parents), or one error naming it."""
+    from mcl2pnml.core.errors import Location, Mcl2PnmlError
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise Mcl2PnmlError(f"cannot make the folder: {e.strerror or e}",
+                            Location(str(folder))) from None
+    return folder
+
+
 def save_witness(folder: Path, mission: Path, v, w) -> list[Path]:
     """A failing property's files in ``folder``: NAME.txt (:func:`witness_text`),
     NAME.vehicle.json (the script, if any), NAME.log (the run as ``run --log`` writes it:
     the replayed run if any, else the counterexample) and NAME.html (``show``'s page
     following that run step by step)."""
     from mcl2pnml.core.files import atomic_write_text
-    folder.mkdir(parents=True, exist_ok=True)
+    make_folder(folder)
     name = v.property.name
     written = [folder / f"{name}.txt"]
     atomic_write_text(written[0], "\n".join(witness_text(v, w)) + "\n")

@@ -262,3 +262,34 @@ def _witnesses_replay(case) -> None:
                            primitives=list(checked.primitives),
                            callables=[*checked.tasks, *checked.functions]).script \
                 == w.replayed.script
+
+
+# -- the command line ----------------------------------------------------------------------
+
+def test_analyze_json_gives_the_run_in_the_mission_terms_and_its_script():
+    out = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--state-space", "--json",
+                  "--properties", EXAMPLES / "multi_leg.false.props")
+    assert out.returncode == 1, out.stderr
+    [prop] = json.loads(out.stdout)["properties"]
+    cex = prop["counterexample"]
+    assert cex["vehicle_script"] == {"KeepDepth": ["ok@1", "ok@1"]}
+    assert cex["why_not"] is None and cex["replayed"]["same_run"]
+    assert any("the time-out of Goto (900 s) expires" in line for line in cex["mission"])
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--counterexamples", "{tmp}/cx"], "counterexamples are of properties: add --properties"),
+    (["--properties", "{props}", "--initial", "mission.B", "--counterexamples", "{tmp}/cx"],
+     "leave out --initial"),
+    (["--properties", "{props}", "--counterexamples", "{tmp}/file/cx"],
+     "cannot make the folder: Not a directory"),
+    (["--properties", "{props}", "--counterexamples", "{tmp}/file"], "is a file"),
+])
+def test_counterexamples_option_errors(args, message, tmp_path):
+    """One message, exit status 2, nothing written."""
+    (tmp_path / "file").write_text("")
+    args = [a.format(tmp=tmp_path, props=EXAMPLES / "multi_leg.false.props") for a in args]
+    out = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--state-space", *args)
+    assert out.returncode == 2 and message in out.stderr, out.stderr
+    assert "Traceback" not in out.stderr and out.stderr.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
