@@ -57,26 +57,39 @@ EXPLORATION = {"verifypn": r"Spent ([\d.]+) on verification",
                "lola": r"time used\s*:\s*([\d.]+)"}
 
 
+def timed(command: list[str], timeout: float = TIMEOUT) -> tuple[float, float, str, int] | None:
+    """One run of ``command`` under GNU ``time``: (wall seconds, peak MB, its output
+    (standard output, then standard error), exit status); None if it timed out or
+    ``time`` printed no peak."""
+    timer = shutil.which("time") or "/usr/bin/time"
+    start = time.perf_counter()
+    try:
+        out = subprocess.run([timer, "-f", "PEAK_KB %M", *command], capture_output=True,
+                             text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None
+    seconds = time.perf_counter() - start
+    peak = re.search(r"PEAK_KB (\d+)", out.stderr)
+    if peak is None:
+        return None
+    return seconds, int(peak.group(1)) / 1024, out.stdout + out.stderr, out.returncode
+
+
 def measure(tool: str, command: list[str]) -> dict | None:
     """Seconds, peak MB and markings of one run, or None if it failed or timed out.
 
     ``explore_seconds`` is the exploration alone where the tool reports it.
     """
-    timer = shutil.which("time") or "/usr/bin/time"
-    start = time.perf_counter()
-    try:
-        out = subprocess.run([timer, "-f", "PEAK_KB %M", *command], capture_output=True,
-                             text=True, timeout=TIMEOUT)
-    except subprocess.TimeoutExpired:
+    ran = timed(command)
+    if ran is None:
         return None
-    seconds = time.perf_counter() - start
-    peak = re.search(r"PEAK_KB (\d+)", out.stderr)
-    states = states_of(tool, out.stdout + out.stderr)
-    if states is None or peak is None:
+    seconds, peak_mb, output, status = ran
+    states = states_of(tool, output)
+    if states is None:
         return None
-    inner = re.search(EXPLORATION[tool], out.stdout + out.stderr) if tool in EXPLORATION else None
-    return {"seconds": seconds, "peak_mb": int(peak.group(1)) / 1024, "states": states,
-            "partial": out.returncode == 3,
+    inner = re.search(EXPLORATION[tool], output) if tool in EXPLORATION else None
+    return {"seconds": seconds, "peak_mb": peak_mb, "states": states,
+            "partial": status == 3,
             "explore_seconds": float(inner.group(1)) if inner else None}
 
 

@@ -9,6 +9,9 @@ Measures, on this machine, in one run (about fifteen minutes on 2 cores):
   per state, and our speed as a ratio to each peer;
 * Model Checking Contest models: ``analyze --state-space`` against TAPAAL's
   verifypn and LoLA, time and peak memory (:mod:`bench.real_models`);
+* mission properties: ``analyze --properties`` on every example's property
+  files against verifypn and LoLA on the same queries, with and without
+  their reductions (:mod:`bench.properties_peers`);
 * invariants: the exact P-invariant basis of compiled missions of 100 to
   5,000 places against plain ``sympy.Matrix.nullspace``
   (:mod:`bench.invariants_vs_nullspace`);
@@ -36,7 +39,7 @@ from mcl2pnml.core.files import atomic_write_text
 
 from analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
-from bench import real_models
+from bench import properties_peers, real_models
 from bench import statespace_peers as peers
 from bench.core_scale import slope
 from bench.missions import survey
@@ -240,6 +243,34 @@ def real_models_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bo
     return lines, targets
 
 
+def properties_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    """Mission properties against verifypn and LoLA (:mod:`bench.properties_peers`)."""
+    rows = properties_peers.run(quick, log=log)
+    lines = ["## Mission properties: ours, verifypn, LoLA", "",
+             f"Measured {datetime.date.today().isoformat()}. Each example's property files "
+             "(`NAME.props`, which hold; `NAME.false.props`, which fail"
+             + (", dam_inspection left out by --quick" if quick else "") + "). Ours: "
+             "`mcl2pnml analyze MISSION --state-space --properties FILE --json`, the "
+             "command a user runs (start-up, compiling, one exploration, every property, "
+             "each failing one's counterexample told in the mission's terms and replayed on "
+             "both engines), a fresh process; the inner loop (`check_all`: the exploration "
+             "and each property's product with its observer) timed apart. The peers: the "
+             "queries `compile --properties` writes (every property in LTL, those with an "
+             "exact CTL or reachability form also there), verifypn in one call per category "
+             "file, LoLA in one call per query, each with its defaults (structural "
+             "reductions, stubborn sets) and with them off (`-r 0 -p`; "
+             "`--netreduction=off --stubborn=off`); verifypn with `-q 0` either way (its "
+             "query simplification can run 30 s on our bounded-existence queries). Seconds "
+             "summed over a tool's calls, the largest peak memory, and the peer's time as a "
+             "multiple of our command's (above 1: ours is faster). Every answer is compared "
+             "with our verdict.", "", *properties_peers.table(rows)]
+    verifypn_agrees = all(properties_peers.differs(r, r["verifypn", name]) in ("agree", "-")
+                          for r in rows for name, _ in properties_peers.CONFIGS["verifypn"])
+    targets = [("mission properties: verifypn answers every query as we do", verifypn_agrees,
+                "every example's property files" if verifypn_agrees else "see the section")]
+    return lines, targets
+
+
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     from analysis.invariants import p_invariant_basis
     from mcl2pnml.core.structure import structure
@@ -353,7 +384,9 @@ def main(argv: list[str]) -> int:
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
     sections, targets = [], []
     for name, section in (("state spaces", statespace_section),
-                          ("MCC models", real_models_section), ("invariants", invariants_section),
+                          ("MCC models", real_models_section),
+                          ("mission properties", properties_section),
+                          ("invariants", invariants_section),
                           ("compile", compile_section), ("executor", executor_section)):
         log(f"{name}...")
         lines, found = section(quick, log)

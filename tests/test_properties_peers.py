@@ -274,3 +274,20 @@ def test_peers_agree_on_a_thousand_generated_missions(batch):
     with tempfile.TemporaryDirectory() as folder:
         COMPARED.append(_generated(batch, Path(folder)))
     print(f"generated missions compared so far: {sum(COMPARED)}")
+
+
+def test_the_benchmark_times_the_same_queries_and_compares_the_answers(monkeypatch):
+    """bench/properties_peers.py on one example's false properties: every tool in every
+    configuration answers, each answer compared with ours (LoLA with its reductions aside,
+    whose known fault the section reports)."""
+    from bench import properties_peers as bench
+    monkeypatch.setattr(bench, "RUNS", 1)
+    chosen = [case for case in bench.cases(quick=True) if case[0] == "multi_leg.false.props"]
+    monkeypatch.setattr(bench, "cases", lambda quick=False: chosen)
+    [row] = bench.run(quick=True)
+    assert row["ours"]["verdicts"] == {"FixOnlyAfterNavigationFailure": False}
+    for tool, configs in bench.CONFIGS.items():
+        for name, _ in configs:
+            assert bench.differs(row, row[tool, name]) == "agree", (tool, name)
+    lines = bench.table([row])
+    assert lines[-1].endswith("none.") and "multi_leg.false.props" in lines[2]
