@@ -266,8 +266,13 @@ def test_peers_agree_on_generated_missions(batch):
 COMPARED = []
 
 
+#: Batches of ten drawn by the slow variant: some five in six missions drawn are within
+#: GENERATED_STATES (249 of 300 sampled), so 130 batches compare some 1,080 missions.
+SLOW_BATCHES = 130
+
+
 @pytest.mark.slow
-@settings(max_examples=110, deadline=None, phases=NO_SHRINK,
+@settings(max_examples=SLOW_BATCHES, deadline=None, phases=NO_SHRINK,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(GENERATED)
 def test_peers_agree_on_a_thousand_generated_missions(batch):
