@@ -265,6 +265,12 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
     def markings(self) -> CounterMarkings:  # type: ignore[override]
         return CounterMarkings(self)
 
+    def tokens(self, place: int) -> np.ndarray:  # type: ignore[override]
+        lay = self.layout
+        field = (self.rows[:, lay.word[place]] >> np.uint64(lay.shift[place])) \
+            & np.uint64(lay.mask(place))
+        return field.astype(np.float64)
+
     @cached_property
     def bound(self) -> float:
         # a place at a time: unpacking every marking into a row of counts

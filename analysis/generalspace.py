@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Callable, Sequence
 
+import numpy as np
+
 from mcl2pnml.core.structure import Structure
 
 if TYPE_CHECKING:
@@ -133,6 +135,11 @@ class StateSpace:
     def terminal(self) -> list[int]:
         """Nodes where no transition is enabled (dead markings)."""
         return [n for n, d in enumerate(self.out_degree) if d == 0]
+
+    def tokens(self, place: int) -> np.ndarray:
+        """The tokens of place ``place`` (its index) in every node, in node order: a
+        property reads a few places of every marking, not every place."""
+        return np.array([m[place] for m in self.markings], dtype=np.float64)
 
     def marking(self, node: int) -> dict[str, float]:
         places = self.structure.places

@@ -290,6 +290,10 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
     def markings(self) -> PackedMarkings:  # type: ignore[override]
         return PackedMarkings(self)
 
+    def tokens(self, place: int) -> np.ndarray:  # type: ignore[override]
+        word = self.packed[self.position(np.arange(self.states)), place // 64]
+        return ((word >> np.uint64(place % 64)) & np.uint64(1)).astype(np.float64)
+
     def _lookup(self, rows: np.ndarray) -> np.ndarray:
         """Sorted positions of ``rows`` (-1 for rows that are not reachable markings)."""
         at, found = search(self.keys, keys_of(rows))

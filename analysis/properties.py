@@ -60,7 +60,10 @@ from dataclasses import dataclass
 from typing import Iterable
 
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.properties import Const, Pattern, Predicate, Property, ScopeKind, holds
+import numpy as np
+
+from mcl2pnml.core.properties import (And, Const, Not, Or, Pattern, Predicate, Property,
+                                      ScopeKind, Tokens, holds, places_of)
 
 
 class Status(enum.Enum):
@@ -208,21 +211,79 @@ def check_all(net: Net, properties: Iterable[Property],
                 for p in properties]
     ids = [pl.id for pl in net.places]
     tids = [t.id for t in net.transitions]
-    marked = [tuple((ids[k], int(n)) for k, n in enumerate(m) if n) for m in space.markings]
     after: list[list[tuple[int, int]]] = [[] for _ in range(space.states)]
-    for a, b, t in zip(space.src, space.dst, space.trans):
-        after[int(a)].append((int(b), int(t)))
-    as_dicts = [dict(m) for m in marked]
+    for a, b, t in zip(space.src.tolist(), space.dst.tolist(), space.trans.tolist()):
+        after[a].append((b, t))
+    # a property reads a few places of every marking: their columns, not the markings
+    index = {pid: k for k, pid in enumerate(ids)}
+    read = sorted({p for prop in properties for x in _truths(prop) for p in places_of(x)})
+    columns = {p: space.tokens(index[p]) if p in index else np.zeros(space.states)
+               for p in read}   # a place the net has not holds no token, as in holds()
+
+    def marked(node: int) -> Marked:
+        """A marking of the counterexample, as its marked places (decoded on demand)."""
+        return tuple((ids[k], int(n)) for k, n in enumerate(space.markings[node]) if n)
+
     verdicts = []
     for prop in properties:
-        preds = _truths(prop)
-        truth = [tuple(holds(x, m) for x in preds) for m in as_dicts]
-        verdicts.append(_product(prop, marked, tids, after, truth, max_states))
+        p, s, q, r = (_holds_everywhere(x, columns, space.states) for x in _truths(prop))
+        codes = (8 * p + 4 * s + 2 * q + r).astype(np.int64).tolist()
+        verdicts.append(_product(prop, marked, tids, after, codes, max_states))
     return verdicts
 
 
-def _product(prop, marked, tids, after, truth, max_states) -> Verdict:
-    start = (0, step(prop, _initial(prop.scope.kind), *truth[0]))
+def _holds_everywhere(predicate: Predicate, columns, n: int) -> np.ndarray:
+    """Whether ``predicate`` holds in each of the ``n`` markings whose places' tokens are
+    ``columns`` (place id -> counts in node order): :func:`holds`, a column at a time."""
+    if isinstance(predicate, Tokens):
+        total = sum((columns[p] for p in predicate.places), np.zeros(n))
+        return total >= predicate.at_least
+    if isinstance(predicate, Not):
+        return ~_holds_everywhere(predicate.arg, columns, n)
+    if isinstance(predicate, (And, Or)):
+        parts = [_holds_everywhere(a, columns, n) for a in predicate.args]
+        combine = np.logical_and if isinstance(predicate, And) else np.logical_or
+        return combine.reduce(parts) if parts else np.full(n, isinstance(predicate, And))
+    return np.full(n, bool(predicate.value))
+
+
+class _Observers:
+    """The observer's states met, numbered, and its moves, each worked out once: the
+    product's states are then pairs of integers (a marking, an observer state), and a
+    move one table lookup, whatever the pattern."""
+
+    def __init__(self, prop: Property):
+        self.prop = prop
+        self.states: list = []
+        self.number: dict = {}
+        self.moves: dict[int, int] = {}
+        self.pending: list[bool] = []
+        self.bad = self.intern(BAD)
+        self.start = self.intern(_initial(prop.scope.kind))
+
+    def intern(self, obs) -> int:
+        k = self.number.get(obs)
+        if k is None:
+            k = self.number[obs] = len(self.states)
+            self.states.append(obs)
+            self.pending.append(pending(self.prop, obs))
+        return k
+
+    def after(self, k: int, code: int) -> int:
+        """The state after reading a marking whose truths are ``code`` (P S Q R as bits)."""
+        key = k * 16 + code
+        got = self.moves.get(key)
+        if got is None:
+            got = self.moves[key] = self.intern(step(
+                self.prop, self.states[k], bool(code & 8), bool(code & 4), bool(code & 2),
+                bool(code & 1)))
+        return got
+
+
+def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
+    obs = _Observers(prop)
+    move, bad, pend = obs.after, obs.bad, obs.pending
+    start = (0, move(obs.start, codes[0]))
     parent: dict = {start: None}
     order = [start]
     dist = {start: 0}
@@ -231,29 +292,31 @@ def _product(prop, marked, tids, after, truth, max_states) -> Verdict:
     best = None   # (length, shape, state) of the shortest violation so far
     while queue:
         node = queue.popleft()
-        m, obs = node
-        if obs is BAD:
+        m, o = node
+        if o == bad:
             if best is None or dist[node] < best[0]:
                 best = (dist[node], Shape.PREFIX, node)
             succ[node] = []
             continue
-        if not after[m] and pending(prop, obs):
+        if not after[m] and pend[o]:
             if best is None or dist[node] < best[0]:
                 best = (dist[node], Shape.FINITE, node)
         nxt = []
+        d = dist[node] + 1
         for b, t in after[m]:
-            child = (b, step(prop, obs, *truth[b]))
+            child = (b, move(o, codes[b]))
             nxt.append((child, t))
             if child not in parent:
                 if len(parent) >= max_states:
                     return Verdict(prop, Status.UNKNOWN, states=len(parent),
                                    reason=f"more than {max_states:,} product states")
                 parent[child] = (node, t)
-                dist[child] = dist[node] + 1
+                dist[child] = d
                 order.append(child)
                 queue.append(child)
         succ[node] = nxt
-    lasso = _shortest_lasso(prop, order, succ, dist, best[0] if best else None)
+    lasso = _shortest_lasso(lambda o: o != bad and pend[o], order, succ, dist,
+                            best[0] if best else None)
     if lasso is not None and (best is None or lasso[0] < best[0]):
         length, node, cycle = lasso
         path = _path(parent, node)
@@ -267,12 +330,12 @@ def _product(prop, marked, tids, after, truth, max_states) -> Verdict:
             ms.pop()
             trans.pop()
         return Verdict(prop, Status.FAILS, tuple(tids[t] for t in trans),
-                       tuple(marked[m] for m in ms), Shape.LASSO, loop=loop, states=len(parent))
+                       tuple(marked(m) for m in ms), Shape.LASSO, loop=loop, states=len(parent))
     if best is None:
         return Verdict(prop, Status.HOLDS, states=len(parent))
     nodes, trans = _path(parent, best[2])
     return Verdict(prop, Status.FAILS, tuple(tids[t] for t in trans),
-                   tuple(marked[m] for m, _ in nodes), best[1], states=len(parent))
+                   tuple(marked(m) for m, _ in nodes), best[1], states=len(parent))
 
 
 def _path(parent, node):
@@ -284,17 +347,18 @@ def _path(parent, node):
     return nodes[::-1], trans[::-1]
 
 
-def _shortest_lasso(prop, order, succ, dist, bound):
+def _shortest_lasso(open_, order, succ, dist, bound):
     """(prefix + cycle length, entry state, (cycle states after entry, transitions)) of
-    the shortest lasso whose cycle stays in pending states, or None."""
+    the shortest lasso whose cycle stays in states with an obligation open (``open_`` of
+    the observer's state), or None."""
     import networkx as nx
 
     g = nx.DiGraph()
     for node in order:
-        if node[1] is not BAD and pending(prop, node[1]):
+        if open_(node[1]):
             g.add_node(node)
             for child, _ in succ[node]:
-                if child[1] is not BAD and pending(prop, child[1]):
+                if open_(child[1]):
                     g.add_edge(node, child)
     on_cycle = set()
     for comp in nx.strongly_connected_components(g):

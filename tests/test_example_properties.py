@@ -17,9 +17,9 @@ command, then review the diff:
 
     MCL2PNML_REGOLD=1 .venv/bin/python -m pytest tests/test_example_properties.py -m 'slow or not slow'
 
-dam_inspection's state space (197,331 markings; some 50 s for its
-properties) puts its cases behind the ``slow`` marker; the others take a
-few seconds together.
+dam_inspection's state space (197,331 markings; some 15 s for both its
+files) puts its cases behind the ``slow`` marker; the others take a few
+seconds together.
 """
 from __future__ import annotations
 

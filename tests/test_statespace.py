@@ -60,6 +60,23 @@ def test_independent_cycles_have_4_to_the_k_markings(backend):
         assert behaviour(space).home_marking and behaviour(space).reusable
 
 
+def test_a_place_s_tokens_in_every_node_are_its_column_of_the_markings(backend):
+    """``tokens(p)``, what a property reads (analysis/properties.py), is the p-th count of
+    each node's marking, in node order, on every explorer: on a safe net, a net of
+    counters, and one place with up to three tokens."""
+    from analysis.zoo import kanban
+    b = NetBuilder("three")
+    b.place("a", 3)
+    b.place("b")
+    b.transition("t")
+    b.arc("a", "t")
+    b.arc("t", "b")
+    for net in (cycles(2), kanban(1), b.build()):
+        space = explore(net, backend=backend)
+        for p in range(len(net.places)):
+            assert space.tokens(p).tolist() == [m[p] for m in space.markings], (net.name, p)
+
+
 def test_a_producer_is_unbounded_and_gets_omega(backend):
     b = NetBuilder("producer")
     b.place("ready", 1)
