@@ -67,8 +67,9 @@ def test_a_place_s_tokens_in_every_node_are_its_column_of_the_markings(backend):
     from analysis.zoo import kanban
     for net in (cycles(2), kanban(1), kanban(2)):
         space = explore(net, backend=backend)
+        markings = list(space.markings)      # decoded once
         for p in range(len(net.places)):
-            assert space.tokens(p).tolist() == [m[p] for m in space.markings], (net.name, p)
+            assert space.tokens(p).tolist() == [m[p] for m in markings], (net.name, p)
 
 
 def test_a_producer_is_unbounded_and_gets_omega(backend):
