@@ -1,0 +1,200 @@
+"""The interface contract of a task or a control structure, checked on its state space.
+
+Sections 2.3 to 2.5 of the paper argue compositionally: a task pattern or a
+control structure is started by its place B, may be aborted through A, and
+ends in exactly one of OK, FAIL and ABORTED, after which it can be started
+again; a structure that joins children keeping this behaviour keeps it
+too, and the reduced model of Fig. 3 (B to OK, FAIL or ABORTED; B and A to
+ABORTED) stands for any child that does. This module states that behaviour
+once, over a net's fusion places, as the clauses a component must meet, and
+checks each one by exploring the net (a template with its children reduced
+is a few hundred markings at most).
+
+The **rest** marking is the net's M0 without tokens in B and A: a called
+component waits there, its mutex MTX (and its children's, and any lock)
+marked. Then, for the component started from rest:
+
+* ``idle``: at rest, and at rest with only A marked (an abort that comes
+  after the component has ended, which the caller drains), nothing can fire;
+* ``safe``: started (rest + B, and rest + B + A: an abort pending from the
+  start, which covers one that comes at any later moment), no place ever
+  holds two tokens;
+* ``ends``: every dead marking so reached is an end: one token in exactly
+  one of OK, FAIL and ABORTED, B consumed, every other place back at rest
+  (its MTX, its children's and the locks given back, nothing left inside);
+* ``abort``: A is consumed exactly when the end is ABORTED; without A the
+  end is never ABORTED;
+* ``always ends``: from every reachable marking an end can still be reached
+  (no livelock, no deadlock).
+
+A component that meets them, fused with its caller on B, A, OK, FAIL and
+ABORTED, behaves toward the caller as the reduced model does (the paper's
+section 2.3). May import the core and the rest of ``analysis``.
+"""
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+from mcl2pnml.core.net import Net
+
+from analysis.statespace import ExplorationLimit, explore
+
+#: The fusion places of a component's control interface, by role (the places' labels).
+START, ABORT = "B", "A"
+RESULTS = ("OK", "FAIL", "ABORTED")
+
+
+class Clause(enum.Enum):
+    """One clause of the contract (see the module's documentation)."""
+
+    IDLE = "idle"
+    """At rest, and at rest with A alone, nothing fires."""
+
+    SAFE = "safe"
+    """Started, with or without an abort pending, no place holds two tokens."""
+
+    ENDS = "ends"
+    """Every dead marking is an end: one result, B consumed, the rest restored."""
+
+    ABORT = "abort"
+    """A is consumed exactly when the end is ABORTED; never ABORTED without A."""
+
+    ALWAYS_ENDS = "always ends"
+    """From every reachable marking an end can still be reached."""
+
+
+@dataclass(frozen=True)
+class Breach:
+    """A clause broken: from which start, the firing sequence to the marking that shows
+    it, that marking (its marked places), and what is wrong there."""
+
+    clause: Clause
+    start: str
+    path: tuple[str, ...]
+    marking: tuple[str, ...]
+    why: str
+
+    def __str__(self) -> str:
+        steps = " ".join(self.path) or "(no firing)"
+        return (f"{self.clause.value}: from {self.start}, after {steps}: {self.why} "
+                f"(marked: {', '.join(self.marking) or 'nothing'})")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The contract checked: the breaches found (none: the component keeps it) and the
+    markings explored from each start."""
+
+    breaches: tuple[Breach, ...]
+    markings: int
+
+    @property
+    def kept(self) -> bool:
+        return not self.breaches
+
+
+class NoInterface(ValueError):
+    """The net has not the control interface the contract is stated over."""
+
+
+def roles(net: Net) -> dict[str, str]:
+    """The place of each role of the control interface (B, A, OK, FAIL, ABORTED), by the
+    places' interface labels; a missing or doubled role is :class:`NoInterface`."""
+    found: dict[str, list[str]] = {}
+    for p in net.places:
+        if p.interface in (START, ABORT, *RESULTS):
+            found.setdefault(p.interface, []).append(p.id)
+    wanted = (START, ABORT, *RESULTS)
+    missing = [r for r in wanted if r not in found]
+    doubled = [r for r in wanted if len(found.get(r, ())) > 1]
+    if missing or doubled:
+        raise NoInterface(f"net '{net.name}': " + "; ".join(
+            ([f"no place labelled {', '.join(missing)}"] if missing else [])
+            + [f"{len(found[r])} places labelled {r}" for r in doubled]))
+    return {r: found[r][0] for r in wanted}
+
+
+def check(net: Net, max_states: int = 100_000) -> Verdict:
+    """Every clause of the contract on ``net`` (a component with the control interface)."""
+    role = roles(net)
+    rest = {p: n for p, n in net.initial.items() if p not in (role[START], role[ABORT])}
+    breaches: list[Breach] = []
+    explored = 0
+    for label, extra in (("rest", {}), ("rest + A", {role[ABORT]: 1})):
+        space = _explore(net, {**rest, **extra}, max_states)
+        explored += space.states
+        st, m = space.structure, space.markings[0]
+        fires = [t for j, t in enumerate(st.transitions)
+                 if all(m[p] >= w for arcs in (st.pre[j], st.read[j]) for p, w in arcs.items())]
+        if fires:
+            breaches.append(Breach(Clause.IDLE, label, (), _marked(space, 0),
+                                   f"{', '.join(fires)} can fire though the component was "
+                                   "not started"))
+    for label, extra in (("rest + B", {role[START]: 1}),
+                         ("rest + B + A", {role[START]: 1, role[ABORT]: 1})):
+        space = _explore(net, {**rest, **extra}, max_states)
+        explored += space.states
+        breaches += _started(space, role, rest, label, aborted=role[ABORT] in extra)
+    return Verdict(tuple(breaches), explored)
+
+
+def _explore(net: Net, marking: dict[str, int], max_states: int):
+    try:
+        return explore(net.with_initial({p: n for p, n in marking.items() if n}),
+                       max_states=max_states)
+    except ExplorationLimit as e:
+        raise ExplorationLimit(f"net '{net.name}' has more than {max_states:,} markings from "
+                               "its start: a component's contract is checked on a small net "
+                               "(its children reduced)") from e
+
+
+def _marked(space, node: int) -> tuple[str, ...]:
+    return tuple(space.format(node))
+
+
+def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
+             aborted: bool) -> list[Breach]:
+    s = space.structure
+    index = s.place_index
+    out: list[Breach] = []
+
+    def breach(clause: Clause, node: int, why: str) -> None:
+        out.append(Breach(clause, label, tuple(space.path_to(node)), _marked(space, node), why))
+
+    if not space.bounded or space.bound > 1:
+        node = next(n for n in range(space.states) if max(space.markings[n]) > 1)
+        twice = [s.places[k] for k, n in enumerate(space.markings[node]) if n > 1]
+        breach(Clause.SAFE, node, f"{', '.join(twice)} holds two tokens or more")
+        return out       # the other clauses are read on a safe net's markings
+    results = [index[role[r]] for r in RESULTS]
+    control = {index[role[START]], index[role[ABORT]], *results}
+    ends = []
+    for node in space.terminal:
+        m = space.markings[node]
+        held = [r for r, k in zip(RESULTS, results) if m[k]]
+        left = [s.places[k] for k in range(len(s.places)) if k not in control
+                and m[k] != rest.get(s.places[k], 0)]
+        if len(held) != 1 or m[index[role[START]]]:
+            breach(Clause.ENDS, node, "a dead marking that is no end: "
+                   + (f"results {', '.join(held)}" if held else "no result")
+                   + (", B still marked" if m[index[role[START]]] else ""))
+            continue
+        if left:
+            breach(Clause.ENDS, node, f"ended {held[0]} with {', '.join(left)} not back at rest")
+            continue
+        ends.append(node)
+        a_left = bool(m[index[role[ABORT]]])
+        if held[0] == "ABORTED" and (not aborted or a_left):
+            breach(Clause.ABORT, node, "ended ABORTED " + ("with no abort asked" if not aborted
+                                                           else "and A still marked"))
+        elif held[0] != "ABORTED" and aborted and not a_left:
+            breach(Clause.ABORT, node, f"ended {held[0]} but consumed A")
+    if ends:
+        reach = space.can_reach(ends)
+        stuck = next((n for n in range(space.states) if not reach[n]), None)
+        if stuck is not None:
+            breach(Clause.ALWAYS_ENDS, stuck, "no end can be reached from here")
+    elif not space.terminal:
+        breach(Clause.ALWAYS_ENDS, 0, "the component never ends")
+    return out

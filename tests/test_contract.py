@@ -1,0 +1,87 @@
+"""The interface contract of tasks and structures (analysis/contract.py): every template of
+the library keeps it, with its children reduced (Fig. 3), and each clause is broken, and
+said so with the run that shows it, by a net made to break it."""
+from __future__ import annotations
+
+import pytest
+
+from analysis.contract import Clause, NoInterface, check, roles
+from mcl2pnml.core.net import Net, NetBuilder
+from mcl2pnml.language.library import default_library
+from mcl2pnml.language.template_parser import TemplateKind
+
+LIBRARY = default_library()
+COMPONENTS = [t.name for t in LIBRARY.unique() if t.kind is not TemplateKind.PRIMITIVE]
+
+
+@pytest.mark.parametrize("name", COMPONENTS)
+def test_every_template_keeps_the_contract_with_its_children_reduced(name):
+    verdict = check(LIBRARY.composed(name))
+    assert verdict.kept, [str(b) for b in verdict.breaches]
+    assert verdict.markings >= 4    # rest, rest + A, and two starts, each explored
+
+
+def reduced(*drop: str, extra=()) -> Net:
+    """The reduced task (Fig. 3) without the arcs ``drop`` names ("t2:OK" is t2 -> OK),
+    with ``extra`` arcs added: a component made to break a clause."""
+    net = LIBRARY.reduced.net
+    kept = tuple(a for a in net.arcs if f"{a.source}:{a.target}" not in drop
+                 and f"{a.target}:{a.source}" not in drop)
+    b = NetBuilder("broken")
+    for p in net.places:
+        b.place(p.id, net.initial[p.id], interface=p.interface)
+    for t in net.transitions:
+        b.transition(t.id)
+    for a in kept:
+        b.arc(a.source, a.target)
+    for source, target in extra:
+        b.arc(source, target)
+    return b.build()
+
+
+@pytest.mark.parametrize("net,clause,start,why", [
+    # t2 gives MTX back twice: two tokens in MTX
+    (lambda: reduced(extra=[("t2", "MTX")]), Clause.SAFE, "rest + B", "MTX holds two tokens"),
+    # t3 marks nothing: the run stops with no result
+    (lambda: reduced("t3:FAIL"), Clause.ENDS, "rest + B", "no result"),
+    # t2 forgets to give MTX back
+    (lambda: reduced("t2:MTX"), Clause.ENDS, "rest + B", "MTX not back at rest"),
+    # t4 leaves A marked when it ends ABORTED
+    (lambda: reduced("A:t4"), Clause.ABORT, "rest + B", "ended ABORTED with no abort asked"),
+    # t5 fires on A alone: an abort after the end restarts nothing, it must stay inert
+    (lambda: reduced("B:t5"), Clause.IDLE, "rest + A", "t5 can fire"),
+])
+def test_each_clause_broken_is_said_with_its_run(net, clause, start, why):
+    verdict = check(net())
+    assert not verdict.kept
+    found = [b for b in verdict.breaches if b.clause is clause and b.start == start]
+    assert found, [str(b) for b in verdict.breaches]
+    assert why in str(found[0])
+
+
+def test_a_component_that_can_run_for_ever_breaks_always_ends():
+    """The reduced task with a way into a loop it never leaves (EXE -> trap -> LOOP, and
+    spin: LOOP -> LOOP): no dead marking there, and no end either."""
+    net = LIBRARY.reduced.net
+    b = NetBuilder("loops")
+    for p in net.places:
+        b.place(p.id, net.initial[p.id], interface=p.interface)
+    b.place("LOOP")
+    for t in (*[t.id for t in net.transitions], "trap", "spin"):
+        b.transition(t)
+    for a in net.arcs:
+        b.arc(a.source, a.target)
+    for source, target in (("EXE", "trap"), ("trap", "LOOP"), ("LOOP", "spin"),
+                           ("spin", "LOOP")):
+        b.arc(source, target)
+    verdict = check(b.build())
+    [breach] = [br for br in verdict.breaches if br.start == "rest + B"]
+    assert breach.clause is Clause.ALWAYS_ENDS and breach.path == ("t1", "trap")
+
+
+def test_a_net_without_the_control_interface_is_refused_naming_what_lacks():
+    b = NetBuilder("plain")
+    b.place("B", 1, interface="B")
+    b.place("OK", interface="OK")
+    with pytest.raises(NoInterface, match="no place labelled A, FAIL, ABORTED"):
+        roles(b.build())
