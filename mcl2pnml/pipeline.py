@@ -62,9 +62,23 @@ def check_source(text: str, filename: str = "<mcl>"):
 
 
 def compile_checked(checked, *, reduced: bool = False) -> Net:
-    """One composed net (step 2); ``reduced``: every task the paper's reduced model (Fig. 3)."""
+    """One composed net (step 2); ``reduced``: every task the paper's reduced model (Fig. 3).
+
+    Templates a user adds (``$MCL2PNML_TEMPLATE_PATH``) are first held to the interface
+    contract (:mod:`mcl2pnml.certify.templates`): one that breaks it is refused with the
+    run that shows it; the package's own are proven once and stored."""
     from mcl2pnml.language.compiler import compile_checked as compile_
+    _user_templates_proven()
     return compile_(checked, reduced=reduced)
+
+
+def _user_templates_proven() -> None:
+    import os
+
+    from mcl2pnml.language.library import ENV
+    if os.environ.get(ENV):
+        from mcl2pnml.certify.templates import proven
+        proven()
 
 
 def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,

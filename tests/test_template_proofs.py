@@ -1,0 +1,61 @@
+"""The library's templates proven once against the interface contract (mcl2pnml/certify/
+templates.py): the stored proofs are current, and a user's template is proven when it is
+used, a broken one refused with its run."""
+from __future__ import annotations
+
+from mcl2pnml.certify.templates import canonical, components, digest, prove, stored
+from mcl2pnml.language.library import default_library
+
+from helpers import ROOT, run_cli
+
+LIB = default_library()
+ACHIEVE = (ROOT / "templates" / "achieve_goal.pnt").read_text()
+MISSION = """primitive P(v);
+task T(x) = {pattern}(P(x)) timeout 5;
+mission {{ T(1); }}
+"""
+
+
+def test_the_stored_proofs_are_the_templates_proven_now():
+    """Every component template's proof is stored, with the digest of the net it is proven
+    on now (after a deliberate change: python -m mcl2pnml.certify.templates --update)."""
+    now = {t.name: prove(LIB, t.name).as_json() for t in components(LIB)}
+    assert stored() == now
+
+
+def test_the_digest_covers_the_behaviour_not_the_names():
+    net = LIB.composed("sequence")
+    assert digest(net.renamed("another name")) == digest(net)
+    fewer = net.__class__(net.name, net.places, net.transitions, net.arcs[1:], net.initial)
+    assert digest(fewer) != digest(net)
+    assert '"arcs"' in canonical(net)
+
+
+def _user(tmp_path, name: str, text: str):
+    folder = tmp_path / "mine"
+    folder.mkdir(exist_ok=True)
+    (folder / f"{name.lower()}.pnt").write_text(text)
+    mission = tmp_path / "m.mcl"
+    mission.write_text(MISSION.format(pattern=name))
+    import os
+    env = {**os.environ, "MCL2PNML_TEMPLATE_PATH": str(folder)}
+    return run_cli("compile", mission, "-o", tmp_path / "m.pnml", env=env), tmp_path / "m.pnml"
+
+
+def test_a_user_s_pattern_that_keeps_the_contract_compiles(tmp_path):
+    text = ACHIEVE.replace("pattern AchieveGoal alias task", "pattern AchieveOnce")
+    out, pnml = _user(tmp_path, "AchieveOnce", text)
+    assert out.returncode == 0, out.stderr
+    assert pnml.is_file()
+
+
+def test_a_user_s_pattern_that_breaks_the_contract_is_refused_with_its_run(tmp_path):
+    """t08 ends OK without giving MTX back: the task could never be called again."""
+    text = ACHIEVE.replace("pattern AchieveGoal alias task", "pattern AchieveLeaky").replace(
+        "transition t08: W_OK, ?OFF -> OK, MTX", "transition t08: W_OK, ?OFF -> OK")
+    out, pnml = _user(tmp_path, "AchieveLeaky", text)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert "achieveleaky.pnt" in out.stderr
+    assert "template 'AchieveLeaky' breaks the interface contract" in out.stderr
+    assert "ended OK with MTX not back at rest" in out.stderr and "t08" in out.stderr
+    assert not pnml.exists()
