@@ -25,7 +25,10 @@ marked. Then, for the component started from rest:
 * ``abort``: A is consumed exactly when the end is ABORTED; without A the
   end is never ABORTED;
 * ``always ends``: from every reachable marking an end can still be reached
-  (no livelock, no deadlock).
+  (no livelock, no deadlock);
+* ``result last``: whenever a result is marked, every other place is
+  already at rest, so a caller may take the result and start the component
+  again at once.
 
 A component that meets them, fused with its caller on B, A, OK, FAIL and
 ABORTED, behaves toward the caller as the reduced model does (the paper's
@@ -62,6 +65,12 @@ class Clause(enum.Enum):
 
     ALWAYS_ENDS = "always ends"
     """From every reachable marking an end can still be reached."""
+
+    RESULT_LAST = "result last"
+    """Whenever a result is marked, everything else is already at rest: a caller that
+    takes the result may start the component again at once (section 2.3's reusability,
+    which a check of the dead markings alone misses: a task that gives its result while
+    its primitive still holds a request would get a second one)."""
 
 
 @dataclass(frozen=True)
@@ -190,6 +199,16 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
                                                            else "and A still marked"))
         elif held[0] != "ABORTED" and aborted and not a_left:
             breach(Clause.ABORT, node, f"ended {held[0]} but consumed A")
+    late = next((n for n in range(space.states)
+                 if any(space.markings[n][k] for k in results)
+                 and any(space.markings[n][k] != rest.get(s.places[k], 0)
+                         for k in range(len(s.places)) if k not in control)), None)
+    if late is not None:
+        m = space.markings[late]
+        busy = [s.places[k] for k in range(len(s.places)) if k not in control
+                and m[k] != rest.get(s.places[k], 0)]
+        breach(Clause.RESULT_LAST, late, f"a result is marked while {', '.join(busy)} "
+                                         "is not back at rest")
     if ends:
         reach = space.can_reach(ends)
         stuck = next((n for n in range(space.states) if not reach[n]), None)

@@ -85,3 +85,42 @@ def test_a_net_without_the_control_interface_is_refused_naming_what_lacks():
     b.place("OK", interface="OK")
     with pytest.raises(NoInterface, match="no place labelled A, FAIL, ABORTED"):
         roles(b.build())
+
+
+def test_a_result_given_before_the_rest_is_restored_breaks_result_last():
+    """t2 marks OK, and only a later step gives MTX back: a caller taking OK at once could
+    start the component while it still holds its mutex (the dead markings are all fine)."""
+    net = LIBRARY.reduced.net
+    b = NetBuilder("late")
+    for p in net.places:
+        b.place(p.id, net.initial[p.id], interface=p.interface)
+    b.place("HOLD")
+    for t in (*[t.id for t in net.transitions], "t2b"):
+        b.transition(t)
+    for a in net.arcs:
+        if (a.source, a.target) != ("t2", "MTX"):
+            b.arc(a.source, a.target)
+    for source, target in (("t2", "HOLD"), ("HOLD", "t2b"), ("t2b", "MTX")):
+        b.arc(source, target)
+    verdict = check(b.build())
+    [breach] = [br for br in verdict.breaches if br.start == "rest + B"]
+    assert breach.clause is Clause.RESULT_LAST and breach.path == ("t1", "t2")
+    assert "MTX, HOLD is not back at rest" in breach.why
+
+
+def test_removing_an_arc_of_a_template_breaks_the_contract_but_for_five_guards():
+    """Each arc of each template removed in turn: the contract is broken, except by the
+    guards that matter only when tasks share a primitive (a task starts only if its
+    primitive is off: the locks of the call sites keep two tasks apart) and NULL's read of
+    its mutex (it is free whenever NULL starts)."""
+    kept = []
+    for name in COMPONENTS:
+        t, net = LIBRARY.get(name), LIBRARY.composed(name)
+        for a in t.net.arcs:
+            mutant = Net(net.name, net.places, net.transitions,
+                         tuple(x for x in net.arcs if x != a), net.initial)
+            if check(mutant).kept:
+                kept.append(f"{t.name}: {a.source} -> {a.target}")
+    assert kept == ["AchieveGoal: OFF -> t01", "KeepGoal: OFF -> t01",
+                    "KeepTwoGoals: P_OFF -> t01", "KeepTwoGoals: Q_OFF -> t01",
+                    "null: MTX -> t1"]
