@@ -72,20 +72,63 @@ def components(lib: Library) -> list:
     return [t for t in lib.unique() if t.kind is not TemplateKind.PRIMITIVE]
 
 
-def prove(lib: Library, name: str) -> Proof:
-    """Template ``name`` checked against the contract now; :class:`BrokenTemplate` with the
-    first breach's run if it breaks it."""
-    t = lib.get(name)
-    net = lib.composed(name)
+#: The proofs of the compiler's own joints, beside the templates': a call site with its
+#: callee behind the gate and a lock, and two call sites sharing one callee (a parallel
+#: structure's two branches calling the same task).
+CALL_SITE, SHARED_CALLEE = "call site", "call sites sharing a callee"
+
+
+def call_net(lib: Library, sites: int) -> Net:
+    """``sites`` call sites (:func:`mcl2pnml.language.compiler.call_site_net`) of one
+    callee, the reduced task (Fig. 3) with its gate, taking one primitive's lock; two
+    sites are the branches of a parallel structure. Any callee that keeps the contract
+    behaves toward its call sites as the reduced one does."""
+    from mcl2pnml.core.compose import compose
+    from mcl2pnml.core.net import Marking, NetBuilder, Place
+    from mcl2pnml.language.compiler import call_site_net
+    from mcl2pnml.language.library import at_rest
+    from mcl2pnml.language.template_parser import CONTROL
+    reduced = at_rest(lib.reduced.net)
+    callee = Net("T", (*reduced.places, Place("GATE")), reduced.transitions, reduced.arcs,
+                 Marking({**reduced.initial, "GATE": 1}))
+    lock = NetBuilder("P")
+    lock.place("LOCK", 1)
+    names = ["site"] if sites == 1 else [f"site{k}" for k in range(1, sites + 1)]
+    parts = [(n, call_site_net("T", ["P"])) for n in names] + [("T", callee),
+                                                                 ("P", lock.build())]
+    groups = [["T.GATE", *(f"{n}.to.GATE" for n in names)],
+              ["P.LOCK", *(f"{n}.lock.P" for n in names)]]
+    groups += [[f"T.{p}", *(f"{n}.to.{p}" for n in names)] for p in CONTROL if p != "MTX"]
+    if sites > 1:
+        parallel = lib.get("parallel")
+        parts.insert(0, ("par", at_rest(parallel.net)))
+        groups += [[f"{n}.{p}", f"par.{slot}_{p}"]
+                   for n, slot in zip(names, parallel.children) for p in CONTROL]
+    return compose(parts, groups, name=CALL_SITE if sites == 1 else SHARED_CALLEE)
+
+
+def subjects(lib: Library) -> list[tuple[str, str, Net, str]]:
+    """(name, kind, net, where it comes from) of everything proven: each component
+    template composed as the paper analyses it, then the compiler's call-site joints."""
+    out = [(t.name, t.kind.value, lib.composed(t.name), t.source) for t in components(lib)]
+    compiler = "mcl2pnml/language/compiler.py"
+    out += [(CALL_SITE, "joint", call_net(lib, 1), compiler),
+            (SHARED_CALLEE, "joint", call_net(lib, 2), compiler)]
+    return out
+
+
+def prove(name: str, kind: str, net: Net, source: str) -> Proof:
+    """``net`` checked against the contract now; :class:`BrokenTemplate` with the first
+    breaches' runs if it breaks it."""
     verdict = check(net)
     if not verdict.kept:
         breaches = "; ".join(str(b) for b in verdict.breaches[:3])
         more = len(verdict.breaches) - 3
         raise BrokenTemplate(
-            f"template '{t.name}' breaks the interface contract (docs/ARCHITECTURE.md, "
+            f"template '{name}' breaks the interface contract (docs/ARCHITECTURE.md, "
             f"analysis.contract) with its children reduced: {breaches}"
-            + (f"; and {more} more" if more > 0 else ""), Location(t.source))
-    return Proof(t.name, t.kind.value, digest(net), verdict.markings)
+            + (f"; and {more} more" if more > 0 else ""), Location(source))
+    return Proof(name, kind, digest(net), verdict.markings)
 
 
 def stored(folder: Path | None = None) -> dict[str, dict]:
@@ -98,30 +141,31 @@ def stored(folder: Path | None = None) -> dict[str, dict]:
 
 
 def proven(lib: Library | None = None) -> dict[str, Proof]:
-    """Every component template's proof: the stored one where the digest matches, else
-    checked now (a template that breaks the contract is refused)."""
+    """Every subject's proof: the stored one where the digest matches, else checked now
+    (a template that breaks the contract is refused)."""
     lib = lib or default_library()
     known = stored()
     out = {}
-    for t in components(lib):
-        net = lib.composed(t.name)
+    for name, kind, net, source in subjects(lib):
         d = digest(net)
-        entry = known.get(t.name)
+        entry = known.get(name)
         if entry is not None and entry.get("digest") == d:
-            out[t.name] = Proof(t.name, t.kind.value, d, entry.get("markings", 0))
+            out[name] = Proof(name, kind, d, entry.get("markings", 0))
         else:
-            out[t.name] = prove(lib, t.name)
+            out[name] = prove(name, kind, net, source)
     return out
 
 
 def update(folder: Path | None = None) -> Path:
-    """Prove every template of the package's library now and store the proofs."""
+    """Prove every subject of the package's library now and store the proofs."""
     lib = Library.load([folder or template_dirs()[0]])
-    proofs = {t.name: prove(lib, t.name).as_json() for t in components(lib)}
+    proofs = {name: prove(name, kind, net, source).as_json()
+              for name, kind, net, source in subjects(lib)}
     path = (folder or template_dirs()[0]) / PROOFS
     atomic_write_text(path, json.dumps({
         "about": "each template checked against the interface contract with its children "
-                 "reduced; the digest is of the composed net (mcl2pnml/certify/templates.py)",
+                 "reduced, and the compiler's call-site joints; the digest is of the net "
+                 "checked (mcl2pnml/certify/templates.py)",
         "templates": proofs}, indent=2, sort_keys=True) + "\n")
     return path
 

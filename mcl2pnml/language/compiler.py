@@ -42,7 +42,7 @@ delays on time-outs.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Sequence
 
 from dataclasses import replace
 
@@ -251,46 +251,7 @@ class Compiler:
 
     def call_site(self, callee: str) -> Net:
         """The call-site net of ``callee``; each call stamps its arguments on ``enter``."""
-        locks = self._locks(callee)
-        b = NetBuilder(callee)
-        for p in CONTROL:
-            b.place(p, 1 if p == "MTX" else 0, interface=p)
-        b.place("IN", payload=payloads.place_payload(f"inside {callee}"))
-        b.place("ABT", payload=payloads.place_payload(f"abort passed on to {callee}"))
-        for p in ("GATE", *CONTROL):
-            if p != "MTX":
-                b.place(f"to.{p}", interface=f"{callee}.{p}")
-        for prim in locks:
-            b.place(f"lock.{prim}", interface=f"{prim}.LOCK")
-        enter = b.transition(ENTER)
-        for p in ("B", "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
-            b.arc(p, enter)
-        b.arc(enter, "to.B")
-        b.arc(enter, "IN")
-        t = b.transition("pending_abort", payload=_doc("aborted before it started"))
-        b.arc("B", t)
-        b.arc("A", t)
-        b.arc(t, "ABORTED")
-        t = b.transition("abort", payload=_doc(f"pass the abort on to {callee}"))
-        b.arc("IN", t)
-        b.arc("A", t)
-        b.arc(t, "to.A")
-        b.arc(t, "ABT")
-
-        def leave(tid: str, inputs: list[str], result: str, doc: str) -> None:
-            t = b.transition(tid, payload=_doc(doc))
-            for p in inputs:
-                b.arc(p, t)
-            for p in (result, "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
-                b.arc(t, p)
-
-        for r in ("OK", "FAIL"):
-            leave(f"return_{r}", ["IN", f"to.{r}"], r, f"{callee} ended {r}")
-        leave("return_ABORTED", ["ABT", "to.ABORTED"], "ABORTED", f"{callee} aborted")
-        for r in ("OK", "FAIL"):
-            leave(f"drain_{r}", ["ABT", f"to.{r}", "to.A"], "ABORTED",
-                  f"{callee} ended {r} before the abort reached it: drain its A")
-        return b.build()
+        return call_site_net(callee, self._locks(callee))
 
     # -- the whole mission -------------------------------------------------------------------
 
@@ -318,6 +279,52 @@ class Compiler:
     def _name(self) -> str:
         stem = self.c.program.file.rsplit("/", 1)[-1]
         return stem[:-4] if stem.endswith(".mcl") else stem or "mission"
+
+
+def call_site_net(callee: str, locks: Sequence[str]) -> Net:
+    """The call-site net of ``callee`` taking the locks of the primitives ``locks``: it
+    waits for the callee's gate and the locks, takes them all at once, enters the shared
+    net, passes an abort on, routes the result back and gives everything back (see the
+    module's documentation)."""
+    b = NetBuilder(callee)
+    for p in CONTROL:
+        b.place(p, 1 if p == "MTX" else 0, interface=p)
+    b.place("IN", payload=payloads.place_payload(f"inside {callee}"))
+    b.place("ABT", payload=payloads.place_payload(f"abort passed on to {callee}"))
+    for p in ("GATE", *CONTROL):
+        if p != "MTX":
+            b.place(f"to.{p}", interface=f"{callee}.{p}")
+    for prim in locks:
+        b.place(f"lock.{prim}", interface=f"{prim}.LOCK")
+    enter = b.transition(ENTER)
+    for p in ("B", "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
+        b.arc(p, enter)
+    b.arc(enter, "to.B")
+    b.arc(enter, "IN")
+    t = b.transition("pending_abort", payload=_doc("aborted before it started"))
+    b.arc("B", t)
+    b.arc("A", t)
+    b.arc(t, "ABORTED")
+    t = b.transition("abort", payload=_doc(f"pass the abort on to {callee}"))
+    b.arc("IN", t)
+    b.arc("A", t)
+    b.arc(t, "to.A")
+    b.arc(t, "ABT")
+
+    def leave(tid: str, inputs: list[str], result: str, doc: str) -> None:
+        t = b.transition(tid, payload=_doc(doc))
+        for p in inputs:
+            b.arc(p, t)
+        for p in (result, "MTX", "to.GATE", *(f"lock.{x}" for x in locks)):
+            b.arc(t, p)
+
+    for r in ("OK", "FAIL"):
+        leave(f"return_{r}", ["IN", f"to.{r}"], r, f"{callee} ended {r}")
+    leave("return_ABORTED", ["ABT", "to.ABORTED"], "ABORTED", f"{callee} aborted")
+    for r in ("OK", "FAIL"):
+        leave(f"drain_{r}", ["ABT", f"to.{r}", "to.A"], "ABORTED",
+              f"{callee} ended {r} before the abort reached it: drain its A")
+    return b.build()
 
 
 @without_gc
