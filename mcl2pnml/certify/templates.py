@@ -50,6 +50,61 @@ def digest(net: Net) -> str:
     return hashlib.sha256(canonical(net).encode()).hexdigest()
 
 
+def shape(net: Net, slots: frozenset[str] = frozenset()) -> str:
+    """The digest of one instance's own net, as the certificate's checker finds it in a
+    compiled PNML: ids, timing, arcs, and the marking of its own places (not of ``slots``,
+    the places it shares with its children or primitives, whose marking is theirs); no
+    labels, which fusion does not keep, and no timing: the proofs are of the untimed net,
+    which allows every timing."""
+    text = json.dumps({
+        "places": sorted([p.id, None if p.id in slots else net.initial[p.id]]
+                         for p in net.places),
+        "transitions": sorted(t.id for t in net.transitions),
+        "arcs": sorted([a.source, a.target, a.weight, a.kind.value] for a in net.arcs),
+    }, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def local(lib: Library, subject: str) -> tuple[Net, frozenset[str]]:
+    """The own net of an instance of ``subject`` in a compiled mission, with its slot places:
+    a structure's template at rest; a task's pattern at rest with its gate (without its
+    time-out transitions for "NAME without a time-out", timing left to the checker); a
+    primitive with its lock; a call site taking ``k`` locks ("call site/k")."""
+    from mcl2pnml.core.net import Marking, NetBuilder, Place
+    from mcl2pnml.language.library import at_rest
+    if subject == "primitive":
+        net = at_rest(lib.primitive.net)
+        net = Net("primitive", (*net.places, Place("LOCK")), net.transitions, net.arcs,
+                  Marking({**net.initial, "LOCK": 1}))
+        return net, frozenset()
+    if subject.startswith(CALL_SITE + "/"):
+        from mcl2pnml.language.compiler import call_site_net
+        k = int(subject.rsplit("/", 1)[1])
+        net = call_site_net("T", [str(i) for i in range(1, k + 1)])
+        slots = frozenset(p.id for p in net.places if p.id.startswith(("to.", "lock.")))
+        return net, slots
+    name = subject.removesuffix(" without a time-out")
+    t = lib.get(name)
+    net = at_rest(t.net)
+    if t.kind is TemplateKind.PATTERN:
+        if name != subject:
+            net = without_timeouts(net)
+        net = Net(name, (*net.places, Place("GATE")), net.transitions, net.arcs,
+                  Marking({**net.initial, "GATE": 1}))
+        interface = [p.id for p in lib.primitive.net.places if p.interface is not None]
+        from mcl2pnml.language.template_parser import slot_places
+        slots = frozenset(place for slot in t.primitives
+                          for place in slot_places(slot, tuple(interface)))
+        return net, slots
+    return net, frozenset(p.id for p in net.places
+                          if any(p.id.startswith(f"{c}_") for c in t.children))
+
+
+def local_digest(lib: Library, subject: str) -> str:
+    net, slots = local(lib, subject)
+    return shape(net, slots)
+
+
 @dataclass(frozen=True)
 class Proof:
     """A template checked against the contract: its composed net's digest and markings."""
@@ -76,6 +131,8 @@ def components(lib: Library) -> list:
 #: callee behind the gate and a lock, and two call sites sharing one callee (a parallel
 #: structure's two branches calling the same task).
 CALL_SITE, SHARED_CALLEE = "call site", "call sites sharing a callee"
+#: The most primitives a task uses (a pattern's slots), so the most locks a call site takes.
+MAX_LOCKS = 2
 
 
 def call_net(lib: Library, sites: int) -> Net:
@@ -172,8 +229,14 @@ def proven(lib: Library | None = None) -> dict[str, Proof]:
 def update(folder: Path | None = None) -> Path:
     """Prove every subject of the package's library now and store the proofs."""
     lib = Library.load([folder or template_dirs()[0]])
-    proofs = {name: prove(name, kind, net, source).as_json()
+    proofs = {name: {**prove(name, kind, net, source).as_json(), **(
+                  {"local": local_digest(lib, name)} if kind != "joint" else {})}
               for name, kind, net, source in subjects(lib)}
+    # the instances a compiled mission is made of, besides the proven components
+    proofs["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
+    for k in range(MAX_LOCKS + 1):
+        proofs[f"{CALL_SITE}/{k}"] = {"kind": "joint", "local":
+                                      local_digest(lib, f"{CALL_SITE}/{k}")}
     path = (folder or template_dirs()[0]) / PROOFS
     atomic_write_text(path, json.dumps({
         "about": "each template checked against the interface contract with its children "

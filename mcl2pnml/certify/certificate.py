@@ -1,0 +1,104 @@
+"""A mission's certificate: the proof, from its parts, that its net behaves (sections 2.3-2.5).
+
+The argument, rule by rule, each resting on a proof of
+:mod:`mcl2pnml.certify.templates` (a component checked once against the
+interface contract of :mod:`analysis.contract`, its children reduced):
+
+* **task**: a task's net is its pattern fused with its primitives (with its
+  time-out, or without one); the pattern's proof covers it, used by one call
+  at a time (its gate), its primitives by one task at a time (their locks);
+* **call**: a call site with its callee behind the callee's gate and its
+  primitives' locks keeps the contract if the callee does (the joint's
+  proof; the shared-callee proof where several sites call one callee);
+* **structure**: a structure whose children keep the contract keeps it: the
+  reduced model (Fig. 3) ends in any result at any time, so it allows every
+  behaviour a child that keeps the contract shows at the fusion places, and
+  the template was proven with reduced children;
+* **function**: a function's body is a structure behind its gate, entered
+  by call sites; functions are not recursive (each calls only functions
+  declared before it), so gates are taken in one order and cannot deadlock;
+* **mission**: the root structure, started by ``mission.B``: by the
+  contract, the net is 1-safe, an end is always reachable, every end is the
+  rest marking with one of ``mission.OK`` and ``mission.FAIL`` (no abort is
+  asked), and from there the mission can run again (reusable).
+
+:func:`certify` writes the tree of the mission (and of each function) with
+the rule and the proof used at each node, the side conditions, and the
+conclusion. :mod:`mcl2pnml.certify.checker` re-checks it against the PNML
+alone. No state space is explored: the cost is linear in the mission.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from mcl2pnml.certify.templates import local_digest, proven
+from mcl2pnml.core.payloads import MISSION
+from mcl2pnml.language.functional import (FCall, function_expression, instances,
+                                          mission_expression)
+from mcl2pnml.language.library import Library, default_library
+
+#: The version of the certificate's JSON form.
+FORMAT = 1
+#: The compiler's name of each structure kind's template.
+from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE  # noqa: E402
+
+
+def certify(checked, lib: Library | None = None, net_name: str | None = None) -> dict[str, Any]:
+    """The certificate of a checked mission (:class:`mcl2pnml.language.checker.Checked`)."""
+    lib = lib or default_library()
+    proofs = proven(lib)
+    calls: dict[str, int] = {}
+    trees = {MISSION: _tree(mission_expression(checked.mission), MISSION, "", lib, calls)}
+    for name in checked.function_order:
+        trees[name] = _tree(function_expression(checked.functions[name]), name, name, lib,
+                            calls)
+    tasks = {}
+    for name, task in checked.tasks.items():
+        pattern = checked.patterns[name].name
+        subject = pattern if task.timeout is not None else f"{pattern} without a time-out"
+        tasks[name] = {"pattern": pattern, "subject": subject,
+                       "primitives": [p.name for p in task.primitives],
+                       "slots": list(checked.patterns[name].primitives),
+                       "timeout": None if task.timeout is None else task.timeout.value,
+                       "proof": proofs[subject].digest,
+                       "local": local_digest(lib, subject)}
+    used = sorted({p for t in tasks.values() for p in t["primitives"]})
+    return {
+        "format": FORMAT,
+        "mission": net_name or checked.program.file,
+        "rules": ["task", "call", "structure", "function", "mission"],
+        "proofs": {name: p.digest for name, p in sorted(proofs.items())},
+        "primitives": {p: {"local": local_digest(lib, "primitive")} for p in used},
+        "tasks": tasks,
+        "functions": list(checked.function_order),
+        "trees": trees,
+        "calls": calls,
+        "side_conditions": {
+            "functions not recursive": "each function calls only functions before it in "
+                                       "'functions'",
+            "locks": "every call site of a task takes the locks of exactly the task's "
+                     "primitives, and gives them back with its result",
+            "gates": "every call site of a task or function takes its gate on entry and "
+                     "gives it back with its result",
+        },
+        "conclusion": {"safe": True, "an end always reachable": True, "reusable": True,
+                       "ends": [f"{MISSION}.OK", f"{MISSION}.FAIL"],
+                       "why": "the root keeps the interface contract (rules above), started "
+                              "by mission.B with no abort asked"},
+    }
+
+
+def _tree(root, root_name: str, scope: str, lib: Library, calls: dict[str, int]) -> list:
+    """The instances of one tree in pre-order: name, rule, what it uses, its parent."""
+    out = []
+    for inst in instances(root, root_name, scope):
+        if isinstance(inst.node, FCall):
+            calls[inst.node.name] = calls.get(inst.node.name, 0) + 1
+            out.append({"instance": inst.name, "rule": "call", "callee": inst.node.name,
+                        "parent": inst.parent})
+        else:
+            template = lib.get(STRUCTURE_TEMPLATE[inst.node.kind])
+            out.append({"instance": inst.name, "rule": "structure", "template": template.name,
+                        "slots": list(template.children[:len(inst.node.children)]),
+                        "local": local_digest(lib, template.name), "parent": inst.parent})
+    return out

@@ -1,0 +1,187 @@
+"""Re-checking a certificate against a compiled PNML, without trusting the compiler.
+
+:mod:`mcl2pnml.certify.certificate` claims that a net is made of proven
+parts joined by the rules. This module checks the claim on the net alone,
+in one pass over its nodes and arcs:
+
+* every node of the net belongs to one instance of the certificate's tree
+  (by its id's prefix: the longest instance name that starts it), and every
+  instance is there;
+* each instance's own net (its transitions, their arcs, its places, and the
+  places it shares, renamed to the slots the tree says they fill: a
+  structure's ``T1_B`` is its first child's ``B``, a call site's ``to.B`` its
+  callee's, its ``lock.k`` the k-th primitive of its task, a task's ``E``
+  its primitive's) has the digest of the part proven in
+  ``templates/proofs.json``: a structure's template, a task's pattern with
+  or without its time-out, a primitive, a call site with its locks;
+* the side conditions: functions call only functions before them (no
+  recursion, so gates are taken in one order); a call site of a task takes
+  exactly its primitives' locks (the renaming allows no other); a place a
+  part shares is one the tree gives it; M0 is every part at rest with
+  ``mission.B`` marked.
+
+What it trusts: the proofs file (each entry was checked against the contract
+by exploring the part, and ``python -m mcl2pnml.certify.templates --update``
+does it again) and the argument of the rules. Not the compiler: a net that
+differs from its certificate by one arc is refused, naming the instance.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+import re
+
+from mcl2pnml.certify.templates import CALL_SITE, shape, stored
+from mcl2pnml.core.net import Arc, Marking, Net, Place, Transition
+from mcl2pnml.core.payloads import MISSION
+
+CONTROL = ("B", "A", "MTX", "OK", "FAIL", "ABORTED")
+#: A structure's slot place: ``T1_B``.
+_SLOT = re.compile(r"T\d+_")
+PRIMITIVE_ROLES = ("ON", "OFF", "E", "D", "S1", "S2")
+
+
+def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None) -> list[str]:
+    """Every way ``net`` departs from ``cert`` (none: the certificate holds for it)."""
+    proofs = proofs if proofs is not None else stored()
+    problems: list[str] = []
+    parts: dict[str, dict[str, Any]] = {}     # instance -> what it is
+    for p in cert.get("primitives", {}):
+        parts[p] = {"rule": "primitive"}
+    for t, info in cert.get("tasks", {}).items():
+        parts[t] = {"rule": "task", **info}
+    for tree, nodes in cert.get("trees", {}).items():
+        for k, node in enumerate(nodes):
+            children = [n["instance"] for n in nodes if n.get("parent") == k]
+            parts[node["instance"]] = {**node, "children": children, "tree": tree,
+                                       "root": k == 0}
+    functions = cert.get("functions", [])
+    owner = _owners(net, parts)
+    for missing in sorted(set(parts) - set(owner.values())):
+        problems.append(f"instance '{missing}' of the certificate has no node in the net")
+    for node_id, inst in owner.items():
+        if inst is None:
+            problems.append(f"'{node_id}' belongs to no instance of the certificate")
+    problems += _side_conditions(cert, functions)
+    own_places: dict[str, list[str]] = {}
+    for p in net.places:
+        if owner.get(p.id):
+            own_places.setdefault(owner[p.id], []).append(p.id)
+    arcs_of: dict[str, list] = {}
+    for a in net.arcs:
+        t = a.target if a.target in net.transition_index else a.source
+        if owner.get(t):
+            arcs_of.setdefault(owner[t], []).append(a)
+    transitions_of: dict[str, list[str]] = {}
+    for t in net.transitions:
+        if owner.get(t.id):
+            transitions_of.setdefault(owner[t.id], []).append(t.id)
+    for name, part in parts.items():
+        if name not in own_places and name not in transitions_of:
+            continue
+        problems += _part(net, name, part, parts, own_places.get(name, []),
+                          transitions_of.get(name, []), arcs_of.get(name, []), proofs,
+                          functions)
+    return problems
+
+
+def _owners(net: Net, parts: dict[str, Any]) -> dict[str, str | None]:
+    """Each node id's instance: the longest instance name followed by a dot that starts it."""
+    out: dict[str, str | None] = {}
+    for node in (*net.places, *net.transitions):
+        i, found = node.id.rfind("."), None
+        while i > 0:
+            if node.id[:i] in parts:
+                found = node.id[:i]
+                break
+            i = node.id.rfind(".", 0, i)
+        out[node.id] = found
+    return out
+
+
+def _side_conditions(cert: dict[str, Any], functions: list[str]) -> list[str]:
+    problems = []
+    order = {f: k for k, f in enumerate(functions)}
+    for tree, nodes in cert.get("trees", {}).items():
+        for node in nodes:
+            callee = node.get("callee")
+            if callee in order and tree in order and order[callee] >= order[tree]:
+                problems.append(f"function '{tree}' calls '{callee}', which is not before it: "
+                                "a call cycle could take gates out of order")
+            if node.get("rule") == "call" and callee not in order and \
+                    callee not in cert.get("tasks", {}):
+                problems.append(f"'{node['instance']}' calls '{callee}', no task or function "
+                                "of the certificate")
+    return problems
+
+
+def _part(net, name, part, parts, places, transitions, arcs, proofs, functions) -> list[str]:
+    """One instance's own net, renamed to its template's ids, against the proven digest."""
+    rule = part["rule"]
+    rename: dict[str, str] = {}
+    if rule == "structure":
+        subject = part["template"]
+        for slot, child in zip(part["slots"], part["children"]):
+            rename.update({f"{child}.{p}": f"{slot}_{p}" for p in CONTROL})
+    elif rule == "call":
+        callee = part["callee"]
+        prims = sorted(set(parts.get(callee, {}).get("primitives", [])))
+        subject = f"{CALL_SITE}/{len(prims)}"
+        rename.update({f"{callee}.{p}": f"to.{p}" for p in ("GATE", *CONTROL) if p != "MTX"})
+        rename.update({f"{p}.LOCK": f"lock.{k}" for k, p in enumerate(prims, 1)})
+    elif rule == "task":
+        subject = part["subject"]
+        for slot, prim in zip(part["slots"], part["primitives"]):
+            rename.update({f"{prim}.{r}": (f"{slot}_{r}" if slot else r)
+                           for r in PRIMITIVE_ROLES})
+    else:
+        subject = "primitive"
+    entry = proofs.get(subject)
+    if entry is None or "local" not in entry:
+        return [f"'{name}' is a {subject}, which no stored proof covers"]
+    problems = []
+    prefix = name + "."
+    gate = f"{name}.GATE" if part.get("root") and part.get("tree") in functions else None
+    local_places = {}
+    for p in places:
+        if p == gate:
+            continue
+        local_places[p] = p[len(prefix):]
+    shared = set()
+    for end, slot in rename.items():   # every place the template shares, used or not
+        if end in net.place_index:
+            local_places[end] = slot
+            shared.add(slot)
+    for a in arcs:
+        for end in (a.source, a.target):
+            if end in net.place_index and end not in local_places:
+                if end not in rename:
+                    problems.append(f"'{name}' ({rule}) has an arc with '{end}', which the "
+                                    "certificate does not give it")
+                    continue
+                local_places[end] = rename[end]
+                shared.add(rename[end])
+    if problems:
+        return problems
+    initial = {}
+    for p, local in local_places.items():
+        n = net.initial[p]
+        if part.get("root") and part.get("tree") == MISSION and local == "B":
+            if n != 1:
+                problems.append("mission.B is not marked in M0: the mission does not start")
+            n = 0
+        initial[local] = n
+    if rule == "structure":     # a slot the tree leaves empty is still a slot
+        shared |= {x for x in local_places.values() if _SLOT.match(x)}
+    own = Net(name, tuple(Place(x) for x in sorted(set(local_places.values()))),
+              tuple(Transition(t[len(prefix):]) for t in transitions),
+              tuple(Arc(local_places.get(a.source, a.source[len(prefix):]),
+                        local_places.get(a.target, a.target[len(prefix):]), a.weight, a.kind)
+                    for a in arcs),
+              Marking({p: n for p, n in initial.items() if n}))
+    if shape(own, frozenset(shared)) != entry["local"]:
+        problems.append(f"'{name}' is not the proven {subject}: its places, transitions or "
+                        "arcs differ")
+    if gate is not None and net.initial[gate] != 1:
+        problems.append(f"the gate '{gate}' is not free in M0")
+    return problems
