@@ -36,6 +36,7 @@ Examples:
   mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
   mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
+  mcl2pnml certify examples/sauce.mcl
 """
 FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
@@ -372,6 +373,54 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
                                               f"{len(graph['edges']):,} edges"
                                               if "markings" in graph else graph["reason"]),
                    err=True)
+    return 0
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("mission", type=FILE)
+@click.option("-o", "--output", type=OUTPUT, help="Write the certificate here "
+              "(default: MISSION.cert.json).")
+@click.option("--check", "net_file", type=FILE, metavar="NET.pnml",
+              help="Do not certify: re-check the certificate MISSION (a .cert.json) against "
+                   "this compiled net, without trusting the compiler.")
+@NET_OPTION
+def certify(mission: Path, output: Path | None, net_file: Path | None,
+            net_id: str | None) -> int:
+    """Prove MISSION from its parts, without exploring: write its certificate.
+
+    Every task pattern and control structure was proven once against the
+    interface contract (docs/ARCHITECTURE.md, mcl2pnml.certify); the
+    certificate says, instance by instance, which proof and which rule make
+    the mission 1-safe, always able to end, and reusable, and is re-checked
+    at once against the compiled net. Exit status 1: it does not hold.
+    """
+    if net_file is not None:
+        if output is not None:
+            raise OptionError("-o", "--check writes nothing")
+        cert = pipeline.load_certificate(mission)
+        net = pipeline.load_net(net_file, net_id)
+        problems = pipeline.check_certificate(net, cert)
+    else:
+        if net_id is not None:
+            raise OptionError("--net", "only --check reads a net file")
+        if mission.suffix != ".mcl":
+            raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl); to re-check a "
+                                         "certificate, add --check NET.pnml")
+        output = output or mission.with_name(mission.stem + ".cert.json")
+        check_outputs([("-o", output)], [("the mission", mission)])
+        cert, net, problems = pipeline.certify_file(mission)
+        if not problems:
+            pipeline.save_certificate(cert, output)
+            click.echo(f"wrote {output}", err=True)
+    instances = sum(len(t) for t in cert.get("trees", {}).values())
+    if problems:
+        click.echo(f"{net.name}: the certificate does not hold:")
+        for p in problems:
+            click.echo(f"  {p}")
+        return 1
+    click.echo(f"{net.name}: certified from its parts ({instances} instances, "
+               f"{len(cert['tasks'])} tasks, {len(cert['functions'])} functions): 1-safe, an "
+               "end always reachable, reusable; every end mission.OK or mission.FAIL")
     return 0
 
 

@@ -253,6 +253,57 @@ def template_clusters(name: str) -> dict[str, list[str]]:
     return default_library().slots(name)
 
 
+# -- certificates (sections 2.3-2.5: proven from the parts) --------------------------------
+
+def certify_file(mission: str | Path) -> tuple[dict[str, Any], Net, list[str]]:
+    """The certificate of ``mission`` (:mod:`mcl2pnml.certify.certificate`), its compiled
+    net, and what the independent checker finds wrong with the pair (nothing: it holds)."""
+    from mcl2pnml.certify.certificate import certify
+    from mcl2pnml.certify.checker import check
+    checked = check_file(mission)
+    net = compile_checked(checked)
+    cert = certify(checked, net_name=net.name)
+    # checked as it will be read back: plain JSON
+    return cert, net, check(net, json.loads(json.dumps(cert)))
+
+
+def load_certificate(path: str | Path) -> dict[str, Any]:
+    """A certificate read back; a file that is not one is one error naming it."""
+    from mcl2pnml.core.errors import Location, Mcl2PnmlError
+    from mcl2pnml.core.files import json_fault, read_text
+    text = read_text(path, "certificate")
+    try:
+        cert = json.loads(text)
+    except json.JSONDecodeError as e:
+        lines = text.splitlines()
+        raise Mcl2PnmlError(f"not a certificate: {e.msg}", Location(
+            str(path), e.lineno, e.colno, lines[e.lineno - 1] if lines else None)) from None
+    except (ValueError, RecursionError) as e:
+        raise Mcl2PnmlError(f"not a certificate: {json_fault(e)}", Location(str(path))) from None
+    from mcl2pnml.certify.certificate import FORMAT
+    if not isinstance(cert, dict) or cert.get("format") != FORMAT or \
+            not isinstance(cert.get("trees"), dict):
+        raise Mcl2PnmlError(f"not a certificate of format {FORMAT} (`mcl2pnml certify` "
+                            "writes them)", Location(str(path), 1, 1))
+    return cert
+
+
+def check_certificate(net: Net, cert: dict[str, Any]) -> list[str]:
+    """What the independent checker finds wrong with ``cert`` for ``net`` (nothing: it
+    holds); a certificate whose shape is broken is a problem, never a crash."""
+    from mcl2pnml.certify.checker import check
+    try:
+        return check(net, cert)
+    except (KeyError, TypeError, ValueError, AttributeError) as e:
+        return [f"the certificate is malformed: {type(e).__name__}: {e}"]
+
+
+def save_certificate(cert: dict[str, Any], path: str | Path) -> Path:
+    from mcl2pnml.core.files import atomic_write_text
+    atomic_write_text(path, json.dumps(cert, indent=2) + "\n")
+    return Path(path)
+
+
 # -- analysis ------------------------------------------------------------------------------
 
 def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> dict[str, Any]:

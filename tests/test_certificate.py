@@ -96,3 +96,42 @@ def test_the_certificate_s_conclusion_is_what_exploring_finds(text):
 @given(missions(depth=2, width=2, function_depth=1))
 def test_ten_thousand_certificates_are_what_exploring_finds(text):
     assert _explored_agrees(text) in (True, None)
+
+
+# -- the command line ----------------------------------------------------------------------
+
+def test_certify_writes_the_certificate_and_check_re_reads_it(tmp_path):
+    from helpers import run_cli
+    mission = tmp_path / "sauce.mcl"
+    mission.write_text((ROOT / "examples" / "sauce.mcl").read_text())
+    out = run_cli("certify", mission)
+    assert out.returncode == 0, out.stderr
+    assert "certified from its parts" in out.stdout and "1-safe" in out.stdout
+    cert = tmp_path / "sauce.cert.json"
+    assert json.loads(cert.read_text())["conclusion"]["reusable"]
+    assert run_cli("compile", mission, "-o", tmp_path / "sauce.pnml").returncode == 0
+    again = run_cli("certify", cert, "--check", tmp_path / "sauce.pnml")
+    assert again.returncode == 0 and "certified from its parts" in again.stdout
+    other = tmp_path / "docking.pnml"
+    assert run_cli("compile", ROOT / "examples" / "docking.mcl", "-o", other).returncode == 0
+    wrong = run_cli("certify", cert, "--check", other)
+    assert wrong.returncode == 1 and "the certificate does not hold" in wrong.stdout
+
+
+@pytest.mark.parametrize("args,message", [
+    (["{tmp}/bad.json", "--check", "{pnml}"], "bad.json:2:3: not a certificate: Expecting"),
+    (["{tmp}/other.json", "--check", "{pnml}"], "not a certificate of format 1"),
+    (["{mission}", "--net", "x"], "only --check reads a net file"),
+    (["{tmp}/other.json"], "is not a mission (.mcl)"),
+])
+def test_certify_errors_are_one_message(args, message, tmp_path):
+    from helpers import run_cli
+    (tmp_path / "bad.json").write_text("{\n  oops\n")
+    (tmp_path / "other.json").write_text('{"format": 7}')
+    pnml = tmp_path / "s.pnml"
+    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o", pnml).returncode == 0
+    args = [a.format(tmp=tmp_path, pnml=pnml, mission=ROOT / "examples" / "sauce.mcl")
+            for a in args]
+    out = run_cli("certify", *args)
+    assert out.returncode == 2 and message in out.stderr, out.stderr
+    assert "Traceback" not in out.stderr

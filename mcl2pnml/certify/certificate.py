@@ -33,14 +33,13 @@ from typing import Any
 
 from mcl2pnml.certify.templates import local_digest, proven
 from mcl2pnml.core.payloads import MISSION
+from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE
 from mcl2pnml.language.functional import (FCall, function_expression, instances,
                                           mission_expression)
 from mcl2pnml.language.library import Library, default_library
 
 #: The version of the certificate's JSON form.
 FORMAT = 1
-#: The compiler's name of each structure kind's template.
-from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE  # noqa: E402
 
 
 def certify(checked, lib: Library | None = None, net_name: str | None = None) -> dict[str, Any]:
