@@ -90,6 +90,7 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None) ->
 def _tree(root, root_name: str, scope: str, lib: Library, calls: dict[str, int]) -> list:
     """The instances of one tree in pre-order: name, rule, what it uses, its parent."""
     out = []
+    digests: dict[str, str] = {}      # a template's own net is the same at every instance
     for inst in instances(root, root_name, scope):
         if isinstance(inst.node, FCall):
             calls[inst.node.name] = calls.get(inst.node.name, 0) + 1
@@ -99,5 +100,7 @@ def _tree(root, root_name: str, scope: str, lib: Library, calls: dict[str, int])
             template = lib.get(STRUCTURE_TEMPLATE[inst.node.kind])
             out.append({"instance": inst.name, "rule": "structure", "template": template.name,
                         "slots": list(template.children[:len(inst.node.children)]),
-                        "local": local_digest(lib, template.name), "parent": inst.parent})
+                        "local": digests.get(template.name) or digests.setdefault(
+                            template.name, local_digest(lib, template.name)),
+                        "parent": inst.parent})
     return out

@@ -31,8 +31,10 @@ from typing import Any
 
 import re
 
-from mcl2pnml.certify.templates import CALL_SITE, shape, stored
-from mcl2pnml.core.net import Arc, Marking, Net, Place, Transition
+from mcl2pnml.certify.templates import CALL_SITE, shape_of, stored
+from mcl2pnml.core.net import ArcKind, Net
+
+READ = ArcKind.READ
 from mcl2pnml.core.payloads import MISSION
 
 CONTROL = ("B", "A", "MTX", "OK", "FAIL", "ABORTED")
@@ -51,9 +53,12 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
     for t, info in cert.get("tasks", {}).items():
         parts[t] = {"rule": "task", **info}
     for tree, nodes in cert.get("trees", {}).items():
+        children: list[list[str]] = [[] for _ in nodes]
+        for node in nodes:       # one pass: each node under its parent, in order
+            if node.get("parent", -1) >= 0:
+                children[node["parent"]].append(node["instance"])
         for k, node in enumerate(nodes):
-            children = [n["instance"] for n in nodes if n.get("parent") == k]
-            parts[node["instance"]] = {**node, "children": children, "tree": tree,
+            parts[node["instance"]] = {**node, "children": children[k], "tree": tree,
                                        "root": k == 0}
     functions = cert.get("functions", [])
     owner = _owners(net, parts)
@@ -68,10 +73,11 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
         if owner.get(p.id):
             own_places.setdefault(owner[p.id], []).append(p.id)
     arcs_of: dict[str, list] = {}
-    for a in net.arcs:
-        t = a.target if a.target in net.transition_index else a.source
-        if owner.get(t):
-            arcs_of.setdefault(owner[t], []).append(a)
+    places = net.place_index
+    for a in net.arcs:       # each arc under its transition's instance
+        inst = owner.get(a.source if a.source not in places else a.target)
+        if inst:
+            arcs_of.setdefault(inst, []).append(a)
     transitions_of: dict[str, list[str]] = {}
     for t in net.transitions:
         if owner.get(t.id):
@@ -148,19 +154,27 @@ def _part(net, name, part, parts, places, transitions, arcs, proofs, functions) 
             continue
         local_places[p] = p[len(prefix):]
     shared = set()
+    index = net.place_index
     for end, slot in rename.items():   # every place the template shares, used or not
-        if end in net.place_index:
+        if end in index:
             local_places[end] = slot
             shared.add(slot)
-    for a in arcs:
-        for end in (a.source, a.target):
-            if end in net.place_index and end not in local_places:
-                if end not in rename:
-                    problems.append(f"'{name}' ({rule}) has an arc with '{end}', which the "
-                                    "certificate does not give it")
-                    continue
-                local_places[end] = rename[end]
-                shared.add(rename[end])
+    cut = len(prefix)
+    local_arcs = []
+    for a in arcs:           # one pass: each arc renamed, a place it may not touch said
+        source, target = a.source, a.target
+        if source in index:
+            place, transition = source, target
+        else:
+            place, transition = target, source
+        got = local_places.get(place)
+        if got is None:
+            problems.append(f"'{name}' ({rule}) has an arc with '{place}', which the "
+                            "certificate does not give it")
+            continue
+        t = transition[cut:]
+        local_arcs.append((got, t, a.weight, "read" if a.kind is READ else "normal")
+                          if place is source else (t, got, a.weight, "normal"))
     if problems:
         return problems
     initial = {}
@@ -173,13 +187,9 @@ def _part(net, name, part, parts, places, transitions, arcs, proofs, functions) 
         initial[local] = n
     if rule == "structure":     # a slot the tree leaves empty is still a slot
         shared |= {x for x in local_places.values() if _SLOT.match(x)}
-    own = Net(name, tuple(Place(x) for x in sorted(set(local_places.values()))),
-              tuple(Transition(t[len(prefix):]) for t in transitions),
-              tuple(Arc(local_places.get(a.source, a.source[len(prefix):]),
-                        local_places.get(a.target, a.target[len(prefix):]), a.weight, a.kind)
-                    for a in arcs),
-              Marking({p: n for p, n in initial.items() if n}))
-    if shape(own, frozenset(shared)) != entry["local"]:
+    digest = shape_of(((x, None if x in shared else n) for x, n in initial.items()),
+                      (t[cut:] for t in transitions), local_arcs)
+    if digest != entry["local"]:
         problems.append(f"'{name}' is not the proven {subject}: its places, transitions or "
                         "arcs differ")
     if gate is not None and net.initial[gate] != 1:

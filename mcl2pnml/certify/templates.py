@@ -52,17 +52,32 @@ def digest(net: Net) -> str:
 
 def shape(net: Net, slots: frozenset[str] = frozenset()) -> str:
     """The digest of one instance's own net, as the certificate's checker finds it in a
-    compiled PNML: ids, timing, arcs, and the marking of its own places (not of ``slots``,
-    the places it shares with its children or primitives, whose marking is theirs); no
-    labels, which fusion does not keep, and no timing: the proofs are of the untimed net,
-    which allows every timing."""
-    text = json.dumps({
-        "places": sorted([p.id, None if p.id in slots else net.initial[p.id]]
-                         for p in net.places),
-        "transitions": sorted(t.id for t in net.transitions),
-        "arcs": sorted([a.source, a.target, a.weight, a.kind.value] for a in net.arcs),
-    }, separators=(",", ":"))
-    return hashlib.sha256(text.encode()).hexdigest()
+    compiled PNML: ids, arcs, and the marking of its own places (not of ``slots``, the
+    places it shares with its children or primitives, whose marking is theirs); no labels,
+    which fusion does not keep, and no timing: the proofs are of the untimed net, which
+    allows every timing."""
+    return shape_of(((p.id, None if p.id in slots else net.initial[p.id]) for p in net.places),
+                    (t.id for t in net.transitions),
+                    ((a.source, a.target, a.weight, a.kind.value) for a in net.arcs))
+
+
+def shape_of(places, transitions, arcs) -> str:
+    """:func:`shape` of a net given as its parts: (place, marking or None) pairs,
+    transition ids, (source, target, weight, kind) arcs; the checker's fast way, with no
+    net built. A mission repeats a few shapes thousands of times (every call site of a
+    task, every sequence): each one's digest is computed once."""
+    key = (tuple(sorted(places)), tuple(sorted(transitions)), tuple(sorted(arcs)))
+    found = _SHAPES.get(key)
+    if found is None:
+        text = json.dumps({"places": [list(p) for p in key[0]], "transitions": list(key[1]),
+                           "arcs": [list(a) for a in key[2]]}, separators=(",", ":"))
+        found = _SHAPES[key] = hashlib.sha256(text.encode()).hexdigest()
+        if len(_SHAPES) > 10_000:     # a bound: shapes of one mission are few
+            _SHAPES.clear()
+    return found
+
+
+_SHAPES: dict[tuple, str] = {}
 
 
 def local(lib: Library, subject: str) -> tuple[Net, frozenset[str]]:
