@@ -98,7 +98,8 @@ def output_estimate(vectors) -> int:
 
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
             max_states: int = 5_000_000, progress: Progress | None = None,
-            explorer: str = "auto", max_memory: int | None = None) -> dict[str, Any]:
+            explorer: str = "auto", max_memory: int | None = None,
+            explore_states: bool = True) -> dict[str, Any]:
     """Everything we know how to prove about ``net``, as JSON-ready data.
 
     ``explorer`` is one of :data:`analysis.statespace.BACKENDS`; ``max_memory``
@@ -106,6 +107,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     The structural results come first, so that an exploration stopped by its
     budget still ends in a partial answer: ``"partial"`` says how many
     markings were explored and whether a dead marking was met among them.
+    ``explore_states=False``: no exploration, the state space's facts left None.
     """
     # the budget is the whole process's: what the net and the structural results
     # hold counts against it (the default, half of what is free now, comes on top
@@ -121,6 +123,13 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     structural = {} if state_space_only else _structural(s, limits, left_out, budget)
     partial = None
     release()
+    if not explore_states:     # the caller knows the behaviour otherwise (a certificate)
+        result = _state_space_facts(net, s, None)
+        result.update(structural)
+        _fit_output(result, limits, left_out, budget)
+        if limits:
+            result["limits"] = limits
+        return result
     try:
         with guard(_floored(budget), "the exploration"):
             space = explore(s, max_states=max_states, progress=progress, backend=explorer,

@@ -446,6 +446,9 @@ def _progress(states: int, frontier: int) -> None:
               metavar="[FILE]", help="Check a mission's properties (docs/properties.md) on its "
               "runs: the mission's, then FILE's (default: MISSION.props, if there is one); "
               "exit 1 if one fails, 3 if one is unknown.")
+@click.option("--explore", is_flag=True, help="Explore the reachable markings even where a "
+              "certificate beside FILE (FILE.cert.json, `mcl2pnml certify`) proves the "
+              "behaviour.")
 @click.option("--counterexamples", "cex_dir", metavar="DIR",
               type=click.Path(file_okay=False, path_type=Path),
               help="With --properties: for each failing property write DIR/NAME.txt (its run "
@@ -456,7 +459,7 @@ def _progress(states: int, frontier: int) -> None:
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
             progress: bool | None, explorer: str, max_memory: str | None,
             net_id: str | None, properties: str | None = None,
-            cex_dir: Path | None = None) -> int:
+            cex_dir: Path | None = None, explore: bool = False) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
@@ -474,9 +477,23 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     net = pipeline.load_net(file, net_id, max_memory)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress
+    # a certificate beside the file proves the behaviour without exploring (mcl2pnml.certify)
+    beside = pipeline.certificate_beside(file)
+    certified = None
+    if beside.is_file() and start is None and not explore:
+        certified, problems = pipeline.certified_facts(net, beside)
+        if problems:
+            click.echo(f"{beside}: the certificate does not hold for this net ({problems[0]}"
+                       + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
+                       + "): exploring instead", err=True)
     result = pipeline.analyze(net, start, state_space_only=state_space, max_states=max_states,
                               progress=_progress if shown else None, explorer=explorer,
-                              max_memory=max_memory)
+                              max_memory=max_memory, explore_states=certified is None)
+    if certified is not None:
+        result.update(certified)
+        click.echo(f"{beside}: the certificate holds: 1-safe, an end always reachable, "
+                   "reusable, proven from the mission's parts; the markings were not explored "
+                   "(--explore to explore them)", err=True)
     if shown:
         click.echo("", err=True)
     verdicts = None if properties is None else _check_properties(file, properties, net, start,

@@ -298,6 +298,25 @@ def check_certificate(net: Net, cert: dict[str, Any]) -> list[str]:
         return [f"the certificate is malformed: {type(e).__name__}: {e}"]
 
 
+def certificate_beside(file: Path) -> Path:
+    """Where ``certify`` writes the certificate of ``file`` (a mission, or its net)."""
+    return file.with_name(file.stem + ".cert.json")
+
+
+def certified_facts(net: Net, cert_path: Path) -> tuple[dict[str, Any] | None, list[str]]:
+    """What a certificate proves of ``net``, as ``analyze`` reports it, if it holds for
+    ``net``; else None and what the checker found."""
+    cert = load_certificate(cert_path)
+    problems = check_certificate(net, cert)
+    if problems:
+        return None, problems
+    facts = {"bounded": True, "safe": True, "deadlock_free": True, "ends_properly": True,
+             "final_always_reachable": True, "reusable": True,
+             "certificate": {"file": str(cert_path), "holds": True,
+                             "ends": cert["conclusion"]["ends"]}}
+    return facts, []
+
+
 def save_certificate(cert: dict[str, Any], path: str | Path) -> Path:
     from mcl2pnml.core.files import atomic_write_text
     atomic_write_text(path, json.dumps(cert, indent=2) + "\n")

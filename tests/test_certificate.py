@@ -135,3 +135,25 @@ def test_certify_errors_are_one_message(args, message, tmp_path):
     out = run_cli("certify", *args)
     assert out.returncode == 2 and message in out.stderr, out.stderr
     assert "Traceback" not in out.stderr
+
+
+def test_analyze_takes_the_certificate_beside_the_mission_and_says_so(tmp_path):
+    from helpers import run_cli
+    mission = tmp_path / "sauce.mcl"
+    mission.write_text((ROOT / "examples" / "sauce.mcl").read_text())
+    assert run_cli("certify", mission).returncode == 0
+    out = run_cli("analyze", mission, "--state-space", "--json")
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout)
+    assert "the certificate holds" in out.stderr and r["states"] is None
+    assert r["safe"] and r["reusable"] and r["final_always_reachable"]
+    assert r["certificate"]["holds"]
+    explored = json.loads(run_cli("analyze", mission, "--state-space", "--json",
+                                  "--explore").stdout)
+    assert explored["states"] == 1_509 and explored["reusable"]
+    # a certificate that is not this mission's is said, and the markings explored
+    (tmp_path / "sauce.cert.json").write_text(
+        json.dumps(_certified(ROOT / "examples" / "docking.mcl")[1]))
+    stale = run_cli("analyze", mission, "--state-space", "--json")
+    assert "the certificate does not hold for this net" in stale.stderr
+    assert json.loads(stale.stdout)["states"] == 1_509
