@@ -31,7 +31,7 @@ from typing import Any
 
 import re
 
-from mcl2pnml.certify.templates import CALL_SITE, shape_of, stored
+from mcl2pnml.certify.templates import CALL_SITE, current, shape_of
 from mcl2pnml.core.net import ArcKind, Net
 
 READ = ArcKind.READ
@@ -44,8 +44,12 @@ PRIMITIVE_ROLES = ("ON", "OFF", "E", "D", "S1", "S2")
 
 
 def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None) -> list[str]:
-    """Every way ``net`` departs from ``cert`` (none: the certificate holds for it)."""
-    proofs = proofs if proofs is not None else stored()
+    """Every way ``net`` departs from ``cert`` (none: the certificate holds for it).
+
+    ``proofs``: the proven parts to hold the instances to (default: the library in use,
+    :func:`mcl2pnml.certify.templates.current`: the stored proofs, and a user's templates
+    proven now)."""
+    proofs = proofs if proofs is not None else current()
     problems: list[str] = []
     parts: dict[str, dict[str, Any]] = {}     # instance -> what it is
     for p in cert.get("primitives", {}):

@@ -241,6 +241,27 @@ def proven(lib: Library | None = None) -> dict[str, Proof]:
     return out
 
 
+def current(lib: Library | None = None) -> dict[str, dict]:
+    """The proofs of the library in use, as the checker reads them: the stored ones where
+    the digest matches, every other subject (a user's template, an edited one) proven now,
+    and every instance's own digest computed from the library (:class:`BrokenTemplate`
+    for a subject that breaks the contract)."""
+    lib = lib or default_library()
+    known = stored()
+    out: dict[str, dict] = {}
+    for name, kind, net, source in subjects(lib):
+        d = digest(net)
+        entry = known.get(name)
+        if entry is None or entry.get("digest") != d:
+            entry = prove(name, kind, net, source).as_json()
+        out[name] = {**entry, **({"local": local_digest(lib, name)} if kind != "joint" else {})}
+    out["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
+    for k in range(MAX_LOCKS + 1):
+        out[f"{CALL_SITE}/{k}"] = {"kind": "joint",
+                                   "local": local_digest(lib, f"{CALL_SITE}/{k}")}
+    return out
+
+
 def update(folder: Path | None = None) -> Path:
     """Prove every subject of the package's library now and store the proofs."""
     lib = Library.load([folder or template_dirs()[0]])
