@@ -383,9 +383,12 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
 @click.option("--check", "net_file", type=FILE, metavar="NET.pnml",
               help="Do not certify: re-check the certificate MISSION (a .cert.json) against "
                    "this compiled net, without trusting the compiler.")
+@click.option("--abort-pending", is_flag=True, help="Certify the mission started with "
+              "mission.A marked too (an abort racing every step): its ends then include "
+              "mission.ABORTED.")
 @NET_OPTION
 def certify(mission: Path, output: Path | None, net_file: Path | None,
-            net_id: str | None) -> int:
+            net_id: str | None, abort_pending: bool = False) -> int:
     """Prove MISSION from its parts, without exploring: write its certificate.
 
     Every task pattern and control structure was proven once against the
@@ -408,7 +411,7 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
                                          "certificate, add --check NET.pnml")
         output = output or mission.with_name(mission.stem + ".cert.json")
         check_outputs([("-o", output)], [("the mission", mission)])
-        cert, net, problems = pipeline.certify_file(mission)
+        cert, net, problems = pipeline.certify_file(mission, abort_pending)
         if not problems:
             pipeline.save_certificate(cert, output)
             click.echo(f"wrote {output}", err=True)
@@ -420,7 +423,8 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
         return 1
     click.echo(f"{net.name}: certified from its parts ({instances} instances, "
                f"{len(cert['tasks'])} tasks, {len(cert['functions'])} functions): 1-safe, an "
-               "end always reachable, reusable; every end mission.OK or mission.FAIL")
+               "end always reachable, reusable; every end one of "
+               + ", ".join(cert["conclusion"]["ends"]))
     return 0
 
 

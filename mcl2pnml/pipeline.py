@@ -255,14 +255,19 @@ def template_clusters(name: str) -> dict[str, list[str]]:
 
 # -- certificates (sections 2.3-2.5: proven from the parts) --------------------------------
 
-def certify_file(mission: str | Path) -> tuple[dict[str, Any], Net, list[str]]:
+def certify_file(mission: str | Path, abort_pending: bool = False
+                 ) -> tuple[dict[str, Any], Net, list[str]]:
     """The certificate of ``mission`` (:mod:`mcl2pnml.certify.certificate`), its compiled
-    net, and what the independent checker finds wrong with the pair (nothing: it holds)."""
+    net (with ``mission.A`` marked too if ``abort_pending``), and what the independent
+    checker finds wrong with the pair (nothing: it holds)."""
     from mcl2pnml.certify.certificate import certify
     from mcl2pnml.certify.checker import check
+    from mcl2pnml.core.payloads import MissionPlace
     checked = check_file(mission)
     net = compile_checked(checked)
-    cert = certify(checked, net_name=net.name)
+    if abort_pending:
+        net = net.with_initial({**net.initial, MissionPlace.A.id: 1})
+    cert = certify(checked, net_name=net.name, abort_pending=abort_pending)
     # checked as it will be read back: plain JSON
     return cert, net, check(net, json.loads(json.dumps(cert)))
 

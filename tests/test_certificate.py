@@ -65,22 +65,33 @@ def test_a_recursive_call_order_is_a_side_condition_broken():
 
 def _explored_agrees(text: str) -> bool | None:
     """Whether exploring the mission's net finds what its certificate concludes (1-safe,
-    an end always reachable, reusable, every end mission.OK or mission.FAIL at rest);
-    None when the net is too large to explore here."""
+    an end always reachable, reusable, every end mission.OK or mission.FAIL at rest), and
+    the same with an abort pending (ends mission.ABORTED too); None when the net is too
+    large to explore here."""
+    from mcl2pnml.certify.certificate import certify as certify_
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "m.mcl"
         path.write_text(text)
         net, cert = _certified(path)
+        checked = pipeline.check_file(path)
     assert check(net, cert) == []
-    try:
-        space = explore(net, max_states=20_000)
-    except ExplorationLimit:
-        return None
-    b = behaviour(space)
-    ends = {tuple(p for p in space.format(n) if p.startswith("mission.") and
-                  p != "mission.MTX") for n in space.terminal}
-    return (space.safe and b.deadlock_free and b.final_always_reachable and b.reusable
-            and ends <= {("mission.OK",), ("mission.FAIL",)})
+    aborted = net.with_initial({**net.initial, "mission.A": 1})
+    assert check(aborted, json.loads(json.dumps(certify_(checked, abort_pending=True)))) == []
+    for start, allowed in ((net, {("mission.OK",), ("mission.FAIL",)}),
+                           # the abort is left for the caller when the end is not ABORTED
+                           (aborted, {("mission.A", "mission.OK"), ("mission.A", "mission.FAIL"),
+                                      ("mission.ABORTED",)})):
+        try:
+            space = explore(start, max_states=20_000)
+        except ExplorationLimit:
+            return None
+        b = behaviour(space)
+        ends = {tuple(p for p in space.format(n) if p.startswith("mission.") and
+                      p != "mission.MTX") for n in space.terminal}
+        if not (space.safe and b.deadlock_free and b.final_always_reachable and b.reusable
+                and ends <= allowed):
+            return False
+    return True
 
 
 @settings(max_examples=60, deadline=None,
@@ -230,3 +241,17 @@ def test_every_template_missing_an_arc_is_never_certified_into_a_broken_net():
         assert fine or not certified, (name, arc)
         cautious += fine and not certified
     print(f"{len(MUTANTS)} mutants; refused though this mission explores well: {cautious}")
+
+
+def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
+    from helpers import run_cli
+    mission = tmp_path / "dam.mcl"
+    mission.write_text((ROOT / "examples" / "dam_inspection.mcl").read_text())
+    out = run_cli("certify", mission, "--abort-pending")
+    assert out.returncode == 0, out.stderr
+    assert "mission.OK, mission.FAIL, mission.ABORTED" in out.stdout
+    cert = json.loads((tmp_path / "dam.cert.json").read_text())
+    assert cert["start"] == ["mission.B", "mission.A"] and "abort" in cert["conclusion"]
+    # the net without the abort is not the one it proves
+    net, _ = _certified(mission)
+    assert any("does not mark mission.A" in p for p in check(net, cert))

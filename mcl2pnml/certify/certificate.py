@@ -42,8 +42,11 @@ from mcl2pnml.language.library import Library, default_library
 FORMAT = 1
 
 
-def certify(checked, lib: Library | None = None, net_name: str | None = None) -> dict[str, Any]:
-    """The certificate of a checked mission (:class:`mcl2pnml.language.checker.Checked`)."""
+def certify(checked, lib: Library | None = None, net_name: str | None = None,
+            abort_pending: bool = False) -> dict[str, Any]:
+    """The certificate of a checked mission (:class:`mcl2pnml.language.checker.Checked`),
+    started by ``mission.B`` (and, ``abort_pending``, with ``mission.A`` marked too: the
+    abort racing every step, as the analysis proves that an aborted mission ends)."""
     lib = lib or default_library()
     proofs = proven(lib)
     calls: dict[str, int] = {}
@@ -80,10 +83,17 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None) ->
             "gates": "every call site of a task or function takes its gate on entry and "
                      "gives it back with its result",
         },
+        "start": [f"{MISSION}.B", *([f"{MISSION}.A"] if abort_pending else [])],
         "conclusion": {"safe": True, "an end always reachable": True, "reusable": True,
-                       "ends": [f"{MISSION}.OK", f"{MISSION}.FAIL"],
+                       "ends": [f"{MISSION}.OK", f"{MISSION}.FAIL",
+                                *([f"{MISSION}.ABORTED"] if abort_pending else [])],
+                       **({"abort": f"{MISSION}.A is consumed exactly when the end is "
+                                    f"{MISSION}.ABORTED, and left marked otherwise"}
+                          if abort_pending else {}),
                        "why": "the root keeps the interface contract (rules above), started "
-                              "by mission.B with no abort asked"},
+                              "by mission.B" + (" with mission.A pending (A consumed "
+                                                "exactly when the end is ABORTED)"
+                                                if abort_pending else " with no abort asked")},
     }
 
 

@@ -91,7 +91,7 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
             continue
         problems += _part(net, name, part, parts, own_places.get(name, []),
                           transitions_of.get(name, []), arcs_of.get(name, []), proofs,
-                          functions)
+                          functions, cert.get("start", [f"{MISSION}.B"]))
     return problems
 
 
@@ -125,7 +125,8 @@ def _side_conditions(cert: dict[str, Any], functions: list[str]) -> list[str]:
     return problems
 
 
-def _part(net, name, part, parts, places, transitions, arcs, proofs, functions) -> list[str]:
+def _part(net, name, part, parts, places, transitions, arcs, proofs, functions,
+          cert_start) -> list[str]:
     """One instance's own net, renamed to its template's ids, against the proven digest."""
     rule = part["rule"]
     rename: dict[str, str] = {}
@@ -182,11 +183,13 @@ def _part(net, name, part, parts, places, transitions, arcs, proofs, functions) 
     if problems:
         return problems
     initial = {}
+    start = set(cert_start)
     for p, local in local_places.items():
         n = net.initial[p]
-        if part.get("root") and part.get("tree") == MISSION and local == "B":
-            if n != 1:
-                problems.append("mission.B is not marked in M0: the mission does not start")
+        if part.get("root") and part.get("tree") == MISSION and local in ("B", "A"):
+            if n != (f"{MISSION}.{local}" in start):
+                problems.append(f"M0 {'marks' if n else 'does not mark'} {MISSION}.{local}; "
+                                f"the certificate starts from {', '.join(sorted(start))}")
             n = 0
         initial[local] = n
     if rule == "structure":     # a slot the tree leaves empty is still a slot
