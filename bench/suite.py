@@ -12,6 +12,8 @@ Measures, on this machine, in one run (about fifteen minutes on 2 cores):
 * mission properties: ``analyze --properties`` on every example's property
   files against verifypn and LoLA on the same queries, with and without
   their reductions (:mod:`bench.properties_peers`);
+* certificates: a mission proven from its parts against exploring it, and
+  certifying surveys of 100 to 10,000 calls (:mod:`bench.certify_scale`);
 * invariants: the exact P-invariant basis of compiled missions of 100 to
   5,000 places against plain ``sympy.Matrix.nullspace``
   (:mod:`bench.invariants_vs_nullspace`);
@@ -39,7 +41,7 @@ from mcl2pnml.core.files import atomic_write_text
 
 from analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
-from bench import properties_peers, real_models
+from bench import certify_scale, properties_peers, real_models
 from bench import statespace_peers as peers
 from bench.core_scale import slope
 from bench.missions import survey
@@ -271,6 +273,11 @@ def properties_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
     return lines, targets
 
 
+def certify_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    """Certificates against exploring, and their scale (:mod:`bench.certify_scale`)."""
+    return certify_scale.section(quick, log)
+
+
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     from analysis.invariants import p_invariant_basis
     from mcl2pnml.core.structure import structure
@@ -386,6 +393,7 @@ def main(argv: list[str]) -> int:
     for name, section in (("state spaces", statespace_section),
                           ("MCC models", real_models_section),
                           ("mission properties", properties_section),
+                          ("certificates", certify_section),
                           ("invariants", invariants_section),
                           ("compile", compile_section), ("executor", executor_section)):
         log(f"{name}...")
