@@ -13,8 +13,9 @@ has the digest stored is taken as proven; any other (a user's file on
 used, and a template that breaks the contract is refused with the run that
 shows it.
 
-Rewrite the stored proofs after a deliberate change to a template:
+List the stored proofs, or rewrite them after a deliberate change to a template:
 
+    python -m mcl2pnml.certify.templates --list
     python -m mcl2pnml.certify.templates --update
 """
 from __future__ import annotations
@@ -282,8 +283,21 @@ def update(folder: Path | None = None) -> Path:
     return path
 
 
+def listing() -> list[str]:
+    """One line per stored proof: what was proven, on how many markings."""
+    out = []
+    for name, entry in sorted(stored().items()):
+        if "digest" in entry:
+            out.append(f"{name:<32} {entry['kind']:<10} {entry['markings']:>4} markings  "
+                       f"{entry['digest'][:12]}")
+    return out
+
+
 if __name__ == "__main__":
-    if sys.argv[1:] != ["--update"]:
-        print(__doc__.strip().splitlines()[-1].strip(), file=sys.stderr)
+    if sys.argv[1:] == ["--list"]:
+        print("\n".join(listing()))
+    elif sys.argv[1:] == ["--update"]:
+        print(f"wrote {update()}")
+    else:
+        print("python -m mcl2pnml.certify.templates --list | --update", file=sys.stderr)
         sys.exit(2)
-    print(f"wrote {update()}")
