@@ -247,30 +247,7 @@ def real_models_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bo
 
 def properties_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
     """Mission properties against verifypn and LoLA (:mod:`bench.properties_peers`)."""
-    rows = properties_peers.run(quick, log=log)
-    lines = ["## Mission properties: ours, verifypn, LoLA", "",
-             f"Measured {datetime.date.today().isoformat()}. Each example's property files "
-             "(`NAME.props`, which hold; `NAME.false.props`, which fail"
-             + (", dam_inspection left out by --quick" if quick else "") + "). Ours: "
-             "`mcl2pnml analyze MISSION --state-space --properties FILE --json`, the "
-             "command a user runs (start-up, compiling, one exploration, every property, "
-             "each failing one's counterexample told in the mission's terms and replayed on "
-             "both engines), a fresh process; the inner loop (`check_all`: the exploration "
-             "and each property's product with its observer) timed apart. The peers: the "
-             "queries `compile --properties` writes (every property in LTL, those with an "
-             "exact CTL or reachability form also there), verifypn in one call per category "
-             "file, LoLA in one call per query, each with its defaults (structural "
-             "reductions, stubborn sets) and with them off (`-r 0 -p`; "
-             "`--netreduction=off --stubborn=off`); verifypn with `-q 0` either way (its "
-             "query simplification can run 30 s on our bounded-existence queries). Seconds "
-             "summed over a tool's calls, the largest peak memory, and the peer's time as a "
-             "multiple of our command's (above 1: ours is faster). Every answer is compared "
-             "with our verdict.", "", *properties_peers.table(rows)]
-    verifypn_agrees = all(properties_peers.differs(r, r["verifypn", name]) in ("agree", "-")
-                          for r in rows for name, _ in properties_peers.CONFIGS["verifypn"])
-    targets = [("mission properties: verifypn answers every query as we do", verifypn_agrees,
-                "every example's property files" if verifypn_agrees else "see the section")]
-    return lines, targets
+    return properties_peers.section(quick, log)
 
 
 def certify_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
