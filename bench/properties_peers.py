@@ -300,7 +300,10 @@ def section(quick: bool = False, log=lambda text: None
              "A peer's seconds are summed over its calls on the file, its memory the largest "
              "peak; \"/ ours\": its seconds over our whole command's (above 1: ours is "
              f"faster). A call past {TIMEOUT:.0f} s counts as timed out. \"verdicts\": every "
-             "answer compared with our verdict, per property.", "", *table(rows)]
+             "answer compared with our verdict, per property. Ours explores every reachable marking "
+             "once and then checks each property on them; the peers search on the fly, per "
+             "query, and stop at a counterexample, which on a failing file is found within "
+             "the first markings.", "", *table(rows)]
     agrees = all(differs(r, r["verifypn", name]) in ("agree", "-")
                  for r in rows for name, _ in CONFIGS["verifypn"])
     targets = [("mission properties: verifypn answers every query as we do", agrees,
