@@ -27,15 +27,14 @@ differs from its certificate by one arc is refused, naming the instance.
 """
 from __future__ import annotations
 
-from typing import Any
-
 import re
+from typing import Any
 
 from mcl2pnml.certify.templates import CALL_SITE, current, shape_of
 from mcl2pnml.core.net import ArcKind, Net
+from mcl2pnml.core.payloads import MISSION
 
 READ = ArcKind.READ
-from mcl2pnml.core.payloads import MISSION
 
 CONTROL = ("B", "A", "MTX", "OK", "FAIL", "ABORTED")
 #: A structure's slot place: ``T1_B``.
