@@ -38,11 +38,13 @@ def test_every_example_is_certified_and_the_certificate_checks(mission):
 
 def test_a_net_one_arc_away_from_its_certificate_is_refused_naming_the_instance():
     """Every arc of the paper's mission removed in turn: the checker refuses each net."""
+    from mcl2pnml.certify.templates import current
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    proofs = current()
     for arc in net.arcs:
         mutant = Net(net.name, net.places, net.transitions,
                      tuple(a for a in net.arcs if a != arc), net.initial)
-        problems = check(mutant, cert)
+        problems = check(mutant, cert, proofs)
         assert problems, arc
         owner = arc.target if arc.target in net.transition_index else arc.source
         assert any(f"'{owner.rsplit('.', 1)[0]}" in p for p in problems) or \
