@@ -19,9 +19,10 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     templates = sorted(n for n in names if n.startswith("mcl2pnml/templates/"))
     shipped = sorted(f"mcl2pnml/templates/{p.name}" for p in (ROOT / "templates").iterdir()
-                     if p.suffix in (".py", ".pnt"))
+                     if p.suffix in (".py", ".pnt") or p.name == "proofs.json")
     assert templates == shipped
     assert any(n.startswith("analysis/") for n in names)
+    assert "mcl2pnml/certify/checker.py" in names
     assert "mcl2pnml/io/pnml/ptnet.rng" in names   # our PNML schema: validate needs it
     assert any(n.endswith("entry_points.txt") for n in names)
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
@@ -43,3 +44,8 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
                          capture_output=True, text=True, cwd=tmp_path, timeout=60,
                          env={**env, "MCL2PNML_PNML_GRAMMAR": "none"})
     assert out.returncode == 0 and "(mcl2pnml's ISO/IEC 15909-2 schema)" in out.stdout, out.stderr
+    # the installed copy certifies from its own stored proofs
+    out = subprocess.run([str(target / "bin" / "mcl2pnml"), "certify",
+                          str(ROOT / "examples" / "sauce.mcl"), "-o", str(tmp_path / "s.json")],
+                         capture_output=True, text=True, cwd=tmp_path, timeout=60, env=env)
+    assert out.returncode == 0 and "certified from its parts" in out.stdout, out.stderr
