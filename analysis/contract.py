@@ -134,8 +134,7 @@ def check(net: Net, max_states: int = 100_000) -> Verdict:
         space = _explore(net, {**rest, **extra}, max_states)
         explored += space.states
         st, m = space.structure, space.markings[0]
-        fires = [t for j, t in enumerate(st.transitions)
-                 if all(m[p] >= w for arcs in (st.pre[j], st.read[j]) for p, w in arcs.items())]
+        fires = [t for j, t in enumerate(st.transitions) if st.enabled(m, j)]
         if fires:
             breaches.append(Breach(Clause.IDLE, label, (), _marked(space, 0),
                                    f"{', '.join(fires)} can fire though the component was "

@@ -455,12 +455,9 @@ def judge(net: Net, prop: Property, transitions: Iterable[str]) -> Shown | None:
         if tid not in index:
             raise ValueError(f"'{tid}' is no transition of '{net.name}'")
         j = index[tid]
-        if any(m[p] < w for arcs in (s.pre[j], s.read[j]) for p, w in arcs.items()):
+        if not s.enabled(m, j):
             raise ValueError(f"'{tid}' is not enabled after {k - 1} firings")
-        for p, w in s.pre[j].items():
-            m[p] -= w
-        for p, w in s.post[j].items():
-            m[p] += w
+        s.fire(m, j)
         obs = step(prop, obs, *read())
         if not pending(prop, obs):
             open_since = None
@@ -473,8 +470,7 @@ def judge(net: Net, prop: Property, transitions: Iterable[str]) -> Shown | None:
         seen[state] = k    # the latest visit: the shortest cycle back to it
     if obs is BAD:
         return Shown(Shape.PREFIX, k)
-    dead = not any(all(m[p] >= w for arcs in (s.pre[j], s.read[j]) for p, w in arcs.items())
-                   for j in range(len(s.transitions)))
+    dead = not any(s.enabled(m, j) for j in range(len(s.transitions)))
     if dead and pending(prop, obs):
         return Shown(Shape.FINITE, k)
     return None

@@ -205,18 +205,18 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
     s = structure(net)
     known = [(text, pred) for text, pred in atoms(primitives, callables)
              if places_of(pred) <= net.place_index.keys()]
-    marking = dict(net.initial.items())
-    true_now = {text for text, pred in known if holds(pred, marking)}
+    m = list(s.initial_vector())
+
+    def marking() -> dict[str, int]:
+        return {s.places[k]: n for k, n in enumerate(m) if n}
+
+    true_now = {text for text, pred in known if holds(pred, marking())}
     env: dict[str, dict[str, Any]] = {MISSION: {}}
     kinds, raw, changes = [], [], []
     for tid in transitions:
         t = net.transition_index[tid]
         payload = read_transition(t)
-        j = s.transition_index[tid]
-        for p, w in s.pre[j].items():
-            marking[s.places[p]] = marking.get(s.places[p], 0) - w
-        for p, w in s.post[j].items():
-            marking[s.places[p]] = marking.get(s.places[p], 0) + w
+        s.fire(m, s.transition_index[tid])
         if payload.entry is not None:
             e = payload.entry
             scope = env.get(e.scope, {})
@@ -236,14 +236,15 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
             kind, text = StepKind.INTERNAL, ""
         acts = tuple((a.kind, a.primitive, tuple(x.evaluate(env.get(a.scope, {})) for x in a.args))
                      for a in payload.actions)
-        now = {text_ for text_, pred in known if holds(pred, marking)}
+        here = marking()
+        now = {text_ for text_, pred in known if holds(pred, here)}
         changes.append(tuple([f"+{a}" for a, _ in known if a in now - true_now]
                              + [f"-{a}" for a, _ in known if a in true_now - now]))
         true_now = now
         kinds.append(kind)
         raw.append((tid, kind, text, acts, payload.event))
     times, departs, why_not = schedule(net, transitions, kinds, loop)
-    script, no_script = _script(raw, kinds)
+    script, no_script = _script(raw)
     why_not = no_script or why_not
     steps = []
     for n, ((tid, kind, text, acts, ev), change) in enumerate(zip(raw, changes), 1):
@@ -279,12 +280,9 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
     timed = {j: Fraction(str(net.transitions[j].timing.earliest))
              for j in range(len(s.transitions)) if net.transitions[j].timing is not None}
 
-    def enabled(j: int) -> bool:
-        return all(m[p] >= w for arcs in (s.pre[j], s.read[j]) for p, w in arcs.items())
-
     # stimulus 0 is the start; each report and time-out is the next one
     stimulus_of = []                       # per firing: the stimulus it happens in
-    set_at = {j: 0 for j in timed if enabled(j)}   # running timers: when each was set
+    set_at = {j: 0 for j in timed if s.enabled(m, j)}   # running timers: when each was set
     fixed: list[tuple[int, int, Fraction]] = []    # (stimulus, timer set at, seconds)
     before: list[tuple[int, int, Fraction]] = []   # stimulus must precede that timer
     # what the engines do at once, before time passes: every step of the supervisor, and the
@@ -295,7 +293,7 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
     for n, (tid, kind) in enumerate(zip(transitions, kinds), 1):
         j = s.transition_index[tid]
         if kind in (StepKind.REPORT, StepKind.TIMEOUT):
-            waiting = next((k for k in urgent if enabled(k)), None)
+            waiting = next((k for k in urgent if s.enabled(m, k)), None)
             if waiting is not None and departs is None:
                 what = "a report" if kind is StepKind.REPORT else "a time-out"
                 departs = (f"at step {n} {what} comes while {s.transitions[waiting]} can still "
@@ -307,12 +305,9 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
         if n - 1 == loop:
             at_loop = dict(set_at)
         stimulus_of.append(current)
-        for p, w in s.pre[j].items():
-            m[p] -= w
-        for p, w in s.post[j].items():
-            m[p] += w
+        s.fire(m, j)
         for k in timed:    # a timer is set when its time-out becomes enabled, dropped when not
-            if enabled(k):
+            if s.enabled(m, k):
                 set_at.setdefault(k, current)
             else:
                 set_at.pop(k, None)
@@ -354,7 +349,7 @@ def _event_kind(t) -> EventKind | None:
 
 # -- the vehicle script --------------------------------------------------------------------------
 
-def _script(raw, kinds) -> tuple[dict[str, list[tuple[int, int, EventKind | None]]], str | None]:
+def _script(raw) -> tuple[dict[str, list[tuple[int, int, EventKind | None]]], str | None]:
     """Per primitive, each enabling's (firing of the enable, firing of its reply or -1,
     the reply); or why no script gives this run."""
     enablings: dict[str, list[list[Any]]] = {}

@@ -105,6 +105,18 @@ class Structure:
     def initial_vector(self) -> tuple[int, ...]:
         return tuple(self.net.initial[p] for p in self.places)
 
+    def enabled(self, m, j: int) -> bool:
+        """Whether transition ``j`` may fire in marking ``m`` (token counts by place index):
+        every place it consumes from or reads holds the arc's weight."""
+        return all(m[p] >= w for arcs in (self.pre[j], self.read[j]) for p, w in arcs.items())
+
+    def fire(self, m: list[int], j: int) -> None:
+        """Fire transition ``j`` in marking ``m``, in place (``m`` a list of counts)."""
+        for p, w in self.pre[j].items():
+            m[p] -= w
+        for p, w in self.post[j].items():
+            m[p] += w
+
     def names(self, indices) -> list[str]:
         return [self.places[i] for i in sorted(indices)]
 
