@@ -77,8 +77,8 @@ def _user_templates_proven() -> None:
 
     from mcl2pnml.language.library import ENV
     if os.environ.get(ENV):
-        from mcl2pnml.certify.templates import proven
-        proven()
+        from mcl2pnml.certify.templates import current
+        current()
 
 
 def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,
@@ -262,14 +262,16 @@ def certify_file(mission: str | Path, abort_pending: bool = False
     checker finds wrong with the pair (nothing: it holds)."""
     from mcl2pnml.certify.certificate import certify
     from mcl2pnml.certify.checker import check
+    from mcl2pnml.certify.templates import current
     from mcl2pnml.core.payloads import MissionPlace
     checked = check_file(mission)
     net = compile_checked(checked)
     if abort_pending:
         net = net.with_initial({**net.initial, MissionPlace.A.id: 1})
-    cert = certify(checked, net_name=net.name, abort_pending=abort_pending)
+    proofs = current()      # read once, for the certificate and its check
+    cert = certify(checked, net_name=net.name, abort_pending=abort_pending, proofs=proofs)
     # checked as it will be read back: plain JSON
-    return cert, net, check(net, json.loads(json.dumps(cert)))
+    return cert, net, check(net, json.loads(json.dumps(cert)), proofs)
 
 
 def load_certificate(path: str | Path) -> dict[str, Any]:

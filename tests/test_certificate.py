@@ -215,8 +215,9 @@ def _judged(name: str, arc) -> tuple[bool, bool]:
     checked = pipeline.check_source(ALL_TEMPLATES, "all.mcl")
     net = compile_checked(checked, lib)
     try:
-        cert = certify(checked, lib)
-        certified = check(net, json.loads(json.dumps(cert)), current(lib)) == []
+        proofs = current(lib)
+        cert = certify(checked, lib, proofs=proofs)
+        certified = check(net, json.loads(json.dumps(cert)), proofs) == []
     except BrokenTemplate:
         certified = False
     try:

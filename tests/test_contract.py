@@ -21,17 +21,20 @@ def test_every_template_keeps_the_contract_with_its_children_reduced(name):
     assert verdict.markings >= 4    # rest, rest + A, and two starts, each explored
 
 
-def reduced(*drop: str, extra=()) -> Net:
+def reduced(*drop: str, extra=(), places=(), transitions=()) -> Net:
     """The reduced task (Fig. 3) without the arcs ``drop`` names ("t2:OK" is t2 -> OK),
-    with ``extra`` arcs added: a component made to break a clause."""
+    with ``extra`` arcs and the new ``places`` and ``transitions`` they join added: a
+    component made to break a clause."""
     net = LIBRARY.reduced.net
     kept = tuple(a for a in net.arcs if f"{a.source}:{a.target}" not in drop
                  and f"{a.target}:{a.source}" not in drop)
     b = NetBuilder("broken")
     for p in net.places:
         b.place(p.id, net.initial[p.id], interface=p.interface)
-    for t in net.transitions:
-        b.transition(t.id)
+    for p in places:
+        b.place(p)
+    for t in (*(t.id for t in net.transitions), *transitions):
+        b.transition(t)
     for a in kept:
         b.arc(a.source, a.target)
     for source, target in extra:
@@ -62,19 +65,9 @@ def test_each_clause_broken_is_said_with_its_run(net, clause, start, why):
 def test_a_component_that_can_run_for_ever_breaks_always_ends():
     """The reduced task with a way into a loop it never leaves (EXE -> trap -> LOOP, and
     spin: LOOP -> LOOP): no dead marking there, and no end either."""
-    net = LIBRARY.reduced.net
-    b = NetBuilder("loops")
-    for p in net.places:
-        b.place(p.id, net.initial[p.id], interface=p.interface)
-    b.place("LOOP")
-    for t in (*[t.id for t in net.transitions], "trap", "spin"):
-        b.transition(t)
-    for a in net.arcs:
-        b.arc(a.source, a.target)
-    for source, target in (("EXE", "trap"), ("trap", "LOOP"), ("LOOP", "spin"),
-                           ("spin", "LOOP")):
-        b.arc(source, target)
-    verdict = check(b.build())
+    verdict = check(reduced(extra=[("EXE", "trap"), ("trap", "LOOP"), ("LOOP", "spin"),
+                                   ("spin", "LOOP")], places=["LOOP"],
+                            transitions=["trap", "spin"]))
     [breach] = [br for br in verdict.breaches if br.start == "rest + B"]
     assert breach.clause is Clause.ALWAYS_ENDS and breach.path == ("t1", "trap")
 
@@ -90,19 +83,8 @@ def test_a_net_without_the_control_interface_is_refused_naming_what_lacks():
 def test_a_result_given_before_the_rest_is_restored_breaks_result_last():
     """t2 marks OK, and only a later step gives MTX back: a caller taking OK at once could
     start the component while it still holds its mutex (the dead markings are all fine)."""
-    net = LIBRARY.reduced.net
-    b = NetBuilder("late")
-    for p in net.places:
-        b.place(p.id, net.initial[p.id], interface=p.interface)
-    b.place("HOLD")
-    for t in (*[t.id for t in net.transitions], "t2b"):
-        b.transition(t)
-    for a in net.arcs:
-        if (a.source, a.target) != ("t2", "MTX"):
-            b.arc(a.source, a.target)
-    for source, target in (("t2", "HOLD"), ("HOLD", "t2b"), ("t2b", "MTX")):
-        b.arc(source, target)
-    verdict = check(b.build())
+    verdict = check(reduced("t2:MTX", extra=[("t2", "HOLD"), ("HOLD", "t2b"), ("t2b", "MTX")],
+                            places=["HOLD"], transitions=["t2b"]))
     [breach] = [br for br in verdict.breaches if br.start == "rest + B"]
     assert breach.clause is Clause.RESULT_LAST and breach.path == ("t1", "t2")
     assert "MTX, HOLD is not back at rest" in breach.why

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from mcl2pnml.certify.templates import local_digest, proven
+from mcl2pnml.certify.templates import current
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE
 from mcl2pnml.language.functional import (FCall, function_expression, instances,
@@ -43,17 +43,21 @@ FORMAT = 1
 
 
 def certify(checked, lib: Library | None = None, net_name: str | None = None,
-            abort_pending: bool = False) -> dict[str, Any]:
+            abort_pending: bool = False, proofs: dict[str, dict] | None = None
+            ) -> dict[str, Any]:
     """The certificate of a checked mission (:class:`mcl2pnml.language.checker.Checked`),
     started by ``mission.B`` (and, ``abort_pending``, with ``mission.A`` marked too: the
-    abort racing every step, as the analysis proves that an aborted mission ends)."""
+    abort racing every step, as the analysis proves that an aborted mission ends).
+    ``proofs``: the library's (:func:`mcl2pnml.certify.templates.current`), if already
+    read."""
     lib = lib or default_library()
-    proofs = proven(lib)
+    proofs = proofs if proofs is not None else current(lib)
     calls: dict[str, int] = {}
-    trees = {MISSION: _tree(mission_expression(checked.mission), MISSION, "", lib, calls)}
+    trees = {MISSION: _tree(mission_expression(checked.mission), MISSION, "", lib, proofs,
+                            calls)}
     for name in checked.function_order:
         trees[name] = _tree(function_expression(checked.functions[name]), name, name, lib,
-                            calls)
+                            proofs, calls)
     tasks = {}
     for name, task in checked.tasks.items():
         pattern = checked.patterns[name].name
@@ -62,15 +66,15 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
                        "primitives": [p.name for p in task.primitives],
                        "slots": list(checked.patterns[name].primitives),
                        "timeout": None if task.timeout is None else task.timeout.value,
-                       "proof": proofs[subject].digest,
-                       "local": local_digest(lib, subject)}
+                       "proof": proofs[subject]["digest"],
+                       "local": proofs[subject]["local"]}
     used = sorted({p for t in tasks.values() for p in t["primitives"]})
     return {
         "format": FORMAT,
         "mission": net_name or checked.program.file,
         "rules": ["task", "call", "structure", "function", "mission"],
-        "proofs": {name: p.digest for name, p in sorted(proofs.items())},
-        "primitives": {p: {"local": local_digest(lib, "primitive")} for p in used},
+        "proofs": {name: p["digest"] for name, p in sorted(proofs.items()) if "digest" in p},
+        "primitives": {p: {"local": proofs["primitive"]["local"]} for p in used},
         "tasks": tasks,
         "functions": list(checked.function_order),
         "trees": trees,
@@ -97,10 +101,10 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
     }
 
 
-def _tree(root, root_name: str, scope: str, lib: Library, calls: dict[str, int]) -> list:
+def _tree(root, root_name: str, scope: str, lib: Library, proofs: dict[str, dict],
+          calls: dict[str, int]) -> list:
     """The instances of one tree in pre-order: name, rule, what it uses, its parent."""
     out = []
-    digests: dict[str, str] = {}      # a template's own net is the same at every instance
     for inst in instances(root, root_name, scope):
         if isinstance(inst.node, FCall):
             calls[inst.node.name] = calls.get(inst.node.name, 0) + 1
@@ -110,7 +114,5 @@ def _tree(root, root_name: str, scope: str, lib: Library, calls: dict[str, int])
             template = lib.get(STRUCTURE_TEMPLATE[inst.node.kind])
             out.append({"instance": inst.name, "rule": "structure", "template": template.name,
                         "slots": list(template.children[:len(inst.node.children)]),
-                        "local": digests.get(template.name) or digests.setdefault(
-                            template.name, local_digest(lib, template.name)),
-                        "parent": inst.parent})
+                        "local": proofs[template.name]["local"], "parent": inst.parent})
     return out

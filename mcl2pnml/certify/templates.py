@@ -226,29 +226,15 @@ def stored(folder: Path | None = None) -> dict[str, dict]:
         return {}
 
 
-def proven(lib: Library | None = None) -> dict[str, Proof]:
-    """Every subject's proof: the stored one where the digest matches, else checked now
-    (a template that breaks the contract is refused)."""
+def current(lib: Library | None = None, known: dict[str, dict] | None = None
+            ) -> dict[str, dict]:
+    """The proofs of the library in use, as the certificate and its checker read them: the
+    ``known`` ones (default: the stored ones) where the digest matches, every other subject
+    (a user's template, an edited one) proven now, and every instance's own digest
+    computed from the library (:class:`BrokenTemplate` for a subject that breaks the
+    contract)."""
     lib = lib or default_library()
-    known = stored()
-    out = {}
-    for name, kind, net, source in subjects(lib):
-        d = digest(net)
-        entry = known.get(name)
-        if entry is not None and entry.get("digest") == d:
-            out[name] = Proof(name, kind, d, entry.get("markings", 0))
-        else:
-            out[name] = prove(name, kind, net, source)
-    return out
-
-
-def current(lib: Library | None = None) -> dict[str, dict]:
-    """The proofs of the library in use, as the checker reads them: the stored ones where
-    the digest matches, every other subject (a user's template, an edited one) proven now,
-    and every instance's own digest computed from the library (:class:`BrokenTemplate`
-    for a subject that breaks the contract)."""
-    lib = lib or default_library()
-    known = stored()
+    known = stored() if known is None else known
     out: dict[str, dict] = {}
     for name, kind, net, source in subjects(lib):
         d = digest(net)
@@ -256,6 +242,7 @@ def current(lib: Library | None = None) -> dict[str, dict]:
         if entry is None or entry.get("digest") != d:
             entry = prove(name, kind, net, source).as_json()
         out[name] = {**entry, **({"local": local_digest(lib, name)} if kind != "joint" else {})}
+    # the instances a compiled mission is made of, besides the proven components
     out["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
     for k in range(MAX_LOCKS + 1):
         out[f"{CALL_SITE}/{k}"] = {"kind": "joint",
@@ -266,14 +253,7 @@ def current(lib: Library | None = None) -> dict[str, dict]:
 def update(folder: Path | None = None) -> Path:
     """Prove every subject of the package's library now and store the proofs."""
     lib = Library.load([folder or template_dirs()[0]])
-    proofs = {name: {**prove(name, kind, net, source).as_json(), **(
-                  {"local": local_digest(lib, name)} if kind != "joint" else {})}
-              for name, kind, net, source in subjects(lib)}
-    # the instances a compiled mission is made of, besides the proven components
-    proofs["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
-    for k in range(MAX_LOCKS + 1):
-        proofs[f"{CALL_SITE}/{k}"] = {"kind": "joint", "local":
-                                      local_digest(lib, f"{CALL_SITE}/{k}")}
+    proofs = current(lib, known={})     # nothing taken as known: every subject proven now
     path = (folder or template_dirs()[0]) / PROOFS
     atomic_write_text(path, json.dumps({
         "about": "each template checked against the interface contract with its children "
