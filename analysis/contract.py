@@ -28,7 +28,17 @@ marked. Then, for the component started from rest:
   (no livelock, no deadlock);
 * ``result last``: whenever a result is marked, every other place is
   already at rest, so a caller may take the result and start the component
-  again at once.
+  again at once;
+* ``abortable``: started with an abort pending, it can end ABORTED and in
+  each result it can give without one, and in no other: what the reduced
+  model does, so that the reduced model with the same results stands for it.
+
+The results a component can give from rest + B (a subset of OK and FAIL)
+are its **results**: the reduced model restricted to them (:func:`restricted`)
+behaves toward a caller as the component does, both in what it can do and
+in what it can still do, which is what an end always being reachable
+depends on (a loop whose condition can never fail never ends, though every
+part keeps the rest of the contract).
 
 A component that meets them, fused with its caller on B, A, OK, FAIL and
 ABORTED, behaves toward the caller as the reduced model does (the paper's
@@ -72,6 +82,11 @@ class Clause(enum.Enum):
     which a check of the dead markings alone misses: a task that gives its result while
     its primitive still holds a request would get a second one)."""
 
+    ABORTABLE = "abortable"
+    """Started with an abort pending, it can end ABORTED and in every result it can give
+    without one, and in no other: the reduced model with the same results stands for it
+    (a structure above may have to abort it, or wait for a result it can give)."""
+
 
 @dataclass(frozen=True)
 class Breach:
@@ -97,6 +112,9 @@ class Verdict:
 
     breaches: tuple[Breach, ...]
     markings: int
+    #: the results it can end in from rest + B (OK, FAIL), and from rest + B + A
+    results: frozenset[str] = frozenset()
+    results_aborted: frozenset[str] = frozenset()
 
     @property
     def kept(self) -> bool:
@@ -139,12 +157,54 @@ def check(net: Net, max_states: int = 100_000) -> Verdict:
             breaches.append(Breach(Clause.IDLE, label, (), _marked(space, 0),
                                    f"{', '.join(fires)} can fire though the component was "
                                    "not started"))
+    ends: list[frozenset[str]] = []
     for label, extra in (("rest + B", {role[START]: 1}),
                          ("rest + B + A", {role[START]: 1, role[ABORT]: 1})):
         space = _explore(net, {**rest, **extra}, max_states)
         explored += space.states
-        breaches += _started(space, role, rest, label, aborted=role[ABORT] in extra)
-    return Verdict(tuple(breaches), explored)
+        found, got = _started(space, role, rest, label, aborted=role[ABORT] in extra)
+        breaches += found
+        ends.append(got)
+    plain, aborted = ends
+    if not breaches and aborted != plain | {"ABORTED"}:
+        breaches.append(Breach(
+            Clause.ABORTABLE, "rest + B + A", (), (),
+            f"with an abort pending it ends {_names(aborted)}, without one "
+            f"{_names(plain)}: not these and ABORTED, as the reduced model would"))
+    return Verdict(tuple(breaches), explored, plain, aborted)
+
+
+def _names(results) -> str:
+    return " or ".join(r for r in RESULTS if r in results) or "never"
+
+
+def restricted(net: Net, results, stuck: bool = False) -> Net:
+    """The reduced model ``net`` (Fig. 3) giving only ``results`` of OK and FAIL when not
+    aborted: its transitions into the other results' places removed, with their arcs;
+    ``stuck``: besides, a running model may stray into a place it never leaves (``STUCK``,
+    looping on itself) until it is aborted: a child that may run for ever."""
+    from mcl2pnml.core.net import Arc, Place, Transition
+    role = roles(net)
+    gone = {a.source for a in net.arcs
+            if a.target in {role[r] for r in RESULTS[:2] if r not in results}}
+    places, arcs = list(net.places), [a for a in net.arcs
+                                      if a.source not in gone and a.target not in gone]
+    transitions = [t for t in net.transitions if t.id not in gone]
+    if stuck:
+        # the abort of a running model (Fig. 3's t4: EXE, A -> ABORTED, MTX) shows where
+        # it runs, and what an abort gives back
+        pre = {t.id: [a for a in net.arcs if a.target == t.id] for t in net.transitions}
+        abort = next(t.id for t in net.transitions
+                     if {a.source for a in pre[t.id]} & {role[ABORT]}
+                     and not {a.source for a in pre[t.id]} & {role[START]})
+        running = [a.source for a in pre[abort] if a.source != role[ABORT]]
+        places.append(Place("STUCK"))
+        transitions += [Transition("stray"), Transition("spin"), Transition("stop")]
+        arcs += [Arc(p, "stray") for p in running] + [
+            Arc("stray", "STUCK"), Arc("STUCK", "spin"), Arc("spin", "STUCK"),
+            Arc("STUCK", "stop"), Arc(role[ABORT], "stop")]
+        arcs += [Arc("stop", a.target) for a in net.arcs if a.source == abort]
+    return Net(net.name, tuple(places), tuple(transitions), tuple(arcs), net.initial)
 
 
 def _explore(net: Net, marking: dict[str, int], max_states: int):
@@ -162,7 +222,8 @@ def _marked(space, node: int) -> tuple[str, ...]:
 
 
 def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
-             aborted: bool) -> list[Breach]:
+             aborted: bool) -> tuple[list[Breach], frozenset[str]]:
+    """The breaches found from one start, and the results its ends give."""
     s = space.structure
     index = s.place_index
     out: list[Breach] = []
@@ -174,7 +235,7 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
         node = next(n for n in range(space.states) if max(space.markings[n]) > 1)
         twice = [s.places[k] for k, n in enumerate(space.markings[node]) if n > 1]
         breach(Clause.SAFE, node, f"{', '.join(twice)} holds two tokens or more")
-        return out       # the other clauses are read on a safe net's markings
+        return out, frozenset()   # the other clauses are read on a safe net's markings
     results = [index[role[r]] for r in RESULTS]
     control = {index[role[START]], index[role[ABORT]], *results}
     ends = []
@@ -215,4 +276,5 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
             breach(Clause.ALWAYS_ENDS, stuck, "no end can be reached from here")
     elif not space.terminal:
         breach(Clause.ALWAYS_ENDS, 0, "the component never ends")
-    return out
+    return out, frozenset(RESULTS[next(k for k, r in enumerate(results)
+                                       if space.markings[n][r])] for n in ends)

@@ -394,8 +394,10 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
     Every task pattern and control structure was proven once against the
     interface contract (docs/ARCHITECTURE.md, mcl2pnml.certify); the
     certificate says, instance by instance, which proof and which rule make
-    the mission 1-safe, always able to end, and reusable, and is re-checked
-    at once against the compiled net. Exit status 1: it does not hold.
+    the mission 1-safe, always able to end, and reusable, and which ends it
+    has, and is re-checked at once against the compiled net. Exit status 1:
+    it does not hold; 2: the mission cannot be certified (a loop that can
+    never end: the message points at it).
     """
     if net_file is not None:
         if output is not None:
@@ -421,8 +423,10 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
         for p in problems:
             click.echo(f"  {p}")
         return 1
+    tasks, functions = len(cert["tasks"]), len(cert["functions"])
     click.echo(f"{net.name}: certified from its parts ({instances} instances, "
-               f"{len(cert['tasks'])} tasks, {len(cert['functions'])} functions): 1-safe, an "
+               f"{tasks} task{'s' * (tasks != 1)}, {functions} function"
+               f"{'s' * (functions != 1)}): 1-safe, an "
                "end always reachable, reusable; every end one of "
                + ", ".join(cert["conclusion"]["ends"]))
     return 0

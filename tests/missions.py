@@ -24,7 +24,8 @@ def task_decl(draw, name: str) -> str:
     return f"task {name}(x) = {body}{timeout};"
 
 
-def statement(depth: int, callees: list[str], width: int = 3, tasks: list[str] | None = None):
+def statement(depth: int, callees: list[str], width: int = 3, tasks: list[str] | None = None,
+              any_condition: bool = False):
     """Statements nested ``depth`` structures deep, blocks and branches at most ``width`` long.
 
     A loop's condition calls one of ``tasks`` (default: any callee). A task
@@ -32,6 +33,7 @@ def statement(depth: int, callees: list[str], width: int = 3, tasks: list[str] |
     once, every time (``function F() { }``), and a loop on it would never
     end: a livelock that the analysis rightly reports (not reusable) and
     that both engines stop as a zero-time loop, but not a mission to prove.
+    ``any_condition``: a loop's condition may be any structure, such missions too.
     """
     tasks = tasks or callees
     arg = st.sampled_from(["1", "2.5", "(1, 2)", "K"])
@@ -39,7 +41,7 @@ def statement(depth: int, callees: list[str], width: int = 3, tasks: list[str] |
     condition = st.builds(lambda n, a: f"{n}({a})", st.sampled_from(tasks), arg)
     if depth == 0:
         return call
-    inner = statement(depth - 1, callees, width, tasks)
+    inner = statement(depth - 1, callees, width, tasks, any_condition)
     block = st.lists(inner, min_size=0, max_size=width).map(lambda b: "{ " + " ".join(b) + " }")
     nonempty = st.lists(inner, min_size=1, max_size=width).map(lambda b: "{ " + " ".join(b) + " }")
     structure = st.one_of(call.map(lambda c: c[:-1]), nonempty)
@@ -50,20 +52,23 @@ def statement(depth: int, callees: list[str], width: int = 3, tasks: list[str] |
         st.tuples(structure, structure).map(lambda s: f"monitor({s[0]}, {s[1]});"),
         st.tuples(structure, nonempty, st.none() | block).map(
             lambda s: f"if ({s[0]}) then {s[1]}" + (f" else {s[2]}" if s[2] else "")),
-        # a loop's condition is a task's call, so that every loop may end
-        st.tuples(condition, nonempty).map(lambda s: f"while ({s[0]}) {s[1]}"),
+        # a loop's condition is a task's call, so that every loop may end (unless any)
+        st.tuples(structure if any_condition else condition, nonempty).map(
+            lambda s: f"while ({s[0]}) {s[1]}"),
     )
 
 
 @st.composite
-def missions(draw, depth: int = 2, width: int = 3, function_depth: int | None = None) -> str:
+def missions(draw, depth: int = 2, width: int = 3, function_depth: int | None = None,
+             any_condition: bool = False) -> str:
     """A whole mission: up to three tasks, up to two functions (a later one may
     call an earlier one), and a mission body ``depth`` structures deep.
 
     Functions nest ``function_depth`` structures deep (by default one level
     less than the mission, so that a call of a function inside a structure
     reaches as deep as the mission's own structures). ``width`` bounds blocks and parallel branches: the state
-    space grows with it far faster than with ``depth``.
+    space grows with it far faster than with ``depth``. ``any_condition``: loops on any
+    structure, some of which never end.
     """
     lines = ["const K = (0.5, -1);"]
     lines += [f"primitive {p}(v);" for p in PRIMITIVES]
@@ -72,11 +77,12 @@ def missions(draw, depth: int = 2, width: int = 3, function_depth: int | None = 
     callees = list(tasks)
     fdepth = depth - 1 if function_depth is None else function_depth
     for k in range(draw(st.integers(0, 2))):
-        body = draw(st.lists(statement(fdepth, callees, width, tasks), min_size=1,
-                             max_size=width))
+        body = draw(st.lists(statement(fdepth, callees, width, tasks, any_condition),
+                             min_size=1, max_size=width))
         lines.append(f"function F{k}(x) {{ {' '.join(body)} }}")
         callees.append(f"F{k}")
-    body = draw(st.lists(statement(depth, callees, width, tasks), min_size=1, max_size=width))
+    body = draw(st.lists(statement(depth, callees, width, tasks, any_condition), min_size=1,
+                         max_size=width))
     lines.append("mission { " + " ".join(body) + " }")
     return "\n".join(lines) + "\n"
 
@@ -126,4 +132,20 @@ def generated_properties(net, seed: int, count: int = 3) -> str:
         text = rng.choice(PATTERNS).format(k=rng.randint(1, 3), **e) + \
             rng.choice(SCOPES).format(**e)
         lines.append(f"property G{k}: {text};")
+    return "\n".join(lines) + "\n"
+
+
+@st.composite
+def shaped_missions(draw, depth: int = 3) -> str:
+    """A small mission on callees of every shape a certificate tells apart: a task that
+    ends OK or FAIL, one that can only fail (KeepGoal with no time-out), a function that
+    can only end OK (an empty body), with loops on any structure: many never end, or may
+    not, and each is a verdict for the certificate to get right."""
+    lines = ["const K = (0.5, -1);", "primitive Pa(v);", "primitive Pb(v);",
+             "task A(x) = AchieveGoal(Pa(x)) timeout 3;",
+             "task F(x) = KeepGoal(Pb(x));",
+             "function E(x) { { } }"]
+    body = draw(st.lists(statement(depth, ["A", "F", "E"], 2, ["A", "F", "E"],
+                                   any_condition=True), min_size=1, max_size=2))
+    lines.append("mission { " + " ".join(body) + " }")
     return "\n".join(lines) + "\n"

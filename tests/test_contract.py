@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from analysis.contract import Clause, NoInterface, check, roles
+from analysis.contract import Clause, NoInterface, check, restricted, roles
 from mcl2pnml.core.net import Net, NetBuilder
 from mcl2pnml.language.library import default_library
 from mcl2pnml.language.template_parser import TemplateKind
@@ -106,3 +106,29 @@ def test_removing_an_arc_of_a_template_breaks_the_contract_but_for_five_guards()
     assert kept == ["AchieveGoal: OFF -> t01", "KeepGoal: OFF -> t01",
                     "KeepTwoGoals: P_OFF -> t01", "KeepTwoGoals: Q_OFF -> t01",
                     "null: MTX -> t1"]
+
+
+def test_a_component_that_ignores_aborts_breaks_abortable():
+    """The reduced task without its two aborts (t4, t5): with an abort pending it still
+    ends OK or FAIL, leaving A, but never ABORTED; a structure above could wait for ever."""
+    net = LIBRARY.reduced.net
+    net = Net("deaf", net.places, tuple(t for t in net.transitions if t.id not in ("t4", "t5")),
+              tuple(a for a in net.arcs if "t4" not in (a.source, a.target)
+                    and "t5" not in (a.source, a.target)), net.initial)
+    verdict = check(net)
+    assert [b.clause for b in verdict.breaches] == [Clause.ABORTABLE]
+    assert "with an abort pending it ends OK or FAIL, without one OK or FAIL" in \
+        verdict.breaches[0].why
+
+
+@pytest.mark.parametrize("results,stuck", [(r, s) for r in ((), ("OK",), ("FAIL",),
+                                                            ("OK", "FAIL"))
+                                           for s in (False, True) if r or s])
+def test_the_restricted_reduced_model_has_exactly_its_signature(results, stuck):
+    """The reduced task cut down to a signature (analysis.contract.restricted) gives those
+    results, may run for ever exactly when asked to, and keeps the rest of the contract:
+    what the certificate's results tables rest on."""
+    from mcl2pnml.certify.templates import classify
+    verdict = check(restricted(LIBRARY.reduced.net, frozenset(results), stuck))
+    assert classify(verdict) == {"ends": list(results), "stuck": stuck}
+    assert verdict.results_aborted == {*results, "ABORTED"}

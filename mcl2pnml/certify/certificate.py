@@ -11,16 +11,22 @@ interface contract of :mod:`analysis.contract`, its children reduced):
   primitives' locks keeps the contract if the callee does (the joint's
   proof; the shared-callee proof where several sites call one callee);
 * **structure**: a structure whose children keep the contract keeps it: the
-  reduced model (Fig. 3) ends in any result at any time, so it allows every
-  behaviour a child that keeps the contract shows at the fusion places, and
-  the template was proven with reduced children;
+  reduced model (Fig. 3) restricted to the results a child can give
+  allows every behaviour that child shows at the fusion places, and still
+  can give each of them, and the template was proven with reduced children
+  giving every choice of results (its results table): the row of the
+  children's results says what the structure gives, or that it breaks the
+  contract (``while`` on a condition that never fails never ends), and
+  then the mission is not certified;
 * **function**: a function's body is a structure behind its gate, entered
   by call sites; functions are not recursive (each calls only functions
   declared before it), so gates are taken in one order and cannot deadlock;
 * **mission**: the root structure, started by ``mission.B``: by the
   contract, the net is 1-safe, an end is always reachable, every end is the
-  rest marking with one of ``mission.OK`` and ``mission.FAIL`` (no abort is
-  asked), and from there the mission can run again (reusable).
+  rest marking with one of the root's results (no abort is asked; each of
+  them is reached by some run), when the result is marked the rest is
+  already at rest (every primitive disabled), and from there the mission can
+  run again (reusable).
 
 :func:`certify` writes the tree of the mission (and of each function) with
 the rule and the proof used at each node, the side conditions, and the
@@ -31,7 +37,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from mcl2pnml.certify.checker import results
 from mcl2pnml.certify.templates import current
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE
 from mcl2pnml.language.functional import (FCall, function_expression, instances,
@@ -69,7 +77,7 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
                        "proof": proofs[subject]["digest"],
                        "local": proofs[subject]["local"]}
     used = sorted({p for t in tasks.values() for p in t["primitives"]})
-    return {
+    cert = {
         "format": FORMAT,
         "mission": net_name or checked.program.file,
         "rules": ["task", "call", "structure", "function", "mission"],
@@ -89,8 +97,7 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
         },
         "start": [f"{MISSION}.B", *([f"{MISSION}.A"] if abort_pending else [])],
         "conclusion": {"safe": True, "an end always reachable": True, "reusable": True,
-                       "ends": [f"{MISSION}.OK", f"{MISSION}.FAIL",
-                                *([f"{MISSION}.ABORTED"] if abort_pending else [])],
+                       "at rest when it ends": True,
                        **({"abort": f"{MISSION}.A is consumed exactly when the end is "
                                     f"{MISSION}.ABORTED, and left marked otherwise"}
                           if abort_pending else {}),
@@ -99,6 +106,52 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
                                                 "exactly when the end is ABORTED)"
                                                 if abort_pending else " with no abort asked")},
     }
+    derived, problems = results(cert, proofs)
+    root = derived.get(MISSION)
+    if not problems and root.stuck and not abort_pending:
+        origin = derived[root.origin]
+        how = ("never ends" if not origin.ends else
+               f"may end {' or '.join(origin.ends)}, or run on for ever")
+        problems = [f"the mission {how} unless it is aborted" if root.origin == MISSION else
+                    f"'{root.origin}' {how} unless it is aborted, and the mission with it"]
+    if problems:
+        name = root.origin if root and root.stuck and not abort_pending else \
+            problems[0].split("'")[1] if "'" in problems[0] else MISSION
+        raise NotCertified(f"{problems[0]}: the mission is not certified (`mcl2pnml analyze "
+                           "--state-space --explore` shows the run)", _where(checked, name))
+    for nodes in trees.values():
+        for node in nodes:
+            node.update(_signature(derived[node["instance"]]))
+    for name, task in tasks.items():
+        task.update(_signature(derived[name]))
+    ends = [f"{MISSION}.{r}" for r in root.ends]
+    cert["conclusion"] = {"ends": ends + ([f"{MISSION}.ABORTED"] if abort_pending else []),
+                          **cert["conclusion"]}
+    return cert
+
+
+def _signature(sig) -> dict[str, Any]:
+    """What the certificate says a node can do (:class:`checker.Signature`)."""
+    return {"results": list(sig.ends), **({"may run for ever": True} if sig.stuck else {})}
+
+
+class NotCertified(Mcl2PnmlError):
+    """A mission whose parts, joined as written, break the contract (a loop that can never
+    end): it has no certificate, and exploring its net shows the fault."""
+
+
+def _where(checked, name: str) -> Location:
+    """Where the instance ``name`` is written."""
+    for root, scope, expr in ((MISSION, "", mission_expression(checked.mission)),
+                              *((f, f, function_expression(checked.functions[f]))
+                                for f in checked.function_order)):
+        for inst in instances(expr, root, scope):
+            if inst.name == name:
+                pos = inst.node.pos
+                lines = checked.program.source.splitlines()
+                return Location(checked.program.file, pos.line, pos.column,
+                                lines[pos.line - 1] if 0 < pos.line <= len(lines) else None)
+    return Location(checked.program.file)
 
 
 def _tree(root, root_name: str, scope: str, lib: Library, proofs: dict[str, dict],

@@ -14,6 +14,11 @@ in one pass over its nodes and arcs:
   its primitive's) has the digest of the part proven in
   ``templates/proofs.json``: a structure's template, a task's pattern with
   or without its time-out, a primitive, a call site with its locks;
+* the results: what each node can end in (OK, FAIL; from B, no abort
+  asked), derived bottom-up from the proofs' results tables (a task's from
+  its pattern's, a call's from its callee's, a structure's from its
+  children's), every node's row kept (no loop that can never end), and the
+  conclusion's ends the root's;
 * the side conditions: functions call only functions before them (no
   recursion, so gates are taken in one order); a call site of a task takes
   exactly its primitives' locks (the renaming allows no other); a place a
@@ -28,9 +33,10 @@ differs from its certificate by one arc is refused, naming the instance.
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import Any, NamedTuple
 
-from mcl2pnml.certify.templates import CALL_SITE, current, shape_of
+from mcl2pnml.certify.templates import (CALL_SITE, SHARED_CALLEE, current, results_key,
+                                        shape_of)
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import MISSION
 
@@ -71,6 +77,18 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
         if inst is None:
             problems.append(f"'{node_id}' belongs to no instance of the certificate")
     problems += _side_conditions(cert, functions)
+    derived, faults = results(cert, proofs)
+    problems += faults
+    claimed = (cert.get("conclusion") or {}).get("ends")
+    if not faults and MISSION in derived:
+        pending = f"{MISSION}.A" in cert.get("start", ())
+        ends = [f"{MISSION}.{r}" for r in derived[MISSION].ends] + (
+            [f"{MISSION}.ABORTED"] if pending else [])
+        if derived[MISSION].stuck and not pending:
+            problems.append(f"{MISSION} may run for ever (from '{derived[MISSION].origin}'), "
+                            "and no abort is pending at the start")
+        elif claimed != ends:
+            problems.append(f"the conclusion's ends {claimed} are not the root's: {ends}")
     own_places: dict[str, list[str]] = {}
     for p in net.places:
         if owner.get(p.id):
@@ -92,6 +110,88 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
                           transitions_of.get(name, []), arcs_of.get(name, []), proofs,
                           functions, cert.get("start", [f"{MISSION}.B"]))
     return problems
+
+
+class Signature(NamedTuple):
+    """What a task, node or function can do from B with no abort asked: end in one of
+    ``ends`` (OK, FAIL), and, if ``stuck``, run for ever instead until it is aborted;
+    ``origin``: the node where running for ever comes from (its children cannot)."""
+
+    ends: tuple[str, ...]
+    stuck: bool
+    origin: str | None = None
+
+
+def results(cert: dict[str, Any], proofs: dict[str, dict]
+            ) -> tuple[dict[str, Signature], list[str]]:
+    """The signature of each task, node and function of ``cert``, derived bottom-up from
+    the proofs' results tables; and the nodes whose row is a breach (with its children
+    doing what they do, the structure breaks the contract in a way no reduced model
+    stands for). One pass over the trees, functions before their callers."""
+    out: dict[str, Signature] = {}
+    problems: list[str] = []
+
+    def row(subject: str, below: list[Signature], what: str, name: str,
+            slots=("the callee",)) -> Signature | None:
+        key = results_key([(frozenset(b.ends), b.stuck) for b in below])
+        entry = (proofs.get(subject) or {}).get("results", {}).get(key)
+        if entry is None:
+            problems.append(f"{what}: no proof of {subject} covers its children's "
+                            f"signatures {key or '(none)'}")
+            return None
+        if "ends" not in entry:
+            problems.append(f"{what}: with {_said(key, slots)}, the {subject} breaks the "
+                            f"contract ({entry.get('breach')})")
+            return None
+        stuck = bool(entry.get("stuck"))
+        origin = next((b.origin for b in below if b.stuck), name) if stuck else None
+        return Signature(tuple(entry["ends"]), stuck, origin)
+
+    for name, task in cert.get("tasks", {}).items():
+        got = row(task.get("subject"), [], f"task '{name}'", name)
+        if got is not None:
+            out[name] = got
+    calls = cert.get("calls", {})
+    trees = cert.get("trees", {})
+    for tree in (*cert.get("functions", []), MISSION):
+        nodes = trees.get(tree, [])
+        children: list[list[int]] = [[] for _ in nodes]
+        for k, node in enumerate(nodes):
+            if node.get("parent", -1) >= 0:
+                children[node["parent"]].append(k)
+        for k in range(len(nodes) - 1, -1, -1):     # children before their parent
+            node, name = nodes[k], nodes[k]["instance"]
+            if node.get("rule") == "call":
+                callee = out.get(node.get("callee"))
+                if callee is None:
+                    continue
+                got = row(CALL_SITE, [callee], f"call '{name}'", name)
+                if calls.get(node.get("callee"), 0) > 1:
+                    row(SHARED_CALLEE, [callee], f"call '{name}'", name)
+                if got is not None and got.stuck:    # the callee's origin, not the call's
+                    got = got._replace(origin=callee.origin or got.origin)
+            else:
+                below = [out.get(nodes[c]["instance"]) for c in children[k]]
+                if any(b is None for b in below):
+                    continue
+                got = row(node.get("template"), below, f"'{name}' ({node.get('template')})",
+                          name, node.get("slots", ()))
+            if got is not None:
+                out[name] = got
+    return out, problems
+
+
+def _said(key: str, slots) -> str:
+    """``OK;OK+FAIL~`` for slots T1, T2: "T1 ending only OK, T2 ending OK or FAIL or
+    running for ever"."""
+    def one(sig: str) -> str:
+        ends = [r for r in sig.rstrip("~").split("+") if r]
+        said = ("only " if len(ends) == 1 and "~" not in sig else "") + " or ".join(ends)
+        if "~" in sig:
+            said = f"{said} or running for ever" if ends else "running for ever"
+        return said
+    return ", ".join(f"{slot} ending {one(sig)}" if sig.rstrip("~") else f"{slot} {one(sig)}"
+                     for slot, sig in zip(slots, key.split(";")))
 
 
 def _owners(net: Net, parts: dict[str, Any]) -> dict[str, str | None]:

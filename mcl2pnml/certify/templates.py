@@ -24,9 +24,10 @@ import hashlib
 import json
 import sys
 from dataclasses import dataclass
+from itertools import product
 from pathlib import Path
 
-from analysis.contract import check
+from analysis.contract import Clause, check, restricted
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import Net
@@ -121,17 +122,58 @@ def local_digest(lib: Library, subject: str) -> str:
     return shape(net, slots)
 
 
+#: What a child may be known to do, from B with no abort asked: the results it can give,
+#: and whether it may also run for ever (until aborted); the reduced model restricted to
+#: that (:func:`analysis.contract.restricted`) stands for it. A child that gives no result
+#: runs for ever (a loop whose condition never fails).
+SIGNATURES = tuple((frozenset(r), stuck) for r, stuck in (
+    ((), True), (("OK",), False), (("OK",), True), (("FAIL",), False), (("FAIL",), True),
+    (("OK", "FAIL"), False), (("OK", "FAIL"), True)))
+FULL = (frozenset({"OK", "FAIL"}), False)
+
+
+def signature_text(results, stuck: bool) -> str:
+    """``OK+FAIL``; ``OK~`` (OK, or runs for ever); ``~`` (runs for ever)."""
+    return "+".join(r for r in ("OK", "FAIL") if r in results) + ("~" if stuck else "")
+
+
+def results_key(children) -> str:
+    """The key of a row of a proof's results table: each child's signature, ``OK+FAIL;OK~``."""
+    return ";".join(signature_text(r, stuck) for r, stuck in children)
+
+
+def classify(verdict) -> dict:
+    """A row of a results table from the contract's verdict: the results the component
+    gives (from B, no abort asked), and whether it may run for ever instead (the one
+    clause broken: from rest + B, an end cannot always be reached; aborted, it always
+    ends, in those results or ABORTED); else the breach that keeps any reduced model
+    from standing for it."""
+    ends = [r for r in ("OK", "FAIL") if r in verdict.results]
+    if verdict.kept:
+        return {"ends": ends, "stuck": False}
+    if all(b.clause is Clause.ALWAYS_ENDS and b.start == "rest + B"
+           for b in verdict.breaches) \
+            and verdict.results_aborted == verdict.results | {"ABORTED"}:
+        return {"ends": ends, "stuck": True}
+    return {"breach": str(verdict.breaches[0])}
+
+
 @dataclass(frozen=True)
 class Proof:
-    """A template checked against the contract: its composed net's digest and markings."""
+    """A template checked against the contract: its composed net's digest and markings,
+    and its results table: for each choice of the results its children can give (each one
+    of :data:`SIGNATURES`), the results it then gives, or the clause it then breaks (a
+    loop whose condition never fails never ends)."""
 
     template: str
     kind: str
     digest: str
     markings: int
+    results: dict
 
     def as_json(self) -> dict:
-        return {"kind": self.kind, "digest": self.digest, "markings": self.markings}
+        return {"kind": self.kind, "digest": self.digest, "markings": self.markings,
+                "results": self.results}
 
 
 class BrokenTemplate(Mcl2PnmlError):
@@ -151,17 +193,19 @@ CALL_SITE, SHARED_CALLEE = "call site", "call sites sharing a callee"
 MAX_LOCKS = 2
 
 
-def call_net(lib: Library, sites: int) -> Net:
+def call_net(lib: Library, sites: int, results: tuple | None = None) -> Net:
     """``sites`` call sites (:func:`mcl2pnml.language.compiler.call_site_net`) of one
     callee, the reduced task (Fig. 3) with its gate, taking one primitive's lock; two
     sites are the branches of a parallel structure. Any callee that keeps the contract
-    behaves toward its call sites as the reduced one does."""
+    behaves toward its call sites as the reduced one does; ``results``: the callee's
+    signature (:data:`SIGNATURES`)."""
     from mcl2pnml.core.compose import compose
     from mcl2pnml.core.net import Marking, NetBuilder, Place
     from mcl2pnml.language.compiler import call_site_net
     from mcl2pnml.language.library import at_rest
     from mcl2pnml.language.template_parser import CONTROL
-    reduced = at_rest(lib.reduced.net)
+    reduced = at_rest(lib.reduced.net if results is None
+                      else restricted(lib.reduced.net, *results))
     callee = Net("T", (*reduced.places, Place("GATE")), reduced.transitions, reduced.arcs,
                  Marking({**reduced.initial, "GATE": 1}))
     lock = NetBuilder("P")
@@ -193,28 +237,56 @@ def without_timeouts(net: Net) -> Net:
 def subjects(lib: Library) -> list[tuple[str, str, Net, str]]:
     """(name, kind, net, where it comes from) of everything proven: each component
     template composed as the paper analyses it, then the compiler's call-site joints."""
-    out = [(t.name, t.kind.value, lib.composed(t.name), t.source) for t in components(lib)]
-    # a task declared without a time-out has no t03 (the compiler removes it)
-    out += [(f"{t.name} without a time-out", t.kind.value, without_timeouts(lib.composed(t.name)),
-             t.source) for t in components(lib) if t.kind is TemplateKind.PATTERN]
+    return [(name, kind, make(None), source) for name, kind, make, _, source in _subjects(lib)]
+
+
+def _subjects(lib: Library) -> list:
+    """(name, kind, its net with the children giving given results, how many children,
+    source) of everything proven."""
+    def composed(name, timeouts=True):
+        def make(results):
+            children = None if results is None else tuple(
+                restricted(lib.reduced.net, r, stuck) for r, stuck in results)
+            net = lib.composed(name, children)
+            return net if timeouts else without_timeouts(net)
+        return make
+
+    out = []
+    for t in components(lib):
+        slots = len(t.children) if t.kind is TemplateKind.STRUCTURE else 0
+        out.append((t.name, t.kind.value, composed(t.name), slots, t.source))
+        if t.kind is TemplateKind.PATTERN:
+            # a task declared without a time-out has no t03 (the compiler removes it)
+            out.append((f"{t.name} without a time-out", t.kind.value,
+                        composed(t.name, timeouts=False), 0, t.source))
     compiler = "mcl2pnml/language/compiler.py"
-    out += [(CALL_SITE, "joint", call_net(lib, 1), compiler),
-            (SHARED_CALLEE, "joint", call_net(lib, 2), compiler)]
+    out += [(CALL_SITE, "joint", lambda r: call_net(lib, 1, r and r[0]), 1, compiler),
+            (SHARED_CALLEE, "joint", lambda r: call_net(lib, 2, r and r[0]), 1, compiler)]
     return out
 
 
-def prove(name: str, kind: str, net: Net, source: str) -> Proof:
-    """``net`` checked against the contract now; :class:`BrokenTemplate` with the first
-    breaches' runs if it breaks it."""
+def prove(name: str, kind: str, make, children: int, source: str) -> Proof:
+    """The subject checked against the contract now, its children reduced (``make(None)``),
+    then with its children giving each choice of results (``make(row)``);
+    :class:`BrokenTemplate` with the first breaches' runs if it breaks the contract."""
+    net = make(None)
     verdict = check(net)
-    if not verdict.kept:
+    # one that may run for ever until aborted (a loop with no way out, a goal kept with
+    # no time-out) keeps the rest of the contract: its signature says so, and a mission
+    # that waits on it is refused where it matters (unless an abort is pending)
+    if "breach" in classify(verdict):
         breaches = "; ".join(str(b) for b in verdict.breaches[:3])
         more = len(verdict.breaches) - 3
         raise BrokenTemplate(
             f"template '{name}' breaks the interface contract (docs/ARCHITECTURE.md, "
             f"analysis.contract) with its children reduced: {breaches}"
             + (f"; and {more} more" if more > 0 else ""), Location(source))
-    return Proof(name, kind, digest(net), verdict.markings)
+    markings, table = verdict.markings, {}
+    for row in product(SIGNATURES, repeat=children):
+        v = verdict if all(r == FULL for r in row) else check(make(row))
+        markings += v.markings if v is not verdict else 0
+        table[results_key(row)] = classify(v)
+    return Proof(name, kind, digest(net), markings, table)
 
 
 def stored(folder: Path | None = None) -> dict[str, dict]:
@@ -236,11 +308,11 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None
     lib = lib or default_library()
     known = stored() if known is None else known
     out: dict[str, dict] = {}
-    for name, kind, net, source in subjects(lib):
-        d = digest(net)
+    for name, kind, make, children, source in _subjects(lib):
+        d = digest(make(None))
         entry = known.get(name)
-        if entry is None or entry.get("digest") != d:
-            entry = prove(name, kind, net, source).as_json()
+        if entry is None or entry.get("digest") != d or "results" not in entry:
+            entry = prove(name, kind, make, children, source).as_json()
         out[name] = {**entry, **({"local": local_digest(lib, name)} if kind != "joint" else {})}
     # the instances a compiled mission is made of, besides the proven components
     out["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
@@ -268,7 +340,7 @@ def listing() -> list[str]:
     out = []
     for name, entry in sorted(stored().items()):
         if "digest" in entry:
-            out.append(f"{name:<32} {entry['kind']:<10} {entry['markings']:>4} markings  "
+            out.append(f"{name:<32} {entry['kind']:<10} {entry['markings']:>6,} markings  "
                        f"{entry['digest'][:12]}")
     return out
 

@@ -124,13 +124,15 @@ class Library:
                     for slot in t.children}
         return {}
 
-    def composed(self, name: str) -> Net:
-        """The net the paper analyses for template ``name``, from the paper's M0."""
+    def composed(self, name: str, children: tuple[Net, ...] | None = None) -> Net:
+        """The net the paper analyses for template ``name``, from the paper's M0;
+        ``children``: a structure's child in each slot (default: the reduced task)."""
         t = self.get(name)
         if t.kind is TemplateKind.PATTERN:
             parts = [prefixed(at_rest(self.primitive.net), slot) for slot in t.primitives]
         elif t.kind is TemplateKind.STRUCTURE:
-            parts = [prefixed(at_rest(self.reduced.net), slot) for slot in t.children]
+            children = children or (self.reduced.net,) * len(t.children)
+            parts = [prefixed(at_rest(child), slot) for slot, child in zip(t.children, children)]
         else:
             parts = []
         net = glue([t.net, *parts], name=name)
