@@ -20,7 +20,7 @@ mission {{ T(1); }}
 def test_the_stored_proofs_are_the_templates_proven_now():
     """Every component template's proof is stored, with the digest of the net it is proven
     on now (after a deliberate change: python -m mcl2pnml.certify.templates --update)."""
-    now = current(LIB, known={})        # nothing taken as known: every subject proven now
+    now = current(LIB, known={}, eager=True)    # nothing taken as known: all proven now
     assert stored() == now
     assert {name for name, *_ in subjects(LIB)} <= set(now)
     for name, entry in stored().items():     # the instances' own nets, as the checker reads
@@ -54,6 +54,17 @@ def test_the_results_tables_say_what_each_structure_gives_with_its_children_s_re
                                   "OK+FAIL~": (("OK", "FAIL"), True)}
     # every row of every structure: 7 signatures a child
     assert len(table["if-then-else"]) == 7 ** 3 and len(table["monitor"]) == 7 ** 2
+
+
+def test_a_template_not_stored_is_proven_row_by_row_as_missions_read_it():
+    """A user's template (here: nothing taken as stored) is proven on its children reduced
+    at once, and on each other row of its results table when a certificate first reads it,
+    with the same answer as proving them all."""
+    lazy = current(LIB, known={})["while"]["results"]
+    assert list(lazy) == ["OK+FAIL;OK+FAIL"]
+    eager = stored()["while"]["results"]
+    assert {key: lazy[key] for key in eager} == eager and len(lazy) == 49
+    assert lazy.get("OK;NOPE") is None and lazy.get("OK") is None
 
 
 def test_the_digest_covers_the_behaviour_not_the_names():

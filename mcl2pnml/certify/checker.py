@@ -130,10 +130,16 @@ def results(cert: dict[str, Any], proofs: dict[str, dict]
     stands for). One pass over the trees, functions before their callers."""
     out: dict[str, Signature] = {}
     problems: list[str] = []
+    # a long mission asks the same few rows again and again: each key built, and each row
+    # read, once
+    keys: dict[tuple, str] = {}
 
     def row(subject: str, below: list[Signature], what: str, name: str,
             slots=("the callee",)) -> Signature | None:
-        key = results_key([(frozenset(b.ends), b.stuck) for b in below])
+        shape = (subject, *((b.ends, b.stuck) for b in below))
+        key = keys.get(shape)
+        if key is None:
+            key = keys[shape] = results_key([(frozenset(b.ends), b.stuck) for b in below])
         entry = (proofs.get(subject) or {}).get("results", {}).get(key)
         if entry is None:
             problems.append(f"{what}: no proof of {subject} covers its children's "
@@ -143,9 +149,11 @@ def results(cert: dict[str, Any], proofs: dict[str, dict]
             problems.append(f"{what}: with {_said(key, slots)}, the {subject} breaks the "
                             f"contract ({entry.get('breach')})")
             return None
-        stuck = bool(entry.get("stuck"))
-        origin = next((b.origin for b in below if b.stuck), name) if stuck else None
-        return Signature(tuple(entry["ends"]), stuck, origin)
+        if not entry.get("stuck"):
+            return _FINISHING.setdefault(tuple(entry["ends"]), Signature(tuple(entry["ends"]),
+                                                                         False))
+        return Signature(tuple(entry["ends"]), True,
+                         next((b.origin for b in below if b.stuck), name))
 
     for name, task in cert.get("tasks", {}).items():
         got = row(task.get("subject"), [], f"task '{name}'", name)
@@ -179,6 +187,10 @@ def results(cert: dict[str, Any], proofs: dict[str, dict]
             if got is not None:
                 out[name] = got
     return out, problems
+
+
+#: The signatures of parts that always end, one object each (no origin to tell apart).
+_FINISHING: dict[tuple[str, ...], Signature] = {}
 
 
 def _said(key: str, slots) -> str:

@@ -265,10 +265,41 @@ def _subjects(lib: Library) -> list:
     return out
 
 
-def prove(name: str, kind: str, make, children: int, source: str) -> Proof:
+class Rows(dict):
+    """A results table whose rows are proven when first read: a user's template is proven
+    on the rows a mission needs, not on all of them (a structure of three slots has 343)."""
+
+    def __init__(self, make, children: int, rows: dict):
+        super().__init__(rows)
+        self._make, self._children = make, children
+
+    def __missing__(self, key: str) -> dict:
+        parts = key.split(";") if self._children else [""]
+        row = [_signature(p) for p in parts] if len(parts) == self._children else None
+        if row is None or None in row:
+            raise KeyError(key)
+        self[key] = classify(check(self._make(tuple(row))))
+        return self[key]
+
+    def get(self, key, default=None):
+        try:
+            return self[key]
+        except KeyError:
+            return default
+
+
+def _signature(text: str):
+    """The signature a row's key names for one child (``OK+FAIL~``), None if no such."""
+    sig = (frozenset(r for r in text.rstrip("~").split("+") if r), text.endswith("~"))
+    return sig if sig in SIGNATURES and signature_text(*sig) == text else None
+
+
+def prove(name: str, kind: str, make, children: int, source: str,
+          eager: bool = True) -> Proof:
     """The subject checked against the contract now, its children reduced (``make(None)``),
-    then with its children giving each choice of results (``make(row)``);
-    :class:`BrokenTemplate` with the first breaches' runs if it breaks the contract."""
+    then with its children giving each choice of results (``make(row)``): every row now, or
+    (not ``eager``) each when first read (:class:`Rows`); :class:`BrokenTemplate` with the
+    first breaches' runs if it breaks the contract."""
     net = make(None)
     verdict = check(net)
     # one that may run for ever until aborted (a loop with no way out, a goal kept with
@@ -281,12 +312,14 @@ def prove(name: str, kind: str, make, children: int, source: str) -> Proof:
             f"template '{name}' breaks the interface contract (docs/ARCHITECTURE.md, "
             f"analysis.contract) with its children reduced: {breaches}"
             + (f"; and {more} more" if more > 0 else ""), Location(source))
-    markings, table = verdict.markings, {}
-    for row in product(SIGNATURES, repeat=children):
-        v = verdict if all(r == FULL for r in row) else check(make(row))
-        markings += v.markings if v is not verdict else 0
-        table[results_key(row)] = classify(v)
-    return Proof(name, kind, digest(net), markings, table)
+    markings, table = verdict.markings, {results_key((FULL,) * children): classify(verdict)}
+    for row in product(SIGNATURES, repeat=children) if eager else ():
+        if results_key(row) not in table:
+            v = check(make(row))
+            markings += v.markings
+            table[results_key(row)] = classify(v)
+    return Proof(name, kind, digest(net), markings,
+                 table if eager else Rows(make, children, table))
 
 
 def stored(folder: Path | None = None) -> dict[str, dict]:
@@ -298,13 +331,13 @@ def stored(folder: Path | None = None) -> dict[str, dict]:
         return {}
 
 
-def current(lib: Library | None = None, known: dict[str, dict] | None = None
-            ) -> dict[str, dict]:
+def current(lib: Library | None = None, known: dict[str, dict] | None = None,
+            eager: bool = False) -> dict[str, dict]:
     """The proofs of the library in use, as the certificate and its checker read them: the
     ``known`` ones (default: the stored ones) where the digest matches, every other subject
-    (a user's template, an edited one) proven now, and every instance's own digest
-    computed from the library (:class:`BrokenTemplate` for a subject that breaks the
-    contract)."""
+    (a user's template, an edited one) proven now (its results table row by row as it is
+    read, unless ``eager``), and every instance's own digest computed from the library
+    (:class:`BrokenTemplate` for a subject that breaks the contract)."""
     lib = lib or default_library()
     known = stored() if known is None else known
     out: dict[str, dict] = {}
@@ -312,7 +345,7 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None
         d = digest(make(None))
         entry = known.get(name)
         if entry is None or entry.get("digest") != d or "results" not in entry:
-            entry = prove(name, kind, make, children, source).as_json()
+            entry = prove(name, kind, make, children, source, eager).as_json()
         out[name] = {**entry, **({"local": local_digest(lib, name)} if kind != "joint" else {})}
     # the instances a compiled mission is made of, besides the proven components
     out["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
@@ -325,7 +358,7 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None
 def update(folder: Path | None = None) -> Path:
     """Prove every subject of the package's library now and store the proofs."""
     lib = Library.load([folder or template_dirs()[0]])
-    proofs = current(lib, known={})     # nothing taken as known: every subject proven now
+    proofs = current(lib, known={}, eager=True)   # nothing taken as known: all proven now
     path = (folder or template_dirs()[0]) / PROOFS
     atomic_write_text(path, json.dumps({
         "about": "each template checked against the interface contract with its children "
