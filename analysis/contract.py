@@ -34,11 +34,13 @@ marked. Then, for the component started from rest:
   model does, so that the reduced model with the same results stands for it.
 
 The results a component can give from rest + B (a subset of OK and FAIL)
-are its **results**: the reduced model restricted to them (:func:`restricted`)
-behaves toward a caller as the component does, both in what it can do and
-in what it can still do, which is what an end always being reachable
-depends on (a loop whose condition can never fail never ends, though every
-part keeps the rest of the contract).
+are its **results** (:attr:`Verdict.results`). With them, and whether it
+may instead run for ever until aborted (the one clause a loop with no way
+out breaks), they are its signature: the reduced model restricted to it
+(:func:`restricted`) behaves toward a caller as the component does, both in
+what it can do and in what it can still do, which is what an end always
+being reachable depends on (a loop whose condition can never fail never
+ends, though every part keeps the rest of the contract).
 
 A component that meets them, fused with its caller on B, A, OK, FAIL and
 ABORTED, behaves toward the caller as the reduced model does (the paper's

@@ -301,7 +301,7 @@ def check_certificate(net: Net, cert: dict[str, Any]) -> list[str]:
     from mcl2pnml.certify.checker import check
     try:
         return check(net, cert)
-    except (KeyError, TypeError, ValueError, AttributeError) as e:
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
         return [f"the certificate is malformed: {type(e).__name__}: {e}"]
 
 

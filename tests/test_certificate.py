@@ -419,3 +419,24 @@ def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
     # the net without the abort is not the one it proves
     net, _ = _certified(mission)
     assert any("does not mark mission.A" in p for p in check(net, cert))
+
+
+@pytest.mark.parametrize("spoil", [
+    lambda c: c["trees"]["mission"][1].update(parent=10_000),
+    lambda c: c["trees"].update(mission="not a list"),
+    lambda c: c.pop("conclusion"),
+    lambda c: c["tasks"]["DropMarker"].update(subject=["a", "list"]),
+    lambda c: c["trees"]["mission"][0].pop("instance"),
+], ids=["parent out of range", "tree not a list", "no conclusion", "subject a list",
+        "node without a name"])
+def test_a_spoilt_certificate_is_refused_with_one_message(spoil, tmp_path):
+    """A certificate is input like any other: spoilt by hand, it is refused, never a crash."""
+    from helpers import run_cli
+    net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    spoil(cert)
+    (tmp_path / "c.json").write_text(json.dumps(cert))
+    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
+                   tmp_path / "s.pnml").returncode == 0
+    out = run_cli("certify", tmp_path / "c.json", "--check", tmp_path / "s.pnml")
+    assert out.returncode == 1 and "Traceback" not in out.stderr + out.stdout
+    assert "the certificate does not hold" in out.stdout

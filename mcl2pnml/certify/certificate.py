@@ -26,7 +26,10 @@ interface contract of :mod:`analysis.contract`, its children reduced):
   rest marking with one of the root's results (no abort is asked; each of
   them is reached by some run), when the result is marked the rest is
   already at rest (every primitive disabled), and from there the mission can
-  run again (reusable).
+  run again (reusable). A root that may run for ever is certified only with
+  an abort pending (``mission.A`` marked at the start: it then always ends,
+  ABORTED among its ends); without one, :class:`NotCertified` points at the
+  node it comes from.
 
 :func:`certify` writes the tree of the mission (and of each function) with
 the rule and the proof used at each node, the side conditions, and the

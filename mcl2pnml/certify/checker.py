@@ -14,10 +14,11 @@ in one pass over its nodes and arcs:
   its primitive's) has the digest of the part proven in
   ``templates/proofs.json``: a structure's template, a task's pattern with
   or without its time-out, a primitive, a call site with its locks;
-* the results: what each node can end in (OK, FAIL; from B, no abort
-  asked), derived bottom-up from the proofs' results tables (a task's from
-  its pattern's, a call's from its callee's, a structure's from its
-  children's), every node's row kept (no loop that can never end), and the
+* the signatures: what each node can do from B with no abort asked (end
+  OK, FAIL, and whether it may run for ever instead), derived bottom-up
+  from the proofs' results tables (a task's from its pattern's, a call's
+  from its callee's, a structure's from its children's), no node's row a
+  breach, a root that may run for ever only with an abort pending, and the
   conclusion's ends the root's;
 * the side conditions: functions call only functions before them (no
   recursion, so gates are taken in one order); a call site of a task takes

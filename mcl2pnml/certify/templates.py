@@ -13,6 +13,15 @@ has the digest stored is taken as proven; any other (a user's file on
 used, and a template that breaks the contract is refused with the run that
 shows it.
 
+Each proof carries a results table: the subject checked again with each
+child reduced to each signature (:data:`SIGNATURES`: the results it can
+give, and whether it may run for ever instead), and what the subject then
+does (its own signature), or the clause it breaks. The certificate derives
+each node's signature from its children's through these rows: whether a
+mission can always end depends on what its parts can give, which the
+contract alone does not say. The package's tables are stored whole; a
+user's template is proven row by row as certificates read it.
+
 List the stored proofs, or rewrite them after a deliberate change to a template:
 
     python -m mcl2pnml.certify.templates --list
