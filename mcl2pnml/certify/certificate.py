@@ -40,7 +40,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from mcl2pnml.certify.checker import results
+from mcl2pnml.certify.checker import results, root_ends
 from mcl2pnml.certify.templates import current
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.payloads import MISSION
@@ -109,27 +109,24 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
                                                 "exactly when the end is ABORTED)"
                                                 if abort_pending else " with no abort asked")},
     }
-    derived, problems = results(cert, proofs)
-    root = derived.get(MISSION)
-    if not problems and root.stuck and not abort_pending:
-        origin = derived[root.origin]
-        how = ("never ends" if not origin.ends else
-               f"may end {' or '.join(origin.ends)}, or run on for ever")
-        problems = [f"the mission {how} unless it is aborted" if root.origin == MISSION else
-                    f"'{root.origin}' {how} unless it is aborted, and the mission with it"]
-    if problems:
-        name = root.origin if root and root.stuck and not abort_pending else \
-            problems[0].split("'")[1] if "'" in problems[0] else MISSION
-        raise NotCertified(f"{problems[0]}: the mission is not certified (`mcl2pnml analyze "
+    derived, faults = results(cert, proofs)
+    ends = None if faults else root_ends(derived[MISSION], abort_pending)
+    if not faults and ends is None:
+        origin = derived[MISSION].origin
+        how = ("never ends" if not derived[origin].ends else
+               f"may end {' or '.join(derived[origin].ends)}, or run on for ever")
+        faults = [(origin, f"the mission {how} unless it is aborted" if origin == MISSION else
+                   f"'{origin}' {how} unless it is aborted, and the mission with it")]
+    if faults:
+        name, message = faults[0]
+        raise NotCertified(f"{message}: the mission is not certified (`mcl2pnml analyze "
                            "--state-space --explore` shows the run)", _where(checked, name))
     for nodes in trees.values():
         for node in nodes:
             node.update(_signature(derived[node["instance"]]))
     for name, task in tasks.items():
         task.update(_signature(derived[name]))
-    ends = [f"{MISSION}.{r}" for r in root.ends]
-    cert["conclusion"] = {"ends": ends + ([f"{MISSION}.ABORTED"] if abort_pending else []),
-                          **cert["conclusion"]}
+    cert["conclusion"] = {"ends": ends, **cert["conclusion"]}
     return cert
 
 

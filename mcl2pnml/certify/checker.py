@@ -79,13 +79,11 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
             problems.append(f"'{node_id}' belongs to no instance of the certificate")
     problems += _side_conditions(cert, functions)
     derived, faults = results(cert, proofs)
-    problems += faults
+    problems += [message for _, message in faults]
     claimed = (cert.get("conclusion") or {}).get("ends")
     if not faults and MISSION in derived:
-        pending = f"{MISSION}.A" in cert.get("start", ())
-        ends = [f"{MISSION}.{r}" for r in derived[MISSION].ends] + (
-            [f"{MISSION}.ABORTED"] if pending else [])
-        if derived[MISSION].stuck and not pending:
+        ends = root_ends(derived[MISSION], f"{MISSION}.A" in cert.get("start", ()))
+        if ends is None:
             problems.append(f"{MISSION} may run for ever (from '{derived[MISSION].origin}'), "
                             "and no abort is pending at the start")
         elif claimed != ends:
@@ -124,37 +122,35 @@ class Signature(NamedTuple):
 
 
 def results(cert: dict[str, Any], proofs: dict[str, dict]
-            ) -> tuple[dict[str, Signature], list[str]]:
+            ) -> tuple[dict[str, Signature], list[tuple[str, str]]]:
     """The signature of each task, node and function of ``cert``, derived bottom-up from
-    the proofs' results tables; and the nodes whose row is a breach (with its children
-    doing what they do, the structure breaks the contract in a way no reduced model
-    stands for). One pass over the trees, functions before their callers."""
+    the proofs' results tables; and the faults, each (instance, what is wrong): a node
+    whose row is a breach (with its children doing what they do, the structure breaks the
+    contract in a way no reduced model stands for), or that no row covers. One pass over
+    the trees, functions before their callers."""
     out: dict[str, Signature] = {}
-    problems: list[str] = []
-    # a long mission asks the same few rows again and again: each key built, and each row
-    # read, once
-    keys: dict[tuple, str] = {}
+    faults: list[tuple[str, str]] = []
+    # a long mission asks the same few rows again and again: each read once
+    rows: dict[tuple, tuple[str, dict | None]] = {}
 
     def row(subject: str, below: list[Signature], what: str, name: str,
             slots=("the callee",)) -> Signature | None:
         shape = (subject, *((b.ends, b.stuck) for b in below))
-        key = keys.get(shape)
-        if key is None:
-            key = keys[shape] = results_key([(frozenset(b.ends), b.stuck) for b in below])
-        entry = (proofs.get(subject) or {}).get("results", {}).get(key)
+        if shape not in rows:
+            key = results_key([(frozenset(b.ends), b.stuck) for b in below])
+            rows[shape] = key, (proofs.get(subject) or {}).get("results", {}).get(key)
+        key, entry = rows[shape]
         if entry is None:
-            problems.append(f"{what}: no proof of {subject} covers its children's "
-                            f"signatures {key or '(none)'}")
+            faults.append((name, f"{what}: no proof of {subject} covers its children's "
+                                 f"signatures {key or '(none)'}"))
             return None
         if "ends" not in entry:
-            problems.append(f"{what}: with {_said(key, slots)}, the {subject} breaks the "
-                            f"contract ({entry.get('breach')})")
+            faults.append((name, f"{what}: with {_said(below, slots)}, the {subject} breaks "
+                                 f"the contract ({entry.get('breach')})"))
             return None
-        if not entry.get("stuck"):
-            return _FINISHING.setdefault(tuple(entry["ends"]), Signature(tuple(entry["ends"]),
-                                                                         False))
-        return Signature(tuple(entry["ends"]), True,
-                         next((b.origin for b in below if b.stuck), name))
+        stuck = bool(entry.get("stuck"))
+        return Signature(tuple(entry["ends"]), stuck,
+                         next((b.origin for b in below if b.stuck), name) if stuck else None)
 
     for name, task in cert.get("tasks", {}).items():
         got = row(task.get("subject"), [], f"task '{name}'", name)
@@ -177,8 +173,6 @@ def results(cert: dict[str, Any], proofs: dict[str, dict]
                 got = row(CALL_SITE, [callee], f"call '{name}'", name)
                 if calls.get(node.get("callee"), 0) > 1:
                     row(SHARED_CALLEE, [callee], f"call '{name}'", name)
-                if got is not None and got.stuck:    # the callee's origin, not the call's
-                    got = got._replace(origin=callee.origin or got.origin)
             else:
                 below = [out.get(nodes[c]["instance"]) for c in children[k]]
                 if any(b is None for b in below):
@@ -187,24 +181,26 @@ def results(cert: dict[str, Any], proofs: dict[str, dict]
                           name, node.get("slots", ()))
             if got is not None:
                 out[name] = got
-    return out, problems
+    return out, faults
 
 
-#: The signatures of parts that always end, one object each (no origin to tell apart).
-_FINISHING: dict[tuple[str, ...], Signature] = {}
+def root_ends(root: Signature, pending: bool) -> list[str] | None:
+    """The ends a certificate concludes for a root of signature ``root``, started with an
+    abort ``pending`` or not; None when it may run for ever and no abort is pending."""
+    if root.stuck and not pending:
+        return None
+    return [f"{MISSION}.{r}" for r in root.ends] + ([f"{MISSION}.ABORTED"] if pending else [])
 
 
-def _said(key: str, slots) -> str:
-    """``OK;OK+FAIL~`` for slots T1, T2: "T1 ending only OK, T2 ending OK or FAIL or
-    running for ever"."""
-    def one(sig: str) -> str:
-        ends = [r for r in sig.rstrip("~").split("+") if r]
-        said = ("only " if len(ends) == 1 and "~" not in sig else "") + " or ".join(ends)
-        if "~" in sig:
-            said = f"{said} or running for ever" if ends else "running for ever"
-        return said
-    return ", ".join(f"{slot} ending {one(sig)}" if sig.rstrip("~") else f"{slot} {one(sig)}"
-                     for slot, sig in zip(slots, key.split(";")))
+def _said(below: list[Signature], slots) -> str:
+    """The children's signatures in words, slot by slot: "T1 ending only OK, T2 ending
+    OK or FAIL or running for ever"."""
+    def one(sig: Signature) -> str:
+        said = ("only " if len(sig.ends) == 1 and not sig.stuck else "") + " or ".join(sig.ends)
+        if sig.stuck:
+            said = f"{said} or running for ever" if sig.ends else "running for ever"
+        return f"ending {said}" if sig.ends else said
+    return ", ".join(f"{slot} {one(sig)}" for slot, sig in zip(slots, below))
 
 
 def _owners(net: Net, parts: dict[str, Any]) -> dict[str, str | None]:

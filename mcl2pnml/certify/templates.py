@@ -304,12 +304,12 @@ def _signature(text: str):
 
 
 def prove(name: str, kind: str, make, children: int, source: str,
-          eager: bool = True) -> Proof:
+          eager: bool = True, net: Net | None = None) -> Proof:
     """The subject checked against the contract now, its children reduced (``make(None)``),
     then with its children giving each choice of results (``make(row)``): every row now, or
     (not ``eager``) each when first read (:class:`Rows`); :class:`BrokenTemplate` with the
-    first breaches' runs if it breaks the contract."""
-    net = make(None)
+    first breaches' runs if it breaks the contract. ``net``: ``make(None)``, if made."""
+    net = net if net is not None else make(None)
     verdict = check(net)
     # one that may run for ever until aborted (a loop with no way out, a goal kept with
     # no time-out) keeps the rest of the contract: its signature says so, and a mission
@@ -351,10 +351,10 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None,
     known = stored() if known is None else known
     out: dict[str, dict] = {}
     for name, kind, make, children, source in _subjects(lib):
-        d = digest(make(None))
+        net = make(None)
         entry = known.get(name)
-        if entry is None or entry.get("digest") != d or "results" not in entry:
-            entry = prove(name, kind, make, children, source, eager).as_json()
+        if entry is None or entry.get("digest") != digest(net) or "results" not in entry:
+            entry = prove(name, kind, make, children, source, eager, net).as_json()
         out[name] = {**entry, **({"local": local_digest(lib, name)} if kind != "joint" else {})}
     # the instances a compiled mission is made of, besides the proven components
     out["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
