@@ -443,3 +443,49 @@ def test_a_spoilt_certificate_is_refused_with_one_message(spoil, tmp_path):
     out = run_cli("certify", tmp_path / "c.json", "--check", tmp_path / "s.pnml")
     assert out.returncode == 1 and "Traceback" not in out.stderr + out.stdout
     assert "the certificate does not hold" in out.stdout
+
+
+#: Missions whose verdicts differ, with whether each is certified from mission.B alone: a
+#: loop that never ends, one whose body can fail, a goal kept for ever under a monitor that
+#: ends it, and a loop that may end or may run on for ever (with an abort pending, each is
+#: certified).
+PEER_MISSIONS = {
+    "idle loop": (LOOP, False),
+    "loop that can fail": (LOOP.replace("while (Idle()) { }", "while (Idle()) { A(2); }"),
+                           True),
+    "watched for ever": ("""primitive P(v);
+primitive Q(v);
+task A(x) = AchieveGoal(P(x)) timeout 5;
+task Keep(x) = KeepGoal(Q(x));
+mission { monitor(Keep(1), A(2)); }
+""", True),
+    "loop that may run on": (LOOP.replace("A(1);\n    while (Idle()) { }",
+                                          "while (A(1)) { while (Idle()) { } }"), False),
+}
+
+
+@pytest.mark.parametrize("pending", [False, True], ids=["from B", "abort pending"])
+@pytest.mark.parametrize("name", PEER_MISSIONS)
+def test_verifypn_and_lola_find_what_the_certificate_says(name, pending, tmp_path):
+    """The certificate against tools we did not write: verifypn and LoLA answer AG EF end
+    and EF (deadlock and not end) (mcl2pnml/io/mccquery.py) on the compiled net; a mission
+    is certified exactly when both say an end is always reachable and no dead marking is
+    improper."""
+    from mcl2pnml.certify.certificate import NotCertified
+    from mcl2pnml.certify.certificate import certify as certify_
+    from test_queries import answers
+    text, from_b = PEER_MISSIONS[name]
+    checked = pipeline.check_source(text, f"{name}.mcl")
+    net = pipeline.compile_checked(checked)
+    if pending:
+        net = net.with_initial({**net.initial, "mission.A": 1})
+    try:
+        certify_(checked, abort_pending=pending, proofs=_proofs())
+        certified = True
+    except NotCertified:
+        certified = False
+    assert certified == (from_b or pending)
+    _, verifypn, lola = answers(net, tmp_path, 200_000)
+    for tool, said in (("verifypn", verifypn), ("LoLA", lola)):
+        ends_well = said["end-always-reachable"] and not said["deadlock-not-an-end"]
+        assert ends_well == certified, (tool, said, certified)
