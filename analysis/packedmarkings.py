@@ -162,8 +162,9 @@ class Firing(NamedTuple):
         return out
 
 
-#: An odd 64-bit multiplier (the golden ratio's), for the key of a marking of several words.
-_MIX = np.uint64(0x9E3779B97F4A7C15)
+#: The two odd multipliers of MurmurHash3's 64-bit finaliser (``fmix64``).
+_MIX1, _MIX2 = np.uint64(0xFF51AFD7ED558CCD), np.uint64(0xC4CEB9FE1A85EC53)
+_SHIFT = np.uint64(33)
 
 
 def keys_of(rows: np.ndarray) -> np.ndarray:
@@ -174,6 +175,12 @@ def keys_of(rows: np.ndarray) -> np.ndarray:
     may then share a key; each explorer makes sure none ever do in one state
     space (or raises :class:`KeyCollision`), so that a key still names one
     marking exactly.
+
+    Each word is folded in, then the whole mixed by a full avalanche step
+    (MurmurHash3's finaliser, a bijection in which every bit of the input
+    moves about half the bits of the output). A weaker step, one multiply and
+    one shift, let two markings that differ in the top bits of two words share
+    a key: two of the 4,773 markings of a small mission did.
     """
     if rows.shape[1] == 1:
         return rows[:, 0]
@@ -182,10 +189,11 @@ def keys_of(rows: np.ndarray) -> np.ndarray:
         for w in range(rows.shape[1]):
             if w:
                 h ^= rows[:, w]
-            # multiply and xor-shift: each step a bijection, so that markings
-            # that differ in one word never share a key
-            h *= _MIX
-            h ^= h >> np.uint64(29)
+            h ^= h >> _SHIFT
+            h *= _MIX1
+            h ^= h >> _SHIFT
+            h *= _MIX2
+            h ^= h >> _SHIFT
     return h
 
 

@@ -281,6 +281,23 @@ def test_markings_that_share_a_key_fall_back_to_exact_exploration(backend, monke
                                                     tuple(fooled.markings[0]), 100, None))
 
 
+def test_markings_that_differ_in_the_top_bits_of_two_words_have_two_keys():
+    """Two markings a small mission reaches (4,773 markings, two words), that differ in
+    bit 62 of the first word and bits 33, 34, 62 and 63 of the second: a multiply and one
+    shift a word gave them one key; the avalanche step gives every such pair two, as it
+    does every pair of markings one or two bits apart in each word."""
+    from analysis.packedmarkings import keys_of
+    pair = np.array([[0x0809120090049292, 0x8000000E02020202],
+                     [0x4809120090049292, 0x4000000802020202]], dtype=np.uint64)
+    assert keys_of(pair)[0] != keys_of(pair)[1]
+    bits = [np.uint64(1) << np.uint64(b) for b in range(64)]
+    rows = np.array([[a, b] for a in (np.uint64(0), *bits[::7], bits[62] | bits[63])
+                     for b in (np.uint64(0), *bits, bits[33] | bits[34] | bits[62] | bits[63])],
+                    dtype=np.uint64)
+    assert len(np.unique(rows, axis=0)) == len(rows)
+    assert len(np.unique(keys_of(rows))) == len(rows)
+
+
 @pytest.mark.parametrize("backend", SAFE)
 def test_a_second_token_hands_over_to_the_general_explorer(backend):
     b = NetBuilder("two tokens later")
