@@ -61,6 +61,72 @@ def test_a_net_one_arc_away_from_its_certificate_is_refused_naming_the_instance(
             any(owner.startswith(p.split("'")[1]) for p in problems), (arc, problems)
 
 
+def _changed(net: Net, how: str, k: int) -> Net | None:
+    """``net`` changed in one way at its k-th place, transition or arc (None: no such
+    change there that leaves a well-formed net)."""
+    from mcl2pnml.core.net import Arc, ArcKind, Place, Transition
+    places, transitions, arcs = net.places, net.transitions, net.arcs
+    initial = dict(net.initial)
+    if how == "arc added":
+        place, transition = places[k % len(places)].id, transitions[k % len(transitions)].id
+        if any({a.source, a.target} == {place, transition} for a in arcs):
+            return None
+        arcs = arcs + (Arc(place, transition),)
+    elif how == "arc turned round":
+        a = arcs[k % len(arcs)]
+        if a.kind is ArcKind.READ or any((b.source, b.target) == (a.target, a.source)
+                                          for b in arcs):
+            return None
+        arcs = tuple(b if b != a else Arc(a.target, a.source, a.weight) for b in arcs)
+    elif how == "weight 2":
+        a = arcs[k % len(arcs)]
+        arcs = tuple(b if b != a else a._replace(weight=2) for b in arcs)
+    elif how == "consuming arc made a read arc":
+        a = arcs[k % len(arcs)]
+        if a.kind is ArcKind.READ or a.source not in net.place_index:
+            return None
+        arcs = tuple(b if b != a else a._replace(kind=ArcKind.READ) for b in arcs)
+    elif how == "token added":
+        place = places[k % len(places)].id
+        initial[place] = initial.get(place, 0) + 1
+    elif how == "token taken":
+        marked = sorted(initial)
+        initial.pop(marked[k % len(marked)])
+    elif how == "place renamed":
+        old = places[k % len(places)].id
+        new = old + "x"
+        places = tuple(p if p.id != old else Place(new) for p in places)
+        arcs = tuple(Arc(new if a.source == old else a.source,
+                         new if a.target == old else a.target, a.weight, a.kind) for a in arcs)
+        if old in initial:
+            initial[new] = initial.pop(old)
+    elif how == "transition added":
+        owner = transitions[k % len(transitions)].id.rsplit(".", 1)[0]
+        transitions = transitions + (Transition(f"{owner}.extra"),)
+    return Net(net.name, places, transitions, arcs, initial)
+
+
+@pytest.mark.parametrize("how", ["arc added", "arc turned round", "weight 2",
+                                 "consuming arc made a read arc", "token added", "token taken",
+                                 "place renamed", "transition added"])
+@pytest.mark.parametrize("mission", ["sauce", "multi_leg"])
+def test_a_net_changed_in_any_one_way_is_refused_saying_what_differs(mission, how):
+    """Changed at many places, nodes and arcs in turn, the net is refused each time, and
+    the checker says so without a crash; the net as compiled holds."""
+    net, cert = _certified(ROOT / "examples" / f"{mission}.mcl")
+    assert check(net, cert) == []
+    changed = 0
+    for k in range(0, 600, 13):
+        other = _changed(net, how, k)
+        if other is None:
+            continue
+        changed += 1
+        problems = check(other, cert)
+        assert problems, (how, k)
+        assert all(isinstance(p, str) and p for p in problems)
+    assert changed >= 10, f"only {changed} nets changed by {how}"
+
+
 def test_a_certificate_of_another_mission_is_refused():
     net, _ = _certified(ROOT / "examples" / "sauce.mcl")
     _, other = _certified(ROOT / "examples" / "docking.mcl")

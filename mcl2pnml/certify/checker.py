@@ -2,18 +2,20 @@
 
 :mod:`mcl2pnml.certify.certificate` claims that a net is made of proven
 parts joined by the rules. This module checks the claim on the net alone,
-in one pass over its nodes and arcs:
+in time linear in the net:
 
-* every node of the net belongs to one instance of the certificate's tree
-  (by its id's prefix: the longest instance name that starts it), and every
-  instance is there;
-* each instance's own net (its transitions, their arcs, its places, and the
-  places it shares, renamed to the slots the tree says they fill: a
-  structure's ``T1_B`` is its first child's ``B``, a call site's ``to.B`` its
-  callee's, its ``lock.k`` the k-th primitive of its task, a task's ``E``
-  its primitive's) has the digest of the part proven in
-  ``templates/proofs.json``: a structure's template, a task's pattern with
-  or without its time-out, a primitive, a call site with its locks;
+* the net is exactly the union of the instances of the certificate's tree:
+  each instance's own net is the own net of its proven part (a structure's
+  template, a task's pattern with or without its time-out, a primitive, a
+  call site with its locks; the library's, its digest the one in
+  ``templates/proofs.json``), its nodes prefixed with the instance's name,
+  and the places it shares being the ones the tree says fill them (a
+  structure's ``T1_B`` is its first child's ``B``, a call site's ``to.B``
+  its callee's, its ``lock.k`` the k-th primitive of its task, a task's
+  ``E`` its primitive's); every node of the net is one instance's own, once;
+  no arc is missing and none is added; M0 is every part at rest, with
+  ``mission.B`` marked (and ``mission.A``, if the certificate starts with an
+  abort pending) and each function's gate free;
 * the signatures: what each node can do from B with no abort asked (end
   OK, FAIL, and whether it may run for ever instead), derived bottom-up
   from the proofs' results tables (a task's from its pattern's, a call's
@@ -22,33 +24,44 @@ in one pass over its nodes and arcs:
   conclusion's ends the root's;
 * the side conditions: functions call only functions before them (no
   recursion, so gates are taken in one order); a call site of a task takes
-  exactly its primitives' locks (the renaming allows no other); a place a
-  part shares is one the tree gives it; M0 is every part at rest with
-  ``mission.B`` marked.
+  exactly its primitives' locks (the fusion allows no other); a place a
+  part shares is one the tree gives it.
+
+The comparison is of integers (:class:`_Layout`): every node numbered, an
+arc a number, each part written for all its instances at once with numpy.
+Where the net differs, it says what, instance by instance: the node or the
+arc missing or added, the token misplaced.
 
 What it trusts: the proofs file (each entry was checked against the contract
 by exploring the part, and ``python -m mcl2pnml.certify.templates --update``
-does it again) and the argument of the rules. Not the compiler: a net that
-differs from its certificate by one arc is refused, naming the instance.
+does it again), the library's parts whose digests are in it, and the
+argument of the rules. Not the compiler: a net that differs from its
+certificate by one arc is refused, naming the instance.
 """
 from __future__ import annotations
 
-import re
+import functools
+from itertools import compress, count, repeat
+from operator import is_not, itemgetter, not_
 from typing import Any, NamedTuple
 
-from mcl2pnml.certify.templates import (CALL_SITE, SHARED_CALLEE, current, results_key,
-                                        shape_of)
+import numpy as np
+
+from mcl2pnml.certify.templates import (CALL_SITE, SHARED_CALLEE, Proofs, current,
+                                        results_key, shape)
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import MISSION
+from mcl2pnml.language.library import default_library
 
-READ = ArcKind.READ
+NORMAL = ArcKind.NORMAL
 
 CONTROL = ("B", "A", "MTX", "OK", "FAIL", "ABORTED")
-#: A structure's slot place: ``T1_B``.
-_SLOT = re.compile(r"T\d+_")
 PRIMITIVE_ROLES = ("ON", "OFF", "E", "D", "S1", "S2")
 
 
+@without_gc      # a million arcs: nothing cyclic to collect while they are read
 def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None) -> list[str]:
     """Every way ``net`` departs from ``cert`` (none: the certificate holds for it).
 
@@ -56,28 +69,11 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
     :func:`mcl2pnml.certify.templates.current`: the stored proofs, and a user's templates
     proven now)."""
     proofs = proofs if proofs is not None else current()
-    problems: list[str] = []
-    parts: dict[str, dict[str, Any]] = {}     # instance -> what it is
-    for p in cert.get("primitives", {}):
-        parts[p] = {"rule": "primitive"}
-    for t, info in cert.get("tasks", {}).items():
-        parts[t] = {"rule": "task", **info}
-    for tree, nodes in cert.get("trees", {}).items():
-        children: list[list[str]] = [[] for _ in nodes]
-        for node in nodes:       # one pass: each node under its parent, in order
-            if node.get("parent", -1) >= 0:
-                children[node["parent"]].append(node["instance"])
-        for k, node in enumerate(nodes):
-            parts[node["instance"]] = {**node, "children": children[k], "tree": tree,
-                                       "root": k == 0}
+    if not isinstance(proofs, Proofs):     # read from a file: the library in use has them
+        proofs = Proofs(proofs, default_library())
     functions = cert.get("functions", [])
-    owner = _owners(net, parts)
-    for missing in sorted(set(parts) - set(owner.values())):
-        problems.append(f"instance '{missing}' of the certificate has no node in the net")
-    for node_id, inst in owner.items():
-        if inst is None:
-            problems.append(f"'{node_id}' belongs to no instance of the certificate")
-    problems += _side_conditions(cert, functions)
+    plans = _plans(cert, functions)
+    problems = _side_conditions(cert, functions)
     derived, faults = results(cert, proofs)
     problems += [message for _, message in faults]
     claimed = (cert.get("conclusion") or {}).get("ends")
@@ -88,27 +84,8 @@ def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None)
                             "and no abort is pending at the start")
         elif claimed != ends:
             problems.append(f"the conclusion's ends {claimed} are not the root's: {ends}")
-    own_places: dict[str, list[str]] = {}
-    for p in net.places:
-        if owner.get(p.id):
-            own_places.setdefault(owner[p.id], []).append(p.id)
-    arcs_of: dict[str, list] = {}
-    places = net.place_index
-    for a in net.arcs:       # each arc under its transition's instance
-        inst = owner.get(a.source if a.source not in places else a.target)
-        if inst:
-            arcs_of.setdefault(inst, []).append(a)
-    transitions_of: dict[str, list[str]] = {}
-    for t in net.transitions:
-        if owner.get(t.id):
-            transitions_of.setdefault(owner[t.id], []).append(t.id)
-    for name, part in parts.items():
-        if name not in own_places and name not in transitions_of:
-            continue
-        problems += _part(net, name, part, parts, own_places.get(name, []),
-                          transitions_of.get(name, []), arcs_of.get(name, []), proofs,
-                          functions, cert.get("start", [f"{MISSION}.B"]))
-    return problems
+    layout = _Layout(net, plans, set(cert.get("start", [f"{MISSION}.B"])))
+    return layout.check(proofs, problems)
 
 
 class Signature(NamedTuple):
@@ -203,20 +180,6 @@ def _said(below: list[Signature], slots) -> str:
     return ", ".join(f"{slot} {one(sig)}" for slot, sig in zip(slots, below))
 
 
-def _owners(net: Net, parts: dict[str, Any]) -> dict[str, str | None]:
-    """Each node id's instance: the longest instance name followed by a dot that starts it."""
-    out: dict[str, str | None] = {}
-    for node in (*net.places, *net.transitions):
-        i, found = node.id.rfind("."), None
-        while i > 0:
-            if node.id[:i] in parts:
-                found = node.id[:i]
-                break
-            i = node.id.rfind(".", 0, i)
-        out[node.id] = found
-    return out
-
-
 def _side_conditions(cert: dict[str, Any], functions: list[str]) -> list[str]:
     problems = []
     order = {f: k for k, f in enumerate(functions)}
@@ -233,80 +196,375 @@ def _side_conditions(cert: dict[str, Any], functions: list[str]) -> list[str]:
     return problems
 
 
-def _part(net, name, part, parts, places, transitions, arcs, proofs, functions,
-          cert_start) -> list[str]:
-    """One instance's own net, renamed to its template's ids, against the proven digest."""
-    rule = part["rule"]
-    rename: dict[str, str] = {}
-    if rule == "structure":
-        subject = part["template"]
-        for slot, child in zip(part["slots"], part["children"]):
-            rename.update({f"{child}.{p}": f"{slot}_{p}" for p in CONTROL})
-    elif rule == "call":
-        callee = part["callee"]
-        prims = sorted(set(parts.get(callee, {}).get("primitives", [])))
-        subject = f"{CALL_SITE}/{len(prims)}"
-        rename.update({f"{callee}.{p}": f"to.{p}" for p in ("GATE", *CONTROL) if p != "MTX"})
-        rename.update({f"{p}.LOCK": f"lock.{k}" for k, p in enumerate(prims, 1)})
-    elif rule == "task":
-        subject = part["subject"]
-        for slot, prim in zip(part["slots"], part["primitives"]):
-            rename.update({f"{prim}.{r}": (f"{slot}_{r}" if slot else r)
-                           for r in PRIMITIVE_ROLES})
-    else:
-        subject = "primitive"
-    entry = proofs.get(subject)
-    if entry is None or "local" not in entry:
-        return [f"'{name}' is a {subject}, which no stored proof covers"]
-    problems = []
-    prefix = name + "."
-    gate = f"{name}.GATE" if part.get("root") and part.get("tree") in functions else None
-    local_places = {}
-    for p in places:
-        if p == gate:
-            continue
-        local_places[p] = p[len(prefix):]
-    shared = set()
-    index = net.place_index
-    for end, slot in rename.items():   # every place the template shares, used or not
-        if end in index:
-            local_places[end] = slot
-            shared.add(slot)
-    cut = len(prefix)
-    local_arcs = []
-    for a in arcs:           # one pass: each arc renamed, a place it may not touch said
-        source, target = a.source, a.target
-        if source in index:
-            place, transition = source, target
-        else:
-            place, transition = target, source
-        got = local_places.get(place)
-        if got is None:
-            problems.append(f"'{name}' ({rule}) has an arc with '{place}', which the "
-                            "certificate does not give it")
-            continue
-        t = transition[cut:]
-        local_arcs.append((got, t, a.weight, "read" if a.kind is READ else "normal")
-                          if place is source else (t, got, a.weight, "normal"))
-    if problems:
+def _owners(ids: list[str], names: set[str] | dict) -> list[str | None]:
+    """Each node's instance: the longest instance name followed by a dot that starts its
+    id (None: no instance's)."""
+    # the longest candidate is nearly always the one: found for every node by loops in C
+    out: list[str | None] = list(map(itemgetter(0), map(str.rpartition, ids, repeat("."))))
+    for k in compress(count(), map(not_, map(names.__contains__, out))):
+        node_id, i, out[k] = ids[k], len(out[k]), None
+        while i > 0:
+            i = node_id.rfind(".", 0, i)
+            if i > 0 and node_id[:i] in names:
+                out[k] = node_id[:i]
+                break
+    return out
+
+
+class _Plan(NamedTuple):
+    """Where one instance of the certificate sits in the net: the proven part it must be
+    (``subject``), and the places it shares: each slot place of the template with the
+    net's place that fills it (a structure's ``T1_B``: its first child's ``B``; ...)."""
+
+    name: str
+    subject: str
+    fills: dict[str, str]
+    gate: str | None          # a function's gate: a place of its root, the call sites' arcs
+
+
+def _plans(cert: dict[str, Any], functions: list[str]) -> dict[str, _Plan]:
+    """Every instance of ``cert``, primitives, tasks and tree nodes, placed."""
+    plans = {p: _Plan(p, "primitive", {}, None) for p in cert.get("primitives", {})}
+    tasks = cert.get("tasks", {})
+    for name, task in tasks.items():
+        fills = {}
+        for slot, prim in zip(task["slots"], task["primitives"]):
+            fills.update({(f"{slot}_{r}" if slot else r): f"{prim}.{r}"
+                          for r in PRIMITIVE_ROLES})
+        plans[name] = _Plan(name, task["subject"], fills, None)
+    for tree, nodes in cert.get("trees", {}).items():
+        children: list[list[str]] = [[] for _ in nodes]
+        for node in nodes:       # one pass: each node under its parent, in order
+            if node.get("parent", -1) >= 0:
+                children[node["parent"]].append(node["instance"])
+        for k, node in enumerate(nodes):
+            name, fills = node["instance"], {}
+            if node["rule"] == "call":
+                callee = node["callee"]
+                prims = sorted(set(tasks.get(callee, {}).get("primitives", [])))
+                subject = f"{CALL_SITE}/{len(prims)}"
+                fills.update({f"to.{p}": f"{callee}.{p}" for p in ("GATE", *CONTROL)
+                              if p != "MTX"})
+                fills.update({f"lock.{k}": f"{p}.LOCK" for k, p in enumerate(prims, 1)})
+            else:
+                subject = node["template"]
+                for slot, child in zip(node["slots"], children[k]):
+                    fills.update({f"{slot}_{p}": f"{child}.{p}" for p in CONTROL})
+            gate = f"{name}.GATE" if k == 0 and tree in functions else None
+            plans[name] = _Plan(name, subject, fills, gate)
+    return plans
+
+
+class _Template(NamedTuple):
+    """A proven part's own net in its template's ids: its nodes in one order (own places,
+    shared places, transitions), its arcs as pairs of positions in that order, so that
+    every instance's arcs are written at once, in numbers."""
+
+    own: tuple[str, ...]                    # places of the part itself
+    slots: tuple[str, ...]                  # places it shares: a child's, a callee's, a lock
+    transitions: tuple[str, ...]
+    sources: tuple[int, ...]                # arc k joins sources[k] to targets[k]
+    targets: tuple[int, ...]
+    unusual: dict[tuple[int, int], tuple[int, ArcKind]]    # arcs of a weight > 1, or read
+    marked: tuple[tuple[int, int], ...]     # (own place, tokens) at rest
+
+    @property
+    def nodes(self) -> tuple[str, ...]:
+        return self.own + self.slots + self.transitions
+
+    @classmethod
+    def of(cls, net: Net, slots: frozenset[str]) -> "_Template":
+        """The template of a part from its own net and the places it shares."""
+        own = tuple(p.id for p in net.places if p.id not in slots)
+        shared = tuple(p.id for p in net.places if p.id in slots)
+        transitions = tuple(t.id for t in net.transitions)
+        at = {x: k for k, x in enumerate(own + shared + transitions)}
+        return cls(own, shared, transitions, tuple(at[a.source] for a in net.arcs),
+                   tuple(at[a.target] for a in net.arcs),
+                   {(at[a.source], at[a.target]): (a.weight, a.kind) for a in net.arcs
+                    if a.weight != 1 or a.kind is not NORMAL},
+                   tuple((at[p], net.initial[p]) for p in own if net.initial[p]))
+
+
+class _Layout:
+    """The net, and the net the certificate describes, in the net's node numbers (places
+    first, then transitions); an arc is the number ``source * size + target``.
+
+    Renaming every instance back to its template would cost several Python steps per
+    arc, a million arcs for 10,000 calls. So the other way round: each proven part's own
+    net, whose digest is the proof's, is written for all the part's instances at once in
+    numbers (a matrix, instance by node: :meth:`_write`), and the net must be exactly
+    their union (:meth:`_holds`): each node some instance's own, once; each arc one some
+    instance has; each marking its part's at rest. The comparisons are of integers, in
+    numpy; only on a net that does not hold is it walked again, to say where
+    (:meth:`_differences`)."""
+
+    def __init__(self, net: Net, plans: dict[str, _Plan], start: set[str]) -> None:
+        self.net, self.plans, self.start = net, plans, start
+        self.ids = [*net.place_index, *net.transition_index]
+        self.places, self.size = len(net.place_index), len(self.ids)
+        self.number = dict(zip(self.ids, count()))
+        self.batches: list[tuple[_Template, list[_Plan], np.ndarray]] = []
+
+    @functools.cached_property
+    def owner(self) -> list[str | None]:
+        """Each node's instance, by its id (:func:`_owners`)."""
+        return _owners(self.ids, self.plans)
+
+    def check(self, proofs: Proofs, problems: list[str]) -> list[str]:
+        """The ``problems`` found already, and where the net is not its instances, each
+        the own net of its proven part."""
+        problems = list(problems)
+        by_subject: dict[str, list[_Plan]] = {}
+        for plan in self.plans.values():
+            by_subject.setdefault(plan.subject, []).append(plan)
+        uncovered: set[str] = set()
+        for subject, group in by_subject.items():
+            template = self._template(proofs, subject)
+            if template is None:
+                problems += [f"'{plan.name}' is a {subject}, which no stored proof covers"
+                             for plan in group]
+                uncovered.update(plan.name for plan in group)
+            else:
+                problems += self._write(template, group)
+        if not self._holds():
+            found = self.nodes_of_no_instance() + self._differences(uncovered)
+            # never a net that does not hold with nothing said
+            problems = found + problems if found or problems else [
+                "the net is not its instances' proven parts joined as the certificate says"]
         return problems
-    initial = {}
-    start = set(cert_start)
-    for p, local in local_places.items():
-        n = net.initial[p]
-        if part.get("root") and part.get("tree") == MISSION and local in ("B", "A"):
-            if n != (f"{MISSION}.{local}" in start):
-                problems.append(f"M0 {'marks' if n else 'does not mark'} {MISSION}.{local}; "
-                                f"the certificate starts from {', '.join(sorted(start))}")
-            n = 0
-        initial[local] = n
-    if rule == "structure":     # a slot the tree leaves empty is still a slot
-        shared |= {x for x in local_places.values() if _SLOT.match(x)}
-    digest = shape_of(((x, None if x in shared else n) for x, n in initial.items()),
-                      (t[cut:] for t in transitions), local_arcs)
-    if digest != entry["local"]:
-        problems.append(f"'{name}' is not the proven {subject}: its places, transitions or "
-                        "arcs differ")
-    if gate is not None and net.initial[gate] != 1:
-        problems.append(f"the gate '{gate}' is not free in M0")
-    return problems
+
+    @staticmethod
+    def _template(proofs: Proofs, subject: str) -> _Template | None:
+        """The template of ``subject``: its own net, if its digest is the proven one."""
+        entry = proofs.get(subject)
+        if entry is None or "local" not in entry:
+            return None
+        try:
+            own, slots = proofs.own(subject)
+        except Mcl2PnmlError:      # a part the library does not have
+            return None
+        return _Template.of(own, slots) if shape(own, slots) == entry["local"] else None
+
+    def nodes_of_no_instance(self) -> list[str]:
+        """The instances with no node in the net; the nodes of no instance."""
+        out = [f"instance '{name}' of the certificate has no node in the net"
+               for name in sorted(self.plans.keys() - set(self.owner))]
+        if None in self.owner:
+            out += [f"'{node}' belongs to no instance of the certificate"
+                    for node, inst in zip(self.ids, self.owner) if inst is None]
+        return out
+
+    def _write(self, template: _Template, group: list[_Plan]) -> list[str]:
+        """The instances of one part, written from its ``template``: a row of node numbers
+        each (-1: no such node in the net)."""
+        if not group:
+            return []
+        problems = []
+        own, slots, transitions = template.own, template.slots, template.transitions
+        wanted = set(slots)
+        for plan in group:     # (a structure with fewer children has no proof either)
+            if not wanted <= plan.fills.keys():
+                problems.append(f"'{plan.name}' leaves its slot "
+                                f"'{min(wanted - plan.fills.keys())}' unfilled")
+        prefixes = [plan.name + "." for plan in group]
+        rows = np.empty((len(group), len(template.nodes)), dtype=np.int64)
+        rows[:, :len(own)] = self._numbers([p + x for p in prefixes for x in own], len(group))
+        rows[:, len(own):len(own) + len(slots)] = self._numbers(
+            [plan.fills.get(s, "") for plan in group for s in slots],
+            len(group))
+        rows[:, len(own) + len(slots):] = self._numbers(
+            [p + t for p in prefixes for t in transitions], len(group))
+        self.batches.append((template, group, rows))
+        return problems
+
+    def _numbers(self, nodes: list[str], instances: int) -> np.ndarray:
+        """The numbers of ``nodes`` (-1: not in the net), as ``instances`` rows."""
+        if not nodes:
+            return np.empty((instances, 0), dtype=np.int64)
+        try:     # one C call for all of them; a node missing is rare, and said later
+            found = itemgetter(*nodes)(self.number)
+        except KeyError:
+            found = [self.number.get(node, -1) for node in nodes]
+        return np.array(found, dtype=np.int64).reshape(instances, -1)
+
+    def _holds(self) -> bool:
+        """Whether the net is exactly the instances :meth:`_write` wrote."""
+        owned, arcs, marked, unusual = [], [], {}, {}
+        size = self.size
+        for template, group, rows in self.batches:
+            if (rows < 0).any():
+                return False
+            ordered = np.sort(rows, axis=1)     # one instance's nodes: all distinct
+            if (ordered[:, 1:] == ordered[:, :-1]).any():
+                return False
+            own, shared = len(template.own), len(template.own) + len(template.slots)
+            # places where the part has places, transitions where it has transitions
+            if (rows[:, :shared] >= self.places).any() or (rows[:, shared:] < self.places).any():
+                return False
+            owned += [rows[:, :own].ravel(), rows[:, shared:].ravel()]
+            gates = [self.number.get(plan.gate, -1) for plan in group if plan.gate]
+            if any(not 0 <= gate < self.places for gate in gates):
+                return False
+            owned.append(np.array(gates, dtype=np.int64))
+            marked.update(dict.fromkeys(gates, 1))
+            arcs.append(rows[:, template.sources] * size + rows[:, template.targets])
+            for (s, t), how in template.unusual.items():
+                unusual.update(dict.fromkeys((rows[:, s] * size + rows[:, t]).tolist(), how))
+            for x, tokens in template.marked:
+                marked.update(dict.fromkeys(rows[:, x].tolist(), tokens))
+        owned_all = np.concatenate(owned) if owned else np.empty(0, dtype=np.int64)
+        if owned_all.size != size or (size and np.bincount(owned_all, minlength=size).max() > 1):
+            return False
+        net_arcs, net_unusual = self._net_arcs()
+        expected = np.concatenate([a.ravel() for a in arcs]) if arcs else \
+            np.empty(0, dtype=np.int64)
+        if expected.size != net_arcs.size or \
+                not np.array_equal(np.sort(expected), np.sort(net_arcs)):
+            return False
+        return net_unusual == unusual and self._marking() == self._marked(marked)
+
+    @functools.cached_property
+    def _net_arcs_once(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]]]:
+        if not self.net.arcs:
+            return np.empty(0, dtype=np.int64), {}
+        sources, targets, weights, kinds = self.net.columns
+        # two million look-ups: itemgetter makes them in one C call each
+        number = self.number
+        arcs = (np.array(itemgetter(*sources)(number), dtype=np.int64).reshape(-1) * self.size
+                + np.array(itemgetter(*targets)(number), dtype=np.int64).reshape(-1))
+        odd = set(compress(count(), map(is_not, kinds, repeat(NORMAL))))
+        if max(weights) > 1:
+            odd.update(compress(count(), map(int(1).__lt__, weights)))
+        return arcs, {int(arcs[k]): (weights[k], kinds[k]) for k in odd}
+
+    def _net_arcs(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]]]:
+        """The net's arcs in numbers, and those of a weight > 1 or not normal (loops in C)."""
+        return self._net_arcs_once
+
+    def _marking(self) -> dict[int, int]:
+        """M0 in numbers."""
+        initial = self.net.initial
+        return {self.number[p]: initial[p] for p in initial}
+
+    def _marked(self, marked: dict[int, int]) -> dict[int, int]:
+        """The marking the certificate says, ``marked`` (every part at rest), and its
+        start."""
+        out = dict(marked)
+        for which in ("B", "A"):
+            k = self.number.get(f"{MISSION}.{which}")
+            if k is not None:
+                out.pop(k, None)
+                if f"{MISSION}.{which}" in self.start:
+                    out[k] = 1
+        return out
+
+    def _differences(self, uncovered: set[str]) -> list[str]:
+        """Where the net is not the instances, said instance by instance (nodes of no
+        instance, an instance with no node or whose part no proof covers, said already,
+        aside). Only on a net that does not hold: its cost does not matter."""
+        left_out = uncovered | (self.plans.keys() - set(self.owner))
+        problems: list[str] = []
+        differ: dict[str, list[str]] = {}
+        ids, places, owner, size = self.ids, self.places, self.owner, self.size
+
+        def said(inst: str | None, what: str) -> None:
+            if inst is not None and inst not in left_out:
+                differ.setdefault(inst, []).append(what)
+
+        def kind(k: int) -> str:
+            return "place" if k < places else "transition"
+
+        claimed: dict[int, str] = {}      # node -> the instance it is written for
+
+        def claim(at: int, node: str, name: str) -> bool:
+            """``node``, number ``at``, written for ``name``: unless another has it."""
+            if at in claimed:
+                problems.append(f"'{node}' is a {kind(at)} of both '{claimed[at]}' and "
+                                f"'{name}'")
+                return False
+            claimed[at] = name
+            return True
+        arcs: set[int] = set()
+        unusual: dict[int, tuple[int, ArcKind]] = {}
+        marked: dict[int, int] = {}
+        given: dict[str, set[str]] = {}
+        for template, group, rows in self.batches:
+            for plan, row in zip(group, rows.tolist()):
+                name, fills = plan.name, plan.fills
+                given[name] = {f"{name}.{x}" for x in template.own} | set(fills.values())
+                lost = False
+                for k, (x, at) in enumerate(zip(template.nodes, row)):
+                    shared = x in template.slots
+                    node = fills.get(x, "(none)") if shared else f"{name}.{x}"
+                    is_place = k < len(template.own) + len(template.slots)
+                    if at < 0:
+                        said(name, f"it has no {'place' if is_place else 'transition'} "
+                                   f"'{node}'")
+                        lost = True
+                    elif shared:
+                        if at >= places:
+                            said(name, f"it shares '{node}', which is not a place")
+                    elif claim(at, node, name) and (at < places) != is_place:
+                        said(name, f"its {kind(at)} '{node}' is a "
+                                   f"{'transition' if is_place else 'place'} of the part")
+                if plan.gate is not None:
+                    gate = self.number.get(plan.gate, -1)
+                    if gate < 0 or gate >= places:
+                        said(name, f"it has no gate '{plan.gate}'")
+                    elif claim(gate, plan.gate, name):
+                        marked[gate] = 1
+                    given[name].add(plan.gate)
+                if lost:
+                    continue
+                arcs.update(row[s] * size + row[t]
+                            for s, t in zip(template.sources, template.targets))
+                for (s, t), how in template.unusual.items():
+                    unusual[row[s] * size + row[t]] = how
+                for x, tokens in template.marked:
+                    marked[row[x]] = tokens
+        for k in sorted(set(range(size)) - claimed.keys()):
+            said(owner[k], f"it has a {kind(k)} '{ids[k]}' the proven part has not")
+        net_arcs, net_unusual = self._net_arcs()
+        in_net = set(net_arcs.tolist())
+
+        def ends(key: int) -> tuple[str, str, int]:
+            s, t = divmod(key, size)
+            return ids[s], ids[t], t if t >= places else s
+
+        for key in sorted(in_net - arcs):
+            s, t, transition = ends(key)
+            inst = owner[transition]
+            place = t if ids[transition] == s else s
+            if inst in given and place not in given[inst]:
+                said(inst, f"it has an arc with '{place}', which the certificate does not "
+                           "give it")
+            else:
+                said(inst, f"it has an arc {s} -> {t} the proven part has not")
+        for key in sorted(arcs - in_net):
+            s, t, transition = ends(key)
+            said(owner[transition], f"it has no arc {s} -> {t}")
+        for key in sorted((net_unusual.keys() | unusual.keys()) & in_net & arcs):
+            if net_unusual.get(key, (1, NORMAL)) != unusual.get(key, (1, NORMAL)):
+                s, t, transition = ends(key)
+                said(owner[transition], f"its arc {s} -> {t} is not of the part's weight "
+                                        "and kind")
+        marking, expected = self._marking(), self._marked(marked)
+        for k in sorted(marking.keys() | expected.keys()):
+            n, m = marking.get(k, 0), expected.get(k, 0)
+            if n == m or k not in claimed:
+                continue
+            place = ids[k]
+            if self.plans[claimed[k]].gate == place:
+                problems.append(f"the gate '{place}' is not free in M0")
+            elif place in (f"{MISSION}.B", f"{MISSION}.A"):
+                problems.append(f"M0 {'marks' if n else 'does not mark'} {place}; the "
+                                f"certificate starts from {', '.join(sorted(self.start))}")
+            else:
+                said(claimed[k], f"M0 puts {n} on '{place}', where the proven part at rest "
+                                 f"has {m}")
+        for inst, whats in differ.items():
+            more = f"; and {len(whats) - 3} more" if len(whats) > 3 else ""
+            problems.append(f"'{inst}' is not the proven {self.plans[inst].subject}: "
+                            + "; ".join(whats[:3]) + more)
+        return problems

@@ -67,28 +67,13 @@ def shape(net: Net, slots: frozenset[str] = frozenset()) -> str:
     places it shares with its children or primitives, whose marking is theirs); no labels,
     which fusion does not keep, and no timing: the proofs are of the untimed net, which
     allows every timing."""
-    return shape_of(((p.id, None if p.id in slots else net.initial[p.id]) for p in net.places),
-                    (t.id for t in net.transitions),
-                    ((a.source, a.target, a.weight, a.kind.value) for a in net.arcs))
-
-
-def shape_of(places, transitions, arcs) -> str:
-    """:func:`shape` of a net given as its parts: (place, marking or None) pairs,
-    transition ids, (source, target, weight, kind) arcs; the checker's fast way, with no
-    net built. A mission repeats a few shapes thousands of times (every call site of a
-    task, every sequence): each one's digest is computed once."""
-    key = (tuple(sorted(places)), tuple(sorted(transitions)), tuple(sorted(arcs)))
-    found = _SHAPES.get(key)
-    if found is None:
-        text = json.dumps({"places": [list(p) for p in key[0]], "transitions": list(key[1]),
-                           "arcs": [list(a) for a in key[2]]}, separators=(",", ":"))
-        found = _SHAPES[key] = hashlib.sha256(text.encode()).hexdigest()
-        if len(_SHAPES) > 10_000:     # a bound: shapes of one mission are few
-            _SHAPES.clear()
-    return found
-
-
-_SHAPES: dict[tuple, str] = {}
+    text = json.dumps({
+        "places": sorted([p.id, None if p.id in slots else net.initial[p.id]]
+                         for p in net.places),
+        "transitions": sorted(t.id for t in net.transitions),
+        "arcs": sorted([a.source, a.target, a.weight, a.kind.value] for a in net.arcs)},
+        separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def local(lib: Library, subject: str) -> tuple[Net, frozenset[str]]:
@@ -340,8 +325,27 @@ def stored(folder: Path | None = None) -> dict[str, dict]:
         return {}
 
 
+class Proofs(dict):
+    """The proofs of one library's parts: subject -> its proof, as ``templates/proofs.json``
+    stores it, its ``local`` digest that of the own net an instance of it has in a compiled
+    mission. Knows the library, so that the checker can write those own nets out
+    (:meth:`own`)."""
+
+    def __init__(self, entries: dict[str, dict], lib: Library,
+                 own: dict[str, tuple[Net, frozenset[str]]] | None = None) -> None:
+        super().__init__(entries)
+        self.lib = lib
+        self._own = dict(own or {})
+
+    def own(self, subject: str) -> tuple[Net, frozenset[str]]:
+        """The own net of an instance of ``subject``, and its slot places (:func:`local`)."""
+        if subject not in self._own:
+            self._own[subject] = local(self.lib, subject)
+        return self._own[subject]
+
+
 def current(lib: Library | None = None, known: dict[str, dict] | None = None,
-            eager: bool = False) -> dict[str, dict]:
+            eager: bool = False) -> Proofs:
     """The proofs of the library in use, as the certificate and its checker read them: the
     ``known`` ones (default: the stored ones) where the digest matches, every other subject
     (a user's template, an edited one) proven now (its results table row by row as it is
@@ -350,18 +354,22 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None,
     lib = lib or default_library()
     known = stored() if known is None else known
     out: dict[str, dict] = {}
+    own = {}
     for name, kind, make, children, source in _subjects(lib):
         net = make(None)
         entry = known.get(name)
         if entry is None or entry.get("digest") != digest(net) or "results" not in entry:
             entry = prove(name, kind, make, children, source, eager, net).as_json()
-        out[name] = {**entry, **({"local": local_digest(lib, name)} if kind != "joint" else {})}
+        if kind != "joint":
+            own[name] = local(lib, name)
+            entry = {**entry, "local": shape(*own[name])}
+        out[name] = entry
     # the instances a compiled mission is made of, besides the proven components
-    out["primitive"] = {"kind": "primitive", "local": local_digest(lib, "primitive")}
-    for k in range(MAX_LOCKS + 1):
-        out[f"{CALL_SITE}/{k}"] = {"kind": "joint",
-                                   "local": local_digest(lib, f"{CALL_SITE}/{k}")}
-    return out
+    for name, kind in (("primitive", "primitive"),
+                       *((f"{CALL_SITE}/{k}", "joint") for k in range(MAX_LOCKS + 1))):
+        own[name] = local(lib, name)
+        out[name] = {"kind": kind, "local": shape(*own[name])}
+    return Proofs(out, lib, own)
 
 
 def update(folder: Path | None = None) -> Path:

@@ -138,12 +138,17 @@ class Instance:
 
     name: str
     kind: str          # "call", or a structure: sequence, parallel, ..., NULL
-    label: str         # the call as written (``Goto((10.0, 5.0, 5.0))``), or the kind
     line: int
     parent: int
     depth: int
     size: int
     node: "FNode" = field(compare=False, repr=False, default=None)
+
+    @property
+    def label(self) -> str:
+        """The call as written (``Goto((10.0, 5.0, 5.0))``), or the kind: written when it
+        is asked for (a survey's 10,000 calls are named, and seldom shown)."""
+        return format_node(self.node) if self.kind == "call" else self.kind
 
 
 def instances(root: FNode, root_name: str, scope: str) -> list[Instance]:
@@ -165,21 +170,21 @@ def instances(root: FNode, root_name: str, scope: str) -> list[Instance]:
     while stack:
         node, parent, depth = stack.pop()
         if isinstance(node, FCall):
-            kind, stem, label, children = "call", node.name, format_node(node), ()
+            kind, stem, children = "call", node.name, ()
         else:
-            kind, stem, label, children = node.kind, node.kind, node.kind, node.children
+            kind, stem, children = node.kind, node.kind, node.children
         if parent < 0:
             name = root_name
         else:
             counters[stem] = counters.get(stem, 0) + 1
             name = f"{scope}.{stem}-{counters[stem]}" if scope else f"{stem}-{counters[stem]}"
         index = len(out)
-        out.append((name, kind, label, node.pos.line, parent, depth, node))
+        out.append((name, kind, node.pos.line, parent, depth, node))
         sizes.append(1)
         stack.extend((child, index, depth + 1) for child in reversed(children))
     for k in range(len(out) - 1, 0, -1):   # children after parents: sizes bottom-up
-        sizes[out[k][4]] += sizes[k]
+        sizes[out[k][3]] += sizes[k]
     # each instance made once, its size known (a frozen dataclass's replace() is slow,
     # and a survey of 10,000 calls has 20,000 instances)
-    return [Instance(name, kind, label, line, parent, depth, size, node)
-            for (name, kind, label, line, parent, depth, node), size in zip(out, sizes)]
+    return [Instance(name, kind, line, parent, depth, size, node)
+            for (name, kind, line, parent, depth, node), size in zip(out, sizes)]
