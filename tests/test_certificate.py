@@ -46,6 +46,19 @@ def test_every_example_s_certificate_is_what_exploring_finds(mission, pending):
     assert _agrees(mission.read_text(), (pending,), max_states=4_000_000) is True
 
 
+def test_proofs_read_back_from_json_check_as_the_library_s_do():
+    """The checker writes each part's own net from the library when the proofs come as
+    plain data (a file read back), and holds the net to the same digests."""
+    from mcl2pnml.certify.templates import current
+    net, cert = _certified(ROOT / "examples" / "multi_leg.mcl")
+    proofs = json.loads(json.dumps(current()))
+    assert check(net, cert, proofs) == []
+    proofs["sequence"]["local"] = "0" * 64       # a digest no part of the library has
+    problems = check(net, cert, proofs)
+    assert problems and all("is a sequence, which no stored proof covers" in p
+                            for p in problems if "sequence" in p)
+
+
 def test_a_net_one_arc_away_from_its_certificate_is_refused_naming_the_instance():
     """Every arc of the paper's mission removed in turn: the checker refuses each net."""
     from mcl2pnml.certify.templates import current

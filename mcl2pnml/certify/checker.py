@@ -232,24 +232,29 @@ def _plans(cert: dict[str, Any], functions: list[str]) -> dict[str, _Plan]:
             fills.update({(f"{slot}_{r}" if slot else r): f"{prim}.{r}"
                           for r in PRIMITIVE_ROLES})
         plans[name] = _Plan(name, task["subject"], fills, None)
+    site = tuple(p for p in ("GATE", *CONTROL) if p != "MTX")
+    site_slots, site_ends = tuple(f"to.{p}" for p in site), tuple(f".{p}" for p in site)
+    ends = tuple(f".{p}" for p in CONTROL)
+    slot_places: dict[str, tuple[str, ...]] = {}      # T1 -> T1_B, T1_A, ...
     for tree, nodes in cert.get("trees", {}).items():
         children: list[list[str]] = [[] for _ in nodes]
         for node in nodes:       # one pass: each node under its parent, in order
             if node.get("parent", -1) >= 0:
                 children[node["parent"]].append(node["instance"])
         for k, node in enumerate(nodes):
-            name, fills = node["instance"], {}
+            name = node["instance"]
             if node["rule"] == "call":
                 callee = node["callee"]
                 prims = sorted(set(tasks.get(callee, {}).get("primitives", [])))
                 subject = f"{CALL_SITE}/{len(prims)}"
-                fills.update({f"to.{p}": f"{callee}.{p}" for p in ("GATE", *CONTROL)
-                              if p != "MTX"})
+                fills = dict(zip(site_slots, map(callee.__add__, site_ends)))
                 fills.update({f"lock.{k}": f"{p}.LOCK" for k, p in enumerate(prims, 1)})
             else:
-                subject = node["template"]
+                subject, fills = node["template"], {}
                 for slot, child in zip(node["slots"], children[k]):
-                    fills.update({f"{slot}_{p}": f"{child}.{p}" for p in CONTROL})
+                    if slot not in slot_places:
+                        slot_places[slot] = tuple(f"{slot}_{p}" for p in CONTROL)
+                    fills.update(zip(slot_places[slot], map(child.__add__, ends)))
             gate = f"{name}.GATE" if k == 0 and tree in functions else None
             plans[name] = _Plan(name, subject, fills, gate)
     return plans
