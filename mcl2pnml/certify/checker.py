@@ -347,7 +347,7 @@ class _Layout:
             return None
         try:
             own, slots = proofs.own(subject)
-        except Mcl2PnmlError:      # a part the library does not have
+        except (Mcl2PnmlError, ValueError):      # a part the library does not have
             return None
         return _Template.of(own, slots) if shape(own, slots) == entry["local"] else None
 
