@@ -421,7 +421,7 @@ class _Layout:
         owned_all = np.concatenate(owned) if owned else np.empty(0, dtype=np.int64)
         if owned_all.size != size or (size and np.bincount(owned_all, minlength=size).max() > 1):
             return False
-        net_arcs, net_unusual = self._net_arcs()
+        net_arcs, net_unusual = self._net_arcs
         expected = np.concatenate([a.ravel() for a in arcs]) if arcs else \
             np.empty(0, dtype=np.int64)
         if expected.size != net_arcs.size or \
@@ -430,7 +430,8 @@ class _Layout:
         return net_unusual == unusual and self._marking() == self._marked(marked)
 
     @functools.cached_property
-    def _net_arcs_once(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]]]:
+    def _net_arcs(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]]]:
+        """The net's arcs in numbers, and those of a weight > 1 or not normal (loops in C)."""
         if not self.net.arcs:
             return np.empty(0, dtype=np.int64), {}
         sources, targets, weights, kinds = self.net.columns
@@ -442,10 +443,6 @@ class _Layout:
         if max(weights) > 1:
             odd.update(compress(count(), map(int(1).__lt__, weights)))
         return arcs, {int(arcs[k]): (weights[k], kinds[k]) for k in odd}
-
-    def _net_arcs(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]]]:
-        """The net's arcs in numbers, and those of a weight > 1 or not normal (loops in C)."""
-        return self._net_arcs_once
 
     def _marking(self) -> dict[int, int]:
         """M0 in numbers."""
@@ -530,7 +527,7 @@ class _Layout:
                     marked[row[x]] = tokens
         for k in sorted(set(range(size)) - claimed.keys()):
             said(owner[k], f"it has a {kind(k)} '{ids[k]}' the proven part has not")
-        net_arcs, net_unusual = self._net_arcs()
+        net_arcs, net_unusual = self._net_arcs
         in_net = set(net_arcs.tolist())
 
         def ends(key: int) -> tuple[str, str, int]:
