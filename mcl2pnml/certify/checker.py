@@ -395,7 +395,7 @@ class _Layout:
 
     def _holds(self) -> bool:
         """Whether the net is exactly the instances :meth:`_write` wrote."""
-        owned, arcs, marked, unusual = [], [], {}, {}
+        owned = []
         size = self.size
         for template, group, rows in self.batches:
             if (rows < 0).any():
@@ -412,22 +412,33 @@ class _Layout:
             if any(not 0 <= gate < self.places for gate in gates):
                 return False
             owned.append(np.array(gates, dtype=np.int64))
-            marked.update(dict.fromkeys(gates, 1))
-            arcs.append(rows[:, template.sources] * size + rows[:, template.targets])
-            for (s, t), how in template.unusual.items():
-                unusual.update(dict.fromkeys((rows[:, s] * size + rows[:, t]).tolist(), how))
-            for x, tokens in template.marked:
-                marked.update(dict.fromkeys(rows[:, x].tolist(), tokens))
         owned_all = np.concatenate(owned) if owned else np.empty(0, dtype=np.int64)
         if owned_all.size != size or (size and np.bincount(owned_all, minlength=size).max() > 1):
             return False
         net_arcs, net_unusual = self._net_arcs
-        expected = np.concatenate([a.ravel() for a in arcs]) if arcs else \
-            np.empty(0, dtype=np.int64)
+        expected, unusual, marked = self._expected()
         if expected.size != net_arcs.size or \
                 not np.array_equal(np.sort(expected), np.sort(net_arcs)):
             return False
         return net_unusual == unusual and self._marking() == self._marked(marked)
+
+    def _expected(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]], dict[int, int]]:
+        """The arcs the instances :meth:`_write` wrote have, those of a weight > 1 or not
+        normal, and the tokens of their parts at rest and of the gates (an instance with a
+        node not in the net aside: it has no arcs to write)."""
+        arcs, unusual, marked = [], {}, {}
+        size = self.size
+        for template, group, rows in self.batches:
+            whole = (rows >= 0).all(axis=1)
+            rows = rows[whole]
+            arcs.append((rows[:, template.sources] * size + rows[:, template.targets]).ravel())
+            for (s, t), how in template.unusual.items():
+                unusual.update(dict.fromkeys((rows[:, s] * size + rows[:, t]).tolist(), how))
+            for x, tokens in template.marked:
+                marked.update(dict.fromkeys(rows[:, x].tolist(), tokens))
+            gates = (self.number.get(plan.gate, -1) for plan in group if plan.gate)
+            marked.update(dict.fromkeys((g for g in gates if 0 <= g < self.places), 1))
+        return (np.concatenate(arcs) if arcs else np.empty(0, dtype=np.int64)), unusual, marked
 
     @functools.cached_property
     def _net_arcs(self) -> tuple[np.ndarray, dict[int, tuple[int, ArcKind]]]:
@@ -487,15 +498,11 @@ class _Layout:
                 return False
             claimed[at] = name
             return True
-        arcs: set[int] = set()
-        unusual: dict[int, tuple[int, ArcKind]] = {}
-        marked: dict[int, int] = {}
         given: dict[str, set[str]] = {}
         for template, group, rows in self.batches:
             for plan, row in zip(group, rows.tolist()):
                 name, fills = plan.name, plan.fills
                 given[name] = {f"{name}.{x}" for x in template.own} | set(fills.values())
-                lost = False
                 for k, (x, at) in enumerate(zip(template.nodes, row)):
                     shared = x in template.slots
                     node = fills.get(x, "(none)") if shared else f"{name}.{x}"
@@ -503,7 +510,6 @@ class _Layout:
                     if at < 0:
                         said(name, f"it has no {'place' if is_place else 'transition'} "
                                    f"'{node}'")
-                        lost = True
                     elif shared:
                         if at >= places:
                             said(name, f"it shares '{node}', which is not a place")
@@ -514,21 +520,15 @@ class _Layout:
                     gate = self.number.get(plan.gate, -1)
                     if gate < 0 or gate >= places:
                         said(name, f"it has no gate '{plan.gate}'")
-                    elif claim(gate, plan.gate, name):
-                        marked[gate] = 1
+                    else:
+                        claim(gate, plan.gate, name)
                     given[name].add(plan.gate)
-                if lost:
-                    continue
-                arcs.update(row[s] * size + row[t]
-                            for s, t in zip(template.sources, template.targets))
-                for (s, t), how in template.unusual.items():
-                    unusual[row[s] * size + row[t]] = how
-                for x, tokens in template.marked:
-                    marked[row[x]] = tokens
         for k in sorted(set(range(size)) - claimed.keys()):
             said(owner[k], f"it has a {kind(k)} '{ids[k]}' the proven part has not")
         net_arcs, net_unusual = self._net_arcs
         in_net = set(net_arcs.tolist())
+        written, unusual, marked = self._expected()
+        arcs = set(written.tolist())
 
         def ends(key: int) -> tuple[str, str, int]:
             s, t = divmod(key, size)
