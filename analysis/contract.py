@@ -29,6 +29,12 @@ marked. Then, for the component started from rest:
 * ``result last``: whenever a result is marked, every other place is
   already at rest, so a caller may take the result and start the component
   again at once;
+* ``result final``: whenever a result is marked, nothing in the component
+  can fire: the result stands until the caller takes it out. Without it a
+  component could end OK and then take its own OK back to end FAIL: its
+  dead markings say "only FAIL", but a caller takes the OK first, and a
+  signature read from the dead markings alone would lie to the caller
+  (docs/certificate.md, the composition argument);
 * ``abortable``: started with an abort pending, it can end ABORTED and in
   each result it can give without one, and in no other: what the reduced
   model does, so that the reduced model with the same results stands for it.
@@ -54,6 +60,10 @@ from dataclasses import dataclass
 from mcl2pnml.core.net import Net
 
 from analysis.statespace import ExplorationLimit, explore
+
+#: The version of the contract: stored proofs of another version are proven again
+#: (2: the ``result final`` clause).
+VERSION = 2
 
 #: The fusion places of a component's control interface, by role (the places' labels).
 START, ABORT = "B", "A"
@@ -83,6 +93,12 @@ class Clause(enum.Enum):
     takes the result may start the component again at once (section 2.3's reusability,
     which a check of the dead markings alone misses: a task that gives its result while
     its primitive still holds a request would get a second one)."""
+
+    RESULT_FINAL = "result final"
+    """Whenever a result is marked, no transition of the component is enabled: a result
+    once given is final until the caller takes it, so the results a caller can see are
+    exactly the component's ends (version 2 of the contract; without it a component that
+    ends OK and may take its OK back to end FAIL showed the signature "only FAIL")."""
 
     ABORTABLE = "abortable"
     """Started with an abort pending, it can end ABORTED and in every result it can give
@@ -196,9 +212,13 @@ def restricted(net: Net, results, stuck: bool = False) -> Net:
         # the abort of a running model (Fig. 3's t4: EXE, A -> ABORTED, MTX) shows where
         # it runs, and what an abort gives back
         pre = {t.id: [a for a in net.arcs if a.target == t.id] for t in net.transitions}
-        abort = next(t.id for t in net.transitions
-                     if {a.source for a in pre[t.id]} & {role[ABORT]}
-                     and not {a.source for a in pre[t.id]} & {role[START]})
+        abort = next((t.id for t in net.transitions
+                      if {a.source for a in pre[t.id]} & {role[ABORT]}
+                      and not {a.source for a in pre[t.id]} & {role[START]}), None)
+        if abort is None:
+            raise NoInterface(f"net '{net.name}': no transition aborts it while it runs (one "
+                              "taking A but not B): it cannot stand for a child that may run "
+                              "for ever until aborted")
         running = [a.source for a in pre[abort] if a.source != role[ABORT]]
         places.append(Place("STUCK"))
         transitions += [Transition("stray"), Transition("spin"), Transition("stop")]
@@ -271,6 +291,14 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
                 and m[k] != rest.get(s.places[k], 0)]
         breach(Clause.RESULT_LAST, late, f"a result is marked while {', '.join(busy)} "
                                          "is not back at rest")
+    dead = set(space.terminal)
+    moving = next((n for n in range(space.states) if n not in dead
+                   and any(space.markings[n][k] for k in results)), None)
+    if moving is not None:
+        m = space.markings[moving]
+        fires = [t for j, t in enumerate(s.transitions) if s.enabled(m, j)]
+        breach(Clause.RESULT_FINAL, moving, f"a result is marked and {', '.join(fires)} can "
+                                            "still fire: a caller may take the result first")
     if ends:
         reach = space.can_reach(ends)
         stuck = next((n for n in range(space.states) if not reach[n]), None)

@@ -85,9 +85,23 @@ def test_a_result_given_before_the_rest_is_restored_breaks_result_last():
     start the component while it still holds its mutex (the dead markings are all fine)."""
     verdict = check(reduced("t2:MTX", extra=[("t2", "HOLD"), ("HOLD", "t2b"), ("t2b", "MTX")],
                             places=["HOLD"], transitions=["t2b"]))
-    [breach] = [br for br in verdict.breaches if br.start == "rest + B"]
-    assert breach.clause is Clause.RESULT_LAST and breach.path == ("t1", "t2")
+    [breach] = [br for br in verdict.breaches if br.start == "rest + B"
+                and br.clause is Clause.RESULT_LAST]
+    assert breach.path == ("t1", "t2")
     assert "MTX, HOLD is not back at rest" in breach.why
+
+
+def test_a_result_taken_back_breaks_result_final():
+    """The reduced task that may take its own OK back and end FAIL (regret: OK -> FAIL):
+    every dead marking is a proper end, the rest is at rest whenever a result is marked,
+    and its ends are only FAIL; but a caller takes the OK first, so "only FAIL" would be a
+    lie to it. Version 2 of the contract refuses it, with the run to the OK."""
+    verdict = check(reduced(extra=[("OK", "regret"), ("regret", "FAIL")],
+                            transitions=["regret"]))
+    clauses = {b.clause for b in verdict.breaches}
+    assert clauses == {Clause.RESULT_FINAL}, [str(b) for b in verdict.breaches]
+    breach = next(b for b in verdict.breaches if b.start == "rest + B")
+    assert breach.path == ("t1", "t2") and "regret can still fire" in breach.why
 
 
 def test_removing_an_arc_of_a_template_breaks_the_contract_but_for_five_guards():

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from itertools import product
 from pathlib import Path
 
+from analysis.contract import VERSION as CONTRACT_VERSION
 from analysis.contract import Clause, check, restricted
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
@@ -58,7 +59,9 @@ def canonical(net: Net) -> str:
 
 
 def digest(net: Net) -> str:
-    return hashlib.sha256(canonical(net).encode()).hexdigest()
+    """The digest of the composed net checked, and of the contract it was checked against:
+    a proof of another version of the contract is no proof of this one."""
+    return hashlib.sha256(f"contract {CONTRACT_VERSION}\n{canonical(net)}".encode()).hexdigest()
 
 
 def shape(net: Net, slots: frozenset[str] = frozenset()) -> str:
