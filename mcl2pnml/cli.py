@@ -386,9 +386,12 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
 @click.option("--abort-pending", is_flag=True, help="Certify the mission started with "
               "mission.A marked too (an abort racing every step): its ends then include "
               "mission.ABORTED.")
+@click.option("--max-certificate-size", "max_cert", metavar="SIZE", default="16M",
+              show_default=True, help="With --check: refuse a certificate larger than this, "
+              "before reading it.")
 @NET_OPTION
 def certify(mission: Path, output: Path | None, net_file: Path | None,
-            net_id: str | None, abort_pending: bool = False) -> int:
+            net_id: str | None, abort_pending: bool = False, max_cert: str = "16M") -> int:
     """Prove MISSION from its parts, without exploring: write its certificate.
 
     Every task pattern and control structure was proven once against the
@@ -397,14 +400,16 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
     the mission 1-safe, always able to end, and reusable, and which ends it
     has, and is re-checked at once against the compiled net. Exit status 1:
     it does not hold; 2: the mission cannot be certified (a loop that can
-    never end: the message points at it).
+    never end: the message points at it; or, with --check, a certificate that is
+    not one: too large, not JSON, or not of the certificate's shape).
     """
     if net_file is not None:
         if output is not None:
             raise OptionError("-o", "--check writes nothing")
-        cert = pipeline.load_certificate(mission)
+        cert = pipeline.load_certificate(mission, pipeline.parse_size(
+            max_cert, "--max-certificate-size"))
         net = pipeline.load_net(net_file, net_id)
-        problems = pipeline.check_certificate(net, cert)
+        problems = pipeline.check_certificate(net, cert, shaped=True)
     else:
         if net_id is not None:
             raise OptionError("--net", "only --check reads a net file")
@@ -457,6 +462,9 @@ def _progress(states: int, frontier: int) -> None:
 @click.option("--explore", is_flag=True, help="Explore the reachable markings even where a "
               "certificate beside FILE (FILE.cert.json, `mcl2pnml certify`) proves the "
               "behaviour.")
+@click.option("--max-certificate-size", "max_cert", metavar="SIZE", default="16M",
+              show_default=True, help="Refuse a certificate beside FILE larger than this, "
+              "before reading it.")
 @click.option("--counterexamples", "cex_dir", metavar="DIR",
               type=click.Path(file_okay=False, path_type=Path),
               help="With --properties: for each failing property write DIR/NAME.txt (its run "
@@ -467,7 +475,8 @@ def _progress(states: int, frontier: int) -> None:
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
             progress: bool | None, explorer: str, max_memory: str | None,
             net_id: str | None, properties: str | None = None,
-            cex_dir: Path | None = None, explore: bool = False) -> int:
+            cex_dir: Path | None = None, explore: bool = False, max_cert: str = "16M"
+            ) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
@@ -489,7 +498,8 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     beside = pipeline.certificate_beside(file)
     certified = None
     if beside.is_file() and start is None and not explore:
-        certified, problems = pipeline.certified_facts(net, beside)
+        certified, problems = pipeline.certified_facts(
+            net, beside, pipeline.parse_size(max_cert, "--max-certificate-size"))
         if problems:
             click.echo(f"{beside}: the certificate does not hold for this net ({problems[0]}"
                        + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")

@@ -274,11 +274,36 @@ def certify_file(mission: str | Path, abort_pending: bool = False
     return cert, net, check(net, json.loads(json.dumps(cert)), proofs)
 
 
-def load_certificate(path: str | Path) -> dict[str, Any]:
-    """A certificate read back; a file that is not one is one error naming it."""
+#: The largest certificate read, unless raised (``--max-certificate-size``): a 10,000-call
+#: survey's is 3.3 MB; read as JSON, a file takes about fifteen times its size in memory.
+MAX_CERTIFICATE = 16 * 2**20
+
+
+def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE
+                     ) -> dict[str, Any]:
+    """A certificate read back and held to its schema (:mod:`mcl2pnml.certify.form`): a
+    file over ``max_size`` bytes (checked before reading it), or that is not JSON, or not of
+    the certificate's shape, is one error naming it, with the line and column or the JSON
+    path of the fault."""
+    import os
+
+    from mcl2pnml.certify import form
     from mcl2pnml.core.errors import Location, Mcl2PnmlError
     from mcl2pnml.core.files import json_fault, read_text
+    limit = parse_size(max_size, "--max-certificate-size") if isinstance(max_size, str) \
+        else max_size
+    try:
+        size = os.stat(path).st_size
+    except OSError:
+        size = 0     # read_text says why it cannot be read
+    if size > limit:
+        raise Mcl2PnmlError(f"cannot read the certificate: it is {size / 2**20:.1f} MiB, over "
+                            f"the limit of {limit / 2**20:.1f} MiB (--max-certificate-size to "
+                            "raise it)", Location(str(path)))
     text = read_text(path, "certificate")
+    if len(text) > limit:      # grown since: never read past the limit
+        raise Mcl2PnmlError("cannot read the certificate: it grew past the limit while read",
+                            Location(str(path)))
     try:
         cert = json.loads(text)
     except json.JSONDecodeError as e:
@@ -287,22 +312,22 @@ def load_certificate(path: str | Path) -> dict[str, Any]:
             str(path), e.lineno, e.colno, lines[e.lineno - 1] if lines else None)) from None
     except (ValueError, RecursionError) as e:
         raise Mcl2PnmlError(f"not a certificate: {json_fault(e)}", Location(str(path))) from None
-    from mcl2pnml.certify.certificate import FORMAT
-    if not isinstance(cert, dict) or cert.get("format") != FORMAT or \
-            not isinstance(cert.get("trees"), dict):
-        raise Mcl2PnmlError(f"not a certificate of format {FORMAT} (`mcl2pnml certify` "
+    if not isinstance(cert, dict) or cert.get("format") != form.FORMAT:
+        raise Mcl2PnmlError(f"not a certificate of format {form.FORMAT} (`mcl2pnml certify` "
                             "writes them)", Location(str(path), 1, 1))
+    faults = form.shape_faults(cert)
+    if faults:
+        more = f" (and {len(faults) - 1} more)" if len(faults) > 1 else ""
+        raise Mcl2PnmlError(f"the certificate is malformed at {faults[0]}{more}",
+                            Location(str(path)))
     return cert
 
 
-def check_certificate(net: Net, cert: dict[str, Any]) -> list[str]:
+def check_certificate(net: Net, cert: dict[str, Any], *, shaped: bool = False) -> list[str]:
     """What the independent checker finds wrong with ``cert`` for ``net`` (nothing: it
-    holds); a certificate whose shape is broken is a problem, never a crash."""
+    holds); ``shaped``: :func:`load_certificate` held it to its schema already."""
     from mcl2pnml.certify.checker import check
-    try:
-        return check(net, cert)
-    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as e:
-        return [f"the certificate is malformed: {type(e).__name__}: {e}"]
+    return check(net, cert, shaped=shaped)
 
 
 def certificate_beside(file: Path) -> Path:
@@ -310,11 +335,13 @@ def certificate_beside(file: Path) -> Path:
     return file.with_name(file.stem + ".cert.json")
 
 
-def certified_facts(net: Net, cert_path: Path) -> tuple[dict[str, Any] | None, list[str]]:
+def certified_facts(net: Net, cert_path: Path, max_size: int | str = MAX_CERTIFICATE
+                    ) -> tuple[dict[str, Any] | None, list[str]]:
     """What a certificate proves of ``net``, as ``analyze`` reports it, if it holds for
-    ``net``; else None and what the checker found."""
-    cert = load_certificate(cert_path)
-    problems = check_certificate(net, cert)
+    ``net``; else None and what the checker found. The facts are the checker's: the ends
+    are the ones it derived (the certificate must say exactly those to hold)."""
+    cert = load_certificate(cert_path, max_size)
+    problems = check_certificate(net, cert, shaped=True)
     if problems:
         return None, problems
     facts = {"bounded": True, "safe": True, "deadlock_free": True, "ends_properly": True,

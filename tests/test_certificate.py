@@ -56,6 +56,7 @@ def test_proofs_read_back_from_json_check_as_the_library_s_do():
     proofs["sequence"]["local"] = "0" * 64       # a digest no part of the library has
     problems = check(net, cert, proofs)
     assert problems and all("is a sequence, which no stored proof covers" in p
+                            or "its own digest is not sequence's" in p
                             for p in problems if "sequence" in p)
 
 
@@ -148,10 +149,19 @@ def test_a_certificate_of_another_mission_is_refused():
     assert any("belongs to no instance" in p for p in problems)
 
 
-def test_a_recursive_call_order_is_a_side_condition_broken():
+def test_the_functions_order_is_computed_and_a_call_cycle_is_refused():
+    """The checker orders the functions itself: the list reversed changes nothing; a
+    function made to call one that calls it is a cycle, refused whatever the list says."""
     net, cert = _certified(ROOT / "examples" / "multi_leg.mcl")
     cert["functions"] = list(reversed(cert["functions"]))
-    assert any("is not before it" in p for p in check(net, cert))
+    assert check(net, cert) == []
+    calls = {f: [n for n in cert["trees"][f] if n["rule"] == "call"
+                 and n["callee"] in cert["functions"]] for f in cert["functions"]}
+    caller = next(f for f in calls if calls[f])
+    callee = calls[caller][0]["callee"]
+    site = next(n for n in cert["trees"][callee] if n["rule"] == "call")
+    site["callee"] = caller
+    assert any("call each other in a cycle" in p for p in check(net, cert))
 
 
 @functools.cache
@@ -285,7 +295,7 @@ def test_certify_writes_the_certificate_and_check_re_reads_it(tmp_path):
 
 @pytest.mark.parametrize("args,message", [
     (["{tmp}/bad.json", "--check", "{pnml}"], "bad.json:2:3: not a certificate: Expecting"),
-    (["{tmp}/other.json", "--check", "{pnml}"], "not a certificate of format 1"),
+    (["{tmp}/other.json", "--check", "{pnml}"], "not a certificate of format 2"),
     (["{mission}", "--net", "x"], "only --check reads a net file"),
     (["{tmp}/other.json"], "is not a mission (.mcl)"),
 ])
@@ -486,7 +496,8 @@ def test_a_loop_that_never_ends_is_not_certified_and_the_message_points_at_it(tm
 def test_a_certificate_claiming_other_ends_is_refused():
     net, cert = _certified(ROOT / "examples" / "docking.mcl")
     cert["conclusion"]["ends"] = ["mission.OK"]
-    assert any("are not the root's" in p for p in check(net, cert))
+    assert any("the conclusion is not the one derived from the parts" in p
+               for p in check(net, cert))
 
 
 def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
@@ -503,16 +514,26 @@ def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
     assert any("does not mark mission.A" in p for p in check(net, cert))
 
 
-@pytest.mark.parametrize("spoil", [
-    lambda c: c["trees"]["mission"][1].update(parent=10_000),
-    lambda c: c["trees"].update(mission="not a list"),
-    lambda c: c.pop("conclusion"),
-    lambda c: c["tasks"]["DropMarker"].update(subject=["a", "list"]),
-    lambda c: c["trees"]["mission"][0].pop("instance"),
-], ids=["parent out of range", "tree not a list", "no conclusion", "subject a list",
-        "node without a name"])
-def test_a_spoilt_certificate_is_refused_with_one_message(spoil, tmp_path):
-    """A certificate is input like any other: spoilt by hand, it is refused, never a crash."""
+@pytest.mark.parametrize("spoil,message", [
+    (lambda c: c["trees"].update(mission="not a list"),
+     "malformed at $.trees.mission: 'not a list' is not of type 'array'"),
+    (lambda c: c.pop("conclusion"), "malformed at $: 'conclusion' is a required property"),
+    (lambda c: c.pop("tasks"), "malformed at $: 'tasks' is a required property"),
+    (lambda c: c["tasks"]["DropMarker"].update(subject=["a", "list"]),
+     "malformed at $.tasks.DropMarker.subject: ['a', 'list'] is not of type 'string'"),
+    (lambda c: c["trees"]["mission"][0].pop("instance"),
+     "malformed at $.trees.mission[0]: 'instance' is a required property"),
+    (lambda c: c["trees"]["mission"][1].update(parent="0"),
+     "malformed at $.trees.mission[1].parent: '0' is not of type 'integer'"),
+    (lambda c: c["conclusion"].update(safe=False),
+     "malformed at $.conclusion.safe: True was expected"),
+    (lambda c: c.update(start=[]), "malformed at $.start: [] should be non-empty"),
+], ids=["tree not a list", "no conclusion", "no tasks", "subject a list",
+        "node without a name", "parent a string", "safe false", "no start"])
+def test_a_certificate_not_of_its_shape_is_one_message_at_its_json_path(spoil, message,
+                                                                       tmp_path):
+    """A certificate is input like any other: spoilt by hand, it is refused with one line
+    naming the file and the JSON path of the fault, exit 2, never a crash."""
     from helpers import run_cli
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     spoil(cert)
@@ -520,8 +541,23 @@ def test_a_spoilt_certificate_is_refused_with_one_message(spoil, tmp_path):
     assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
                    tmp_path / "s.pnml").returncode == 0
     out = run_cli("certify", tmp_path / "c.json", "--check", tmp_path / "s.pnml")
+    assert out.returncode == 2 and out.stdout == "", out.stderr
+    assert out.stderr.startswith(f"{tmp_path / 'c.json'}: the certificate is ")
+    assert message in out.stderr and out.stderr.count("\n") == 1, out.stderr
+    assert check(net, cert) and all(p.startswith("the certificate is malformed")
+                                    for p in check(net, cert))
+
+
+def test_a_parent_out_of_range_is_a_certificate_that_does_not_hold(tmp_path):
+    from helpers import run_cli
+    net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    cert["trees"]["mission"][1]["parent"] = 10_000
+    (tmp_path / "c.json").write_text(json.dumps(cert))
+    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
+                   tmp_path / "s.pnml").returncode == 0
+    out = run_cli("certify", tmp_path / "c.json", "--check", tmp_path / "s.pnml")
     assert out.returncode == 1 and "Traceback" not in out.stderr + out.stdout
-    assert "the certificate does not hold" in out.stdout
+    assert "parent 10000 is no other node of the tree" in out.stdout
 
 
 #: Missions whose verdicts differ, with whether each is certified from mission.B alone: a

@@ -40,7 +40,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from mcl2pnml.certify.checker import results, root_ends
+from mcl2pnml.certify import form
+from mcl2pnml.certify.checker import results, root_ends, said_signature
 from mcl2pnml.certify.templates import current
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.gcpause import without_gc
@@ -49,10 +50,6 @@ from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE
 from mcl2pnml.language.functional import (FCall, function_expression, instances,
                                           mission_expression)
 from mcl2pnml.language.library import Library, default_library
-
-#: The version of the certificate's JSON form.
-FORMAT = 1
-
 
 @without_gc      # 20,000 instances for a 10,000-call survey: nothing cyclic among them
 def certify(checked, lib: Library | None = None, net_name: str | None = None,
@@ -83,33 +80,17 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
                        "local": proofs[subject]["local"]}
     used = sorted({p for t in tasks.values() for p in t["primitives"]})
     cert = {
-        "format": FORMAT,
+        "format": form.FORMAT,
         "mission": net_name or checked.program.file,
-        "rules": ["task", "call", "structure", "function", "mission"],
+        "rules": list(form.RULES),
         "proofs": {name: p["digest"] for name, p in sorted(proofs.items()) if "digest" in p},
         "primitives": {p: {"local": proofs["primitive"]["local"]} for p in used},
         "tasks": tasks,
         "functions": list(checked.function_order),
         "trees": trees,
         "calls": calls,
-        "side_conditions": {
-            "functions not recursive": "each function calls only functions before it in "
-                                       "'functions'",
-            "locks": "every call site of a task takes the locks of exactly the task's "
-                     "primitives, and gives them back with its result",
-            "gates": "every call site of a task or function takes its gate on entry and "
-                     "gives it back with its result",
-        },
-        "start": [f"{MISSION}.B", *([f"{MISSION}.A"] if abort_pending else [])],
-        "conclusion": {"safe": True, "an end always reachable": True, "reusable": True,
-                       "at rest when it ends": True,
-                       **({"abort": f"{MISSION}.A is consumed exactly when the end is "
-                                    f"{MISSION}.ABORTED, and left marked otherwise"}
-                          if abort_pending else {}),
-                       "why": "the root keeps the interface contract (rules above), started "
-                              "by mission.B" + (" with mission.A pending (A consumed "
-                                                "exactly when the end is ABORTED)"
-                                                if abort_pending else " with no abort asked")},
+        "side_conditions": dict(form.SIDE_CONDITIONS),
+        "start": form.start(abort_pending),
     }
     derived, faults = results(cert, proofs)
     ends = None if faults else root_ends(derived[MISSION], abort_pending)
@@ -125,16 +106,11 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
                            "--state-space --explore` shows the run)", _where(checked, name))
     for nodes in trees.values():
         for node in nodes:
-            node.update(_signature(derived[node["instance"]]))
+            node.update(said_signature(derived[node["instance"]]))
     for name, task in tasks.items():
-        task.update(_signature(derived[name]))
-    cert["conclusion"] = {"ends": ends, **cert["conclusion"]}
+        task.update(said_signature(derived[name]))
+    cert["conclusion"] = form.conclusion(ends, abort_pending)
     return cert
-
-
-def _signature(sig) -> dict[str, Any]:
-    """What the certificate says a node can do (:class:`checker.Signature`)."""
-    return {"results": list(sig.ends), **({"may run for ever": True} if sig.stuck else {})}
 
 
 class NotCertified(Mcl2PnmlError):

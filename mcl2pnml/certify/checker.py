@@ -47,6 +47,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from mcl2pnml.certify import form
 from mcl2pnml.certify.templates import (CALL_SITE, SHARED_CALLEE, Proofs, current,
                                         results_key, shape)
 from mcl2pnml.core.errors import Mcl2PnmlError
@@ -54,6 +55,7 @@ from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language.library import default_library
+from mcl2pnml.language.template_parser import TemplateKind
 
 NORMAL = ArcKind.NORMAL
 
@@ -62,30 +64,41 @@ PRIMITIVE_ROLES = ("ON", "OFF", "E", "D", "S1", "S2")
 
 
 @without_gc      # a million arcs: nothing cyclic to collect while they are read
-def check(net: Net, cert: dict[str, Any], proofs: dict[str, dict] | None = None) -> list[str]:
-    """Every way ``net`` departs from ``cert`` (none: the certificate holds for it).
+def check(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
+          shaped: bool = False) -> list[str]:
+    """Every way ``net`` departs from ``cert`` (none: the certificate holds for it), at most
+    :data:`form.MAX_FAULTS` of each kind.
 
-    ``proofs``: the proven parts to hold the instances to (default: the library in use,
-    :func:`mcl2pnml.certify.templates.current`: the stored proofs, and a user's templates
-    proven now)."""
+    Nothing the verdict rests on is taken from ``cert``: it is held to its schema, read
+    into a :class:`Model` that must be a tree as the net's own places join it, and every
+    fact it states (each node's results, the calls, the digests, the conclusion) is
+    computed again and must be what it says (``shaped``: the caller held it to its schema
+    already, :func:`mcl2pnml.pipeline.load_certificate`). ``proofs``: the proven parts to hold the
+    instances to (default: the library in use, :func:`mcl2pnml.certify.templates.current`:
+    the stored proofs, and a user's templates proven now)."""
+    faults = [] if shaped else form.shape_faults(cert)
+    if faults:
+        return [f"the certificate is malformed: {f}" for f in faults]
+    instances = len(cert["primitives"]) + len(cert["tasks"]) + sum(map(len,
+                                                                       cert["trees"].values()))
+    size = len(net.place_index) + len(net.transition_index)
+    if instances > size:      # each instance has a node of its own: a padded certificate
+        return [f"the certificate names {instances:,} instances, and the net has {size:,} "
+                "nodes: every instance has nodes of its own"]
     proofs = proofs if proofs is not None else current()
     if not isinstance(proofs, Proofs):     # read from a file: the library in use has them
         proofs = Proofs(proofs, default_library())
-    functions = cert.get("functions", [])
-    plans = _plans(cert, functions)
-    problems = _side_conditions(cert, functions)
-    derived, faults = results(cert, proofs)
+    model, problems = read(cert, proofs)
+    if model is None:
+        return problems[:form.MAX_FAULTS]
+    derived, faults = signatures(model, proofs)
     problems += [message for _, message in faults]
-    claimed = (cert.get("conclusion") or {}).get("ends")
-    if not faults and MISSION in derived:
-        ends = root_ends(derived[MISSION], f"{MISSION}.A" in cert.get("start", ()))
-        if ends is None:
-            problems.append(f"{MISSION} may run for ever (from '{derived[MISSION].origin}'), "
-                            "and no abort is pending at the start")
-        elif claimed != ends:
-            problems.append(f"the conclusion's ends {claimed} are not the root's: {ends}")
-    layout = _Layout(net, plans, set(cert.get("start", [f"{MISSION}.B"])))
-    return layout.check(proofs, problems)
+    if not faults:
+        problems += _claims(cert, model, proofs, derived)
+    layout = _Layout(net, _plans(model, proofs.lib), set(form.start(model.pending)))
+    problems = layout.check(proofs, problems)
+    return problems[:form.MAX_FAULTS] + ([f"and {len(problems) - form.MAX_FAULTS} more"]
+                                         if len(problems) > form.MAX_FAULTS else [])
 
 
 class Signature(NamedTuple):
@@ -98,14 +111,190 @@ class Signature(NamedTuple):
     origin: str | None = None
 
 
+class Node(NamedTuple):
+    """One instance of a tree, as the checker reads it: a call site of ``subject`` (a
+    task or a function), or a structure of template ``subject`` whose slots its
+    ``children`` fill in the template's order (indices into :attr:`Model.nodes`)."""
+
+    name: str
+    call: bool
+    subject: str
+    children: tuple[int, ...]
+    tree: str
+
+
+class Model(NamedTuple):
+    """A certificate read and validated: what the checker reasons on. Every name is one
+    instance's (unique); each tree is a tree (one root, named as the tree, every node
+    reached from it once); each structure has one child per slot of its template; each
+    call names a task or a function; the functions are ordered callees first (computed:
+    a call cycle is refused); a task's primitives are the certificate's, one per slot of
+    its pattern."""
+
+    primitives: tuple[str, ...]
+    tasks: dict[str, tuple[str, tuple[str, ...]]]     # name -> (subject, its primitives)
+    nodes: tuple[Node, ...]
+    roots: dict[str, int]           # MISSION and each function -> its root's index
+    order: tuple[str, ...]          # MISSION's and the functions' trees, callees first
+    uses: dict[str, int]            # a task's or function's call sites, counted
+    pending: bool                   # mission.A marked at the start too
+
+
+def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, list[str]]:
+    """``cert`` (of the schema's shape) as a :class:`Model`, or None and every reason it
+    is not one."""
+    from graphlib import CycleError, TopologicalSorter
+    problems: list[str] = []
+    lib = getattr(proofs, "lib", None) or default_library()
+    functions = list(cert["functions"])
+    if set(cert["trees"]) != {MISSION, *functions} or MISSION in functions:
+        problems.append(f"the trees are {sorted(cert['trees'])}: they must be '{MISSION}' "
+                        f"and one for each function of 'functions' {functions}")
+    if cert["start"] not in (form.start(False), form.start(True)):
+        problems.append(f"the start {cert['start']} is not {form.start(False)} or "
+                        f"{form.start(True)}: a mission starts at mission.B, an abort "
+                        "pending or not")
+    owner: dict[str, str] = {}
+
+    def named(name: str, what: str) -> None:
+        if name in owner:
+            problems.append(f"the name '{name}' is given to {owner[name]} and to {what}: "
+                            "every instance has its own")
+        else:
+            owner[name] = what
+
+    primitives = tuple(cert["primitives"])
+    for p in primitives:
+        named(p, f"primitive '{p}'")
+    tasks: dict[str, tuple[str, tuple[str, ...]]] = {}
+    for name, task in cert["tasks"].items():
+        named(name, f"task '{name}'")
+        subject, pattern = task["subject"], task["pattern"]
+        entry = proofs.get(subject) or {}
+        slots = _pattern_slots(lib, pattern)
+        if entry.get("kind") != "pattern" or \
+                subject not in (pattern, f"{pattern} without a time-out") or slots is None:
+            problems.append(f"task '{name}': '{subject}' is no proven pattern")
+            continue
+        prims = tuple(task["primitives"])
+        if len(prims) != len(slots) or list(task["slots"]) != list(slots):
+            problems.append(f"task '{name}': its pattern {pattern} has the primitive slots "
+                            f"{list(slots)}, filled by {list(prims)} as {task['slots']}")
+        unknown = [p for p in prims if p not in cert["primitives"]]
+        if unknown:
+            problems.append(f"task '{name}' uses {unknown[0]}, no primitive of the certificate")
+        tasks[name] = (subject, prims)
+    nodes: list[Node] = []
+    roots: dict[str, int] = {}
+    calls: dict[str, set[str]] = {}
+    uses: dict[str, int] = {}
+    for tree in (t for t in cert["trees"] if t == MISSION or t in functions):
+        raw, base = cert["trees"][tree], len(nodes)
+        children: list[list[int]] = [[] for _ in raw]
+        top = []
+        for k, node in enumerate(raw):
+            parent = node["parent"]
+            if parent == -1:
+                top.append(k)
+            elif parent >= len(raw) or parent == k:
+                problems.append(f"'{node['instance']}' of tree '{tree}': parent {parent} is no "
+                                "other node of the tree")
+            else:
+                children[parent].append(k)
+        if len(top) != 1 or raw[top[0]]["instance"] != tree:
+            problems.append(f"tree '{tree}' must have one root, named '{tree}': it has "
+                            f"{[raw[k]['instance'] for k in top] or 'none'}")
+            continue
+        reached, todo = [False] * len(raw), [top[0]]
+        while todo:
+            k = todo.pop()
+            reached[k] = True
+            todo.extend(children[k])
+        if not all(reached):
+            stray = next(raw[k]["instance"] for k in range(len(raw)) if not reached[k])
+            problems.append(f"'{stray}' of tree '{tree}' is not reached from its root: the "
+                            "parents make a cycle")
+            continue
+        roots[tree] = base + top[0]
+        calls[tree] = set()
+        for k, node in enumerate(raw):
+            name = node["instance"]
+            named(name, f"a node of tree '{tree}'")
+            if node["rule"] == "call":
+                callee = node["callee"]
+                if children[k]:
+                    problems.append(f"call '{name}' has children: a call site has none")
+                if callee not in tasks and callee not in functions:
+                    problems.append(f"'{name}' calls '{callee}', no task or function of the "
+                                    "certificate")
+                elif callee in functions:
+                    calls[tree].add(callee)
+                uses[callee] = uses.get(callee, 0) + 1
+                nodes.append(Node(name, True, callee, (), tree))
+                continue
+            template = node["template"]
+            slots = _structure_slots(lib, template) \
+                if (proofs.get(template) or {}).get("kind") == "structure" else None
+            if slots is None:
+                problems.append(f"'{name}': '{template}' is no proven structure")
+            elif len(children[k]) != len(slots) or list(node["slots"]) != list(slots):
+                problems.append(
+                    f"'{name}' ({template}) has {len(children[k])} children and the slots "
+                    f"{node['slots']}; the template has the slots {list(slots)}, each filled "
+                    "by one child, in order")
+            nodes.append(Node(name, False, template, tuple(base + c for c in children[k]),
+                              tree))
+    try:
+        order = tuple(TopologicalSorter(calls).static_order())
+    except CycleError as e:
+        cycle = " -> ".join(e.args[1])
+        problems.append(f"the functions call each other in a cycle ({cycle}): gates could "
+                        "be taken out of order, and the argument needs none")
+        order = ()
+    if problems:
+        return None, problems
+    return Model(primitives, tasks, tuple(nodes), roots, order, uses,
+                 cert["start"] == form.start(True)), []
+
+
+def _pattern_slots(lib, name: str) -> tuple[str, ...] | None:
+    """The primitive slots of pattern ``name`` in the library (None: no such pattern)."""
+    try:
+        t = lib.get(name)
+    except Mcl2PnmlError:
+        return None
+    return tuple(t.primitives) if t.kind is TemplateKind.PATTERN else None
+
+
+def _structure_slots(lib, name: str) -> tuple[str, ...] | None:
+    """The slots of structure ``name`` in the library (None: no such structure)."""
+    try:
+        t = lib.get(name)
+    except Mcl2PnmlError:
+        return None
+    return tuple(t.children) if t.kind is TemplateKind.STRUCTURE else None
+
+
 def results(cert: dict[str, Any], proofs: dict[str, dict]
             ) -> tuple[dict[str, Signature], list[tuple[str, str]]]:
-    """The signature of each task, node and function of ``cert``, derived bottom-up from
-    the proofs' results tables; and the faults, each (instance, what is wrong): a node
-    whose row is a breach (with its children doing what they do, the structure breaks the
-    contract in a way no reduced model stands for), or that no row covers. One pass over
-    the trees, functions before their callers."""
-    out: dict[str, Signature] = {}
+    """The signature of each task, node and function of ``cert`` by name, and the faults
+    (:func:`signatures`); a certificate that is no :class:`Model` is all faults."""
+    model, problems = read(cert, proofs)
+    if model is None:
+        return {}, [(MISSION, p) for p in problems]
+    return signatures(model, proofs)
+
+
+def signatures(model: Model, proofs: dict[str, dict]
+               ) -> tuple[dict[str, Signature], list[tuple[str, str]]]:
+    """The signature of each task, node and function of ``model`` (by name: names are
+    unique), derived bottom-up from the proofs' results tables; and the faults, each
+    (instance, what is wrong): a node whose row is a breach (with its children doing what
+    they do, the structure breaks the contract in a way no reduced model stands for), or
+    that no row covers. Tasks first, then each tree after the functions it calls, each
+    node after its children: an order computed from the model, not read."""
+    by_node: list[Signature | None] = [None] * len(model.nodes)
+    tasks: dict[str, Signature] = {}
     faults: list[tuple[str, str]] = []
     # a long mission asks the same few rows again and again: each read once
     rows: dict[tuple, tuple[str, dict | None]] = {}
@@ -129,35 +318,39 @@ def results(cert: dict[str, Any], proofs: dict[str, dict]
         return Signature(tuple(entry["ends"]), stuck,
                          next((b.origin for b in below if b.stuck), name) if stuck else None)
 
-    for name, task in cert.get("tasks", {}).items():
-        got = row(task.get("subject"), [], f"task '{name}'", name)
+    for name, (subject, _) in model.tasks.items():
+        got = row(subject, [], f"task '{name}'", name)
         if got is not None:
-            out[name] = got
-    calls = cert.get("calls", {})
-    trees = cert.get("trees", {})
-    for tree in (*cert.get("functions", []), MISSION):
-        nodes = trees.get(tree, [])
-        children: list[list[int]] = [[] for _ in nodes]
-        for k, node in enumerate(nodes):
-            if node.get("parent", -1) >= 0:
-                children[node["parent"]].append(k)
-        for k in range(len(nodes) - 1, -1, -1):     # children before their parent
-            node, name = nodes[k], nodes[k]["instance"]
-            if node.get("rule") == "call":
-                callee = out.get(node.get("callee"))
+            tasks[name] = got
+    nodes = model.nodes
+    for tree in (*(t for t in model.order if t != MISSION), MISSION):
+        post: list[int] = []
+        todo = [model.roots[tree]]
+        while todo:          # pre-order, reversed: every node after its children
+            k = todo.pop()
+            post.append(k)
+            todo.extend(nodes[k].children)
+        for k in reversed(post):
+            node = nodes[k]
+            if node.call:
+                callee = (tasks.get(node.subject) if node.subject in model.tasks
+                          else by_node[model.roots[node.subject]])
                 if callee is None:
                     continue
-                got = row(CALL_SITE, [callee], f"call '{name}'", name)
-                if calls.get(node.get("callee"), 0) > 1:
-                    row(SHARED_CALLEE, [callee], f"call '{name}'", name)
+                got = row(CALL_SITE, [callee], f"call '{node.name}'", node.name)
+                if model.uses[node.subject] > 1:
+                    row(SHARED_CALLEE, [callee], f"call '{node.name}'", node.name)
             else:
-                below = [out.get(nodes[c]["instance"]) for c in children[k]]
+                below = [by_node[c] for c in node.children]
                 if any(b is None for b in below):
                     continue
-                got = row(node.get("template"), below, f"'{name}' ({node.get('template')})",
-                          name, node.get("slots", ()))
-            if got is not None:
-                out[name] = got
+                slots = _structure_slots(proofs.lib, node.subject) \
+                    if isinstance(proofs, Proofs) else None
+                got = row(node.subject, below, f"'{node.name}' ({node.subject})", node.name,
+                          slots or tuple(f"T{i}" for i in range(1, len(below) + 1)))
+            by_node[k] = got
+    out = dict(tasks)
+    out.update((node.name, sig) for node, sig in zip(nodes, by_node) if sig is not None)
     return out, faults
 
 
@@ -180,20 +373,61 @@ def _said(below: list[Signature], slots) -> str:
     return ", ".join(f"{slot} {one(sig)}" for slot, sig in zip(slots, below))
 
 
-def _side_conditions(cert: dict[str, Any], functions: list[str]) -> list[str]:
+def said_signature(sig: Signature) -> dict[str, Any]:
+    """What a certificate says a node can do."""
+    return {"results": list(sig.ends), **({"may run for ever": True} if sig.stuck else {})}
+
+
+def _claims(cert: dict[str, Any], model: Model, proofs: dict[str, dict],
+            derived: dict[str, Signature]) -> list[str]:
+    """Every fact ``cert`` states that is not what the checker computes: the proofs'
+    digests, each part's own digest, each node's results, the calls counted, the
+    conclusion. None of them is used: a certificate that says them wrong is refused,
+    never half believed."""
     problems = []
-    order = {f: k for k, f in enumerate(functions)}
-    for tree, nodes in cert.get("trees", {}).items():
-        for node in nodes:
-            callee = node.get("callee")
-            if callee in order and tree in order and order[callee] >= order[tree]:
-                problems.append(f"function '{tree}' calls '{callee}', which is not before it: "
-                                "a call cycle could take gates out of order")
-            if node.get("rule") == "call" and callee not in order and \
-                    callee not in cert.get("tasks", {}):
-                problems.append(f"'{node['instance']}' calls '{callee}', no task or function "
-                                "of the certificate")
+    digests = {name: p["digest"] for name, p in sorted(proofs.items()) if "digest" in p}
+    if cert["proofs"] != digests:
+        other = sorted(k for k in digests.keys() | cert["proofs"].keys()
+                       if digests.get(k) != cert["proofs"].get(k))
+        problems.append(f"the certificate's proofs are not the library's in use (they differ "
+                        f"for {', '.join(other[:5])}): it was made with other templates")
+    if cert["rules"] != form.RULES or cert["side_conditions"] != form.SIDE_CONDITIONS:
+        problems.append("the rules or the side conditions are not this checker's")
+    local = {name: p.get("local") for name, p in proofs.items()}
+    for p in model.primitives:
+        if cert["primitives"][p]["local"] != local.get("primitive"):
+            problems.append(f"primitive '{p}': its own digest is not the proven primitive's")
+    for name, (subject, _) in model.tasks.items():
+        task = cert["tasks"][name]
+        if task["proof"] != digests.get(subject) or task["local"] != local.get(subject):
+            problems.append(f"task '{name}': its digests are not those of {subject}'s proof")
+        if name in derived and said_signature(derived[name]) != _said_of(task):
+            problems.append(f"task '{name}' is said to end {_said_of(task)}; its proof says "
+                            f"{said_signature(derived[name])}")
+    for tree, raw in cert["trees"].items():
+        for node in raw:
+            name = node["instance"]
+            if node["rule"] == "structure" and node["local"] != local.get(node["template"]):
+                problems.append(f"'{name}': its own digest is not {node['template']}'s")
+            if name in derived and said_signature(derived[name]) != _said_of(node):
+                problems.append(f"'{name}' is said to end {_said_of(node)}; derived from its "
+                                f"parts it ends {said_signature(derived[name])}")
+    if cert["calls"] != {k: v for k, v in model.uses.items()}:
+        problems.append(f"the calls counted are {model.uses}, not {cert['calls']}")
+    if MISSION in derived:
+        ends = root_ends(derived[MISSION], model.pending)
+        if ends is None:
+            problems.append(f"{MISSION} may run for ever (from '{derived[MISSION].origin}'), "
+                            "and no abort is pending at the start")
+        elif cert["conclusion"] != form.conclusion(ends, model.pending):
+            problems.append(f"the conclusion is not the one derived from the parts: ends "
+                            f"{cert['conclusion']['ends']}, derived {ends}")
     return problems
+
+
+def _said_of(node: dict[str, Any]) -> dict[str, Any]:
+    return {"results": list(node["results"]),
+            **({"may run for ever": True} if node.get("may run for ever") else {})}
 
 
 def _owners(ids: list[str], names: set[str] | dict) -> list[str | None]:
@@ -222,41 +456,41 @@ class _Plan(NamedTuple):
     gate: str | None          # a function's gate: a place of its root, the call sites' arcs
 
 
-def _plans(cert: dict[str, Any], functions: list[str]) -> dict[str, _Plan]:
-    """Every instance of ``cert``, primitives, tasks and tree nodes, placed."""
-    plans = {p: _Plan(p, "primitive", {}, None) for p in cert.get("primitives", {})}
-    tasks = cert.get("tasks", {})
-    for name, task in tasks.items():
+def _plans(model: Model, lib) -> dict[str, _Plan]:
+    """Every instance of ``model``, primitives, tasks and tree nodes, placed: the slots
+    each fills are the model's, the same the signatures were derived on."""
+    plans = {p: _Plan(p, "primitive", {}, None) for p in model.primitives}
+    for name, (subject, prims) in model.tasks.items():
         fills = {}
-        for slot, prim in zip(task["slots"], task["primitives"]):
+        pattern = lib.get(subject.removesuffix(" without a time-out"))
+        for slot, prim in zip(pattern.primitives, prims):
             fills.update({(f"{slot}_{r}" if slot else r): f"{prim}.{r}"
                           for r in PRIMITIVE_ROLES})
-        plans[name] = _Plan(name, task["subject"], fills, None)
+        plans[name] = _Plan(name, subject, fills, None)
     site = tuple(p for p in ("GATE", *CONTROL) if p != "MTX")
     site_slots, site_ends = tuple(f"to.{p}" for p in site), tuple(f".{p}" for p in site)
     ends = tuple(f".{p}" for p in CONTROL)
     slot_places: dict[str, tuple[str, ...]] = {}      # T1 -> T1_B, T1_A, ...
-    for tree, nodes in cert.get("trees", {}).items():
-        children: list[list[str]] = [[] for _ in nodes]
-        for node in nodes:       # one pass: each node under its parent, in order
-            if node.get("parent", -1) >= 0:
-                children[node["parent"]].append(node["instance"])
-        for k, node in enumerate(nodes):
-            name = node["instance"]
-            if node["rule"] == "call":
-                callee = node["callee"]
-                prims = sorted(set(tasks.get(callee, {}).get("primitives", [])))
-                subject = f"{CALL_SITE}/{len(prims)}"
-                fills = dict(zip(site_slots, map(callee.__add__, site_ends)))
-                fills.update({f"lock.{k}": f"{p}.LOCK" for k, p in enumerate(prims, 1)})
-            else:
-                subject, fills = node["template"], {}
-                for slot, child in zip(node["slots"], children[k]):
-                    if slot not in slot_places:
-                        slot_places[slot] = tuple(f"{slot}_{p}" for p in CONTROL)
-                    fills.update(zip(slot_places[slot], map(child.__add__, ends)))
-            gate = f"{name}.GATE" if k == 0 and tree in functions else None
-            plans[name] = _Plan(name, subject, fills, gate)
+    slots_of: dict[str, tuple[str, ...]] = {}
+    gates = {model.roots[t] for t in model.roots if t != MISSION}
+    nodes = model.nodes
+    for k, node in enumerate(nodes):
+        name = node.name
+        if node.call:
+            callee = node.subject
+            prims = sorted(set(model.tasks[callee][1])) if callee in model.tasks else []
+            subject = f"{CALL_SITE}/{len(prims)}"
+            fills = dict(zip(site_slots, map(callee.__add__, site_ends)))
+            fills.update({f"lock.{k}": f"{p}.LOCK" for k, p in enumerate(prims, 1)})
+        else:
+            subject, fills = node.subject, {}
+            if subject not in slots_of:
+                slots_of[subject] = tuple(lib.get(subject).children)
+            for slot, child in zip(slots_of[subject], node.children):
+                if slot not in slot_places:
+                    slot_places[slot] = tuple(f"{slot}_{p}" for p in CONTROL)
+                fills.update(zip(slot_places[slot], map(nodes[child].name.__add__, ends)))
+        plans[name] = _Plan(name, subject, fills, f"{name}.GATE" if k in gates else None)
     return plans
 
 

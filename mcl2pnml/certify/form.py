@@ -1,0 +1,97 @@
+"""The certificate's JSON form: its schema, the parts every certificate says alike, and its
+conclusion, written once for :mod:`mcl2pnml.certify.certificate`, which writes them, and
+:mod:`mcl2pnml.certify.checker`, which holds a file to them.
+
+The shape is ``certificate.schema.json`` (JSON Schema, draft 7) beside this module: a
+valid certificate passes it in one compiled function (``fastjsonschema``, a fifth of a
+second for a 10,000-call survey); an invalid one is validated again by ``jsonschema``,
+whose errors name the JSON path of each fault. The shape is only the first gate: what the
+fields mean, and which of them the checker recomputes rather than believe, is
+docs/certificate.md.
+"""
+from __future__ import annotations
+
+import functools
+import json
+from importlib import resources
+from typing import Any
+
+from mcl2pnml.core.payloads import MISSION
+
+#: The version of the certificate's JSON form (2: contract 2, and every fact recomputed).
+FORMAT = 2
+
+#: The rules of the argument, in the order the certificate lists them.
+RULES = ["task", "call", "structure", "function", "mission"]
+
+SIDE_CONDITIONS = {
+    "functions not recursive": "each function calls only functions that do not call it back "
+                               "(the checker orders them itself)",
+    "locks": "every call site of a task takes the locks of exactly the task's primitives, "
+             "and gives them back with its result",
+    "gates": "every call site of a task or function takes its gate on entry and gives it "
+             "back with its result",
+}
+
+#: The most faults said of one certificate: a hostile file may have a million.
+MAX_FAULTS = 20
+
+
+def start(pending: bool) -> list[str]:
+    """The places marked at the start: ``mission.B``, and ``mission.A`` with an abort
+    pending."""
+    return [f"{MISSION}.B", *([f"{MISSION}.A"] if pending else [])]
+
+
+def conclusion(ends: list[str], pending: bool) -> dict[str, Any]:
+    """What a certificate concludes of a mission whose root ends in ``ends``: the one
+    conclusion the checker accepts, computed, never read."""
+    return {"ends": ends, "safe": True, "an end always reachable": True, "reusable": True,
+            "at rest when it ends": True,
+            **({"abort": f"{MISSION}.A is consumed exactly when the end is {MISSION}.ABORTED, "
+                         "and left marked otherwise"} if pending else {}),
+            "why": "the root keeps the interface contract (rules above), started by "
+                   "mission.B" + (" with mission.A pending (A consumed exactly when the end "
+                                  "is ABORTED)" if pending else " with no abort asked")}
+
+
+@functools.cache
+def schema() -> dict[str, Any]:
+    text = resources.files("mcl2pnml.certify").joinpath("certificate.schema.json").read_text(
+        encoding="utf-8")
+    return json.loads(text)
+
+
+@functools.cache
+def _fast():
+    import fastjsonschema
+    return fastjsonschema.compile(schema())
+
+
+def shape_faults(cert: Any) -> list[str]:
+    """Where ``cert`` is not of the certificate's shape, each fault at its JSON path
+    (``$.trees.mission[3].parent: 'x' is not of type 'integer'``); at most
+    :data:`MAX_FAULTS`, the count of the rest said."""
+    import fastjsonschema
+    try:
+        _fast()(cert)
+        return []
+    except fastjsonschema.JsonSchemaException:
+        pass
+    except RecursionError:      # nested deeper than a certificate ever is
+        return ["$: nested too deeply for a certificate"]
+    import jsonschema
+    validator = jsonschema.Draft7Validator(schema())
+    try:
+        errors = sorted(validator.iter_errors(cert), key=lambda e: list(map(str, e.path)))
+    except RecursionError:
+        return ["$: nested too deeply for a certificate"]
+    out = [f"{e.json_path}: {_short(e.message)}" for e in errors[:MAX_FAULTS]]
+    if len(errors) > MAX_FAULTS:
+        out.append(f"and {len(errors) - MAX_FAULTS} more faults of shape")
+    return out or ["$: not of the certificate's shape"]
+
+
+def _short(message: str, limit: int = 200) -> str:
+    """A validator's message, cut: it quotes the value, which may be a whole tree."""
+    return message if len(message) <= limit else message[:limit] + "..."
