@@ -604,3 +604,27 @@ def test_verifypn_and_lola_find_what_the_certificate_says(name, pending, tmp_pat
     for tool, said in (("verifypn", verifypn), ("LoLA", lola)):
         ends_well = said["end-always-reachable"] and not said["deadlock-not-an-end"]
         assert ends_well == certified, (tool, said, certified)
+
+
+def test_a_user_s_reduced_model_is_no_ground_for_a_certificate(tmp_path):
+    """The proofs stand each child by the package's reduced model (Fig. 3): one a user puts
+    in its place (here one that can only be aborted before it starts, which once crashed
+    certifying with an abort pending) is refused by certify and by the checker, one
+    message naming its file, never a traceback."""
+    from helpers import run_cli
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    text = (ROOT / "templates" / "task_reduced.pnt").read_text()
+    (folder / "task_reduced.pnt").write_text(
+        text.replace('transition t4: EXE, A -> ABORTED, MTX     "aborted while running"\n', ""))
+    env = {**__import__("os").environ, "MCL2PNML_TEMPLATE_PATH": str(folder)}
+    net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    (tmp_path / "s.cert.json").write_text(json.dumps(cert))
+    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
+                   tmp_path / "s.pnml").returncode == 0
+    for args in ([ROOT / "examples" / "sauce.mcl", "-o", tmp_path / "x.json", "--abort-pending"],
+                 [tmp_path / "s.cert.json", "--check", tmp_path / "s.pnml"]):
+        out = run_cli("certify", *args, env=env)
+        assert out.returncode in (1, 2) and "Traceback" not in out.stderr + out.stdout
+        assert "the reduced task 'task-reduced' is not the package's" in out.stderr + out.stdout
+    assert not (tmp_path / "x.json").exists()

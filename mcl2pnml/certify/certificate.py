@@ -42,7 +42,7 @@ from typing import Any
 
 from mcl2pnml.certify import form
 from mcl2pnml.certify.checker import results, root_ends, said_signature
-from mcl2pnml.certify.templates import current
+from mcl2pnml.certify.templates import current, untrusted_reduced
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.payloads import MISSION
@@ -61,6 +61,9 @@ def certify(checked, lib: Library | None = None, net_name: str | None = None,
     ``proofs``: the library's (:func:`mcl2pnml.certify.templates.current`), if already
     read."""
     lib = lib or default_library()
+    refused = untrusted_reduced(lib)
+    if refused is not None:
+        raise refused
     proofs = proofs if proofs is not None else current(lib)
     calls: dict[str, int] = {}
     trees = {MISSION: _tree(mission_expression(checked.mission), MISSION, "", lib, proofs,

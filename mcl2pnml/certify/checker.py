@@ -49,7 +49,7 @@ import numpy as np
 
 from mcl2pnml.certify import form
 from mcl2pnml.certify.templates import (CALL_SITE, SHARED_CALLEE, Proofs, current,
-                                        results_key, shape)
+                                        results_key, shape, untrusted_reduced)
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import ArcKind, Net
@@ -88,6 +88,9 @@ def check(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
     proofs = proofs if proofs is not None else current()
     if not isinstance(proofs, Proofs):     # read from a file: the library in use has them
         proofs = Proofs(proofs, default_library())
+    refused = untrusted_reduced(proofs.lib)
+    if refused is not None:
+        return [refused.message]
     model, problems = read(cert, proofs)
     if model is None:
         return problems[:form.MAX_FAULTS]

@@ -375,6 +375,21 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None,
     return Proofs(out, lib, own)
 
 
+def untrusted_reduced(lib: Library) -> Mcl2PnmlError | None:
+    """Why certificates cannot rest on ``lib``, if they cannot: its reduced task is not the
+    package's (a user's file replaced it). Every proof stands a child by the reduced model
+    restricted to the child's signature, and that it may is an argument about the
+    package's Fig. 3 (docs/certificate.md), not about any net a user names so."""
+    package = next((e for e in stored().values() if e.get("kind") == "reduced"), None)
+    if package is None or package.get("digest") == digest(lib.composed(lib.reduced.name)):
+        return None
+    return Mcl2PnmlError(
+        f"the reduced task '{lib.reduced.name}' is not the package's: certificates rest on "
+        "the package's reduced model (Fig. 3), which stands for any child that keeps the "
+        "contract (docs/certificate.md); remove this file from $MCL2PNML_TEMPLATE_PATH to "
+        "certify", Location(str(lib.reduced.source)))
+
+
 def update(folder: Path | None = None) -> Path:
     """Prove every subject of the package's library now and store the proofs."""
     lib = Library.load([folder or template_dirs()[0]])
