@@ -628,3 +628,11 @@ def test_a_user_s_reduced_model_is_no_ground_for_a_certificate(tmp_path):
         assert out.returncode in (1, 2) and "Traceback" not in out.stderr + out.stdout
         assert "the reduced task 'task-reduced' is not the package's" in out.stderr + out.stdout
     assert not (tmp_path / "x.json").exists()
+
+
+def test_a_primitive_no_task_uses_is_covered_by_no_proof():
+    """A primitive is proven idle at rest only within its tasks' proofs: one listed with no
+    task using it (its net added to match) is refused, not taken as idle."""
+    net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    cert["primitives"]["Spare"] = dict(cert["primitives"]["DetectCross"])
+    assert any("primitive 'Spare' is used by no task" in p for p in check(net, cert))

@@ -187,6 +187,10 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
         if unknown:
             problems.append(f"task '{name}' uses {unknown[0]}, no primitive of the certificate")
         tasks[name] = (subject, prims)
+    # a primitive is proven idle at rest only inside the proof of a task that uses it
+    used = {p for _, prims in tasks.values() for p in prims}
+    problems += [f"primitive '{p}' is used by no task: no proof covers it alone"
+                 for p in primitives if p not in used]
     nodes: list[Node] = []
     roots: dict[str, int] = {}
     calls: dict[str, set[str]] = {}
