@@ -37,7 +37,13 @@ marked. Then, for the component started from rest:
   (docs/certificate.md, the composition argument);
 * ``abortable``: started with an abort pending, it can end ABORTED and in
   each result it can give without one, and in no other: what the reduced
-  model does, so that the reduced model with the same results stands for it.
+  model does, so that the reduced model with the same results stands for it;
+* ``caller``: for a component checked with reduced children (a structure,
+  a call site), it starts a child only when the child is at rest: whenever
+  a child's B is marked, the child is not running and holds no result. This
+  is what the contract assumes of a component's environment (it was checked
+  started from rest, never restarted while it runs), so each parent proves
+  it of its children (assume-guarantee: docs/certificate.md).
 
 The results a component can give from rest + B (a subset of OK and FAIL)
 are its **results** (:attr:`Verdict.results`). With them, and whether it
@@ -105,6 +111,12 @@ class Clause(enum.Enum):
     without one, and in no other: the reduced model with the same results stands for it
     (a structure above may have to abort it, or wait for a result it can give)."""
 
+    CALLER = "caller"
+    """A child (a reduced model in a slot) is started only at rest: whenever its B is
+    marked, it is not running (nor stuck) and none of its results is marked. The contract
+    of the child was checked from rest, so this is the assumption a parent discharges for
+    each of its children (version 2)."""
+
 
 @dataclass(frozen=True)
 class Breach:
@@ -160,8 +172,10 @@ def roles(net: Net) -> dict[str, str]:
     return {r: found[r][0] for r in wanted}
 
 
-def check(net: Net, max_states: int = 100_000) -> Verdict:
-    """Every clause of the contract on ``net`` (a component with the control interface)."""
+def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = ()) -> Verdict:
+    """Every clause of the contract on ``net`` (a component with the control interface);
+    ``children``: the prefixes of the places of its reduced children (``T1_``, ``T.``),
+    each held to the ``caller`` clause."""
     role = roles(net)
     rest = {p: n for p, n in net.initial.items() if p not in (role[START], role[ABORT])}
     breaches: list[Breach] = []
@@ -181,7 +195,7 @@ def check(net: Net, max_states: int = 100_000) -> Verdict:
         space = _explore(net, {**rest, **extra}, max_states)
         explored += space.states
         found, got = _started(space, role, rest, label, aborted=role[ABORT] in extra)
-        breaches += found
+        breaches += found + _callers(space, children, label)
         ends.append(got)
     plain, aborted = ends
     if not breaches and aborted != plain | {"ABORTED"}:
@@ -237,6 +251,25 @@ def _explore(net: Net, marking: dict[str, int], max_states: int):
         raise ExplorationLimit(f"net '{net.name}' has more than {max_states:,} markings from "
                                "its start: a component's contract is checked on a small net "
                                "(its children reduced)") from e
+
+
+def _callers(space, children: tuple[str, ...], label: str) -> list[Breach]:
+    """The ``caller`` clause: each child (places prefixed so) started only at rest."""
+    out: list[Breach] = []
+    index = space.structure.place_index
+    for prefix in children:
+        start = index.get(f"{prefix}{START}")
+        busy = [index[f"{prefix}{p}"] for p in ("EXE", "STUCK", *RESULTS)
+                if f"{prefix}{p}" in index]
+        if start is None:
+            continue
+        node = next((n for n in range(space.states) if space.markings[n][start]
+                     and any(space.markings[n][k] for k in busy)), None)
+        if node is not None:
+            out.append(Breach(Clause.CALLER, label, tuple(space.path_to(node)),
+                              _marked(space, node), f"{prefix}{START} is marked while the "
+                              "child is running or holds a result"))
+    return out
 
 
 def _marked(space, node: int) -> tuple[str, ...]:

@@ -146,3 +146,20 @@ def test_the_restricted_reduced_model_has_exactly_its_signature(results, stuck):
     verdict = check(restricted(LIBRARY.reduced.net, frozenset(results), stuck))
     assert classify(verdict) == {"ends": list(results), "stuck": stuck}
     assert verdict.results_aborted == {*results, "ABORTED"}
+
+
+def test_a_structure_that_starts_a_running_child_again_breaks_caller():
+    """The sequence with a transition that marks its first child's B again while that
+    child runs: the child's contract was checked from rest only, so a parent must start a
+    child only at rest, and the ``caller`` clause says where it does not."""
+    from mcl2pnml.core.net import Arc, Transition
+    net = LIBRARY.composed("sequence")
+    net = Net(net.name, net.places, (*net.transitions, Transition("again")),
+              (*net.arcs, Arc("T1_EXE", "again"), Arc("again", "T1_EXE"),
+               Arc("again", "T1_B")), net.initial)
+    verdict = check(net, children=("T1_", "T2_"))
+    [breach] = [b for b in verdict.breaches if b.clause is Clause.CALLER
+                and b.start == "rest + B"]
+    assert breach.path == ("t1", "T1_t1", "again")
+    assert "T1_B is marked while the child is running" in breach.why
+    assert check(LIBRARY.composed("sequence"), children=("T1_", "T2_")).kept

@@ -251,15 +251,31 @@ def _subjects(lib: Library) -> list:
     out = []
     for t in components(lib):
         slots = len(t.children) if t.kind is TemplateKind.STRUCTURE else 0
-        out.append((t.name, t.kind.value, composed(t.name), slots, t.source))
+        out.append((t.name, t.kind.value, _with_children(
+            composed(t.name), tuple(f"{c}_" for c in t.children[:slots])), slots, t.source))
         if t.kind is TemplateKind.PATTERN:
             # a task declared without a time-out has no t03 (the compiler removes it)
             out.append((f"{t.name} without a time-out", t.kind.value,
                         composed(t.name, timeouts=False), 0, t.source))
     compiler = "mcl2pnml/language/compiler.py"
-    out += [(CALL_SITE, "joint", lambda r: call_net(lib, 1, r and r[0]), 1, compiler),
-            (SHARED_CALLEE, "joint", lambda r: call_net(lib, 2, r and r[0]), 1, compiler)]
+    out += [(CALL_SITE, "joint", _with_children(lambda r: call_net(lib, 1, r and r[0]),
+                                                ("T.",)), 1, compiler),
+            (SHARED_CALLEE, "joint", _with_children(lambda r: call_net(lib, 2, r and r[0]),
+                                                    ("T.",)), 1, compiler)]
     return out
+
+
+def _with_children(make, prefixes: tuple[str, ...]):
+    """``make`` marked with the prefixes of its reduced children's places, which the
+    contract's ``caller`` clause holds it to (:func:`_checked`)."""
+    make.children = prefixes
+    return make
+
+
+def _checked(make, net: Net):
+    """The contract checked on ``net``, made by ``make``: with its reduced children held
+    to the ``caller`` clause."""
+    return check(net, children=getattr(make, "children", ()))
 
 
 class Rows(dict):
@@ -275,7 +291,7 @@ class Rows(dict):
         row = [_signature(p) for p in parts] if len(parts) == self._children else None
         if row is None or None in row:
             raise KeyError(key)
-        self[key] = classify(check(self._make(tuple(row))))
+        self[key] = classify(_checked(self._make, self._make(tuple(row))))
         return self[key]
 
     def get(self, key, default=None):
@@ -298,7 +314,7 @@ def prove(name: str, kind: str, make, children: int, source: str,
     (not ``eager``) each when first read (:class:`Rows`); :class:`BrokenTemplate` with the
     first breaches' runs if it breaks the contract. ``net``: ``make(None)``, if made."""
     net = net if net is not None else make(None)
-    verdict = check(net)
+    verdict = _checked(make, net)
     # one that may run for ever until aborted (a loop with no way out, a goal kept with
     # no time-out) keeps the rest of the contract: its signature says so, and a mission
     # that waits on it is refused where it matters (unless an abort is pending)
@@ -312,7 +328,7 @@ def prove(name: str, kind: str, make, children: int, source: str,
     markings, table = verdict.markings, {results_key((FULL,) * children): classify(verdict)}
     for row in product(SIGNATURES, repeat=children) if eager else ():
         if results_key(row) not in table:
-            v = check(make(row))
+            v = _checked(make, make(row))
             markings += v.markings
             table[results_key(row)] = classify(v)
     return Proof(name, kind, digest(net), markings,
