@@ -14,6 +14,10 @@ The **rest** marking is the net's M0 without tokens in B and A: a called
 component waits there, its mutex MTX (and its children's, and any lock)
 marked. Then, for the component started from rest:
 
+* ``interface``: B and A are the caller's to mark, the results its to take:
+  no transition of the component marks its own B or A, and none takes or
+  reads its own OK, FAIL or ABORTED (a component that marked its own A
+  would be aborted at its next start, with no abort asked);
 * ``idle``: at rest, and at rest with only A marked (an abort that comes
   after the component has ended, which the caller drains), nothing can fire;
 * ``safe``: started (rest + B, and rest + B + A: an abort pending from the
@@ -78,6 +82,10 @@ RESULTS = ("OK", "FAIL", "ABORTED")
 
 class Clause(enum.Enum):
     """One clause of the contract (see the module's documentation)."""
+
+    INTERFACE = "interface"
+    """No transition marks the component's own B or A, or takes or reads its own results:
+    those are the caller's moves (version 2)."""
 
     IDLE = "idle"
     """At rest, and at rest with A alone, nothing fires."""
@@ -178,7 +186,12 @@ def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = ()) -
     each held to the ``caller`` clause."""
     role = roles(net)
     rest = {p: n for p, n in net.initial.items() if p not in (role[START], role[ABORT])}
-    breaches: list[Breach] = []
+    inputs, outputs = {role[START], role[ABORT]}, {role[r] for r in RESULTS}
+    breaches: list[Breach] = [
+        Breach(Clause.INTERFACE, "the net", (), (),
+               f"{a.source} marks {a.target}, the caller's to mark" if a.target in inputs
+               else f"{a.target} takes {a.source}, the caller's to take")
+        for a in net.arcs if a.target in inputs or a.source in outputs]
     explored = 0
     for label, extra in (("rest", {}), ("rest + A", {role[ABORT]: 1})):
         space = _explore(net, {**rest, **extra}, max_states)

@@ -99,7 +99,8 @@ def test_a_result_taken_back_breaks_result_final():
     verdict = check(reduced(extra=[("OK", "regret"), ("regret", "FAIL")],
                             transitions=["regret"]))
     clauses = {b.clause for b in verdict.breaches}
-    assert clauses == {Clause.RESULT_FINAL}, [str(b) for b in verdict.breaches]
+    assert clauses == {Clause.INTERFACE, Clause.RESULT_FINAL}, [str(b) for b in
+                                                                verdict.breaches]
     breach = next(b for b in verdict.breaches if b.start == "rest + B")
     assert breach.path == ("t1", "t2") and "regret can still fire" in breach.why
 
@@ -163,3 +164,13 @@ def test_a_structure_that_starts_a_running_child_again_breaks_caller():
     assert breach.path == ("t1", "T1_t1", "again")
     assert "T1_B is marked while the child is running" in breach.why
     assert check(LIBRARY.composed("sequence"), children=("T1_", "T2_")).kept
+
+
+def test_a_component_that_marks_its_own_abort_breaks_interface():
+    """t2 ends OK and marks A too: every clause read on the markings holds (A is the
+    caller's place, left for it to drain), but the next start would be aborted with no
+    abort asked; the interface clause refuses the arc itself."""
+    verdict = check(reduced(extra=[("t2", "A")]))
+    assert [str(b) for b in verdict.breaches if b.clause is Clause.INTERFACE] == [
+        "interface: from the net, after (no firing): t2 marks A, the caller's to mark "
+        "(marked: nothing)"]
