@@ -192,6 +192,7 @@ def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = ()) -
                f"{a.source} marks {a.target}, the caller's to mark" if a.target in inputs
                else f"{a.target} takes {a.source}, the caller's to take")
         for a in net.arcs if a.target in inputs or a.source in outputs]
+    breaches += _discipline(net, children)
     explored = 0
     for label, extra in (("rest", {}), ("rest + A", {role[ABORT]: 1})):
         space = _explore(net, {**rest, **extra}, max_states)
@@ -264,6 +265,35 @@ def _explore(net: Net, marking: dict[str, int], max_states: int):
         raise ExplorationLimit(f"net '{net.name}' has more than {max_states:,} markings from "
                                "its start: a component's contract is checked on a small net "
                                "(its children reduced)") from e
+
+
+#: What a parent may do with a child's places: mark its B and A (and a callee's gate, given
+#: back), take its results and a left A. Nothing else: not its mutex, not its inside.
+PARENT_MARKS, PARENT_TAKES = {START, ABORT, "GATE"}, {ABORT, "GATE", *RESULTS}
+
+
+def _discipline(net: Net, children: tuple[str, ...]) -> list[Breach]:
+    """The structural half of the ``caller`` clause: the parent's transitions touch each
+    child's places only as :data:`PARENT_MARKS` and :data:`PARENT_TAKES` say, with plain
+    arcs (a parent that read a child's B, or took its mutex, would see the child in a
+    state its reduced model has not)."""
+    out = []
+    for a in net.arcs:
+        for prefix in children:
+            child_place = a.target if a.target.startswith(prefix) else (
+                a.source if a.source.startswith(prefix) else None)
+            other = a.source if child_place == a.target else a.target
+            if child_place is None or other.startswith(prefix):
+                continue
+            role = child_place[len(prefix):]
+            marks = child_place == a.target
+            if a.kind.value != "normal" or role not in (PARENT_MARKS if marks else PARENT_TAKES):
+                out.append(Breach(Clause.CALLER, "the net", (), (),
+                                  f"{other} {'marks' if marks else 'takes'} {child_place}"
+                                  + ("" if a.kind.value == "normal" else f" ({a.kind.value})")
+                                  + ": a parent only marks a child's B and A, and takes its "
+                                    "results and a left A"))
+    return out
 
 
 def _callers(space, children: tuple[str, ...], label: str) -> list[Breach]:

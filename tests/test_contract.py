@@ -174,3 +174,17 @@ def test_a_component_that_marks_its_own_abort_breaks_interface():
     assert [str(b) for b in verdict.breaches if b.clause is Clause.INTERFACE] == [
         "interface: from the net, after (no firing): t2 marks A, the caller's to mark "
         "(marked: nothing)"]
+
+
+def test_a_structure_that_reads_its_child_s_mutex_breaks_caller():
+    """A parent touches a child only through B, A and the results: the sequence's start
+    made to read its first child's MTX sees the child in a state that a real child need not
+    show where its reduced model does; the caller clause refuses the arc itself."""
+    from mcl2pnml.core.net import Arc, ArcKind
+    net = LIBRARY.composed("sequence")
+    net = Net(net.name, net.places, net.transitions,
+              (*net.arcs, Arc("T1_MTX", "t1", kind=ArcKind.READ)), net.initial)
+    said = [b.why for b in check(net, children=("T1_", "T2_")).breaches
+            if b.clause is Clause.CALLER]
+    assert said == ["t1 takes T1_MTX (read): a parent only marks a child's B and A, and "
+                    "takes its results and a left A"]

@@ -203,13 +203,17 @@ def call_net(lib: Library, sites: int, results: tuple | None = None) -> Net:
     from mcl2pnml.language.template_parser import CONTROL
     reduced = at_rest(lib.reduced.net if results is None
                       else restricted(lib.reduced.net, *results))
-    callee = Net("T", (*reduced.places, Place("GATE")), reduced.transitions, reduced.arcs,
-                 Marking({**reduced.initial, "GATE": 1}))
+    # its places unlabelled: fused with the call sites', the interface labels are the
+    # sites' (the joint's B is the first site's)
+    callee = Net("T", (*(Place(p.id) for p in reduced.places), Place("GATE")),
+                 reduced.transitions, reduced.arcs, Marking({**reduced.initial, "GATE": 1}))
     lock = NetBuilder("P")
     lock.place("LOCK", 1)
     names = ["site"] if sites == 1 else [f"site{k}" for k in range(1, sites + 1)]
-    parts = [(n, call_site_net("T", ["P"])) for n in names] + [("T", callee),
-                                                                 ("P", lock.build())]
+    # the callee first: the places fused with it keep its ids (T.B, ...), which the
+    # contract's caller clause reads the callee's state by
+    parts = [("T", callee), *((n, call_site_net("T", ["P"])) for n in names),
+             ("P", lock.build())]
     groups = [["T.GATE", *(f"{n}.to.GATE" for n in names)],
               ["P.LOCK", *(f"{n}.lock.P" for n in names)]]
     groups += [[f"T.{p}", *(f"{n}.to.{p}" for n in names)] for p in CONTROL if p != "MTX"]
