@@ -636,3 +636,47 @@ def test_a_primitive_no_task_uses_is_covered_by_no_proof():
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     cert["primitives"]["Spare"] = dict(cert["primitives"]["DetectCross"])
     assert any("primitive 'Spare' is used by no task" in p for p in check(net, cert))
+
+
+def test_hostile_certificates_are_refused_at_once_with_one_message(tmp_path):
+    """Bounds before work: a file over the size limit is refused before it is read (here a
+    sparse file of 17 MiB), and the limit can be raised; a certificate naming more
+    instances than the net has nodes is refused before its trees are read; one with a
+    thousand decoys says at most twenty faults and how many more; analyze, finding a
+    malformed certificate beside a net, says so at its JSON path and stops."""
+    from helpers import run_cli
+    net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    pnml = tmp_path / "s.pnml"
+    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o", pnml).returncode == 0
+    big = tmp_path / "big.json"
+    with open(big, "wb") as f:
+        f.truncate(17 * 2**20)
+    out = run_cli("certify", big, "--check", pnml)
+    assert out.returncode == 2 and out.stderr == (
+        f"{big}: cannot read the certificate: it is 17.0 MiB, over the limit of 16.0 MiB "
+        "(--max-certificate-size to raise it)\n")
+    out = run_cli("certify", big, "--check", pnml, "--max-certificate-size", "32M")
+    assert out.returncode == 2 and "not a certificate" in out.stderr
+    node = cert["trees"]["mission"][-1]
+    padded = json.loads(json.dumps(cert))
+    padded["trees"]["mission"] += [{**node, "instance": f"x{k}", "parent": 0}
+                                   for k in range(500)]
+    (tmp_path / "padded.json").write_text(json.dumps(padded))
+    out = run_cli("certify", tmp_path / "padded.json", "--check", pnml)
+    assert out.returncode == 1 and out.stdout.splitlines()[1:] == [
+        "  the certificate names 521 instances, and the net has 421 nodes: every instance "
+        "has nodes of its own"]
+    decoys = json.loads(json.dumps(cert))
+    decoys["trees"]["mission"] += [{**node, "instance": f"x{k}", "parent": 10_000}
+                                   for k in range(300)]
+    (tmp_path / "decoys.json").write_text(json.dumps(decoys))
+    out = run_cli("certify", tmp_path / "decoys.json", "--check", pnml)
+    lines = out.stdout.splitlines()
+    # 300 parents out of range, and the tree left with nodes its root does not reach
+    assert out.returncode == 1 and len(lines) == 1 + 20 + 1 and lines[-1] == "  and 281 more"
+    (tmp_path / "s.cert.json").write_text(json.dumps({**cert, "tasks": []}))
+    out = run_cli("analyze", pnml)
+    assert out.returncode == 2 and out.stdout == "" and out.stderr == (
+        f"{tmp_path / 's.cert.json'}: the certificate is malformed at $.tasks: [] is not of "
+        "type 'object'\n")
+    assert run_cli("analyze", pnml, "--explore", "--state-space").returncode == 0

@@ -93,15 +93,20 @@ def check(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
         return [refused.message]
     model, problems = read(cert, proofs)
     if model is None:
-        return problems[:form.MAX_FAULTS]
+        return _capped(problems)
     derived, faults = signatures(model, proofs)
     problems += [message for _, message in faults]
     if not faults:
         problems += _claims(cert, model, proofs, derived)
     layout = _Layout(net, _plans(model, proofs.lib), set(form.start(model.pending)))
-    problems = layout.check(proofs, problems)
-    return problems[:form.MAX_FAULTS] + ([f"and {len(problems) - form.MAX_FAULTS} more"]
-                                         if len(problems) > form.MAX_FAULTS else [])
+    return _capped(layout.check(proofs, problems))
+
+
+def _capped(problems: list[str]) -> list[str]:
+    """At most :data:`form.MAX_FAULTS` problems, and how many more: a hostile file may
+    have a million."""
+    more = len(problems) - form.MAX_FAULTS
+    return problems[:form.MAX_FAULTS] + ([f"and {more} more"] if more > 0 else [])
 
 
 class Signature(NamedTuple):
