@@ -485,15 +485,18 @@ def _plans(model: Model, lib) -> dict[str, _Plan]:
     slot_places: dict[str, tuple[str, ...]] = {}      # T1 -> T1_B, T1_A, ...
     slots_of: dict[str, tuple[str, ...]] = {}
     gates = {model.roots[t] for t in model.roots if t != MISSION}
+    sites: dict[str, tuple[str, dict[str, str]]] = {}
     nodes = model.nodes
     for k, node in enumerate(nodes):
         name = node.name
         if node.call:
             callee = node.subject
-            prims = sorted(set(model.tasks[callee][1])) if callee in model.tasks else []
-            subject = f"{CALL_SITE}/{len(prims)}"
-            fills = dict(zip(site_slots, map(callee.__add__, site_ends)))
-            fills.update({f"lock.{k}": f"{p}.LOCK" for k, p in enumerate(prims, 1)})
+            if callee not in sites:      # every site of one callee shares the same places
+                prims = sorted(set(model.tasks[callee][1])) if callee in model.tasks else []
+                fills = dict(zip(site_slots, map(callee.__add__, site_ends)))
+                fills.update({f"lock.{k}": f"{p}.LOCK" for k, p in enumerate(prims, 1)})
+                sites[callee] = f"{CALL_SITE}/{len(prims)}", fills
+            subject, fills = sites[callee]
         else:
             subject, fills = node.subject, {}
             if subject not in slots_of:
