@@ -14,11 +14,12 @@ import click
 
 from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
+from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
-from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
+from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS, property_query_files
 from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
 from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
@@ -42,6 +43,15 @@ FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
 NET_OPTION = click.option("--net", "net_id", metavar="ID",
                           help="The net to read, of a PNML file that holds several.")
+PROPERTIES_SIZE = f"{MAX_PROPERTIES_SIZE >> 20}M"
+PROPERTIES_SIZE_OPTION = click.option(
+    "--max-properties-size", "max_props_size", metavar="SIZE", default=PROPERTIES_SIZE,
+    show_default=True,
+    help="With --properties: refuse a properties file larger than this, before reading it.")
+ATOMS_OPTION = click.option(
+    "--max-atoms", metavar="N", type=click.IntRange(min=1), default=PROPERTY_ATOMS,
+    show_default=True, help="With --properties: refuse properties of more than N atoms in "
+    "all (the mission's and the file's), before checking them.")
 FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
                              show_default=True,
                              help="; ".join(f"{f.name}: {f.says}" for f in FORMATS.values()))
@@ -103,7 +113,10 @@ def main() -> None:
               metavar="[FILE]", help="Also print each property compiled to place formulas "
               "(docs/properties.md): the mission's, then FILE's (default: MISSION.props, "
               "if there is one).")
-def check(mission: Path, properties: str | None) -> int:
+@PROPERTIES_SIZE_OPTION
+@ATOMS_OPTION
+def check(mission: Path, properties: str | None, max_props_size: str = PROPERTIES_SIZE,
+          max_atoms: int = PROPERTY_ATOMS) -> int:
     """Parse and check MISSION (MCL): names, arities, patterns, recursion, properties.
 
     Every error of the file is reported at once, each with file:line:col.
@@ -111,7 +124,8 @@ def check(mission: Path, properties: str | None) -> int:
     click.echo(f"{mission}: ok ({pipeline.check_file(mission).summary()})")
     if properties is not None:
         from mcl2pnml.core.properties import describe
-        _, compiled = pipeline.properties_of(mission, extra=_properties_file(mission, properties))
+        _, compiled = pipeline.properties_of(mission, extra=_properties_file(mission, properties),
+                                             max_size=max_props_size, max_atoms=max_atoms)
         for prop in compiled:
             click.echo(f"property {prop.name} ({prop.location.prefix()}): {prop.text}")
             click.echo(f"  {prop.pattern.value}: P = {describe(prop.p)}"
@@ -167,9 +181,12 @@ def functional(mission: Path, with_functions: bool) -> int:
               "and .ReachabilityCardinality.xml (docs/properties.md).")
 @click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half "
               "free). A mission whose net would not fit is one message, exit 2.")
+@PROPERTIES_SIZE_OPTION
+@ATOMS_OPTION
 def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, expand: str,
              queries: Path | None, tool: str, max_memory: str | None,
-             properties: str | None = None) -> int:
+             properties: str | None = None, max_props_size: str = PROPERTIES_SIZE,
+             max_atoms: int = PROPERTY_ATOMS) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
@@ -182,13 +199,19 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
     if expand and "expand" not in FORMATS[fmt].options:
         raise click.BadParameter(f"only a drawing has boxes to open, not {fmt}: --format "
                                  "svg, png or dot", param_hint="--expand")
-    check_outputs([("-o", output), ("--queries", queries)], [("the mission", mission)])
+    stem = output.with_suffix("") if output.suffix else output
+    extra = None if properties is None else _properties_file(mission, properties)
+    check_outputs([("-o", output), ("--queries", queries),
+                   *(("--properties", path) for path in
+                     (property_query_files(stem).values() if properties is not None else ()))],
+                  [("the mission", mission), ("the properties file (--properties)", extra)])
     props = ()
     if properties is None:
         net = pipeline.compile_file(mission, max_memory=max_memory)
     else:
         net, props = pipeline.properties_of(
-            mission, extra=_properties_file(mission, properties), max_memory=max_memory)
+            mission, extra=extra, max_memory=max_memory, max_size=max_props_size,
+            max_atoms=max_atoms)
         if not props:
             raise OptionError("--properties", f"{mission} declares no property, and there "
                               f"is no {properties or mission.with_suffix('.props')} beside it")
@@ -200,7 +223,6 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
         written = pipeline.save_queries(net, queries, tool)
         click.echo(f"wrote {queries}: {', '.join(p.id for p in written)} (for {tool})", err=True)
     if props:
-        stem = output.with_suffix("") if output.suffix else output
         for path, qs in pipeline.save_property_queries(props, stem):
             click.echo(f"wrote {path}: {len(qs)} {'query' if len(qs) == 1 else 'queries'}",
                        err=True)
@@ -470,12 +492,22 @@ def _progress(states: int, frontier: int) -> None:
               help="With --properties: for each failing property write DIR/NAME.txt (its run "
                    "in the mission's terms), NAME.vehicle.json (a vehicle script that replays a "
                    "violation on both engines), NAME.log and NAME.html (a page stepping "
-                   "through it).")
+                   "through it). No file may be an input: a name that is one is refused "
+                   "before anything is written.")
+@click.option("--max-counterexamples", "max_cex", metavar="N", type=click.IntRange(min=0),
+              default=pipeline.MAX_COUNTEREXAMPLES, show_default=True,
+              help="With --properties: explain (print, and write with --counterexamples) the "
+                   "counterexamples of the first N failing properties only; the others are "
+                   "given their verdict and firing sequence, and their number is said.")
+@PROPERTIES_SIZE_OPTION
+@ATOMS_OPTION
 @NET_OPTION
 def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
             progress: bool | None, explorer: str, max_memory: str | None,
             net_id: str | None, properties: str | None = None,
-            cex_dir: Path | None = None, explore: bool = False, max_cert: str = "16M"
+            cex_dir: Path | None = None, explore: bool = False,
+            max_cex: int = pipeline.MAX_COUNTEREXAMPLES, max_props_size: str = PROPERTIES_SIZE,
+            max_atoms: int = PROPERTY_ATOMS, max_cert: str = "16M"
             ) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
@@ -489,9 +521,26 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if cex_dir is not None and initial is not None:
         raise OptionError("--counterexamples", "a replay starts the mission from its start: "
                                                "leave out --initial")
+    props = extra = None
+    if properties is None:
+        net = pipeline.load_net(file, net_id, max_memory)
+    else:   # read, counted and checked before the analysis, which they may make long
+        if file.suffix != ".mcl":
+            raise OptionError("--properties", "properties are a mission's (an .mcl file)")
+        if net_id is not None:
+            raise OptionError("--net", "properties are a mission's, which compiles to one "
+                                       "net; leave out --net")
+        extra = _properties_file(file, properties)
+        net, props = pipeline.properties_of(file, extra=extra, max_memory=max_memory,
+                                            max_size=max_props_size, max_atoms=max_atoms)
     if cex_dir is not None:     # before the analysis: a folder that cannot be is said at once
+        # and before anything is written: no property's files may be an input
+        inputs = [("the mission", file), ("the properties file (--properties)", extra),
+                  ("the certificate beside it", pipeline.certificate_beside(file))]
+        check_outputs([("--counterexamples", path) for prop in props for path in
+                       pipeline.witness_files(cex_dir, prop.name).values()], inputs,
+                      "give another folder, or rename the property")
         pipeline.make_folder(cex_dir)
-    net = pipeline.load_net(file, net_id, max_memory)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
     shown = sys.stderr.isatty() if progress is None else progress
     # a certificate beside the file proves the behaviour without exploring (mcl2pnml.certify)
@@ -514,15 +563,24 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
                    "(--explore to explore them)", err=True)
     if shown:
         click.echo("", err=True)
-    verdicts = None if properties is None else _check_properties(file, properties, net, start,
-                                                                 max_states)
-    # the mission's terms and the replay start from the mission's own start
-    witnesses = (pipeline.witnesses(file, net, verdicts)
+    verdicts = None if props is None else pipeline.check_properties(
+        net if start is None else net.with_initial(start), props, max_states)
+    # the mission's terms and the replay start from the mission's own start; only the
+    # counterexamples printed and written are explained, each costing a search and a replay
+    witnesses = (pipeline.witnesses(file, net, verdicts, max_cex)
                  if verdicts is not None and start is None else None)
-    if cex_dir is not None:
+    if witnesses is not None:
+        failing = sum(v.shape is not None for v in verdicts)
+        explained = sum(w is not None for w in witnesses)
+        if explained < failing:
+            click.echo(f"counterexamples of {failing - explained:,} of the {failing:,} "
+                       f"failing properties left out: the first {explained:,} are explained "
+                       "(--max-counterexamples to raise the limit)", err=True)
+    if cex_dir is not None and any(w is not None for w in witnesses):
+        page = pipeline.show_nets(str(file), with_run=True)   # the same for every property
         for v, w in zip(verdicts, witnesses):
             if w is not None:
-                for path in pipeline.save_witness(cex_dir, file, v, w):
+                for path in pipeline.save_witness(cex_dir, file, v, w, page):
                     click.echo(f"wrote {path}", err=True)
     if as_json:
         if verdicts is not None:
@@ -536,16 +594,6 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if "fails" in statuses:
         return 1
     return 3 if "partial" in result or "unknown" in statuses else 0
-
-
-def _check_properties(file: Path, properties: str, net, start, max_states: int) -> list:
-    """The verdicts of the mission's properties (and FILE's) on the analysed net."""
-    if file.suffix != ".mcl":
-        raise OptionError("--properties", "properties are a mission's (an .mcl file)")
-    _, props = pipeline.properties_of(file, extra=_properties_file(file, properties))
-    if start is not None:
-        net = net.with_initial(start)
-    return pipeline.check_properties(net, props, max_states)
 
 
 def _properties_file(mission: Path, properties: str) -> Path | None:

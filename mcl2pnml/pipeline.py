@@ -82,17 +82,30 @@ def _user_templates_proven() -> None:
 
 
 def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,
-                  max_memory: int | str | None = None) -> tuple[Net, tuple["Property", ...]]:
+                  max_memory: int | str | None = None, max_size: int | str | None = None,
+                  max_atoms: int | None = None) -> tuple[Net, tuple["Property", ...]]:
     """The compiled net of ``mission`` and its properties compiled to predicates on its
     places (:mod:`mcl2pnml.language.properties`): those the mission declares, then those
     of ``extra`` (a side file of ``property`` declarations), each with its location.
-    ``reduced``: on the reduced model (Fig. 3), where an atom on a primitive is an error."""
+    ``reduced``: on the reduced model (Fig. 3), where an atom on a primitive is an error.
+
+    ``extra`` over ``max_size`` bytes (or as ``--max-properties-size`` takes it) is
+    refused before it is read, and properties of more than ``max_atoms`` atoms in all
+    once parsed, before they are checked (defaults: the limits of
+    :mod:`mcl2pnml.core.bounds`)."""
+    from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS
     from mcl2pnml.language.parser import parse_file
-    from mcl2pnml.language.properties import check_side_file, compile_properties
+    from mcl2pnml.language.properties import check_atoms, check_side_file, compile_properties
+    if isinstance(max_size, str):
+        max_size = parse_size(max_size, "--max-properties-size")
     checked = check_file(mission)
-    sources = [checked.program]
-    if extra is not None:
-        sources.append(check_side_file(parse_file(extra), checked.program))
+    side = None if extra is None else parse_file(
+        extra, "properties file", MAX_PROPERTIES_SIZE if max_size is None else max_size,
+        "--max-properties-size")
+    sources = [checked.program] + ([side] if side is not None else [])
+    check_atoms(sources, MAX_PROPERTY_ATOMS if max_atoms is None else max_atoms)
+    if side is not None:
+        check_side_file(side, checked.program)
     from mcl2pnml.core.memory import Budget, guard
     if isinstance(max_memory, str):
         max_memory = parse_size(max_memory)
@@ -376,15 +389,29 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
     return check_all(net, properties, max_states)
 
 
-def witnesses(mission: Path, net: Net, verdicts) -> list:
+#: How many failing properties ``analyze`` explains, unless told (``--max-counterexamples``):
+#: each costs its replay on both engines, at times a search of the engines' own runs, and
+#: four files, so that thousands of failing properties would take minutes to hours.
+MAX_COUNTEREXAMPLES = 100
+
+
+def witnesses(mission: Path, net: Net, verdicts, most: int | None = None) -> list:
     """For each verdict, its :class:`~mcl2pnml.counterexample.Witness` when it fails
     (the counterexample in the mission's terms, the vehicle script that replays a violation
-    on both engines, or why none does), else None. ``net`` is ``mission``'s compiled net."""
+    on both engines, or why none does), else None. ``net`` is ``mission``'s compiled net.
+    ``most``: only the first ``most`` failing verdicts are explained, the others' are None,
+    and cost nothing."""
     from mcl2pnml.counterexample import witness
     checked = check_file(mission)
-    return [None if v.shape is None else
-            witness(net, checked, v.property, v.transitions, shape=v.shape.value, loop=v.loop)
-            for v in verdicts]
+    out, left = [], most
+    for v in verdicts:
+        if v.shape is None or left == 0:
+            out.append(None)
+            continue
+        out.append(witness(net, checked, v.property, v.transitions, shape=v.shape.value,
+                           loop=v.loop))
+        left = None if left is None else left - 1
+    return out
 
 
 def verdicts_json(verdicts, witnesses=None) -> list[dict[str, Any]]:
@@ -458,25 +485,32 @@ def make_folder(folder: Path) -> Path:
     return folder
 
 
-def save_witness(folder: Path, mission: Path, v, w) -> list[Path]:
+def witness_files(folder: Path, name: str) -> dict[str, Path]:
+    """The files :func:`save_witness` may write for the property ``name`` in ``folder``,
+    by what they hold: every one, so that they can be checked against the inputs before
+    anything is written."""
+    return {kind: folder / f"{name}.{suffix}" for kind, suffix in
+            (("text", "txt"), ("script", "vehicle.json"), ("log", "log"), ("page", "html"))}
+
+
+def save_witness(folder: Path, mission: Path, v, w, shown: "Shown | None" = None) -> list[Path]:
     """A failing property's files in ``folder``: NAME.txt (:func:`witness_text`),
     NAME.vehicle.json (the script, if any), NAME.log (the run as ``run --log`` writes it:
     the replayed run if any, else the counterexample) and NAME.html (``show``'s page
-    following that run step by step)."""
+    following that run step by step). ``shown``: the mission's page content
+    (:func:`show_nets`), when the caller writes several and has it already."""
     from mcl2pnml.core.files import atomic_write_text
     make_folder(folder)
-    name = v.property.name
-    written = [folder / f"{name}.txt"]
-    atomic_write_text(written[0], "\n".join(witness_text(v, w)) + "\n")
-    shown = w.replayed or w.run
+    files = witness_files(folder, v.property.name)
+    written = [files["text"]]
+    atomic_write_text(files["text"], "\n".join(witness_text(v, w)) + "\n")
+    run = w.replayed or w.run
     if w.replayed is not None:
-        written.append(folder / f"{name}.vehicle.json")
-        atomic_write_text(written[-1], w.replayed.script_json())
-    log = folder / f"{name}.log"
-    atomic_write_text(log, "".join(json.dumps(e) + "\n" for e in shown.run_log()))
-    page = folder / f"{name}.html"
-    save_show_page(page, show_nets(str(mission), with_run=True), log)
-    return [*written, log, page]
+        written.append(files["script"])
+        atomic_write_text(files["script"], w.replayed.script_json())
+    atomic_write_text(files["log"], "".join(json.dumps(e) + "\n" for e in run.run_log()))
+    save_show_page(files["page"], shown or show_nets(str(mission), with_run=True), files["log"])
+    return [*written, files["log"], files["page"]]
 
 
 def parse_size(text: str, option: str = "--max-memory") -> int:
@@ -570,6 +604,10 @@ class Shown:
     #: The boxes of each net's drawing by its label: a template's slots (the primitive of
     #: Fig. 2's task, T1 and T2 of Fig. 4); a net without, each instance in its box.
     boxes: dict[str, dict[str, list[str]]] = field(default_factory=dict)
+    #: Each net as the page draws it, made by the first page written: a run does not
+    #: change it, so the pages of many runs of one mission (a counterexample's each,
+    #: ``analyze --counterexamples``) lay the mission out and explore it once.
+    drawn: list[dict[str, Any]] = field(default_factory=list, compare=False, repr=False)
 
 
 def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None) -> Shown:
@@ -625,9 +663,10 @@ def save_show_page(path: str | Path, shown: Shown,
         entries = read_run(run_log)
         check_run(shown.nets[0][0], entries, str(run_log))
     tree = tree_data(shown.trees)
-    save_page(path, shown.title, [variant(net, label, tree, shown.boxes.get(label))
-                                  for net, label in shown.nets],
-              entries, tree)
+    if not shown.drawn:
+        shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label))
+                           for net, label in shown.nets)
+    save_page(path, shown.title, shown.drawn, entries, tree)
     return Path(path)
 
 

@@ -45,6 +45,29 @@ def run_cli(*args, cwd=None, env=None, timeout: float = 300) -> subprocess.Compl
                           capture_output=True, text=True, cwd=cwd, env=env, timeout=timeout)
 
 
+def cli(*args):
+    """The command in this process (click's runner): fast, and its exit status."""
+    from click.testing import CliRunner
+
+    from mcl2pnml.cli import main
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def one_error(out, *pieces: str) -> str:
+    """Exit status 2, one message (its first line holds ``pieces``), no traceback."""
+    text = getattr(out, "output", None) or out.stderr
+    code = getattr(out, "exit_code", None)
+    code = out.returncode if code is None else code
+    assert code == 2, text
+    assert "Traceback" not in text, text
+    error = getattr(out, "exception", None)     # in process: only the CLI's own exit
+    assert error is None or isinstance(error, SystemExit), repr(error)
+    first = text.strip().splitlines()[0]
+    for piece in pieces:
+        assert piece in first, text
+    return text
+
+
 def assert_golden(path: Path, text: str) -> None:
     """``text`` is what the golden file ``path`` holds.
 

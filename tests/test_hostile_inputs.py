@@ -17,7 +17,7 @@ import signal
 
 import pytest
 
-from helpers import DATA, ROOT, assert_error_golden, run_cli
+from helpers import DATA, ROOT, assert_error_golden, cli, one_error, run_cli
 from mcl2pnml.core.errors import Mcl2PnmlError
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
@@ -37,29 +37,6 @@ TOO_LARGE = [DATA / "mcl" / "invalid" / "huge_timeout.mcl",
              DATA / "pnml" / "invalid" / "huge_weight.pnml",
              DATA / "pnml" / "invalid" / "timing_too_long.pnml",
              DATA / "pnml" / "invalid" / "payload_too_deep.pnml"]
-
-
-def cli(*args):
-    """The command in this process (click's runner): fast, and its exit status."""
-    from click.testing import CliRunner
-
-    from mcl2pnml.cli import main
-    return CliRunner().invoke(main, [str(a) for a in args])
-
-
-def one_error(out, *pieces: str) -> str:
-    """Exit status 2, one message (its first line holds ``pieces``), no traceback."""
-    text = getattr(out, "output", None) or out.stderr
-    code = getattr(out, "exit_code", None)
-    code = out.returncode if code is None else code
-    assert code == 2, text
-    assert "Traceback" not in text, text
-    error = getattr(out, "exception", None)     # in process: only the CLI's own exit
-    assert error is None or isinstance(error, SystemExit), repr(error)
-    first = text.strip().splitlines()[0]
-    for piece in pieces:
-        assert piece in first, text
-    return text
 
 
 @pytest.fixture

@@ -15,6 +15,10 @@ through the analysis's 64-bit counters):
   the TINA writer counts in;
 * any other number in MCL: an integer of at most :data:`MAX_INTEGER` in
   size, or a finite decimal (a double).
+
+And the properties a command reads: a side file of at most
+:data:`MAX_PROPERTIES_SIZE` bytes, checked before it is read, and at most
+:data:`MAX_PROPERTY_ATOMS` atoms in all, counted once they are parsed.
 """
 from __future__ import annotations
 
@@ -26,6 +30,14 @@ MAX_TOKENS_TEXT = "2^63-1 (9,223,372,036,854,775,807)"
 MAX_SECONDS = 1_000_000_000
 #: The largest integer literal of MCL, in size (a decimal may be larger, up to a double's).
 MAX_INTEGER = 2 ** 63 - 1
+#: The largest side file of properties read, unless raised (``--max-properties-size``):
+#: the examples' are a few KB; reading and parsing cost about 2 s and 50 MB a MiB.
+MAX_PROPERTIES_SIZE = 4 << 20
+#: The most atoms (``true`` and ``false`` count) the properties of one command may
+#: have in all, unless raised (``--max-atoms``): each atom is evaluated in each
+#: marking of the product the checker explores, so that the limit keeps a command's
+#: time and memory in proportion to what a person writes.
+MAX_PROPERTY_ATOMS = 10_000
 
 
 def natural_at_most(digits: str, limit: int) -> int | None:

@@ -29,7 +29,10 @@ Every input is read through here too (:func:`read_bytes`, :func:`read_text`,
 :func:`open_regular`), and only a regular file is read: a FIFO would block
 the command for ever, a device may never end, a directory is no input.
 And an output must not be an input of the same command, nor another of its
-outputs (:func:`check_outputs`): writing it would destroy what is read.
+outputs (:func:`check_outputs`): writing it would destroy what is read. A read
+may be bounded (``limit``): the size is checked before a byte is read, and no
+more than the limit is read, so that a file of gigabytes is refused at once
+with one message naming the option that raises the limit.
 """
 from __future__ import annotations
 
@@ -212,29 +215,63 @@ def open_regular(path: str | Path, what: str | None = None, flags: int = os.O_RD
     return fd
 
 
-def _read(path: str | Path, what: str | None) -> bytes:
+def mib(size: int) -> str:
+    """A size as the limits' messages give it: ``4.0 MiB``."""
+    return f"{size / 2**20:,.1f} MiB"
+
+
+def _read(path: str | Path, what: str | None, limit: int | None = None,
+          option: str | None = None) -> bytes:
+    """The bytes of the regular file at ``path``; with ``limit``, at most that many.
+
+    The size is checked on the open descriptor before anything is read, so that a
+    file of gigabytes costs nothing to refuse; and no more than ``limit`` + 1 bytes
+    are read, since a file may grow after the check, and some regular files (those
+    of /proc) say they are empty. ``option`` is the one that raises the limit.
+    """
+    the = f" the {what}" if what else ""
+
+    def too_large(size: int | None) -> Mcl2PnmlError:
+        is_ = f"it is {mib(size)}, over" if size is not None else "it is over"
+        raise_it = f" ({option} to raise it)" if option else ""
+        return Mcl2PnmlError(f"cannot read{the}: {is_} the limit of {mib(limit)}{raise_it}",
+                             Location(str(path)))
     fd = open_regular(path, what)
     try:
         with os.fdopen(fd, "rb") as f:
-            return f.read()
+            if limit is None:
+                return f.read()
+            size = os.fstat(f.fileno()).st_size
+            if size > limit:
+                raise too_large(size)
+            data = f.read(limit + 1)
+            if len(data) > limit:
+                raise too_large(None)
+            return data
     except OSError as e:
         reason = e.strerror or str(e)
-        the = f" the {what}" if what else ""
         raise Mcl2PnmlError(f"cannot read{the}: {reason}", Location(str(path))) from None
 
 
-def read_text(path: str | Path, what: str) -> str:
-    """A UTF-8 text file, or one error naming it: "FILE: cannot read the WHAT: why"."""
-    data = _read(path, what)
+def read_text(path: str | Path, what: str, limit: int | None = None,
+              option: str | None = None) -> str:
+    """A UTF-8 text file, or one error naming it: "FILE: cannot read the WHAT: why".
+
+    ``limit``: a file of more bytes is refused before it is read, the message
+    naming ``option`` as the way to raise the limit (:func:`_read`).
+    """
+    data = _read(path, what, limit, option)
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
         raise Mcl2PnmlError(f"cannot read the {what}: {e}", Location(str(path))) from None
 
 
-def read_bytes(path: str | Path, what: str | None = None) -> bytes:
-    """A file's bytes; a file that cannot be read, or is no regular file, is one error naming it."""
-    return _read(path, what)
+def read_bytes(path: str | Path, what: str | None = None, limit: int | None = None,
+               option: str | None = None) -> bytes:
+    """A file's bytes; a file that cannot be read, or is no regular file, or is over
+    ``limit`` bytes (:func:`read_text`), is one error naming it."""
+    return _read(path, what, limit, option)
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:
@@ -251,27 +288,58 @@ def same_file(a: str | Path, b: str | Path) -> bool:
         return False
 
 
+def _identity(path: Path) -> tuple[Path | None, tuple[int, int] | None]:
+    """What :func:`same_file` compares, found once: the resolved path, and the device
+    and inode where the file exists."""
+    try:
+        resolved = path.resolve()
+    except (OSError, RuntimeError):   # a symbolic link loop: the inode may still say
+        resolved = None
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return resolved, None
+    return resolved, (st.st_dev, st.st_ino)
+
+
 def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
-                  inputs: Iterable[tuple[str, str | Path | None]] = ()) -> None:
+                  inputs: Iterable[tuple[str, str | Path | None]] = (),
+                  instead: str = "give another file") -> None:
     """Refuse an output that is an input of the same command, or another of its outputs.
 
     ``outputs`` are (option, path) pairs (``("-o", ...)``, ``("--log", ...)``),
     ``inputs`` (what it is, path) pairs (``("the mission", ...)``); None is an
     option not given. Writing an output that is also an input destroys the
     input (``compile s.mcl -o s.mcl``); two outputs in one file keep the last.
-    One :class:`~mcl2pnml.core.errors.OptionError` naming the option.
+    One :class:`~mcl2pnml.core.errors.OptionError` naming the option, ending with
+    ``instead`` (what to do about it). Files are compared as :func:`same_file`
+    does, each looked up once, so that thousands of outputs (a counterexample's
+    files per property) cost a moment.
     """
-    given_outputs = [(o, Path(p)) for o, p in outputs if p is not None]
-    given_inputs = [(w, Path(p)) for w, p in inputs if p is not None]
-    for i, (option, path) in enumerate(given_outputs):
-        for what, source in given_inputs:
-            if same_file(path, source):
-                raise OptionError(option, f"'{path}' is {what}, which this command reads: "
-                                          "writing there would destroy it; give another file")
-        for other, earlier in given_outputs[:i]:
-            if same_file(path, earlier):
-                raise OptionError(option, f"'{path}' is also the file of {other}: give each "
-                                          "output a file of its own")
+    # each file's resolved path and inode -> (what it is or its option, an input?)
+    seen: dict[tuple[str, object], tuple[str, bool]] = {}
+
+    def keys(path: Path) -> list[tuple[str, object]]:
+        resolved, inode = _identity(path)
+        return [key for key in (("path", resolved), ("inode", inode)) if key[1] is not None]
+    for what, p in inputs:
+        for key in keys(Path(p)) if p is not None else ():
+            seen.setdefault(key, (what, True))
+    for option, p in outputs:
+        if p is None:
+            continue
+        path = Path(p)
+        found = keys(path)
+        clashes = [seen[key] for key in found if key in seen]
+        clash = next((c for c in clashes if c[1]), clashes[0] if clashes else None)
+        if clash is not None and clash[1]:
+            raise OptionError(option, f"'{path}' is {clash[0]}, which this command reads: "
+                                      f"writing there would destroy it; {instead}")
+        if clash is not None:
+            raise OptionError(option, f"'{path}' is also the file of {clash[0]}: give each "
+                                      "output a file of its own")
+        for key in found:
+            seen.setdefault(key, (option, False))
 
 
 def json_fault(error: ValueError | RecursionError) -> str:

@@ -86,9 +86,14 @@ class Element:
 
     def lines(self, indent: str = "") -> list[str]:
         """The element an element a line; a short one, or one of leaves only, on one line."""
-        flat = self.flat()
-        if not self.children or (all(not c.children for c in self.children) and len(flat) <= 96):
-            return [indent + flat]
+        # flat() only where it may be used: called on every element, it would write each
+        # subtree again for each of its ancestors (a property of 100,000 atoms: minutes)
+        if not self.children:
+            return [indent + self.flat()]
+        if all(not c.children for c in self.children):
+            flat = self.flat()
+            if len(flat) <= 96:
+                return [indent + flat]
         inner = [line for c in self.children for line in c.lines(indent + "  ")]
         return [f"{indent}<{self.tag}>", *inner, f"{indent}</{self.tag}>"]
 
@@ -272,13 +277,20 @@ def property_queries(props) -> dict[str, tuple[Property, ...]]:
     return out
 
 
+def property_query_files(stem: str | Path) -> dict[str, Path]:
+    """Each category's file, ``STEM.CATEGORY.xml``: all that may be written, for checking
+    them against the command's inputs first."""
+    stem = Path(stem)
+    return {category: stem.with_name(f"{stem.name}.{category}.xml") for category in CATEGORIES}
+
+
 def save_property_queries(props, stem: str | Path) -> list[tuple[Path, tuple[Property, ...]]]:
     """Write each category's queries to ``STEM.CATEGORY.xml``, whole or not at all; the
     files written, with their queries."""
-    stem = Path(stem)
+    files = property_query_files(stem)
     written = []
     for category, queries in property_queries(props).items():
-        path = stem.with_name(f"{stem.name}.{category}.xml")
+        path = files[category]
         atomic_write_text(path, to_xml(queries))
         written.append((path, queries))
     return written

@@ -383,6 +383,7 @@ def _parse_tree(text: str, filename: str) -> tuple[ast.Declaration, ...]:
 MAX_NESTING = 100
 _NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall", "tuple",
             "pexpr", "pand", "pnot"}
+_PROPERTY_NESTING = {"pexpr", "pand", "pnot"}
 
 
 def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
@@ -412,10 +413,13 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
             if depth > MAX_NESTING:
                 line, col = node.meta.line, node.meta.column
                 src = lines[line - 1] if 0 < line <= len(lines) else None
-                raise Mcl2PnmlError(
-                    f"nested too deeply: more than {MAX_NESTING} levels of blocks, "
-                    "structures, calls and tuples; split the mission into functions",
-                    Location(filename, line, col, src))
+                what = (f"more than {MAX_NESTING} levels of operators in a property; "
+                        "write it more simply, or as several properties"
+                        if node.data in _PROPERTY_NESTING else
+                        f"more than {MAX_NESTING} levels of blocks, structures, calls and "
+                        "tuples; split the mission into functions")
+                raise Mcl2PnmlError(f"nested too deeply: {what}",
+                                    Location(filename, line, col, src))
         stack.extend((child, depth) for child in reversed(node.children)
                      if isinstance(child, (Tree, Token)))
 
@@ -456,6 +460,10 @@ _CHILDREN = {
 }
 
 
-def parse_file(path: str | Path) -> ast.Program:
+def parse_file(path: str | Path, what: str | None = None, limit: int | None = None,
+               option: str | None = None) -> ast.Program:
+    """Parse the MCL file at ``path``; ``what`` names it in a message that it cannot be
+    read, and a file over ``limit`` bytes is refused before it is read, ``option``
+    raising the limit (:func:`mcl2pnml.core.files.read_bytes`)."""
     path = Path(path)
-    return parse(decode(read_bytes(path), str(path)), str(path))
+    return parse(decode(read_bytes(path, what, limit, option), str(path)), str(path))

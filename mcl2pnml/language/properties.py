@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 from mcl2pnml.core import properties as typed
-from mcl2pnml.core.bounds import MAX_TOKENS, MAX_TOKENS_TEXT
+from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS, MAX_TOKENS, MAX_TOKENS_TEXT
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MISSION
@@ -91,6 +91,42 @@ def _atoms(expr: ast.PropExpr | None):
             stack.append(e.arg)
         elif isinstance(e, (ast.PropAnd, ast.PropOr)):
             stack.extend(reversed(e.args))
+
+
+def _leaves(expr: ast.PropExpr):
+    """Every atom and constant of an expression, in the order written."""
+    stack = [expr]
+    while stack:
+        e = stack.pop()
+        if isinstance(e, (ast.PropAtom, ast.PropTruth)):
+            yield e
+        elif isinstance(e, ast.PropNot):
+            stack.append(e.arg)
+        elif isinstance(e, (ast.PropAnd, ast.PropOr)):
+            stack.extend(reversed(e.args))
+
+
+def check_atoms(sources: Sequence[ast.Program], limit: int = MAX_PROPERTY_ATOMS,
+                option: str = "--max-atoms") -> None:
+    """Refuse the properties of ``sources`` (the mission, then a side file) when they have
+    more than ``limit`` atoms in all: one error at the first atom past the limit, before
+    they are checked, compiled or judged
+    (:data:`~mcl2pnml.core.bounds.MAX_PROPERTY_ATOMS`). Counting is one walk of the
+    parsed expressions, without recursion."""
+    count, first = 0, None
+    for program in sources:
+        for prop in program.of(ast.Property):
+            for expr in _expressions(prop):
+                for leaf in _leaves(expr):
+                    count += 1
+                    if count == limit + 1:
+                        first = (program, leaf.pos)
+    if first is None:
+        return
+    program, pos = first
+    raise Mcl2PnmlError(f"the properties have {count:,} atoms in all, over the limit of "
+                        f"{limit:,} ({option} to raise it); this is atom {limit + 1:,}",
+                        _Errors(program).location(pos))
 
 
 def _expressions(prop: ast.Property):
