@@ -90,7 +90,8 @@ def scale(sizes=SIZES, log=lambda text: None) -> list[dict]:
 
 
 def commands(calls: int = 10_000) -> dict:
-    """The whole commands, fresh processes: certify the survey; analyze the dam (explores)."""
+    """The whole commands, fresh processes: certify the survey, check its certificate file
+    against its PNML; certify the dam; analyze the dam (explores)."""
     ours = str(Path(sys.executable).with_name("mcl2pnml"))
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -98,6 +99,13 @@ def commands(calls: int = 10_000) -> dict:
         mission.write_text(survey(calls))
         ran = timed([ours, "certify", str(mission)])
         out["certify survey"] = ran and {"seconds": ran[0], "peak_mb": ran[1], "ok": ran[3] == 0}
+        # the certificate read back as a user's file: its size bound, its schema, the check
+        pnml = Path(tmp) / f"survey-{calls}.pnml"
+        timed([ours, "compile", str(mission), "-o", str(pnml)])
+        ran = timed([ours, "certify", str(mission.with_name(f"survey-{calls}.cert.json")),
+                     "--check", str(pnml)])
+        out["check survey's certificate file against its PNML"] = ran and {
+            "seconds": ran[0], "peak_mb": ran[1], "ok": ran[3] == 0}
         dam_mission = Path(tmp) / "dam_inspection.mcl"
         dam_mission.write_text((ROOT / "examples" / "dam_inspection.mcl").read_text())
         ran = timed([ours, "certify", str(dam_mission)])

@@ -298,25 +298,12 @@ def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE
     file over ``max_size`` bytes (checked before reading it), or that is not JSON, or not of
     the certificate's shape, is one error naming it, with the line and column or the JSON
     path of the fault."""
-    import os
-
     from mcl2pnml.certify import form
     from mcl2pnml.core.errors import Location, Mcl2PnmlError
     from mcl2pnml.core.files import json_fault, read_text
     limit = parse_size(max_size, "--max-certificate-size") if isinstance(max_size, str) \
         else max_size
-    try:
-        size = os.stat(path).st_size
-    except OSError:
-        size = 0     # read_text says why it cannot be read
-    if size > limit:
-        raise Mcl2PnmlError(f"cannot read the certificate: it is {size / 2**20:.1f} MiB, over "
-                            f"the limit of {limit / 2**20:.1f} MiB (--max-certificate-size to "
-                            "raise it)", Location(str(path)))
-    text = read_text(path, "certificate")
-    if len(text) > limit:      # grown since: never read past the limit
-        raise Mcl2PnmlError("cannot read the certificate: it grew past the limit while read",
-                            Location(str(path)))
+    text = read_text(path, "certificate", limit, "--max-certificate-size")
     try:
         cert = json.loads(text)
     except json.JSONDecodeError as e:
