@@ -302,8 +302,31 @@ _READ = ["?ON", "?OFF", "?S1", "?S2"]
 def _pattern(rng: random.Random, name: str) -> str:
     """AchieveGoal changed at random into the pattern ``name``: transitions dropped, added
     (between its own places, perhaps reading the primitive) or given another output."""
-    lines = (ROOT / "templates" / "achieve_goal.pnt").read_text().splitlines()
-    lines = [f'pattern {name} "generated"' if ln.startswith("pattern ") else ln
+    return _changed(rng, "achieve_goal.pnt", f'pattern {name} "generated"', _OWN, _GIVEN,
+                    _READ)
+
+
+#: A generated sequence's transitions take and give its own places and its children's
+#: interface places (the mutex too: the contract's caller clause must catch that).
+_SEQ_OWN = ["B", "A", "MTX", "OK", "FAIL", "ABORTED", "RUN1", "RUN2", "ABT1", "ABT2"]
+_SEQ_CHILD = [f"T{k}_{p}" for k in (1, 2) for p in ("B", "A", "OK", "FAIL", "ABORTED", "MTX")]
+
+
+def _sequence(rng: random.Random, name: str) -> str:
+    """The sequence changed at random: a user's ``sequence.pnt`` takes the package's place
+    in every block of a mission."""
+    del name
+    return _changed(rng, "sequence.pnt", 'structure sequence "generated"',
+                    _SEQ_OWN + _SEQ_CHILD, _SEQ_OWN + _SEQ_CHILD, [])
+
+
+def _changed(rng: random.Random, file: str, header: str, takes, gives, reads) -> str:
+    """The package's template ``file`` with its header line ``header`` and one to three
+    changes: a transition dropped, one added (taking ``takes``, perhaps reading ``reads``,
+    giving ``gives``), or an output of one replaced."""
+    lines = (ROOT / "templates" / file).read_text().splitlines()
+    kind = header.split()[0]
+    lines = [header if ln.startswith(f"{kind} ") else ln
              for ln in lines if not ln.startswith("#")]
     transitions = [k for k, ln in enumerate(lines) if ln.startswith("transition ")]
     for step in range(rng.randint(1, 3)):
@@ -311,15 +334,16 @@ def _pattern(rng: random.Random, name: str) -> str:
         if roll < 0.3 and transitions:
             lines[rng.choice(transitions)] = ""
         elif roll < 0.7:
-            ins = rng.sample(_OWN, rng.randint(1, 2)) + rng.sample(_READ, rng.randint(0, 1))
-            outs = rng.sample(_GIVEN, rng.randint(1, 2))
+            ins = rng.sample(takes, rng.randint(1, 2)) + \
+                (rng.sample(reads, rng.randint(0, 1)) if reads else [])
+            outs = rng.sample(gives, rng.randint(1, 2))
             lines.append(f"transition g{step}: {', '.join(ins)} -> {', '.join(outs)}")
         elif transitions:
             k = rng.choice(transitions)
             head, _, out = lines[k].partition("->")
             words = out.split('"')[0].split()
             if words:
-                words[rng.randrange(len(words))] = rng.choice(_GIVEN) + \
+                words[rng.randrange(len(words))] = rng.choice(gives) + \
                     ("," if words[-1] != words[0] else "")
                 lines[k] = f"{head}-> {' '.join(words).rstrip(',')}"
     return "\n".join(lines) + "\n"
@@ -331,49 +355,85 @@ _PROBES = ["while (U(1)) { A(2); }", "while (U(1)) { while (E()) { } }",
            "if (U(1)) then { A(1); } else { E(); }", "parallel(U(1), A(2));",
            "monitor(U(1), A(2));", "monitor(A(2), U(1));", "U(1); U(2);"]
 
+#: Missions whose blocks are sequences: a user's sequence where it starts, is aborted,
+#: loops, runs beside another and holds a loop that never ends.
+_SEQ_PROBES = ["A(1); A(2);", "while (A(1)) { A(2); A(3); }",
+               "parallel({ A(1); F(2); }, A(3));", "monitor({ A(1); E(); }, A(2));",
+               "if (A(1)) then { A(2); F(3); } else { E(); }", "A(1); while (E()) { }"]
 
-def test_generated_user_patterns_that_keep_the_contract_are_certified_only_as_explored(
-        tmp_path, monkeypatch):
-    """Random patterns of one primitive slot, those whose composed net keeps the contract
-    kept, each a user's template (``$MCL2PNML_TEMPLATE_PATH``) in missions that use it:
-    a certificate the checker accepts is what exploring finds."""
+#: What each kind of generated template is: its maker, its file and name, how its net is
+#: checked against the contract, and the missions it is tried in.
+_USER = {
+    "pattern": (_pattern, lambda k: (f"gen{k}.pnt", f"Gen{k}"), (), _PROBES),
+    "sequence": (_sequence, lambda k: ("sequence.pnt", "sequence"), ("T1_", "T2_"),
+                 _SEQ_PROBES),
+}
+
+
+def _user_templates(tmp_path, monkeypatch, kind: str, candidates: int, used: int,
+                    seed: int) -> tuple[int, int, cm.Tally]:
+    """``candidates`` generated templates of ``kind``, those that keep the contract kept,
+    ``used`` of them put in missions as a user's template: (kept, certified, tally)."""
     from analysis.contract import check as contract
     from mcl2pnml.language.library import Library, default_library
-    rng = random.Random(SEED)
+    make, named, children, probes = _USER[kind]
+    rng = random.Random(seed)
     ours = ROOT / "templates"
     kept, tally, certified_ = [], cm.Tally(), 0
-    for k in range(60):
+    for k in range(candidates):
         folder = tmp_path / f"t{k}"
         folder.mkdir()
-        name = f"Gen{k}"
-        (folder / f"gen{k}.pnt").write_text(_pattern(rng, name))
+        file, name = named(k)
+        (folder / file).write_text(make(rng, name))
         try:
             lib = Library.load([ours, folder])
-            verdict = contract(lib.composed(name))
+            verdict = contract(lib.composed(name), children=children)
         except Mcl2PnmlError:
             continue
         if verdict.kept:
-            kept.append(folder)
-    assert len(kept) >= 3, f"only {len(kept)} of 60 generated patterns keep the contract"
+            kept.append((folder, name))
     try:
-        for folder in kept[:4]:
-            name = next(folder.glob("*.pnt")).stem.replace("gen", "Gen")
+        for folder, name in kept[:used]:
             monkeypatch.setenv("MCL2PNML_TEMPLATE_PATH", str(folder))
             default_library.cache_clear()
-            for body in _PROBES:
-                text = cm.HEADER + f"task U(x) = {name}(Pa(x)) timeout 3;\n" + \
-                    f"mission {{ {body} }}\n"
+            for body in probes:
+                text = cm.HEADER + f"task U(x) = {name}(Pa(x)) timeout 3;\n" * (
+                    kind == "pattern") + f"mission {{ {body} }}\n"
                 for pending in (False, True):
                     try:
                         cert, net, problems = cm.certified(text, pending)
                     except Mcl2PnmlError:
-                        continue        # not certified (or the pattern refused): fine
+                        continue        # not certified (or the template refused): fine
                     certified_ += not problems
                     base = cm.Base(text, "abort pending" if pending else "from B", net,
                                    json.dumps(cert))
-                    cm.judge(tally, base, [f"user pattern {name}"], cert, net)
+                    cm.judge(tally, base, [f"user {kind} {folder.name}"], cert, net)
     finally:
         monkeypatch.delenv("MCL2PNML_TEMPLATE_PATH")
         default_library.cache_clear()
-    assert certified_ > 0, f"no mission on {len(kept)} generated patterns was certified"
+    return len(kept), certified_, tally
+
+
+@pytest.mark.parametrize("kind", sorted(_USER))
+def test_generated_user_templates_that_keep_the_contract_are_certified_only_as_explored(
+        kind, tmp_path, monkeypatch):
+    """Random patterns of one primitive slot, and random sequences (a user's file in the
+    package's place), those whose net keeps the contract kept, each a user's template
+    (``$MCL2PNML_TEMPLATE_PATH``) in missions that use it: a certificate the checker
+    accepts is what exploring finds."""
+    kept, certified_, tally = _user_templates(tmp_path, monkeypatch, kind, 60, 4, SEED)
+    assert kept >= 3, f"only {kept} of 60 generated {kind}s keep the contract"
+    assert certified_ > 0, f"no mission on {kept} generated {kind}s was certified"
+    assert not tally.broken and not tally.crashes, tally.report()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", sorted(_USER))
+def test_thousands_of_generated_user_templates_are_certified_only_as_explored(
+        kind, tmp_path, monkeypatch):
+    """The long run: 3,000 candidates of each kind, every one that keeps the contract put
+    in the missions."""
+    kept, certified_, tally = _user_templates(tmp_path, monkeypatch, kind, 3_000, 3_000,
+                                              SEED + 7)
+    assert kept >= 30 and certified_ > 0, (kept, certified_)
     assert not tally.broken and not tally.crashes, tally.report()
