@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 
 from analysis.behaviour import behaviour
-from analysis.statespace import ExplorationLimit, explore
+from analysis.statespace import ExplorationLimit
 from mcl2pnml import pipeline
 from mcl2pnml.certify.certificate import certify
 from mcl2pnml.certify.checker import check

@@ -84,7 +84,7 @@ def local(lib: Library, subject: str) -> tuple[Net, frozenset[str]]:
     a structure's template at rest; a task's pattern at rest with its gate (without its
     time-out transitions for "NAME without a time-out", timing left to the checker); a
     primitive with its lock; a call site taking ``k`` locks ("call site/k")."""
-    from mcl2pnml.core.net import Marking, NetBuilder, Place
+    from mcl2pnml.core.net import Marking, Place
     from mcl2pnml.language.library import at_rest
     if subject == "primitive":
         net = at_rest(lib.primitive.net)
