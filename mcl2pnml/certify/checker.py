@@ -1,42 +1,52 @@
-"""Re-checking a certificate against a compiled PNML, without trusting the compiler.
+"""Re-checking a certificate against a compiled PNML, trusting the net and the proofs,
+never the certificate (docs/certificate.md, section 6).
 
 :mod:`mcl2pnml.certify.certificate` claims that a net is made of proven
 parts joined by the rules. This module checks the claim on the net alone,
-in time linear in the net:
+in time linear in the net. The certificate only guides (it names the
+instances, and the proof each is held to); every fact the verdict rests on
+is computed here:
 
-* the net is exactly the union of the instances of the certificate's tree:
+* the certificate is of its schema (:mod:`mcl2pnml.certify.form`), no
+  larger than the net it describes, and read into a :class:`Model` (:func:`read`):
+  one tree for the mission and one per function, each rooted at the node
+  named as it and every node reached from the root once, names unique, a
+  structure's children filling its template's slots in the template's
+  order, a call naming a task or a function, the functions ordered callees
+  first (a cycle refused: gates are then taken in one order), the start
+  ``mission.B`` (and ``mission.A``, an abort pending);
+* the net is exactly the union of the model's instances (:class:`_Layout`):
   each instance's own net is the own net of its proven part (a structure's
   template, a task's pattern with or without its time-out, a primitive, a
   call site with its locks; the library's, its digest the one in
   ``templates/proofs.json``), its nodes prefixed with the instance's name,
-  and the places it shares being the ones the tree says fill them (a
+  and the places it shares being the ones the model says fill them (a
   structure's ``T1_B`` is its first child's ``B``, a call site's ``to.B``
   its callee's, its ``lock.k`` the k-th primitive of its task, a task's
   ``E`` its primitive's); every node of the net is one instance's own, once;
-  no arc is missing and none is added; M0 is every part at rest, with
-  ``mission.B`` marked (and ``mission.A``, if the certificate starts with an
-  abort pending) and each function's gate free;
-* the signatures: what each node can do from B with no abort asked (end
-  OK, FAIL, and whether it may run for ever instead), derived bottom-up
-  from the proofs' results tables (a task's from its pattern's, a call's
-  from its callee's, a structure's from its children's), no node's row a
-  breach, a root that may run for ever only with an abort pending, and the
-  conclusion's ends the root's;
-* the side conditions: functions call only functions before them (no
-  recursion, so gates are taken in one order); a call site of a task takes
-  exactly its primitives' locks (the fusion allows no other); a place a
-  part shares is one the tree gives it.
+  no arc is missing and none is added; M0 is every part at rest, with the
+  start marked and each function's gate free;
+* the signatures (:func:`signatures`): what each node can do from B with no
+  abort asked (end OK, FAIL, and whether it may run for ever instead),
+  derived bottom-up, keyed by node, on the same model, from the proofs'
+  results tables; no node's row a breach, a root that may run for ever only
+  with an abort pending;
+* every claim of the certificate (each node's results, the calls counted,
+  the digests, the rules, the conclusion) is what was computed
+  (:func:`_claims`): compared, never used.
 
-The comparison is of integers (:class:`_Layout`): every node numbered, an
-arc a number, each part written for all its instances at once with numpy.
-Where the net differs, it says what, instance by instance: the node or the
-arc missing or added, the token misplaced.
+The comparison with the net is of integers: every node numbered, an arc a
+number, each part written for all its instances at once with numpy. Where
+the net differs, it says what, instance by instance: the node or the arc
+missing or added, the token misplaced.
 
-What it trusts: the proofs file (each entry was checked against the contract
-by exploring the part, and ``python -m mcl2pnml.certify.templates --update``
-does it again), the library's parts whose digests are in it, and the
-argument of the rules. Not the compiler: a net that differs from its
-certificate by one arc is refused, naming the instance.
+What it trusts (docs/certificate.md, section 7): the proofs file (each entry
+was checked against the contract by exploring the part, and ``python -m
+mcl2pnml.certify.templates --update`` does it again), the library's parts
+whose digests are in it (the reduced model the package's own), the argument
+of the rules, and the net reader. Not the compiler: a net that differs from
+its certificate by one arc is refused, naming the instance. Not the
+certificate.
 """
 from __future__ import annotations
 
