@@ -1012,8 +1012,10 @@ def mutated(base: Base, names: list[str], rng: random.Random) -> tuple[Any, Net]
             return None
         try:
             got = MUTATIONS[name](cert, net, rng)
-        except (KeyError, TypeError, AttributeError, IndexError, ValueError):
-            return None     # an earlier mutation left nothing this one can hold
+        except (KeyError, TypeError, AttributeError, IndexError, ValueError, NetError):
+            # an earlier mutation left nothing this one can hold (the mission's places
+            # renamed away, say, before an abort is added to them)
+            return None
         if got is None or got[1] is None:
             return None
         cert, net = got
