@@ -304,8 +304,11 @@ def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE
     limit = parse_size(max_size, "--max-certificate-size") if isinstance(max_size, str) \
         else max_size
     text = read_text(path, "certificate", limit, "--max-certificate-size")
+
+    def not_json(constant: str):
+        raise ValueError(f"{constant} is not JSON")
     try:
-        cert = json.loads(text)
+        cert = json.loads(text, parse_constant=not_json)
     except json.JSONDecodeError as e:
         lines = text.splitlines()
         raise Mcl2PnmlError(f"not a certificate: {e.msg}", Location(

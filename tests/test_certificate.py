@@ -680,3 +680,27 @@ def test_hostile_certificates_are_refused_at_once_with_one_message(tmp_path):
         f"{tmp_path / 's.cert.json'}: the certificate is malformed at $.tasks: [] is not of "
         "type 'object'\n")
     assert run_cli("analyze", pnml, "--explore", "--state-space").returncode == 0
+
+
+@pytest.mark.parametrize("spoil,said", [
+    (lambda c: c["trees"]["mission"][1].update(parent=0.0), None),     # JSON's integer 0
+    (lambda c: c["trees"]["mission"][1].update(parent=True), "is not of type 'integer'"),
+    (lambda c: c["trees"]["mission"][1].update(parent=10**300), "is greater than the maximum"),
+    (lambda c: c["trees"]["mission"][1].update(parent=-1.0), "must have one root"),
+], ids=["parent 0.0", "parent true", "parent 10**300", "parent -1.0"])
+def test_numbers_in_a_certificate_are_read_as_json_means_them(spoil, said):
+    """JSON Schema's integers include 1.0, not true: the checker reads 0.0 as the index 0
+    and never fails on a number of another type or size."""
+    net, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    spoil(cert)
+    problems = check(net, cert)
+    assert (problems == []) if said is None else any(said in p for p in problems), problems
+
+
+def test_a_certificate_with_nan_is_not_json(tmp_path):
+    from helpers import run_cli
+    _, cert = _certified(ROOT / "examples" / "sauce.mcl")
+    text = json.dumps(cert).replace('"timeout": 10', '"timeout": NaN')
+    (tmp_path / "c.json").write_text(text)
+    out = run_cli("certify", tmp_path / "c.json", "--check", ROOT / "examples" / "sauce.mcl")
+    assert out.returncode == 2 and "not a certificate: NaN is not JSON" in out.stderr, out.stderr

@@ -215,7 +215,7 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
         children: list[list[int]] = [[] for _ in raw]
         top = []
         for k, node in enumerate(raw):
-            parent = node["parent"]
+            parent = int(node["parent"])    # JSON's 1.0 is the schema's integer 1
             if parent == -1:
                 top.append(k)
             elif parent >= len(raw) or parent == k:

@@ -150,5 +150,8 @@ def _part(cert: Any, path: list) -> tuple[Any, dict] | None:
 
 
 def _short(message: str, limit: int = 200) -> str:
-    """A validator's message, cut: it quotes the value, which may be a whole tree."""
-    return message if len(message) <= limit else message[:limit] + "..."
+    """A validator's message, cut in the middle: it quotes the value (which may be a whole
+    tree) first and says what is wrong with it last."""
+    if len(message) <= limit:
+        return message
+    return message[:limit // 2] + " ... " + message[-limit // 2:]
