@@ -361,6 +361,23 @@ def _post_order(nodes: list) -> list[int]:
     return order + [k for k in range(len(nodes)) if k not in order]
 
 
+@mutation("numbers written otherwise")
+def _numbers(cert, net, rng):
+    """Parents and counts as JSON writes them too (1.0), or as no integer (true, 1.5,
+    10**30): the same certificate, or one refused, never a crash."""
+    nodes = _tree(cert, rng)
+    if not nodes:
+        return None
+    node = rng.choice(nodes)
+    node["parent"] = rng.choice([float(node["parent"]), True, node["parent"] + 0.5,
+                                 10**30, -1.0])
+    calls = cert.get("calls")
+    if isinstance(calls, dict) and calls and rng.random() < 0.5:
+        callee = rng.choice(sorted(calls))
+        calls[callee] = rng.choice([float(calls[callee]), 0, -3])
+    return cert, net
+
+
 @mutation("root after its children")
 def _root_last(cert, net, rng):
     nodes = _tree(cert, rng, 1.0)
