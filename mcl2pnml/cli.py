@@ -52,6 +52,14 @@ ATOMS_OPTION = click.option(
     "--max-atoms", metavar="N", type=click.IntRange(min=1), default=PROPERTY_ATOMS,
     show_default=True, help="With --properties: refuse properties of more than N atoms in "
     "all (the mission's and the file's), before checking them.")
+CERTIFICATE_SIZE = f"{pipeline.MAX_CERTIFICATE >> 20}M"
+
+
+def _certificate_size_option(said: str):
+    return click.option("--max-certificate-size", "max_cert", metavar="SIZE",
+                        default=CERTIFICATE_SIZE, show_default=True, help=said)
+
+
 FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
                              show_default=True,
                              help="; ".join(f"{f.name}: {f.says}" for f in FORMATS.values()))
@@ -408,12 +416,12 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
 @click.option("--abort-pending", is_flag=True, help="Certify the mission started with "
               "mission.A marked too (an abort racing every step): its ends then include "
               "mission.ABORTED.")
-@click.option("--max-certificate-size", "max_cert", metavar="SIZE", default="16M",
-              show_default=True, help="With --check: refuse a certificate larger than this, "
-              "before reading it.")
+@_certificate_size_option("With --check: refuse a certificate larger than this, before "
+                          "reading it.")
 @NET_OPTION
 def certify(mission: Path, output: Path | None, net_file: Path | None,
-            net_id: str | None, abort_pending: bool = False, max_cert: str = "16M") -> int:
+            net_id: str | None, abort_pending: bool = False,
+            max_cert: str = CERTIFICATE_SIZE) -> int:
     """Prove MISSION from its parts, without exploring: write its certificate.
 
     Every task pattern and control structure was proven once against the
@@ -484,9 +492,8 @@ def _progress(states: int, frontier: int) -> None:
 @click.option("--explore", is_flag=True, help="Explore the reachable markings even where a "
               "certificate beside FILE (FILE.cert.json, `mcl2pnml certify`) proves the "
               "behaviour.")
-@click.option("--max-certificate-size", "max_cert", metavar="SIZE", default="16M",
-              show_default=True, help="Refuse a certificate beside FILE larger than this, "
-              "before reading it.")
+@_certificate_size_option("Refuse a certificate beside FILE larger than this, before "
+                          "reading it.")
 @click.option("--counterexamples", "cex_dir", metavar="DIR",
               type=click.Path(file_okay=False, path_type=Path),
               help="With --properties: for each failing property write DIR/NAME.txt (its run "
@@ -507,8 +514,7 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
             net_id: str | None, properties: str | None = None,
             cex_dir: Path | None = None, explore: bool = False,
             max_cex: int = pipeline.MAX_COUNTEREXAMPLES, max_props_size: str = PROPERTIES_SIZE,
-            max_atoms: int = PROPERTY_ATOMS, max_cert: str = "16M"
-            ) -> int:
+            max_atoms: int = PROPERTY_ATOMS, max_cert: str = CERTIFICATE_SIZE) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
