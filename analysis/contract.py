@@ -18,6 +18,11 @@ marked. Then, for the component started from rest:
   no transition of the component marks its own B or A, and none takes or
   reads its own OK, FAIL or ABORTED (a component that marked its own A
   would be aborted at its next start, with no abort asked);
+* ``asleep``: at rest, only B wakes it: each of its own transitions needs B
+  or a place of its own that is empty at rest, whatever the places it
+  shares with other parts hold (a task that read its primitive at rest
+  would be woken by another task driving the same primitive: the lock keeps
+  their runs apart, not what an idle task reads);
 * ``idle``: at rest, and at rest with only A marked (an abort that comes
   after the component has ended, which the caller drains), nothing can fire;
 * ``safe``: started (rest + B, and rest + B + A: an abort pending from the
@@ -66,6 +71,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from mcl2pnml.core.net import Net
 
@@ -86,6 +92,11 @@ class Clause(enum.Enum):
     INTERFACE = "interface"
     """No transition marks the component's own B or A, or takes or reads its own results:
     those are the caller's moves (version 2)."""
+
+    ASLEEP = "asleep"
+    """Each of the component's own transitions needs B or one of its own places that is
+    empty at rest: at rest, what the parts it shares (its primitives, its children) do
+    cannot wake it (version 2)."""
 
     IDLE = "idle"
     """At rest, and at rest with A alone, nothing fires."""
@@ -180,10 +191,20 @@ def roles(net: Net) -> dict[str, str]:
     return {r: found[r][0] for r in wanted}
 
 
-def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = ()) -> Verdict:
+class Own(NamedTuple):
+    """What of a composed net is the component's own: its transitions, and the places of
+    the other parts it is composed with (its primitives', its children's), not its own."""
+
+    transitions: frozenset[str]
+    foreign: frozenset[str]
+
+
+def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = (),
+          own: Own | None = None) -> Verdict:
     """Every clause of the contract on ``net`` (a component with the control interface);
     ``children``: the prefixes of the places of its reduced children (``T1_``, ``T.``),
-    each held to the ``caller`` clause."""
+    each held to the ``caller`` clause; ``own``: what of the net is the component's, held
+    to the ``asleep`` clause (None: every transition and place)."""
     role = roles(net)
     rest = {p: n for p, n in net.initial.items() if p not in (role[START], role[ABORT])}
     inputs, outputs = {role[START], role[ABORT]}, {role[r] for r in RESULTS}
@@ -192,7 +213,7 @@ def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = ()) -
                f"{a.source} marks {a.target}, the caller's to mark" if a.target in inputs
                else f"{a.target} takes {a.source}, the caller's to take")
         for a in net.arcs if a.target in inputs or a.source in outputs]
-    breaches += _discipline(net, children)
+    breaches += _discipline(net, children) + _asleep(net, role, own)
     explored = 0
     for label, extra in (("rest", {}), ("rest + A", {role[ABORT]: 1})):
         space = _explore(net, {**rest, **extra}, max_states)
@@ -294,6 +315,23 @@ def _discipline(net: Net, children: tuple[str, ...]) -> list[Breach]:
                                   + ": a parent only marks a child's B and A, and takes its "
                                     "results and a left A"))
     return out
+
+
+def _asleep(net: Net, role: dict[str, str], own: Own | None) -> list[Breach]:
+    """The ``asleep`` clause: each own transition needs B or an own place empty at rest."""
+    transitions = own.transitions if own is not None else {t.id for t in net.transitions}
+    foreign = own.foreign if own is not None else frozenset()
+    interface = {role[r] for r in (ABORT, *RESULTS)}
+    wakers = {role[START]} | {p.id for p in net.places if p.id not in foreign
+                              and p.id not in interface and not net.initial[p.id]}
+    needs: dict[str, bool] = dict.fromkeys(transitions, False)
+    for a in net.arcs:
+        if a.target in needs and a.source in wakers:
+            needs[a.target] = True
+    return [Breach(Clause.ASLEEP, "the net", (), (),
+                   f"{t} needs neither B nor a place of its own that is empty at rest: at "
+                   "rest, the places it shares with other parts could wake it")
+            for t in sorted(t for t, ok in needs.items() if not ok)]
 
 
 def _callers(space, children: tuple[str, ...], label: str) -> list[Breach]:

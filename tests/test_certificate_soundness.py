@@ -437,3 +437,34 @@ def test_thousands_of_generated_user_templates_are_certified_only_as_explored(
                                               SEED + 7)
     assert kept >= 30 and certified_ > 0, (kept, certified_)
     assert not tally.broken and not tally.crashes, tally.report()
+
+
+def test_a_user_pattern_an_idle_task_of_which_reads_its_primitive_is_refused(tmp_path):
+    """Found by the generated user patterns: AchieveGoal with ``g0: MTX, ?S1 -> OK``
+    keeps every clause read on its own markings (at rest its primitive is off), but in
+    ``parallel(U(1), A(2))`` the task A drives the primitive both share to S1 while U is at
+    rest, and U ends OK with nobody having called it: two tokens in a place. The lock keeps
+    two tasks' runs apart, not what an idle task reads; the contract's ``asleep`` clause
+    (each own transition needs B or an own place empty at rest) refuses the pattern."""
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    text = (ROOT / "templates" / "achieve_goal.pnt").read_text().replace(
+        "pattern AchieveGoal alias task", "pattern Woken") + "transition g0: MTX, ?S1 -> OK\n"
+    (folder / "woken.pnt").write_text(text)
+    mission = tmp_path / "m.mcl"
+    mission.write_text(cm.HEADER + "task U(x) = Woken(Pa(x)) timeout 3;\n"
+                       "mission { parallel(U(1), A(2)); }\n")
+    env = {**os.environ, "MCL2PNML_TEMPLATE_PATH": str(folder)}
+    out = run_cli("certify", mission, env=env)
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert "template 'Woken' breaks the interface contract" in out.stderr
+    assert "asleep: from the net, after (no firing): g0 needs neither B nor a place of its " \
+           "own that is empty at rest" in out.stderr
+    # what it would have certified: the same net, made by hand, is not 1-safe
+    net = pipeline.compile_source(mission.read_text().replace("Woken", "AchieveGoal"), "m.mcl")
+    from mcl2pnml.core.net import Arc, ArcKind, Transition
+    net = cm.rebuilt(net, arcs=(*net.arcs, Arc("U.MTX", "U.g0"),
+                                Arc("Pa.S1", "U.g0", kind=ArcKind.READ),
+                                Arc("U.g0", "U.OK")), transitions=(Transition("U.g0"),))
+    assert cm.judged(net, json.loads(json.dumps(cm.certified(
+        mission.read_text().replace("Woken", "AchieveGoal"))[0]))) is not None

@@ -99,8 +99,8 @@ def test_a_result_taken_back_breaks_result_final():
     verdict = check(reduced(extra=[("OK", "regret"), ("regret", "FAIL")],
                             transitions=["regret"]))
     clauses = {b.clause for b in verdict.breaches}
-    assert clauses == {Clause.INTERFACE, Clause.RESULT_FINAL}, [str(b) for b in
-                                                                verdict.breaches]
+    assert clauses == {Clause.INTERFACE, Clause.ASLEEP, Clause.RESULT_FINAL}, [
+        str(b) for b in verdict.breaches]
     breach = next(b for b in verdict.breaches if b.start == "rest + B")
     assert breach.path == ("t1", "t2") and "regret can still fire" in breach.why
 

@@ -37,7 +37,7 @@ from itertools import product
 from pathlib import Path
 
 from analysis.contract import VERSION as CONTRACT_VERSION
-from analysis.contract import Clause, check, restricted
+from analysis.contract import Clause, Own, check, restricted
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import Net
@@ -255,31 +255,62 @@ def _subjects(lib: Library) -> list:
     out = []
     for t in components(lib):
         slots = len(t.children) if t.kind is TemplateKind.STRUCTURE else 0
-        out.append((t.name, t.kind.value, _with_children(
-            composed(t.name), tuple(f"{c}_" for c in t.children[:slots])), slots, t.source))
+        # the template's own nodes: not its slots (a child's places, a primitive's)
+        slot_ids = _slot_ids(lib, t)
+        own = (frozenset(x.id for x in t.net.transitions),
+               frozenset(p.id for p in t.net.places if p.id not in slot_ids))
+        out.append((t.name, t.kind.value, _marked(
+            composed(t.name), tuple(f"{c}_" for c in t.children[:slots]), own), slots,
+            t.source))
         if t.kind is TemplateKind.PATTERN:
             # a task declared without a time-out has no t03 (the compiler removes it)
             out.append((f"{t.name} without a time-out", t.kind.value,
-                        composed(t.name, timeouts=False), 0, t.source))
+                        _marked(composed(t.name, timeouts=False), (), own), 0, t.source))
     compiler = "mcl2pnml/language/compiler.py"
-    out += [(CALL_SITE, "joint", _with_children(lambda r: call_net(lib, 1, r and r[0]),
-                                                ("T.",)), 1, compiler),
-            (SHARED_CALLEE, "joint", _with_children(lambda r: call_net(lib, 2, r and r[0]),
-                                                    ("T.",)), 1, compiler)]
+    for name, sites in ((CALL_SITE, 1), (SHARED_CALLEE, 2)):
+        make = (lambda k: lambda r: call_net(lib, k, r and r[0]))(sites)
+        out.append((name, "joint", _marked(make, ("T.",), _JOINT), 1, compiler))
     return out
 
 
-def _with_children(make, prefixes: tuple[str, ...]):
-    """``make`` marked with the prefixes of its reduced children's places, which the
-    contract's ``caller`` clause holds it to (:func:`_checked`)."""
-    make.children = prefixes
+#: The joints' own nodes: the call sites' (and a parallel's), not the callee's or the lock's.
+_JOINT = ("T.", "P.")
+
+
+def _slot_ids(lib: Library, t) -> frozenset[str]:
+    """The places of template ``t`` that fill its slots: its children's interface places,
+    its primitives'."""
+    if t.kind is TemplateKind.PATTERN:
+        from mcl2pnml.language.template_parser import slot_places
+        interface = tuple(p.id for p in lib.primitive.net.places if p.interface is not None)
+        return frozenset(p for slot in t.primitives for p in slot_places(slot, interface))
+    return frozenset(p.id for p in t.net.places
+                     if any(p.id.startswith(f"{c}_") for c in t.children))
+
+
+def _marked(make, children: tuple[str, ...], own):
+    """``make`` marked with what the contract's ``caller`` and ``asleep`` clauses hold its
+    nets to (:func:`_checked`): the prefixes of its reduced children's places, and its own
+    nodes (the template's transitions and places; for a joint, the prefixes of the parts
+    that are not its own)."""
+    make.children, make.own = children, own
     return make
 
 
 def _checked(make, net: Net):
     """The contract checked on ``net``, made by ``make``: with its reduced children held
-    to the ``caller`` clause."""
-    return check(net, children=getattr(make, "children", ()))
+    to the ``caller`` clause, and its own transitions to the ``asleep`` clause."""
+    own = getattr(make, "own", None)
+    if own is _JOINT:
+        mine = Own(frozenset(t.id for t in net.transitions if not t.id.startswith(_JOINT)),
+                   frozenset(p.id for p in net.places if p.id.startswith(_JOINT)))
+    elif own is not None:
+        transitions, places = own
+        mine = Own(transitions & {t.id for t in net.transitions},
+                   frozenset(p.id for p in net.places if p.id not in places))
+    else:
+        mine = None
+    return check(net, children=getattr(make, "children", ()), own=mine)
 
 
 class Rows(dict):
