@@ -79,6 +79,10 @@ def test_a_hundred_thousand_mutated_pairs_are_accepted_only_where_exploring_agre
     tallies.append(cm.campaign(pool, None, pairs - single * len(names), SEED + 1))
     total = sum(t.pairs for t in tallies)
     broken = [t for t in tallies if t.broken or t.crashes]
+    # said with -s (or -rP): what the campaign ran
+    print(f"{total} pairs, {sum(t.accepted for t in tallies)} accepted, "
+          f"{sum(t.refused for t in tallies)} refused, "
+          f"{sum(t.too_large for t in tallies)} too large to explore")
     assert total >= pairs * 0.95, total
     assert not broken, f"{total} pairs, {sum(t.accepted for t in tallies)} accepted\n" + \
         "\n".join(t.report(1) for t in broken)
@@ -475,6 +479,8 @@ def test_thousands_of_generated_user_templates_are_certified_only_as_explored(
     in the missions."""
     kept, certified_, tally = _user_templates(tmp_path, monkeypatch, kind, 3_000, 3_000,
                                               SEED + 7)
+    print(f"{kind}: {kept} of 3,000 keep the contract; {certified_} missions certified; "
+          f"{tally.summary()}")
     assert kept >= 30 and certified_ > 0, (kept, certified_)
     assert not tally.broken and not tally.crashes, tally.report()
 
