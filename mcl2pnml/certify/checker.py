@@ -83,9 +83,10 @@ def check(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
     into a :class:`Model` that must be a tree as the net's own places join it, and every
     fact it states (each node's results, the calls, the digests, the conclusion) is
     computed again and must be what it says (``shaped``: the caller held it to its schema
-    already, :func:`mcl2pnml.pipeline.load_certificate`). ``proofs``: the proven parts to hold the
-    instances to (default: the library in use, :func:`mcl2pnml.certify.templates.current`:
-    the stored proofs, and a user's templates proven now)."""
+    already, :func:`mcl2pnml.pipeline.load_certificate`). ``proofs``: the proven parts to
+    hold the instances to (default: the library in use,
+    :func:`mcl2pnml.certify.templates.current`: the stored proofs, and a user's templates
+    proven now)."""
     faults = [] if shaped else form.shape_faults(cert)
     if faults:
         return [f"the certificate is malformed: {f}" for f in faults]
@@ -436,7 +437,9 @@ def _claims(cert: dict[str, Any], model: Model, proofs: dict[str, dict],
                                 f"parts it ends {said_signature(derived[name])}")
     if cert["calls"] != {k: v for k, v in model.uses.items()}:
         problems.append(f"the calls counted are {model.uses}, not {cert['calls']}")
-    if MISSION in derived:
+    if MISSION not in derived:      # never a certificate that holds with nothing said
+        problems.append(f"the root '{MISSION}' has no signature derived from its parts")
+    else:
         ends = root_ends(derived[MISSION], model.pending)
         if ends is None:
             problems.append(f"{MISSION} may run for ever (from '{derived[MISSION].origin}'), "
