@@ -78,7 +78,7 @@ from mcl2pnml.core.net import Net
 from analysis.statespace import ExplorationLimit, explore
 
 #: The version of the contract: stored proofs of another version are proven again
-#: (2: the ``result final`` clause).
+#: (2: the ``interface``, ``asleep``, ``result final`` and ``caller`` clauses).
 VERSION = 2
 
 #: The fusion places of a component's control interface, by role (the places' labels).
@@ -340,10 +340,11 @@ def _callers(space, children: tuple[str, ...], label: str) -> list[Breach]:
     index = space.structure.place_index
     for prefix in children:
         start = index.get(f"{prefix}{START}")
+        if start is None:       # never a child that is held to nothing
+            raise NoInterface(f"no place {prefix}{START}: the child '{prefix}' cannot be "
+                              "held to the caller clause")
         busy = [index[f"{prefix}{p}"] for p in ("EXE", "STUCK", *RESULTS)
                 if f"{prefix}{p}" in index]
-        if start is None:
-            continue
         node = next((n for n in range(space.states) if space.markings[n][start]
                      and any(space.markings[n][k] for k in busy)), None)
         if node is not None:
