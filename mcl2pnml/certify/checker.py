@@ -109,7 +109,7 @@ def check(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
     problems += [message for _, message in faults]
     if not faults:
         problems += _claims(cert, model, proofs, derived)
-    layout = _Layout(net, _plans(model, proofs.lib), set(form.start(model.pending)))
+    layout = _Layout(net, _plans(model), set(form.start(model.pending)))
     return _capped(layout.check(proofs, problems))
 
 
@@ -157,6 +157,7 @@ class Model(NamedTuple):
     order: tuple[str, ...]          # MISSION's and the functions' trees, callees first
     uses: dict[str, int]            # a task's or function's call sites, counted
     pending: bool                   # mission.A marked at the start too
+    slots: dict[str, tuple[str, ...]]   # each template used -> its slots, in order
 
 
 def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, list[str]]:
@@ -185,12 +186,17 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
     primitives = tuple(cert["primitives"])
     for p in primitives:
         named(p, f"primitive '{p}'")
+    # each template looked up once, as the kind it is used for
+    slots_of: dict[tuple[str, TemplateKind], tuple[str, ...] | None] = {}
     tasks: dict[str, tuple[str, tuple[str, ...]]] = {}
     for name, task in cert["tasks"].items():
         named(name, f"task '{name}'")
         subject, pattern = task["subject"], task["pattern"]
         entry = proofs.get(subject) or {}
-        slots = _pattern_slots(lib, pattern)
+        key = (pattern, TemplateKind.PATTERN)
+        if key not in slots_of:
+            slots_of[key] = _slots(lib, *key)
+        slots = slots_of[key]
         if entry.get("kind") != "pattern" or \
                 subject not in (pattern, f"{pattern} without a time-out") or slots is None:
             problems.append(f"task '{name}': '{subject}' is no proven pattern")
@@ -256,8 +262,11 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
                 nodes.append(Node(name, True, callee, (), tree))
                 continue
             template = node["template"]
-            slots = _structure_slots(lib, template) \
-                if (proofs.get(template) or {}).get("kind") == "structure" else None
+            key = (template, TemplateKind.STRUCTURE)
+            if key not in slots_of:
+                slots_of[key] = _slots(lib, *key) \
+                    if (proofs.get(template) or {}).get("kind") == "structure" else None
+            slots = slots_of[key]
             if slots is None:
                 problems.append(f"'{name}': '{template}' is no proven structure")
             elif len(children[k]) != len(slots) or list(node["slots"]) != list(slots):
@@ -277,25 +286,20 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
     if problems:
         return None, problems
     return Model(primitives, tasks, tuple(nodes), roots, order, uses,
-                 cert["start"] == form.start(True)), []
+                 cert["start"] == form.start(True),
+                 {t: slots for (t, _), slots in slots_of.items() if slots is not None}), []
 
 
-def _pattern_slots(lib, name: str) -> tuple[str, ...] | None:
-    """The primitive slots of pattern ``name`` in the library (None: no such pattern)."""
+def _slots(lib, name: str, kind: TemplateKind) -> tuple[str, ...] | None:
+    """The slots of template ``name`` in the library, if it is of ``kind``: a pattern's
+    primitive slots, a structure's children's (None: no such template)."""
     try:
         t = lib.get(name)
     except Mcl2PnmlError:
         return None
-    return tuple(t.primitives) if t.kind is TemplateKind.PATTERN else None
-
-
-def _structure_slots(lib, name: str) -> tuple[str, ...] | None:
-    """The slots of structure ``name`` in the library (None: no such structure)."""
-    try:
-        t = lib.get(name)
-    except Mcl2PnmlError:
+    if t.kind is not kind:
         return None
-    return tuple(t.children) if t.kind is TemplateKind.STRUCTURE else None
+    return tuple(t.primitives if kind is TemplateKind.PATTERN else t.children)
 
 
 def results(cert: dict[str, Any], proofs: dict[str, dict]
@@ -367,10 +371,8 @@ def signatures(model: Model, proofs: dict[str, dict]
                 below = [by_node[c] for c in node.children]
                 if any(b is None for b in below):
                     continue
-                slots = _structure_slots(proofs.lib, node.subject) \
-                    if isinstance(proofs, Proofs) else None
                 got = row(node.subject, below, f"'{node.name}' ({node.subject})", node.name,
-                          slots or tuple(f"T{i}" for i in range(1, len(below) + 1)))
+                          model.slots[node.subject])
             by_node[k] = got
     out = dict(tasks)
     out.update((node.name, sig) for node, sig in zip(nodes, by_node) if sig is not None)
@@ -435,7 +437,7 @@ def _claims(cert: dict[str, Any], model: Model, proofs: dict[str, dict],
             if name in derived and said_signature(derived[name]) != _said_of(node):
                 problems.append(f"'{name}' is said to end {_said_of(node)}; derived from its "
                                 f"parts it ends {said_signature(derived[name])}")
-    if cert["calls"] != {k: v for k, v in model.uses.items()}:
+    if cert["calls"] != model.uses:
         problems.append(f"the calls counted are {model.uses}, not {cert['calls']}")
     if MISSION not in derived:      # never a certificate that holds with nothing said
         problems.append(f"the root '{MISSION}' has no signature derived from its parts")
@@ -481,14 +483,14 @@ class _Plan(NamedTuple):
     gate: str | None          # a function's gate: a place of its root, the call sites' arcs
 
 
-def _plans(model: Model, lib) -> dict[str, _Plan]:
+def _plans(model: Model) -> dict[str, _Plan]:
     """Every instance of ``model``, primitives, tasks and tree nodes, placed: the slots
     each fills are the model's, the same the signatures were derived on."""
     plans = {p: _Plan(p, "primitive", {}, None) for p in model.primitives}
     for name, (subject, prims) in model.tasks.items():
         fills = {}
-        pattern = lib.get(subject.removesuffix(" without a time-out"))
-        for slot, prim in zip(pattern.primitives, prims):
+        for slot, prim in zip(model.slots[subject.removesuffix(" without a time-out")],
+                              prims):
             fills.update({(f"{slot}_{r}" if slot else r): f"{prim}.{r}"
                           for r in PRIMITIVE_ROLES})
         plans[name] = _Plan(name, subject, fills, None)
@@ -496,7 +498,6 @@ def _plans(model: Model, lib) -> dict[str, _Plan]:
     site_slots, site_ends = tuple(f"to.{p}" for p in site), tuple(f".{p}" for p in site)
     ends = tuple(f".{p}" for p in CONTROL)
     slot_places: dict[str, tuple[str, ...]] = {}      # T1 -> T1_B, T1_A, ...
-    slots_of: dict[str, tuple[str, ...]] = {}
     gates = {model.roots[t] for t in model.roots if t != MISSION}
     sites: dict[str, tuple[str, dict[str, str]]] = {}
     nodes = model.nodes
@@ -512,9 +513,7 @@ def _plans(model: Model, lib) -> dict[str, _Plan]:
             subject, fills = sites[callee]
         else:
             subject, fills = node.subject, {}
-            if subject not in slots_of:
-                slots_of[subject] = tuple(lib.get(subject).children)
-            for slot, child in zip(slots_of[subject], node.children):
+            for slot, child in zip(model.slots[subject], node.children):
                 if slot not in slot_places:
                     slot_places[slot] = tuple(f"{slot}_{p}" for p in CONTROL)
                 fills.update(zip(slot_places[slot], map(nodes[child].name.__add__, ends)))

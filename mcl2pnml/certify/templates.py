@@ -105,13 +105,7 @@ def local(lib: Library, subject: str) -> tuple[Net, frozenset[str]]:
             net = without_timeouts(net)
         net = Net(name, (*net.places, Place("GATE")), net.transitions, net.arcs,
                   Marking({**net.initial, "GATE": 1}))
-        interface = [p.id for p in lib.primitive.net.places if p.interface is not None]
-        from mcl2pnml.language.template_parser import slot_places
-        slots = frozenset(place for slot in t.primitives
-                          for place in slot_places(slot, tuple(interface)))
-        return net, slots
-    return net, frozenset(p.id for p in net.places
-                          if any(p.id.startswith(f"{c}_") for c in t.children))
+    return net, _slot_ids(lib, t)
 
 
 def local_digest(lib: Library, subject: str) -> str:
