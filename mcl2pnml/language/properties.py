@@ -82,19 +82,11 @@ class _Errors:
 
 def _atoms(expr: ast.PropExpr | None):
     """Every atom of an expression (nested at most the parser's MAX_NESTING deep)."""
-    stack = [expr]
-    while stack:
-        e = stack.pop()
-        if isinstance(e, ast.PropAtom):
-            yield e
-        elif isinstance(e, ast.PropNot):
-            stack.append(e.arg)
-        elif isinstance(e, (ast.PropAnd, ast.PropOr)):
-            stack.extend(reversed(e.args))
+    return (e for e in _leaves(expr) if isinstance(e, ast.PropAtom))
 
 
-def _leaves(expr: ast.PropExpr):
-    """Every atom and constant of an expression, in the order written."""
+def _leaves(expr: ast.PropExpr | None):
+    """Every atom and constant of an expression, in the order written (none of None)."""
     stack = [expr]
     while stack:
         e = stack.pop()
