@@ -436,8 +436,7 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
     if net_file is not None:
         if output is not None:
             raise OptionError("-o", "--check writes nothing")
-        cert = pipeline.load_certificate(mission, pipeline.parse_size(
-            max_cert, "--max-certificate-size"))
+        cert = pipeline.load_certificate(mission, max_cert)
         net = pipeline.load_net(net_file, net_id)
         problems = pipeline.check_certificate(net, cert, shaped=True)
     else:
@@ -553,8 +552,7 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     beside = pipeline.certificate_beside(file)
     certified = None
     if beside.is_file() and start is None and not explore:
-        certified, problems = pipeline.certified_facts(
-            net, beside, pipeline.parse_size(max_cert, "--max-certificate-size"))
+        certified, problems = pipeline.certified_facts(net, beside, max_cert)
         if problems:
             click.echo(f"{beside}: the certificate does not hold for this net ({problems[0]}"
                        + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
