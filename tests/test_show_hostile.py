@@ -199,6 +199,12 @@ def test_a_hostile_net_is_drawn_and_played_as_text(tmp_path, browser, listener, 
     assert page.locator("#graph line.edge > title").all_text_contents() == [f"{e} t" for e in evil[:-1]]
     page.click('#graph g.marking[data-index="2"] circle')
     assert page.text_content("#marking") == evil[2]
+    # the supervisor's steps are named as text, and Settle takes them all
+    assert f"({evil[2]} t)" in page.text_content("#supervisor")
+    assert page.is_disabled("#advance")
+    page.click("#settle")
+    assert page.text_content("#marking") == evil[-1]
+    assert page.locator("#history li").all_text_contents() == [f"{e} t" for e in evil[2:-1]]
     w.assert_nothing_happened(heard)
 
 

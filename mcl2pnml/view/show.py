@@ -29,8 +29,17 @@ nodes the page colours by state, computed from the marking and the firings
 alone (:func:`tree_parts`: every structure and call site has the reduced
 task's control interface, section 2.3 and Fig. 3), so it holds in the full
 and the reduced model alike. A clock plays virtual time as TINA's stepper
-does: a time-out (``Timing``, the task's ``t03``) may fire only once it
-has been enabled for its delay; a replayed run sets the clock from its log.
+does, in the engines' timed semantics (:mod:`mcl2pnml.runtime.executor`): a
+time-out (``Timing``, the task's ``t03``) may fire only once it has been
+enabled for its delay, its timer kept while it stays enabled and started
+again when it is enabled again; the supervisor's steps (:func:`role`: neither
+a time-out nor fired by a vehicle event) come first, so *Advance time* is
+refused, and the page says why, while one is enabled; *Settle* takes them in
+the executor's order (the one enabled longest first, ties in the net's order,
+a call entry last) until the mission waits for the vehicle or a time-out, or
+has its result, and stops a loop that never settles after a bounded number
+of firings. A replayed run sets the clock from its log, and its steps and
+the firings are listed with their times.
 And the reachability graph of a net of up to 2,000 markings
 (:mod:`mcl2pnml.view.reachability`) is drawn, a marking clicked to play
 from it.
@@ -89,7 +98,7 @@ from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_text
 from mcl2pnml.view.layout import Drawn, drawn_layout
 from mcl2pnml.core.net import Net, thaw
-from mcl2pnml.core.payloads import doc_of, read_transition
+from mcl2pnml.core.payloads import MissionPlace, TransitionPayload, doc_of, read_transition
 from mcl2pnml.view.reachability import reachability_graph
 
 #: Above this many nodes the page would be a heap nobody can read: refused.
@@ -158,6 +167,30 @@ def tree_parts(net: Net, tree: Sequence[dict[str, Any]]) -> list[dict[str, Any]]
     return out
 
 
+#: The places whose marking ends a run (the mission's result): the page's *Settle*
+#: stops there, as the engines stop the run.
+MISSION_RESULTS = tuple(p.id for p in (MissionPlace.OK, MissionPlace.FAIL, MissionPlace.ABORTED))
+
+
+def role(payload: TransitionPayload, timed: bool) -> str:
+    """Who fires a transition, as the executor (:mod:`mcl2pnml.runtime.executor`) reads
+    its payload and timing; the page's *Settle* and *Advance time* follow it:
+
+    * ``"event"``: a vehicle event fires it (its payload names one);
+    * ``"entry"``: a call site's ``enter``, a supervisor step taken last: only when no
+      other step is enabled, then the first in the net's order;
+    * ``"timeout"``: a timed transition (a task's time-out), fired when it has been
+      enabled for its delay, once the supervisor has taken every step it can;
+    * ``"step"``: the supervisor's other steps, taken at once, the one enabled longest
+      first (ties in the net's order), before vehicle events and before time passes.
+    """
+    if payload.event is not None:
+        return "event"
+    if payload.entry is not None:
+        return "entry"
+    return "timeout" if timed else "step"
+
+
 def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
             clusters: Mapping[str, Sequence[str]] | None = None) -> dict[str, Any]:
     """One net as the page draws it: nodes with positions, arcs by index with their bend
@@ -197,6 +230,7 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
         transitions.append({
             "id": t.id, "label": t.label, "x": pos[t.id][0], "y": pos[t.id][1],
             "timing": str(t.timing) if t.timing is not None else None, "kind": kind,
+            "role": role(payload, t.timing is not None),
             # the timed token game's delay: enabled this long before it may fire
             "delay": t.timing.earliest if t.timing is not None else 0,
             "latest": t.timing.latest if t.timing is not None else None,
@@ -214,6 +248,7 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
     invariants = [{"terms": [[index[p], c] for p, c in y.items()],
                    "value": sum(c * net.initial[p] for p, c in y.items())} for y in basis]
     return {"label": label, "name": net.name, "places": places, "transitions": transitions,
+            "results": [index[p] for p in MISSION_RESULTS if p in index],
             "groups": sorted(kept), "invariants": invariants, "tree": tree_parts(net, tree),
             "boxes": [[name, *drawn.boxes[name]] for name in sorted(kept) if name in drawn.boxes],
             "graph": reachability_graph(net).to_json()}

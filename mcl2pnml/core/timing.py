@@ -1,0 +1,181 @@
+"""Time in the verdicts: a net's timed semantics, and the one a compiled mission runs in.
+
+docs/time.md is the prose of what this module states in types. A
+:class:`TimedNet` is a P/T net read as a time Petri net with priorities
+(Merlin and Farber's static intervals, as TINA reads them; Berthomieu,
+Peres and Vernadat's priorities), with two additions a vehicle needs:
+
+* every transition has a static interval ``[earliest, latest]`` in whole
+  units of time: its clock starts when the transition becomes enabled (and
+  again when it fires and stays enabled); it may fire once the clock has
+  reached ``earliest`` and must fire (or be disabled) before it passes
+  ``latest``. ``[0, None]`` is an untimed transition, ``[0, 0]`` an urgent
+  one: time does not pass while it is enabled;
+* ``priority``: transitions that, while one of them is enabled, are the only
+  ones that may fire (the supervisor's steps: the engines take every step
+  they can before anything else happens);
+* ``gaps``: groups of transitions whose firings are at least a number of
+  units apart (a primitive's reports: no vehicle reports infinitely often
+  in one instant), the first one of a group at any time;
+* ``fair``: groups of transitions of which one must eventually fire when
+  one of them stays enabled (a primitive that is on eventually reports).
+
+A transition newly enabled by a firing is one enabled after it and not
+before it, or the fired transition itself (the executor's rule: a
+transition that stays enabled keeps its timer).
+
+:func:`mission_timing` reads a compiled mission's transitions by their
+payloads (:mod:`mcl2pnml.core.payloads`) and gives each its interval under
+the vehicle's :class:`Assumptions`. May import: the rest of the core.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Mapping
+
+from mcl2pnml.core.errors import OptionError
+from mcl2pnml.core.net import Net
+from mcl2pnml.core.payloads import EventKind, read_transition
+
+#: The longest acknowledgement delay and report gap an option may set, in seconds.
+MAX_ASSUMED = 1_000_000
+
+
+@dataclass(frozen=True)
+class Assumptions:
+    """What the vehicle is assumed to do, printed with every timed verdict (docs/time.md).
+
+    ``ack_within``: the vehicle acknowledges an enable (``on``) or a disable
+    (``off``) within this many seconds of the request (0: at once, as the
+    scripted and simulated vehicles do). ``report_gap``: a primitive's reports
+    (``achieved``, ``failed``) are at least this many seconds apart. ``fair``:
+    a primitive that is on and has not reported since it was enabled reports
+    eventually (without it, a vehicle may stay silent for ever). ``priority``:
+    the supervisor's steps come before any vehicle event at their instant, as in
+    the engines; False is the semantics of timed-arc tools (urgency only).
+    """
+
+    ack_within: Fraction = Fraction(0)
+    report_gap: Fraction = Fraction(1)
+    fair: bool = False
+    priority: bool = True
+
+    def words(self) -> str:
+        """The assumptions in one line, as every timed verdict is printed with."""
+        ack = "at once" if self.ack_within == 0 else f"within {_s(self.ack_within)} s"
+        return (f"acknowledgements {ack}; a primitive's reports at least "
+                f"{_s(self.report_gap)} s apart; "
+                + ("an enabled primitive reports eventually" if self.fair
+                   else "a primitive may never report")
+                + ("" if self.priority else "; supervisor steps urgent, not first"))
+
+    def as_json(self) -> dict:
+        return {"ack_within": _num(self.ack_within), "report_gap": _num(self.report_gap),
+                "fair": self.fair, "priority": self.priority}
+
+
+def _s(x: Fraction) -> str:
+    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
+
+
+def _num(x: Fraction) -> int | float:
+    return x.numerator if x.denominator == 1 else float(x)
+
+
+def seconds_option(text: str, option: str) -> Fraction:
+    """A number of seconds as an option gives it: finite, 0 or more, at most a million."""
+    try:
+        value = Fraction(text)
+    except (ValueError, ZeroDivisionError):
+        raise OptionError(option, f"'{text}' is not a number of seconds") from None
+    if value < 0 or value > MAX_ASSUMED:
+        raise OptionError(option, f"'{text}' is not between 0 and {MAX_ASSUMED:,} seconds")
+    if value.denominator > 1_000_000:
+        raise OptionError(option, f"'{text}' is finer than a microsecond")
+    return value
+
+
+@dataclass(frozen=True)
+class TimedNet:
+    """A net with its timed semantics (see the module's documentation), in whole units.
+
+    ``unit`` is the length of one unit in seconds: every time bound of the
+    net and of the assumptions is a whole number of it.
+    """
+
+    net: Net
+    intervals: Mapping[str, tuple[int, int | None]]
+    priority: frozenset[str] = frozenset()
+    gaps: tuple[tuple[frozenset[str], int], ...] = ()
+    fair: tuple[frozenset[str], ...] = ()
+    unit: Fraction = Fraction(1)
+    names: Mapping[str, str] = field(default_factory=dict)
+    """What each gap or fairness group stands for (a primitive's name), by its first member."""
+
+    def seconds(self, units: int | float) -> Fraction | float:
+        return units * self.unit if not isinstance(units, float) else units * float(self.unit)
+
+
+def _unit(values) -> Fraction:
+    """The largest unit 1/q (q a power of ten, up to a million) in which every value is whole."""
+    for digits in range(7):
+        q = 10 ** digits
+        if all((Fraction(v) * q).denominator == 1 for v in values):
+            return Fraction(1, q)
+    raise OptionError("--time", "a time bound is finer than a microsecond")
+
+
+def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedNet:
+    """The timed semantics of a compiled mission under ``assumptions`` (docs/time.md).
+
+    * a time-out (a timed transition, the task's ``t03``) fires exactly its
+      seconds after it became enabled: after the task started and its
+      primitives acknowledged ``on`` (the read arc on ``ON``), as both engines
+      start its timer;
+    * an acknowledgement (``on``, ``off``) within ``ack_within`` of its request;
+    * a report (``achieved``, ``failed``) at any time, a primitive's at least
+      ``report_gap`` apart; with ``fair``, the first report after an enabling
+      (a transition out of the primitive's ``C``) eventually;
+    * every other transition is a step of the supervisor: urgent, and first
+      when ``priority``.
+    """
+    values = [assumptions.ack_within, assumptions.report_gap]
+    for t in net.transitions:
+        if t.timing is not None:
+            values.append(Fraction(t.timing.earliest).limit_denominator(10 ** 9))
+            if t.timing.latest is not None:
+                values.append(Fraction(t.timing.latest).limit_denominator(10 ** 9))
+    unit = _unit(values)
+
+    def units(x) -> int:
+        return int(Fraction(x).limit_denominator(10 ** 9) / unit)
+
+    intervals: dict[str, tuple[int, int | None]] = {}
+    priority, reports, first = set(), {}, {}
+    pre = net.pre
+    for t in net.transitions:
+        event = read_transition(t).event
+        if t.timing is not None:
+            latest = None if t.timing.latest is None else units(t.timing.latest)
+            intervals[t.id] = (units(t.timing.earliest), latest)
+        elif event is None:
+            intervals[t.id] = (0, 0)
+            priority.add(t.id)
+        elif event.kind in (EventKind.ON, EventKind.OFF):
+            intervals[t.id] = (0, units(assumptions.ack_within))
+        else:
+            intervals[t.id] = (0, None)
+            prim = event.primitive or t.id.rsplit(".", 1)[0]
+            reports.setdefault(prim, []).append(t.id)
+            # the first report of an enabling leaves C, the primitive's "seeking" place
+            if any(a.source.rsplit(".", 1)[-1] == "C" and a.kind.name != "READ"
+                   for a in pre[t.id]):
+                first.setdefault(prim, []).append(t.id)
+    gap = units(assumptions.report_gap)
+    gaps = tuple((frozenset(ts), gap) for _, ts in sorted(reports.items())) if gap else ()
+    fair = tuple(frozenset(ts) for _, ts in sorted(first.items())) if assumptions.fair else ()
+    names = {min(ts): p for p, ts in list(reports.items()) + list(first.items())}
+    return TimedNet(net, intervals, frozenset(priority) if assumptions.priority else frozenset(),
+                    gaps, fair, unit, names)
+
