@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import sys
+from fractions import Fraction
 from pathlib import Path
 
 import click
@@ -17,6 +18,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
+from mcl2pnml.core.timing import Assumptions, seconds_option
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS, property_query_files
@@ -189,10 +191,17 @@ def functional(mission: Path, with_functions: bool) -> int:
               "and .ReachabilityCardinality.xml (docs/properties.md).")
 @click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half "
               "free). A mission whose net would not fit is one message, exit 2.")
+@click.option("--ack-within", metavar="SECONDS", help="With --format tapn: the vehicle "
+              "acknowledges an enable or a disable within this many seconds of the moment it "
+              "can (default 0: at once).")
+@click.option("--report-gap", metavar="SECONDS", help="With --format tapn: a primitive's "
+              "reports are at least this many seconds apart, the first at any time (default 1; "
+              "0: any number at one instant).")
 @PROPERTIES_SIZE_OPTION
 @ATOMS_OPTION
 def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, expand: str,
              queries: Path | None, tool: str, max_memory: str | None,
+             ack_within: str | None = None, report_gap: str | None = None,
              properties: str | None = None, max_props_size: str = PROPERTIES_SIZE,
              max_atoms: int = PROPERTY_ATOMS) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
@@ -207,6 +216,17 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
     if expand and "expand" not in FORMATS[fmt].options:
         raise click.BadParameter(f"only a drawing has boxes to open, not {fmt}: --format "
                                  "svg, png or dot", param_hint="--expand")
+    timing = None
+    if fmt == "tapn":
+        timing = Assumptions(
+            ack_within=Fraction(0) if ack_within is None
+            else seconds_option(ack_within, "--ack-within"),
+            report_gap=Fraction(1) if report_gap is None
+            else seconds_option(report_gap, "--report-gap"), priority=False)
+    elif ack_within is not None or report_gap is not None:
+        raise click.BadParameter(
+            f"only a timed-arc net (--format tapn) says what the vehicle is assumed to do, "
+            f"not {fmt}", param_hint="--ack-within" if ack_within is not None else "--report-gap")
     stem = output.with_suffix("") if output.suffix else output
     extra = None if properties is None else _properties_file(mission, properties)
     check_outputs([("-o", output), ("--queries", queries),
@@ -224,9 +244,19 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
             raise OptionError("--properties", f"{mission} declares no property, and there "
                               f"is no {properties or mission.with_suffix('.props')} beside it")
     opened = None if expand == "all" else tuple(n for n in expand.split(",") if n)
+    if timing is not None:   # the queries beside the net: none of them an input
+        check_outputs([("-o", output), ("--queries", queries),
+                       *(("-o", path) for path in
+                         pipeline.timed_query_paths(net, output, timing, props))],
+                      [("the mission", mission), ("the properties file (--properties)", extra)])
     pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True,
-                      expand=opened)
+                      expand=opened, timing=timing)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
+    if timing is not None:
+        click.echo(f"timed semantics: {timing.words()}", err=True)
+        for path, query, bound in pipeline.save_timed_queries(net, output, timing, props):
+            click.echo(f"wrote {path}: {query.description} "
+                       f"(verifydtapn -k {bound} {output} {path})", err=True)
     if queries is not None:
         written = pipeline.save_queries(net, queries, tool)
         click.echo(f"wrote {queries}: {', '.join(p.id for p in written)} (for {tool})", err=True)
@@ -505,6 +535,20 @@ def _progress(states: int, frontier: int) -> None:
               help="With --properties: explain (print, and write with --counterexamples) the "
                    "counterexamples of the first N failing properties only; the others are "
                    "given their verdict and firing sequence, and their number is said.")
+@click.option("--timed", is_flag=True,
+              help="A mission's verdicts in the time it runs in (docs/time.md): whether every "
+                   "run ends, its earliest and latest end times, and --properties on the "
+                   "time-divergent runs, under the vehicle's assumptions below.")
+@click.option("--ack-within", metavar="SECONDS", default="0", show_default=True,
+              help="With --timed: the vehicle acknowledges enable and disable within this.")
+@click.option("--report-gap", metavar="SECONDS", default="1", show_default=True,
+              help="With --timed: a primitive's reports are at least this far apart.")
+@click.option("--fair-reports", is_flag=True,
+              help="With --timed: a primitive that is on reports eventually (without it, a "
+                   "vehicle may stay silent for ever).")
+@click.option("--urgency-only", is_flag=True,
+              help="With --timed: supervisor steps are urgent but vehicle events may come "
+                   "first at their instant (the semantics of timed-arc tools).")
 @PROPERTIES_SIZE_OPTION
 @ATOMS_OPTION
 @NET_OPTION
@@ -513,7 +557,9 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
             net_id: str | None, properties: str | None = None,
             cex_dir: Path | None = None, explore: bool = False,
             max_cex: int = pipeline.MAX_COUNTEREXAMPLES, max_props_size: str = PROPERTIES_SIZE,
-            max_atoms: int = PROPERTY_ATOMS, max_cert: str = CERTIFICATE_SIZE) -> int:
+            max_atoms: int = PROPERTY_ATOMS, max_cert: str = CERTIFICATE_SIZE,
+            timed: bool = False, ack_within: str = "0", report_gap: str = "1",
+            fair_reports: bool = False, urgency_only: bool = False) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
@@ -526,6 +572,10 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if cex_dir is not None and initial is not None:
         raise OptionError("--counterexamples", "a replay starts the mission from its start: "
                                                "leave out --initial")
+    assumptions = _assumptions(timed, ack_within, report_gap, fair_reports, urgency_only)
+    if timed and initial is not None:
+        raise OptionError("--timed", "a timed verdict starts the mission from its start (its "
+                                     "clocks at 0): leave out --initial")
     props = extra = None
     if properties is None:
         net = pipeline.load_net(file, net_id, max_memory)
@@ -567,8 +617,14 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
                    "(--explore to explore them)", err=True)
     if shown:
         click.echo("", err=True)
-    verdicts = None if props is None else pipeline.check_properties(
-        net if start is None else net.with_initial(start), props, max_states)
+    timed_ends = None
+    if timed:
+        timed_ends = pipeline.timed_ends(net, assumptions, max_states)
+        verdicts = None if props is None else pipeline.check_properties_timed(
+            net, props, assumptions, max_states)
+    else:
+        verdicts = None if props is None else pipeline.check_properties(
+            net if start is None else net.with_initial(start), props, max_states)
     # the mission's terms and the replay start from the mission's own start; only the
     # counterexamples printed and written are explained, each costing a search and a replay
     witnesses = (pipeline.witnesses(file, net, verdicts, max_cex)
@@ -589,15 +645,32 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if as_json:
         if verdicts is not None:
             result["properties"] = pipeline.verdicts_json(verdicts, witnesses)
+        if timed_ends is not None:
+            result["timed"] = timed_ends.as_json()
         click.echo(json.dumps(result, indent=2))
     else:
         click.echo(pipeline.analysis_text(result))
+        if timed_ends is not None:
+            click.echo("\n".join(timed_ends.lines()))
         for k, v in enumerate(verdicts or ()):
             click.echo("\n".join(pipeline.witness_text(v, witnesses[k] if witnesses else None)))
     statuses = {v.status.value for v in verdicts or ()}
     if "fails" in statuses:
         return 1
     return 3 if "partial" in result or "unknown" in statuses else 0
+
+
+def _assumptions(timed: bool, ack_within: str, report_gap: str, fair: bool, urgency_only: bool):
+    """The vehicle's assumptions of ``--timed`` (docs/time.md); refused without it."""
+    from mcl2pnml.core.timing import Assumptions, seconds_option
+    given = [name for name, said in (("--ack-within", ack_within != "0"),
+                                     ("--report-gap", report_gap != "1"),
+                                     ("--fair-reports", fair), ("--urgency-only", urgency_only))
+             if said]
+    if given and not timed:
+        raise OptionError(given[0], "an assumption of the timed verdicts: add --timed")
+    return Assumptions(seconds_option(ack_within, "--ack-within"),
+                       seconds_option(report_gap, "--report-gap"), fair, not urgency_only)
 
 
 def _properties_file(mission: Path, properties: str) -> Path | None:

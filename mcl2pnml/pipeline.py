@@ -25,6 +25,7 @@ from mcl2pnml.io.formats import FORMATS, SaveOptions, reader_of
 
 if TYPE_CHECKING:
     from mcl2pnml.core.properties import Property
+    from mcl2pnml.core.timing import Assumptions
     from mcl2pnml.language.functional import Instance
     from mcl2pnml.runtime.session import RunOptions
 
@@ -177,7 +178,7 @@ def load_net(path: str | Path, net_id: str | None = None,
 def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
              title: str | None = None, mission: bool = False,
              clusters: Mapping[str, Sequence[str]] | None = None,
-             expand: Sequence[str] | None = ()) -> Path:
+             expand: Sequence[str] | None = (), timing: "Assumptions | None" = None) -> Path:
     """Write ``net`` to ``path`` in format ``fmt`` (a name of the format table).
 
     ``layout`` places the nodes where the format keeps positions (PNML):
@@ -185,7 +186,8 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     too. ``mission``: a compiled mission, whose TINA file follows the
     executor's timing. A drawing (svg, png, dot) shows ``clusters`` as boxes
     (None: a mission's calls, :func:`template_clusters` for a template) and
-    opens those ``expand`` names (None: all).
+    opens those ``expand`` names (None: all). ``timing``: what the vehicle is assumed to
+    do, for the formats that write a mission's timed semantics (tapn).
     """
     form = FORMATS.get(fmt)
     if form is None:
@@ -193,8 +195,34 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     drawn = _drawn(net, layout) if "positions" in form.options else None
     form.save(net, path, SaveOptions(positions=drawn and drawn.positions,
                                      bends=drawn and drawn.bends, title=title,
-                                     urgent=mission, clusters=clusters, expand=expand))
+                                     urgent=mission, clusters=clusters, expand=expand,
+                                     timing=timing))
     return Path(path)
+
+
+def save_timed_queries(net: Net, net_path: str | Path, timing: "Assumptions | None" = None,
+                       properties=()):
+    """The queries verifydtapn checks a mission's timed-arc net (``compile --format tapn``)
+    against, written beside it (an end always reached, a dead state that is not an end, the
+    safety its clocks rest on, the properties a state formula says; :mod:`mcl2pnml.io.tapn`);
+    returns each file, its query and the k-bound to give verifydtapn."""
+    from mcl2pnml.io.tapn import save_queries as save
+    return save(net, net_path, timing, properties)
+
+
+def timed_query_paths(net: Net, net_path: str | Path, timing: "Assumptions | None" = None,
+                      properties=()) -> list[Path]:
+    """The files :func:`save_timed_queries` would write, to check them as outputs first."""
+    from mcl2pnml.io.tapn import query_paths
+    return query_paths(net, net_path, timing, properties)
+
+
+def save_deadline(net: Net, path: str | Path, seconds, timing: "Assumptions | None" = None):
+    """A mission's timed-arc net with an observer of time ``seconds`` at ``path``, and
+    beside it the query "some run has no result at that time" (:mod:`mcl2pnml.io.tapn`);
+    returns the net's file, the query's, and the k-bound to give verifydtapn."""
+    from mcl2pnml.io.tapn import save_deadline as save
+    return save(net, path, seconds, timing)
 
 
 def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
@@ -673,3 +701,25 @@ def save_reachability_json(net: Net, path: str | Path) -> dict[str, Any]:
     graph["transitions"] = [t.id for t in net.transitions]
     atomic_write_text(path, json.dumps(graph, ensure_ascii=False) + "\n")
     return graph
+
+
+# -- time in the verdicts (docs/time.md) --------------------------------------------------
+
+def timed_ends(net: Net, assumptions: "Assumptions | None" = None,
+               max_states: int = 1_000_000):
+    """Whether every run of the compiled mission ``net`` ends under ``assumptions`` (the
+    defaults of :class:`~mcl2pnml.core.timing.Assumptions` if None), its earliest and
+    latest end times, and what a run that never ends waits for
+    (:class:`mcl2pnml.timed.TimedEnds`)."""
+    from mcl2pnml import timed
+    from mcl2pnml.core.timing import Assumptions
+    return timed.ends(net, assumptions or Assumptions(), max_states)
+
+
+def check_properties_timed(net: Net, properties, assumptions: "Assumptions | None" = None,
+                           max_states: int = 1_000_000) -> list:
+    """Each property's :class:`analysis.properties.Verdict` on the mission's time-divergent
+    runs (docs/time.md), on one zone graph."""
+    from mcl2pnml import timed
+    from mcl2pnml.core.timing import Assumptions
+    return timed.check(net, properties, assumptions or Assumptions(), max_states)

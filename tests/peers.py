@@ -1,4 +1,4 @@
-"""The real Petri-net tools the tests compare us with: TAPAAL's verifypn and LoLA.
+"""The real Petri-net tools the tests compare us with: TAPAAL's verifypn and verifydtapn, LoLA.
 
 They are looked for in ``$MCL2PNML_PEERS``, then in ``../shared/peers/bin`` beside
 the repository, then on PATH. A test that needs one calls :func:`need`, which
@@ -19,6 +19,7 @@ import pytest
 from helpers import ROOT
 
 VERIFYPN = "verifypn-linux64"
+VERIFYDTAPN = "verifydtapn"
 LOLA = "lola"
 TIMEOUT = 120.0
 
@@ -183,3 +184,37 @@ def lola_each(net: Path, queries: Path, scratch: Path, only: str | None = None,
         path.write_bytes(etree.tostring(single, xml_declaration=True, encoding="utf-8"))
         answers.update(lola_queries(net, path, reductions))
     return answers
+
+
+# -- TAPAAL's timed engine on our timed-arc nets (tests/test_tapn.py) -----------------------
+
+#: The address space a verifydtapn call may take: past it the call fails, and gives no verdict
+#: (a discrete-time state space with long time-outs can take all the memory there is).
+VERIFYDTAPN_MEMORY = 4 << 30
+
+
+def _limit_memory() -> None:
+    import resource
+    resource.setrlimit(resource.RLIMIT_AS, (VERIFYDTAPN_MEMORY, VERIFYDTAPN_MEMORY))
+
+
+def verifydtapn(net: Path, query: Path, bound: int, timeout: float = 60.0,
+                ptrie: bool = False) -> tuple[bool | None, str]:
+    """verifydtapn's verdict on the text query ``query`` for the timed-arc net ``net``, and its
+    output; None when it gives none: out of time or memory, or a verdict for the ``-k bound``
+    part of the state space only (``Max number of tokens found ...: >K``), which does not count.
+    Its exit status is 0 whatever the verdict: the verdict is the line it prints.
+    ``ptrie``: its PTrie store (``-p 1``), about 9 times less memory for twice the time."""
+    args = [str(need(VERIFYDTAPN)), "-k", str(bound), *(["-p", "1"] if ptrie else []),
+            str(net), str(query)]
+    try:
+        r = subprocess.run(args, capture_output=True, text=True, timeout=timeout,
+                           preexec_fn=_limit_memory)
+    except subprocess.TimeoutExpired:
+        return None, f"no verdict within {timeout:g} s"
+    out = r.stdout + r.stderr
+    verdict = re.search(r"^Query is (NOT )?satisfied\.", out, re.M)
+    tokens = re.search(r"^Max number of tokens found in any reachable marking: *(\S+)", out, re.M)
+    if verdict is None or tokens is None or tokens.group(1).startswith(">"):
+        return None, out
+    return verdict.group(1) is None, out

@@ -18,7 +18,13 @@ Peres and Vernadat's priorities), with two additions a vehicle needs:
   units apart (a primitive's reports: no vehicle reports infinitely often
   in one instant), the first one of a group at any time;
 * ``fair``: groups of transitions of which one must eventually fire when
-  one of them stays enabled (a primitive that is on eventually reports).
+  one of them stays enabled (a primitive that is on eventually reports);
+* ``shared``: groups of transitions with one clock between them, which
+  starts when the first of them becomes enabled and runs while one of them
+  is (a disable's acknowledgement is one of three transitions, ``off_C``,
+  ``off_S1``, ``off_S2``, by the state of the goal: a report that moves the
+  goal while the disable is pending does not restart the vehicle's delay).
+  Members share their interval.
 
 A transition newly enabled by a firing is one enabled after it and not
 before it, or the fired transition itself (the executor's rule: a
@@ -112,6 +118,7 @@ class TimedNet:
     unit: Fraction = Fraction(1)
     names: Mapping[str, str] = field(default_factory=dict)
     """What each gap or fairness group stands for (a primitive's name), by its first member."""
+    shared: tuple[frozenset[str], ...] = ()
 
     def seconds(self, units: int | float) -> Fraction | float:
         return units * self.unit if not isinstance(units, float) else units * float(self.unit)
@@ -152,7 +159,7 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
         return int(Fraction(x).limit_denominator(10 ** 9) / unit)
 
     intervals: dict[str, tuple[int, int | None]] = {}
-    priority, reports, first = set(), {}, {}
+    priority, reports, first, offs = set(), {}, {}, {}
     pre = net.pre
     for t in net.transitions:
         event = read_transition(t).event
@@ -164,6 +171,8 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
             priority.add(t.id)
         elif event.kind in (EventKind.ON, EventKind.OFF):
             intervals[t.id] = (0, units(assumptions.ack_within))
+            if event.kind is EventKind.OFF:
+                offs.setdefault(event.primitive or t.id.rsplit(".", 1)[0], []).append(t.id)
         else:
             intervals[t.id] = (0, None)
             prim = event.primitive or t.id.rsplit(".", 1)[0]
@@ -176,6 +185,7 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
     gaps = tuple((frozenset(ts), gap) for _, ts in sorted(reports.items())) if gap else ()
     fair = tuple(frozenset(ts) for _, ts in sorted(first.items())) if assumptions.fair else ()
     names = {min(ts): p for p, ts in list(reports.items()) + list(first.items())}
+    shared = tuple(frozenset(ts) for _, ts in sorted(offs.items()) if len(ts) > 1)
     return TimedNet(net, intervals, frozenset(priority) if assumptions.priority else frozenset(),
-                    gaps, fair, unit, names)
+                    gaps, fair, unit, names, shared)
 

@@ -3,7 +3,9 @@
 * PNML (ISO/IEC 15909-2), the standard, in :mod:`mcl2pnml.io.pnml`;
 * TINA's ``.net`` (time Petri nets, LAAS-CNRS), :mod:`mcl2pnml.io.tina`;
 * LoLA's net format (P/T nets, Rostock), :mod:`mcl2pnml.io.lola`;
-* graphviz's DOT, and the SVG and PNG it renders, :mod:`mcl2pnml.io.dot`.
+* graphviz's DOT, and the SVG and PNG it renders, :mod:`mcl2pnml.io.dot`;
+* TAPAAL's timed-arc nets (write only: a compiled mission under its timed
+  semantics, for verifydtapn), :mod:`mcl2pnml.io.tapn`.
 
 Each :class:`Format` names the module and functions that implement it,
 imported only when the format is used (graphviz, lark and lxml are not
@@ -21,6 +23,7 @@ from typing import Callable, Mapping, Sequence
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.timing import Assumptions
 
 
 @dataclass(frozen=True)
@@ -39,6 +42,9 @@ class SaveOptions:
     clusters: Mapping[str, Sequence[str]] | None = None
     #: the boxes a drawing shows open, the others shut, one node each (None: all open)
     expand: Sequence[str] | None = ()
+    #: a compiled mission's timed semantics: what the vehicle is assumed to do (None: the
+    #: writer's own default; a timed-arc net's is acknowledgements at once, reports 1 s apart)
+    timing: Assumptions | None = None
 
 
 @dataclass(frozen=True)
@@ -89,6 +95,10 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
     Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
            "mcl2pnml.io.lola", "load_lola", "save_lola"),
+    Format("tapn", "TAPAAL timed-arc", (".tapn",),
+           "TAPAAL's timed-arc PNML for verifydtapn: a mission under its timed semantics "
+           "(time-outs, acknowledgements, report gaps in token ages), queries beside it",
+           "mcl2pnml.io.tapn", None, "save_tapn", ("timing",)),
     Format("dot", "DOT", (".dot",), "graphviz's DOT source of the drawing",
            "mcl2pnml.io.dot", None, "save_dot", ("title", "clusters", "expand")),
     Format("svg", "SVG", (".svg",), "the drawing as SVG", "mcl2pnml.io.dot", None, "save_svg",

@@ -1,0 +1,543 @@
+"""TAPAAL's timed-arc Petri nets: a compiled mission under its timed semantics, and queries.
+
+TAPAAL's discrete-time engine, verifydtapn, reads a timed-arc net in
+TAPAAL's PNML dialect (one flat ``<net>``; ``<place invariant="&lt;= 10">``,
+``<transition urgent="true">``, ``<inputArc inscription="[a,b]">``,
+``<outputArc>``, ``<transportArc>``, ``<inhibitorArc>``) and a query as
+text, one of ``EF φ``, ``AG φ``, ``AF φ``, ``EG φ`` over place names,
+``and``, ``or``, ``not`` and ``deadlock``. There, time lives in the tokens:
+each token has an age, a place's invariant bounds the ages of its tokens
+(time cannot pass beyond it), an input arc's interval guards the age of the
+token it takes, an output arc makes a token of age 0, a transport arc moves
+one and keeps its age, and an urgent transition lets no time pass while it
+is enabled (urgency, not priority: other transitions may fire first at the
+same instant).
+
+The semantics written is the project's (:func:`mcl2pnml.core.timing.mission_timing`):
+every transition has a static interval whose clock starts when it becomes
+enabled, a primitive's reports are some seconds apart, and the supervisor's
+steps are urgent, not first (``Assumptions(priority=False)``: TAPAAL has
+urgency and no priorities). It is written in token ages as follows:
+
+* ``[0, ∞)`` (a report): an ordinary transition;
+* ``[0, 0]`` (a supervisor step; an acknowledgement when they come at once):
+  an urgent transition;
+* anything else (a time-out ``[T, T]``, an acknowledgement ``[0, K]``): the
+  transition's clock is a token of its own, in a place ``CLK`` that nothing
+  else reads, made by an urgent transition ``start`` the instant the
+  transition is enabled (it reads the transition's inputs and is inhibited
+  by ``CLK``), and taken by an urgent ``stop`` per input place the instant
+  that place is emptied (inhibited by it). The transition takes the clock
+  token with the guard ``[a, b]``, and ``CLK`` has the invariant ``<= b``:
+  it fires between a and b units after it was enabled, or is disabled
+  before. A token's age in an input place would not do: a time-out reads
+  its primitive's ``ON``, which the vehicle marks up to K seconds after the
+  task's ``EXE``. Urgency alone would let the transition be disabled and
+  enabled again at one instant before ``stop`` took the old clock, so every
+  transition that marks one of its input places (without taking a token
+  from it) is inhibited by ``CLK``: in a 1-safe net such a transition can
+  fire only when that place is empty, so the inhibitor only makes it wait,
+  at the same instant, for ``stop``. The construction needs the places it
+  watches to hold one token at most, as in every compiled mission (the
+  mission's certificate proves it); arcs of weight 2 or more on them, or two
+  initial tokens, are refused, and :func:`safety_query` asks verifydtapn to
+  check the rest;
+* a primitive's reports, at least d units apart: a place ``FIRST`` (one
+  token) and a place ``GAP``; each report is written twice, once taking
+  ``FIRST`` (the first report of the run, at any time) and once taking
+  ``GAP``'s token with the guard ``[d, ∞)``, both putting a token of age 0
+  in ``GAP``;
+* read arcs are transport arcs from the place back to it (the token keeps
+  its age).
+
+Time bounds are whole numbers in verifydtapn: bounds that are not whole
+seconds are written in a finer unit (a power of ten, named in a comment at
+the top of the file), as :func:`mcl2pnml.core.timing.mission_timing` chose
+it. Fairness (a primitive that is on reports eventually) is beyond what a
+timed-arc net says without priorities and is refused, as is ``priority``.
+
+Names in text queries are letters, digits and ``_``: every node id is
+written so (``mission.OK`` as ``mission_OK``), one distinct name per node,
+the original id in a comment beside every node whose name differs, and the
+mapping kept in :attr:`TimedArcNet.names` for the queries.
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field, replace
+from fractions import Fraction
+from pathlib import Path
+from typing import Iterable, Mapping
+
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.files import atomic_write_text
+from mcl2pnml.core.net import ArcKind, Net
+from mcl2pnml.core.payloads import RESULT_PLACES
+from mcl2pnml.core.properties import (And, Const, Not, Or, Pattern, Predicate, Property,
+                                      ScopeKind, Tokens)
+from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
+from mcl2pnml.core.version import __version__
+
+#: The assumptions a timed-arc net is written under unless told: TAPAAL's urgency, no priority.
+TAPAAL_ASSUMPTIONS = Assumptions(priority=False)
+NAMESPACE = "http://www.informatik.hu-berlin.de/top/pnml/ptNetb"
+#: Words of verifydtapn's query language, never used as a name.
+_RESERVED = frozenset({"ef", "eg", "af", "ag", "and", "or", "not", "deadlock", "true",
+                       "false", "e", "a", "f", "g", "x", "u"})
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*\Z")
+
+
+class TapnError(Mcl2PnmlError):
+    """A net or an assumption a timed-arc net cannot say exactly."""
+
+
+# -- the timed-arc net -----------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class TPlace:
+    id: str
+    tokens: int = 0
+    #: the age bound of its tokens, in units (None: no bound)
+    invariant: int | None = None
+
+
+@dataclass(frozen=True)
+class TTransition:
+    id: str
+    urgent: bool = False
+
+
+@dataclass(frozen=True)
+class TArc:
+    """One arc: ``kind`` input, output, transport (``via`` the transition) or inhibitor."""
+
+    kind: str
+    source: str
+    target: str
+    #: the guard on the age of the token taken, in units (an input or transport arc)
+    guard: tuple[int, int | None] = (0, None)
+    weight: int = 1
+    via: str | None = None
+
+
+@dataclass(frozen=True)
+class TimedArcNet:
+    """A net written for verifydtapn, and how it relates to the net it was written from."""
+
+    name: str
+    places: tuple[TPlace, ...]
+    transitions: tuple[TTransition, ...]
+    arcs: tuple[TArc, ...]
+    #: original node id -> its name here
+    names: Mapping[str, str]
+    #: original transition id -> the transitions here that fire it (a report: two)
+    copies: Mapping[str, tuple[str, ...]]
+    #: the length of one unit of time, in seconds
+    unit: Fraction
+    assumptions: Assumptions
+    #: the places whose safety the clocks rest on (names here)
+    watched: tuple[str, ...] = ()
+    #: what the file says first, for its reader
+    notes: tuple[str, ...] = ()
+    #: each added node's name -> what it is for
+    added: Mapping[str, str] = field(default_factory=dict)
+
+    def name_of(self, node_id: str) -> str:
+        """The name of an original node here; an id the net does not have is an error."""
+        try:
+            return self.names[node_id]
+        except KeyError:
+            raise TapnError(f"net '{self.name}' has no node '{node_id}'") from None
+
+    @property
+    def bound(self) -> int:
+        """A k-bound for verifydtapn (``-k``) no reachable marking exceeds in a 1-safe net."""
+        return max(1, len(self.places) + sum(p.tokens for p in self.places))
+
+    def units(self, seconds: Fraction | int | float, what: str) -> int:
+        """``seconds`` in this net's units; refused when it is not a whole number of them."""
+        value = Fraction(seconds).limit_denominator(10 ** 9) / self.unit
+        if value.denominator != 1 or value < 0:
+            raise TapnError(f"{what} ({float(seconds):g} s) is not a whole number of the "
+                            f"net's time unit ({_seconds(self.unit)} s)")
+        return int(value)
+
+
+def _seconds(x: Fraction) -> str:
+    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
+
+
+class _Names:
+    """Distinct query-safe names: letters, digits and ``_``, never a word of the language."""
+
+    def __init__(self) -> None:
+        self.used: set[str] = set()
+
+    def take(self, wanted: str) -> str:
+        base = re.sub(r"[^A-Za-z0-9_]", "_", wanted) or "n"
+        if not base[0].isalpha():
+            base = "n" + base
+        name, k = base, 1
+        while name in self.used or name.lower() in _RESERVED:
+            k += 1
+            name = f"{base}_{k}"
+        self.used.add(name)
+        return name
+
+
+def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
+                  timed: TimedNet | None = None) -> TimedArcNet:
+    """``net`` under ``assumptions`` as a timed-arc net (see the module's documentation).
+
+    ``timed``: the timed semantics to write, when the caller has one already
+    (default: :func:`~mcl2pnml.core.timing.mission_timing` of ``net``).
+    """
+    if assumptions.priority:
+        raise TapnError("TAPAAL's urgent transitions are not first at their instant: a "
+                        "timed-arc net is written with the supervisor's steps urgent only "
+                        "(assumptions without priority)")
+    if assumptions.fair:
+        raise TapnError("a timed-arc net cannot say that a primitive reports eventually "
+                        "(fairness) without a bound; it is written without it")
+    try:
+        timed = timed or mission_timing(net, assumptions)
+    except Mcl2PnmlError as e:
+        raise TapnError(f"net '{net.name}': {e.message}") from None
+    pre, post = net.pre, net.post
+    names = _Names()
+    name = {p.id: names.take(p.id) for p in net.places}
+    name.update({t.id: names.take(t.id) for t in net.transitions})
+    added: dict[str, str] = {}
+
+    def new(wanted: str, what: str) -> str:
+        n = names.take(wanted)
+        added[n] = what
+        return n
+
+    places = [TPlace(name[p.id], net.initial[p.id]) for p in net.places]
+    # per original transition: its arcs here, then what the clocks and gaps add
+    inputs: dict[str, list[TArc]] = {}
+    urgent: set[str] = set()
+    clocked: dict[str, tuple[str, tuple[int, int | None]]] = {}   # transition -> (CLK, interval)
+    for t in net.transitions:
+        lo, hi = timed.intervals.get(t.id, (0, None))
+        n = name[t.id]
+        arcs = []
+        for a in pre[t.id]:
+            if a.kind is ArcKind.READ:
+                arcs.append(TArc("transport", name[a.source], name[a.source], weight=a.weight,
+                                 via=n))
+            else:
+                arcs.append(TArc("input", name[a.source], n, weight=a.weight))
+        inputs[t.id] = arcs
+        if (lo, hi) == (0, 0):
+            urgent.add(t.id)
+        elif (lo, hi) != (0, None):
+            clocked[t.id] = (new(f"CLK_{n}", f"the clock of {t.id}: its age is the time since "
+                                 "it was enabled"), (lo, hi))
+    # the clocks: start, stop, and the producers of the watched places held back
+    extra_t: list[TTransition] = []
+    extra_a: list[TArc] = []
+    inhibited: dict[str, list[str]] = {t.id: [] for t in net.transitions}
+    producers: dict[str, list[str]] = {}
+    for t in net.transitions:
+        for a in post[t.id]:
+            producers.setdefault(a.target, []).append(t.id)
+    consumes = {t.id: {a.source for a in pre[t.id] if a.kind is ArcKind.NORMAL}
+                for t in net.transitions}
+    watched: dict[str, None] = {}
+    for t_id, (clock, (lo, hi)) in clocked.items():
+        places.append(TPlace(clock, 0, hi))
+        start = new(f"start_{name[t_id]}", f"starts the clock of {t_id} when it is enabled")
+        extra_t.append(TTransition(start, urgent=True))
+        extra_a.append(TArc("inhibitor", clock, start))
+        extra_a.append(TArc("output", start, clock))
+        for a in pre[t_id]:
+            p = a.source
+            if a.weight != 1:
+                raise TapnError(f"transition '{t_id}' is timed and takes {a.weight} tokens "
+                                f"from '{p}': its clock is written for places of one token")
+            watched[p] = None
+            extra_a.append(TArc("transport", name[p], name[p], via=start))
+            stop = new(f"stop_{name[t_id]}_{name[p]}",
+                       f"takes the clock of {t_id} when {p} is emptied")
+            extra_t.append(TTransition(stop, urgent=True))
+            extra_a.append(TArc("input", clock, stop))
+            extra_a.append(TArc("inhibitor", name[p], stop))
+            for u in producers.get(p, ()):
+                if u != t_id and p not in consumes[u] and clock not in inhibited[u]:
+                    inhibited[u].append(clock)
+        inputs[t_id].append(TArc("input", clock, name[t_id], guard=(lo, hi)))
+    for p in watched:
+        if net.initial[p] > 1:
+            raise TapnError(f"place '{p}' starts with {net.initial[p]} tokens: the clocks of "
+                            "the transitions it enables are written for places of one token")
+        for a in net.arcs:
+            if p in (a.source, a.target) and a.weight != 1:
+                raise TapnError(f"place '{p}' has an arc of weight {a.weight} "
+                                f"({a.source} -> {a.target}): the clocks of the transitions "
+                                "it enables are written for places of one token")
+    # the reports' gaps: each report twice, the first of the run and one after a gap
+    gap_of: dict[str, tuple[str, str, int]] = {}
+    for members, gap in timed.gaps:
+        if gap <= 0:
+            continue
+        who = timed.names.get(min(members), min(members))
+        first = new(f"FIRST_{who}", f"no report of {who} yet")
+        last = new(f"GAP_{who}", f"the time since the last report of {who}")
+        places += [TPlace(first, 1), TPlace(last, 0)]
+        for t_id in members:
+            gap_of[t_id] = (first, last, gap)
+    transitions: list[TTransition] = []
+    arcs: list[TArc] = []
+    copies: dict[str, tuple[str, ...]] = {}
+    for t in net.transitions:
+        n = name[t.id]
+        variants = [(n, [])]
+        if t.id in gap_of:
+            first, last, gap = gap_of[t.id]
+            again = new(f"{n}_again", f"{t.id} after an earlier report of its primitive")
+            variants = [(n, [TArc("input", first, n)]),
+                        (again, [TArc("input", last, again, guard=(gap, None))])]
+        copies[t.id] = tuple(v for v, _ in variants)
+        for v, own in variants:
+            transitions.append(TTransition(v, urgent=t.id in urgent))
+            for a in inputs[t.id] + own:
+                arcs.append(replace(a, via=v) if a.kind == "transport" else replace(a, target=v))
+            for a in post[t.id]:
+                arcs.append(TArc("output", v, name[a.target], weight=a.weight))
+            if t.id in gap_of:
+                arcs.append(TArc("output", v, gap_of[t.id][1]))
+            for clock in inhibited[t.id]:
+                arcs.append(TArc("inhibitor", clock, v))
+    notes = [f"{net.name or 'net'}: written by mcl2pnml {__version__} for TAPAAL's "
+             "verifydtapn (discrete time)",
+             f"time unit: {_seconds(timed.unit)} s (every age bound below counts this unit)",
+             f"assumptions: {assumptions.words()}"]
+    return TimedArcNet(net.name or "net", tuple(places), tuple(transitions + extra_t),
+                       tuple(arcs + extra_a), name, copies, timed.unit, assumptions,
+                       tuple(name[p] for p in watched), tuple(notes), added)
+
+
+# -- writing -------------------------------------------------------------------------------
+
+def _interval(guard: tuple[int, int | None]) -> str:
+    lo, hi = guard
+    return f"[{lo},inf)" if hi is None else f"[{lo},{hi}]"
+
+
+def _comment(text: str) -> str:
+    return "<!-- " + text.replace("--", "-\\u002d") + " -->"
+
+
+def to_text(tnet: TimedArcNet) -> str:
+    """The timed-arc net as TAPAAL's PNML (the dialect verifydtapn reads)."""
+    original = {v: k for k, v in tnet.names.items() if k != v}
+    lines = ['<?xml version="1.0" encoding="UTF-8"?>', f'<pnml xmlns="{NAMESPACE}">']
+    lines += ["  " + _comment(n) for n in tnet.notes]
+    lines.append(f'  <net id="{tnet.name if _NAME.match(tnet.name) else "net"}" '
+                 'type="P/T net">')
+
+    def note(node: str) -> None:
+        if node in original:
+            lines.append("    " + _comment(f"{node}: {json.dumps(original[node])}"))
+        elif node in tnet.added:
+            lines.append("    " + _comment(f"{node}: {tnet.added[node]}"))
+
+    for p in tnet.places:
+        note(p.id)
+        inv = "&lt; inf" if p.invariant is None else f"&lt;= {p.invariant}"
+        lines.append(f'    <place id="{p.id}" name="{p.id}" invariant="{inv}" '
+                     f'initialMarking="{p.tokens}"/>')
+    for t in tnet.transitions:
+        note(t.id)
+        lines.append(f'    <transition id="{t.id}" name="{t.id}" '
+                     f'urgent="{"true" if t.urgent else "false"}"/>')
+    for a in tnet.arcs:
+        weight = "" if a.weight == 1 else f' weight="{a.weight}"'
+        if a.kind == "input":
+            lines.append(f'    <inputArc inscription="{_interval(a.guard)}" source="{a.source}" '
+                         f'target="{a.target}"{weight}/>')
+        elif a.kind == "output":
+            lines.append(f'    <outputArc inscription="1" source="{a.source}" '
+                         f'target="{a.target}"{weight}/>')
+        elif a.kind == "transport":
+            lines.append(f'    <transportArc inscription="{_interval(a.guard)}" '
+                         f'source="{a.source}" transition="{a.via}" target="{a.target}"'
+                         f'{weight}/>')
+        else:
+            lines.append(f'    <inhibitorArc inscription="[0,inf)" source="{a.source}" '
+                         f'target="{a.target}"{weight}/>')
+    lines += ["  </net>", "</pnml>"]
+    return "\n".join(lines) + "\n"
+
+
+def save_tapn(net: Net, path: str | Path, *, timing: Assumptions | None = None) -> Path:
+    """Write ``net`` to ``path`` as a timed-arc net under ``timing``, whole or not at all."""
+    atomic_write_text(path, to_text(timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)))
+    return Path(path)
+
+
+# -- queries ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Query:
+    """One query for verifydtapn: a name (the file's middle suffix), what it asks, its text."""
+
+    name: str
+    description: str
+    text: str
+
+
+def predicate_text(predicate: Predicate, tnet: TimedArcNet) -> str:
+    """A predicate on places in verifydtapn's words, with the net's names."""
+    if isinstance(predicate, Tokens):
+        if not predicate.places:
+            return "true" if predicate.at_least <= 0 else "false"
+        total = " + ".join(tnet.name_of(p) for p in predicate.places)
+        return f"{total} >= {predicate.at_least}"
+    if isinstance(predicate, Not):
+        return f"not ({predicate_text(predicate.arg, tnet)})"
+    if isinstance(predicate, (And, Or)):
+        if not predicate.args:
+            return "true" if isinstance(predicate, And) else "false"
+        word = " and " if isinstance(predicate, And) else " or "
+        return "(" + word.join(predicate_text(a, tnet) for a in predicate.args) + ")"
+    if isinstance(predicate, Const):
+        return "true" if predicate.value else "false"
+    raise TypeError(f"not a predicate: {predicate!r}")
+
+
+def _results(tnet: TimedArcNet) -> list[str]:
+    missing = [r.id for r in RESULT_PLACES if r.id not in tnet.names]
+    if missing:
+        raise TapnError(f"net '{tnet.name}' is not a compiled mission: it has no "
+                        f"{', '.join(missing)}")
+    return [tnet.names[r.id] for r in RESULT_PLACES]
+
+
+def ends_query(tnet: TimedArcNet) -> Query:
+    """"An end is always reached": every run, however time passes, marks a result."""
+    some = " or ".join(f"{r} = 1" for r in _results(tnet))
+    return Query("ends", "an end is always reached (AF a result)", f"AF ({some})\n")
+
+
+def deadlock_query(tnet: TimedArcNet) -> Query:
+    """"A dead state that is not an end": nothing can fire now or after any delay, and no
+    result is marked."""
+    none = " and ".join(f"{r} = 0" for r in _results(tnet))
+    return Query("deadlock", "a dead state that is not an end (EF deadlock and no result)",
+                 f"EF (deadlock and {none})\n")
+
+
+def safety_query(tnet: TimedArcNet) -> Query | None:
+    """What the clocks rest on: the places they watch never hold two tokens (None: none)."""
+    if not tnet.watched:
+        return None
+    each = " and ".join(f"{p} <= 1" for p in tnet.watched)
+    return Query("safe", "the places the clocks watch hold one token at most (AG)",
+                 f"AG ({each})\n")
+
+
+def property_query(prop: Property, tnet: TimedArcNet) -> Query | None:
+    """A mission's property as one query, where a single state formula says it exactly
+    (None: not so). Absence and universality globally are invariants (``AG``); existence
+    globally is ``AF``: on every maximal timed run, time passing for ever included."""
+    if prop.scope.kind is not ScopeKind.GLOBALLY:
+        return None
+    p = predicate_text(prop.p, tnet)
+    if prop.pattern is Pattern.ABSENCE:
+        text = f"AG not ({p})"
+    elif prop.pattern is Pattern.UNIVERSALITY:
+        text = f"AG ({p})"
+    elif prop.pattern is Pattern.EXISTENCE:
+        text = f"AF ({p})"
+    else:
+        return None
+    return Query(f"property.{_file_part(prop.name)}", f"{prop.name}: {prop.text or prop.pattern.value}",
+                 text + "\n")
+
+
+def _file_part(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_-]", "_", text) or "p"
+
+
+def mission_queries(tnet: TimedArcNet, properties: Iterable[Property] = ()) -> list[Query]:
+    """The queries written beside a mission's timed-arc net."""
+    out = [ends_query(tnet), deadlock_query(tnet)]
+    safe = safety_query(tnet)
+    if safe is not None:
+        out.append(safe)
+    out += [q for q in (property_query(p, tnet) for p in properties) if q is not None]
+    return out
+
+
+def query_path(net_path: str | Path, query: Query) -> Path:
+    """Where a query goes beside the net: ``OUT.tapn`` -> ``OUT.ends.q``."""
+    path = Path(net_path)
+    stem = path.with_suffix("") if path.suffix else path
+    return stem.with_name(f"{stem.name}.{query.name}.q")
+
+
+def query_paths(net: Net, net_path: str | Path, timing: Assumptions | None = None,
+                properties: Iterable[Property] = ()) -> list[Path]:
+    """The files :func:`save_queries` would write (for checking outputs beforehand)."""
+    tnet = timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)
+    return [query_path(net_path, q) for q in mission_queries(tnet, properties)]
+
+
+def save_queries(net: Net, net_path: str | Path, timing: Assumptions | None = None,
+                 properties: Iterable[Property] = ()) -> list[tuple[Path, Query, int]]:
+    """Write the mission's queries beside its timed-arc net at ``net_path``; returns each
+    file, its query, and the k-bound to give verifydtapn (``-k``)."""
+    tnet = timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)
+    written = []
+    for q in mission_queries(tnet, properties):
+        path = query_path(net_path, q)
+        atomic_write_text(path, q.text)
+        written.append((path, q, tnet.bound))
+    return written
+
+
+# -- time bounds: an observer --------------------------------------------------------------
+
+def deadline_net(net: Net, seconds: Fraction | int | float,
+                 timing: Assumptions | None = None) -> tuple[TimedArcNet, Query]:
+    """The net with an observer of time ``seconds`` and the query "some run has no result
+    at that time" (``EF LATE = 1``): a place ``CLOCK`` (one token, never reset, no
+    invariant), a transition ``late`` that takes it with the guard ``[W, ∞)`` and is
+    inhibited by every result place, into ``LATE``. It fires only at W or later, while no
+    result is marked; a result stays marked once marked, so it fires on a run exactly when
+    that run is still without a result at some moment of time W (perhaps just before the
+    result, at the same instant: the query's answer for W is whether a run ends at W or
+    later)."""
+    tnet = timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)
+    results = _results(tnet)
+    w = tnet.units(seconds, "the time bound")
+    names = _Names()
+    names.used = set(tnet.names.values()) | set(tnet.added)
+    clock, late, done = names.take("CLOCK"), names.take("late"), names.take("LATE")
+    observer = TimedArcNet(
+        tnet.name, tnet.places + (TPlace(clock, 1), TPlace(done, 0)),
+        tnet.transitions + (TTransition(late),),
+        tnet.arcs + (TArc("input", clock, late, guard=(w, None)), TArc("output", late, done),
+                     *(TArc("inhibitor", r, late) for r in results)),
+        tnet.names, tnet.copies, tnet.unit, tnet.assumptions, tnet.watched,
+        tnet.notes + (f"observer: {late} fires at {_seconds(Fraction(w) * tnet.unit)} s or "
+                      f"later while no result is marked",),
+        {**tnet.added, clock: "the time since the start", late: "no result yet at the bound",
+         done: "a run had no result at the bound"})
+    return observer, Query(f"late{w}", f"some run has no result at {_seconds(Fraction(w) * tnet.unit)} s",
+                           f"EF {done} = 1\n")
+
+
+def save_deadline(net: Net, path: str | Path, seconds: Fraction | int | float,
+                  timing: Assumptions | None = None) -> tuple[Path, Path, int]:
+    """Write the observer net of :func:`deadline_net` to ``path`` and its query beside it;
+    returns the net's file, the query's, and the k-bound to give verifydtapn."""
+    observer, query = deadline_net(net, seconds, timing)
+    atomic_write_text(path, to_text(observer))
+    qpath = query_path(path, query)
+    atomic_write_text(qpath, query.text)
+    return Path(path), qpath, observer.bound

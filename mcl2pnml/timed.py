@@ -1,0 +1,200 @@
+"""A mission's timed verdicts in its own terms: does it always end, when, and its properties.
+
+:mod:`analysis.timed` answers on any :class:`~mcl2pnml.core.timing.TimedNet`;
+this module asks it about a compiled mission (docs/time.md): the mission's
+semantics under the vehicle's :class:`~mcl2pnml.core.timing.Assumptions`
+(:func:`~mcl2pnml.core.timing.mission_timing`), "an end is always reached"
+(the existence of a result, Dwyer et al.'s *eventually*, on every
+time-divergent run), the earliest and latest end times, and, when a run
+never ends, what it waits for, in words: "FindCross waits for DetectCross's
+report, and has no time-out". The property verdicts are handed back as
+:class:`analysis.properties.Verdict`, so that the counterexample machinery of
+:mod:`mcl2pnml.counterexample` reads them as it reads the untimed ones.
+
+Sits beside :mod:`mcl2pnml.counterexample`, between the facade and the layers
+it joins: may import :mod:`mcl2pnml.core` and :mod:`analysis`; only
+:mod:`mcl2pnml.pipeline` imports it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Sequence
+
+from analysis import timed as engine
+from analysis.properties import Shape, Status, Verdict
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.net import Net
+from mcl2pnml.core.payloads import MissionPlace, read_transition
+from mcl2pnml.core.properties import Pattern, Property, Scope, ScopeKind, Tokens
+from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
+
+#: The mission's result places: a run has ended once one is marked.
+ENDS = (MissionPlace.OK.id, MissionPlace.FAIL.id, MissionPlace.ABORTED.id)
+
+
+def semantics(net: Net, assumptions: Assumptions) -> TimedNet:
+    """The mission's timed semantics, or one error if ``net`` is no compiled mission."""
+    missing = [p for p in ENDS if p not in net.place_index]
+    if missing:
+        raise Mcl2PnmlError(f"net '{net.name}' is not a compiled mission (it has no place "
+                            f"{', '.join(missing)}): a timed verdict reads a mission's time-outs "
+                            "and vehicle events (compile MCL with `mcl2pnml compile`)")
+    if not any(read_transition(t).event is not None for t in net.transitions):
+        raise Mcl2PnmlError(f"net '{net.name}' has no transition fired by the vehicle: its file "
+                            "lost the mission's payloads, without which time has no meaning")
+    return mission_timing(net, assumptions)
+
+
+def ends_property() -> Property:
+    """"An end is always reached": one of the results, eventually, on every run."""
+    return Property("AlwaysEnds", Pattern.EXISTENCE, Tokens(ENDS, 1), scope=Scope(ScopeKind.GLOBALLY),
+                    text="eventually outcome(OK) or outcome(FAIL) or outcome(ABORTED)")
+
+
+@dataclass(frozen=True)
+class TimedEnds:
+    """Whether and when the mission's runs end, under ``assumptions`` (docs/time.md).
+
+    ``always_ends``: every time-divergent run reaches a result (None: unknown,
+    ``reason`` says why); ``deadlock``: some state has nothing that can happen
+    and no result (time passes for ever there: a stall); ``earliest`` and
+    ``latest``: the first and last times, in seconds, at which a run reaches its
+    result (``latest`` None when a run never ends); ``waits``: what a run that
+    never ends waits for, in words; ``never``: that run's verdict (its firings);
+    ``latest_run``: the firings of a run that ends at ``latest``.
+    """
+
+    assumptions: Assumptions
+    always_ends: bool | None
+    deadlock: bool
+    earliest: Fraction | None
+    latest: Fraction | None
+    waits: tuple[str, ...]
+    never: Verdict | None
+    states: int
+    reason: str | None = None
+    latest_run: tuple[str, ...] = ()
+
+    def lines(self) -> list[str]:
+        """The answer as ``analyze --timed`` prints it."""
+        out = [f"timed (docs/time.md): {self.assumptions.words()}"]
+        if self.always_ends is None:
+            out.append(f"  an end is always reached: unknown ({self.reason})")
+        elif self.always_ends:
+            out.append(f"  an end is always reached: yes ({self.states:,} zones)")
+        else:
+            out.append("  an end is always reached: no, " + "; ".join(self.waits))
+        if self.deadlock:
+            out.append("  a state with nothing left to happen and no result: yes (a stall)")
+        if self.earliest is not None:
+            latest = "never (a run does not end)" if self.latest is None else \
+                f"{_s(self.latest)} s"
+            out.append(f"  end time: earliest {_s(self.earliest)} s, latest {latest}")
+        return out
+
+    def as_json(self) -> dict[str, Any]:
+        return {"assumptions": self.assumptions.as_json(), "always_ends": self.always_ends,
+                "deadlock": self.deadlock, "reason": self.reason,
+                "earliest": _num(self.earliest), "latest": _num(self.latest),
+                "waits": list(self.waits), "zones": self.states,
+                "latest_run": list(self.latest_run),
+                "never": None if self.never is None else {
+                    "shape": self.never.shape.value, "transitions": list(self.never.transitions),
+                    "loop": self.never.loop}}
+
+
+def _s(x: Fraction) -> str:
+    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
+
+
+def _num(x: Fraction | None) -> int | float | None:
+    if x is None:
+        return None
+    return x.numerator if x.denominator == 1 else float(x)
+
+
+def ends(net: Net, assumptions: Assumptions = Assumptions(),
+         max_states: int = 1_000_000) -> TimedEnds:
+    """Whether every run of the mission ends, when, and what one that does not waits for."""
+    tn = semantics(net, assumptions)
+    graph, (verdict,) = engine.check_all(tn, [ends_property()], max_states)
+    if graph is None:
+        return TimedEnds(assumptions, None, False, None, None, (), None, verdict.states,
+                         verdict.reason)
+    deadlock = any(graph.waits[s] and not graph.enabled[s] and not graph.markings[s] & _end_mask(graph)
+                   for s in range(graph.states))
+    if verdict.status == "unknown":
+        return TimedEnds(assumptions, None, deadlock, None, None, (), None, graph.states,
+                         verdict.reason)
+    times = engine.end_times(tn, ENDS, verdict, max_states)
+    unit = tn.unit
+    earliest = None if times.earliest is None else times.earliest * unit
+    latest = None if times.latest is None else times.latest * unit
+    never = None if verdict.status == "holds" else as_verdict(graph, verdict)
+    waits = () if never is None else tuple(waiting(graph, verdict))
+    return TimedEnds(assumptions, verdict.status == "holds", deadlock, earliest, latest, waits,
+                     never, graph.states, latest_run=times.latest_path)
+
+
+def _end_mask(graph: engine.ZoneGraph) -> int:
+    mask = 0
+    for k, p in enumerate(graph.places):
+        if p in ENDS:
+            mask |= 1 << k
+    return mask
+
+
+def waiting(graph: engine.ZoneGraph, verdict: engine.TimedVerdict) -> list[str]:
+    """What a run that never ends waits for, in the mission's words."""
+    last = verdict.path[-1]
+    marked = set(graph.marked(last))
+    timeouts = {t.id.rsplit(".", 1)[0] for t in graph.tn.net.transitions if t.timing is not None}
+    out = []
+    tasks = [] if verdict.shape == "lasso" else sorted(
+        p.rsplit(".", 1)[0] for p in marked if p.endswith(".EXE"))
+    for task in tasks:
+        prims = sorted(p.rsplit(".", 1)[0] for p in marked if p.endswith(".ON")
+                       and _uses(graph.tn.net, task, p.rsplit(".", 1)[0]))
+        what = f"{task} waits for " + (" and ".join(f"{p}'s report" for p in prims) or
+                                       "its primitives")
+        what += ", and has no time-out" if task not in timeouts else ""
+        out.append(what)
+    if verdict.shape == "lasso":
+        cycle = verdict.transitions[verdict.loop:]
+        out.append("a cycle repeats for ever: " + " ".join(cycle[:12])
+                   + (" ..." if len(cycle) > 12 else ""))
+    elif not out:
+        out.append("the run waits for ever with " + ", ".join(sorted(marked)[:8]) + " marked")
+    if verdict.shape == "finite" and tasks:
+        out[-1] += " (nothing aborts it)"
+    return out
+
+
+def _uses(net: Net, task: str, prim: str) -> bool:
+    """Whether ``task``'s net is fused with ``prim``'s (its t01 asks ``prim`` to start)."""
+    t01 = f"{task}.t01"
+    if t01 not in net.transition_index:
+        return True
+    return any(a.target.startswith(prim + ".") for a in net.post[t01])
+
+
+def as_verdict(graph: engine.ZoneGraph, v: engine.TimedVerdict) -> Verdict:
+    """A timed verdict in the untimed checker's type (:class:`analysis.properties.Verdict`)."""
+    status = {"holds": Status.HOLDS, "fails": Status.FAILS, "unknown": Status.UNKNOWN}[v.status]
+    if status is not Status.FAILS:
+        return Verdict(v.property, status, states=v.states, reason=v.reason)
+    markings = tuple(tuple((p, 1) for p in graph.marked(s)) for s in v.path)
+    shape = {"prefix": Shape.PREFIX, "finite": Shape.FINITE, "lasso": Shape.LASSO}[v.shape]
+    return Verdict(v.property, status, v.transitions, markings, shape, v.loop, v.states)
+
+
+def check(net: Net, properties: Sequence[Property], assumptions: Assumptions = Assumptions(),
+          max_states: int = 1_000_000) -> list[Verdict]:
+    """Each property's verdict on the mission's time-divergent runs (docs/time.md)."""
+    tn = semantics(net, assumptions)
+    graph, verdicts = engine.check_all(tn, properties, max_states)
+    if graph is None:
+        return [Verdict(v.property, Status.UNKNOWN, states=v.states, reason=v.reason)
+                for v in verdicts]
+    return [as_verdict(graph, v) for v in verdicts]
