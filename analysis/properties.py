@@ -422,7 +422,8 @@ class Shown:
     loop: int | None = None
 
 
-def judge(net: Net, prop: Property, transitions: Iterable[str]) -> Shown | None:
+def judge(net: Net, prop: Property, transitions: Iterable[str],
+          silent: Iterable[str] = ()) -> Shown | None:
     """Whether the run that fires ``transitions`` from M0 shows ``prop`` violated, and how.
 
     The same observer as :func:`check` reads the run's markings. It shows a
@@ -432,7 +433,9 @@ def judge(net: Net, prop: Property, transitions: Iterable[str]) -> Shown | None:
     obligation open at every marking in between: that cycle, repeated for
     ever, is an infinite run that violates the property. A transition that
     is not enabled where the run fires it is an error (ValueError): the
-    sequence is no run of the net.
+    sequence is no run of the net. ``silent``: transitions that may stay
+    unfired for ever (under a timed semantics, a vehicle's reports: a run may
+    end where only they are enabled, the vehicle silent).
     """
     from mcl2pnml.core.structure import structure
 
@@ -470,7 +473,8 @@ def judge(net: Net, prop: Property, transitions: Iterable[str]) -> Shown | None:
         seen[state] = k    # the latest visit: the shortest cycle back to it
     if obs is BAD:
         return Shown(Shape.PREFIX, k)
-    dead = not any(s.enabled(m, j) for j in range(len(s.transitions)))
+    quiet = {index[t] for t in silent if t in index}
+    dead = not any(s.enabled(m, j) for j in range(len(s.transitions)) if j not in quiet)
     if dead and pending(prop, obs):
         return Shown(Shape.FINITE, k)
     return None

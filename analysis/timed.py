@@ -2,7 +2,8 @@
 
 The semantics is :mod:`mcl2pnml.core.timing`'s (docs/time.md): each
 transition has a static interval and a clock that starts when it becomes
-enabled; priority transitions (the supervisor's steps) preempt every other;
+enabled; priority transitions (the supervisor's steps) preempt every other,
+and eager ones (acknowledgements at once) every other but those;
 gap groups (a primitive's reports) fire at least a number of units apart;
 fairness groups (a primitive's first report) eventually fire when one of
 them stays enabled. Time is dense; every bound is a whole number of units.
@@ -165,13 +166,15 @@ class TimedLimit(Mcl2PnmlError):
 
 
 def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
-               ends: Iterable[str] | None = None,
+               ends: Iterable[str] | None = None, earliest_only: bool = False,
                progress: Callable[[int], None] | None = None) -> ZoneGraph:
     """The zone graph of ``tn`` from its initial marking (see the module's documentation).
 
     ``ends``: places of which any marked is an end; given, the graph stops at
     the first end of each run and records the global time of reaching it
-    (:attr:`ZoneGraph.ends`).
+    (:attr:`ZoneGraph.ends`). ``earliest_only``: a state reached no earlier
+    than an end already found is not explored further (enough for the
+    earliest end, and finite even where runs never end).
     """
     net = tn.net
     s = structure(net)
@@ -199,10 +202,12 @@ def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
     for j, tid in enumerate(s.transitions):
         a, b = tn.intervals.get(tid, (0, None))
         lo[j], hi[j] = a, b
-    prio = 0
+    prio = eager = 0
     for j, tid in enumerate(s.transitions):
         if tid in tn.priority:
             prio |= 1 << j
+        if tid in tn.eager:
+            eager |= 1 << j
     urgent_mask = 0       # [0,0]: time does not pass while one is enabled
     deadline_mask = 0     # a finite upper bound: time passes only up to it
     for j in range(T):
@@ -376,6 +381,7 @@ def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
 
     key0, urg0 = got
     intern(key0, urg0, en0, None)
+    best = [INF]
     while queue:
         k = queue.popleft()
         m = g.markings[k]
@@ -383,8 +389,12 @@ def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
             continue       # the run has ended: its time was recorded when it got here
         clocks, flat = g.zones[k]
         n = len(clocks) + 1
+        if earliest_only and g.ends:
+            gi = clocks.index(glob) + 1
+            if -(flat[gi] >> 1) >= best[0]:
+                continue
         en = g.enabled[k]
-        cand = en & prio if en & prio else en
+        cand = en & prio or en & eager or en
         fired_any = False
         for j in bits(cand):
             d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
@@ -438,6 +448,7 @@ def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
                 # every way in counts: past the end time passes, so the end states of
                 # different times may share one zone
                 g.ends.append((k, j, earliest, latest))
+                best[0] = min(best[0], earliest)
         if not fired_any and not g.waits[k]:
             g.stuck.append(k)   # time cannot pass for ever, and nothing can fire
     return g
@@ -669,6 +680,7 @@ class EndTimes:
     latest: int | None
     never: TimedVerdict | None
     states: int
+    reason: str | None = None
     latest_path: tuple[str, ...] = ()
     latest_states: tuple[int, ...] = ()
 
@@ -679,13 +691,12 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
     always reached" on the same net): when it fails, the latest is unbounded."""
     ends = list(ends)
     bounded = always.status == "holds"
-    cap = max_states if bounded else min(max_states, 200_000)
     try:
-        graph = zone_graph(tn, max_states=cap, ends=ends)
+        graph = zone_graph(tn, max_states=max_states, ends=ends, earliest_only=not bounded)
     except TimedLimit as e:
-        if bounded:
-            raise
-        return EndTimes(None, None, always, e.states)
+        # the times are left unknown: the clock of the whole run multiplies the zones
+        return EndTimes(None, None, None if bounded else always, e.states,
+                        reason=f"{e}, with the clock of the whole run")
     if not graph.ends:
         return EndTimes(None, None, always if not bounded else None, graph.states)
     earliest = min(e for _, _, e, _ in graph.ends)
@@ -699,5 +710,5 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
         k, t = graph.parent[nodes[-1]]
         trans.append(graph.transitions[t])
         nodes.append(k)
-    return EndTimes(earliest, latest, None, graph.states, tuple(trans[::-1]),
-                    tuple(nodes[::-1]))
+    return EndTimes(earliest, latest, None, graph.states, latest_path=tuple(trans[::-1]),
+                    latest_states=tuple(nodes[::-1]))

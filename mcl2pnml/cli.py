@@ -535,10 +535,12 @@ def _progress(states: int, frontier: int) -> None:
               help="With --properties: explain (print, and write with --counterexamples) the "
                    "counterexamples of the first N failing properties only; the others are "
                    "given their verdict and firing sequence, and their number is said.")
-@click.option("--timed", is_flag=True,
+@click.option("--timed/--untimed", default=None,
               help="A mission's verdicts in the time it runs in (docs/time.md): whether every "
                    "run ends, its earliest and latest end times, and --properties on the "
-                   "time-divergent runs, under the vehicle's assumptions below.")
+                   "time-divergent runs, under the vehicle's assumptions below. The default "
+                   "for a mission's --properties; --untimed: on every run of the net, as "
+                   "other Petri-net tools read it.")
 @click.option("--ack-within", metavar="SECONDS", default="0", show_default=True,
               help="With --timed: the vehicle acknowledges enable and disable within this.")
 @click.option("--report-gap", metavar="SECONDS", default="1", show_default=True,
@@ -558,7 +560,7 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
             cex_dir: Path | None = None, explore: bool = False,
             max_cex: int = pipeline.MAX_COUNTEREXAMPLES, max_props_size: str = PROPERTIES_SIZE,
             max_atoms: int = PROPERTY_ATOMS, max_cert: str = CERTIFICATE_SIZE,
-            timed: bool = False, ack_within: str = "0", report_gap: str = "1",
+            timed: bool | None = None, ack_within: str = "0", report_gap: str = "1",
             fair_reports: bool = False, urgency_only: bool = False) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
@@ -572,6 +574,8 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
     if cex_dir is not None and initial is not None:
         raise OptionError("--counterexamples", "a replay starts the mission from its start: "
                                                "leave out --initial")
+    if timed is None:   # a mission's properties are about the runs it has: in time
+        timed = properties is not None and file.suffix == ".mcl" and initial is None
     assumptions = _assumptions(timed, ack_within, report_gap, fair_reports, urgency_only)
     if timed and initial is not None:
         raise OptionError("--timed", "a timed verdict starts the mission from its start (its "
@@ -597,37 +601,41 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
                       "give another folder, or rename the property")
         pipeline.make_folder(cex_dir)
     start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
-    shown = sys.stderr.isatty() if progress is None else progress
-    # a certificate beside the file proves the behaviour without exploring (mcl2pnml.certify)
-    beside = pipeline.certificate_beside(file)
-    certified = None
-    if beside.is_file() and start is None and not explore:
-        certified, problems = pipeline.certified_facts(net, beside, max_cert)
-        if problems:
-            click.echo(f"{beside}: the certificate does not hold for this net ({problems[0]}"
-                       + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
-                       + "): exploring instead", err=True)
-    result = pipeline.analyze(net, start, state_space_only=state_space, max_states=max_states,
-                              progress=_progress if shown else None, explorer=explorer,
-                              max_memory=max_memory, explore_states=certified is None)
-    if certified is not None:
-        result.update(certified)
-        click.echo(f"{beside}: the certificate holds: 1-safe, an end always reachable, "
-                   "reusable, proven from the mission's parts; the markings were not explored "
-                   "(--explore to explore them)", err=True)
-    if shown:
-        click.echo("", err=True)
-    timed_ends = None
-    if timed:
+    if timed:   # the runs in time: the timed answers alone, the untimed ones with --untimed
+        result: dict = {}
         timed_ends = pipeline.timed_ends(net, assumptions, max_states)
         verdicts = None if props is None else pipeline.check_properties_timed(
             net, props, assumptions, max_states)
     else:
+        shown = sys.stderr.isatty() if progress is None else progress
+        # a certificate beside the file proves the behaviour without exploring (mcl2pnml.certify)
+        beside = pipeline.certificate_beside(file)
+        certified = None
+        if beside.is_file() and start is None and not explore:
+            certified, problems = pipeline.certified_facts(net, beside, max_cert)
+            if problems:
+                click.echo(f"{beside}: the certificate does not hold for this net "
+                           f"({problems[0]}"
+                           + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
+                           + "): exploring instead", err=True)
+        result = pipeline.analyze(net, start, state_space_only=state_space,
+                                  max_states=max_states, progress=_progress if shown else None,
+                                  explorer=explorer, max_memory=max_memory,
+                                  explore_states=certified is None)
+        if certified is not None:
+            result.update(certified)
+            click.echo(f"{beside}: the certificate holds: 1-safe, an end always reachable, "
+                       "reusable, proven from the mission's parts; the markings were not "
+                       "explored (--explore to explore them)", err=True)
+        if shown:
+            click.echo("", err=True)
+        timed_ends = None
         verdicts = None if props is None else pipeline.check_properties(
             net if start is None else net.with_initial(start), props, max_states)
     # the mission's terms and the replay start from the mission's own start; only the
     # counterexamples printed and written are explained, each costing a search and a replay
-    witnesses = (pipeline.witnesses(file, net, verdicts, max_cex)
+    witnesses = (pipeline.witnesses(file, net, verdicts, max_cex,
+                                    assumptions if timed else None)
                  if verdicts is not None and start is None else None)
     if witnesses is not None:
         failing = sum(v.shape is not None for v in verdicts)
@@ -649,15 +657,17 @@ def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, m
             result["timed"] = timed_ends.as_json()
         click.echo(json.dumps(result, indent=2))
     else:
-        click.echo(pipeline.analysis_text(result))
-        if timed_ends is not None:
+        if timed_ends is None:
+            click.echo(pipeline.analysis_text(result))
+        else:
             click.echo("\n".join(timed_ends.lines()))
         for k, v in enumerate(verdicts or ()):
             click.echo("\n".join(pipeline.witness_text(v, witnesses[k] if witnesses else None)))
     statuses = {v.status.value for v in verdicts or ()}
     if "fails" in statuses:
         return 1
-    return 3 if "partial" in result or "unknown" in statuses else 0
+    undecided = timed_ends is not None and timed_ends.always_ends is None
+    return 3 if "partial" in result or "unknown" in statuses or undecided else 0
 
 
 def _assumptions(timed: bool, ack_within: str, report_gap: str, fair: bool, urgency_only: bool):

@@ -194,12 +194,13 @@ _HEARD = {EventKind.ON: "{} is on", EventKind.OFF: "{} is off",
 
 def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
             loop: int | None, primitives: Iterable[str],
-            callables: Iterable[str]) -> Counterexample:
+            callables: Iterable[str], gap: Fraction | None = None) -> Counterexample:
     """The counterexample ``transitions`` (a failing verdict's, :class:`analysis.properties.
     Verdict`) in the mission's terms, timed, with the vehicle script that replays it.
 
     ``primitives`` and ``callables`` (tasks and functions) are the mission's names, whose
-    atoms each step's changes are told in.
+    atoms each step's changes are told in. ``gap``: a primitive's reports at least this
+    many seconds apart (a timed verdict's assumption, docs/time.md), which the times meet.
     """
     from mcl2pnml.core.structure import structure
     s = structure(net)
@@ -243,7 +244,7 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
         true_now = now
         kinds.append(kind)
         raw.append((tid, kind, text, acts, payload.event))
-    times, departs, why_not = schedule(net, transitions, kinds, loop)
+    times, departs, why_not = schedule(net, transitions, kinds, loop, gap)
     script, no_script = _script(raw)
     why_not = no_script or why_not
     steps = []
@@ -265,13 +266,16 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
 # -- the schedule --------------------------------------------------------------------------------
 
 def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
-             loop: int | None = None) -> tuple[list[Fraction] | None, str | None, str | None]:
+             loop: int | None = None, gap: Fraction | None = None
+             ) -> tuple[list[Fraction] | None, str | None, str | None]:
     """The earliest times, one per firing, at which the engines take the stimuli in the
     sequence's order (see the module's documentation), or None; where the sequence departs
     from what the engines do at once (a stimulus while a step of the supervisor is still to
     fire), the first such place, in words; why no times exist, if none do. A lasso (its
     cycle from firing ``loop`` on) has none if a time-out runs all along the cycle: time
-    passing as the cycle repeats, it would expire."""
+    passing as the cycle repeats, it would expire. ``gap``: each primitive's reports at
+    least that many seconds apart (and a lasso's cycle at least that long, when the cycle
+    has a report of the primitive that reports first in it again)."""
     import networkx as nx
 
     from mcl2pnml.core.structure import structure
@@ -290,8 +294,15 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
     urgent = [j for j, t in enumerate(net.transitions)
               if t.timing is None and _event_kind(t) not in (EventKind.ACHIEVED, EventKind.FAILED)]
     current, departs = 0, None
+    last_report: dict[str, int] = {}       # primitive -> the stimulus of its last report
+    spaced: list[tuple[int, int]] = []     # (earlier, later) reports of one primitive
     for n, (tid, kind) in enumerate(zip(transitions, kinds), 1):
         j = s.transition_index[tid]
+        if kind is StepKind.REPORT and gap:
+            prim = _event_primitive(net.transitions[j])
+            if prim in last_report:
+                spaced.append((last_report[prim], current + 1))
+            last_report[prim] = current + 1
         if kind in (StepKind.REPORT, StepKind.TIMEOUT):
             waiting = next((k for k in urgent if s.enabled(m, k)), None)
             if waiting is not None and departs is None:
@@ -332,6 +343,8 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
             at_least(k, at, -seconds)
         for k, at, seconds in before:
             at_least(k, at, epsilon - seconds)
+        for earlier, later in spaced:
+            at_least(earlier, later, gap)
         try:
             dist = nx.single_source_bellman_ford_path_length(g, 0)
         except nx.NetworkXUnbounded:
@@ -340,6 +353,11 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
         return [times[k] for k in stimulus_of], departs, None
     return None, departs, ("no times make the time-outs expire in the sequence's order (a report "
                   "would have to come after a time-out that the run has not met yet)")
+
+
+def _event_primitive(t) -> str | None:
+    event = read_transition(t).event
+    return None if event is None else event.primitive
 
 
 def _event_kind(t) -> EventKind | None:
@@ -421,9 +439,11 @@ def vehicle(script: dict[str, list[str]]) -> ScriptedVehicle:
                             for p, replies in script.items()})
 
 
-def replay(cex: Counterexample, net: Net, checked) -> Replay:
+def replay(cex: Counterexample, net: Net, checked, silent: Sequence[str] = ()) -> Replay:
     """Run ``cex``'s script on the Petri-net executor (of ``net``) and on the reference
-    engine (of ``checked``), up to the counterexample's last stimulus, and judge the runs."""
+    engine (of ``checked``), up to the counterexample's last stimulus, and judge the runs
+    (``silent``: the transitions a run may end with enabled, :func:`analysis.properties.
+    judge`)."""
     from analysis.properties import judge
     from mcl2pnml.runtime.engine import canonical_trace, run
     from mcl2pnml.runtime.executor import PetriEngine
@@ -434,7 +454,7 @@ def replay(cex: Counterexample, net: Net, checked) -> Replay:
     fired: list[str] = []
     petri.on_fire = lambda t, tid: fired.append(tid)
     ran = run(petri, vehicle(cex.script), max_time=cex.end)
-    shown = judge(net, cex.property, fired)
+    shown = judge(net, cex.property, fired, silent)
     reference = run(ReferenceEngine(checked), vehicle(cex.script), max_time=cex.end)
     trace = canonical_trace(ran.entries)
     same = trace == canonical_trace(reference.entries)
@@ -624,34 +644,49 @@ class Witness:
 
 
 def witness(net: Net, checked, prop: Property, transitions: Sequence[str], *, shape: str,
-            loop: int | None) -> Witness:
+            loop: int | None, timing=None) -> Witness:
     """The counterexample ``transitions`` of ``prop`` explained, scripted and replayed.
 
     The checker's run is replayed when a script gives it and the engines take it as it is
     (it fires no stimulus while the engines still have a step to take at once). Otherwise
     the engines' own violating run is taken: the executor's run under the checker's script,
     when that still shows the violation, else the shortest one :func:`engine_run` finds.
+
+    ``timing``: the :class:`~mcl2pnml.core.timing.Assumptions` of a timed verdict
+    (docs/time.md): the times meet its report gap, and a run may end where only the
+    vehicle's reports are left (the vehicle silent for ever; with ``fair``, only its
+    reports after the first of an enabling).
     """
     from analysis.properties import judge
     names = dict(primitives=list(checked.primitives),
                  callables=[*checked.tasks, *checked.functions])
+    gap, silent = None, ()
+    if timing is not None:
+        from mcl2pnml.core.timing import mission_timing
+        tn = mission_timing(net, timing)
+        fair = set().union(*tn.fair) if tn.fair else set()
+        silent = tuple(t for members, _ in tn.gaps for t in members if t not in fair) \
+            if tn.gaps else tuple(t for t, (a, b) in tn.intervals.items()
+                                  if b is None and a == 0 and t not in fair)
+        gap = timing.report_gap
+        names["gap"] = gap
 
     def replayed(seq: Sequence[str]) -> tuple[Counterexample | None, Replay | None, str]:
-        shown = judge(net, prop, seq)
+        shown = judge(net, prop, seq, silent)
         if shown is None:
             return None, None, "it does not show the violation"
         cex = explain(net, prop, seq[:shown.step], shape=shown.shape.value, loop=shown.loop,
                       **names)
         if cex.script is None:
             return cex, None, cex.why_not or ""
-        tried = replay(cex, net, checked)
+        tried = replay(cex, net, checked, silent)
         return cex, tried, "" if tried.reached and tried.same_on_reference else tried.detail
 
     run_ = explain(net, prop, transitions, shape=shape, loop=loop, **names)
     if run_.script is None:
         why = run_.why_not
     else:
-        tried = replay(run_, net, checked)
+        tried = replay(run_, net, checked, silent)
         if tried.reached and tried.same_on_reference and run_.departs is None:
             return Witness(run_, run_, tried, None)
         why = run_.departs or tried.detail

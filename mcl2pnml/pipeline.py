@@ -413,7 +413,8 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
 MAX_COUNTEREXAMPLES = 100
 
 
-def witnesses(mission: Path, net: Net, verdicts, most: int | None = None) -> list:
+def witnesses(mission: Path, net: Net, verdicts, most: int | None = None,
+              timing: "Assumptions | None" = None) -> list:
     """For each verdict, its :class:`~mcl2pnml.counterexample.Witness` when it fails
     (the counterexample in the mission's terms, the vehicle script that replays a violation
     on both engines, or why none does), else None. ``net`` is ``mission``'s compiled net.
@@ -427,7 +428,7 @@ def witnesses(mission: Path, net: Net, verdicts, most: int | None = None) -> lis
             out.append(None)
             continue
         out.append(witness(net, checked, v.property, v.transitions, shape=v.shape.value,
-                           loop=v.loop))
+                           loop=v.loop, timing=timing))
         left = None if left is None else left - 1
     return out
 

@@ -48,7 +48,8 @@ def semantics(net: Net, assumptions: Assumptions) -> TimedNet:
 
 def ends_property() -> Property:
     """"An end is always reached": one of the results, eventually, on every run."""
-    return Property("AlwaysEnds", Pattern.EXISTENCE, Tokens(ENDS, 1), scope=Scope(ScopeKind.GLOBALLY),
+    return Property("AlwaysEnds", Pattern.EXISTENCE, Tokens(ENDS, 1),
+                    scope=Scope(ScopeKind.GLOBALLY),
                     text="eventually outcome(OK) or outcome(FAIL) or outcome(ABORTED)")
 
 
@@ -91,6 +92,8 @@ class TimedEnds:
             latest = "never (a run does not end)" if self.latest is None else \
                 f"{_s(self.latest)} s"
             out.append(f"  end time: earliest {_s(self.earliest)} s, latest {latest}")
+        elif self.always_ends is not None and self.reason:
+            out.append(f"  end time: not computed ({self.reason})")
         return out
 
     def as_json(self) -> dict[str, Any]:
@@ -122,19 +125,21 @@ def ends(net: Net, assumptions: Assumptions = Assumptions(),
     if graph is None:
         return TimedEnds(assumptions, None, False, None, None, (), None, verdict.states,
                          verdict.reason)
-    deadlock = any(graph.waits[s] and not graph.enabled[s] and not graph.markings[s] & _end_mask(graph)
+    ended = _end_mask(graph)
+    deadlock = any(graph.waits[s] and not graph.enabled[s] and not graph.markings[s] & ended
                    for s in range(graph.states))
     if verdict.status == "unknown":
         return TimedEnds(assumptions, None, deadlock, None, None, (), None, graph.states,
                          verdict.reason)
     times = engine.end_times(tn, ENDS, verdict, max_states)
     unit = tn.unit
+    reason = times.reason
     earliest = None if times.earliest is None else times.earliest * unit
     latest = None if times.latest is None else times.latest * unit
     never = None if verdict.status == "holds" else as_verdict(graph, verdict)
     waits = () if never is None else tuple(waiting(graph, verdict))
     return TimedEnds(assumptions, verdict.status == "holds", deadlock, earliest, latest, waits,
-                     never, graph.states, latest_run=times.latest_path)
+                     never, graph.states, reason, latest_run=times.latest_path)
 
 
 def _end_mask(graph: engine.ZoneGraph) -> int:

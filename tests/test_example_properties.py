@@ -4,8 +4,11 @@
 property with why it holds; ``examples/NAME.false.props`` states mistakes
 easily made about the same mission, each with why it is false
 (docs/properties.md). Both are checked here through the facade, as
-``mcl2pnml analyze --properties`` checks them (``pipeline.properties_of``,
-then ``pipeline.check_properties``).
+``mcl2pnml analyze --properties`` checks them: in the time the mission runs in
+(``pipeline.check_properties_timed``, docs/time.md). On the untimed net
+(``--untimed``, ``pipeline.check_properties``) the false ones fail too, and the
+true ones hold, but for those whose comment says they fail on the untimed net,
+and why: the comment is held to the verdict both ways.
 
 The counterexample of each false property is kept as the command prints
 it, in ``tests/data/counterexamples/NAME.PROPNAME.txt``: the lines of that
@@ -45,13 +48,28 @@ def _examples() -> list:
             for m in sorted(EXAMPLES.glob("*.mcl"))]
 
 
+#: What a property's comment says when it holds in time only (docs/time.md).
+UNTIMED_ONLY = "fails on the untimed net"
+
+
 @functools.lru_cache(maxsize=None)
-def _verdicts(name: str, suffix: str) -> tuple:
+def _verdicts(name: str, suffix: str, timed: bool = True) -> tuple:
     """The verdicts of ``examples/NAME.SUFFIX``'s properties (the mission declares none)."""
     mission = EXAMPLES / f"{name}.mcl"
     _, properties = pipeline.properties_of(mission, extra=EXAMPLES / f"{name}{suffix}")
     assert properties and all(p.location.file.endswith(suffix) for p in properties)
-    return tuple(pipeline.check_properties(pipeline.compile_file(mission), properties))
+    net = pipeline.compile_file(mission)
+    check = pipeline.check_properties_timed if timed else pipeline.check_properties
+    return tuple(check(net, properties))
+
+
+def _comment(path: Path, line: int) -> str:
+    """The comment block just above line ``line`` of ``path`` (its ``//`` lines, joined)."""
+    lines = path.read_text().splitlines()[:line - 1]
+    block = []
+    while lines and lines[-1].startswith("//"):
+        block.insert(0, lines.pop()[2:].strip())
+    return " ".join(block)
 
 
 @functools.lru_cache(maxsize=None)
@@ -95,6 +113,17 @@ def test_every_property_of_the_props_file_holds(name):
     assert len(verdicts) >= 3
     assert {v.property.name: v.status for v in verdicts} == \
         {v.property.name: Status.HOLDS for v in verdicts}
+
+
+@pytest.mark.parametrize("name", _examples())
+def test_on_the_untimed_net_exactly_the_ones_said_to_fail_there_do(name):
+    path = EXAMPLES / f"{name}.props"
+    said = {v.property.name for v in _verdicts(name, ".props", False)
+            if UNTIMED_ONLY in _comment(path, v.property.location.line)}
+    assert {v.property.name: v.status for v in _verdicts(name, ".props", False)} == \
+        {v.property.name: Status.FAILS if v.property.name in said else Status.HOLDS
+         for v in _verdicts(name, ".props", False)}
+    assert all(v.status is Status.FAILS for v in _verdicts(name, ".false.props", False))
 
 
 @pytest.mark.parametrize("name", _examples())

@@ -346,25 +346,28 @@ def test_analyze_properties_of_the_papers_mission(tmp_path):
     from helpers import run_cli
 
     sauce = Path(__file__).parent.parent / "examples" / "sauce.mcl"
-    false = sauce.with_name("sauce.false.props")
-    out = run_cli("analyze", str(sauce), "--state-space", "--properties", str(false))
-    assert out.returncode == 1, out.stderr   # Ends fails on the untimed net
+    true = sauce.with_name("sauce.props")
+    # on the untimed net (--untimed) "Ends" fails: a goal lost and regained for ever
+    out = run_cli("analyze", str(sauce), "--untimed", "--state-space", "--properties", str(true))
+    assert out.returncode == 1, out.stderr
     lines = out.stdout.splitlines()
     ends = next(k for k, l in enumerate(lines) if l.startswith("property Ends ("))
-    assert "sauce.false.props:" in lines[ends] and lines[ends].endswith(": fails")
+    assert "sauce.props:" in lines[ends] and lines[ends].endswith(": fails")
     assert lines[ends + 1] == "  counterexample (lasso):" and lines[ends + 2].strip().startswith("1. ")
-    js = json.loads(run_cli("analyze", str(sauce), "--state-space", "--properties", str(false),
-                            "--json").stdout)
+    js = json.loads(run_cli("analyze", str(sauce), "--untimed", "--state-space", "--properties",
+                            str(true), "--json").stdout)
     verdicts = {v["name"]: v for v in js["properties"]}
     assert verdicts["Ends"]["status"] == "fails"
     assert verdicts["Ends"]["counterexample"]["shape"] == "lasso"
-    # without FILE, sauce.props beside the mission: every one holds, exit 0
+    # in time (the default) and without FILE, sauce.props beside the mission: every one
+    # holds, "Ends" too, exit 0
     out = run_cli("analyze", str(sauce), "--state-space", "--properties")
     assert out.returncode == 0, out.stderr
     lines = out.stdout.splitlines()
     assert any(l.startswith("property MarkerOnlyOverCross (") and l.endswith(": holds")
                for l in lines)
-    assert not any(l.startswith("property Ends (") for l in lines)
+    assert any(l.startswith("property Ends (") and l.endswith(": holds") for l in lines)
+    assert lines[0].startswith("timed (docs/time.md): acknowledgements at once")
     # only holding ones: exit 0 (analyze's own state limit is exit 2, as without properties)
     holding = tmp_path / "ok.props"
     holding.write_text("property Never: never outcome(OK) and outcome(FAIL);\n")

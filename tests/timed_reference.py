@@ -18,6 +18,7 @@ class Discrete:
         self.lo = [tn.intervals.get(t, (0, None))[0] for t in s.transitions]
         self.hi = [tn.intervals.get(t, (0, None))[1] for t in s.transitions]
         self.prio = [t in tn.priority for t in s.transitions]
+        self.eager = [t in tn.eager for t in s.transitions]
         self.group = [-1] * self.T
         self.gap = [g for _, g in tn.gaps]
         for k, (members, _) in enumerate(tn.gaps):
@@ -50,7 +51,7 @@ class Discrete:
         and the tick (label None, delay 1)."""
         m, clocks, gaps = state
         en = self.enabled(m)
-        cand = [j for j in en if self.prio[j]] or en
+        cand = [j for j in en if self.prio[j]] or [j for j in en if self.eager[j]] or en
         out = []
         for j in cand:
             if clocks[self.timer[j]] < self.lo[j]:
@@ -97,3 +98,34 @@ class Discrete:
                     seen.add(item)
                     queue.append(item)
         return earliest, latest
+
+    def always_ends(self, ends, limit=500_000) -> bool:
+        """Whether every time-divergent run reaches an end: no cycle of states without an
+        end (time passing on it: a tick) is reachable, waiting for ever included (a tick
+        that changes nothing)."""
+        import networkx as nx
+        idx = [self.s.place_index[p] for p in ends if p in self.s.place_index]
+        start = self.initial()
+        seen = {start: 0}
+        order = [start]
+        g = nx.DiGraph()
+        k = 0
+        while k < len(order):
+            state = order[k]
+            k += 1
+            if any(state[0][i] for i in idx):
+                continue
+            for j, nxt, d in self.moves(state):
+                if nxt not in seen:
+                    if len(seen) > limit:
+                        raise RuntimeError(f"more than {limit:,} discrete states")
+                    seen[nxt] = len(order)
+                    order.append(nxt)
+                if not any(nxt[0][i] for i in idx):
+                    a, b = seen[state], seen[nxt]
+                    g.add_edge(a, b, tick=(g.get_edge_data(a, b, {}).get("tick", False) or d > 0))
+        for comp in nx.strongly_connected_components(g):
+            sub = g.subgraph(comp)
+            if any(d["tick"] for _, _, d in sub.edges(data=True)):
+                return False
+        return True

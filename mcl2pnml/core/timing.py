@@ -14,6 +14,10 @@ Peres and Vernadat's priorities), with two additions a vehicle needs:
 * ``priority``: transitions that, while one of them is enabled, are the only
   ones that may fire (the supervisor's steps: the engines take every step
   they can before anything else happens);
+* ``eager``: transitions that come next, after the priority ones: while one
+  is enabled (and no priority transition is), only they may fire (the
+  vehicle's acknowledgements at once, taken before any other vehicle event of
+  their instant, as the engines take a scripted vehicle's);
 * ``gaps``: groups of transitions whose firings are at least a number of
   units apart (a primitive's reports: no vehicle reports infinitely often
   in one instant), the first one of a group at any time;
@@ -119,6 +123,7 @@ class TimedNet:
     names: Mapping[str, str] = field(default_factory=dict)
     """What each gap or fairness group stands for (a primitive's name), by its first member."""
     shared: tuple[frozenset[str], ...] = ()
+    eager: frozenset[str] = frozenset()
 
     def seconds(self, units: int | float) -> Fraction | float:
         return units * self.unit if not isinstance(units, float) else units * float(self.unit)
@@ -140,7 +145,9 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
       seconds after it became enabled: after the task started and its
       primitives acknowledged ``on`` (the read arc on ``ON``), as both engines
       start its timer;
-    * an acknowledgement (``on``, ``off``) within ``ack_within`` of its request;
+    * an acknowledgement (``on``, ``off``) within ``ack_within`` of its request
+      (one clock for a primitive's three ``off`` transitions); at once, it comes
+      before any report or time-out of its instant (``eager``);
     * a report (``achieved``, ``failed``) at any time, a primitive's at least
       ``report_gap`` apart; with ``fair``, the first report after an enabling
       (a transition out of the primitive's ``C``) eventually;
@@ -159,7 +166,7 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
         return int(Fraction(x).limit_denominator(10 ** 9) / unit)
 
     intervals: dict[str, tuple[int, int | None]] = {}
-    priority, reports, first, offs = set(), {}, {}, {}
+    priority, reports, first, offs, eager = set(), {}, {}, {}, set()
     pre = net.pre
     for t in net.transitions:
         event = read_transition(t).event
@@ -171,6 +178,8 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
             priority.add(t.id)
         elif event.kind in (EventKind.ON, EventKind.OFF):
             intervals[t.id] = (0, units(assumptions.ack_within))
+            if assumptions.ack_within == 0:
+                eager.add(t.id)
             if event.kind is EventKind.OFF:
                 offs.setdefault(event.primitive or t.id.rsplit(".", 1)[0], []).append(t.id)
         else:
@@ -186,6 +195,7 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
     fair = tuple(frozenset(ts) for _, ts in sorted(first.items())) if assumptions.fair else ()
     names = {min(ts): p for p, ts in list(reports.items()) + list(first.items())}
     shared = tuple(frozenset(ts) for _, ts in sorted(offs.items()) if len(ts) > 1)
-    return TimedNet(net, intervals, frozenset(priority) if assumptions.priority else frozenset(),
-                    gaps, fair, unit, names, shared)
+    first_ = assumptions.priority
+    return TimedNet(net, intervals, frozenset(priority) if first_ else frozenset(),
+                    gaps, fair, unit, names, shared, frozenset(eager) if first_ else frozenset())
 

@@ -22,26 +22,33 @@ urgency and no priorities). It is written in token ages as follows:
 * ``[0, ∞)`` (a report): an ordinary transition;
 * ``[0, 0]`` (a supervisor step; an acknowledgement when they come at once):
   an urgent transition;
-* anything else (a time-out ``[T, T]``, an acknowledgement ``[0, K]``): the
-  transition's clock is a token of its own, in a place ``CLK`` that nothing
-  else reads, made by an urgent transition ``start`` the instant the
-  transition is enabled (it reads the transition's inputs and is inhibited
-  by ``CLK``), and taken by an urgent ``stop`` per input place the instant
-  that place is emptied (inhibited by it). The transition takes the clock
-  token with the guard ``[a, b]``, and ``CLK`` has the invariant ``<= b``:
-  it fires between a and b units after it was enabled, or is disabled
-  before. A token's age in an input place would not do: a time-out reads
-  its primitive's ``ON``, which the vehicle marks up to K seconds after the
-  task's ``EXE``. Urgency alone would let the transition be disabled and
-  enabled again at one instant before ``stop`` took the old clock, so every
-  transition that marks one of its input places (without taking a token
-  from it) is inhibited by ``CLK``: in a 1-safe net such a transition can
-  fire only when that place is empty, so the inhibitor only makes it wait,
-  at the same instant, for ``stop``. The construction needs the places it
-  watches to hold one token at most, as in every compiled mission (the
-  mission's certificate proves it); arcs of weight 2 or more on them, or two
-  initial tokens, are refused, and :func:`safety_query` asks verifydtapn to
-  check the rest;
+* anything else (a time-out ``[T, T]``, an acknowledgement ``[0, K]``): a
+  clock, a token of its own in a place ``CLK`` that nothing else reads, one per
+  transition or per group of :attr:`~mcl2pnml.core.timing.TimedNet.shared`
+  (a disable's three acknowledgements ``off_C``, ``off_S1``, ``off_S2``: one
+  clock, which starts when the first of them becomes enabled and runs while
+  one of them is). An urgent ``start`` per member makes it the instant that
+  member is enabled (it reads the member's inputs and is inhibited by
+  ``CLK``); an urgent ``stop`` takes it the instant no member is enabled, one
+  per way of disabling them all (inhibited by one input place of each
+  member, the minimal sets). A member takes the clock token with the guard
+  ``[a, b]``, and ``CLK`` has the invariant ``<= b``: it fires between a and b
+  units after the clock started, or every member is disabled before; when a
+  member fires and another stays enabled, ``start`` makes a new clock at
+  once, as the semantics restarts it. A token's age in an input place would
+  not do: a time-out reads its primitive's ``ON``, which the vehicle marks up
+  to K seconds after the task's ``EXE``. Urgency alone would let the group be
+  disabled and enabled again at one instant before ``stop`` took the old
+  clock; so a transition that marks a member's input place without taking a
+  token from it (in a 1-safe net it can fire only when that place is empty,
+  that member disabled) is written once inhibited by ``CLK`` (it waits, at
+  the same instant, for ``stop``) and once per other member, reading that
+  member's inputs (``..._while_M``: M is enabled, the clock is not stale and
+  runs on; a report that moves the goal while the disable is pending). The
+  construction needs the places it watches to hold one token at most, as in
+  every compiled mission (the mission's certificate proves it); arcs of
+  weight 2 or more on them, or two initial tokens, are refused, and
+  :func:`safety_query` asks verifydtapn to check the rest;
 * a primitive's reports, at least d units apart: a place ``FIRST`` (one
   token) and a place ``GAP``; each report is written twice, once taking
   ``FIRST`` (the first report of the run, at any time) and once taking
@@ -219,7 +226,6 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
     # per original transition: its arcs here, then what the clocks and gaps add
     inputs: dict[str, list[TArc]] = {}
     urgent: set[str] = set()
-    clocked: dict[str, tuple[str, tuple[int, int | None]]] = {}   # transition -> (CLK, interval)
     for t in net.transitions:
         lo, hi = timed.intervals.get(t.id, (0, None))
         n = name[t.id]
@@ -233,42 +239,15 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
         inputs[t.id] = arcs
         if (lo, hi) == (0, 0):
             urgent.add(t.id)
-        elif (lo, hi) != (0, None):
-            clocked[t.id] = (new(f"CLK_{n}", f"the clock of {t.id}: its age is the time since "
-                                 "it was enabled"), (lo, hi))
-    # the clocks: start, stop, and the producers of the watched places held back
     extra_t: list[TTransition] = []
     extra_a: list[TArc] = []
-    inhibited: dict[str, list[str]] = {t.id: [] for t in net.transitions}
-    producers: dict[str, list[str]] = {}
-    for t in net.transitions:
-        for a in post[t.id]:
-            producers.setdefault(a.target, []).append(t.id)
-    consumes = {t.id: {a.source for a in pre[t.id] if a.kind is ArcKind.NORMAL}
-                for t in net.transitions}
     watched: dict[str, None] = {}
-    for t_id, (clock, (lo, hi)) in clocked.items():
-        places.append(TPlace(clock, 0, hi))
-        start = new(f"start_{name[t_id]}", f"starts the clock of {t_id} when it is enabled")
-        extra_t.append(TTransition(start, urgent=True))
-        extra_a.append(TArc("inhibitor", clock, start))
-        extra_a.append(TArc("output", start, clock))
-        for a in pre[t_id]:
-            p = a.source
-            if a.weight != 1:
-                raise TapnError(f"transition '{t_id}' is timed and takes {a.weight} tokens "
-                                f"from '{p}': its clock is written for places of one token")
-            watched[p] = None
-            extra_a.append(TArc("transport", name[p], name[p], via=start))
-            stop = new(f"stop_{name[t_id]}_{name[p]}",
-                       f"takes the clock of {t_id} when {p} is emptied")
-            extra_t.append(TTransition(stop, urgent=True))
-            extra_a.append(TArc("input", clock, stop))
-            extra_a.append(TArc("inhibitor", name[p], stop))
-            for u in producers.get(p, ()):
-                if u != t_id and p not in consumes[u] and clock not in inhibited[u]:
-                    inhibited[u].append(clock)
-        inputs[t_id].append(TArc("input", clock, name[t_id], guard=(lo, hi)))
+    # per original transition: the clocks it must not restart by mistake, each a list of
+    # the ways it may fire (see _clock)
+    guards: dict[str, list[list[tuple[str, str, list[TArc]]]]] = {t.id: [] for t in net.transitions}
+    for members, (lo, hi) in _timers(net, timed):
+        _clock(net, members, (lo, hi), name, new, places, inputs, extra_t, extra_a, guards,
+               watched)
     for p in watched:
         if net.initial[p] > 1:
             raise TapnError(f"place '{p}' starts with {net.initial[p]} tokens: the clocks of "
@@ -300,6 +279,10 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
             again = new(f"{n}_again", f"{t.id} after an earlier report of its primitive")
             variants = [(n, [TArc("input", first, n)]),
                         (again, [TArc("input", last, again, guard=(gap, None))])]
+        for guard in guards[t.id]:
+            # a clock it must not restart by mistake: each variant once per way of firing
+            variants = [(v if k == 0 else new(f"{v}_{suffix}", f"{t.id} {what}"), own + extra)
+                        for v, own in variants for k, (suffix, what, extra) in enumerate(guard)]
         copies[t.id] = tuple(v for v, _ in variants)
         for v, own in variants:
             transitions.append(TTransition(v, urgent=t.id in urgent))
@@ -309,8 +292,6 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
                 arcs.append(TArc("output", v, name[a.target], weight=a.weight))
             if t.id in gap_of:
                 arcs.append(TArc("output", v, gap_of[t.id][1]))
-            for clock in inhibited[t.id]:
-                arcs.append(TArc("inhibitor", clock, v))
     notes = [f"{net.name or 'net'}: written by mcl2pnml {__version__} for TAPAAL's "
              "verifydtapn (discrete time)",
              f"time unit: {_seconds(timed.unit)} s (every age bound below counts this unit)",
@@ -318,6 +299,115 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
     return TimedArcNet(net.name or "net", tuple(places), tuple(transitions + extra_t),
                        tuple(arcs + extra_a), name, copies, timed.unit, assumptions,
                        tuple(name[p] for p in watched), tuple(notes), added)
+
+
+def _timers(net: Net, timed: TimedNet) -> list[tuple[list[str], tuple[int, int | None]]]:
+    """The clocks to write: one per group of :attr:`TimedNet.shared` and one per other
+    transition whose interval is neither ``[0, 0]`` nor ``[0, inf)``; each as its members
+    (in the net's order) and their interval."""
+    order = {t.id: k for k, t in enumerate(net.transitions)}
+    out, grouped = [], set()
+    for group in timed.shared:
+        members = sorted(group, key=order.__getitem__)
+        spans = {timed.intervals.get(t, (0, None)) for t in members}
+        if len(spans) > 1:
+            raise TapnError("transitions sharing a clock must share their interval: "
+                            + ", ".join(members))
+        (span,) = spans
+        grouped.update(members)
+        if span not in ((0, 0), (0, None)):
+            out.append((members, span))
+    for t in net.transitions:
+        span = timed.intervals.get(t.id, (0, None))
+        if t.id not in grouped and span not in ((0, 0), (0, None)):
+            out.append(([t.id], span))
+    return out
+
+
+#: The most transitions a clock's ``stop`` may need (one per way of disabling every member).
+MAX_STOPS = 64
+
+
+def _clock(net: Net, members: list[str], span: tuple[int, int | None], name: dict, new,
+           places: list, inputs: dict, extra_t: list, extra_a: list, guards: dict,
+           watched: dict) -> None:
+    """One clock shared by ``members`` (see the module's documentation): its place, a
+    ``start`` per member, a ``stop`` per way of disabling them all, each member guarded by
+    it, and the guards of the transitions that could enable a member while a stale clock
+    is still there."""
+    pre, post = net.pre, net.post
+    lo, hi = span
+    single = len(members) == 1
+    label = name[members[0]] if single else _common(name[t] for t in members)
+    what = members[0] if single else ", ".join(members)
+    clock = new(f"CLK_{label}", f"the clock of {what}: its age is the time since "
+                + ("it was" if single else "one of them was first") + " enabled")
+    places.append(TPlace(clock, 0, hi))
+    needs = {}
+    for t_id in members:
+        needs[t_id] = [a.source for a in pre[t_id]]
+        for a in pre[t_id]:
+            if a.weight != 1:
+                raise TapnError(f"transition '{t_id}' is timed and takes {a.weight} tokens "
+                                f"from '{a.source}': its clock is written for places of one "
+                                "token")
+            watched[a.source] = None
+        start = new(f"start_{name[t_id]}", f"starts the clock of {t_id} when it is enabled"
+                    + ("" if single else " and no other of its clock is"))
+        extra_t.append(TTransition(start, urgent=True))
+        extra_a.append(TArc("inhibitor", clock, start))
+        extra_a.append(TArc("output", start, clock))
+        for p in needs[t_id]:
+            extra_a.append(TArc("transport", name[p], name[p], via=start))
+        inputs[t_id].append(TArc("input", clock, name[t_id], guard=(lo, hi)))
+    # stop: every member disabled, by one empty input place each (minimal sets only)
+    ways: list[frozenset[str]] = [frozenset()]
+    for t_id in members:
+        ways = list({w | {p} for w in ways for p in needs[t_id]})
+        ways = [w for w in ways if not any(o < w for o in ways)]
+        if len(ways) > MAX_STOPS:
+            raise TapnError(f"the clock shared by {what} needs more than {MAX_STOPS} "
+                            "transitions to stop")
+    for way in sorted(ways, key=sorted):
+        empty = sorted(way)
+        stop = new(f"stop_{label}_" + "_".join(name[p] for p in empty),
+                   f"takes the clock of {what} when " + " and ".join(empty)
+                   + (" is" if len(empty) == 1 else " are") + " emptied")
+        extra_t.append(TTransition(stop, urgent=True))
+        extra_a.append(TArc("input", clock, stop))
+        extra_a.extend(TArc("inhibitor", name[p], stop) for p in empty)
+    # a transition that marks a member's input place without taking a token from it can
+    # fire only when that place is empty (the net is 1-safe): that member is disabled.
+    # Unless another member is enabled, the clock is then stale (stop takes it at this
+    # instant): it waits for stop, or it fires while another member is enabled (the clock
+    # runs on, the group stays enabled before it)
+    for u in net.transitions:
+        if u.id in members:
+            continue
+        taken = {a.source for a in pre[u.id]}
+        made = {a.target for a in post[u.id]} - {a.source for a in pre[u.id]
+                                                  if a.kind is ArcKind.NORMAL}
+        if not any(made & set(needs[t_id]) for t_id in members):
+            continue
+        ways_u = [("", "", [TArc("inhibitor", clock, name[u.id])])]
+        for t_id in members if not single else ():
+            if made & set(needs[t_id]):
+                continue     # it cannot be enabled when u fires
+            reads = [p for p in needs[t_id] if p not in taken]
+            ways_u.append((f"while_{name[t_id]}", f"while {t_id} is enabled (the clock of "
+                           f"{what} runs on)",
+                           [TArc("transport", name[p], name[p], via=name[u.id]) for p in reads]))
+        guards[u.id].append(ways_u)
+
+
+def _common(names) -> str:
+    """The longest common prefix of ``names``, without a trailing ``_``."""
+    names = list(names)
+    prefix = names[0]
+    for n in names[1:]:
+        while not n.startswith(prefix):
+            prefix = prefix[:-1]
+    return prefix.rstrip("_") or "shared"
 
 
 # -- writing -------------------------------------------------------------------------------
