@@ -94,7 +94,7 @@ class Discrete:
                 item = (nxt, t + d)
                 if item not in seen:
                     if len(seen) > limit:
-                        return earliest, None
+                        raise RuntimeError(f"more than {limit:,} discrete states")
                     seen.add(item)
                     queue.append(item)
         return earliest, latest
