@@ -703,7 +703,9 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
     if not bounded:
         return EndTimes(earliest, None, always, graph.states)
     if any(lt is None for _, _, _, lt in graph.ends):
-        raise Mcl2PnmlError("an end with no upper bound on its time, though every run ends")
+        # every run ends (fairness: a report comes eventually), but not by any bound
+        return EndTimes(earliest, None, None, graph.states,
+                        reason="no bound: a report that comes eventually may come at any time")
     state, last, _, latest = max(graph.ends, key=lambda e: e[3])
     trans, nodes = [graph.transitions[last]], [state]
     while graph.parent[nodes[-1]] is not None:

@@ -89,8 +89,9 @@ class TimedEnds:
         if self.deadlock:
             out.append("  a state with nothing left to happen and no result: yes (a stall)")
         if self.earliest is not None:
-            latest = "never (a run does not end)" if self.latest is None else \
-                f"{_s(self.latest)} s"
+            latest = (f"{_s(self.latest)} s" if self.latest is not None else
+                      f"unbounded ({self.reason})" if self.always_ends else
+                      "never (a run does not end)")
             out.append(f"  end time: earliest {_s(self.earliest)} s, latest {latest}")
         elif self.always_ends is not None and self.reason:
             out.append(f"  end time: not computed ({self.reason})")
