@@ -147,3 +147,23 @@ def everything() -> Net:
     b.arc("heap", "t_window", 3)
     b.arc("t_window", "B")
     return b.build()
+
+
+#: What a property's comment says when it holds in time only (docs/time.md).
+UNTIMED_ONLY = "fails on the untimed net"
+
+
+def untimed_only(props: Path) -> set[str]:
+    """The properties of ``props`` whose comment (the ``//`` lines just above them) says
+    they fail on the untimed net: they hold in the time the mission runs in only."""
+    import re
+    names, block = set(), []
+    for line in props.read_text().splitlines():
+        if line.startswith("//"):
+            block.append(line[2:].strip())
+            continue
+        found = re.match(r"property\s+(\w+)\s*:", line)
+        if found and UNTIMED_ONLY in " ".join(block):
+            names.add(found.group(1))
+        block = []
+    return names

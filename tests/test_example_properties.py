@@ -21,8 +21,8 @@ command, then review the diff:
     MCL2PNML_REGOLD=1 .venv/bin/python -m pytest tests/test_example_properties.py -m 'slow or not slow'
 
 dam_inspection's state space (197,331 markings; some 15 s for both its
-files) puts its cases behind the ``slow`` marker; the others take a few
-seconds together.
+files) and sampling's zones in time (490,000, some 35 s a file) put their
+cases behind the ``slow`` marker; the others take a few seconds together.
 """
 from __future__ import annotations
 
@@ -35,21 +35,18 @@ import pytest
 from analysis.properties import Status
 from mcl2pnml import pipeline
 
-from helpers import DATA, ROOT, assert_golden
+from helpers import DATA, ROOT, assert_golden, untimed_only
 
 EXAMPLES = ROOT / "examples"
 COUNTEREXAMPLES = DATA / "counterexamples"
-#: The examples whose properties take more than a few seconds to check.
-SLOW = {"dam_inspection"}
+#: The examples whose properties take more than a few seconds to check (sampling: its
+#: sampling loop beside a 600 s leg gives 490,000 zones in time, some 35 s a file).
+SLOW = {"dam_inspection", "sampling"}
 
 
 def _examples() -> list:
     return [pytest.param(m.stem, marks=[pytest.mark.slow] if m.stem in SLOW else [], id=m.stem)
             for m in sorted(EXAMPLES.glob("*.mcl"))]
-
-
-#: What a property's comment says when it holds in time only (docs/time.md).
-UNTIMED_ONLY = "fails on the untimed net"
 
 
 @functools.lru_cache(maxsize=None)
@@ -63,13 +60,7 @@ def _verdicts(name: str, suffix: str, timed: bool = True) -> tuple:
     return tuple(check(net, properties))
 
 
-def _comment(path: Path, line: int) -> str:
-    """The comment block just above line ``line`` of ``path`` (its ``//`` lines, joined)."""
-    lines = path.read_text().splitlines()[:line - 1]
-    block = []
-    while lines and lines[-1].startswith("//"):
-        block.insert(0, lines.pop()[2:].strip())
-    return " ".join(block)
+
 
 
 @functools.lru_cache(maxsize=None)
@@ -117,9 +108,7 @@ def test_every_property_of_the_props_file_holds(name):
 
 @pytest.mark.parametrize("name", _examples())
 def test_on_the_untimed_net_exactly_the_ones_said_to_fail_there_do(name):
-    path = EXAMPLES / f"{name}.props"
-    said = {v.property.name for v in _verdicts(name, ".props", False)
-            if UNTIMED_ONLY in _comment(path, v.property.location.line)}
+    said = untimed_only(EXAMPLES / f"{name}.props")
     assert {v.property.name: v.status for v in _verdicts(name, ".props", False)} == \
         {v.property.name: Status.FAILS if v.property.name in said else Status.HOLDS
          for v in _verdicts(name, ".props", False)}
