@@ -9,8 +9,8 @@ another (no two at once), each a fresh process under GNU ``time`` (wall-clock
 seconds, the whole process's peak resident memory in MiB), one run each:
 
 * ours, the command a user runs: ``mcl2pnml analyze MISSION --timed`` (start-up,
-  compiling, the untimed analysis ``analyze`` always prints, then whether every
-  run ends and the earliest and latest end times), in our default semantics
+  compiling, the zone graph, whether every run ends and the earliest and latest
+  end times), in our default semantics
   (the supervisor's steps first at their instant) and with ``--urgency-only``
   (the supervisor's steps urgent only: verifydtapn's semantics, the one its
   verdict is compared with);
@@ -157,8 +157,8 @@ def section(names: list[str] = (), timeout: float = TIMEOUT, log=lambda text: No
     return ["## Timed verdicts: ours, verifydtapn", "",
             f"Measured {datetime.date.today().isoformat()}, one process at a time, one run "
             "each (`python -m bench.timed_peers`). Ours: `mcl2pnml analyze MISSION --timed`, "
-            "the command a user runs (start-up, compiling, the untimed analysis it always "
-            "prints, then \"an end is always reached\" and the end times), in our semantics "
+            "the command a user runs (start-up, compiling, the zone graph, then \"an end is "
+            "always reached\" and the end times), in our semantics "
             "(the supervisor's steps first at their instant) and with `--urgency-only` "
             "(verifydtapn's: urgent only). verifydtapn: `verifydtapn -k K MISSION.tapn "
             "MISSION.ends.q` on what `mcl2pnml compile MISSION --format tapn` writes, K the "

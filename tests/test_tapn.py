@@ -485,23 +485,23 @@ def _generated(tmp_path_factory, source, assumptions=AT_ONCE, max_states=1_000_0
 
 
 @seed(7)
-@settings(max_examples=15, deadline=None, database=None,
+@settings(max_examples=150, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(source=SMALL)
 def test_verifydtapn_on_generated_missions(tmp_path_factory, source):
     """Small generated missions: verifydtapn gives a verdict on "an end is always reached"
     (a time-out bounds every task of some; others may wait for ever for a report), held to
-    our own checker where it exists (which takes most of the time: fifteen here, fifty in
-    the slow variant)."""
+    our own checker (a hundred and fifty here, two thousand larger ones in the slow
+    variant)."""
     _generated(tmp_path_factory, source)
 
 
 @pytest.mark.slow
 @seed(7)
-@settings(max_examples=50, deadline=None, database=None,
+@settings(max_examples=2000, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
-@given(source=SMALL)
-def test_verifydtapn_on_fifty_generated_missions(tmp_path_factory, source):
+@given(source=missions(depth=2, width=2, function_depth=0))
+def test_verifydtapn_on_two_thousand_generated_missions(tmp_path_factory, source):
     _generated(tmp_path_factory, source)
 
 
