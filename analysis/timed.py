@@ -50,11 +50,10 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
-from fractions import Fraction
 from typing import Callable, Iterable, Sequence
 
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.core.properties import Predicate, Property, places_of
+from mcl2pnml.core.properties import Property, places_of
 from mcl2pnml.core.structure import structure
 from mcl2pnml.core.timing import TimedNet
 
@@ -167,7 +166,7 @@ class TimedLimit(Mcl2PnmlError):
 
 def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
                ends: Iterable[str] | None = None, earliest_only: bool = False,
-               progress: Callable[[int], None] | None = None) -> ZoneGraph:
+               progress: Callable[[int, int], None] | None = None) -> ZoneGraph:
     """The zone graph of ``tn`` from its initial marking (see the module's documentation).
 
     ``ends``: places of which any marked is an end; given, the graph stops at
@@ -178,7 +177,7 @@ def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
     """
     net = tn.net
     s = structure(net)
-    P, T = len(s.places), len(s.transitions)
+    T = len(s.transitions)
     for p, n in enumerate(s.initial_vector()):
         if n > 1:
             raise Mcl2PnmlError(f"timed analysis needs a safe net: '{s.places[p]}' holds "
@@ -480,7 +479,7 @@ class TimedVerdict:
 
 def check(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     """``prop`` on every time-divergent run of ``graph`` (see the module's documentation)."""
-    from analysis.properties import BAD, _Observers, _truths
+    from analysis.properties import _Observers, _truths
 
     from mcl2pnml.core.properties import holds
     obs = _Observers(prop)
