@@ -69,7 +69,7 @@ IDS = ["defaults", "gap2", "ack1", "urgency", "ack2-gap3-urgency"]
 
 
 @pytest.mark.parametrize("assumptions", [pytest.param(a, id=i, marks=[pytest.mark.slow]
-                                                      if i in ("ack1", "urgency",
+                                                      if i in ("gap2", "ack1", "urgency",
                                                                "ack2-gap3-urgency")
                                                       else []) for a, i in zip(ASSUMED, IDS)])
 def test_the_zone_graph_agrees_with_one_state_per_second_on_the_papers_mission(assumptions,
