@@ -479,7 +479,7 @@ class TimedVerdict:
 
 def check(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     """``prop`` on every time-divergent run of ``graph`` (see the module's documentation)."""
-    from analysis.properties import _Observers, _truths
+    from analysis.properties import _Observers, _path, _truths
 
     from mcl2pnml.core.properties import holds
     obs = _Observers(prop)
@@ -522,7 +522,7 @@ def check(graph: ZoneGraph, prop: Property) -> TimedVerdict:
         succ[node] = nxt
     if best is not None:
         shape, node = best
-        trans, path = _back(parent, node)
+        path, trans = _path(parent, node)
         return TimedVerdict(prop, "fails", tuple(graph.transitions[t] for t in trans), shape,
                             states=len(parent), path=tuple(z for z, _ in path))
     lasso = _lasso(graph, order, succ, lambda o: o != obs.bad and obs.pending[o])
@@ -531,7 +531,7 @@ def check(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     if lasso is None:
         return TimedVerdict(prop, "holds", states=len(parent))
     entry, cycle = lasso
-    trans, path = _back(parent, entry)
+    path, trans = _path(parent, entry)
     loop = len(trans)
     nodes = [z for z, _ in path]
     for child, t in cycle:
@@ -546,15 +546,6 @@ def _places_of_preds(preds) -> set[str]:
     for x in preds:
         out |= set(places_of(x))
     return out
-
-
-def _back(parent, node):
-    nodes, trans = [node], []
-    while parent[node] is not None:
-        node, t = parent[node]
-        nodes.append(node)
-        trans.append(t)
-    return trans[::-1], nodes[::-1]
 
 
 def _fair_wait(graph: ZoneGraph, z: int) -> bool:
