@@ -31,7 +31,7 @@ system-deps:
 $(STAMP): pyproject.toml analysis/_native.c
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,mavlink]'
 	touch $(STAMP)
 
 setup: system-deps $(STAMP)

@@ -21,7 +21,7 @@ import re
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, read_text
@@ -70,6 +70,14 @@ class VehicleInputError(Mcl2PnmlError):
 
 class LinkLost(Exception):
     """The link to the vehicle closed or broke: nothing more can be sent or received."""
+
+
+class VehicleFault(Exception):
+    """The vehicle cannot go on (an autopilot that refuses to arm, that reboots...).
+
+    Its message is the run's diagnosis, as it stands: the run ends STALLED,
+    with its safe stop.
+    """
 
 
 @dataclass(frozen=True)
@@ -190,6 +198,15 @@ class LiveVehicle(ABC):
     @abstractmethod
     def wait_event(self, timeout: float | None, clock) -> Event | None:
         """The next event, stamped ``clock()`` on arrival; None after ``timeout`` seconds."""
+
+    #: The vehicle's own clock, where it keeps one (an autopilot's): the run's time
+    #: is then its seconds, not the wall clock's (None: the wall clock).
+    clock: Callable[[], float] | None = None
+
+    def secure(self, t: float) -> list[str]:
+        """After the safe stop's disables: bring the vehicle to a safe state (hold,
+        surface, disarm...), each step in words, acknowledged or not (default: none)."""
+        return []
 
 
 # ---------------------------------------------------------------------------

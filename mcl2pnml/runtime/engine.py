@@ -27,7 +27,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from mcl2pnml.runtime.aal import (Action, ActionKind, Event, LinkLost, SafeStop, Vehicle, VehicleInputError,
+from mcl2pnml.runtime.aal import (Action, ActionKind, Event, LinkLost, SafeStop, Vehicle, VehicleFault, VehicleInputError,
                   _time, canonical_trace, causal_order)
 
 
@@ -169,6 +169,8 @@ class Run:
     waiting: list[str] = field(default_factory=list)
     #: the disables the run loop sent at the end to primitives still enabled
     safe_stop: list[SafeStop] = field(default_factory=list)
+    #: then the vehicle's safe state, step by step (an autopilot's hold, surface, disarm)
+    secured: list[str] = field(default_factory=list)
 
     def as_json(self) -> dict[str, Any]:
         """The object of ``mcl2pnml run --json`` (cli.md), with ``safe_stop`` when there was one."""
@@ -176,6 +178,8 @@ class Run:
                "trace": canonical_trace(self.entries)}
         if self.safe_stop:
             out["safe_stop"] = [a.as_json() for a in self.safe_stop]
+        if self.secured:
+            out["safe_state"] = list(self.secured)
         return out
 
     def report(self) -> list[str]:
@@ -184,6 +188,7 @@ class Run:
         lines += [f"  {line}" for line in self.waiting]
         if self.safe_stop:
             lines.append("  safe stop: disabled " + ", ".join(a.primitive for a in self.safe_stop))
+        lines += [f"  safe state: {line}" for line in self.secured]
         return lines
 
 
@@ -205,6 +210,7 @@ class _Driver:
         self.entries: list[Action | Event] = []
         self.enabled: dict[str, None] = {}      # insertion-ordered set
         self.fault: str | None = None           # what the vehicle or its link did wrong
+        self.secured: list[str] = []            # the vehicle's safe state, step by step
 
     def deliver(self, actions: list[Action]) -> None:
         """Record and send the actions one stimulus caused, in causal order (the trace's)."""
@@ -235,6 +241,8 @@ class _Driver:
         except Exception as e:      # an adapter's own error, whatever its type
             if isinstance(e, LinkLost):
                 self.fault = f"the link to the vehicle was lost ({what}): {e}"
+            elif isinstance(e, VehicleFault):
+                self.fault = str(e)
             else:
                 self.fault = f"the vehicle failed to carry out {what}: {type(e).__name__}: {e}"
             raise _Fault from None
@@ -253,7 +261,7 @@ class _Driver:
             waiting = ([self.fault] if self.fault else []) + (note or []) \
                 + self.engine.waiting()
         return Run(outcome, t, self.entries, list(self.engine.ignored), waiting + failed,
-                   stopped)
+                   stopped, self.secured)
 
     def safe_stop(self, t: float) -> tuple[list[SafeStop], list[str]]:
         """Disable every primitive still enabled; the ones that could not be, in words."""
@@ -269,6 +277,12 @@ class _Driver:
         for action in stopped:      # logged after: a failing log must not keep the vehicle going
             if self.listener:
                 self.listener(action)
+        secure = getattr(self.vehicle, "secure", None)
+        if secure is not None and not self.secured:
+            try:
+                self.secured = secure(t)
+            except Exception as e:   # an adapter's own failure: say it, the run still ends
+                self.secured = [f"could not be reached: {type(e).__name__}: {e}"]
         return stopped, failed
 
 
@@ -330,9 +344,13 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
     """
     import time
 
-    clock = clock or time.monotonic
-    start = clock()
-    now = lambda: clock() - start    # noqa: E731
+    own = getattr(vehicle, "clock", None)
+    if clock is None and own is not None:
+        now = own       # the vehicle's own clock (an autopilot's): its seconds are the run's
+    else:
+        clock = clock or time.monotonic
+        start = clock()
+        now = lambda: clock() - start    # noqa: E731
     d = _Driver(engine, vehicle, listener)
     try:
         d.deliver(engine.start(0.0))

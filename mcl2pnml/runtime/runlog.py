@@ -13,7 +13,11 @@ The JSON-lines log has the same entries as objects (``{"t": 30, "event":
 tool can follow a run while it happens or replay it after. The safe stop
 at the end of a run (docs/faults.md) is logged as ``safe-stop`` lines
 (``"safe_stop": true`` in JSON), and the run's end as ``{"t": ...,
-"outcome": ...}``. The journal of :mod:`mcl2pnml.runtime.journal` is this log,
+"outcome": ...}``. An autopilot (docs/ardusub.md) adds its own lines: what
+it says and is told (``autopilot``), the safe state it is brought to
+(``safe-state``), its track and the markers dropped (JSON only), and each
+achieved or failed says who judged it (``"source"``: the autopilot's
+telemetry or a simulated sensor). The journal of :mod:`mcl2pnml.runtime.journal` is this log,
 written a flushed line at a time.
 """
 from __future__ import annotations
@@ -61,8 +65,21 @@ class RunLog:
                 what += f"({_args(entry.args)})"
             self._line(entry.t, "action", what, entry.as_json())
         else:
-            self._line(entry.t, "event", f"{entry.kind.value:<9} {entry.primitive}",
-                       entry.as_json())
+            obj, what = entry.as_json(), f"{entry.kind.value:<9} {entry.primitive}"
+            source = getattr(entry, "source", None)
+            if source:      # who judged it: the autopilot, or a simulated sensor
+                obj.update(source=source, why=entry.why)
+                what += f"  ({source}: {entry.why})"
+            self._line(entry.t, "event", what, obj)
+
+    def vehicle(self, t: float, kind: str, text: str, obj: dict[str, Any]) -> None:
+        """A line of the vehicle's own: what the autopilot says and is told, its safe
+        state; its track and markers (JSON only: the live log stays readable)."""
+        obj = {"t": _time(t), **obj}
+        if text:
+            self._line(t, kind, text, obj)
+        else:
+            self._json(obj)
 
     def fired(self, t: float, transition: str) -> None:
         if self.text is not None and self.transitions:

@@ -231,6 +231,8 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
         seen = len(engine.ignored)
 
     if kind.realtime:
+        if hasattr(vehicle, "log"):     # an autopilot's own lines: what it says, its track
+            vehicle.log = log.vehicle
         vehicle.open()              # connect only now: the mission and mapping are checked
         try:
             result = run_realtime(engine, vehicle, listener=listener, max_time=options.max_time)

@@ -57,6 +57,28 @@ def _bridge(spec: str, connect: str | None, world: Path | None,
     return MappedVehicle(VehicleMapping.load(spec[len("bridge:"):]), transport)
 
 
+def _mavlink(spec: str, connect: str | None, world: Path | None,
+             link: LinkOptions) -> LiveVehicle:
+    """An autopilot over MAVLink; its address and mapping are checked, not yet connected."""
+    from mcl2pnml.runtime.autopilot import AutopilotMapping
+    from mcl2pnml.runtime.mavlink import MavlinkVehicle
+    from mcl2pnml.runtime.simulator import World
+    if connect is None:
+        raise OptionError("--connect", "an autopilot needs --connect tcp:HOST:PORT (or "
+                                       "udp:HOST:PORT, serial:DEVICE[:BAUD]); ArduSub's "
+                                       "simulator serves tcp:127.0.0.1:5760")
+    if link.secret or link.tls_ca or link.tls_cert or link.tls_key:
+        raise OptionError("--secret" if link.secret else "--tls-ca",
+                          "the bridge's link takes a secret and TLS; MAVLink does not")
+    path = _mapping_path(spec)
+    mapping = AutopilotMapping.load(path) if path else AutopilotMapping.ardusub()
+    return MavlinkVehicle(connect, mapping, World.load(world) if world else World(), link)
+
+
+def _mapping_path(spec: str) -> Path | None:
+    return Path(spec[len("mavlink:"):]) if spec.startswith("mavlink:") else None
+
+
 def _script(spec: str, connect: str | None, world: Path | None,
             link: LinkOptions) -> Vehicle:
     from mcl2pnml.runtime.aal import ScriptedVehicle
@@ -64,12 +86,16 @@ def _script(spec: str, connect: str | None, world: Path | None,
 
 
 #: Every kind of vehicle, the first that matches wins: the kinematic AUV
-#: simulator, a real vehicle through a mapping file and a bridge server, and
+#: simulator, a real vehicle through a mapping file and a bridge server, an
+#: autopilot over MAVLink (ArduSub, docs/ardusub.md), and
 #: (whatever else is given) a vehicle script of shared/spec/cli.md.
 VEHICLES: tuple[VehicleKind, ...] = (
     VehicleKind("sim", lambda spec: spec == "sim", _simulator, takes_world=True),
     VehicleKind("bridge:MAPPING.json", lambda spec: spec.startswith("bridge:"), _bridge,
                 realtime=True),
+    VehicleKind("mavlink[:MAPPING.json]",
+                lambda spec: spec == "mavlink" or spec.startswith("mavlink:"), _mavlink,
+                realtime=True, takes_world=True, source=_mapping_path),
     VehicleKind("SCRIPT.json", lambda spec: True, _script, source=Path),
 )
 

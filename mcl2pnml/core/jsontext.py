@@ -1,0 +1,81 @@
+"""Where a value stands in a JSON text: a JSON path to a line and a column.
+
+A configuration file of ours (a world, a mapping) is parsed by Python's
+``json`` and checked on the parsed value, but a fault must be shown where
+the user wrote it. :func:`locator` walks a text that has parsed already,
+as JSON reads it, and records where each value starts, by its path (keys
+and indices from the root); a key given twice is located where JSON takes
+it, the last time.
+"""
+from __future__ import annotations
+
+import json
+from typing import Callable, Iterable
+
+from mcl2pnml.core.errors import Location
+
+_BLANK = " \t\r\n"
+_DECODER = json.JSONDecoder()
+
+Path = tuple  # keys (str) and indices (int) from the root
+
+
+def offsets(text: str) -> dict[Path, int]:
+    """The offset in ``text`` where each value starts, by its path; ``text`` is valid JSON."""
+    found: dict[Path, int] = {}
+    # an explicit stack, not recursion: a file nested thousands deep has parsed
+    # (Python's json recurses in C) and must not overflow here
+    stack: list[tuple[Path, int]] = [((), _skip(text, 0))]
+    while stack:
+        path, i = stack.pop()
+        found[path] = i
+        if text[i] not in "{[":
+            continue
+        children = []
+        opening, closing = text[i], "}" if text[i] == "{" else "]"
+        i = _skip(text, i + 1)
+        index = 0
+        while text[i] != closing:
+            if opening == "{":
+                key, i = json.decoder.scanstring(text, i + 1)
+                i = _skip(text, i, _BLANK + ":")
+                child: Path = path + (key,)
+            else:
+                child, index = path + (index,), index + 1
+            children.append((child, i))
+            _, i = _DECODER.raw_decode(text, i)
+            i = _skip(text, i, _BLANK + ",")
+        stack.extend(reversed(children))
+    return found
+
+
+def _skip(text: str, i: int, chars: str = _BLANK) -> int:
+    while i < len(text) and text[i] in chars:
+        i += 1
+    return i
+
+
+def locator(text: str, filename: str) -> Callable[[Iterable], Location]:
+    """``where(path)``: the location of the value at ``path`` (its nearest located ancestor's)."""
+    starts = offsets(text)
+    lines = text.split("\n")
+
+    def where(path: Iterable) -> Location:
+        path = tuple(path)
+        while path not in starts and path:
+            path = path[:-1]
+        at = starts.get(path)
+        if at is None:
+            return Location(filename)
+        line = text.count("\n", 0, at)
+        column = at - (text.rfind("\n", 0, at) + 1) + 1
+        return Location(filename, line + 1, column, lines[line][:400])
+    return where
+
+
+def dotted(path: Iterable) -> str:
+    """A JSON path as the messages write it: ``primitives.KeepDepth.band``, ``safe_state[1]``."""
+    out = ""
+    for part in path:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "the file"

@@ -1,0 +1,191 @@
+"""Binding a mission's primitives to an autopilot: the autopilot mapping file.
+
+A MAVLink autopilot (ArduSub: docs/ardusub.md) does not know MCL's
+primitives; it holds a mode, a position target, servo outputs. The mapping
+file says, per primitive, who carries it out (section 2.1: the primitives
+live on the vehicle's side of the abstraction layer):
+
+* ``"by": "autopilot"``: flown. The primitive's set points (a point, a depth,
+  a heading: what the simulated primitive of the same name asks,
+  :mod:`mcl2pnml.runtime.simprims`) become one GUIDED position target,
+  composed from every enabled primitive by the simulator's rule: each channel
+  follows the enabled primitive of highest priority that sets it, ties by
+  name; a channel nobody sets holds where the vehicle was when it was let go.
+  Its goal is judged as the simulator judges it, on the autopilot's own
+  position (a tolerance band held for a settle time, lost when out of it for
+  longer than a loss time); it fails when the autopilot leaves GUIDED,
+  disarms, or has had no position for ``position_lost_after`` seconds.
+* ``"by": "servo"``: an actuator, ``MAV_CMD_DO_SET_SERVO`` to ``pwm`` on
+  ``channel`` (``release_pwm`` when disabled); ``"by": "relay"``:
+  ``MAV_CMD_DO_SET_RELAY``. Failed when the autopilot refuses the command
+  or does not acknowledge it within ``ack_within``; once accepted, achieved
+  as the simulated primitive says (after its world delay).
+* ``"by": "simulated"``: a payload sensor the autopilot does not have
+  (a camera that sees the cross, a plume detector...), simulated from the
+  world file against the autopilot's own position. The log says so.
+
+Every bound (how long to wait for a position, an acknowledgement, the
+surface) and the safe state a run ends in are settings of the file,
+checked as the world file's are: one message at the setting's line and
+column. The package's own mapping, for ArduSub, is ``ardusub.json`` beside
+this module (``--vehicle mavlink``).
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.files import json_fault, read_text
+from mcl2pnml.core.jsontext import dotted, locator
+
+#: The largest mapping file read, in bytes.
+MAX_MAPPING = 1 << 20
+#: The steps of the safe state, in the only order they make sense in.
+SAFE_STEPS = ("hold", "surface", "disarm")
+#: Who carries out a primitive.
+BY = ("autopilot", "servo", "relay", "simulated")
+
+
+def _seconds(low: float, high: float) -> dict[str, Any]:
+    return {"type": "number", "minimum": low, "maximum": high}
+
+
+_BINDING = {
+    "autopilot": {"settle": _seconds(0, 600), "lost_after": _seconds(0, 3600),
+                  "tolerance": {"type": "number", "exclusiveMinimum": 0, "maximum": 1000}},
+    "servo": {"channel": {"type": "integer", "minimum": 1, "maximum": 32},
+              "pwm": {"type": "integer", "minimum": 500, "maximum": 2500},
+              "release_pwm": {"type": "integer", "minimum": 500, "maximum": 2500}},
+    "relay": {"relay": {"type": "integer", "minimum": 0, "maximum": 15}},
+    "simulated": {},
+}
+_REQUIRED = {"servo": ["channel", "pwm"], "relay": ["relay"]}
+
+#: The file's JSON Schema; each binding is checked against its kind's after.
+SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "required": ["primitives"],
+    "additionalProperties": False,
+    "properties": {
+        "autopilot": {"type": "string", "maxLength": 200},
+        "home": {"type": "array", "minItems": 2, "maxItems": 2,
+                 "items": {"type": "number", "minimum": -1e6, "maximum": 1e6}},
+        "ready_within": _seconds(1, 3600),
+        "ack_within": _seconds(0.1, 600),
+        "position_lost_after": _seconds(0, 3600),
+        "telemetry_rate": {"type": "number", "minimum": 1, "maximum": 50},
+        "safe_state": {"type": "array", "maxItems": 3, "uniqueItems": True,
+                       "items": {"enum": list(SAFE_STEPS)}},
+        "hold_within": _seconds(0, 600),
+        "surface_depth": {"type": "number", "minimum": 0, "maximum": 100},
+        "surface_within": _seconds(0, 3600),
+        "primitives": {
+            "type": "object", "maxProperties": 1000,
+            "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_]*$", "maxLength": 200},
+            "additionalProperties": {"type": "object", "required": ["by"],
+                                     "properties": {"by": {"enum": list(BY)}}},
+        },
+    },
+}
+
+
+@dataclass(frozen=True)
+class Binding:
+    """One primitive: who carries it out, and that kind's settings (None: the world's)."""
+
+    primitive: str
+    by: str
+    settle: float | None = None
+    lost_after: float | None = None
+    tolerance: float | None = None
+    channel: int | None = None
+    pwm: int | None = None
+    release_pwm: int | None = None
+    relay: int | None = None
+
+
+@dataclass(frozen=True)
+class AutopilotMapping:
+    """A loaded autopilot mapping (see the module's documentation); times in the autopilot's s."""
+
+    bindings: Mapping[str, Binding]
+    autopilot: str = "ArduSub"
+    #: the world point (x, y) of the autopilot's EKF origin; None: the world's start
+    home: tuple[float, float] | None = None
+    #: how long the autopilot may take to have a position and pass its pre-arm checks
+    ready_within: float = 180.0
+    #: how long a command (mode, arm, servo) may wait for its COMMAND_ACK
+    ack_within: float = 3.0
+    #: a flown primitive fails after this long without the autopilot's position
+    position_lost_after: float = 5.0
+    #: LOCAL_POSITION_NED and ATTITUDE per second of the autopilot's clock
+    telemetry_rate: float = 10.0
+    safe_state: tuple[str, ...] = SAFE_STEPS
+    hold_within: float = 10.0
+    surface_depth: float = 0.3
+    surface_within: float = 120.0
+    filename: str = field(default="<mapping>", compare=False)
+
+    @classmethod
+    def from_json(cls, text: str, filename: str = "<mapping>") -> "AutopilotMapping":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise Mcl2PnmlError(f"not an autopilot mapping: {e.msg}",
+                                Location(filename, e.lineno, e.colno)) from None
+        except (ValueError, RecursionError) as e:
+            raise Mcl2PnmlError(f"not an autopilot mapping: {json_fault(e)}",
+                                Location(filename)) from None
+        where = locator(text, filename)
+        _check(data, SCHEMA, where)
+        bindings = {}
+        for name, spec in data["primitives"].items():
+            kind = spec["by"]
+            schema = {"type": "object", "additionalProperties": False,
+                      "required": ["by"] + _REQUIRED.get(kind, []),
+                      "properties": {"by": {}, **_BINDING[kind]}}
+            _check(spec, schema, lambda path, n=name: where(("primitives", n, *path)),
+                   ("primitives", name))
+            bindings[name] = Binding(name, **spec)
+        steps = tuple(data.get("safe_state", SAFE_STEPS))
+        if list(steps) != sorted(steps, key=SAFE_STEPS.index):
+            raise Mcl2PnmlError("safe_state: the steps go in the order hold, surface, disarm "
+                                "(any of them may be left out)", where(("safe_state",)))
+        settings = {k: v for k, v in data.items() if k not in ("primitives", "safe_state")}
+        if "home" in settings:
+            settings["home"] = tuple(float(v) for v in settings["home"])
+        return cls(bindings, safe_state=steps, filename=filename, **settings)
+
+    @classmethod
+    def load(cls, path: str | Path) -> "AutopilotMapping":
+        return cls.from_json(read_text(path, "autopilot mapping", MAX_MAPPING), str(path))
+
+    @classmethod
+    def ardusub(cls) -> "AutopilotMapping":
+        """The package's own mapping for ArduSub (``ardusub.json``)."""
+        source = resources.files("mcl2pnml.runtime").joinpath("ardusub.json")
+        return cls.from_json(source.read_text("utf-8"), "ardusub.json (mcl2pnml's own)")
+
+
+def _check(value: Any, schema: dict[str, Any], where, prefix: tuple = ()) -> None:
+    """``value`` against ``schema``: the first fault, at its line and column, or nothing."""
+    from jsonschema import Draft202012Validator
+    from jsonschema.exceptions import best_match
+
+    error = best_match(Draft202012Validator(schema).iter_errors(value))
+    if error is None:
+        return
+    path = tuple(error.absolute_path)
+    message = error.message
+    if error.validator == "additionalProperties":
+        valid = sorted(error.schema.get("properties", {}))
+        message = message.replace("Additional properties are not allowed ", "unknown setting ")
+        message += "; valid: " + ", ".join(valid)
+    elif error.validator == "enum":
+        message = f"{json.dumps(error.instance)[:80]} is not one of " + ", ".join(
+            map(str, error.validator_value))
+    raise Mcl2PnmlError(f"{dotted(prefix + path)}: {message[:300]}", where(path))

@@ -1,0 +1,726 @@
+"""A MAVLink autopilot as the vehicle: missions flown on ArduSub (docs/ardusub.md).
+
+The paper runs its missions on the real vehicle through the Architecture
+Abstraction Layer (section 2.1, section 3). Here the vehicle is an
+autopilot spoken to as a ground station speaks to it, over MAVLink (TCP,
+UDP or a serial line, through ``pymavlink``, the ``mavlink`` extra):
+
+* **Start** (:meth:`MavlinkVehicle.open`): a heartbeat from a submarine
+  autopilot, ``SIM_SPEEDUP`` read where there is one (a simulated autopilot
+  runs its failsafes on its own clock), the telemetry rates raised, the
+  EKF's position and pre-arm checks awaited, GUIDED, armed. Every wait is
+  bounded by the mapping (in the autopilot's seconds) and by the liveness
+  (in wall seconds: a silent peer).
+* **Time** is the autopilot's (``time_boot_ms``): a run at a simulator's
+  speed-up of 100 is the same run as at 1, and its times come from the
+  autopilot. The mission's clock starts when the vehicle is armed.
+* **Actions and events** as :mod:`mcl2pnml.runtime.autopilot` maps them:
+  one GUIDED position target composed from the flown primitives, servo
+  and relay commands acknowledged by ``COMMAND_ACK``, simulated sensors on
+  the autopilot's position. Each achieved or failed says where it came
+  from (:class:`Reported`).
+* **Liveness**: heartbeats sent at the speed-up's rate (the autopilot's GCS
+  failsafe counts them on its clock); the autopilot's own heartbeat
+  awaited: none within the liveness, the link is lost, and the run stops
+  with its safe stop. A heartbeat of another kind of vehicle, a clock
+  that runs back or leaps, a peer that sends only garbage: the same.
+* **Safe state** (:meth:`MavlinkVehicle.secure`): after the run loop has
+  disabled every primitive, the mapping's steps (hold, surface, disarm),
+  each logged acknowledged or not.
+"""
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable, Mapping
+
+from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
+from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
+                                  VehicleFault)
+from mcl2pnml.runtime.autopilot import AutopilotMapping, Binding
+from mcl2pnml.runtime.link import LinkOptions
+from mcl2pnml.runtime.simprims import Context, SimulatedPrimitive, Steer, installed
+from mcl2pnml.runtime.simulator import State, World
+
+#: ArduSub's modes (``HEARTBEAT.custom_mode``), as its documentation numbers them.
+MODES = {0: "STABILIZE", 1: "ACRO", 2: "ALT_HOLD", 3: "AUTO", 4: "GUIDED", 7: "CIRCLE",
+         9: "SURFACE", 16: "POSHOLD", 19: "MANUAL", 20: "MOTOR_DETECT", 21: "SURFTRAK"}
+GUIDED, SURFACE, POSHOLD, ALT_HOLD = 4, 9, 16, 2
+MAV_TYPE_SUBMARINE, MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 12, 6, 8
+#: MAV_CMD numbers used
+SET_MODE, ARM_DISARM, SET_MESSAGE_INTERVAL, DO_SET_SERVO, DO_SET_RELAY = 176, 400, 511, 183, 181
+#: SET_POSITION_TARGET_LOCAL_NED type masks: position only; position and yaw
+POSITION, POSITION_YAW = 0x0DF8, 0x09F8
+EKF_POS_HORIZ_ABS = 0x10
+PREARM_OK = 0x10000000
+ARMED_FLAG = 0x80
+#: COMMAND_ACK results, in words
+RESULTS = {0: "ACCEPTED", 1: "TEMPORARILY_REJECTED", 2: "DENIED", 3: "UNSUPPORTED",
+           4: "FAILED", 5: "IN_PROGRESS", 6: "CANCELLED"}
+#: The largest step of the autopilot's clock between two messages (s); more is a fault.
+MAX_CLOCK_STEP = 60.0
+#: Wall seconds one wait for a message lasts before the bounds are looked at again.
+POLL = 0.05
+#: Autopilot messages kept for the log (STATUSTEXT and the like); the rest counted.
+KEPT_NOTES = 200
+#: The track is logged once per this many seconds of the autopilot's clock.
+TRACK_EVERY = 1.0
+
+
+@dataclass(frozen=True)
+class Reported(Event):
+    """An achieved or failed judged by this layer: from the autopilot's telemetry or its
+    acknowledgement (``source`` "autopilot"), or from a simulated sensor ("simulated")."""
+
+    source: str = "autopilot"
+    why: str = ""
+
+
+@dataclass
+class _Active:
+    """An enabled primitive: its arguments, its goal (Fig. 1: C, S2, S1), its state here."""
+
+    binding: Binding
+    prim: SimulatedPrimitive
+    args: tuple
+    since: float
+    enabling: int
+    achieved: int
+    goal: str = "C"
+    memory: dict = field(default_factory=dict)
+    #: why it can no longer reach its goal (the autopilot left GUIDED...): it says nothing more
+    dead: str | None = None
+    #: an actuator: its command not yet acknowledged (False), accepted (True)
+    accepted: bool = False
+
+
+class MavlinkVehicle(LiveVehicle):
+    """An autopilot over MAVLink, flying a mission's primitives (see the module's documentation)."""
+
+    def __init__(self, address: str, mapping: AutopilotMapping, world: World | None = None,
+                 link: LinkOptions | None = None,
+                 table: Mapping[str, SimulatedPrimitive] | None = None):
+        self.address, self.mapping = address, mapping
+        self.url = _url(address)
+        self.world = world or World()
+        self.link = link or LinkOptions()
+        home = mapping.home or self.world.start[:2]
+        self.home = (float(home[0]), float(home[1]))
+        self.offer(installed() if table is None else table)
+        #: where the run's log lines about the autopilot go: ``log(t, kind, text, obj)``
+        self.log: Callable[[float, str, str, dict], None] = lambda *entry: None
+        self.conn = None
+        self.lock = threading.Lock()
+        self.stopping = threading.Event()
+        self.beat: threading.Thread | None = None
+        self.send_fault: str | None = None
+        self.speedup = 1.0
+        self.target = (1, 1)
+        self.boot: float | None = None     # the autopilot's clock, s
+        self.t0 = 0.0                      # its reading when the mission's clock started
+        self.ned: tuple[float, float, float] | None = None
+        self.speed = 0.0
+        self.yaw = 0.0
+        self.mode: int | None = None
+        self.armed = False
+        self.ekf = 0
+        self.position_since: float | None = None   # when the EKF last had a position
+        self.prearm = False
+        self.last_heartbeat = 0.0                 # wall clock
+        self.last_text = ""
+        self.bad_data = 0
+        self.notes_dropped = 0
+        self.notes = 0
+        self.acks: deque = deque(maxlen=64)       # (command, result) not yet taken
+        self.active: dict[str, _Active] = {}
+        self.enablings: dict[str, int] = {}
+        self.achievements: dict[str, int] = {}
+        self.events: deque[Event] = deque()
+        self.pending: list[tuple[str, int, float]] = []   # actuator: (primitive, command, by)
+        self.hold: list[float] = [0.0, 0.0, 0.0]  # NED where an unset channel holds
+        self.owners: tuple = (None, None, None)
+        self.sent_target: tuple | None = None
+        self.next_track = 0.0
+        self.unready: Exception | None = None
+        self.opened = False
+
+    # -- the mission's side ---------------------------------------------------------------
+
+    def offer(self, table: Mapping[str, SimulatedPrimitive]) -> None:
+        """The simulated primitives that give each mapped primitive its meaning."""
+        self.table = dict(table)
+        self.primitives = frozenset(self.mapping.bindings)
+
+    def check_primitives(self, used: set[str]) -> None:
+        for name in sorted(used):
+            if name in self.mapping.bindings and name not in self.table:
+                raise Mcl2PnmlError(
+                    f"the mapping binds '{name}', but no simulated primitive of that name says "
+                    "what its set points and its goal are (docs/simulator.md: "
+                    "--sim-primitives)", None)
+
+    def clock(self) -> float:
+        """The mission's clock: the autopilot's seconds since it was armed for the mission."""
+        return (self.boot or 0.0) - self.t0
+
+    def act(self, action: Action) -> None:
+        self._ready()
+        name, t = action.primitive, action.t
+        if action.kind is ActionKind.DISABLE:
+            act = self.active.pop(name, None)
+            if act is not None and act.binding.by in ("servo", "relay"):
+                self._release(act)
+            self._steer()
+            self.events.append(Event(t, EventKind.OFF, name))
+            return
+        binding = self.mapping.bindings[name]
+        self.enablings[name] = self.enablings.get(name, 0) + 1
+        act = self.active[name] = _Active(binding, self.table[name], tuple(action.args), t,
+                                          self.enablings[name], self.achievements.get(name, 0))
+        self.events.append(Event(t, EventKind.ON, name))
+        problem = act.prim.check(self._context(act))
+        if problem is None and binding.by == "autopilot" and not self._flying():
+            problem = self._why_not_flying()
+        if problem is not None:
+            self._report(act, name, EventKind.FAILED, t, "autopilot", problem)
+            act.dead = problem
+            return
+        if binding.by == "servo":
+            self._command(DO_SET_SERVO, binding.channel, binding.pwm)
+            self.pending.append((name, DO_SET_SERVO, self.boot + self.mapping.ack_within))
+        elif binding.by == "relay":
+            self._command(DO_SET_RELAY, binding.relay, 1)
+            self.pending.append((name, DO_SET_RELAY, self.boot + self.mapping.ack_within))
+        self._steer()
+
+    def wait_event(self, timeout: float | None, clock) -> Event | None:
+        """The next event; None once the autopilot's clock has run ``timeout`` seconds."""
+        self._ready()
+        deadline = None if timeout is None else self.clock() + timeout
+        while not self.events:
+            if deadline is not None and self.clock() >= deadline:
+                return None
+            self._pump(POLL)
+        return self.events.popleft()
+
+    # -- connecting -----------------------------------------------------------------------
+
+    def open(self) -> None:
+        """Connect; then make ready (a failure there ends the run STALLED, with its reason)."""
+        import socket
+
+        mavutil = _mavutil()
+        previous = socket.getdefaulttimeout()
+        socket.setdefaulttimeout(self.link.connect_timeout)   # pymavlink's connect has none
+        scheme, _, rest = self.url.partition(":")
+        try:
+            if scheme == "serial":
+                device, _, baud = rest.rpartition(":")
+                self.conn = mavutil.mavlink_connection(device, baud=int(baud), source_system=255,
+                                                       source_component=190)
+            else:
+                self.conn = mavutil.mavlink_connection(self.url, source_system=255,
+                                                       source_component=190, retries=0)
+        except Exception as e:   # refused, unreachable, no such device
+            raise Mcl2PnmlError(f"cannot connect to the autopilot at {self.address}: "
+                                f"{getattr(e, 'strerror', None) or e}") from None
+        finally:
+            socket.setdefaulttimeout(previous)
+        self.opened = True
+        try:
+            self._prepare()
+        except (VehicleFault, LinkLost) as e:
+            self.unready = e
+
+    def _prepare(self) -> None:
+        self._await_heartbeat()
+        self.beat = threading.Thread(target=self._heartbeats, name="mavlink-heartbeat",
+                                     daemon=True)
+        self.beat.start()
+        self._read_speedup()
+        mavlink = _mavutil().mavlink
+        rate = 1e6 / self.mapping.telemetry_rate
+        for message, interval in ((mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, rate),
+                                  (mavlink.MAVLINK_MSG_ID_ATTITUDE, rate),
+                                  (mavlink.MAVLINK_MSG_ID_EKF_STATUS_REPORT, 5e5),
+                                  (mavlink.MAVLINK_MSG_ID_SYS_STATUS, 5e5),
+                                  (mavlink.MAVLINK_MSG_ID_SYSTEM_TIME, 5e5)):
+            self._command(SET_MESSAGE_INTERVAL, message, interval)
+        self._log_note("connected: system %d, a submarine; speed-up %g" %
+                       (self.target[0], self.speedup))
+        ready = self._until(lambda: self.ekf & EKF_POS_HORIZ_ABS and self.prearm
+                            and self.ned is not None, self.mapping.ready_within)
+        if not ready:
+            self._log_note(f"no position and pre-arm checks after {self.mapping.ready_within:g} "
+                           "s; trying GUIDED all the same")
+        self._set_mode(GUIDED, "GUIDED")
+        result = self._ask(ARM_DISARM, 1)
+        if result != 0:
+            raise VehicleFault(f"the autopilot refused to arm ({_result(result)})"
+                               + self._said())
+        if not self._until(lambda: self.armed, self.mapping.ack_within):
+            raise VehicleFault("the autopilot acknowledged arming but does not say it is armed")
+        self.t0 = self.boot
+        self.hold = list(self.ned)
+        self.owners = (None, None, None)
+        self.next_track = 0.0
+        self._log_note("armed in GUIDED: the mission's clock starts")
+        self._steer(force=True)
+
+    def _ready(self) -> None:
+        if self.unready is not None:
+            raise self.unready
+        if self.send_fault is not None:
+            raise LinkLost(self.send_fault)
+
+    def _await_heartbeat(self) -> None:
+        end = time.monotonic() + self.link.liveness
+        while time.monotonic() < end:
+            msg = self._recv(min(POLL, max(0.0, end - time.monotonic())))
+            if msg is not None and msg.get_type() == "HEARTBEAT" \
+                    and msg.type != MAV_TYPE_GCS and msg.autopilot != MAV_AUTOPILOT_INVALID:
+                self.target = (msg.get_srcSystem(), msg.get_srcComponent())
+                self._heartbeat(msg)
+                return
+        raise LinkLost(f"no autopilot heartbeat from {self.address} within "
+                       f"{self.link.liveness:g} s")
+
+    def _read_speedup(self) -> None:
+        """A simulated autopilot's speed-up (its failsafes run on its clock); 1 where none."""
+        with self.lock:
+            self.conn.mav.param_request_read_send(*self.target, b"SIM_SPEEDUP", -1)
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:
+            msg = self._recv(POLL)
+            if msg is not None and msg.get_type() == "PARAM_VALUE" \
+                    and msg.param_id == "SIM_SPEEDUP":
+                value = float(msg.param_value)
+                if math.isfinite(value) and 0 < value <= 10_000:
+                    self.speedup = value
+                return
+
+    def _heartbeats(self) -> None:
+        """Our heartbeat, ``heartbeat`` seconds of the autopilot's clock apart."""
+        mavlink = _mavutil().mavlink
+        while not self.stopping.wait(self.link.heartbeat / max(1.0, self.speedup)):
+            try:
+                with self.lock:
+                    self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS,
+                                                 mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                                                 mavlink.MAV_STATE_ACTIVE)
+            except Exception as e:   # the link is gone: the loop hears it as lost
+                self.send_fault = f"cannot send to the autopilot: {e}"
+                return
+
+    # -- receiving --------------------------------------------------------------------------
+
+    def _recv(self, timeout: float):
+        try:
+            return self.conn.recv_match(blocking=True, timeout=timeout)
+        except Exception as e:    # a socket error, a device gone
+            raise LinkLost(f"the link to the autopilot broke: {e}") from None
+
+    def _pump(self, timeout: float) -> None:
+        """Take what the autopilot sent within ``timeout`` wall seconds; check liveness."""
+        end = time.monotonic() + timeout
+        msg = self._recv(timeout)
+        while msg is not None:
+            self._handle(msg)
+            if time.monotonic() > end:
+                break    # a flood: look at the bounds, then read on
+            msg = self._recv(0)
+        self._check_pending()
+        if time.monotonic() - self.last_heartbeat > self.link.liveness:
+            raise LinkLost(f"no heartbeat from the autopilot for {self.link.liveness:g} s "
+                           f"(bad MAVLink data: {self.bad_data} messages)")
+        if self.send_fault is not None:
+            raise LinkLost(self.send_fault)
+
+    def _until(self, done: Callable[[], Any], seconds: float) -> bool:
+        """Pump until ``done()`` or ``seconds`` of the autopilot's clock have passed."""
+        start = self.boot
+        while not done():
+            if start is not None and self.boot is not None and self.boot - start >= seconds:
+                return False
+            if start is None:
+                start = self.boot
+            self._pump(POLL)
+        return True
+
+    def _handle(self, msg) -> None:
+        kind = msg.get_type()
+        if kind == "BAD_DATA":
+            self.bad_data += 1
+            return
+        if (msg.get_srcSystem(), msg.get_srcComponent()) != self.target:
+            return     # another component (a gimbal, a camera) or another ground station
+        millis = getattr(msg, "time_boot_ms", None)
+        if millis is not None:
+            self._tick(millis / 1000.0)
+        if kind == "HEARTBEAT":
+            self._heartbeat(msg)
+        elif kind == "LOCAL_POSITION_NED":
+            values = (msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz)
+            if all(map(math.isfinite, values)) and max(map(abs, values)) < 1e6:
+                self.ned = (msg.x, msg.y, msg.z)
+                self.speed = math.sqrt(msg.vx ** 2 + msg.vy ** 2 + msg.vz ** 2)
+                self._sample()
+        elif kind == "ATTITUDE":
+            if math.isfinite(msg.yaw):
+                self.yaw = msg.yaw
+        elif kind == "EKF_STATUS_REPORT":
+            self.ekf = msg.flags
+            if self.ekf & EKF_POS_HORIZ_ABS:
+                self.position_since = None
+            elif self.position_since is None:
+                self.position_since = self.boot
+        elif kind == "SYS_STATUS":
+            self.prearm = bool(msg.onboard_control_sensors_health & PREARM_OK)
+        elif kind == "COMMAND_ACK":
+            self.acks.append((msg.command, msg.result))
+            self._acknowledged(msg.command, msg.result)
+        elif kind == "STATUSTEXT":
+            text = "".join(ch for ch in str(msg.text) if ch.isprintable())[:120]
+            if "yaw alignment" not in text:    # twenty of them after arming
+                self.last_text = text
+                self._log_note(f"says: {text}")
+
+    def _tick(self, seconds: float) -> None:
+        if not math.isfinite(seconds):
+            return
+        if self.boot is not None and (seconds < self.boot - 1.0
+                                      or seconds > self.boot + MAX_CLOCK_STEP):
+            raise VehicleFault(f"the autopilot's clock went from {self.boot:.3f} s to "
+                               f"{seconds:.3f} s: rebooted, or not one autopilot")
+        self.boot = seconds if self.boot is None else max(self.boot, seconds)
+
+    def _heartbeat(self, msg) -> None:
+        if msg.type != MAV_TYPE_SUBMARINE:
+            raise VehicleFault(f"the autopilot (system {msg.get_srcSystem()}) says it is a "
+                               f"vehicle of MAV_TYPE {msg.type}, not a submarine "
+                               f"({MAV_TYPE_SUBMARINE}): {self.mapping.autopilot} flies "
+                               "submarines only")
+        self.last_heartbeat = time.monotonic()
+        armed = bool(msg.base_mode & ARMED_FLAG)
+        mode = msg.custom_mode
+        if self.opened and self.t0 and (mode != self.mode or armed != self.armed):
+            what = f"mode {MODES.get(mode, mode)}, {'armed' if armed else 'disarmed'}"
+            self._log_note(f"now {what}")
+            if not (armed and mode == GUIDED):
+                for name, act in sorted(self.active.items()):
+                    if act.binding.by == "autopilot" and act.dead is None:
+                        why = f"the autopilot is now in {what}"
+                        self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
+                        act.dead = why
+        self.mode, self.armed = mode, armed
+
+    # -- the primitives' goals --------------------------------------------------------------
+
+    def _state(self) -> State:
+        n, e, d = self.ned
+        return State(self.clock(), self.home[0] + n, self.home[1] + e, d, self.yaw)
+
+    def _context(self, act: _Active) -> Context:
+        b = act.binding
+        world = self.world
+        changes = {k: v for k, v in (("settle_time", b.settle), ("lost_after", b.lost_after))
+                   if v is not None}
+        if b.tolerance is not None:
+            changes.update(acceptance=b.tolerance, depth_band=b.tolerance,
+                           heading_band=math.radians(b.tolerance))
+        if changes:
+            world = replace(world, **changes)
+        state = self._state() if self.ned is not None else State(self.clock(), *self.home,
+                                                                  0.0, 0.0)
+        return Context(act.args, state, world, act.since, act.goal, act.enabling,
+                       act.achieved, act.memory)
+
+    def _sample(self) -> None:
+        """A new position: each enabled primitive's goal judged, the target composed again."""
+        if not self.t0:
+            return
+        t = self.clock()
+        if t >= self.next_track:
+            x, y, z, yaw = (s := self._state()).x, s.y, s.z, s.yaw
+            self.log(t, "track", "", {"track": [round(x, 3), round(y, 3), round(z, 3),
+                                                round(math.degrees(yaw), 1)]})
+            self.next_track = t + TRACK_EVERY
+        for name in sorted(self.active):
+            act = self.active[name]
+            if act.dead is not None:
+                continue
+            by = act.binding.by
+            if by == "autopilot" and self.position_since is not None and \
+                    self.boot - self.position_since >= self.mapping.position_lost_after:
+                why = (f"the autopilot has had no position for "
+                       f"{self.mapping.position_lost_after:g} s (EKF flags {self.ekf:#x})")
+                self._report(act, name, EventKind.FAILED, t, "autopilot", why)
+                act.dead = why
+                continue
+            if by in ("servo", "relay") and not act.accepted:
+                continue
+            report = act.prim.sense(self._context(act))
+            if report is not None and report is not self._goal_event(act):
+                self._report(act, name, report, t,
+                             "simulated" if by == "simulated" else "autopilot",
+                             "sensed" if by == "simulated" else "telemetry")
+        self._steer()
+
+    @staticmethod
+    def _goal_event(act: _Active) -> EventKind | None:
+        return {"S2": EventKind.ACHIEVED, "S1": EventKind.FAILED}.get(act.goal)
+
+    def _report(self, act: _Active, name: str, kind: EventKind, t: float, source: str,
+                why: str) -> None:
+        act.goal = "S2" if kind is EventKind.ACHIEVED else "S1"
+        if kind is EventKind.ACHIEVED:
+            self.achievements[name] = self.achievements.get(name, 0) + 1
+            if name == "ReleaseMarker" and self.ned is not None:
+                s = self._state()
+                self.log(t, "marker", "", {"marker": [round(s.x, 3), round(s.y, 3)]})
+        self.events.append(Reported(t, kind, name, source, why))
+
+    # -- actuators -------------------------------------------------------------------------
+
+    def _acknowledged(self, command: int, result: int) -> None:
+        for i, (name, cmd, _) in enumerate(self.pending):
+            if cmd == command:
+                del self.pending[i]
+                act = self.active.get(name)
+                if act is None or act.dead is not None:
+                    return
+                if result == 0:
+                    act.accepted = True
+                else:
+                    why = f"the autopilot refused command {command}: {_result(result)}" \
+                        + self._said()
+                    self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
+                    act.dead = why
+                return
+
+    def _check_pending(self) -> None:
+        if self.boot is None:
+            return
+        for name, cmd, by in list(self.pending):
+            if self.boot >= by:
+                self.pending.remove((name, cmd, by))
+                act = self.active.get(name)
+                if act is not None and act.dead is None:
+                    why = (f"no acknowledgement of command {cmd} within "
+                           f"{self.mapping.ack_within:g} s")
+                    self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
+                    act.dead = why
+
+    def _release(self, act: _Active) -> None:
+        b = act.binding
+        try:
+            if b.by == "servo" and b.release_pwm is not None:
+                self._command(DO_SET_SERVO, b.channel, b.release_pwm)
+            elif b.by == "relay":
+                self._command(DO_SET_RELAY, b.relay, 0)
+        except LinkLost:
+            raise
+
+    # -- set points -------------------------------------------------------------------------
+
+    def _flying(self) -> bool:
+        return self.armed and self.mode == GUIDED
+
+    def _why_not_flying(self) -> str:
+        return (f"the autopilot is in {MODES.get(self.mode, self.mode)}, "
+                f"{'armed' if self.armed else 'disarmed'}: flown primitives need GUIDED, armed")
+
+    def _steer(self, force: bool = False) -> None:
+        """Send the GUIDED target the flown primitives compose (the simulator's rule)."""
+        if self.ned is None or not self._flying():
+            return
+        chosen: dict[str, tuple[int, str, Any]] = {}
+        for name in sorted(self.active):
+            act = self.active[name]
+            if act.binding.by != "autopilot" or act.dead is not None:
+                continue
+            steer: Steer | None = act.prim.steer(self._context(act))
+            if steer is None:
+                continue
+            for channel, value in (("point", steer.point), ("depth", steer.depth),
+                                   ("heading", steer.heading)):
+                if value is not None and act.prim.priority > chosen.get(channel, (-1,))[0]:
+                    chosen[channel] = (act.prim.priority, name, value)
+        owners = tuple(chosen.get(c, (0, None))[1] for c in ("point", "depth", "heading"))
+        n, e, d = self.ned
+        # a channel let go holds where the vehicle is now
+        if owners[0] is None and self.owners[0] is not None:
+            self.hold[0], self.hold[1] = n, e
+        if owners[1] is None and self.owners[1] is not None:
+            self.hold[2] = d
+        self.owners = owners
+        north, east = (chosen["point"][2][0] - self.home[0], chosen["point"][2][1] - self.home[1]) \
+            if "point" in chosen else (self.hold[0], self.hold[1])
+        down = chosen["depth"][2] if "depth" in chosen else self.hold[2]
+        yaw = chosen["heading"][2] if "heading" in chosen else None
+        target = (round(north, 3), round(east, 3), round(down, 3),
+                  None if yaw is None else round(yaw, 4))
+        if target == self.sent_target and not force:
+            return
+        self.sent_target = target
+        with self._sending():
+            self.conn.mav.set_position_target_local_ned_send(
+                int(self.boot * 1000) & 0xFFFFFFFF, *self.target, 1,
+                POSITION if yaw is None else POSITION_YAW, north, east, down,
+                0, 0, 0, 0, 0, 0, yaw or 0.0, 0)
+        x, y = self.home[0] + north, self.home[1] + east
+        words = f"target ({x:.2f}, {y:.2f}) depth {down:.2f} m" + (
+            "" if yaw is None else f" heading {math.degrees(yaw):.0f} deg")
+        self.log(self.clock(), "autopilot", words,
+                 {"setpoint": [round(x, 3), round(y, 3), round(down, 3)]})
+
+    # -- commands ---------------------------------------------------------------------------
+
+    def _sending(self):
+        vehicle = self
+
+        class _Send:
+            def __enter__(self):
+                vehicle.lock.acquire()
+
+            def __exit__(self, kind, error, tb):
+                vehicle.lock.release()
+                if error is not None and not isinstance(error, (LinkLost, VehicleFault)):
+                    raise LinkLost(f"cannot send to the autopilot: {error}") from None
+        return _Send()
+
+    def _command(self, command: int, *params: float) -> None:
+        params = list(params) + [0.0] * (7 - len(params))
+        with self._sending():
+            self.conn.mav.command_long_send(*self.target, command, 0, *params)
+
+    def _ask(self, command: int, *params: float) -> int | None:
+        """Send a command and wait for its acknowledgement; None when none came in time."""
+        self.acks.clear()
+        self._command(command, *params)
+        got: list[int] = []
+
+        def acked():
+            for cmd, result in self.acks:
+                if cmd == command and result != 5:    # IN_PROGRESS is not the answer
+                    got.append(result)
+                    return True
+            return False
+        return got[0] if self._until(acked, self.mapping.ack_within) else None
+
+    def _set_mode(self, mode: int, name: str) -> None:
+        self.last_text = ""
+        result = self._ask(SET_MODE, 1, mode)
+        if result != 0:
+            raise VehicleFault(f"the autopilot refused mode {name} ({_result(result)})"
+                               + self._said())
+        if not self._until(lambda: self.mode == mode, self.mapping.ack_within):
+            raise VehicleFault(f"the autopilot acknowledged mode {name} but is in "
+                               f"{MODES.get(self.mode, self.mode)}")
+
+    def _said(self) -> str:
+        return f": \"{self.last_text}\"" if self.last_text else ""
+
+    def _log_note(self, text: str) -> None:
+        if self.notes >= KEPT_NOTES:
+            self.notes_dropped += 1
+            return
+        self.notes += 1
+        self.log(self.clock() if self.t0 else 0.0, "autopilot", text, {"autopilot": text})
+
+    # -- the end ----------------------------------------------------------------------------
+
+    def secure(self, t: float) -> list[str]:
+        """Bring the vehicle to the mapping's safe state; each step said, acknowledged or not."""
+        done: list[str] = []
+        if self.conn is None:
+            return done
+
+        def step(name: str, text: str, ok: bool) -> None:
+            line = f"{name}: {text}"
+            done.append(line)
+            self.log(self.clock() if self.t0 else 0.0, "safe-state", line,
+                     {"safe_state": name, "acknowledged": ok, "detail": text})
+
+        for name in self.mapping.safe_state:
+            try:
+                self._ready()
+                if name == "hold":
+                    mode, word = (POSHOLD, "POSHOLD") if self.ekf & EKF_POS_HORIZ_ABS \
+                        else (ALT_HOLD, "ALT_HOLD")
+                    result = self._ask(SET_MODE, 1, mode)
+                    if result == 0:
+                        slow = self._until(lambda: self.speed < 0.2, self.mapping.hold_within)
+                        step(name, f"{word} acknowledged; "
+                             + ("the vehicle has stopped" if slow else
+                                f"still moving after {self.mapping.hold_within:g} s"), True)
+                    else:
+                        step(name, f"{word} not acknowledged ({_result(result)}){self._said()}",
+                             False)
+                elif name == "surface":
+                    result = self._ask(SET_MODE, 1, SURFACE)
+                    if result == 0:
+                        up = self._until(lambda: self.ned is not None
+                                         and self.ned[2] <= self.mapping.surface_depth,
+                                         self.mapping.surface_within)
+                        depth = f"{self.ned[2]:.2f} m" if self.ned else "unknown"
+                        step(name, "SURFACE acknowledged; " + (
+                            f"at the surface (depth {depth})" if up else
+                            f"depth {depth} after {self.mapping.surface_within:g} s"), True)
+                    else:
+                        step(name, f"SURFACE not acknowledged ({_result(result)})"
+                             f"{self._said()}", False)
+                else:
+                    result = self._ask(ARM_DISARM, 0)
+                    off = result == 0 and self._until(lambda: not self.armed,
+                                                      self.mapping.ack_within)
+                    step(name, "disarm acknowledged; disarmed" if off else
+                         f"disarm not acknowledged ({_result(result)}){self._said()}", off)
+            except (LinkLost, VehicleFault) as e:
+                step(name, f"not done: {e}", False)
+        return done
+
+    def close(self) -> None:
+        self.stopping.set()
+        if self.beat is not None:
+            self.beat.join(timeout=2.0)
+        if self.conn is not None:
+            try:
+                self.conn.close()
+            except Exception:   # closing a broken link: nothing more to do with it
+                pass
+
+
+def _result(result: int | None) -> str:
+    return "no acknowledgement" if result is None else RESULTS.get(result, f"result {result}")
+
+
+def _mavutil():
+    try:
+        from pymavlink import mavutil
+    except ImportError:
+        raise OptionError("--vehicle", "a MAVLink autopilot needs pymavlink: pip install "
+                          "'mcl2pnml[mavlink]'") from None
+    return mavutil
+
+
+def _url(address: str) -> str:
+    """``tcp:HOST:PORT``, ``udp:HOST:PORT`` (listen) or ``serial:DEVICE[:BAUD]`` as pymavlink's."""
+    scheme, _, rest = address.partition(":")
+    if scheme in ("tcp", "udp"):
+        host, sep, port = rest.rpartition(":")
+        if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise OptionError("--connect", f"'{address}': write {scheme}:HOST:PORT, as "
+                              f"{scheme}:127.0.0.1:{5760 if scheme == 'tcp' else 14550}")
+        return f"{scheme}:{host}:{port}"
+    if scheme == "serial":
+        device, _, baud = rest.partition(":")
+        if not device or (baud and not baud.isdigit()):
+            raise OptionError("--connect", f"'{address}': write serial:DEVICE[:BAUD], as "
+                              "serial:/dev/ttyACM0:115200")
+        return f"serial:{device}:{baud or 115200}"
+    raise OptionError("--connect", f"'{address}': an autopilot is reached at tcp:HOST:PORT, "
+                      "udp:HOST:PORT or serial:DEVICE[:BAUD]")
