@@ -277,11 +277,14 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
               help="The AUV simulator (it offers " + ", ".join(sorted(simulated()))
               + ", and those of --sim-primitives and installed packages; docs/simulator.md; "
               "a world NAME.world.json beside the mission is its default), a real vehicle "
-              "through a mapping file and a bridge (see --connect), or a script "
+              "through a mapping file and a bridge (see --connect), an autopilot over MAVLink "
+              "(ArduSub; mavlink: takes another mapping; docs/ardusub.md), or a script "
               '({"PRIMITIVE": ["ok@5", "fail@3", "never"]}; each example of examples/ has one '
               "beside it, NAME.vehicle.json).")
 @click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge: "
-              "(a host name, an IPv4 address, or an IPv6 one in brackets: [::1]:7777).")
+              "(a host name, an IPv4 address, or an IPv6 one in brackets: [::1]:7777); for "
+              "--vehicle mavlink, the autopilot: tcp:HOST:PORT, udp:HOST:PORT (listen) or "
+              "serial:DEVICE[:BAUD].")
 @click.option("--secret", type=FILE, help="Authenticate every line of the bridge's link, both "
               "ways (HMAC-SHA256), with the shared secret in this file (mode 600, 16 bytes or "
               "more); the bridge server gets the same file.")
@@ -291,10 +294,12 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
               "a bridge that requires one.")
 @click.option("--tls-key", type=FILE, help="The private key of --tls-cert (PEM).")
 @click.option("--heartbeat", type=click.FloatRange(min=0, min_open=True), default=HEARTBEAT,
-              show_default=True, help="Seconds between the heartbeats sent to the bridge.")
+              show_default=True, help="Seconds between the heartbeats sent to the bridge (to an "
+              "autopilot: of its clock, so faster on a simulator sped up).")
 @click.option("--liveness", type=click.FloatRange(min=0, min_open=True), default=LIVENESS,
               show_default=True, help="Seconds without a line from the bridge (its heartbeats "
-              "included) after which the link is lost: the run stops, with its safe stop.")
+              "included; an autopilot's heartbeat) after which the link is lost: the run stops, "
+              "with its safe stop.")
 @click.option("--send-timeout", type=click.FloatRange(min=0, min_open=True),
               default=SEND_TIMEOUT, show_default=True, help="Seconds a line to the bridge may "
               "take to send before the link is lost (a bridge that does not read).")
@@ -312,7 +317,8 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
 @click.option("--transitions", is_flag=True, help="Show fired transitions in the live log.")
 @click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
               show_default=True, help="Stop a mission still running at this time (virtual, or "
-              "the wall clock's for a real vehicle): outcome TIMELIMIT, with the safe stop.")
+              "the wall clock's for a real vehicle, the autopilot's own for --vehicle mavlink): "
+              "outcome TIMELIMIT, with the safe stop.")
 @click.option("--journal", type=OUTPUT,
               help="Journal the run here as it happens (a new file), to resume it if killed.")
 @click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "

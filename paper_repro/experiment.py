@@ -58,7 +58,8 @@ def trials() -> list[Trial]:
 WAYPOINTS = ((10.0, 0.0), (10.0, 8.0))
 
 
-def plot(runs: list[Trial], path: Path) -> Path:
+def plot(runs: list[Trial], path: Path, vehicle: str = "vehicle (simulated)",
+         title: str = "on the simulated AUV") -> Path:
     """Fig. 5, one row per run: the top view (x-y, to scale: the tank, the waypoints,
     the cross, the markers dropped) and the depth over time (depth downwards), the
     vehicle against what it was asked (the set points of section 3).
@@ -86,7 +87,7 @@ def plot(runs: list[Trial], path: Path) -> Path:
         for k, ((px, py), (x, y), _, _) in enumerate(legs):
             top.plot([px, x], [py, y], color="tab:red", ls="--", lw=1,
                      label="desired" if k == 0 else None)
-        top.plot(xs, ys, color="tab:blue", lw=1.5, label="vehicle (simulated)")
+        top.plot(xs, ys, color="tab:blue", lw=1.5, label=vehicle)
         top.plot([xs[0]], [ys[0]], "o", color="tab:blue", ms=5)
         for k, (wx, wy) in enumerate(WAYPOINTS, 1):
             top.plot([wx], [wy], "D", color="tab:red", ms=6, label="waypoints" if k == 1 else None)
@@ -106,7 +107,7 @@ def plot(runs: list[Trial], path: Path) -> Path:
         top.set_title(f"{r.label}: top view", fontsize=10)
         top.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
         # depth over time, the set depths as steps from the time each was given
-        side.plot(ts, zs, color="tab:blue", lw=1.5, label="vehicle (simulated)")
+        side.plot(ts, zs, color="tab:blue", lw=1.5, label=vehicle)
         steps_t = [t0 for _, _, t0, _ in legs] + [ts[-1]]
         steps_z = [z for *_, z in legs]
         side.step(steps_t, steps_z + steps_z[-1:], where="post", color="tab:red", ls="--",
@@ -118,7 +119,7 @@ def plot(runs: list[Trial], path: Path) -> Path:
         side.set_title(f"depth: {r.outcome.value} at t = {r.time:.1f} s", fontsize=10)
         side.grid(alpha=0.3)
         side.legend(fontsize=7, loc="lower right")
-    fig.suptitle("Fig. 5. The SAUC-E mission (Algorithm 1) on the simulated AUV, "
+    fig.suptitle(f"Fig. 5. The SAUC-E mission (Algorithm 1) {title}, "
                  f"{width:g} x {length:g} x {depth:g} m tank", fontsize=11)
     fig.tight_layout()
     fig.savefig(path, dpi=110)

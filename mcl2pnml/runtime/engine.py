@@ -336,11 +336,14 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
                  listener: Listener | None = None, max_time: float | None = None) -> Run:
     """Drive ``engine`` against a real vehicle (a :class:`~mcl2pnml.runtime.bridge.MappedVehicle`).
 
-    Time is the wall clock from the start; time-outs fire when it reaches
-    them, and events count from when they arrive. A real vehicle can always
+    Time is the wall clock from the start, or the vehicle's own clock where
+    it keeps one (an autopilot's, so that a simulator sped up 100 times
+    gives the same run); time-outs fire when it reaches them, and events
+    count from when they arrive. A real vehicle can always
     still answer, so a run ends with a result, at ``max_time`` (TIMELIMIT), when
     the link drops (STALLED, saying so), or when the operator interrupts it;
-    each way with the safe stop of :func:`run`.
+    each way with the safe stop of :func:`run`, then the vehicle's own safe
+    state (:meth:`~mcl2pnml.runtime.aal.LiveVehicle.secure`).
     """
     import time
 
