@@ -141,6 +141,9 @@ class AutopilotMapping:
             raise Mcl2PnmlError(f"not an autopilot mapping: {json_fault(e)}",
                                 Location(filename)) from None
         where = locator(text, filename)
+        nan = _nan(data)
+        if nan is not None:     # Python's json reads NaN, and NaN passes every bound
+            raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
         _check(data, SCHEMA, where)
         bindings = {}
         for name, spec in data["primitives"].items():
@@ -171,21 +174,43 @@ class AutopilotMapping:
         return cls.from_json(source.read_text("utf-8"), "ardusub.json (mcl2pnml's own)")
 
 
+def _nan(value: Any) -> tuple | None:
+    """The path of the first NaN in a parsed file, or None."""
+    stack = [((), value)]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, float) and value != value:
+            return path
+        items = value.items() if isinstance(value, dict) else \
+            enumerate(value) if isinstance(value, list) else ()
+        stack.extend(reversed([((*path, k), v) for k, v in items]))
+    return None
+
+
 def _check(value: Any, schema: dict[str, Any], where, prefix: tuple = ()) -> None:
     """``value`` against ``schema``: the first fault, at its line and column, or nothing."""
     from jsonschema import Draft202012Validator
     from jsonschema.exceptions import best_match
 
-    error = best_match(Draft202012Validator(schema).iter_errors(value))
-    if error is None:
-        return
-    path = tuple(error.absolute_path)
-    message = error.message
-    if error.validator == "additionalProperties":
-        valid = sorted(error.schema.get("properties", {}))
-        message = message.replace("Additional properties are not allowed ", "unknown setting ")
-        message += "; valid: " + ", ".join(valid)
-    elif error.validator == "enum":
-        message = f"{json.dumps(error.instance)[:80]} is not one of " + ", ".join(
-            map(str, error.validator_value))
-    raise Mcl2PnmlError(f"{dotted(prefix + path)}: {message[:300]}", where(path))
+    try:
+        error = best_match(Draft202012Validator(schema).iter_errors(value))
+        if error is None:
+            return
+        path = at = tuple(error.absolute_path)
+        message = error.message
+        if error.validator == "additionalProperties":
+            valid = sorted(error.schema.get("properties", {}))
+            message = message.replace("Additional properties are not allowed ",
+                                      "unknown setting ")
+            message += "; valid: " + ", ".join(valid)
+            # shown where the first unknown setting is, as a world file's is
+            at += tuple(key for key in error.instance if key not in valid)[:1]
+        elif "propertyNames" in error.absolute_schema_path:    # a bad name: where it is
+            at += (error.instance,)
+        elif error.validator == "enum":
+            message = f"{json.dumps(error.instance)[:80]} is not one of " + ", ".join(
+                map(str, error.validator_value))
+    except RecursionError as e:   # a value nested a little less deep than json reads: its repr
+        raise Mcl2PnmlError(f"not an autopilot mapping: {json_fault(e)}",
+                            Location(where(()).file)) from None
+    raise Mcl2PnmlError(f"{dotted(prefix + path)}: {message[:300]}", where(at))

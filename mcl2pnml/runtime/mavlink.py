@@ -23,7 +23,7 @@ UDP or a serial line, through ``pymavlink``, the ``mavlink`` extra):
   failsafe counts them on its clock); the autopilot's own heartbeat
   awaited: none within the liveness, the link is lost, and the run stops
   with its safe stop. A heartbeat of another kind of vehicle, a clock
-  that runs back or leaps, a peer that sends only garbage: the same.
+  that runs back, leaps or stands, a peer that sends only garbage: the same.
 * **Safe state** (:meth:`MavlinkVehicle.secure`): after the run loop has
   disabled every primitive, the mapping's steps (hold, surface, disarm),
   each logged acknowledged or not.
@@ -123,6 +123,9 @@ class MavlinkVehicle(LiveVehicle):
         self.t0 = 0.0                      # its reading when the mission's clock started
         self.ned: tuple[float, float, float] | None = None
         self.speed = 0.0
+        #: its depth (m, down): LOCAL_POSITION_NED's, or GLOBAL_POSITION_INT's, which it
+        #: sends on (from its depth sensor) when its EKF has lost the horizontal position
+        self.depth: float | None = None
         self.yaw = 0.0
         self.mode: int | None = None
         self.armed = False
@@ -130,6 +133,7 @@ class MavlinkVehicle(LiveVehicle):
         self.position_since: float | None = None   # when the EKF last had a position
         self.prearm = False
         self.last_heartbeat = 0.0                 # wall clock
+        self.clock_moved = 0.0                    # wall clock; 0: its clock not yet awaited
         self.last_text = ""
         self.bad_data = 0
         self.notes_dropped = 0
@@ -163,8 +167,9 @@ class MavlinkVehicle(LiveVehicle):
                     "--sim-primitives)", None)
 
     def clock(self) -> float:
-        """The mission's clock: the autopilot's seconds since it was armed for the mission."""
-        return (self.boot or 0.0) - self.t0
+        """The mission's clock: the autopilot's seconds since it was armed for the mission
+        (0 until then: a run that never started ends at 0, not at the autopilot's uptime)."""
+        return (self.boot or 0.0) - self.t0 if self.t0 else 0.0
 
     def act(self, action: Action) -> None:
         self._ready()
@@ -230,6 +235,12 @@ class MavlinkVehicle(LiveVehicle):
         finally:
             socket.setdefaulttimeout(previous)
         self.opened = True
+        for hook, why in (("handle_eof", "the autopilot closed the connection"),
+                          ("handle_disconnect", "the connection was reset")):
+            # pymavlink's TCP link prints these (on our standard output, at every read
+            # after) and reads on from a closed socket: here either breaks the link
+            if hasattr(self.conn, hook):
+                setattr(self.conn, hook, _broken(why))
         try:
             self._prepare()
         except (VehicleFault, LinkLost) as e:
@@ -237,10 +248,12 @@ class MavlinkVehicle(LiveVehicle):
 
     def _prepare(self) -> None:
         self._await_heartbeat()
+        # the speed-up first: it sets our heartbeats' period, and the autopilot's GCS
+        # failsafe counts from the first one it sees
+        self._read_speedup()
         self.beat = threading.Thread(target=self._heartbeats, name="mavlink-heartbeat",
                                      daemon=True)
         self.beat.start()
-        self._read_speedup()
         mavlink = _mavutil().mavlink
         rate = 1e6 / self.mapping.telemetry_rate
         for message, interval in ((mavlink.MAVLINK_MSG_ID_LOCAL_POSITION_NED, rate),
@@ -249,6 +262,7 @@ class MavlinkVehicle(LiveVehicle):
                                   (mavlink.MAVLINK_MSG_ID_SYS_STATUS, 5e5),
                                   (mavlink.MAVLINK_MSG_ID_SYSTEM_TIME, 5e5)):
             self._command(SET_MESSAGE_INTERVAL, message, interval)
+        self.clock_moved = time.monotonic()
         self._log_note("connected: system %d, a submarine; speed-up %g" %
                        (self.target[0], self.speedup))
         ready = self._until(lambda: self.ekf & EKF_POS_HORIZ_ABS and self.prearm
@@ -301,11 +315,14 @@ class MavlinkVehicle(LiveVehicle):
                 if math.isfinite(value) and 0 < value <= 10_000:
                     self.speedup = value
                 return
+            if msg is not None:     # its heartbeats and the rest count meanwhile
+                self._handle(msg)
 
     def _heartbeats(self) -> None:
-        """Our heartbeat, ``heartbeat`` seconds of the autopilot's clock apart."""
+        """Our heartbeat, ``heartbeat`` seconds of the autopilot's clock apart, the first at
+        once (one wall second later would be 100 of a simulator's at a speed-up of 100)."""
         mavlink = _mavutil().mavlink
-        while not self.stopping.wait(self.link.heartbeat / max(1.0, self.speedup)):
+        while True:
             try:
                 with self.lock:
                     self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS,
@@ -313,6 +330,8 @@ class MavlinkVehicle(LiveVehicle):
                                                  mavlink.MAV_STATE_ACTIVE)
             except Exception as e:   # the link is gone: the loop hears it as lost
                 self.send_fault = f"cannot send to the autopilot: {e}"
+                return
+            if self.stopping.wait(self.link.heartbeat / max(1.0, self.speedup)):
                 return
 
     # -- receiving --------------------------------------------------------------------------
@@ -323,6 +342,13 @@ class MavlinkVehicle(LiveVehicle):
         except Exception as e:    # a socket error, a device gone
             raise LinkLost(f"the link to the autopilot broke: {e}") from None
 
+    def _take(self):
+        """The next message already received, without waiting (None: none)."""
+        try:
+            return self.conn.recv_msg()
+        except Exception as e:
+            raise LinkLost(f"the link to the autopilot broke: {e}") from None
+
     def _pump(self, timeout: float) -> None:
         """Take what the autopilot sent within ``timeout`` wall seconds; check liveness."""
         end = time.monotonic() + timeout
@@ -331,13 +357,17 @@ class MavlinkVehicle(LiveVehicle):
             self._handle(msg)
             if time.monotonic() > end:
                 break    # a flood: look at the bounds, then read on
-            msg = self._recv(0)
+            msg = self._take()
         self._check_pending()
         if time.monotonic() - self.last_heartbeat > self.link.liveness:
             raise LinkLost(f"no heartbeat from the autopilot for {self.link.liveness:g} s "
                            f"(bad MAVLink data: {self.bad_data} messages)")
         if self.send_fault is not None:
             raise LinkLost(self.send_fault)
+        if self.clock_moved and time.monotonic() - self.clock_moved > self.link.liveness:
+            at = "it has sent no time" if self.boot is None else f"at {self.boot:.3f} s"
+            raise VehicleFault(f"the autopilot's clock has not moved for {self.link.liveness:g} s"
+                               f" ({at}): no telemetry, or a clock that stands")
 
     def _until(self, done: Callable[[], Any], seconds: float) -> bool:
         """Pump until ``done()`` or ``seconds`` of the autopilot's clock have passed."""
@@ -366,8 +396,12 @@ class MavlinkVehicle(LiveVehicle):
             values = (msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz)
             if all(map(math.isfinite, values)) and max(map(abs, values)) < 1e6:
                 self.ned = (msg.x, msg.y, msg.z)
+                self.depth = msg.z
                 self.speed = math.sqrt(msg.vx ** 2 + msg.vy ** 2 + msg.vz ** 2)
                 self._sample()
+        elif kind == "GLOBAL_POSITION_INT":
+            self.depth = -msg.relative_alt / 1000.0
+            self.speed = math.sqrt(msg.vx ** 2 + msg.vy ** 2 + msg.vz ** 2) / 100.0
         elif kind == "ATTITUDE":
             if math.isfinite(msg.yaw):
                 self.yaw = msg.yaw
@@ -377,6 +411,7 @@ class MavlinkVehicle(LiveVehicle):
                 self.position_since = None
             elif self.position_since is None:
                 self.position_since = self.boot
+            self._position_lost()
         elif kind == "SYS_STATUS":
             self.prearm = bool(msg.onboard_control_sensors_health & PREARM_OK)
         elif kind == "COMMAND_ACK":
@@ -393,8 +428,14 @@ class MavlinkVehicle(LiveVehicle):
             return
         if self.boot is not None and (seconds < self.boot - 1.0
                                       or seconds > self.boot + MAX_CLOCK_STEP):
-            raise VehicleFault(f"the autopilot's clock went from {self.boot:.3f} s to "
+            was, self.boot = self.boot, seconds
+            if self.t0:     # the mission's time goes on from where it was
+                self.t0 += seconds - was
+            # said once: the run ends on it, and its safe state reads the new clock
+            raise VehicleFault(f"the autopilot's clock went from {was:.3f} s to "
                                f"{seconds:.3f} s: rebooted, or not one autopilot")
+        if self.boot is None or seconds > self.boot:
+            self.clock_moved = self.clock_moved and time.monotonic()
         self.boot = seconds if self.boot is None else max(self.boot, seconds)
 
     def _heartbeat(self, msg) -> None:
@@ -468,6 +509,21 @@ class MavlinkVehicle(LiveVehicle):
                              "simulated" if by == "simulated" else "autopilot",
                              "sensed" if by == "simulated" else "telemetry")
         self._steer()
+
+    def _position_lost(self) -> None:
+        """Without a position the autopilot may stop sending LOCAL_POSITION_NED (ArduSub
+        does), so its EKF reports judge that too: each flown primitive fails once it has
+        had none for the mapping's while, as :meth:`_sample` says."""
+        if not self.t0 or self.position_since is None \
+                or self.boot - self.position_since < self.mapping.position_lost_after:
+            return
+        for name in sorted(self.active):
+            act = self.active[name]
+            if act.binding.by == "autopilot" and act.dead is None:
+                why = (f"the autopilot has had no position for "
+                       f"{self.mapping.position_lost_after:g} s (EKF flags {self.ekf:#x})")
+                self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
+                act.dead = why
 
     @staticmethod
     def _goal_event(act: _Active) -> EventKind | None:
@@ -594,6 +650,7 @@ class MavlinkVehicle(LiveVehicle):
 
     def _command(self, command: int, *params: float) -> None:
         params = list(params) + [0.0] * (7 - len(params))
+        self.last_text = ""     # what it says next may be why it refuses this one
         with self._sending():
             self.conn.mav.command_long_send(*self.target, command, 0, *params)
 
@@ -647,7 +704,21 @@ class MavlinkVehicle(LiveVehicle):
 
         for name in self.mapping.safe_state:
             try:
-                self._ready()
+                # a vehicle that never got ready, or whose clock leapt, is still asked: only
+                # a link that is gone is not (an armed vehicle must not be left armed)
+                if isinstance(self.unready, LinkLost):
+                    raise self.unready
+                if self.send_fault is not None:
+                    raise LinkLost(self.send_fault)
+                if not self.armed:
+                    # motors off is the safe state a step would reach: nothing is sent
+                    # (SURFACE or POSHOLD would only wait to be armed)
+                    where = f"(in {MODES.get(self.mode, self.mode)})"
+                    if name == "disarm":
+                        step(name, f"already disarmed {where}: nothing to send", True)
+                    else:
+                        step(name, f"not sent: the autopilot is disarmed {where}", False)
+                    continue
                 if name == "hold":
                     mode, word = (POSHOLD, "POSHOLD") if self.ekf & EKF_POS_HORIZ_ABS \
                         else (ALT_HOLD, "ALT_HOLD")
@@ -663,10 +734,10 @@ class MavlinkVehicle(LiveVehicle):
                 elif name == "surface":
                     result = self._ask(SET_MODE, 1, SURFACE)
                     if result == 0:
-                        up = self._until(lambda: self.ned is not None
-                                         and self.ned[2] <= self.mapping.surface_depth,
+                        up = self._until(lambda: self.depth is not None
+                                         and self.depth <= self.mapping.surface_depth,
                                          self.mapping.surface_within)
-                        depth = f"{self.ned[2]:.2f} m" if self.ned else "unknown"
+                        depth = "unknown" if self.depth is None else f"{self.depth:.2f} m"
                         step(name, "SURFACE acknowledged; " + (
                             f"at the surface (depth {depth})" if up else
                             f"depth {depth} after {self.mapping.surface_within:g} s"), True)
@@ -694,6 +765,12 @@ class MavlinkVehicle(LiveVehicle):
                 pass
 
 
+def _broken(why: str) -> Callable[[], None]:
+    def hook() -> None:
+        raise ConnectionError(why)
+    return hook
+
+
 def _result(result: int | None) -> str:
     return "no acknowledgement" if result is None else RESULTS.get(result, f"result {result}")
 
@@ -712,7 +789,9 @@ def _url(address: str) -> str:
     scheme, _, rest = address.partition(":")
     if scheme in ("tcp", "udp"):
         host, sep, port = rest.rpartition(":")
-        if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        # pymavlink's links take a host name or an IPv4 address (no IPv6)
+        if not sep or not host or ":" in host or not port.isdigit() \
+                or not 0 < int(port) < 65536:
             raise OptionError("--connect", f"'{address}': write {scheme}:HOST:PORT, as "
                               f"{scheme}:127.0.0.1:{5760 if scheme == 'tcp' else 14550}")
         return f"{scheme}:{host}:{port}"
