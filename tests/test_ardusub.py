@@ -41,6 +41,8 @@ from mcl2pnml.runtime.autopilot import AutopilotMapping
 from mcl2pnml.runtime.engine import Outcome
 from mcl2pnml.runtime.mavlink import DO_SET_SERVO
 from mcl2pnml.runtime.reference import ReferenceEngine
+from mcl2pnml.runtime.simulator import World
+from test_show import browser, marking, page_of  # noqa: F401 (fixtures)
 
 EXAMPLES = ROOT / "examples"
 SAUCE = EXAMPLES / "sauce.mcl"
@@ -257,6 +259,37 @@ def test_without_the_cross_the_survey_ends_ok_and_drops_no_marker(autopilot, tmp
     assert legs and len(flight.reports("achieved", "GoToWayPoint")) == len(legs)
     flight.assert_left_disarmed()
     assert_as_the_semantics_say(flight)
+
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_flight_is_replayed_on_the_page_and_drawn_as_fig_5(autopilot, tmp_path, page_of):
+    """``show --run`` plays a flight's log on the net; Fig. 5 is drawn from its own track."""
+    from paper_repro.ardusub import main as fig5, trial_from_log
+    flight = fly(autopilot, tmp_path)
+    assert flight.outcome == "OK", flight.out[-3000:]
+    log = tmp_path / "run.jsonl"
+    out = run_cli("show", SAUCE, "--run", log, "-o", tmp_path / "flight.html", cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    page = page_of(tmp_path / "flight.html")
+    page.click("#run-end")
+    assert "mission.OK" in marking(page)
+    fired = [e["fire"] for e in flight.log if "fire" in e]
+    assert page.locator("#history li").all_text_contents() == fired
+    # the log's own lines are told in words, the track is not played
+    shown = page.locator("#run-entries li").all_text_contents()
+    assert any("(simulated)" in line and "DetectCross" in line for line in shown)
+    assert any("safe state disarm" in line for line in shown)
+    assert not any('"track"' in line for line in shown)
+    # Fig. 5 from the log alone: the track, the set points, the marker, the outcome
+    trial = trial_from_log(log, "flown", None)
+    assert trial.outcome is Outcome.OK
+    assert len(trial.trajectory) == sum("track" in e for e in flight.log) > 10
+    assert trial.markers == [tuple(e["marker"]) for e in flight.log if "marker" in e]
+    deepest = max(args[0] for action, primitive, args in flight.actions()
+                  if (action, primitive) == ("enable", "KeepDepth"))
+    assert max(z for _, _, _, z in trial.trajectory) >= deepest - 2 * World().depth_band
+    assert fig5([str(log), "-o", str(tmp_path / "fig5.png")]) == 0
+    assert (tmp_path / "fig5.png").stat().st_size > 10_000
 
 
 # -- faults ------------------------------------------------------------------------------------
