@@ -411,13 +411,14 @@ def flown_examples() -> list[Path]:
 
 @pytest.mark.slow
 @pytest.mark.timeout(300)
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("mission", flown_examples(), ids=lambda p: p.stem)
 def test_every_example_ends_on_the_autopilot_as_on_the_simulator(autopilot, tmp_path,
-                                                                 mission):
-    simulated = run_cli("run", mission, "--json", cwd=ROOT, timeout=120)
+                                                                 mission, engine):
+    simulated = run_cli("run", mission, "--json", "--engine", engine, cwd=ROOT, timeout=120)
     assert simulated.returncode in (0, 1, 4), simulated.stderr
     expected = json.loads(simulated.stdout)
-    flight = fly(autopilot, tmp_path / "run", mission=mission, bound=240)
+    flight = fly(autopilot, tmp_path / "run", "--engine", engine, mission=mission, bound=240)
     assert_autopilot_disarmed(autopilot)
     flight.assert_clean()
     world = mission.with_name(mission.stem + ".world.json")
@@ -428,3 +429,4 @@ def test_every_example_ends_on_the_autopilot_as_on_the_simulator(autopilot, tmp_
     here = {e["primitive"] for e in flight.reports("failed")}
     there = {e["primitive"] for e in expected["trace"] if e.get("event") == "failed"}
     assert here == there, (here, there)
+    assert_as_the_semantics_say(flight, mission)

@@ -34,6 +34,7 @@ import math
 import threading
 import time
 from collections import deque
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping
 
@@ -572,13 +573,10 @@ class MavlinkVehicle(LiveVehicle):
 
     def _release(self, act: _Active) -> None:
         b = act.binding
-        try:
-            if b.by == "servo" and b.release_pwm is not None:
-                self._command(DO_SET_SERVO, b.channel, b.release_pwm)
-            elif b.by == "relay":
-                self._command(DO_SET_RELAY, b.relay, 0)
-        except LinkLost:
-            raise
+        if b.by == "servo" and b.release_pwm is not None:
+            self._command(DO_SET_SERVO, b.channel, b.release_pwm)
+        elif b.by == "relay":
+            self._command(DO_SET_RELAY, b.relay, 0)
 
     # -- set points -------------------------------------------------------------------------
 
@@ -635,18 +633,16 @@ class MavlinkVehicle(LiveVehicle):
 
     # -- commands ---------------------------------------------------------------------------
 
+    @contextmanager
     def _sending(self):
-        vehicle = self
-
-        class _Send:
-            def __enter__(self):
-                vehicle.lock.acquire()
-
-            def __exit__(self, kind, error, tb):
-                vehicle.lock.release()
-                if error is not None and not isinstance(error, (LinkLost, VehicleFault)):
-                    raise LinkLost(f"cannot send to the autopilot: {error}") from None
-        return _Send()
+        """One send at a time (the heartbeat thread sends too); a failure loses the link."""
+        with self.lock:
+            try:
+                yield
+            except (LinkLost, VehicleFault):
+                raise
+            except Exception as e:   # a socket error, a device gone
+                raise LinkLost(f"cannot send to the autopilot: {e}") from None
 
     def _command(self, command: int, *params: float) -> None:
         params = list(params) + [0.0] * (7 - len(params))
@@ -686,7 +682,9 @@ class MavlinkVehicle(LiveVehicle):
             self.notes_dropped += 1
             return
         self.notes += 1
-        self.log(self.clock() if self.t0 else 0.0, "autopilot", text, {"autopilot": text})
+        # before it is armed the mission's clock is 0: the autopilot's own time says when
+        boot = {} if self.boot is None else {"boot": round(self.boot, 3)}
+        self.log(self.clock(), "autopilot", text, {"autopilot": text, **boot})
 
     # -- the end ----------------------------------------------------------------------------
 
