@@ -76,9 +76,11 @@ demo: setup
 	@echo "  paper_repro/out/fig1-4.svg/.png  Figs. 1 to 4 redrawn from the templates"
 	@echo "  paper_repro/out/fig5.png         Fig. 5: the mission on the simulated AUV, with and without the cross"
 
-# the tests are spread over the cores (up to four: each worker loads numba and a
-# browser); a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
-TEST_WORKERS := -n auto --maxprocesses=4
+# the tests are spread over one worker more than the cores (up to four: each worker
+# loads numba and a browser), since a third of their time is spent waiting on peer
+# tools, the browser and the autopilot (on 2 cores: 4:39 with 3 workers, 5:14 with 2);
+# a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
+TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 )))
 
 test: setup
 	$(PY) -m pytest $(TEST_WORKERS)

@@ -167,7 +167,7 @@ def test_a_mapping_nested_deep_is_one_message_at_every_depth():
     deepest = _deepest_json()
     for template in ('{"primitives": {"A": %s}}', '{"primitives": {"A": {"by": %s}}}',
                      '{"primitives": {}, "home": %s}', '%s'):
-        for depth in range(deepest - 20, deepest + 3):
+        for depth in range(deepest - 6, deepest + 3):
             e = error_of(template % ("[" * depth + "]" * depth))    # ours, no RecursionError
             assert str(e).startswith("m.json:")
 
