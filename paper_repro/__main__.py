@@ -81,7 +81,7 @@ therefore serialise the tasks of one primitive itself; the templates alone do
 not.
 
 **Monitor.** The paper ends a monitor OK whenever its second structure ends
-first. Ours ends FAIL when that structure failed (shared/spec/mcl.md): a
+first. Ours ends FAIL when that structure failed (docs/mcl.md): a
 detector that fails must not send the vehicle to drop a marker.
 
 **Time.** The time-out `t03` is explored untimed: it may fire in any order

@@ -1,6 +1,6 @@
 """What travels in a net's payloads: the contract between the compiler and its readers.
 
-The compiler (section 2.4 of the paper, and shared/spec/mcl.md, "Sharing")
+The compiler (section 2.4 of the paper, and docs/mcl.md, "Sharing")
 leaves in the net everything the Mission Control System needs to run it
 (section 2.1): which transitions send actions to the vehicle's primitives,
 which ones the vehicle's events fire, with which arguments each call of a
@@ -83,7 +83,7 @@ MISSION = "mission"
 
 class MissionPlace(enum.Enum):
     """The fusion places of the mission's root structure (the paper's Fp,
-    section 2.5; shared/spec/mcl.md, "Results"): a run starts by marking B
+    section 2.5; docs/mcl.md, "Results"): a run starts by marking B
     and ends when one result place is marked."""
 
     B = "B"
@@ -109,11 +109,11 @@ class MissionPlace(enum.Enum):
         return f"{MISSION}.{self.value}"
 
 
-#: The places whose marking ends a run, each a result of shared/spec/mcl.md.
+#: The places whose marking ends a run, each a result of docs/mcl.md.
 RESULT_PLACES = (MissionPlace.OK, MissionPlace.FAIL, MissionPlace.ABORTED)
 
 #: A call site's transition that enters the callee (it takes the callee's
-#: gate and locks: shared/spec/mcl.md, "Sharing"); its payload holds a
+#: gate and locks: docs/mcl.md, "Sharing"); its payload holds a
 #: :class:`CallEntry`.
 ENTER = "enter"
 
@@ -173,7 +173,7 @@ class CallEntry:
     """A call site's entry, as the compiler writes it (section 2.4): the callee
     it enters and the values of the callee's parameters, evaluated in
     ``scope`` when the entry fires. One shared net per task and function,
-    entered with each call's own arguments (shared/spec/mcl.md, "Sharing")."""
+    entered with each call's own arguments (docs/mcl.md, "Sharing")."""
 
     callee: str
     scope: str
@@ -206,7 +206,7 @@ class EventBinding:
 
 @dataclass(frozen=True)
 class TimeOut:
-    """A task's time-out (``t03``; shared/spec/mcl.md, "Time")."""
+    """A task's time-out (``t03``; docs/mcl.md, "Tasks, patterns and time-outs")."""
 
     seconds: int | float | None = None
     """None in a pattern template (the transition *is* the time-out); the

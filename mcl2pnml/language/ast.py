@@ -1,6 +1,6 @@
 """The MCL abstract syntax tree: immutable data that keeps source positions.
 
-One dataclass per construct of ``shared/spec/mcl.md``. Every node has a
+One dataclass per construct of ``docs/mcl.md``. Every node has a
 ``pos`` (line, column), so that the checker and the compiler can point at
 the source; positions take no part in equality, so two programs that say
 the same thing are equal wherever they were written.

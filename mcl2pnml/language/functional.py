@@ -13,7 +13,7 @@ functions (structures or calls), as section 3.2 describes:
 * calls of tasks and functions stay calls, with their arguments as written.
 
 The paper's Algorithm 1 gives, character for character, the string that
-``shared/spec/cli.md`` shows for Algorithm 2.
+``docs/mcl.md`` shows for Algorithm 2.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """MCL text to the AST (lark, LALR), the first stage of the compiler.
 
-The grammar is ``shared/spec/mcl.md``'s: declarations in any order (const,
+The grammar is ``docs/mcl.md``'s: declarations in any order (const,
 primitive, task, function, mission), statements that are calls, blocks,
 ``parallel``, ``monitor``, ``if``/``then``/``else`` and ``while``/``do``; and
 ``property`` declarations (docs/properties.md), whose words are keywords only

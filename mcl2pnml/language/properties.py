@@ -46,7 +46,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language import ast
 
-#: The results a task, a function or the mission ends with (shared/spec/mcl.md, "Results").
+#: The results a task, a function or the mission ends with (docs/mcl.md, "Results").
 RESULTS = ("OK", "FAIL", "ABORTED")
 
 #: Each atom: what its arguments name ("primitive", "callable": a task or a function,

@@ -1,4 +1,4 @@
-"""The reference engine: MCL run directly by the rules of ``shared/spec/mcl.md``, no Petri net.
+"""The reference engine: MCL run directly by the rules of ``docs/mcl.md``, no Petri net.
 
 It exists to judge the executor (and to be judged by it): the same mission,
 the same vehicle, and both engines must give the same outcome, time and

@@ -1,7 +1,7 @@
 """One run of a mission: a vehicle, an engine, the log and the journal, wired together.
 
 What ``mcl2pnml run`` does between reading its options and printing the
-outcome (shared/spec/cli.md, ``run``): resume a journal's run with the
+outcome (docs/running.md, ``run``): resume a journal's run with the
 journal's own options, take the world beside the mission for the simulator
 given none (``NAME.world.json``), build the vehicle
 (:mod:`mcl2pnml.runtime.vehicles`) with the user's simulated primitives,

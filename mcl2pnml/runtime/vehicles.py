@@ -88,7 +88,7 @@ def _script(spec: str, connect: str | None, world: Path | None,
 #: Every kind of vehicle, the first that matches wins: the kinematic AUV
 #: simulator, a real vehicle through a mapping file and a bridge server, an
 #: autopilot over MAVLink (ArduSub, docs/ardusub.md), and
-#: (whatever else is given) a vehicle script of shared/spec/cli.md.
+#: (whatever else is given) a vehicle script (docs/running.md).
 VEHICLES: tuple[VehicleKind, ...] = (
     VehicleKind("sim", lambda spec: spec == "sim", _simulator, takes_world=True),
     VehicleKind("bridge:MAPPING.json", lambda spec: spec.startswith("bridge:"), _bridge,
