@@ -39,7 +39,7 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = [
-    "check_file", "check_source", "properties_of", "compile_file", "compile_source", "functional_form",
+    "check_file", "check_source", "warnings_of", "properties_of", "compile_file", "compile_source", "functional_form",
     "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "template_clusters", "templates",
     "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
     "Shown", "save_reachability_json",
@@ -60,6 +60,14 @@ def check_source(text: str, filename: str = "<mcl>"):
     from mcl2pnml.language.checker import check
     from mcl2pnml.language.parser import parse
     return check(parse(text, filename))
+
+
+def warnings_of(checked) -> list:
+    """The warnings of a checked program (:mod:`mcl2pnml.language.lint`): valid MCL that
+    does not do what it seems to say, each with its code, location and fix; those the
+    source acknowledges (``// mcl: allow W001 because ...``) left out."""
+    from mcl2pnml.language.lint import lint
+    return lint(checked)
 
 
 def compile_checked(checked, *, reduced: bool = False) -> Net:
@@ -84,7 +92,8 @@ def _user_templates_proven() -> None:
 
 def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,
                   max_memory: int | str | None = None, max_size: int | str | None = None,
-                  max_atoms: int | None = None) -> tuple[Net, tuple["Property", ...]]:
+                  max_atoms: int | None = None, checked=None
+                  ) -> tuple[Net, tuple["Property", ...]]:
     """The compiled net of ``mission`` and its properties compiled to predicates on its
     places (:mod:`mcl2pnml.language.properties`): those the mission declares, then those
     of ``extra`` (a side file of ``property`` declarations), each with its location.
@@ -93,13 +102,14 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
     ``extra`` over ``max_size`` bytes (or as ``--max-properties-size`` takes it) is
     refused before it is read, and properties of more than ``max_atoms`` atoms in all
     once parsed, before they are checked (defaults: the limits of
-    :mod:`mcl2pnml.core.bounds`)."""
+    :mod:`mcl2pnml.core.bounds`). ``checked``: the mission already checked, not read
+    again."""
     from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS
     from mcl2pnml.language.parser import parse_file
     from mcl2pnml.language.properties import check_atoms, check_side_file, compile_properties
     if isinstance(max_size, str):
         max_size = parse_size(max_size, "--max-properties-size")
-    checked = check_file(mission)
+    checked = check_file(mission) if checked is None else checked
     side = None if extra is None else parse_file(
         extra, "properties file", MAX_PROPERTIES_SIZE if max_size is None else max_size,
         "--max-properties-size")
@@ -116,7 +126,7 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
 
 
 def compile_file(path: str | Path, *, reduced: bool = False,
-                 max_memory: int | str | None = None) -> Net:
+                 max_memory: int | str | None = None, checked=None) -> Net:
     """The mission in ``path`` compiled to one net, within the memory budget.
 
     A mission's net is about as large as its text is long, but only the
@@ -124,11 +134,12 @@ def compile_file(path: str | Path, *, reduced: bool = False,
     (:func:`mcl2pnml.core.memory.guard`; ``max_memory`` in bytes or as
     ``--max-memory`` takes it, default half the memory available), which
     stops it with one message instead of the kernel killing the process.
+    ``checked``: the file already checked (:func:`check_file`), not read again.
     """
     from mcl2pnml.core.memory import Budget, guard
     if isinstance(max_memory, str):
         max_memory = parse_size(max_memory)
-    checked = check_file(path)
+    checked = check_file(path) if checked is None else checked
     with guard(Budget(max_memory), f"compiling {path}"):
         return compile_checked(checked, reduced=reduced)
 

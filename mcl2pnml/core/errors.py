@@ -97,11 +97,12 @@ class PnmlError(Mcl2PnmlError):
 SHOWN_ERRORS = 50
 
 
-def shown(errors: Sequence[object]) -> list[str]:
-    """The errors as lines to print: the first :data:`SHOWN_ERRORS`, then how many more."""
+def shown(errors: Sequence[object], what: str = "errors") -> list[str]:
+    """The errors (or warnings) as lines to print: the first :data:`SHOWN_ERRORS`, then
+    how many more."""
     lines = [str(e) for e in errors[:SHOWN_ERRORS]]
     if len(errors) > SHOWN_ERRORS:
-        lines.append(f"... and {len(errors) - SHOWN_ERRORS:,} more errors "
+        lines.append(f"... and {len(errors) - SHOWN_ERRORS:,} more {what} "
                      f"(the first {SHOWN_ERRORS} are shown)")
     return lines
 
