@@ -92,6 +92,21 @@ class Event:
         return {"t": _time(self.t), "event": self.kind.value, "primitive": self.primitive}
 
 
+@dataclass(frozen=True)
+class Reported(Event):
+    """An achieved or failed that says who judged it and why: the autopilot's telemetry
+    or its acknowledgement (``source`` "autopilot"), a simulated sensor ("simulated"),
+    or the simulator ("simulator": why the primitive failed).
+
+    Its trace entry is an :class:`Event`'s (:func:`canonical_trace`); the run log
+    adds ``source`` and ``why`` (:mod:`mcl2pnml.runtime.runlog`), and the run's
+    ``--json`` lists the failures' reasons apart, as ``problems``.
+    """
+
+    source: str = "autopilot"
+    why: str = ""
+
+
 def _time(t: float) -> float | int:
     return int(t) if float(t).is_integer() else round(t, 6)
 

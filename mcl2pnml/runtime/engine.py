@@ -27,7 +27,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
-from mcl2pnml.runtime.aal import (Action, ActionKind, Event, LinkLost, SafeStop, Vehicle, VehicleFault, VehicleInputError,
+from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, Reported, SafeStop, Vehicle, VehicleFault, VehicleInputError,
                   _time, canonical_trace, causal_order)
 
 
@@ -180,7 +180,17 @@ class Run:
             out["safe_stop"] = [a.as_json() for a in self.safe_stop]
         if self.secured:
             out["safe_state"] = list(self.secured)
+        problems = self.problems()
+        if problems:
+            out["problems"] = problems
         return out
+
+    def problems(self) -> list[dict[str, Any]]:
+        """Why primitives failed, as the vehicle said (a :class:`Reported` failure): each
+        ``{"t", "primitive", "why", "source"}``, in the trace's order (cli.md)."""
+        return [{"t": _time(e.t), "primitive": e.primitive, "why": e.why, "source": e.source}
+                for e in self.entries
+                if isinstance(e, Reported) and e.kind is EventKind.FAILED and e.why]
 
     def report(self) -> list[str]:
         """The end of ``mcl2pnml run``'s text: the outcome, what it waits for, the safe stop."""

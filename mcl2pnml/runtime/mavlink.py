@@ -40,7 +40,7 @@ from typing import Any, Callable, Mapping
 
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
-                                  VehicleFault)
+                                  Reported, VehicleFault)
 from mcl2pnml.runtime.autopilot import AutopilotMapping, Binding
 from mcl2pnml.runtime.link import LinkOptions
 from mcl2pnml.runtime.simprims import Context, SimulatedPrimitive, Steer, installed
@@ -69,15 +69,6 @@ POLL = 0.05
 KEPT_NOTES = 200
 #: The track is logged once per this many seconds of the autopilot's clock.
 TRACK_EVERY = 1.0
-
-
-@dataclass(frozen=True)
-class Reported(Event):
-    """An achieved or failed judged by this layer: from the autopilot's telemetry or its
-    acknowledgement (``source`` "autopilot"), or from a simulated sensor ("simulated")."""
-
-    source: str = "autopilot"
-    why: str = ""
 
 
 @dataclass

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Vehicle
+from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Reported, Vehicle
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, read_text
 from mcl2pnml.runtime.simprims import Context, SimulatedPrimitive, built_in, installed
@@ -238,7 +238,7 @@ class AUVSimulator(Vehicle):
         if problem:
             # the vehicle cannot do it: it says so at once, and does nothing
             act.goal, act.bad = "S1", True
-            self.acks.append(Event(t, EventKind.FAILED, name))
+            self.acks.append(Reported(t, EventKind.FAILED, name, "simulator", problem))
             self.problems.append((t, name, problem))
             return
         steer = prim.steer(self._context(act, self.state))
@@ -358,7 +358,9 @@ class AUVSimulator(Vehicle):
             sensed = self._sensed(s, memories)
             if sensed:
                 name, kind = sensed[0]
-                self._lookahead = (s.t, Event(s.t, kind, name), memories)
+                event = Event(s.t, kind, name) if kind is not EventKind.FAILED else \
+                    Reported(s.t, kind, name, "simulator", _sensed_why(self.table[name]))
+                self._lookahead = (s.t, event, memories)
                 return self._lookahead
         return None
 
@@ -375,6 +377,8 @@ class AUVSimulator(Vehicle):
         act.goal = "S2" if event.kind is EventKind.ACHIEVED else "S1"
         if event.kind is EventKind.ACHIEVED:
             self.achievements[event.primitive] = self.achievements.get(event.primitive, 0) + 1
+        if isinstance(event, Reported):
+            self.problems.append((t, event.primitive, event.why))
         self.table[event.primitive].reported(self._context(act, self.state), event.kind, self)
         self._lookahead = None
         return event
@@ -395,6 +399,14 @@ class AUVSimulator(Vehicle):
             self.state = self._step(self.state, step, self.rng)
             self._sensed(self.state, memories)
             self.trajectory.append((self.state.t, self.state.x, self.state.y, self.state.z))
+
+
+def _sensed_why(prim: SimulatedPrimitive) -> str:
+    """Why a primitive failed after it started: its ``fails`` words, the at-once ones aside
+    (those are :meth:`~mcl2pnml.runtime.simprims.SimulatedPrimitive.check`'s, said then)."""
+    later = [part for part in prim.fails.split("; ")
+             if part and not part.startswith(("at once", "never"))]
+    return "; ".join(later) or f"{prim.name} reported its goal failed"
 
 
 #: The report that leaves each goal state as it is (Fig. 1: S2 achieved, S1 failed).
