@@ -1,6 +1,6 @@
 """One analysis of a net, as the JSON of ``mcl2pnml analyze --json`` and as a readable report.
 
-The JSON object holds what ``shared/spec/cli.md`` lists (``places``,
+The JSON object holds what docs/interop.md lists (``places``,
 ``transitions``, ``p_invariants``, ``siphons``, ``bounded``, ``safe``,
 ``terminal_markings``, ``reusable``, ``deadlock_free``, ``states``) and more:
 ``initial_marking``, ``t_invariants``, the minimal semi-positive invariants,
@@ -228,6 +228,9 @@ def _state_space_facts(net: Net, s, space) -> dict[str, Any]:
         # as every other tool counts them.
         "interface": "mission" if ours else "none",
         "deadlock_free": (b.deadlock_free if ours else not b.terminal) if b else None,
+        # the textbook's deadlock-freedom, whatever the interface: no dead marking at all
+        # (a mission's proper ends are dead, so it is false for every mission that ends)
+        "deadlock_free_textbook": not b.terminal if b else None,
         "deadlocks": sorted(list(m) for m in (b.improper if ours else b.terminal))
         if b else None,
         "ends_properly": b.deadlock_free if b else None,
@@ -338,25 +341,41 @@ def _yes(flag) -> str:
     return {True: "yes", False: "NO", None: "not computed"}[flag]
 
 
+def _textbook(r: dict[str, Any]) -> str:
+    """The textbook's deadlock-freedom (no dead marking reachable), with how many are."""
+    free = r.get("deadlock_free_textbook")
+    if free is None and r.get("terminal_markings") is not None:   # an answer of before
+        free = not r["terminal_markings"]
+    if free is not False or r.get("terminal_markings") is None:
+        return _yes(free)
+    n = len(r["terminal_markings"])
+    return f"no ({n:,} dead marking{'s' if n != 1 else ''})"
+
+
 def render_text(r: dict[str, Any]) -> str:
     """The analysis as a report of short tables, for people."""
     out = [f"Net {r['net']}: {r.get('places', '?')} places, {r.get('transitions', '?')} "
            f"transitions; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
+    textbook = ["deadlock-free (textbook: no dead marking reachable)", _textbook(r)]
     out.append(_table(["property", "holds"], [
         ["bounded", _yes(r["bounded"])],
         ["every siphon marked and controlled (inputs aside)", _yes(r.get("siphons_controlled"))],
         ["safe (1-bounded)", _yes(r["safe"])],
-        *([["deadlock-free (every dead marking is a proper end)", _yes(r.get("deadlock_free"))],
+        *([textbook,
+           ["no deadlock (ours: every dead marking is a proper end)",
+            _yes(r.get("deadlock_free"))],
            ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],
            ["reusable", _yes(r.get("reusable"))]] if r.get("interface") != "none" else
-          [["deadlock-free (no dead marking)", _yes(r.get("deadlock_free"))],
+          [textbook,
            ["M0 reachable again from every marking", _yes(r.get("home_marking"))]]),
         ["reachable markings" + (" (coverability nodes)" if r["bounded"] is False else ""),
          "not computed" if r["states"] is None else f"{r['states']:,}"],
     ]))
+    m0 = _tokens(r)
     if r["terminal_markings"] is not None:
-        out += ["", f"Terminal markings ({len(r['terminal_markings'])}):"]
-        out += [f"  {{{', '.join(m)}}}" for m in r["terminal_markings"]] or ["  none"]
+        out += ["", f"Terminal markings ({len(r['terminal_markings'])}), the dead ones, as "
+                "changes from M0 (--json: in full):"]
+        out += [f"  {_change(m0, m)}" for m in r["terminal_markings"]] or ["  none"]
     if "p_invariants" in r:
         if r["p_invariants"] is None:
             out += ["", "P-invariants: not computed (see below)"]
@@ -374,8 +393,14 @@ def render_text(r: dict[str, Any]) -> str:
                     for c in r["siphon_control"]]
             out.append(_table(["siphon", "marked at M0", "controlled"], rows))
         if r.get("t_invariants") is not None:
-            out += ["", f"T-invariants (a basis of {len(r['t_invariants'])}):"]
+            out += ["", f"T-invariants (a basis of {len(r['t_invariants'])}; its entries may "
+                    "be negative):"]
             out += [f"  {format_invariant(x)}" for x in r["t_invariants"]] or ["  none"]
+        semi = r.get("semipositive_t_invariants")
+        if semi is not None:
+            out += ["", f"Minimal semi-positive T-invariants ({len(semi)}; no negative entry: "
+                    "firing each, where it can fire, returns to the marking it left):"]
+            out += [f"  {format_invariant(x)}" for x in semi] or ["  none"]
     partial = r.get("partial") or {}
     if "markings_explored" in partial:
         found, explored = partial["deadlock_found"], partial["markings_explored"]
@@ -388,11 +413,33 @@ def render_text(r: dict[str, Any]) -> str:
         out += ["", "Partial answer: left out to stay within the memory budget: "
                 + ", ".join(k.replace("_", " ") for k in partial["left_out"]) + "."]
     if r.get("deadlocks") and r.get("interface") != "none":
-        out += ["", "Dead markings that are not a proper end:"]
-        out += [f"  {{{', '.join(m)}}}" for m in r["deadlocks"]]
+        out += ["", "Dead markings that are not a proper end, as changes from M0:"]
+        out += [f"  {_change(m0, m)}" for m in r["deadlocks"]]
     for key, why in r.get("limits", {}).items():
         out += ["", f"{key}: not computed ({why})"]
+    out += ["", "The terms (proper end, reusable, siphon, controlled, inputs aside, "
+            "invariants): see docs/glossary.md"]
     return "\n".join(out)
+
+
+def _change(m0: dict[str, int], marking: list[str]) -> str:
+    """A marking as its difference from M0: ``-B +FAIL`` (``p*2``: two tokens; ``w``: any
+    number, on a coverability node), or ``M0`` when it is M0."""
+    tokens = {}
+    for entry in marking:
+        name, _, n = entry.partition("*")
+        tokens[name] = n or "1"
+    words = []
+    for name in sorted(set(m0) | set(tokens), key=lambda p: (p not in m0, p)):
+        have, had = tokens.get(name, "0"), m0.get(name, 0)
+        if not have.isdigit():          # unbounded: omega
+            words.append(f"+{name}*{have}")
+            continue
+        delta = int(have) - had
+        if delta:
+            words.append(("+" if delta > 0 else "-") + name
+                         + (f"*{abs(delta)}" if abs(delta) != 1 else ""))
+    return " ".join(words) or "M0 (no change)"
 
 
 def _tokens(r: dict[str, Any]) -> dict[str, int]:
