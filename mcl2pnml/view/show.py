@@ -34,12 +34,32 @@ time-out (``Timing``, the task's ``t03``) may fire only once it has been
 enabled for its delay, its timer kept while it stays enabled and started
 again when it is enabled again; the supervisor's steps (:func:`role`: neither
 a time-out nor fired by a vehicle event) come first, so *Advance time* is
-refused, and the page says why, while one is enabled; *Settle* takes them in
-the executor's order (the one enabled longest first, ties in the net's order,
-a call entry last) until the mission waits for the vehicle or a time-out, or
-has its result, and stops a loop that never settles after a bounded number
-of firings. A replayed run sets the clock from its log, and its steps and
-the firings are listed with their times.
+refused, and the page says why, while one is enabled; *Supervisor until it
+waits* takes them in the executor's order (the one enabled longest first, ties
+in the net's order, a call entry last) until the mission waits for the
+vehicle or a time-out, or has its result, and stops a loop that never settles
+after a bounded number of firings. A replayed run sets the clock from its
+log, and its steps and the firings are listed with their times.
+
+Playing a mission (docs/show.md). Who fires each transition (its
+:func:`role`) is shown: the enabled ones are listed under the supervisor's,
+the vehicle's (a primitive's reports and acknowledgements) and the
+time-outs, and the drawing gives the vehicle's a thick blue border. *Play*
+plays by itself, at a chosen speed: each step, the supervisor until it
+waits, then a vehicle event at random (at a later time, before the next
+time-out falls due) or time passes to the next time-out; the generator is
+seeded, the odds of a goal achieved against failed are the student's, and
+an event is chosen less when another undoes it (lost, regained), less the
+more often it fired, and far less when it undoes the vehicle's last one (a
+goal lost just after it was regained), so that a game reaches the
+mission's result. An enabled transition is clicked in a square of at least
+28 CSS pixels whatever the zoom (its bar is a few pixels wide at *Fit*). A place's tokens are set by
+hand (*edit marking*, or shift-click: an editor beside it), the
+P-invariants then naming those that break. A node is dragged where a student
+wants it (its arcs drawn straight from there). The drawing as it is shown is
+made, by the script, into a standalone SVG document and a PNG image (drawn
+on a canvas: an SVG image would be an image to load, which the policy
+forbids).
 And the reachability graph of a net of up to 2,000 markings
 (:mod:`mcl2pnml.view.reachability`) is drawn, a marking clicked to play
 from it.
@@ -167,14 +187,15 @@ def tree_parts(net: Net, tree: Sequence[dict[str, Any]]) -> list[dict[str, Any]]
     return out
 
 
-#: The places whose marking ends a run (the mission's result): the page's *Settle*
-#: stops there, as the engines stop the run.
+#: The places whose marking ends a run (the mission's result): the page's *Supervisor
+#: until it waits* and its automatic play stop there, as the engines stop the run.
 MISSION_RESULTS = tuple(p.id for p in (MissionPlace.OK, MissionPlace.FAIL, MissionPlace.ABORTED))
 
 
 def role(payload: TransitionPayload, timed: bool) -> str:
     """Who fires a transition, as the executor (:mod:`mcl2pnml.runtime.executor`) reads
-    its payload and timing; the page's *Settle* and *Advance time* follow it:
+    its payload and timing; the page's *Supervisor until it waits*, *Advance time*, its
+    automatic play and the list of enabled transitions (by who fires them) follow it:
 
     * ``"event"``: a vehicle event fires it (its payload names one);
     * ``"entry"``: a call site's ``enter``, a supervisor step taken last: only when no
@@ -231,6 +252,8 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
             "id": t.id, "label": t.label, "x": pos[t.id][0], "y": pos[t.id][1],
             "timing": str(t.timing) if t.timing is not None else None, "kind": kind,
             "role": role(payload, t.timing is not None),
+            # what the vehicle reports by it (on, achieved, failed, off): automatic play's odds
+            "event": payload.event.kind.value if payload.event is not None else None,
             # the timed token game's delay: enabled this long before it may fire
             "delay": t.timing.earliest if t.timing is not None else 0,
             "latest": t.timing.latest if t.timing is not None else None,

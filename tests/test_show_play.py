@@ -1,0 +1,303 @@
+"""`mcl2pnml show`: playing a mission's token game, in headless Chromium.
+
+Who fires each transition is told apart (the vehicle's reports and acks, the
+supervisor's steps, the time-outs) in the list and in the drawing; *Supervisor
+until it waits* takes the supervisor's steps as the engines do; automatic play
+(seeded, so that a test can play a game again) reaches the mission's result
+without going round a lost/regained loop; an enabled transition is a target at
+least 24 pixels wide at any zoom; a place's tokens can be set by hand, and the
+P-invariants then say which break; the drawing as it is shown is an SVG
+document and a PNG image.
+"""
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from helpers import ROOT, run_cli as run
+from test_show import SHOTS, browser, marking, page_of  # noqa: F401 (fixtures)
+
+#: The least width and height of a click target, in CSS pixels (WCAG 2.2's target size).
+TARGET = 24
+#: A game of the paper's mission is this many steps of automatic play at most.
+MAX_STEPS = 120
+
+
+@pytest.fixture(scope="module")
+def sauce(tmp_path_factory) -> Path:
+    """The paper's mission (examples/sauce.mcl) as a page."""
+    path = tmp_path_factory.mktemp("sauce") / "sauce.html"
+    out = run("show", ROOT / "examples" / "sauce.mcl", "-o", path)
+    assert out.returncode == 0, out.stderr
+    return path
+
+
+def fired(page) -> list[str]:
+    return page.evaluate("() => history.map((i) => V.transitions[i].id)")
+
+
+def roles(page) -> dict[str, str]:
+    return page.evaluate("() => Object.fromEntries(V.transitions.map((t) => [t.id, t.role]))")
+
+
+def listed(page, who: str) -> list[str]:
+    return page.locator(f'#enabled .who-list[data-who="{who}"] button').all_text_contents()
+
+
+def test_the_vehicles_and_the_supervisors_transitions_are_told_apart(sauce, page_of):
+    page = page_of(sauce)
+    role = roles(page)
+    who = {"event": "vehicle", "timeout": "time", "step": "supervisor", "entry": "supervisor"}
+    # in the drawing: each transition's class says who fires it
+    drawn = page.locator("#net g.transition").evaluate_all(
+        "(gs) => gs.map((g) => [g.dataset.id, g.dataset.who, g.classList.contains(g.dataset.who)])")
+    assert len(drawn) == len(role)
+    assert all(w == who[role[t]] and has for t, w, has in drawn)
+    assert {w for _, w, _ in drawn} == {"vehicle", "supervisor", "time"}
+    # ... and a style: the vehicle's bars have a thick blue border, the supervisor's do not
+    stroke = "(g) => getComputedStyle(g.querySelector('rect')).stroke"
+    assert page.locator('#net g.transition[data-id="KeepDepth.achieved"]').evaluate(stroke) \
+        == "rgb(31, 95, 191)"
+    assert page.locator('#net g.transition[data-id="mission.t1"]').evaluate(stroke) \
+        != "rgb(31, 95, 191)"
+    assert "the vehicle's" in page.text_content("header .legend")
+    assert "the supervisor's" in page.text_content("header .legend")
+    # in the list: under a heading, each button with its kind
+    assert listed(page, "vehicle") == [] and "mission.t1" in listed(page, "supervisor")
+    page.click("#settle")
+    assert listed(page, "supervisor") == []
+    assert sorted(listed(page, "vehicle")) == ["DetectCross.on", "GoToWayPoint.on"]
+    assert page.locator("#enabled .who").all_text_contents() == ["The vehicle's (reports, acks)"]
+    assert page.locator('#enabled button[data-id="GoToWayPoint.on"]').get_attribute("class") \
+        == "vehicle"
+
+
+def test_the_supervisor_runs_until_it_waits(sauce, page_of):
+    page = page_of(sauce)
+    button = page.locator("#settle")
+    assert button.text_content() == "Supervisor until it waits" and button.is_enabled()
+    button.click()
+    role = roles(page)
+    steps = fired(page)
+    assert steps and all(role[t] in ("step", "entry") for t in steps)
+    # none of its steps is enabled any more: it waits for the vehicle
+    assert page.evaluate("() => supervisorSteps().length") == 0
+    assert button.is_disabled() and "settled" in page.text_content("#supervisor")
+    # the vehicle reports its goal reached: the supervisor has steps to take again
+    page.click('#enabled button[data-id="GoToWayPoint.on"]')
+    page.click('#enabled button[data-id="GoToWayPoint.achieved"]')
+    assert button.is_enabled()
+    button.click()
+    more = fired(page)[len(steps) + 2:]
+    assert more and all(role[t] in ("step", "entry") for t in more)
+    assert page.evaluate("() => supervisorSteps().length") == 0
+
+
+def play_out(page, seed: int) -> dict:
+    page.fill("#seed", str(seed))
+    page.dispatch_event("#seed", "change")
+    page.click("#reset")
+    return page.evaluate(f"() => playOut({MAX_STEPS})")
+
+
+def test_automatic_play_reaches_the_missions_result(sauce, page_of):
+    page = page_of(sauce)
+    results = set()
+    for seed in range(1, 26):
+        game = play_out(page, seed)
+        # every game ends, in a bounded number of steps, with the mission's result marked
+        assert game["result"] in ("mission.OK", "mission.FAIL", "mission.ABORTED"), (seed, game)
+        assert game["steps"] < MAX_STEPS, (seed, game)
+        assert game["result"] in marking(page)
+        assert "The mission ended: " + game["result"] in page.text_content("#play-status")
+        results.add(game["result"])
+        # no lost/regained loop: a vehicle event is chosen again less and less
+        events = [t for t in fired(page) if roles(page)[t] == "event"]
+        assert max(events.count(t) for t in events) <= 4, (seed, events)
+        # time passes: the vehicle takes its time, and a time-out fires at its due time
+        assert game["now"] > 0
+    assert results >= {"mission.OK", "mission.FAIL"}
+    # a seed plays the same game again
+    first = (play_out(page, 7), fired(page))
+    assert (play_out(page, 7), fired(page)) == first
+
+
+def test_the_vehicles_odds_change_the_games_results(sauce, page_of):
+    page = page_of(sauce)
+    oks = {}
+    for odds in ("3", "0.3333"):
+        page.select_option("#odds", odds)
+        oks[odds] = sum(play_out(page, seed)["result"] == "mission.OK" for seed in range(1, 16))
+    assert oks["3"] > oks["0.3333"]
+
+
+def test_automatic_play_avoids_undoing_the_last_vehicle_event(sauce, page_of):
+    page = page_of(sauce)
+    assert page.evaluate("""() => {
+      const t = (id) => V.transitions[byId.get(id)];
+      return [undoes(t("KeepDepth.lost"), t("KeepDepth.regained")),
+              undoes(t("KeepDepth.regained"), t("KeepDepth.lost")),
+              undoes(t("KeepDepth.achieved"), t("KeepDepth.lost"))];
+    }""") == [True, True, False]
+    # a goal lost or regained is a change of mind, rarer than the reports that end a goal
+    assert page.evaluate("() => V.transitions.filter((t, i) => reversible(i)).map((t) => t.id)"
+                         ".sort()") == sorted(f"{p}.{e}" for p in ("DetectCross", "GoToWayPoint",
+                                              "KeepDepth", "ReleaseMarker")
+                                              for e in ("lost", "regained"))
+    # a goal reached, then lost: regaining it is far less likely than anything else
+    weights = page.evaluate("""() => {
+      settle(); fire(byId.get("GoToWayPoint.on")); settle();
+      fire(byId.get("GoToWayPoint.achieved")); fire(byId.get("GoToWayPoint.lost"));
+      return Object.fromEntries(vehicleChoices().map(([i, w]) => [V.transitions[i].id, w]));
+    }""")
+    assert weights["GoToWayPoint.regained"] < 0.2 * weights["DetectCross.on"]
+
+
+def test_play_and_pause_with_a_speed(sauce, page_of):
+    page = page_of(sauce)
+    page.select_option("#speed", "50")
+    page.click("#play")
+    assert page.text_content("#play") == "Pause"
+    page.wait_for_function("() => document.getElementById('play-status').className === 'result'",
+                           timeout=30_000)
+    assert page.text_content("#play") == "Play"
+    assert page.evaluate("() => result()") in marking(page)
+    states = page.locator("#tree div.node").evaluate_all("(ds) => ds.map((d) => d.dataset.state)")
+    assert states[0] in ("OK", "FAIL", "ABORTED")
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    page.screenshot(path=str(SHOTS / "show_play_sauce.png"))
+    # Pause stops a game; a random step is one step
+    page.click("#reset")
+    page.select_option("#speed", "1")
+    page.click("#play")
+    page.click("#play")
+    assert page.text_content("#play") == "Play"
+    before = len(fired(page))
+    page.click("#play-step")
+    assert len(fired(page)) > before
+
+
+def targets(page) -> list[dict]:
+    return [page.locator("#net rect.hit.enabled").nth(k).bounding_box()
+            for k in range(page.locator("#net rect.hit.enabled").count())]
+
+
+def test_an_enabled_transition_is_a_target_of_24_pixels_at_any_zoom(sauce, page_of):
+    page = page_of(sauce)
+    page.click("#fit")
+    bar = page.locator('#net g.transition[data-id="mission.t1"] rect').bounding_box()
+    assert bar["width"] < 8                        # the bar alone: a few pixels at Fit
+    boxes = targets(page)
+    assert len(boxes) == page.evaluate("() => V.transitions.filter((t, i) => fireable(i)).length")
+    assert all(b["width"] >= TARGET and b["height"] >= TARGET for b in boxes), boxes
+    # only enabled transitions have one
+    assert page.locator("#net rect.hit:not(.enabled)").evaluate_all(
+        "(rs) => rs.every((r) => getComputedStyle(r).display === 'none')")
+    # clicked at its corner, far from the bar, the target fires its transition
+    hit = page.locator('#net rect.hit[data-id="mission.t1"]').bounding_box()
+    page.mouse.click(hit["x"] + 2, hit["y"] + 2)
+    assert fired(page) == ["mission.t1"]
+    # zoomed in and out, still at least 24 pixels
+    for delta in (-600, 900):
+        box = page.locator("#net").bounding_box()
+        page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        for _ in range(6):
+            page.mouse.wheel(0, delta / 6)
+        page.wait_for_timeout(50)
+        assert all(b["width"] >= TARGET and b["height"] >= TARGET for b in targets(page))
+
+
+def test_a_places_tokens_set_by_hand_break_invariants(sauce, page_of):
+    page = page_of(sauce)
+    # a plain click on a place does nothing
+    page.click('#net g.place[data-id="mission.B"]')
+    assert page.is_hidden("#tokens-editor")
+    page.check("#edit-marking")
+    page.click('#net g.place[data-id="mission.B"]')
+    assert page.is_visible("#tokens-editor")
+    assert page.text_content("#tokens-place") == "mission.B"
+    assert page.input_value("#tokens-value") == "1"
+    # the editor is beside the place, in the drawing
+    place = page.locator('#net g.place[data-id="mission.B"]').bounding_box()
+    editor = page.locator("#tokens-editor").bounding_box()
+    assert abs(editor["x"] - place["x"]) < 80 and abs(editor["y"] - place["y"]) < 80
+    page.fill("#tokens-value", "3")
+    page.press("#tokens-value", "Enter")
+    assert page.is_hidden("#tokens-editor")
+    assert "mission.B*3" in marking(page)
+    assert "mission.B 1 \u2192 3" in page.text_content("#marking-note")
+    assert page.text_content("#invariants-status").endswith("1 broken")
+    broken = page.text_content("#invariants-broken")
+    assert broken.startswith("broken: ") and "mission.B" in broken and "(now 3)" in broken
+    # shift-click, out of the edit mode, edits too; Escape leaves the marking as it is
+    page.uncheck("#edit-marking")
+    page.click('#net g.place[data-id="mission.B"]', modifiers=["Shift"])
+    page.fill("#tokens-value", "0")
+    page.press("#tokens-value", "Escape")
+    assert "mission.B*3" in marking(page)
+    page.click('#net g.place[data-id="mission.B"]', modifiers=["Shift"])
+    page.fill("#tokens-value", "1")
+    page.click("#tokens-set")
+    assert page.text_content("#invariants-status").endswith("all hold")
+    assert page.text_content("#invariants-broken") == ""
+    page.click("#reset")
+    assert page.text_content("#marking-note") == ""
+
+
+def test_the_drawing_as_shown_is_an_svg_document_and_a_png(sauce, page_of):
+    page = page_of(sauce)
+    page.click("#settle")
+    text = page.evaluate("() => svgText()")
+    root = ET.fromstring(text.encode("utf-8"))                  # well-formed XML
+    assert root.tag == "{http://www.w3.org/2000/svg}svg"
+    assert root.get("viewBox") == page.get_attribute("#net", "viewBox")
+    ids = {e.get("data-id") for e in root.iter() if e.get("data-id")}
+    nodes = page.evaluate("() => [...V.places, ...V.transitions].map((n) => n.id)")
+    assert set(nodes) <= ids
+    # standalone: each shape carries its paint (the vehicle's blue border among them)
+    bars = [g for g in root.iter("{http://www.w3.org/2000/svg}g")
+            if g.get("data-id") == "GoToWayPoint.on"]
+    assert bars[0].find("{http://www.w3.org/2000/svg}rect").get("stroke") == "rgb(31, 95, 191)"
+    assert not [e for e in root.iter() if "hit" in (e.get("class") or "").split()]
+    signature = page.evaluate("""async () => {
+      const blob = await pngBlob();
+      return [blob.type, [...new Uint8Array(await blob.arrayBuffer()).slice(0, 8)], blob.size];
+    }""")
+    assert signature[0] == "image/png"
+    assert bytes(signature[1]) == b"\x89PNG\r\n\x1a\n" and signature[2] > 10_000
+
+
+def test_a_node_dragged_moves_with_its_arcs_and_fires_nothing(sauce, page_of):
+    page = page_of(sauce)
+    page.click("#settle")
+    page.click('#enabled button[data-id="GoToWayPoint.on"]')
+    t = '#net g.transition[data-id="GoToWayPoint.achieved"]'
+    page.click('#enabled button[data-id="GoToWayPoint.achieved"]')
+    page.click("#back")                             # enabled, and followed by nothing
+    before = page.locator(t).bounding_box()
+    arc = '#net path.arc[data-from="GoToWayPoint.achieved"]'
+    d = page.locator(arc).first.get_attribute("d")
+    firings = len(fired(page))
+    x, y = before["x"] + before["width"] / 2, before["y"] + before["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + 40, y + 30, steps=5)
+    page.mouse.up()
+    page.wait_for_timeout(50)
+    after = page.locator(t).bounding_box()
+    assert abs(after["x"] - before["x"] - 40) < 2 and abs(after["y"] - before["y"] - 30) < 2
+    assert page.locator(arc).first.get_attribute("d") != d     # its arcs follow it
+    assert len(fired(page)) == firings                         # the drag fired nothing
+    # a click still fires it, where it is now
+    page.click(t)
+    assert fired(page)[-1] == "GoToWayPoint.achieved"
+    # a drag from the background moves the view, not the nodes
+    place = page.locator('#net g.place[data-id="mission.B"]').bounding_box()
+    page.mouse.move(5 + page.locator("#net").bounding_box()["x"], 300)
+    page.mouse.down()
+    page.mouse.move(60 + page.locator("#net").bounding_box()["x"], 330, steps=4)
+    page.mouse.up()
+    moved = page.locator('#net g.place[data-id="mission.B"]').bounding_box()
+    assert abs(moved["x"] - place["x"] - 55) < 2
