@@ -1,4 +1,4 @@
-"""The ``mcl2pnml`` command (click), as ``shared/spec/cli.md`` specifies it.
+"""The ``mcl2pnml`` command (click), as ``mcl2pnml --help`` and README's Commands table document it.
 
 It parses options and prints; the work is :mod:`mcl2pnml.pipeline`'s. Errors are handled
 once, in :meth:`Cli.main`: a bad argument is one line, a bad input file its located
@@ -60,6 +60,25 @@ CERTIFICATE_SIZE = f"{pipeline.MAX_CERTIFICATE >> 20}M"
 def _certificate_size_option(said: str):
     return click.option("--max-certificate-size", "max_cert", metavar="SIZE",
                         default=CERTIFICATE_SIZE, show_default=True, help=said)
+
+
+STRICT_OPTION = click.option(
+    "--strict", is_flag=True,
+    help="Make the warnings (docs/warnings.md) errors: exit 2 if there is one. A warning "
+    "that is meant is acknowledged in the mission: // mcl: allow W001 because ...")
+
+
+def _warnings(mission: Path, checked, strict: bool) -> None:
+    """Print the mission's warnings on standard error; with --strict, refuse it (exit 2)."""
+    from mcl2pnml.language.lint import shown as shown_warnings
+    found = pipeline.warnings_of(checked)
+    for line in shown_warnings(found):
+        click.echo(line, err=True)
+    if strict and found:
+        n = len(found)
+        raise Mcl2PnmlError(f"{mission}: {n} warning{'s' * (n != 1)}, which --strict makes "
+                            "errors (fix them, or acknowledge one that is meant with "
+                            "// mcl: allow CODE because ... on the line before it)")
 
 
 FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
@@ -125,17 +144,22 @@ def main() -> None:
               "if there is one).")
 @PROPERTIES_SIZE_OPTION
 @ATOMS_OPTION
+@STRICT_OPTION
 def check(mission: Path, properties: str | None, max_props_size: str = PROPERTIES_SIZE,
-          max_atoms: int = PROPERTY_ATOMS) -> int:
+          max_atoms: int = PROPERTY_ATOMS, strict: bool = False) -> int:
     """Parse and check MISSION (MCL): names, arities, patterns, recursion, properties.
 
-    Every error of the file is reported at once, each with file:line:col.
+    Every error of the file is reported at once, each with file:line:col; then the
+    warnings (docs/warnings.md), on standard error.
     """
-    click.echo(f"{mission}: ok ({pipeline.check_file(mission).summary()})")
+    checked = pipeline.check_file(mission)
+    _warnings(mission, checked, strict)
+    click.echo(f"{mission}: ok ({checked.summary()})")
     if properties is not None:
         from mcl2pnml.core.properties import describe
         _, compiled = pipeline.properties_of(mission, extra=_properties_file(mission, properties),
-                                             max_size=max_props_size, max_atoms=max_atoms)
+                                             max_size=max_props_size, max_atoms=max_atoms,
+                                             checked=checked)
         for prop in compiled:
             click.echo(f"property {prop.name} ({prop.location.prefix()}): {prop.text}")
             click.echo(f"  {prop.pattern.value}: P = {describe(prop.p)}"
@@ -199,11 +223,12 @@ def functional(mission: Path, with_functions: bool) -> int:
               "0: any number at one instant).")
 @PROPERTIES_SIZE_OPTION
 @ATOMS_OPTION
+@STRICT_OPTION
 def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, expand: str,
              queries: Path | None, tool: str, max_memory: str | None,
              ack_within: str | None = None, report_gap: str | None = None,
              properties: str | None = None, max_props_size: str = PROPERTIES_SIZE,
-             max_atoms: int = PROPERTY_ATOMS) -> int:
+             max_atoms: int = PROPERTY_ATOMS, strict: bool = False) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
@@ -233,13 +258,15 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
                    *(("--properties", path) for path in
                      (property_query_files(stem).values() if properties is not None else ()))],
                   [("the mission", mission), ("the properties file (--properties)", extra)])
+    checked = pipeline.check_file(mission)   # its warnings before anything is written
+    _warnings(mission, checked, strict)
     props = ()
     if properties is None:
-        net = pipeline.compile_file(mission, max_memory=max_memory)
+        net = pipeline.compile_file(mission, max_memory=max_memory, checked=checked)
     else:
         net, props = pipeline.properties_of(
             mission, extra=extra, max_memory=max_memory, max_size=max_props_size,
-            max_atoms=max_atoms)
+            max_atoms=max_atoms, checked=checked)
         if not props:
             raise OptionError("--properties", f"{mission} declares no property, and there "
                               f"is no {properties or mission.with_suffix('.props')} beside it")
@@ -305,7 +332,8 @@ def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, e
               "take to send before the link is lost (a bridge that does not read).")
 @click.option("--max-line", type=click.IntRange(min=256), default=MAX_LINE, show_default=True,
               help="The longest line (bytes) the bridge may send; a longer one loses the link.")
-@click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace}.")
+@click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace} (and safe_stop, "
+              "safe_state, problems where there are: docs/running.md).")
 @click.option("--log", "log_path", type=OUTPUT, help="Also log the run here as JSON lines.")
 @click.option("--world", type=FILE, help="The simulator's world (JSON: tank, start, cross, "
               "dock, obstacles, plumes, noise, seed, limits; docs/simulator.md). Default: "
