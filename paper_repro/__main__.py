@@ -111,8 +111,9 @@ def main() -> int:
     md = [
         "# Equations 1-26 of the paper, computed from the templates", "",
         f"**{matched}/{len(rows)} equations match, computed from templates rebuilt from the "
-        "paper's text** (its figures are missing from our copy: the nets in `templates/` are "
-        "ours, made so that the analysis computes what the paper states). "
+        "paper's text and equations** (its figures are not given in full in our copy: the "
+        "nets in `templates/` are ours, made so that the analysis computes what the paper "
+        "states). "
         + ("Every further check holds." if extra_ok else "**Some further check fails.**"),
         "", "Computed by `python -m paper_repro` from the nets in `templates/`; the paper's "
         "side is `shared/paper/equations.md`. Regenerate with `make demo`.", "",

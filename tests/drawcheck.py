@@ -38,6 +38,26 @@ def layout_json(source: str) -> dict:
     return json.loads(out.stdout)
 
 
+def svg_size(svg: bytes) -> tuple[float, float]:
+    """An SVG drawing's width and height in its own units (graphviz: points)."""
+    from lxml import etree
+    _, _, w, h = (float(v) for v in etree.fromstring(svg).get("viewBox").split())
+    return w, h
+
+
+def fitted_text(svg: bytes, slide: tuple[float, float] = (1920, 1080)
+                ) -> tuple[float, tuple[float, float]]:
+    """The height in pixels of the smallest text of an SVG drawing fitted into ``slide``
+    (scale = the lesser of the slide's width over the drawing's and its height over the
+    drawing's; a text's height is its font size), and the drawing's size."""
+    from lxml import etree
+    w, h = svg_size(svg)
+    scale = min(slide[0] / w, slide[1] / h)
+    sizes = [float(t.get("font-size")) for t in etree.fromstring(svg).iter(
+        "{http://www.w3.org/2000/svg}text") if (t.text or "").strip()]
+    return min(sizes) * scale, (w, h)
+
+
 def _texts(obj: dict, owner: str) -> list[Label]:
     labels = []
     for key in _TEXTS:

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from drawcheck import layout_json, problems
+from drawcheck import fitted_text, layout_json, problems
 from helpers import ROOT, run_cli
 from mcl2pnml import pipeline
 from mcl2pnml.io.dot import box_node, drawing, instance_clusters, to_dot
@@ -63,7 +63,7 @@ def test_a_task_is_drawn_beside_its_primitive_with_the_fusion_places_between():
     time-out dark and saying so."""
     graph = layout_json(figure(default_library(), 2).source)
     boxes = {o["name"]: o for o in graph["objects"] if o["name"].startswith("cluster")}
-    assert set(boxes) == {"cluster_primitive", "cluster_legend"}
+    assert set(boxes) == {"cluster_primitive"}
     x0, y0, x1, y1 = map(float, boxes["cluster_primitive"]["bb"].split(","))
     at = {o["name"]: tuple(map(float, o["pos"].split(","))) for o in graph["objects"]
           if "pos" in o}
@@ -97,8 +97,9 @@ def test_an_example_with_every_call_open_is_drawn_without_overlaps(name):
 def test_a_call_opened_on_demand(tmp_path):
     net = mission("sauce.mcl")
     graph = layout_json(drawing(net, expand=["Survey", "monitor-1"]).source)
-    opened = {o["name"] for o in graph["objects"] if o["name"].startswith("cluster_")}
-    assert opened == {"cluster_Survey", "cluster_monitor-1", "cluster_legend"}
+    opened = {o["name"] for o in graph["objects"] if o["name"].startswith("cluster_")
+              and not o["name"].startswith("cluster_call_")}
+    assert opened == {"cluster_Survey", "cluster_monitor-1"}
     assert problems(graph) == []
     out = run_cli("compile", ROOT / "examples" / "sauce.mcl", "--format", "svg",
                   "--expand", "Survey,monitor-1", "-o", tmp_path / "s.svg")
@@ -111,6 +112,116 @@ def test_a_call_opened_on_demand(tmp_path):
     wrong = run_cli("compile", ROOT / "examples" / "sauce.mcl", "--expand", "all",
                     "-o", tmp_path / "t.pnml")
     assert wrong.returncode == 2 and "only a drawing" in wrong.stderr
+
+
+# -- on a slide: every text readable, every mark explained, every circle named -------------
+
+#: A slide (pixels) and the least height of a text on it.
+SLIDE, LEAST = (1920, 1080), 14.0
+#: Drawings still too wide for a slide at 14 px (each of them wider than 16:9 by far: their
+#: widest rank must be wrapped); xfail strict, so that a fix shows.
+NOT_YET = {"tpl:KeepTwoGoals", "tpl:if-then-else", "tpl:monitor", "tpl:parallel",
+           "mission:sauce.mcl"}
+
+
+def _slide_drawings():
+    for number in sorted(FIGURES):
+        yield f"fig:{number}"
+    for name in TEMPLATES:
+        yield f"tpl:{name}"
+    yield "mission:sauce.mcl"
+
+
+@lru_cache(maxsize=None)
+def _drawing(which: str):
+    kind, _, name = which.partition(":")
+    if kind == "fig":
+        return figure(default_library(), int(name))
+    if kind == "tpl":
+        return drawing(pipeline.template_net(name), name,
+                       clusters=pipeline.template_clusters(name), expand=None)
+    return drawing(mission(name), name)
+
+
+@pytest.mark.parametrize("which", [pytest.param(w, marks=pytest.mark.xfail(
+    strict=True, reason="too wide yet")) if w in NOT_YET else w for w in _slide_drawings()])
+def test_every_text_is_readable_on_a_slide(which):
+    """Fitted to a 1920 x 1080 slide, the SVG's smallest text is 14 px high or more."""
+    least, size = fitted_text(_drawing(which).pipe(format="svg"), SLIDE)
+    assert least >= LEAST, (which, size, least)
+
+
+def _marks(graph: dict) -> set[str]:
+    """The marks dot drew (its JSON): the keys of :data:`mcl2pnml.io.dot.LEGEND`."""
+    found = {"place"}
+    for o in graph["objects"]:
+        if o.get("class") == "copy":
+            found.add("copy")
+        if o.get("class") == "box":
+            found.add("shut")
+        if o.get("peripheries") == "2":
+            found.add("fusion")
+        if o.get("fillcolor") == "gray25":
+            found.add("timeout")
+        if o["name"].startswith("cluster_call_"):
+            found.add("call")
+        elif o["name"].startswith("cluster_"):
+            found.add("box")
+    for e in graph.get("edges", []):
+        found.add("read" if e.get("style") == "dashed" else
+                  "back" if e.get("color") == "gray40" else "arc")
+    return found
+
+
+@pytest.mark.parametrize("which", list(_slide_drawings()))
+def test_every_mark_drawn_has_a_legend_entry(which):
+    from mcl2pnml.io.dot import LEGEND
+    graph = layout_json(_drawing(which).source)
+    label = graph["label"]
+    for mark in _marks(graph):
+        assert LEGEND[mark][1].replace(",", "") in label.replace(",", ""), (which, mark)
+
+
+@pytest.mark.xfail(strict=True, reason="dot.FRAME_CALLS and dot.NAME_CALLS are off yet")
+def test_every_interface_circle_of_the_overview_says_whose_it_is():
+    """The collapsed mission: each call's B, A, OK, FAIL, ABORTED... framed with its box,
+    which shows the call's name."""
+    graph = overview("sauce.mcl")
+    by_id = {o["_gvid"]: o for o in graph["objects"]}
+    frame_of = {}
+    for o in graph["objects"]:
+        if o["name"].startswith("cluster_call_"):
+            boxes = [by_id[n] for n in o.get("nodes", ()) if by_id[n].get("class") == "box"]
+            assert len(boxes) == 1
+            for n in o.get("nodes", ()):
+                frame_of[by_id[n]["name"]] = boxes[0]["label"].split("\n")[0]
+    circles = [o for o in graph["objects"] if o.get("class") == "place"
+               and o["label"].split("\n")[0] in {"A", "B", "OK", "FAIL", "ABORTED"}]
+    assert len(circles) >= 50
+    for o in circles:
+        owner = o["name"].rpartition(".")[0]
+        assert frame_of.get(o["name"]) == owner or owner in o["label"].split("\n"), o["name"]
+
+
+def test_the_arcs_into_a_transition_end_apart():
+    """Fig. 2: the arcs into off_S1, off_S2 and off_C (from ON, D, S1, S2) each end at
+    a point of their own on the box, not all at its middle."""
+    graph = layout_json(figure(default_library(), 2).source)
+    names = {o["_gvid"]: o["name"] for o in graph["objects"] if "pos" in o}
+    for t in ("off_S1", "off_S2", "off_C"):
+        ends = [next(op["points"][-1] for op in e["_draw_"] if op["op"] == "b")
+                for e in graph["edges"] if names[e["head"]] == t]
+        assert len(ends) >= 2
+        for i, a in enumerate(ends):
+            for b in ends[i + 1:]:
+                assert math.dist(a, b) >= 6, (t, a, b)
+
+
+@pytest.mark.xfail(strict=True, reason="every call open is still laid out by the flow: a strip")
+def test_a_mission_with_every_call_open_is_a_page_not_a_strip():
+    from drawcheck import svg_size
+    w, h = svg_size(drawing(mission("sauce.mcl"), "sauce.mcl", expand=None).pipe(format="svg"))
+    assert 1 / 3 <= w / h <= 3, (w, h)
 
 
 # -- the checker finds what a reader would see ---------------------------------------------

@@ -63,6 +63,14 @@ FAST_ABOVE = 300
 COPY_RETURNS = 3
 
 
+#: Font sizes (points) of the drawings: every text at least :data:`SMALL`, and the
+#: spaces between nodes small beside it, so that a figure fitted to a 1920 x 1080
+#: slide shows every text at least 14 pixels high (``tests/test_drawings.py``).
+FONT = 12
+SMALL = 11
+TITLE = 16
+
+
 #: The mark of a time-out (a clock face; DejaVu and Liberation fonts have it).
 CLOCK = "\u25f7"
 
@@ -96,10 +104,18 @@ def transition_label(t: Transition, box_name: str | None = None) -> str:
 def transition_style(t: Transition) -> dict[str, str]:
     """A transition's box: light, or dark with white text for a time-out."""
     style = {"shape": "box", "style": "filled", "fillcolor": "gray94", "height": "0.3",
-             "width": "0.3", "margin": "0.06,0.03", "fontsize": "9"}
+             "width": "0.3", "margin": "0.05,0.02", "fontsize": str(FONT)}
     if timeout_text(t) is not None:
         style.update(fillcolor="gray25", fontcolor="white", style="filled,bold")
     return style
+
+
+def _diameter(label: str, size: int, least: float) -> str:
+    """The width (inches) of a circle that holds ``label`` in a font of ``size`` points:
+    the diagonal of the text's box, at least ``least`` times the font size."""
+    lines = label.split("\n")
+    w, h = 0.7 * size * max(len(line) for line in lines), 1.15 * size * len(lines)
+    return f"{max(least * size, (w * w + h * h) ** 0.5 + 2) / 72:.2f}"
 
 
 def _tokens(n: int) -> str:
@@ -157,11 +173,15 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     # per call, a template a few dozen; the overview's small places sit closer
     large = expand is None and len(net.places) + len(net.transitions) > FAST_ABOVE
     g = graphviz.Digraph(net.name, graph_attr={
-        "rankdir": RANKDIR, "nodesep": "0.3" if expand is None else "0.15", "ranksep": "0.45",
-        "fontname": "Helvetica", "fontsize": "12", "label": title or "", "labelloc": "t",
-        **(DOT_SPEED if large else {"newrank": "true"})},
-        node_attr={"fontname": "Helvetica", "fontsize": "10"},
-        edge_attr={"arrowsize": "0.6"})
+        # (the page, laid out without a legend, keeps its wider spaces: its arcs run
+        # along dot's routes, which a tighter layout leads through transitions)
+        "rankdir": RANKDIR, "nodesep": "0.12" if legend else "0.3" if expand is None else "0.15",
+        "ranksep": "0.3" if legend else "0.45",
+        "fontname": "Helvetica", "fontsize": str(TITLE), "label": _text(title or ""),
+        "labelloc": "t", **(DOT_SPEED if large else {"newrank": "true"})},
+        node_attr={"fontname": "Helvetica", "fontsize": str(FONT)},
+        edge_attr={"arrowsize": "0.7"})
+    used: set[str] = set()      # the marks drawn, each explained by the legend
     clusters = border_out(net, clusters or {})
     shut = set() if expand is None else set(clusters) - set(check_expand(clusters, expand))
     box = {n: name for name, members in clusters.items() for n in members}
@@ -178,10 +198,10 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         label = shown + (f"\n{_tokens(tokens)}" if tokens else "")
         # circles all of one size read best; long names get a larger one
         small = owner in shut       # the overview's places: only their short names
-        width = (max(0.4, 0.06 * len(shown) + 0.12) if small
-                 else max(0.55, 0.075 * len(shown) + 0.15))
-        target.node(node_name(p.id), _text(label), shape="circle", width=f"{width:.2f}",
-                    fixedsize="true", fontsize="7" if small else "9",
+        size = SMALL if small else FONT
+        target.node(node_name(p.id), _text(label), shape="circle",
+                    width=_diameter(label, size, 3.2 if small else 3.6),
+                    fixedsize="true", fontsize=str(size),
                     peripheries="2" if p.interface is not None else "1",
                     **{"class": "place"})
 
@@ -204,12 +224,15 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
                 fixed = {"width": f"{w / 72:.2f}", "height": f"{h / 72:.2f}", "fixedsize": "true"}
             g.node(box_node(name), _text(f"{name}\n({size} nodes)"), shape="box",
                    style="rounded,dashed,filled", fillcolor="gray97", color="gray40",
-                   fontsize="10", margin="0.15,0.08", **fixed, **{"class": "box"})
+                   fontsize=str(FONT), margin="0.1,0.05", **fixed, **{"class": "box"})
+            used.add("shut")
     for name, members in clusters.items():
         if name in shut:
             continue
         with g.subgraph(name=f"cluster_{name}") as c:
-            c.attr(label=_text(name), style="rounded,dashed", color="gray50", fontsize="11")
+            c.attr(label=_text(name), style="rounded,dashed", color="gray50", fontsize=str(FONT),
+                   margin="6")
+            used.add("box")
             for m in members:   # net order within the cluster, as given
                 if m in net.place_index:
                     add_place(c, net.place_index[m], name)
@@ -254,11 +277,12 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         shown = _inside(place.label, box_name)
         with where as c:
             c.node(name, _text(shown), shape="circle", fixedsize="true", style="dashed",
-                   width=f"{max(0.4, 0.065 * len(shown) + 0.12):.2f}", fontsize="7",
+                   width=_diameter(shown, SMALL, 3.0), fontsize=str(SMALL),
                    **{"class": "copy"})
         return name
 
     copies = 0
+    marks: set[str] = set()
     joined: set = set()        # the arcs to and from a shut box, drawn once each
     levels = box_levels(net, clusters) if shut else ({}, {})
     for a in net.arcs:
@@ -269,10 +293,12 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             if ends[0] != ends[1] and ends not in joined:   # inside the box: hidden
                 joined.add(ends)
                 _call_edge(g, a, ends, box, levels)
+                marks.add("read" if a.kind is ArcKind.READ else "arc")
             continue
         source, target = node_name(a.source), node_name(a.target)
         if a.weight != 1:
             attrs["label"] = str(a.weight)
+            marks.add("weight")
         if a.kind is ArcKind.READ and reads.get(a.source, 0) >= COPY_RETURNS:
             # a place many transitions test (a primitive's ON and OFF): each test
             # reads a copy of the place drawn beside its transition, instead of
@@ -280,9 +306,11 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             copies += 1
             source = add_copy(copies, net.place_index[a.source], box.get(a.target))
             attrs.update(style="dashed", arrowhead="none")
+            marks.update(("read", "copy"))
         elif a.kind is ArcKind.READ:
             # a test is not a flow of tokens: it must not bend the layout
             attrs.update(style="dashed", arrowhead="none", constraint="false")
+            marks.add("read")
         elif a in back and returns.get(a.target, 0) >= COPY_RETURNS:
             # many tokens going back to one place (a mutex freed by every
             # ending): each arc goes to a copy of the place drawn beside its
@@ -290,31 +318,111 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             # the whole drawing
             copies += 1
             target = add_copy(copies, net.place_index[a.target], box.get(a.source))
+            marks.update(("arc", "copy"))
         elif a in back:
             # a token going back (a primitive switched off): drawn, but the
             # top-down order follows the forward flow
             attrs.update(constraint="false", color="gray40")
+            marks.add("back")
+        else:
+            marks.add("arc")
         g.edge(source, target, **attrs)
+    for p in net.places:
+        if p.interface is not None and (p.id not in drawn):
+            used.add("fusion")
+        if marking.get(p.id, 0) and p.id not in drawn:
+            used.add("token")
+    for t in net.transitions:
+        if t.id not in drawn:
+            used.add("timeout" if timeout_text(t) is not None else "transition")
+    used.add("place")
+    used.update(marks)
     if legend:
-        with g.subgraph(name="cluster_legend") as k:
-            k.attr(label="legend", fontsize="9", style="rounded", color="gray70")
-            k.attr("node", **{"class": "legend"})
-            k.node("legend_place", f"place\n{TOKEN} token", shape="circle", width="0.6",
-                   fixedsize="true", fontsize="8")
-            k.node("legend_iface", "fusion\nplace", shape="circle", width="0.6",
-                   fixedsize="true", peripheries="2", fontsize="8")
-            k.node("legend_t", "transition", shape="box", style="filled", fillcolor="gray94",
-                   height="0.3", margin="0.06,0.03", fontsize="8")
-            k.node("legend_timed", f"time-out\n{CLOCK} delay", shape="box", style="filled,bold",
-                   fillcolor="gray25", fontcolor="white", height="0.3", margin="0.06,0.03",
-                   fontsize="8")
-            k.edge("legend_place", "legend_t")
-            k.edge("legend_iface", "legend_timed", style="dashed", arrowhead="none")
-            # the arcs explained in a node of text, not in edge labels, which dot
-            # lays against their own arc
-            k.node("legend_arcs", "solid: arc, tokens flow\ndashed: read arc, the token stays",
-                   shape="plaintext", fontsize="8")
+        g.graph_attr["label"] = legend_label(title or "", used, _spread(g))
     return g
+
+
+#: The legend's entries, in its order: a mark (HTML, graphviz's subset) and what it means.
+LEGEND = {
+    "place": ("\u25ef", "place"),
+    "token": (TOKEN, "token"),
+    "fusion": ("\u25ce", "fusion place (nets joined)"),
+    "transition": ("\u25ad", "transition"),
+    "timeout": (f'<FONT COLOR="gray25">\u25ac</FONT> {CLOCK}', "time-out, its delay"),
+    "arc": ("\u2500\u2500\u25b6", "arc: tokens flow"),
+    "back": ('<FONT COLOR="gray40">\u2500\u2500\u25b6</FONT>',
+             "grey arc: a token goes back (not ranked)"),
+    "read": ("\u254c\u254c\u254c", "dashed arc: read, the token stays"),
+    "copy": ("\u25cc", "dashed circle: a copy of the place"),
+    "weight": ("\u2500 2 \u25b6", "arc weight"),
+    "box": ("\u2b1a", "dashed frame: a part of the net"),
+    "shut": ("\u25a2", "shut box: a call, its nodes inside"),
+}
+
+
+def legend_label(title: str, used: Collection[str], width: float | None = None) -> str:
+    """The drawing's title and, below it, its legend: an entry for every mark in
+    ``used`` (:data:`LEGEND`), as many a row as the drawing is ``width`` points wide
+    (None: two); an HTML label of graphviz, which dot keeps clear of the drawing."""
+    import html
+    entries = [(mark, text) for key, (mark, text) in LEGEND.items() if key in used]
+    widest = max(0.62 * SMALL * (len(text) + 4) for _, text in entries)
+    per_row = 2 if width is None else max(1, min(len(entries), int(width // widest)))
+    rows = [entries[k:k + per_row] for k in range(0, len(entries), per_row)]
+    cells = "".join("<TR>" + "".join(
+        f'<TD ALIGN="LEFT"><FONT POINT-SIZE="{SMALL}">{mark} {html.escape(text)}</FONT></TD>'
+        for mark, text in r) + "</TR>" for r in rows)
+    return (f'<<TABLE BORDER="0" CELLSPACING="0" CELLPADDING="1">'
+            f'<TR><TD COLSPAN="{per_row}"><FONT POINT-SIZE="{TITLE}">{html.escape(title)}'
+            f'</FONT></TD></TR>{cells}</TABLE>>')
+
+
+#: The compass points where arcs end on a transition with this many arcs coming in,
+#: from the left: distinct points, so that arcs into one box do not merge.
+PORTS = {2: ("nw", "ne"), 3: ("nw", "n", "ne"), 4: ("w", "nw", "ne", "e"),
+         5: ("w", "nw", "n", "ne", "e")}
+
+
+def _spread_heads(g: graphviz.Digraph, layout: dict) -> None:
+    """Each arc into a transition that several arcs come into ends at its own point of
+    the box (:data:`PORTS`), in the order of the arcs' sources from left to right in
+    ``layout`` (dot's JSON of ``g``)."""
+    import re
+    objects = layout.get("objects", [])
+    x = {o["name"]: float(o["pos"].split(",")[0]) for o in objects if "pos" in o}
+    boxes = {o["name"] for o in objects if o.get("class") == "transition"}
+    name = {o["_gvid"]: o["name"] for o in objects if "pos" in o}
+    into: dict[str, list[str]] = {}
+    for e in layout.get("edges", []):
+        tail, head = name.get(e["tail"]), name.get(e["head"])
+        if head in boxes and tail in x and e.get("dir") != "back":
+            into.setdefault(head, []).append(tail)
+    port = {}
+    for head, tails in into.items():
+        if len(set(tails)) == len(tails) and len(tails) in PORTS:
+            for tail, compass in zip(sorted(tails, key=x.__getitem__), PORTS[len(tails)]):
+                port[(tail, head)] = compass
+    edge = re.compile(r'^\t("(?:[^"\\]|\\.)*"|\S+) -> ("(?:[^"\\]|\\.)*"|\S+)( \[|$)')
+    for k, line in enumerate(g.body):
+        m = edge.match(line)
+        if m:
+            tail, head = (v[1:-1].replace('\\"', '"') if v.startswith('"') else v
+                          for v in m.groups()[:2])
+            if (tail, head) in port:
+                g.body[k] = (line[:m.end(2)] + ":" + port[(tail, head)] + line[m.end(2):])
+
+
+def _spread(g: graphviz.Digraph) -> float | None:
+    """Lay ``g`` out once (dot's JSON), spread the arcs into each transition
+    (:func:`_spread_heads`) and return the drawing's width in points; None if dot is
+    not installed (the DOT source is written without it)."""
+    import json
+    try:
+        layout = json.loads(g.pipe(format="json"))
+    except (graphviz.ExecutableNotFound, graphviz.CalledProcessError, ValueError):
+        return None
+    _spread_heads(g, layout)
+    return float(layout["bb"].split(",")[2])
 
 
 def _call_edge(g: graphviz.Digraph, a: Arc, ends: tuple[str, str, ArcKind], box: Mapping[str, str],
