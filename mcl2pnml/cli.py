@@ -442,9 +442,18 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
 @click.option("--graph-json", "graph_json", type=OUTPUT,
               help="Also write the reachability graph the page draws as JSON (up to 2,000 "
                    "markings; above, why there is none).")
+@click.option("--live", "live_log", type=click.Path(dir_okay=False, path_type=Path),
+              help="Serve the page on loopback (127.0.0.1, a random token in its URL) and "
+                   "follow the run of this log as it is written (`run --log`); stops on "
+                   "Ctrl-C or after the run's outcome has been shown (--linger).")
+@click.option("--port", type=click.IntRange(0, 65535), default=0, show_default=True,
+              help="With --live: the port (0: one the system picks).")
+@click.option("--linger", type=click.FloatRange(min=0), default=10.0, show_default=True,
+              metavar="SECONDS", help="With --live: stop this long after the page was handed "
+                                      "the run's outcome.")
 @NET_OPTION
 def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path | None,
-         net_id: str | None) -> int:
+         live_log: Path | None, port: int, linger: float, net_id: str | None) -> int:
     """Write one self-contained HTML page to play the token game on a net.
 
     WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
@@ -452,8 +461,21 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
     step back, reset; see the marking and every P-invariant at each step,
     the reduced model (Fig. 3), a recorded run step by step on a clock, the
     mission's tree, the reachability graph. The page needs no server and
-    fetches nothing.
+    fetches nothing. With --live LOG, the page is served on loopback instead
+    and follows a run as `run --log LOG` writes it.
     """
+    if live_log is None and (port != 0 or linger != 10.0):
+        raise click.UsageError("--port and --linger go with --live")
+    if live_log is not None:
+        if output is not None or run_log is not None or graph_json is not None:
+            raise click.UsageError("--live serves the page: leave out -o, --run and --graph-json")
+        shown = pipeline.show_nets(what, with_run=True, net_id=net_id)
+
+        def ready(url: str) -> None:
+            click.echo(f"serving {shown.title} on {url} , following {live_log} "
+                       f"(Ctrl-C stops)", err=True)
+        pipeline.serve_show_live(shown, live_log, port=port, linger=linger, ready=ready)
+        return 0
     shown = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id)
     output = output or Path(f"{shown.title}.html")
     check_outputs([("-o", output), ("--graph-json", graph_json)],

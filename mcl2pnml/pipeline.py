@@ -41,7 +41,7 @@ def __getattr__(name: str) -> Any:
 __all__ = [
     "check_file", "check_source", "warnings_of", "properties_of", "compile_file", "compile_source", "functional_form",
     "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "template_clusters", "templates",
-    "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page",
+    "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page", "serve_show_live",
     "Shown", "save_reachability_json",
 ]
 
@@ -698,6 +698,20 @@ def save_show_page(path: str | Path, shown: Shown,
                            for net, label in shown.nets)
     save_page(path, shown.title, shown.drawn, entries, tree)
     return Path(path)
+
+
+def serve_show_live(shown: Shown, run_log: str | Path, *, port: int = 0, linger: float = 10.0,
+                    ready=print) -> None:
+    """Serve the token-game page of ``shown`` on loopback, following the run of ``run_log``
+    as it is written (:func:`mcl2pnml.view.show.serve_live`): ``ready`` is given the
+    page's URL; returns on Ctrl-C or ``linger`` seconds after the run's end was served."""
+    from mcl2pnml.view.show import LiveLog, page, serve_live, tree_data, variant
+    tree = tree_data(shown.trees)
+    if not shown.drawn:
+        shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label))
+                           for net, label in shown.nets)
+    html = page(shown.title, shown.drawn, None, tree, live=True)
+    serve_live(html, LiveLog(shown.nets[0][0], run_log), port=port, linger=linger, ready=ready)
 
 
 def save_reachability_json(net: Net, path: str | Path) -> dict[str, Any]:

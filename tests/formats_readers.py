@@ -185,21 +185,38 @@ def read_lola(text: str, decode=lambda s: s) -> dict:
 
 _DOT_TOKEN = re.compile(r"""
     (?P<ws>\s+) | (?P<comment>//[^\n]*|/\*.*?\*/|^\#[^\n]*)
-  | (?P<quoted>"(?:[^"\\]|\\.)*") | (?P<html><[^>]*>)
+  | (?P<quoted>"(?:[^"\\]|\\.)*") | (?P<html><)
   | (?P<edgeop>->|--) | (?P<punct>[{}\[\];,=:])
   | (?P<id>[A-Za-z_\x80-\uffff][A-Za-z_0-9\x80-\uffff]*|-?(?:\.\d+|\d+(?:\.\d*)?))
 """, re.X | re.S | re.M)
 
 
+def _html_end(text: str, start: int) -> int:
+    """Where the <HTML string> opened at ``start`` ends: its '<' and '>' balance (the
+    DOT language's rule; a table label nests its elements)."""
+    depth = 0
+    for i in range(start, len(text)):
+        depth += {"<": 1, ">": -1}.get(text[i], 0)
+        if depth == 0:
+            return i + 1
+    raise AssertionError(f"DOT: an HTML string opened at {start} is not closed")
+
+
 def dot_tokens(text: str) -> list[tuple[str, str]]:
     out = []
-    for m in scan(_DOT_TOKEN, text, "DOT"):
-        value = m.group()
-        if m.lastgroup == "quoted":
+    pos = 0
+    while pos < len(text):
+        m = _DOT_TOKEN.match(text, pos)
+        assert m, f"DOT: cannot read {text[pos:pos + 20]!r}"
+        pos, value = m.end(), m.group()
+        if m.lastgroup == "html":
+            pos = _html_end(text, m.start())
+            out.append(("id", text[m.start():pos]))
+        elif m.lastgroup == "quoted":
             out.append(("id", value[1:-1].replace('\\"', '"')))
-        elif m.lastgroup in ("id", "html"):
+        elif m.lastgroup == "id":
             out.append(("id", value))
-        else:
+        elif m.lastgroup not in ("ws", "comment"):
             out.append((m.lastgroup, value))
     return out
 
@@ -261,9 +278,18 @@ def read_dot(text: str) -> dict:
                 continue
             chain = [word]
             i += 1
+
+            def port() -> None:
+                # node_id: ID [':' ID [':' compass_pt]]: where on the node an edge ends
+                nonlocal i
+                while tokens[i] == ("punct", ":"):
+                    i += 2
+
+            port()
             while tokens[i][0] == "edgeop":
                 chain.append(tokens[i + 1][1])
                 i += 2
+                port()
             given = attrs()
             if len(chain) == 1:
                 node = chain[0]

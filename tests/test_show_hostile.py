@@ -411,10 +411,18 @@ def test_the_policy_lets_run_only_the_pages_own_script_and_style():
                          (directives["style-src"], styles[0])):
         digest = base64.b64encode(hashlib.sha256(text.encode()).digest()).decode()
         assert source == f"'sha256-{digest}'"
-    # the script makes no markup from data, and sets no style or URL
+    # the script makes no markup from data, and sets no style or URL but one: the
+    # download links of the drawing (SVG, PNG) get a blob: URL that the browser mints for
+    # a Blob the page made itself (never data:, never a URL the input spells). So every
+    # `href` in the script must be that assignment, `.href = URL.createObjectURL(`; any
+    # other (a read, an href attribute, setAttribute("href"...), xlink:href) is refused
+    script = scripts[0]
+    hrefs = [m.start() for m in re.finditer("href", script, re.I)]
+    minted = [m.start() + 1 for m in re.finditer(r"\.href = URL\.createObjectURL\(", script)]
+    assert hrefs and hrefs == minted, [script[k - 30:k + 40] for k in set(hrefs) - set(minted)]
     for sink in ("innerHTML", "outerHTML", "insertAdjacentHTML", "document.write", "eval(",
-                 "Function(", "href", "style:", ".style", "setTimeout(\"", "location"):
-        assert sink not in scripts[0], sink
+                 "Function(", "style:", ".style", "setTimeout(\"", "location"):
+        assert sink not in script, sink
 
 
 def test_a_doc_that_is_not_text_is_shown_as_text():

@@ -301,3 +301,36 @@ def test_a_node_dragged_moves_with_its_arcs_and_fires_nothing(sauce, page_of):
     page.mouse.up()
     moved = page.locator('#net g.place[data-id="mission.B"]').bounding_box()
     assert abs(moved["x"] - place["x"] - 55) < 2
+
+
+def test_the_drawing_downloads_as_svg_and_png(sauce, page_of, tmp_path):
+    """The SVG and PNG buttons: each a download of a blob the page made, nothing fetched
+    (page_of checks that no request but the file's was made)."""
+    page = page_of(sauce)
+    page.click("#settle")
+    with page.expect_download() as got:
+        page.click("#save-svg")
+    svg = tmp_path / "drawing.svg"
+    got.value.save_as(svg)
+    assert got.value.suggested_filename == "sauce.svg"
+    assert got.value.url.startswith("blob:")
+    root = ET.parse(svg).getroot()                               # well-formed XML
+    assert root.tag == "{http://www.w3.org/2000/svg}svg"
+    ids = {e.get("data-id") for e in root.iter() if e.get("data-id")}
+    nodes = page.evaluate("() => [...V.places, ...V.transitions].map((n) => n.id)")
+    assert set(nodes) <= ids
+    with page.expect_download() as got:
+        page.click("#save-png")
+    png = tmp_path / "drawing.png"
+    got.value.save_as(png)
+    assert got.value.suggested_filename == "sauce.png"
+    data = png.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    # the graph's drawing too, named after it
+    page.select_option("#view-kind", "graph")
+    with page.expect_download() as got:
+        page.click("#save-svg")
+    assert got.value.suggested_filename == "sauce-graph.svg"
+    got.value.save_as(tmp_path / "graph.svg")
+    root = ET.parse(tmp_path / "graph.svg").getroot()
+    assert root.find(".//{http://www.w3.org/2000/svg}g[@class]") is not None

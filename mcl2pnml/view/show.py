@@ -60,9 +60,17 @@ wants it (its arcs drawn straight from there). The drawing as it is shown is
 made, by the script, into a standalone SVG document and a PNG image (drawn
 on a canvas: an SVG image would be an image to load, which the policy
 forbids).
-And the reachability graph of a net of up to 2,000 markings
-(:mod:`mcl2pnml.view.reachability`) is drawn, a marking clicked to play
-from it.
+*SVG* and *PNG* download them (a link to a ``blob:`` URL the page mints for
+its own Blob). And the reachability graph of a net of up to 2,000 markings
+(:mod:`mcl2pnml.view.reachability`) is drawn layered, each edge labelled
+with its transition, a marking clicked to play from it (the path from M0 to
+it kept and drawn), the strongly connected components as nodes past a few
+hundred markings, the current one expanded.
+
+Following a run live (:func:`serve_live`, ``show --live LOG``): the page is
+served on loopback under a random token and asks its own origin for the
+log's new entries (:class:`LiveLog`: complete lines, checked as
+:func:`read_run` checks them, bounded), playing each as it comes.
 
 Everything the page needs is inside it: the data as JSON, the script and
 the style; it fetches nothing, so it opens from a file, offline, in any
@@ -89,11 +97,15 @@ it; the page trusts only its own template, script and style:
   attribute it sets from data is a URL, a style or an event handler; the
   drawing's geometry (positions, bend points, copies, boxes) is sent as
   numbers only, and an arc's path is made of those numbers by the script;
+* the one URL the script sets is a download link's, to a ``blob:`` URL that
+  ``URL.createObjectURL`` mints for a Blob the page made (its drawing as
+  SVG or PNG), never data or a URL from the input;
 * a Content-Security-Policy (:func:`csp`) lets run only the page's one
   script and one style, named by their SHA-256 hashes computed here from the
   template (no ``'unsafe-inline'``), and nothing else: ``default-src 'none'``
   (no image, font, frame or connection, not even ``data:``),
-  ``connect-src 'none'``, ``form-action 'none'``, ``base-uri 'none'``, and
+  ``connect-src 'none'`` (the live page's ``'self'``: its server, for the
+  log's new entries), ``form-action 'none'``, ``base-uri 'none'``, and
   Trusted Types (``require-trusted-types-for 'script'``), so that an HTML
   sink such as ``innerHTML`` would throw in browsers that have them (Chromium
   does). No policy keeps a page from navigating: ``navigate-to`` was dropped
@@ -353,29 +365,34 @@ def read_run(path: str | Path) -> list[dict[str, Any]]:
     entries = []
     text = read_text(path, "run log")
     for n, line in enumerate(text.split("\n"), 1):
-        if not line.strip():
-            continue
-        try:
-            entry = json.loads(line, parse_constant=_no_constant, parse_float=_finite)
-        except json.JSONDecodeError as e:
-            raise Mcl2PnmlError(f"not a JSON line: {e.msg}",
-                                Location(str(path), n, e.colno, line)) from None
-        except _NotFinite as e:
-            what = ("a number too large for a run log (it would be infinite)"
-                    if e.token[-1].isdigit() else "not a JSON value (JSON has no NaN or infinity)")
-            raise Mcl2PnmlError(f"'{e.token}' is {what}",
-                                Location(str(path), n, _column(line, e.token), line)) from None
-        except ValueError as e:   # an integer of thousands of digits
-            raise Mcl2PnmlError(f"not a run log's JSON line: {e}",
-                                Location(str(path), n, 1, line)) from None
-        if not isinstance(entry, dict):
-            raise Mcl2PnmlError("a run log's line is a JSON object",
-                                Location(str(path), n, 1, line))
-        if "fire" in entry and not isinstance(entry["fire"], str):
-            raise Mcl2PnmlError("a run log's 'fire' is a transition id, a JSON string",
-                                Location(str(path), n, 1, line))
-        entries.append(entry)
+        entry = run_line(line, str(path), n)
+        if entry is not None:
+            entries.append(entry)
     return entries
+
+
+def run_line(line: str, path: str, n: int) -> dict[str, Any] | None:
+    """Line ``n`` of a run log as :func:`read_run` reads it: None if blank, else its entry
+    (an error if it is not a run log's JSON object)."""
+    if not line.strip():
+        return None
+    try:
+        entry = json.loads(line, parse_constant=_no_constant, parse_float=_finite)
+    except json.JSONDecodeError as e:
+        raise Mcl2PnmlError(f"not a JSON line: {e.msg}", Location(path, n, e.colno, line)) from None
+    except _NotFinite as e:
+        what = ("a number too large for a run log (it would be infinite)"
+                if e.token[-1].isdigit() else "not a JSON value (JSON has no NaN or infinity)")
+        raise Mcl2PnmlError(f"'{e.token}' is {what}",
+                            Location(path, n, _column(line, e.token), line)) from None
+    except (ValueError, RecursionError) as e:   # an integer of thousands of digits, deep nesting
+        raise Mcl2PnmlError(f"not a run log's JSON line: {e}", Location(path, n, 1, line)) from None
+    if not isinstance(entry, dict):
+        raise Mcl2PnmlError("a run log's line is a JSON object", Location(path, n, 1, line))
+    if "fire" in entry and not isinstance(entry["fire"], str):
+        raise Mcl2PnmlError("a run log's 'fire' is a transition id, a JSON string",
+                            Location(path, n, 1, line))
+    return entry
 
 
 def check_run(net: Net, entries: Iterable[dict[str, Any]], path: str) -> None:
@@ -412,18 +429,21 @@ def sha256_source(text: str) -> str:
     return f"'sha256-{base64.b64encode(digest).decode('ascii')}'"
 
 
-def csp(html: str) -> str:
+def csp(html: str, live: bool = False) -> str:
     """The Content-Security-Policy of the page made from the template ``html``: its one
-    script and one style, by hash; nothing else."""
+    script and one style, by hash; nothing else. ``live``: the page served by
+    :func:`serve_live`, which may also fetch from its own origin (the log's new lines)."""
     inline = {"script": [], "style": []}
     for m in _INLINE.finditer(html):
         inline[m.group(1)].append(m.group(2))
     if len(inline["script"]) != 1 or len(inline["style"]) != 1:
         raise AssertionError("the page's template has one script and one style")
+    connect = "'self'" if live else "'none'"
     return ("default-src 'none'; "
             f"script-src {sha256_source(inline['script'][0])}; "
             f"style-src {sha256_source(inline['style'][0])}; "
-            "img-src 'none'; connect-src 'none'; font-src 'none'; frame-src 'none'; "
+            f"img-src 'none'; connect-src {connect}; font-src 'none'; "
+            "frame-src 'none'; "
             "object-src 'none'; worker-src 'none'; manifest-src 'none'; "
             "form-action 'none'; base-uri 'none'; "
             "require-trusted-types-for 'script'; trusted-types 'none'")
@@ -452,15 +472,16 @@ def fill(html: str, slots: dict[str, str]) -> str:
 
 def page(title: str, variants: list[dict[str, Any]],
          run: list[dict[str, Any]] | None = None,
-         tree: Sequence[dict[str, Any]] = ()) -> str:
-    """The HTML page: the template with the data inside it."""
+         tree: Sequence[dict[str, Any]] = (), live: bool = False) -> str:
+    """The HTML page: the template with the data inside it. ``live``: the page that
+    :func:`serve_live` serves, which follows the run as its log is written."""
     try:
         data = json_for_html({"title": title, "variants": variants, "run": run,
-                              "tree": list(tree)})
+                              "tree": list(tree), "live": live})
     except ValueError as e:   # read_run and variant let no NaN through: a bug of ours
         raise Mcl2PnmlError(f"the page's data is not JSON: {e}") from None
     html = template()
-    return fill(html, {"TITLE": html_text(title), "CSP": csp(html), "DATA": data})
+    return fill(html, {"TITLE": html_text(title), "CSP": csp(html, live), "DATA": data})
 
 
 def save_page(path: str | Path, title: str, variants: list[dict[str, Any]],
@@ -469,3 +490,189 @@ def save_page(path: str | Path, title: str, variants: list[dict[str, Any]],
     """Write the page, whole or not at all."""
     atomic_write_text(path, page(title, variants, run, tree))
     return Path(path)
+
+
+# -- following a run as it is written (show --live) -----------------------------------------
+
+#: A live log's line may have this many bytes at most: a longer one is refused.
+LIVE_LINE = 64 * 1024
+#: One answer to the page carries this many entries at most (it asks again at once).
+LIVE_ENTRIES = 500
+#: A live log is followed up to this many bytes; past them, no further.
+LIVE_BYTES = 64 * 1024 * 1024
+#: The server stops this long after it started, whatever the run does.
+LIVE_MAX_SECONDS = 24 * 3600
+
+
+class LiveLog:
+    """A run log as it is written: its complete lines read as they come, each checked as
+    :func:`read_run` and :func:`check_run` check a log, up to :data:`LIVE_BYTES`. A bad
+    line ends the reading, and is what the page is told."""
+
+    def __init__(self, net: Net, path: str | Path):
+        import threading
+
+        self.net, self.path = net, Path(path)
+        self.entries: list[dict[str, Any]] = []
+        self.offset = 0          # bytes read, up to the end of the last complete line
+        self.lines = 0
+        self.error: str | None = None
+        self.outcome = False     # the run's outcome line has been read
+        self._lock = threading.Lock()
+
+    def _fail(self, message: str) -> None:
+        self.error = message
+
+    def poll(self) -> None:
+        """Read the complete lines written since the last poll."""
+        import os
+        import stat
+
+        if self.error is not None or self.outcome:
+            return
+        try:
+            st = os.stat(self.path)
+        except FileNotFoundError:
+            return               # not written yet: the run has not started
+        except OSError as e:
+            return self._fail(f"{self.path}: cannot read the run log: {e.strerror}")
+        if not stat.S_ISREG(st.st_mode):
+            return self._fail(f"{self.path}: the run log is not a regular file")
+        if st.st_size < self.offset:
+            return self._fail(f"{self.path}: the run log was cut short while it was followed")
+        if self.offset >= LIVE_BYTES:
+            return self._fail(f"{self.path}: the run log passed {LIVE_BYTES:,} bytes: it is "
+                              f"not followed further")
+        with open(self.path, "rb") as f:
+            f.seek(self.offset)
+            data = f.read(min(st.st_size, LIVE_BYTES) - self.offset)
+        end = data.rfind(b"\n") + 1
+        if end == 0 and len(data) > LIVE_LINE:
+            return self._fail(f"{self.path}:{self.lines + 1}: a run log's line of more than "
+                              f"{LIVE_LINE:,} bytes")
+        for raw in data[:end].split(b"\n")[:-1]:
+            self.lines += 1
+            self.offset += len(raw) + 1
+            try:
+                if len(raw) > LIVE_LINE:
+                    raise Mcl2PnmlError(f"a run log's line of more than {LIVE_LINE:,} bytes",
+                                        Location(str(self.path), self.lines))
+                try:
+                    line = raw.decode("utf-8")
+                except UnicodeDecodeError as e:
+                    raise Mcl2PnmlError(f"not UTF-8: {e.reason}",
+                                        Location(str(self.path), self.lines)) from None
+                entry = run_line(line, str(self.path), self.lines)
+                if entry is None:
+                    continue
+                fired = entry.get("fire")
+                if fired is not None and fired not in self.net.transition_index:
+                    raise Mcl2PnmlError(f"the run fires '{fired}', which is no transition of "
+                                        f"'{self.net.name}': a log of another mission?",
+                                        Location(str(self.path), self.lines))
+            except Mcl2PnmlError as e:
+                return self._fail(str(e))
+            self.entries.append(entry)
+            if "outcome" in entry:
+                self.outcome = True
+                return
+
+    def answer(self, start: int) -> tuple[dict[str, Any], bool]:
+        """The page's answer from entry ``start`` on, and whether it carries the run's
+        last entry (its outcome), or the error that ends the reading."""
+        with self._lock:
+            self.poll()
+            start = max(0, min(start, len(self.entries)))
+            entries = self.entries[start:start + LIVE_ENTRIES]
+            end = start + len(entries)
+            finished = end == len(self.entries) and (self.outcome or self.error is not None)
+            return ({"entries": entries, "next": end, "done": finished,
+                     "error": self.error}, finished)
+
+
+def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
+               ready: Any = print, max_seconds: float = LIVE_MAX_SECONDS) -> None:
+    """Serve the live page ``html`` (:func:`page` with ``live``) and the new entries of
+    ``log`` on loopback (127.0.0.1) only, at ``port`` (0: one the system picks), under a
+    random token: ``ready`` is given the page's URL, which holds it; a request without it
+    (or naming another host: DNS rebinding) gets 403. Returns on Ctrl-C, ``linger``
+    seconds after the page was handed the run's outcome (or the error that stops the
+    reading), or after ``max_seconds``."""
+    import hmac
+    import secrets
+    import threading
+    import time
+    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+    from urllib.parse import parse_qs, urlsplit
+
+    token = secrets.token_urlsafe(24)
+    policy = csp(template(), live=True)
+    body = html.encode("utf-8")
+    finished_at: list[float] = []
+
+    class Handler(BaseHTTPRequestHandler):
+        server_version = "mcl2pnml"
+        sys_version = ""
+
+        def log_message(self, format: str, *args: Any) -> None:   # quiet: the URL has the token
+            pass
+
+        def _send(self, status: int, ctype: str, data: bytes) -> None:
+            self.send_response(status)
+            self.send_header("Content-Type", ctype)
+            self.send_header("Content-Length", str(len(data)))
+            self.send_header("Content-Security-Policy", policy)
+            self.send_header("X-Content-Type-Options", "nosniff")
+            self.send_header("Cache-Control", "no-store")
+            self.send_header("Referrer-Policy", "no-referrer")
+            self.send_header("Cross-Origin-Resource-Policy", "same-origin")
+            self.end_headers()
+            if self.command != "HEAD":
+                self.wfile.write(data)
+
+        def do_GET(self) -> None:
+            url = urlsplit(self.path)
+            host = self.headers.get("Host", "")
+            _, tok, rest = (url.path.split("/", 2) + ["", ""])[:3]
+            if (host not in (f"127.0.0.1:{bound}", f"localhost:{bound}")
+                    or not hmac.compare_digest(tok.encode(), token.encode())):
+                self._send(403, "text/plain; charset=utf-8", b"forbidden\n")
+            elif rest == "" and url.path.endswith("/"):
+                self._send(200, "text/html; charset=utf-8", body)
+            elif rest == "log":
+                try:
+                    start = int(parse_qs(url.query).get("from", ["0"])[0])
+                except ValueError:
+                    start = 0
+                answer, finished = log.answer(start)
+                if finished and not finished_at:
+                    finished_at.append(time.monotonic())
+                self._send(200, "application/json",
+                           json.dumps(answer, allow_nan=False).encode("ascii"))
+            else:
+                self._send(404, "text/plain; charset=utf-8", b"not found\n")
+
+        do_HEAD = do_GET
+
+    server = ThreadingHTTPServer(("127.0.0.1", port), Handler)
+    server.daemon_threads = True
+    bound = server.server_address[1]
+    started = time.monotonic()
+    stop = threading.Event()
+
+    def watch() -> None:          # the run's end served, then linger: stop
+        while not stop.wait(0.1):
+            now = time.monotonic()
+            if (finished_at and now - finished_at[0] >= linger) or now - started >= max_seconds:
+                server.shutdown()
+                return
+
+    threading.Thread(target=watch, daemon=True).start()
+    ready(f"http://127.0.0.1:{bound}/{token}/")
+    try:
+        server.serve_forever(poll_interval=0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        stop.set()
+        server.server_close()

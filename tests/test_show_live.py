@@ -1,0 +1,134 @@
+"""`mcl2pnml show MISSION --live LOG`: the page served on loopback follows a run as its
+log is written, in headless Chromium.
+
+The server binds 127.0.0.1 only, on a port the system picks, under a random
+token in the URL: a request without it (or for another host name) is
+refused. The page asks its own origin for the log's new entries (its policy
+allows connect-src 'self', the static page's none) and plays them; the
+server stops a moment (--linger) after the page has been handed the run's
+outcome.
+"""
+from __future__ import annotations
+
+import json
+import re
+import select
+import subprocess
+import sys
+import time
+import urllib.error
+import urllib.request
+
+import pytest
+
+from helpers import ROOT, run_cli as run
+from test_show import browser, marking  # noqa: F401 (fixtures)
+
+SAUCE = ROOT / "examples" / "sauce.mcl"
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory) -> list[str]:
+    """A run of the paper's mission on the simulated AUV: its log's lines."""
+    log = tmp_path_factory.mktemp("live") / "recorded.jsonl"
+    done = run("run", SAUCE, "--log", log)
+    assert done.returncode == 0, done.stderr
+    return log.read_text().splitlines(keepends=True)
+
+
+def serve(log, *options) -> tuple[subprocess.Popen, str]:
+    """`show --live LOG` started; the process and the URL it prints."""
+    proc = subprocess.Popen([sys.executable, "-m", "mcl2pnml", "show", str(SAUCE), "--live",
+                             str(log), *options], stderr=subprocess.PIPE, text=True)
+    deadline, said = time.monotonic() + 60, ""
+    while time.monotonic() < deadline:
+        if not select.select([proc.stderr], [], [], 0.5)[0]:
+            continue
+        line = proc.stderr.readline()
+        said += line
+        found = re.search(r"http://127\.0\.0\.1:\d+/[A-Za-z0-9_-]{20,}/", line)
+        if found:
+            return proc, found.group()
+        if not line:
+            break
+    proc.kill()
+    pytest.fail(f"no URL printed: {said}")
+
+
+def status(url: str, host: str | None = None) -> int:
+    request = urllib.request.Request(url, headers={"Host": host} if host else {})
+    try:
+        with urllib.request.urlopen(request, timeout=5) as answer:
+            return answer.status
+    except urllib.error.HTTPError as e:
+        return e.code
+
+
+def test_the_page_follows_a_run_as_it_is_written(tmp_path, browser, recorded):
+    log = tmp_path / "run.jsonl"                  # not there yet: the run has not started
+    proc, url = serve(log, "--linger", "1")
+    try:
+        origin, token = url.rsplit("/", 2)[0], url.rsplit("/", 2)[1]
+        # refused: no token, a wrong one, another host name (DNS rebinding)
+        assert status(origin + "/") == 403
+        assert status(origin + "/" + "x" * len(token) + "/") == 403
+        assert status(origin + "/" + "x" * len(token) + "/log?from=0") == 403
+        assert status(url, host="attacker.example:80") == 403
+        assert status(url + "log?from=0") == 200
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        requests, errors = [], []
+        page.on("request", lambda r: requests.append(r.url))
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        answer = page.goto(url)
+        policy = answer.headers["content-security-policy"]
+        assert "connect-src 'self'" in policy and "default-src 'none'" in policy
+        assert "mission.B" in marking(page)
+        fires = [json.loads(line)["fire"] for line in recorded if '"fire"' in line]
+        half = len(recorded) // 2
+        with log.open("a") as out:                # the run, line by line
+            for line in recorded[:half]:
+                out.write(line)
+                out.flush()
+                time.sleep(0.002)
+            so_far = sum('"fire"' in line for line in recorded[:half])
+            page.wait_for_function(f"() => history.length === {so_far}", timeout=10_000)
+            assert "mission.OK" not in marking(page)
+            for line in recorded[half:]:
+                out.write(line)
+                out.flush()
+                time.sleep(0.002)
+        page.wait_for_function("() => /ended/.test(document.getElementById('live-status')"
+                               ".textContent)", timeout=10_000)
+        assert "mission.OK" in marking(page)
+        assert page.locator("#history li").all_text_contents() == fires
+        assert page.text_content("#run-message") == ""
+        assert proc.wait(timeout=10) == 0         # the outcome served, then --linger: stopped
+        assert requests and all(r.startswith(url) for r in requests), requests
+        assert not errors, errors
+        page.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        proc.stderr.close()
+
+
+def test_a_bad_line_stops_the_following_and_is_shown(tmp_path, browser, recorded):
+    log = tmp_path / "run.jsonl"
+    log.write_text(recorded[0] + '{"t": 1, "fire": "nowhere.t9"}\n' + "".join(recorded[1:]))
+    proc, url = serve(log, "--linger", "0.5")
+    try:
+        page = browser.new_page()
+        page.goto(url)
+        page.wait_for_function("() => /error/.test(document.getElementById('live-status')"
+                               ".textContent)", timeout=10_000)
+        assert "'nowhere.t9', which is no transition" in page.text_content("#run-message")
+        assert page.locator("#history li").count() == 1
+        assert proc.wait(timeout=10) == 0
+        page.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        proc.stderr.close()
