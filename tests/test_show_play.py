@@ -102,10 +102,9 @@ def play_out(page, seed: int) -> dict:
     return page.evaluate(f"() => playOut({MAX_STEPS})")
 
 
-def test_automatic_play_reaches_the_missions_result(sauce, page_of):
-    page = page_of(sauce)
+def _games_end(page, seeds) -> None:
     results = set()
-    for seed in range(1, 26):
+    for seed in seeds:
         game = play_out(page, seed)
         # every game ends, in a bounded number of steps, with the mission's result marked
         assert game["result"] in ("mission.OK", "mission.FAIL", "mission.ABORTED"), (seed, game)
@@ -119,9 +118,20 @@ def test_automatic_play_reaches_the_missions_result(sauce, page_of):
         # time passes: the vehicle takes its time, and a time-out fires at its due time
         assert game["now"] > 0
     assert results >= {"mission.OK", "mission.FAIL"}
+
+
+def test_automatic_play_reaches_the_missions_result(sauce, page_of):
+    """Ten seeds here (both results among them), forty behind ``slow``."""
+    page = page_of(sauce)
+    _games_end(page, range(1, 11))
     # a seed plays the same game again
     first = (play_out(page, 7), fired(page))
     assert (play_out(page, 7), fired(page)) == first
+
+
+@pytest.mark.slow
+def test_automatic_play_reaches_the_missions_result_on_forty_seeds(sauce, page_of):
+    _games_end(page_of(sauce), range(1, 41))
 
 
 def test_the_vehicles_odds_change_the_games_results(sauce, page_of):
