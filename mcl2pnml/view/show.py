@@ -641,7 +641,7 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
                 self._send(200, "text/html; charset=utf-8", body)
             elif rest == "log":
                 try:
-                    start = int(parse_qs(url.query).get("from", ["0"])[0])
+                    start = max(0, int(parse_qs(url.query).get("from", ["0"])[0][:12]))
                 except ValueError:
                     start = 0
                 answer, finished = log.answer(start)
