@@ -19,10 +19,13 @@ Conventions of the drawings (a legend is part of every figure):
   site of a mission), named inside their box without the box's name; the
   places where boxes meet (fusion places) are drawn outside every box,
   between the boxes they join;
-* a mission is drawn as its calls: each box shut, one node, its border
-  places (B, A, OK, FAIL, ABORTED...) between it and the box that calls it,
-  ranked by the call hierarchy rather than the flow, so that the overview
-  is as deep as the hierarchy; ``expand`` opens the boxes it names;
+* a mission is drawn as its calls: each box shut, one node, framed (grey) with
+  its own border places (B, A, OK, FAIL, ABORTED...) beside it, so that every
+  circle says whose it is, the frames ranked by the call hierarchy rather than
+  the flow, so that the overview is as deep as the hierarchy; ``expand``
+  opens the boxes it names;
+* a figure wider than a slide (16:9) has its widest rows wrapped: every
+  other node (or frame) of such a row one rank down (:func:`_wrap`);
 * every node has a ``class`` (``place``, ``transition``, ``copy``, ``box``,
   ``legend``), which SVG keeps, so that a page or a script can find them;
 * a place that many transitions give tokens back to (a mutex) is drawn again,
@@ -35,6 +38,7 @@ a box's border, no arc through a node.
 from __future__ import annotations
 
 import contextlib
+import re
 from pathlib import Path
 from typing import Collection, Mapping, Sequence
 
@@ -175,8 +179,8 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     g = graphviz.Digraph(net.name, graph_attr={
         # (the page, laid out without a legend, keeps its wider spaces: its arcs run
         # along dot's routes, which a tighter layout leads through transitions)
-        "rankdir": RANKDIR, "nodesep": "0.12" if legend else "0.3" if expand is None else "0.15",
-        "ranksep": "0.3" if legend else "0.45",
+        "rankdir": RANKDIR, "nodesep": "0.1" if legend else "0.3" if expand is None else "0.15",
+        "ranksep": "0.22" if legend else "0.45",
         "fontname": "Helvetica", "fontsize": str(TITLE), "label": _text(title or ""),
         "labelloc": "t", **(DOT_SPEED if large else {"newrank": "true"})},
         node_attr={"fontname": "Helvetica", "fontsize": str(FONT)},
@@ -209,8 +213,14 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         target.node(node_name(t.id), _text(transition_label(t, box_name)),
                     **transition_style(t), **{"class": "transition"})
 
+    # a shut box is framed with the places on its border that are its own (its B, A,
+    # OK, FAIL, ABORTED...): the frame says whose each circle is, the box its name
+    framed: dict[str, list] = {}
     for p in net.places:
-        if p.id not in clustered:
+        owner = p.id.rpartition(".")[0]
+        if p.id not in clustered and owner in shut:
+            framed.setdefault(owner, []).append(p)
+        elif p.id not in clustered:
             add_place(g, p)
     for t in net.transitions:
         if t.id not in clustered:
@@ -222,9 +232,25 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             if box_sizes and name in box_sizes:
                 w, h = box_sizes[name]
                 fixed = {"width": f"{w / 72:.2f}", "height": f"{h / 72:.2f}", "fixedsize": "true"}
-            g.node(box_node(name), _text(f"{name}\n({size} nodes)"), shape="box",
-                   style="rounded,dashed,filled", fillcolor="gray97", color="gray40",
-                   fontsize=str(FONT), margin="0.1,0.05", **fixed, **{"class": "box"})
+            where = (g.subgraph(name=f"cluster_call_{name}") if name in framed
+                     else contextlib.nullcontext(g))
+            with where as c:
+                if name in framed:
+                    c.attr(label="", style="rounded", color="gray75", margin="4")
+                    used.add("call")
+                c.node(box_node(name), _text(f"{name}\n({size} nodes)"), shape="box",
+                       style="rounded,dashed,filled", fillcolor="gray97", color="gray40",
+                       fontsize=str(FONT), margin="0.1,0.05", **fixed, **{"class": "box"})
+                for p in framed.get(name, ()):
+                    add_place(c, p)
+                if name in framed:
+                    # the places beside the box, not a row of their own above it: the
+                    # overview as deep as the calls, a row each
+                    with c.subgraph() as r:
+                        r.attr(rank="same")
+                        r.node(box_node(name))
+                        for p in framed[name]:
+                            r.node(node_name(p.id))
             used.add("shut")
     for name, members in clusters.items():
         if name in shut:
@@ -338,8 +364,143 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     used.add("place")
     used.update(marks)
     if legend:
+        # a unit of a row: a call's frame moves as one, every other node alone
+        unit = {box_node(name): name for name in framed}
+        unit.update((node_name(p.id), name) for name, places in framed.items() for p in places)
+        # (a large drawing, every box or some open, is laid out once: dot takes seconds)
+        if len(net.places) + len(net.transitions) - len(drawn) + len(shut) <= FAST_ABOVE:
+            _wrap(g, lambda width: legend_label(title or "", used, width), unit,
+                  {node_name(m) for m in (*first, *last)})
         g.graph_attr["label"] = legend_label(title or "", used, _spread(g))
     return g
+
+
+#: The slide a figure is made for (points or pixels: only its shape counts), and how many
+#: times dot lays a figure out again at most to wrap its widest rows (:func:`_wrap`).
+SLIDE = (1920, 1080)
+WRAPS = 6
+PATIENCE = 1
+
+_EDGE = re.compile(r'^\t("(?:[^"\\]|\\.)*"|\S+) -> ("(?:[^"\\]|\\.)*"|\S+)( \[|$)')
+
+
+def _edge_ends(line: str) -> tuple[str, str] | None:
+    """The tail and head (DOT names) of an edge statement of a graph's body, None for
+    any other statement."""
+    m = _EDGE.match(line)
+    if not m:
+        return None
+    tail, head = (v[1:-1].replace('\\"', '"') if v.startswith('"') else v
+                  for v in m.groups()[:2])
+    return tail, head
+
+
+def _wrap(g: graphviz.Digraph, label, unit: Mapping[str, str], fixed: Collection[str]) -> None:
+    """Wrap the rows of ``g`` (top down) that make it wider than a slide onto two rows.
+
+    dot lays ``g`` out (``label(width)``: the graph's label for a drawing so wide);
+    while the drawing is wider than :data:`SLIDE`'s shape, every other unit of its
+    widest row (a node, or a call's frame with its places, ``unit``) goes one rank
+    down: each arc that ranks it (not ``constraint=false``) comes into it at least
+    two ranks long. The places ranked first or last (``fixed``) stay. The layout
+    that fits the slide at the largest scale is kept.
+    """
+    import json
+    body = list(g.body)
+    key = "".join(body) + repr(sorted(unit.items())) + repr(sorted(fixed)) + label(None)
+    if key in _WRAPPED:         # the same drawing again (a figure saved twice)
+        g.body[:] = _WRAPPED[key]
+        return
+    into: dict[str, list[int]] = {}     # each unit: the lines of the arcs that rank it
+    for k, line in enumerate(body):
+        ends = _edge_ends(line)
+        if ends is None or "constraint=false" in line:
+            continue
+        tail, head = ends
+        if unit.get(tail, tail) != unit.get(head, head):
+            into.setdefault(unit.get(head, head), []).append(k)
+
+    def lay_out(down: Mapping[str, int], width: float | None):
+        g.body[:] = body
+        for u, n in down.items():
+            for k in into.get(u, ()):
+                line = g.body[k].rstrip("\n")
+                g.body[k] = (line[:-1] + f" minlen={1 + n}]\n" if line.endswith("]")
+                             else line + f" [minlen={1 + n}]\n")
+        g.graph_attr["label"] = label(width)
+        layout = json.loads(g.pipe(format="json"))
+        _, _, w, h = (float(v) for v in layout["bb"].split(","))
+        return min(SLIDE[0] / w, SLIDE[1] / h), w, h, layout, list(g.body)
+
+    try:
+        best = lay_out({}, None)
+    except (graphviz.ExecutableNotFound, graphviz.CalledProcessError, ValueError):
+        g.body[:] = body
+        return
+    down: dict[str, int] = {}
+    here, worse = best, 0
+    for _ in range(WRAPS):
+        _, w, h, layout, _ = here
+        if w * SLIDE[1] <= h * SLIDE[0]:
+            break
+        tried = []
+        for moved in _splits(layout, unit, into, fixed):
+            more = dict(down)
+            for u in moved:
+                more[u] = more.get(u, 0) + 1
+            try:
+                tried.append((lay_out(more, w), more))
+            except (graphviz.CalledProcessError, ValueError):
+                continue        # one of dot's internal failures: not this way
+        if not tried:
+            break
+        # the best wrap of this row, even if no better yet: one more wrap may be
+        (here, down) = max(tried, key=lambda t: t[0][0])
+        if here[0] > best[0] * 1.001:
+            best, worse = here, 0
+        else:
+            worse += 1
+            if worse > PATIENCE:
+                break
+    g.body[:] = best[4]
+    if len(_WRAPPED) >= 64:
+        _WRAPPED.clear()
+    _WRAPPED[key] = best[4]
+
+
+#: The rows :func:`_wrap` chose for each drawing it wrapped (its body), by the drawing.
+_WRAPPED: dict[str, list[str]] = {}
+
+
+def _splits(layout: dict, unit: Mapping[str, str], into: Mapping[str, Sequence[int]],
+            fixed: Collection[str], rows: int = 3) -> list[list[str]]:
+    """The ways to wrap a row of dot's ``layout`` that :func:`_wrap` tries: every other
+    movable unit (odd ones, or even ones) of each of the ``rows`` widest rows."""
+    found: dict[float, dict[str, tuple[float, float]]] = {}
+    frames = {o["name"][len("cluster_call_"):]: o for o in layout.get("objects", [])
+              if o.get("name", "").startswith("cluster_call_") and "bb" in o}
+    for o in layout.get("objects", []):
+        if "pos" not in o:
+            continue
+        x, y = (float(v) for v in o["pos"].split(","))
+        u = unit.get(o["name"], o["name"])
+        if u in frames:
+            if o["name"] != box_node(u):
+                continue
+            x0, _, x1, _ = (float(v) for v in frames[u]["bb"].split(","))
+            found.setdefault(round(y), {})[u] = (x, x1 - x0)
+        else:
+            found.setdefault(round(y), {})[u] = (x, float(o["width"]) * 72)
+    ways = []
+    for y in sorted(found, key=lambda y: -sum(v for _, v in found[y].values()))[:rows]:
+        row = [u for u, _ in sorted(found[y].items(), key=lambda kv: kv[1][0])]
+        if len(row) < 3:
+            continue
+        for step, first in ((2, 1), (2, 0)):
+            moved = [u for u in row[first::step] if u in into and u not in fixed]
+            if moved:
+                ways.append(moved)
+    return ways
 
 
 #: The legend's entries, in its order: a mark (HTML, graphviz's subset) and what it means.
@@ -357,6 +518,7 @@ LEGEND = {
     "weight": ("\u2500 2 \u25b6", "arc weight"),
     "box": ("\u2b1a", "dashed frame: a part of the net"),
     "shut": ("\u25a2", "shut box: a call, its nodes inside"),
+    "call": ("\u25a2\u25ce", "grey frame: a call and its own border places"),
 }
 
 
