@@ -18,6 +18,8 @@ import sys
 import time
 import urllib.error
 import urllib.request
+from contextlib import contextmanager
+from typing import Iterator
 
 import pytest
 
@@ -36,23 +38,31 @@ def recorded(tmp_path_factory) -> list[str]:
     return log.read_text().splitlines(keepends=True)
 
 
-def serve(log, *options) -> tuple[subprocess.Popen, str]:
-    """`show --live LOG` started; the process and the URL it prints."""
+@contextmanager
+def serving(log, *options) -> Iterator[tuple[subprocess.Popen, str]]:
+    """`show --live LOG` started; the process and the URL it prints; killed if still up."""
     proc = subprocess.Popen([sys.executable, "-m", "mcl2pnml", "show", str(SAUCE), "--live",
                              str(log), *options], stderr=subprocess.PIPE, text=True)
-    deadline, said = time.monotonic() + 60, ""
-    while time.monotonic() < deadline:
-        if not select.select([proc.stderr], [], [], 0.5)[0]:
-            continue
-        line = proc.stderr.readline()
-        said += line
-        found = re.search(r"http://127\.0\.0\.1:\d+/[A-Za-z0-9_-]{20,}/", line)
-        if found:
-            return proc, found.group()
-        if not line:
-            break
-    proc.kill()
-    pytest.fail(f"no URL printed: {said}")
+    try:
+        deadline, said, url = time.monotonic() + 60, "", None
+        while url is None and time.monotonic() < deadline:
+            if not select.select([proc.stderr], [], [], 0.5)[0]:
+                continue
+            line = proc.stderr.readline()
+            said += line
+            found = re.search(r"http://127\.0\.0\.1:\d+/[A-Za-z0-9_-]{20,}/", line)
+            if found:
+                url = found.group()
+            elif not line:
+                break
+        if url is None:
+            pytest.fail(f"no URL printed: {said}")
+        yield proc, url
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        proc.stderr.close()
 
 
 def status(url: str, host: str | None = None) -> int:
@@ -66,8 +76,7 @@ def status(url: str, host: str | None = None) -> int:
 
 def test_the_page_follows_a_run_as_it_is_written(tmp_path, browser, recorded):
     log = tmp_path / "run.jsonl"                  # not there yet: the run has not started
-    proc, url = serve(log, "--linger", "1")
-    try:
+    with serving(log, "--linger", "1") as (proc, url):
         origin, token = url.rsplit("/", 2)[0], url.rsplit("/", 2)[1]
         # refused: no token, a wrong one, another host name (DNS rebinding)
         assert status(origin + "/") == 403
@@ -107,18 +116,12 @@ def test_the_page_follows_a_run_as_it_is_written(tmp_path, browser, recorded):
         assert requests and all(r.startswith(url) for r in requests), requests
         assert not errors, errors
         page.close()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        proc.stderr.close()
 
 
 def test_a_bad_line_stops_the_following_and_is_shown(tmp_path, browser, recorded):
     log = tmp_path / "run.jsonl"
     log.write_text(recorded[0] + '{"t": 1, "fire": "nowhere.t9"}\n' + "".join(recorded[1:]))
-    proc, url = serve(log, "--linger", "0.5")
-    try:
+    with serving(log, "--linger", "0.5") as (proc, url):
         page = browser.new_page()
         page.goto(url)
         page.wait_for_function("() => /error/.test(document.getElementById('live-status')"
@@ -127,8 +130,3 @@ def test_a_bad_line_stops_the_following_and_is_shown(tmp_path, browser, recorded
         assert page.locator("#history li").count() == 1
         assert proc.wait(timeout=10) == 0
         page.close()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        proc.stderr.close()

@@ -182,8 +182,7 @@ class MavlinkVehicle(LiveVehicle):
         if problem is None and binding.by == "autopilot" and not self._flying():
             problem = self._why_not_flying()
         if problem is not None:
-            self._report(act, name, EventKind.FAILED, t, "autopilot", problem)
-            act.dead = problem
+            self._give_up(act, name, t, problem)
             return
         if binding.by == "servo":
             self._command(DO_SET_SERVO, binding.channel, binding.pwm)
@@ -443,11 +442,7 @@ class MavlinkVehicle(LiveVehicle):
             what = f"mode {MODES.get(mode, mode)}, {'armed' if armed else 'disarmed'}"
             self._log_note(f"now {what}")
             if not (armed and mode == GUIDED):
-                for name, act in sorted(self.active.items()):
-                    if act.binding.by == "autopilot" and act.dead is None:
-                        why = f"the autopilot is now in {what}"
-                        self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
-                        act.dead = why
+                self._fail_flown(f"the autopilot is now in {what}")
         self.mode, self.armed = mode, armed
 
     # -- the primitives' goals --------------------------------------------------------------
@@ -481,17 +476,14 @@ class MavlinkVehicle(LiveVehicle):
             self.log(t, "track", "", {"track": [round(x, 3), round(y, 3), round(z, 3),
                                                 round(math.degrees(yaw), 1)]})
             self.next_track = t + TRACK_EVERY
+        lost = self._no_position()
         for name in sorted(self.active):
             act = self.active[name]
             if act.dead is not None:
                 continue
             by = act.binding.by
-            if by == "autopilot" and self.position_since is not None and \
-                    self.boot - self.position_since >= self.mapping.position_lost_after:
-                why = (f"the autopilot has had no position for "
-                       f"{self.mapping.position_lost_after:g} s (EKF flags {self.ekf:#x})")
-                self._report(act, name, EventKind.FAILED, t, "autopilot", why)
-                act.dead = why
+            if by == "autopilot" and lost is not None:
+                self._give_up(act, name, t, lost)
                 continue
             if by in ("servo", "relay") and not act.accepted:
                 continue
@@ -502,20 +494,32 @@ class MavlinkVehicle(LiveVehicle):
                              "sensed" if by == "simulated" else "telemetry")
         self._steer()
 
+    def _no_position(self) -> str | None:
+        """Why the flown primitives fail: no position for the mapping's while (None: not)."""
+        if self.position_since is None \
+                or self.boot - self.position_since < self.mapping.position_lost_after:
+            return None
+        return (f"the autopilot has had no position for "
+                f"{self.mapping.position_lost_after:g} s (EKF flags {self.ekf:#x})")
+
     def _position_lost(self) -> None:
         """Without a position the autopilot may stop sending LOCAL_POSITION_NED (ArduSub
-        does), so its EKF reports judge that too: each flown primitive fails once it has
-        had none for the mapping's while, as :meth:`_sample` says."""
-        if not self.t0 or self.position_since is None \
-                or self.boot - self.position_since < self.mapping.position_lost_after:
-            return
+        does), so its EKF reports judge that too, as :meth:`_sample` does."""
+        lost = self._no_position() if self.t0 else None
+        if lost is not None:
+            self._fail_flown(lost)
+
+    def _fail_flown(self, why: str) -> None:
+        """Every flown primitive still seeking fails, for ``why``, by name."""
         for name in sorted(self.active):
             act = self.active[name]
             if act.binding.by == "autopilot" and act.dead is None:
-                why = (f"the autopilot has had no position for "
-                       f"{self.mapping.position_lost_after:g} s (EKF flags {self.ekf:#x})")
-                self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
-                act.dead = why
+                self._give_up(act, name, self.clock(), why)
+
+    def _give_up(self, act: _Active, name: str, t: float, why: str) -> None:
+        """``act`` fails for ``why`` (the autopilot's doing) and says nothing more."""
+        self._report(act, name, EventKind.FAILED, t, "autopilot", why)
+        act.dead = why
 
     @staticmethod
     def _goal_event(act: _Active) -> EventKind | None:
@@ -543,10 +547,9 @@ class MavlinkVehicle(LiveVehicle):
                 if result == 0:
                     act.accepted = True
                 else:
-                    why = f"the autopilot refused command {command}: {_result(result)}" \
-                        + self._said()
-                    self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
-                    act.dead = why
+                    self._give_up(act, name, self.clock(),
+                                  f"the autopilot refused command {command}: "
+                                  f"{_result(result)}{self._said()}")
                 return
 
     def _check_pending(self) -> None:
@@ -557,10 +560,9 @@ class MavlinkVehicle(LiveVehicle):
                 self.pending.remove((name, cmd, by))
                 act = self.active.get(name)
                 if act is not None and act.dead is None:
-                    why = (f"no acknowledgement of command {cmd} within "
-                           f"{self.mapping.ack_within:g} s")
-                    self._report(act, name, EventKind.FAILED, self.clock(), "autopilot", why)
-                    act.dead = why
+                    self._give_up(act, name, self.clock(),
+                                  f"no acknowledgement of command {cmd} within "
+                                  f"{self.mapping.ack_within:g} s")
 
     def _release(self, act: _Active) -> None:
         b = act.binding
