@@ -120,7 +120,7 @@ def test_a_call_opened_on_demand(tmp_path):
 SLIDE, LEAST = (1920, 1080), 14.0
 #: Drawings still below 14 px on a slide (sauce's overview: its rows wrapped to the slide's
 #: shape, still too large for 11 points at 14 px); xfail strict, so that a fix shows.
-NOT_YET = {"mission:sauce.mcl"}
+NOT_YET: set[str] = set()
 
 
 def _slide_drawings():
@@ -215,11 +215,19 @@ def test_the_arcs_into_a_transition_end_apart():
                 assert math.dist(a, b) >= 6, (t, a, b)
 
 
-@pytest.mark.xfail(strict=True, reason="every call open is still laid out by the flow: a strip")
 def test_a_mission_with_every_call_open_is_a_page_not_a_strip():
+    """``--expand all``: the calls' nets stacked by the call hierarchy, each framed with
+    its border places, the widest rows wrapped: a page (a poster), not a 16:1 strip."""
     from drawcheck import svg_size
-    w, h = svg_size(drawing(mission("sauce.mcl"), "sauce.mcl", expand=None).pipe(format="svg"))
+    graph = drawing(mission("sauce.mcl"), "sauce.mcl", expand=None)
+    w, h = svg_size(graph.pipe(format="svg"))
     assert 1 / 3 <= w / h <= 3, (w, h)
+    # every border place is framed with the box it belongs to, and named there
+    laid = layout_json(graph.source)
+    frames = {o["name"] for o in laid["objects"] if o["name"].startswith("cluster_call_")}
+    assert "cluster_call_Survey" in frames and "cluster_call_monitor-1" in frames
+    assert not [o["label"] for o in laid["objects"] if o.get("class") == "place"
+                and o["label"].startswith(("monitor-1.", "Survey."))]
 
 
 # -- the checker finds what a reader would see ---------------------------------------------

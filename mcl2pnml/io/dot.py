@@ -23,7 +23,9 @@ Conventions of the drawings (a legend is part of every figure):
   its own border places (B, A, OK, FAIL, ABORTED...) beside it, so that every
   circle says whose it is, the frames ranked by the call hierarchy rather than
   the flow, so that the overview is as deep as the hierarchy; ``expand``
-  opens the boxes it names;
+  opens the boxes it names; with every box open (``--expand all``) the boxes
+  are still ranked by the calls, each framed with its border places, a page
+  rather than a strip of every call side by side;
 * a figure wider than a slide (16:9) has its widest rows wrapped: every
   other node (or frame) of such a row one rank down (:func:`_wrap`);
 * every node has a ``class`` (``place``, ``transition``, ``copy``, ``box``,
@@ -163,7 +165,8 @@ def _text(label: str) -> str:
 def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
            clusters: Mapping[str, Sequence[str]] | None = None, title: str | None = None,
            legend: bool = True, expand: Collection[str] | None = None,
-           box_sizes: Mapping[str, tuple[float, float]] | None = None) -> graphviz.Digraph:
+           box_sizes: Mapping[str, tuple[float, float]] | None = None,
+           by_calls: bool = False) -> graphviz.Digraph:
     """The net as a graphviz graph (``.source`` for the text, ``.pipe()`` to render).
 
     ``expand`` names the boxes drawn open; every other box of ``clusters`` is
@@ -171,6 +174,10 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     lead to, once per place and direction. None: every box open.
     ``box_sizes`` (points) makes a shut box as large as its inside laid out
     (:mod:`mcl2pnml.view.layout` places the nodes of a mission so).
+    ``by_calls`` ranks the open boxes as the overview ranks the shut ones, by
+    the call hierarchy (:func:`_call_edge`), each box's inside by its flow:
+    a mission with every call open is a page of the calls' nets stacked, a
+    callee below its callers, not a strip of them side by side.
     """
     marking = net.initial if marking is None else marking
     # dot's speed limits only where a flat drawing is large: an overview has a node
@@ -198,13 +205,14 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         owner = p.id.rpartition(".")[0]
         # a place on the border of a shut box is named as inside it (B, OK...): its
         # arc to the box says whose it is, and the overview stays small
-        shown = _inside(p.label, owner if owner in shut else box_name)
+        shown = _inside(p.label, owner if owner in shut or (by_calls and owner in clusters)
+                        else box_name)
         label = shown + (f"\n{_tokens(tokens)}" if tokens else "")
         # circles all of one size read best; long names get a larger one
         small = owner in shut       # the overview's places: only their short names
         size = SMALL if small else FONT
         target.node(node_name(p.id), _text(label), shape="circle",
-                    width=_diameter(label, size, 3.2 if small else 3.6),
+                    width=_diameter(label, size, 3.0 if small else 3.6),
                     fixedsize="true", fontsize=str(size),
                     peripheries="2" if p.interface is not None else "1",
                     **{"class": "place"})
@@ -218,13 +226,25 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     framed: dict[str, list] = {}
     for p in net.places:
         owner = p.id.rpartition(".")[0]
-        if p.id not in clustered and owner in shut:
+        if p.id not in clustered and (owner in shut or (by_calls and owner in clusters)):
             framed.setdefault(owner, []).append(p)
         elif p.id not in clustered:
             add_place(g, p)
     for t in net.transitions:
         if t.id not in clustered:
             add_transition(g, t)
+    @contextlib.contextmanager
+    def frame(name: str):
+        """The frame of box ``name`` with its border places (a grey cluster), if it has
+        any: the subgraph to draw the box in."""
+        if name not in framed:
+            yield g
+            return
+        with g.subgraph(name=f"cluster_call_{name}") as c:
+            c.attr(label="", style="rounded", color="gray75", margin="2")
+            used.add("call")
+            yield c
+
     for name in clusters:
         if name in shut:
             size = len(clusters[name])
@@ -232,38 +252,37 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
             if box_sizes and name in box_sizes:
                 w, h = box_sizes[name]
                 fixed = {"width": f"{w / 72:.2f}", "height": f"{h / 72:.2f}", "fixedsize": "true"}
-            where = (g.subgraph(name=f"cluster_call_{name}") if name in framed
-                     else contextlib.nullcontext(g))
-            with where as c:
-                if name in framed:
-                    c.attr(label="", style="rounded", color="gray75", margin="4")
-                    used.add("call")
+            with frame(name) as c:
                 c.node(box_node(name), _text(f"{name}\n({size} nodes)"), shape="box",
                        style="rounded,dashed,filled", fillcolor="gray97", color="gray40",
                        fontsize=str(FONT), margin="0.1,0.05", **fixed, **{"class": "box"})
-                for p in framed.get(name, ()):
-                    add_place(c, p)
-                if name in framed:
-                    # the places beside the box, not a row of their own above it: the
-                    # overview as deep as the calls, a row each
-                    with c.subgraph() as r:
-                        r.attr(rank="same")
-                        r.node(box_node(name))
-                        for p in framed[name]:
-                            r.node(node_name(p.id))
+                # the places beside the box, not a row of their own above it: the
+                # overview as deep as the calls, a row each
+                with c.subgraph() as r:
+                    r.attr(rank="same")
+                    r.node(box_node(name))
+                    for p in framed.get(name, ()):
+                        add_place(r, p)
             used.add("shut")
     for name, members in clusters.items():
         if name in shut:
             continue
-        with g.subgraph(name=f"cluster_{name}") as c:
-            c.attr(label=_text(name), style="rounded,dashed", color="gray50", fontsize=str(FONT),
-                   margin="6")
-            used.add("box")
-            for m in members:   # net order within the cluster, as given
-                if m in net.place_index:
-                    add_place(c, net.place_index[m], name)
-                else:
-                    add_transition(c, net.transition_index[m], name)
+        # (a page ranked by calls: each open box framed with its border places, a row
+        # above it, as the overview frames a shut box)
+        with frame(name) as f:
+            with f.subgraph() as r:
+                r.attr(rank="same")
+                for p in framed.get(name, ()):
+                    add_place(r, p)
+            with f.subgraph(name=f"cluster_{name}") as c:
+                c.attr(label=_text(name), style="rounded,dashed", color="gray50",
+                       fontsize=str(FONT), margin="6")
+                used.add("box")
+                for m in members:   # net order within the cluster, as given
+                    if m in net.place_index:
+                        add_place(c, net.place_index[m], name)
+                    else:
+                        add_transition(c, net.transition_index[m], name)
     # where tokens come in on the left, where results come out on the right
     written = {a.target for a in net.arcs if a.target in net.place_index}
     read_or_taken = {a.source for a in net.arcs if a.source in net.place_index}
@@ -274,7 +293,8 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     last = [p.id for p in net.places if p.id not in clustered and p.id not in read_or_taken
             and p.id in written]
     for rank, members in (("source", first), ("sink", last)):
-        if members and not shut:    # an overview is ranked by its calls (_call_edge)
+        # (an overview, or a page ranked by calls, is ranked by its calls: _call_edge)
+        if members and not shut and not by_calls:
             with g.subgraph() as r:
                 r.attr(rank=rank)
                 for m in members:
@@ -299,9 +319,14 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         """A copy of ``place``, dashed and small, in the box ``box_name`` (the box of the
         transition it is drawn beside), if any: its DOT name."""
         name = f"{node_name(place.id)}~{number}"
-        where = g.subgraph(name=f"cluster_{box_name}") if box_name else contextlib.nullcontext(g)
         shown = _inside(place.label, box_name)
-        with where as c:
+        with contextlib.ExitStack() as stack:
+            c = g
+            # (into the box where it is drawn: inside its frame on a page ranked by calls)
+            if box_name in framed:
+                c = stack.enter_context(c.subgraph(name=f"cluster_call_{box_name}"))
+            if box_name:
+                c = stack.enter_context(c.subgraph(name=f"cluster_{box_name}"))
             c.node(name, _text(shown), shape="circle", fixedsize="true", style="dashed",
                    width=_diameter(shown, SMALL, 3.0), fontsize=str(SMALL),
                    **{"class": "copy"})
@@ -310,7 +335,14 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
     copies = 0
     marks: set[str] = set()
     joined: set = set()        # the arcs to and from a shut box, drawn once each
-    levels = box_levels(net, clusters) if shut else ({}, {})
+    levels = box_levels(net, clusters) if shut or by_calls else ({}, {})
+    # the places between two boxes or more, whose arcs rank the boxes by calls
+    touching: dict[str, set[str]] = {}
+    for a in net.arcs if by_calls else ():
+        for p, t in ((a.source, a.target), (a.target, a.source)):
+            if p in net.place_index and p not in box and t in box:
+                touching.setdefault(p, set()).add(box[t])
+    between = {p for p, boxes in touching.items() if len(boxes) > 1}
     for a in net.arcs:
         attrs = {}
         if a.source in drawn or a.target in drawn:
@@ -322,6 +354,10 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
                 marks.add("read" if a.kind is ArcKind.READ else "arc")
             continue
         source, target = node_name(a.source), node_name(a.target)
+        if (a.source in between or a.target in between) and a.weight == 1:
+            _call_edge(g, a, (source, target, a.kind), box, levels)
+            marks.add("read" if a.kind is ArcKind.READ else "arc")
+            continue
         if a.weight != 1:
             attrs["label"] = str(a.weight)
             marks.add("weight")
@@ -367,10 +403,18 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
         # a unit of a row: a call's frame moves as one, every other node alone
         unit = {box_node(name): name for name in framed}
         unit.update((node_name(p.id), name) for name, places in framed.items() for p in places)
-        # (a large drawing, every box or some open, is laid out once: dot takes seconds)
-        if len(net.places) + len(net.transitions) - len(drawn) + len(shut) <= FAST_ABOVE:
-            _wrap(g, lambda width: legend_label(title or "", used, width), unit,
-                  {node_name(m) for m in (*first, *last)})
+        # (on a page ranked by calls, an open box moves with its frame, every node in it)
+        anchor = {name: box_node(name) for name in framed if name in shut}
+        if by_calls:
+            unit.update((node_name(m), name) for name in framed for m in clusters[name])
+            anchor.update((name, node_name(places[0].id)) for name, places in framed.items())
+        # (a large drawing, every box or some open, is laid out once: dot takes seconds;
+        # a page ranked by calls is laid out fast, dot's effort limited)
+        if (by_calls or len(net.places) + len(net.transitions) - len(drawn) + len(shut)
+                <= FAST_ABOVE):
+            _wrap(g, lambda width: legend_label(title or "", used, width), unit, anchor,
+                  {node_name(m) for m in (*first, *last)},
+                  **({"wraps": PAGE_WRAPS, "rows": 1} if by_calls else {}))
         g.graph_attr["label"] = legend_label(title or "", used, _spread(g))
     return g
 
@@ -379,6 +423,9 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
 #: times dot lays a figure out again at most to wrap its widest rows (:func:`_wrap`).
 SLIDE = (1920, 1080)
 WRAPS = 6
+#: A page ranked by calls (every call open) is laid out again fewer times, its widest
+#: row only: each layout takes dot a second.
+PAGE_WRAPS = 3
 PATIENCE = 1
 
 _EDGE = re.compile(r'^\t("(?:[^"\\]|\\.)*"|\S+) -> ("(?:[^"\\]|\\.)*"|\S+)( \[|$)')
@@ -395,15 +442,17 @@ def _edge_ends(line: str) -> tuple[str, str] | None:
     return tail, head
 
 
-def _wrap(g: graphviz.Digraph, label, unit: Mapping[str, str], fixed: Collection[str]) -> None:
+def _wrap(g: graphviz.Digraph, label, unit: Mapping[str, str], anchor: Mapping[str, str],
+          fixed: Collection[str], *, wraps: int = WRAPS, rows: int = 3) -> None:
     """Wrap the rows of ``g`` (top down) that make it wider than a slide onto two rows.
 
     dot lays ``g`` out (``label(width)``: the graph's label for a drawing so wide);
     while the drawing is wider than :data:`SLIDE`'s shape, every other unit of its
     widest row (a node, or a call's frame with its places, ``unit``) goes one rank
     down: each arc that ranks it (not ``constraint=false``) comes into it at least
-    two ranks long. The places ranked first or last (``fixed``) stay. The layout
-    that fits the slide at the largest scale is kept.
+    two ranks long; a frame's row is its ``anchor`` node's. The places ranked first
+    or last (``fixed``) stay. The layout that fits the slide at the largest scale is
+    kept.
     """
     import json
     body = list(g.body)
@@ -439,12 +488,12 @@ def _wrap(g: graphviz.Digraph, label, unit: Mapping[str, str], fixed: Collection
         return
     down: dict[str, int] = {}
     here, worse = best, 0
-    for _ in range(WRAPS):
+    for _ in range(wraps):
         _, w, h, layout, _ = here
         if w * SLIDE[1] <= h * SLIDE[0]:
             break
         tried = []
-        for moved in _splits(layout, unit, into, fixed):
+        for moved in _splits(layout, unit, anchor, into, fixed, rows):
             more = dict(down)
             for u in moved:
                 more[u] = more.get(u, 0) + 1
@@ -472,8 +521,9 @@ def _wrap(g: graphviz.Digraph, label, unit: Mapping[str, str], fixed: Collection
 _WRAPPED: dict[str, list[str]] = {}
 
 
-def _splits(layout: dict, unit: Mapping[str, str], into: Mapping[str, Sequence[int]],
-            fixed: Collection[str], rows: int = 3) -> list[list[str]]:
+def _splits(layout: dict, unit: Mapping[str, str], anchor: Mapping[str, str],
+            into: Mapping[str, Sequence[int]], fixed: Collection[str],
+            rows: int = 3) -> list[list[str]]:
     """The ways to wrap a row of dot's ``layout`` that :func:`_wrap` tries: every other
     movable unit (odd ones, or even ones) of each of the ``rows`` widest rows."""
     found: dict[float, dict[str, tuple[float, float]]] = {}
@@ -485,14 +535,15 @@ def _splits(layout: dict, unit: Mapping[str, str], into: Mapping[str, Sequence[i
         x, y = (float(v) for v in o["pos"].split(","))
         u = unit.get(o["name"], o["name"])
         if u in frames:
-            if o["name"] != box_node(u):
+            if o["name"] != anchor.get(u):
                 continue
             x0, _, x1, _ = (float(v) for v in frames[u]["bb"].split(","))
             found.setdefault(round(y), {})[u] = (x, x1 - x0)
         else:
             found.setdefault(round(y), {})[u] = (x, float(o["width"]) * 72)
     ways = []
-    for y in sorted(found, key=lambda y: -sum(v for _, v in found[y].values()))[:rows]:
+    widest = sorted(found, key=lambda y: -sum(v for _, v in found[y].values()))[:rows]
+    for y in widest:
         row = [u for u, _ in sorted(found[y].items(), key=lambda kv: kv[1][0])]
         if len(row) < 3:
             continue
@@ -500,6 +551,8 @@ def _splits(layout: dict, unit: Mapping[str, str], into: Mapping[str, Sequence[i
             moved = [u for u in row[first::step] if u in into and u not in fixed]
             if moved:
                 ways.append(moved)
+        if y == widest[0]:
+            ways.extend([u] for u in row if u in frames and u in into and u not in fixed)
     return ways
 
 
@@ -789,7 +842,8 @@ def drawing(net: Net, title: str | None = None, *,
     None opens them all.
     """
     boxes = instance_clusters(net) if clusters is None else clusters
-    return to_dot(net, clusters=boxes, title=title or net.name, legend=True, expand=expand)
+    return to_dot(net, clusters=boxes, title=title or net.name, legend=True, expand=expand,
+                  by_calls=clusters is None and expand is None)
 
 
 def save_dot(net: Net, path: str | Path, *, title: str | None = None,
