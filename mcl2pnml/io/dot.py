@@ -414,7 +414,9 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
                 <= FAST_ABOVE):
             _wrap(g, lambda width: legend_label(title or "", used, width), unit, anchor,
                   {node_name(m) for m in (*first, *last)},
-                  **({"wraps": PAGE_WRAPS, "rows": 1} if by_calls else {}))
+                  # (some box open: as large as a page, wrapped as one)
+                  **({"wraps": PAGE_WRAPS, "rows": 1}
+                     if by_calls or 0 < len(shut) < len(clusters) else {}))
         g.graph_attr["label"] = legend_label(title or "", used, _spread(g))
     return g
 
@@ -423,8 +425,8 @@ def to_dot(net: Net, *, marking: Mapping[str, int] | None = None,
 #: times dot lays a figure out again at most to wrap its widest rows (:func:`_wrap`).
 SLIDE = (1920, 1080)
 WRAPS = 6
-#: A page ranked by calls (every call open) is laid out again fewer times, its widest
-#: row only: each layout takes dot a second.
+#: A page (every call open, or some) is laid out again fewer times, its widest row
+#: only: each layout takes dot a second.
 PAGE_WRAPS = 3
 PATIENCE = 1
 
