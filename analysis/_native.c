@@ -367,6 +367,225 @@ fail:
     return NULL;
 }
 
+/* -- a property's product, explored on the fly ----------------------------------------- */
+
+/* The product of the net with a property's observer (analysis/onthefly.py): a row is the
+ * marking's words and one more word, the observer's state. The observer reads each new
+ * marking through its atoms (a set of places and a least number of tokens among them:
+ * popcount, the net being safe): code_of[atom bits] is the marking's letter (P S Q R as
+ * four bits), move[state * 16 + letter] the observer's next state. The search stops at
+ * the first violation found breadth first: a successor in the state `bad` (its position,
+ * FOUND_BAD) or a dead marking with an obligation open (the head's position, FOUND_DEAD).
+ * A successor in `bad` one firing deeper than the head is only the shortest violation
+ * once the head's level is done (a dead marking there is shorter): the level is finished
+ * first. parent, via (the transition) and depth of each row make the way back. */
+enum { FOUND_BAD = 7, FOUND_DEAD = 8 };
+
+typedef struct {
+    const uint64_t *atoms;
+    const int64_t *least, *code_of, *move;
+    const uint8_t *pend;
+    int64_t natoms, bad;
+} Observer;
+
+static inline int64_t observe(const uint64_t *row, int64_t words, const Observer *o,
+                              int64_t state) {
+    int64_t bits = 0;
+    for (int64_t a = 0; a < o->natoms; a++) {
+        int64_t n = 0;
+        const uint64_t *mask = o->atoms + a * words;
+        for (int64_t w = 0; w < words; w++)
+            n += __builtin_popcountll(row[w] & mask[w]);
+        if (n >= o->least[a])
+            bits |= (int64_t)1 << a;
+    }
+    return o->move[state * 16 + o->code_of[bits]];
+}
+
+static int observer_of(Buffers *b, PyObject **objs, Observer *o) {
+    if (!(o->atoms = data_of(b, objs[0], 8, 0))) return 0;
+    if (!(o->least = data_of(b, objs[1], 8, 0))) return 0;
+    o->natoms = items_of(b);
+    if (!(o->code_of = data_of(b, objs[2], 8, 0)) || !(o->move = data_of(b, objs[3], 8, 0))
+        || !(o->pend = data_of(b, objs[4], 1, 0)))
+        return 0;
+    return 1;
+}
+
+static int masks_of(Buffers *b, PyObject **objs, Masks *m) {
+    if (!(m->need = data_of(b, objs[0], 8, 0))) return 0;
+    m->words = b->views[b->count - 1].ndim == 2 ? b->views[b->count - 1].shape[1] : 1;
+    m->transitions = items_of(b) / m->words;
+    if (!(m->keep = data_of(b, objs[1], 8, 0)) || !(m->give = data_of(b, objs[2], 8, 0))
+        || !(m->need_ptr = data_of(b, objs[3], 8, 0)) || !(m->need_word = data_of(b, objs[4], 8, 0))
+        || !(m->touch_ptr = data_of(b, objs[5], 8, 0)) || !(m->touch_word = data_of(b, objs[6], 8, 0))
+        || !(m->key_ptr = data_of(b, objs[7], 8, 0)) || !(m->key_t = data_of(b, objs[8], 8, 0))
+        || !(m->free_t = data_of(b, objs[9], 8, 0)))
+        return 0;
+    m->nfree = items_of(b);
+    return 1;
+}
+
+/* The successor of row by t into nx (the marking's words): 0, or NOT_SAFE. */
+static inline int fire_into(const uint64_t *row, uint64_t *nx, const Masks *m, int64_t t) {
+    memcpy(nx, row, 8 * (size_t)m->words);
+    for (int64_t k = m->touch_ptr[t]; k < m->touch_ptr[t + 1]; k++) {
+        int64_t w = m->touch_word[k];
+        uint64_t rest = nx[w] & m->keep[t * m->words + w];
+        if (rest & m->give[t * m->words + w])
+            return NOT_SAFE;
+        nx[w] = rest | m->give[t * m->words + w];
+    }
+    return 0;
+}
+
+/* product_step(10 masks, 5 observer arrays, bad, queue, count, head, table, bits, parent,
+ * via, depth, found, max_states, budget) -> (count, head, code, found); found: the bad row
+ * met so far (-1: none), whose level is being finished. */
+static PyObject *py_product_step(PyObject *self, PyObject *args) {
+    PyObject *o[20];
+    long long bad, count, head, max_states, budget, found_in;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOLOLLOiOOOLLL", &o[0], &o[1], &o[2], &o[3],
+                          &o[4], &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &o[12],
+                          &o[13], &o[14], &bad, &o[15], &count, &head, &o[16], &bits, &o[17],
+                          &o[18], &o[19], &found_in, &max_states, &budget))
+        return NULL;
+    Buffers b = {.count = 0};
+    Masks m;
+    Observer ob;
+    uint64_t *queue, *table;
+    int64_t *parent, *via, *depth;
+    if (!masks_of(&b, o, &m) || !observer_of(&b, o + 10, &ob)) goto fail;
+    ob.bad = bad;
+    if (!(queue = data_of(&b, o[15], 8, 1))) goto fail;
+    int64_t width = m.words + 1;
+    int64_t capacity = items_of(&b) / width;
+    if (!(table = data_of(&b, o[16], 8, 1))) goto fail;
+    int64_t table_size = items_of(&b);
+    if (!(parent = data_of(&b, o[17], 8, 1)) || !(via = data_of(&b, o[18], 8, 1))
+        || !(depth = data_of(&b, o[19], 8, 1)))
+        goto fail;
+    if (items_of(&b) < capacity) { PyErr_SetString(PyExc_ValueError, "depth too short"); goto fail; }
+
+    int code = GOING;
+    int64_t found = found_in;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
+    uint64_t *nx = PyMem_Malloc(8 * (size_t)width);
+    if (!cand || !nx) { PyMem_Free(cand); PyMem_Free(nx); PyErr_NoMemory(); goto fail; }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t stop = head + budget, tmask = ((int64_t)1 << bits) - 1;
+    while (head < count && head < stop) {
+        /* a bad row found, and its level above done: the shortest violation */
+        if (found >= 0 && depth[head] >= depth[found]) { code = FOUND_BAD; break; }
+        if (count + m.transitions > capacity) { code = QUEUE_FULL; break; }
+        if (10 * (count + m.transitions) > 7 * table_size) { code = TABLE_FULL; break; }
+        const uint64_t *row = queue + head * width;
+        int64_t state = (int64_t)row[m.words];
+        int64_t n = candidates(row, m.words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
+        int enabled = 0;
+        for (int64_t c = 0; c < n && code == GOING; c++) {
+            int64_t t = cand[c];
+            if (!enables(row, &m, t))
+                continue;
+            enabled = 1;
+            if (fire_into(row, nx, &m, t) == NOT_SAFE) { code = NOT_SAFE; break; }
+            nx[m.words] = (uint64_t)observe(nx, m.words, &ob, state);
+            uint64_t h = hash_row(nx, width);
+            int64_t slot = -1;
+            if (probe(queue, width, table, tmask, nx, h & 0xFFFFFFFFULL, slot_of_hash(h, bits),
+                      &slot) >= 0)
+                continue;
+            if (count >= max_states) { code = LIMIT; break; }
+            memcpy(queue + count * width, nx, 8 * (size_t)width);
+            table[slot] = entry(h, count);
+            parent[count] = head;
+            via[count] = t;
+            depth[count] = depth[head] + 1;
+            if ((int64_t)nx[m.words] == ob.bad && found < 0)
+                found = count;
+            count++;
+        }
+        if (code != GOING)
+            break;
+        if (!enabled && ob.pend[state]) { code = FOUND_DEAD; found = head; break; }
+        head++;
+    }
+    if (code == GOING && found >= 0 && head == count)
+        code = FOUND_BAD;
+    Py_END_ALLOW_THREADS
+    PyMem_Free(cand);
+    PyMem_Free(nx);
+    release(&b);
+    return Py_BuildValue("LLiL", (long long)count, (long long)head, code, (long long)found);
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* product_edges(10 masks, 5 observer arrays, queue, count, table, bits, first, src, dst,
+ * trans) -> (next, edges): the arcs between rows whose observer state is pending (an
+ * obligation open), from row `first` on, until the output arrays are full; a pending
+ * row's edges are written whole or not at all. */
+static PyObject *py_product_edges(PyObject *self, PyObject *args) {
+    PyObject *o[20];
+    long long count, first;
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOOLOiLOOO", &o[0], &o[1], &o[2], &o[3], &o[4],
+                          &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &o[12], &o[13],
+                          &o[14], &o[15], &count, &o[16], &bits, &first, &o[17], &o[18], &o[19]))
+        return NULL;
+    Buffers b = {.count = 0};
+    Masks m;
+    Observer ob;
+    const uint64_t *queue, *table;
+    int64_t *src, *dst, *trans;
+    if (!masks_of(&b, o, &m) || !observer_of(&b, o + 10, &ob)) goto fail;
+    if (!(queue = data_of(&b, o[15], 8, 0)) || !(table = data_of(&b, o[16], 8, 0))) goto fail;
+    if (!(src = data_of(&b, o[17], 8, 1)) || !(dst = data_of(&b, o[18], 8, 1))
+        || !(trans = data_of(&b, o[19], 8, 1)))
+        goto fail;
+    int64_t room = items_of(&b), width = m.words + 1, edges = 0, i = first;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
+    uint64_t *nx = PyMem_Malloc(8 * (size_t)width);
+    if (!cand || !nx) { PyMem_Free(cand); PyMem_Free(nx); PyErr_NoMemory(); goto fail; }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t tmask = ((int64_t)1 << bits) - 1;
+    for (; i < count; i++) {
+        const uint64_t *row = queue + i * width;
+        int64_t state = (int64_t)row[m.words];
+        if (!ob.pend[state])
+            continue;
+        if (edges + m.transitions > room)
+            break;
+        int64_t n = candidates(row, m.words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
+        for (int64_t c = 0; c < n; c++) {
+            int64_t t = cand[c], slot = -1;
+            if (!enables(row, &m, t) || fire_into(row, nx, &m, t) == NOT_SAFE)
+                continue;
+            nx[m.words] = (uint64_t)observe(nx, m.words, &ob, state);
+            if (!ob.pend[nx[m.words]])
+                continue;
+            uint64_t h = hash_row(nx, width);
+            int64_t j = probe(queue, width, table, tmask, nx, h & 0xFFFFFFFFULL,
+                              slot_of_hash(h, bits), &slot);
+            if (j < 0)
+                continue;   /* not explored: cannot be, the search was complete */
+            src[edges] = i;
+            dst[edges] = j;
+            trans[edges++] = t;
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(cand);
+    PyMem_Free(nx);
+    release(&b);
+    return Py_BuildValue("LL", (long long)i, (long long)edges);
+fail:
+    release(&b);
+    return NULL;
+}
+
 /* -- the explored state space, asked again --------------------------------------------- */
 
 /* out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t, degree, first):
@@ -926,6 +1145,10 @@ static PyMethodDef methods[] = {
      "Enabled transitions per marking of counters."},
     {"counter_walk", py_counter_walk, METH_VARARGS,
      "The edges of markings of counters, or those that reach the frontier."},
+    {"product_step", py_product_step, METH_VARARGS,
+     "Expand rows of a property's product until a violation."},
+    {"product_edges", py_product_edges, METH_VARARGS,
+     "The arcs between a product's pending rows."},
     {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
     {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
     {NULL, NULL, 0, NULL},
@@ -944,7 +1167,9 @@ PyMODINIT_FUNC PyInit__native(void) {
               || PyModule_AddIntConstant(m, "QUEUE_FULL", QUEUE_FULL) < 0
               || PyModule_AddIntConstant(m, "TABLE_FULL", TABLE_FULL) < 0
               || PyModule_AddIntConstant(m, "OVERFLOW", OVERFLOW) < 0
-              || PyModule_AddIntConstant(m, "GROWING", GROWING) < 0)) {
+              || PyModule_AddIntConstant(m, "GROWING", GROWING) < 0
+              || PyModule_AddIntConstant(m, "FOUND_BAD", FOUND_BAD) < 0
+              || PyModule_AddIntConstant(m, "FOUND_DEAD", FOUND_DEAD) < 0)) {
         Py_DECREF(m);
         return NULL;
     }

@@ -194,12 +194,38 @@ def check(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
     return check_all(net, [prop], max_states)[0]
 
 
+#: How :func:`check_all` decides: on the fly where it applies, else the reference; the
+#: reference alone (every marking first, then each property's product); on the fly alone.
+METHODS = ("auto", "full", "on-the-fly")
+
+
 def check_all(net: Net, properties: Iterable[Property],
-              max_states: int = 1_000_000) -> list[Verdict]:
-    """Each property's verdict, in order, on one exploration of the state space."""
+              max_states: int = 1_000_000, method: str = "auto") -> list[Verdict]:
+    """Each property's verdict, in order.
+
+    ``auto``: on the fly (:mod:`analysis.onthefly`: the product in C, stopping at
+    the first violation) where the net is safe and the loops in C are built;
+    otherwise, or with ``full``, the reference method: one exploration of the
+    state space, then each property's product with its observer.
+    """
+    properties = list(properties)
+    if method not in METHODS:
+        raise ValueError(f"method {method!r}: one of {', '.join(METHODS)}")
+    if method != "full":
+        from analysis import onthefly
+        verdicts = onthefly.check_all(net, properties, max_states)
+        if verdicts is not None:
+            return verdicts
+        if method == "on-the-fly":
+            raise ValueError("this net is not for the on-the-fly checker (not 1-safe, "
+                             "or its loops in C are not built)")
+    return _check_all_full(net, properties, max_states)
+
+
+def _check_all_full(net: Net, properties: list[Property], max_states: int) -> list[Verdict]:
+    """The reference method: every reachable marking, then each property's product."""
     from analysis.statespace import ExplorationLimit, explore
 
-    properties = list(properties)
     try:
         space = explore(net, max_states=max_states)
     except ExplorationLimit as e:

@@ -1,0 +1,353 @@
+"""A property checked on the fly: the product of a safe net and the property's observer,
+explored in C breadth first, stopping at the first violation.
+
+:mod:`analysis.properties` defines the observers (Dwyer et al.'s patterns and
+scopes as deterministic automata reading the marking sequence) and the
+verdicts. Its reference method explores every reachable marking first and
+then each property's product in Python; model checkers search the product
+on the fly and stop at a counterexample. This module does the same, in the
+C loops of the safe-net explorer (``analysis/_native.c``):
+
+* a row of the product is a marking's words and one more, the observer's
+  state; the observer's moves are a table worked out before the search (its
+  states are few), and it reads a marking through its *atoms*, the
+  ``Tokens`` comparisons of the property's predicates, each a popcount of
+  the marking and a mask (the net is safe);
+* breadth first, so the first violation found is a shortest one of its
+  kind: a prefix the observer rejects (``BAD``), or a dead marking with an
+  obligation open (a finite run). The search stops there;
+* only when the whole product has neither, an infinite run that keeps an
+  obligation open for ever (existence, response) is looked for: the arcs
+  between the pending rows are listed in C, their strongly connected
+  components found by scipy, and the lasso entering a cycle earliest,
+  around its shortest cycle, is the counterexample.
+
+So a failing safety property costs the markings up to its counterexample,
+and a holding one one pass of the product at C speed, where the reference
+method pays the whole state space and a Python loop per property.
+:func:`check_all` answers ``None`` for a net it does not take (not safe,
+or the loops in C not built); the caller then uses the reference method.
+"""
+from __future__ import annotations
+
+from typing import Iterable
+
+import numpy as np
+
+from mcl2pnml.core.net import Net
+from mcl2pnml.core.properties import And, Const, Not, Or, Predicate, Property, Tokens
+from mcl2pnml.core.structure import Structure, structure
+
+from analysis.properties import (BAD, Shape, Status, Verdict, _initial, _truths, pending,
+                                 step)
+
+#: A property whose predicates compare more than this many token sums is left to the
+#: reference method: the table of the observer's letters has 2**ATOMS entries.
+ATOMS = 16
+#: Expansions per call of the C loop, between which Python grows the arrays.
+SLICE = 1 << 20
+
+
+class _Refused(Exception):
+    """The net or the property is not for this checker: the reference method takes it."""
+
+
+def available() -> bool:
+    """Whether the loops in C were built (they hold the product's search)."""
+    try:
+        from analysis import _native
+    except ImportError:
+        return False
+    return hasattr(_native, "product_step")
+
+
+def check_all(net: Net, properties: Iterable[Property],
+              max_states: int = 1_000_000) -> list[Verdict] | None:
+    """Each property's verdict, on the fly; None if the net is not for this checker (not
+    1-safe as given, or the loops in C not built), or a property reads too many sums."""
+    if not available():
+        return None
+    s = structure(net)
+    m0 = s.initial_vector()
+    if any(k > 1 for k in m0) or any(w != 1 for w in _weights(net)):
+        return None
+    search = _Search(s)
+    verdicts = []
+    for prop in properties:
+        try:
+            verdicts.append(search.check(prop, max_states))
+        except _Refused:
+            return None
+    return verdicts
+
+
+def _weights(net: Net):
+    return (a.weight for a in net.arcs)
+
+
+# -- the observer as tables --------------------------------------------------------------------
+
+def _atoms(prop: Property) -> list[Tokens]:
+    """The ``Tokens`` comparisons of the property's four predicates, each once."""
+    found: dict[Tokens, None] = {}
+
+    def walk(x: Predicate) -> None:
+        if isinstance(x, Tokens):
+            found.setdefault(x)
+        elif isinstance(x, Not):
+            walk(x.arg)
+        elif isinstance(x, (And, Or)):
+            for a in x.args:
+                walk(a)
+    for x in _truths(prop):
+        walk(x)
+    return list(found)
+
+
+def _value(x: Predicate, truth: dict[Tokens, bool]) -> bool:
+    if isinstance(x, Tokens):
+        return truth[x]
+    if isinstance(x, Not):
+        return not _value(x.arg, truth)
+    if isinstance(x, And):
+        return all(_value(a, truth) for a in x.args)
+    if isinstance(x, Or):
+        return any(_value(a, truth) for a in x.args)
+    assert isinstance(x, Const)
+    return bool(x.value)
+
+
+def _letters(prop: Property, atoms: list[Tokens]) -> np.ndarray:
+    """The observer's letter (P S Q R as bits 8 4 2 1) for each truth of the atoms (bit a:
+    atom a holds)."""
+    truths = _truths(prop)
+    letters = np.zeros(1 << len(atoms), dtype=np.int64)
+    for bits in range(len(letters)):
+        truth = {a: bool(bits >> k & 1) for k, a in enumerate(atoms)}
+        p, s, q, r = (_value(x, truth) for x in truths)
+        letters[bits] = 8 * p + 4 * s + 2 * q + r
+    return letters
+
+
+class _Automaton:
+    """The observer's states reachable from its start under any letters, numbered, and its
+    moves as a table (``move[state * 16 + letter]``)."""
+
+    def __init__(self, prop: Property):
+        self.states: list = [_initial(prop.scope.kind)]
+        number = {self.states[0]: 0}
+        moves: list[int] = []
+        k = 0
+        while k < len(self.states):
+            for letter in range(16):
+                nxt = step(prop, self.states[k], bool(letter & 8), bool(letter & 4),
+                           bool(letter & 2), bool(letter & 1))
+                if nxt not in number:
+                    number[nxt] = len(self.states)
+                    self.states.append(nxt)
+                moves.append(number[nxt])
+            k += 1
+        self.move = np.array(moves, dtype=np.int64)
+        self.pending = np.array([pending(prop, o) and o is not BAD for o in self.states],
+                                dtype=np.uint8)
+        self.bad = number.get(BAD, -1)
+
+
+# -- the search --------------------------------------------------------------------------------
+
+class _Search:
+    """The net's masks, worked out once for all its properties."""
+
+    def __init__(self, s: Structure):
+        from analysis.packedmarkings import (key_index, marking_row, masks, place_weights,
+                                             touched, word_count)
+        self.s = s
+        self.words = word_count(s)
+        need, take, give = masks(s, self.words)
+        m0 = marking_row(s.initial_vector(), self.words)
+        self.m0 = m0[0]
+        keep = ~take
+        self.masks = [np.ascontiguousarray(a) for a in (
+            need, keep, give, *touched(need), *touched(need, take, give),
+            *key_index(need, place_weights(m0)))]
+        self.index = {p: k for k, p in enumerate(s.places)}
+
+    def _atom_arrays(self, atoms: list[Tokens]) -> tuple[np.ndarray, np.ndarray]:
+        from analysis.packedmarkings import masks_of
+        sets = [[self.index[p] for p in a.places if p in self.index] for a in atoms]
+        masks = masks_of(sets, self.words) if sets else np.zeros((0, self.words), np.uint64)
+        return (np.ascontiguousarray(masks),
+                np.array([a.at_least for a in atoms], dtype=np.int64))
+
+    def check(self, prop: Property, max_states: int) -> Verdict:
+        from analysis import _native as c
+        atoms = _atoms(prop)
+        if len(atoms) > ATOMS:
+            raise _Refused
+        auto = _Automaton(prop)
+        letters = _letters(prop, atoms)
+        atom_masks, least = self._atom_arrays(atoms)
+        observer = [atom_masks, least, letters, auto.move, auto.pending]
+        width = self.words + 1
+        start = np.zeros(width, dtype=np.uint64)
+        start[:-1] = self.m0
+        bits0 = sum(1 << k for k, (mask, n) in enumerate(zip(atom_masks, least))
+                    if sum(bin(int(w) & int(m)).count("1") for w, m in zip(self.m0, mask)) >= n)
+        state0 = int(auto.move[letters[bits0]])   # the observer has read M0
+        start[-1] = state0
+        if state0 == auto.bad:
+            return self._verdict(prop, Shape.PREFIX, [start], [], 1)
+        room = len(self.masks[0]) + 1
+        capacity = min(max_states, 1 << 12) + room
+        queue = np.empty((capacity, width), dtype=np.uint64)
+        queue[0] = start
+        parent, via, depth = (np.empty(capacity, dtype=np.int64) for _ in range(3))
+        parent[0], via[0], depth[0] = -1, -1, 0
+        bits = 12
+        table = np.zeros(1 << bits, dtype=np.uint64)
+        c.rehash(queue, 1, table, bits, False)
+        count, head, found = 1, 0, -1
+        while True:
+            count, head, code, found = c.product_step(
+                *self.masks, *observer, auto.bad, queue, count, head, table, bits, parent, via,
+                depth, found, max_states, SLICE)
+            if code == c.QUEUE_FULL:
+                size = 2 * len(queue)
+                queue, parent, via, depth = (_grown(a, count, size)
+                                             for a in (queue, parent, via, depth))
+            elif code == c.TABLE_FULL:
+                while 10 * (count + room) > 7 << bits:
+                    bits += 1
+                table = np.zeros(1 << bits, dtype=np.uint64)
+                c.rehash(queue, count, table, bits, False)
+            elif code == c.NOT_SAFE:
+                raise _Refused
+            elif code == c.LIMIT:
+                return Verdict(prop, Status.UNKNOWN, states=count,
+                               reason=f"more than {max_states:,} product states")
+            elif code in (c.FOUND_BAD, c.FOUND_DEAD) or head == count:
+                break
+        found_shape = {c.FOUND_BAD: Shape.PREFIX, c.FOUND_DEAD: Shape.FINITE}.get(code)
+        bound = None if found_shape is None else int(depth[found])
+        lasso = None
+        if auto.pending.any():
+            # a lasso shorter than the violation found: its rows are all explored
+            lasso = self._lasso(observer, queue, count, table, bits, parent, via, depth, bound)
+        if lasso is not None:
+            rows, trans, loop = lasso
+            return self._verdict(prop, Shape.LASSO, rows, trans, count, loop)
+        if found_shape is not None:
+            rows, trans = _way_back(queue, parent, via, found)
+            return self._verdict(prop, found_shape, rows, trans, count)
+        return Verdict(prop, Status.HOLDS, states=count)
+
+    def _lasso(self, observer, queue, count, table, bits, parent, via, depth, bound):
+        """The rows, transitions and loop of the shortest lasso (shorter than ``bound``
+        firings, if given) whose cycle keeps an obligation open; None if there is none.
+
+        The arcs between pending rows are listed in C; scipy finds their strongly
+        connected components; the entries are tried in breadth-first order, each with
+        its shortest cycle within its component, until no later entry can be shorter.
+        """
+        from analysis import _native as c
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import breadth_first_order, connected_components
+        parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        first, room = 0, max(1 << 16, 4 * len(self.masks[0]))
+        while first < count:
+            src, dst, trans = (np.empty(room, dtype=np.int64) for _ in range(3))
+            first, n = c.product_edges(*self.masks, *observer, queue, count, table, bits,
+                                       first, src, dst, trans)
+            parts.append((src[:n], dst[:n], trans[:n]))
+        src, dst, trans = (np.concatenate(x) for x in zip(*parts))
+        if not len(src):
+            return None
+        graph = csr_matrix((np.ones(len(src), dtype=np.int8), (src, dst)), shape=(count, count))
+        _, label = connected_components(graph, directed=True, connection="strong")
+        # an arc within one component lies on a cycle of pending rows
+        inner = label[src] == label[dst]
+        if not inner.any():
+            return None
+        src, dst, trans = src[inner], dst[inner], trans[inner]
+        arc = {}
+        for a, b, t in zip(src.tolist(), dst.tolist(), trans.tolist()):
+            arc.setdefault((a, b), t)
+        cyclic = np.unique(src)     # in row order: breadth first, so by depth
+        best = None                 # (length, entry, cycle rows)
+        inside = csr_matrix((np.ones(len(src), dtype=np.int8), (src, dst)),
+                            shape=(count, count))
+        into: dict[int, list[int]] = {}
+        for a, b in zip(src.tolist(), dst.tolist()):
+            into.setdefault(b, []).append(a)
+        for entry in cyclic.tolist():
+            d = int(depth[entry])
+            limit = best[0] if best is not None else bound
+            if limit is not None and d + 1 >= limit:
+                break       # every later entry is as deep: no shorter lasso
+            order, pred = breadth_first_order(inside, entry, directed=True,
+                                              return_predecessors=True)
+            reached = {int(u) for u in order}
+            hops = {entry: 0}
+            for u in order.tolist()[1:]:
+                hops[u] = hops[int(pred[u])] + 1
+            last = min((u for u in into.get(entry, ()) if u in reached), key=hops.__getitem__,
+                       default=None)
+            if last is None:
+                continue
+            length = d + hops[last] + 1
+            if limit is None or length < limit:
+                cycle = [last]
+                while cycle[-1] != entry:
+                    cycle.append(int(pred[cycle[-1]]))
+                best = (length, entry, cycle[::-1])
+        if best is None:
+            return None
+        _, entry, cycle = best
+        rows, path = _way_back(queue, parent, via, entry)
+        loop = len(rows) - 1
+        for a, b in zip(cycle, cycle[1:] + [entry]):
+            rows.append(queue[b])
+            path.append(arc[(a, b)])
+        return rows, path, loop
+
+    def _verdict(self, prop: Property, shape: Shape, rows, trans, states: int,
+                 loop: int | None = None) -> Verdict:
+        places = self.s.places
+        tids = self.s.transitions
+        words = self.words
+
+        def marked(row) -> tuple[tuple[str, int], ...]:
+            out = []
+            for w in range(words):
+                x = int(row[w])
+                while x:
+                    low = x & -x
+                    out.append(w * 64 + low.bit_length() - 1)
+                    x ^= low
+            return tuple((places[k], 1) for k in sorted(out))
+        ms = [marked(r) for r in rows]
+        names = [tids[t] for t in trans]
+        if loop is not None:
+            # the same infinite run, its loop entered earlier where the markings allow
+            while loop > 0 and ms[loop - 1] == ms[-2] and names[loop - 1] == names[-1]:
+                loop -= 1
+                ms.pop()
+                names.pop()
+        return Verdict(prop, Status.FAILS, tuple(names), tuple(ms), shape, loop=loop,
+                       states=states)
+
+
+def _grown(a: np.ndarray, count: int, size: int) -> np.ndarray:
+    grown = np.empty((size, *a.shape[1:]), dtype=a.dtype)
+    grown[:count] = a[:count]
+    return grown
+
+
+def _way_back(queue, parent, via, row: int) -> tuple[list, list[int]]:
+    """The rows from the start to ``row`` and the transitions between them."""
+    rows, trans = [queue[row]], []
+    while parent[row] >= 0:
+        trans.append(int(via[row]))
+        row = int(parent[row])
+        rows.append(queue[row])
+    return rows[::-1], trans[::-1]
