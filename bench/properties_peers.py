@@ -12,14 +12,15 @@ measured in the same run, one process after another (no two at once, for
 clean timings), each as a fresh process under GNU ``time`` (wall-clock
 seconds, the whole process's peak resident memory in MiB):
 
-* ours, the command a user runs: ``mcl2pnml analyze MISSION --state-space
-  --properties FILE --json`` (start-up, compiling, exploring once, every
-  property checked, each failing one's counterexample told in the mission's
-  terms and replayed on both engines, the JSON printed), the median of
-  :data:`RUNS` when a run takes under 5 s; and, in this process, the inner
-  loop alone: :func:`analysis.properties.check_all` on the compiled net and
-  properties (:func:`mcl2pnml.pipeline.properties_of`, not timed): exploring
-  once and the product with each property's observer, the median of
+* ours, the command a user runs: ``mcl2pnml analyze MISSION --untimed
+  --state-space --properties FILE --json`` (start-up, compiling, the state
+  space's facts, every property checked on the fly, the JSON printed;
+  ``--untimed``: the runs of the net, the semantics the peers check), the
+  median of :data:`RUNS` when a run takes under 5 s; and, in this process,
+  the inner loop alone: :func:`analysis.properties.check_all` on the
+  compiled net and properties (:func:`mcl2pnml.pipeline.properties_of`, not
+  timed), on the fly (the default) and with the reference method (every
+  marking first, then each product: ``method="full"``), each the median of
   :data:`RUNS` when under 5 s;
 * verifypn and LoLA on the queries ``compile --properties`` writes
   (:func:`mcl2pnml.io.mccquery.property_queries`: every property in
@@ -98,22 +99,25 @@ def ours(mission: Path, props: Path) -> dict | None:
     from analysis.properties import Status, check_all
     from mcl2pnml import pipeline
     command = [str(Path(sys.executable).with_name("mcl2pnml")), "analyze", str(mission),
-               "--state-space", "--no-progress", "--properties", str(props), "--json"]
+               "--untimed", "--state-space", "--no-progress", "--properties", str(props),
+               "--json"]
     runs = _median_of_runs(lambda: timed(command, TIMEOUT), seconds=lambda r: r[0])
     if runs[-1] is None or "}" not in runs[-1][2]:
         return None
     seconds, peak, output, _ = sorted(runs)[len(runs) // 2]
     result = json.loads(output[:output.rindex("}") + 1])
     net, properties = pipeline.properties_of(mission, extra=props)
-    inner, verdicts = [], []
+    inner, full, verdicts = [], [], []
 
-    def once() -> float:
+    def once(method: str, into: list) -> float:
         t0 = time.perf_counter()
-        verdicts[:] = check_all(net, properties)
-        inner.append(time.perf_counter() - t0)
-        return inner[-1]
-    _median_of_runs(once)
+        verdicts[:] = check_all(net, properties, method=method)
+        into.append(time.perf_counter() - t0)
+        return into[-1]
+    _median_of_runs(lambda: once("full", full))
+    _median_of_runs(lambda: once("auto", inner))
     return {"seconds": seconds, "peak_mb": peak, "inner_seconds": statistics.median(inner),
+            "full_seconds": statistics.median(full),
             "markings": result.get("states"),
             "verdicts": {v.property.name: None if v.status is Status.UNKNOWN
                          else v.status is Status.HOLDS for v in verdicts}}
@@ -232,7 +236,8 @@ def table(rows: list[dict]) -> list[str]:
     answers that differ from ours (the last line; "none." when every answer agrees)."""
     configs = [(tool, name) for tool in CONFIGS for name, _ in CONFIGS[tool]]
     label = {c: f"{NAMES[c[0]]}{'' if c[1] == 'defaults' else ', ' + c[1]}" for c in configs}
-    head = (["case", "properties", "markings", "ours (s)", "ours (MiB)", "inner loop (s)"]
+    head = (["case", "properties", "markings", "ours (s)", "ours (MiB)", "inner loop (s)",
+             "inner loop, every marking first (s)"]
             + [f"{label[c]} (s, MiB)" for c in configs] + [f"{label[c]} / ours" for c in configs]
             + ["verdicts"])
     lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 2) + "---|"]
@@ -247,6 +252,7 @@ def table(rows: list[dict]) -> list[str]:
                  f"{o['seconds']:.2f}" if o else "failed",
                  f"{o['peak_mb']:.0f}" if o else "-",
                  f"{o['inner_seconds']:.3f}" if o else "-",
+                 f"{o['full_seconds']:.3f}" if o else "-",
                  *[_seconds(r[c]) for c in configs], *[_ratio(r[c], o) for c in configs],
                  "; ".join(other) if other else "agree" if o else "-"]
         lines.append("| " + " | ".join(cells) + " |")
@@ -285,12 +291,13 @@ def section(quick: bool = False, log=lambda text: None
              "example's property files (`NAME.props`, which hold; `NAME.false.props`, "
              "which fail" + (f"; {', '.join(sorted(LARGE))} left out by --quick" if quick
                              else "") + "). Ours: "
-             "`mcl2pnml analyze MISSION --state-space --properties FILE --json`, the "
-             "command a user runs (start-up, compiling, one exploration, every property, "
-             "each failing one's counterexample told in the mission's terms and replayed on "
-             "both engines), a fresh process, the median of 3 runs when under 5 s; the "
-             "inner loop (`check_all`: the exploration and each property's product with its "
-             "observer, compiling excluded) timed apart, in-process. The peers: the "
+             "`mcl2pnml analyze MISSION --untimed --state-space --properties FILE --json`, "
+             "the command a user runs (start-up, compiling, the state space's facts, every "
+             "property checked on the fly), a fresh process, the median of 3 runs when under "
+             "5 s; the inner loop (`check_all`: each property's product with its observer "
+             "searched on the fly in C, stopping at a counterexample; compiling excluded) "
+             "timed apart, in-process, and beside it the reference method (every marking "
+             "first, then each product in Python). The peers: the "
              "queries `compile --properties` writes (every property in LTL, those with an "
              "exact CTL or reachability form also there), verifypn in one call per category "
              "file, LoLA in one call per query, each call a fresh process, each tool with "
@@ -300,15 +307,34 @@ def section(quick: bool = False, log=lambda text: None
              "A peer's seconds are summed over its calls on the file, its memory the largest "
              "peak; \"/ ours\": its seconds over our whole command's (above 1: ours is "
              f"faster). A call past {TIMEOUT:.0f} s counts as timed out. \"verdicts\": every "
-             "answer compared with our verdict, per property. Ours explores every reachable marking "
-             "once and then checks each property on them; the peers search on the fly, per "
-             "query, and stop at a counterexample, which on a failing file is found within "
-             "the first markings.", "", *table(rows)]
+             "answer compared with our verdict, per property. Ours and the peers search on "
+             "the fly and stop at a counterexample.", "", *table(rows)]
     agrees = all(differs(r, r["verifypn", name]) in ("agree", "-")
                  for r in rows for name, _ in CONFIGS["verifypn"])
     targets = [("mission properties: verifypn answers every query as we do", agrees,
                 "every example's property files" if agrees else "see the section")]
-    return lines, targets
+    return lines, targets + _targets(rows)
+
+
+def _targets(rows: list[dict]) -> list[tuple[str, bool, str]]:
+    """The targets of the whole command against verifypn with its defaults, on the
+    largest example (whose state space the peers take seconds on): failing files within
+    2x its time, holding ones at least as fast, peak memory within 2x."""
+    out = []
+    for r in rows:
+        o, v = r["ours"], r["verifypn", "defaults"]
+        if r["case"].split(".")[0] not in LARGE or not o or not v:
+            continue
+        fails = r["case"].endswith(".false.props")
+        bound = 2.0 if fails else 1.0
+        out.append((f"properties: {r['case']} within {bound:g}x verifypn's time",
+                    o["seconds"] <= bound * v["seconds"],
+                    f"{o['seconds']:.2f} s against {v['seconds']:.2f} s "
+                    f"({o['seconds'] / v['seconds']:.2f}x)"))
+        out.append((f"properties: {r['case']} peak memory within 2x verifypn's",
+                    o["peak_mb"] <= 2 * v["peak_mb"],
+                    f"{o['peak_mb']:.0f} MiB against {v['peak_mb']:.0f} MiB"))
+    return out
 
 
 if __name__ == "__main__":

@@ -3,8 +3,10 @@ against TAPAAL's verifypn and LoLA, each a fresh process, measured in the same r
 
 Run:  .venv/bin/python -m bench.real_models
 
-The models are the PNML files of ``bench/models/`` (where each comes from:
-``bench/models/PROVENANCE.md``). Each tool runs as the command a user types,
+The models are the PNML files of ``../shared/external-nets/bench-models/``
+beside the checkout where it is there, else of ``bench/models/`` (where each
+comes from: ``bench/models/PROVENANCE.md``); each row says which folder its
+file was read from (:func:`models`). Each tool runs as the command a user types,
 start-up included, under GNU ``time``: wall-clock seconds and the peak
 resident memory of the process (its ``ru_maxrss``, the kernel's VmHWM at
 exit; ``time`` itself is a small parent, so the fork does not inflate it).
@@ -23,7 +25,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-MODELS = ROOT / "bench" / "models"
+#: Where the models are looked for, in order: the shared folder beside the checkout, then
+#: the benchmark's own (git ignores PNML there: other projects' data are not kept here).
+FOLDERS = (ROOT.parent / "shared" / "external-nets" / "bench-models", ROOT / "bench" / "models")
 PEERS = ROOT.parent / "shared" / "peers" / "bin"
 TIMEOUT = 120.0
 
@@ -93,11 +97,30 @@ def measure(tool: str, command: list[str]) -> dict | None:
             "explore_seconds": float(inner.group(1)) if inner else None}
 
 
+def models() -> list[Path]:
+    """Each model once, from the first folder of :data:`FOLDERS` that has it."""
+    found: dict[str, Path] = {}
+    for folder in FOLDERS:
+        for model in sorted(folder.glob("*.pnml")) if folder.is_dir() else ():
+            found.setdefault(model.stem, model)
+    return [found[name] for name in sorted(found)]
+
+
+def folder_of(model: Path) -> str:
+    """The folder a model was read from, as the table says it."""
+    for base, shown in ((ROOT, ""), (ROOT.parent, "../")):
+        try:
+            return shown + str(model.parent.relative_to(base)) + "/"
+        except ValueError:
+            continue
+    return str(model.parent) + "/"
+
+
 def run(log=lambda text: None) -> list[dict]:
     """One row a model: each tool's measurement (None where it did not finish)."""
     rows = []
-    for model in sorted(MODELS.glob("*.pnml")):
-        row = {"model": model.stem}
+    for model in models():
+        row = {"model": model.stem, "from": folder_of(model)}
         for tool, command in commands(model).items():
             log(f"  {model.stem}: {tool}")
             row[tool] = measure(tool, command) if command else None
@@ -106,12 +129,12 @@ def run(log=lambda text: None) -> list[dict]:
 
 
 def table(rows: list[dict]) -> list[str]:
-    lines = ["| model | markings | ours (s) | ours (MB) | verifypn (s) | verifypn (MB) "
-             "| LoLA (s) | LoLA (MB) | ours / faster peer (time) |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["| model | read from | markings | ours (s) | ours (MB) | verifypn (s) "
+             "| verifypn (MB) | LoLA (s) | LoLA (MB) | ours / faster peer (time) |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         o = r["ours"]
-        cells = [r["model"], f"{o['states']:,}" if o else "-"]
+        cells = [r["model"], f"`{r['from']}`", f"{o['states']:,}" if o else "-"]
         for tool in ("ours", "verifypn", "lola"):
             m = r[tool]
             cells += [f"{m['seconds']:.2f}", f"{m['peak_mb']:.0f}"] if m else ["-", "-"]

@@ -227,8 +227,10 @@ def real_models_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bo
              "against `verifypn-linux64 -n 1 -e -r 0 -p` and `lola --check=full "
              "--stubborn=off`, each the command a user runs (start-up included), a fresh "
              "process each; seconds and peak resident memory; the last column is our time "
-             "over the faster peer's. The files and where they come from: "
-             "`bench/models/PROVENANCE.md`.", "", *real_models.table(rows)]
+             "over the faster peer's. The files are read from "
+             "`../shared/external-nets/bench-models/` where it is beside the checkout, else "
+             "from `bench/models/` (the column \"read from\" says which); where they come "
+             "from: `bench/models/PROVENANCE.md`.", "", *real_models.table(rows)]
     ratios = [r["ours"]["seconds"] / min(r[t]["seconds"] for t in ("verifypn", "lola") if r[t])
               for r in rows if r["ours"] and (r["verifypn"] or r["lola"])]
     by = {r["model"]: r["ours"] for r in rows}
@@ -241,7 +243,7 @@ def real_models_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bo
                ("Kanban-PT-00005 under 60 s within 4 GB",
                 bool(kanban) and kanban["seconds"] < 60 and kanban["peak_mb"] < 4096,
                 f"{kanban['seconds']:.1f} s, {kanban['peak_mb']:.0f} MB" if kanban
-                else "the model file is not in bench/models")]
+                else "the model file was not found")]
     return lines, targets
 
 
