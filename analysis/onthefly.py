@@ -61,21 +61,27 @@ def available() -> bool:
     return hasattr(_native, "product_step")
 
 
-def check_all(net: Net, properties: Iterable[Property],
-              max_states: int = 1_000_000) -> list[Verdict] | None:
+def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_000,
+              max_memory: int | None = None) -> list[Verdict] | None:
     """Each property's verdict, on the fly; None if the net is not for this checker (not
-    1-safe as given, or the loops in C not built), or a property reads too many sums."""
+    1-safe as given, or the loops in C not built), or a property reads too many sums.
+
+    ``max_memory`` (bytes; default: :func:`~mcl2pnml.core.memory.default_memory`) bounds
+    each search as ``max_states`` does: past either, the verdict is unknown.
+    """
     if not available():
         return None
+    from mcl2pnml.core.memory import default_memory
     s = structure(net)
     m0 = s.initial_vector()
     if any(k > 1 for k in m0) or any(w != 1 for w in _weights(net)):
         return None
     search = _Search(s)
+    budget = default_memory() if max_memory is None else max_memory
     verdicts = []
     for prop in properties:
         try:
-            verdicts.append(search.check(prop, max_states))
+            verdicts.append(search.check(prop, max_states, budget))
         except _Refused:
             return None
     return verdicts
@@ -179,8 +185,16 @@ class _Search:
         return (np.ascontiguousarray(masks),
                 np.array([a.at_least for a in atoms], dtype=np.int64))
 
-    def check(self, prop: Property, max_states: int) -> Verdict:
+    def footprint(self) -> int:
+        """Bytes a product state costs at most: its row, its parent, transition and depth
+        (each array up to twice its rows, as it doubles), and its share of the table."""
+        return 2 * (8 * (self.words + 1) + 24) + 24
+
+    def check(self, prop: Property, max_states: int, budget: int) -> Verdict:
         from analysis import _native as c
+        from mcl2pnml.core.memory import size_text
+        fits = max(1, budget // self.footprint())
+        limit = min(max_states, fits)
         atoms = _atoms(prop)
         if len(atoms) > ATOMS:
             raise _Refused
@@ -198,7 +212,7 @@ class _Search:
         if state0 == auto.bad:
             return self._verdict(prop, Shape.PREFIX, [start], [], 1)
         room = len(self.masks[0]) + 1
-        capacity = min(max_states, 1 << 12) + room
+        capacity = min(limit, 1 << 12) + room
         queue = np.empty((capacity, width), dtype=np.uint64)
         queue[0] = start
         parent, via, depth = (np.empty(capacity, dtype=np.int64) for _ in range(3))
@@ -210,7 +224,7 @@ class _Search:
         while True:
             count, head, code, found = c.product_step(
                 *self.masks, *observer, auto.bad, queue, count, head, table, bits, parent, via,
-                depth, found, max_states, SLICE)
+                depth, found, limit, SLICE)
             if code == c.QUEUE_FULL:
                 size = 2 * len(queue)
                 queue, parent, via, depth = (_grown(a, count, size)
@@ -223,8 +237,10 @@ class _Search:
             elif code == c.NOT_SAFE:
                 raise _Refused
             elif code == c.LIMIT:
-                return Verdict(prop, Status.UNKNOWN, states=count,
-                               reason=f"more than {max_states:,} product states")
+                reason = (f"more than {max_states:,} product states" if limit == max_states
+                          else f"the memory budget ({size_text(budget)}) holds "
+                               f"{limit:,} product states")
+                return Verdict(prop, Status.UNKNOWN, states=count, reason=reason)
             elif code in (c.FOUND_BAD, c.FOUND_DEAD) or head == count:
                 break
         found_shape = {c.FOUND_BAD: Shape.PREFIX, c.FOUND_DEAD: Shape.FINITE}.get(code)

@@ -110,3 +110,12 @@ def test_past_the_limit_the_verdict_is_unknown():
 def test_a_method_is_one_of_three():
     with pytest.raises(ValueError, match="one of auto, full, on-the-fly"):
         check_all(NetBuilder("n").build(), [], method="fast")
+
+
+def test_past_the_memory_budget_the_verdict_is_unknown_and_says_so():
+    mission = ROOT / "examples" / "lawnmower.mcl"
+    net, properties = pipeline.properties_of(mission, extra=ROOT / "examples" / "lawnmower.props")
+    holds = [v for v in check_all(net, properties) if v.status is Status.HOLDS]
+    assert holds
+    v = onthefly.check_all(net, [holds[0].property], max_memory=64 * 1024)[0]
+    assert v.status is Status.UNKNOWN and "memory budget" in v.reason, v
