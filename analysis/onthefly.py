@@ -1,7 +1,7 @@
 """A property checked on the fly: the product of a safe net and the property's observer,
 explored in C breadth first, stopping at the first violation.
 
-:mod:`analysis.properties` defines the observers (Dwyer et al.'s patterns and
+:mod:`analysis.observers` defines the observers (Dwyer et al.'s patterns and
 scopes as deterministic automata reading the marking sequence) and the
 verdicts. Its reference method explores every reachable marking first and
 then each property's product in Python; model checkers search the product
@@ -38,8 +38,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.properties import And, Const, Not, Or, Predicate, Property, Tokens
 from mcl2pnml.core.structure import Structure, structure
 
-from analysis.properties import (BAD, Shape, Status, Verdict, _initial, _truths, pending,
-                                 step)
+from analysis.observers import BAD, Shape, Status, Verdict, initial, pending, step, truths
 
 #: A property whose predicates compare more than this many token sums is left to the
 #: reference method: the table of the observer's letters has 2**ATOMS entries.
@@ -105,7 +104,7 @@ def _atoms(prop: Property) -> list[Tokens]:
         elif isinstance(x, (And, Or)):
             for a in x.args:
                 walk(a)
-    for x in _truths(prop):
+    for x in truths(prop):
         walk(x)
     return list(found)
 
@@ -126,11 +125,11 @@ def _value(x: Predicate, truth: dict[Tokens, bool]) -> bool:
 def _letters(prop: Property, atoms: list[Tokens]) -> np.ndarray:
     """The observer's letter (P S Q R as bits 8 4 2 1) for each truth of the atoms (bit a:
     atom a holds)."""
-    truths = _truths(prop)
+    predicates = truths(prop)
     letters = np.zeros(1 << len(atoms), dtype=np.int64)
     for bits in range(len(letters)):
         truth = {a: bool(bits >> k & 1) for k, a in enumerate(atoms)}
-        p, s, q, r = (_value(x, truth) for x in truths)
+        p, s, q, r = (_value(x, truth) for x in predicates)
         letters[bits] = 8 * p + 4 * s + 2 * q + r
     return letters
 
@@ -140,7 +139,7 @@ class _Automaton:
     moves as a table (``move[state * 16 + letter]``)."""
 
     def __init__(self, prop: Property):
-        self.states: list = [_initial(prop.scope.kind)]
+        self.states: list = [initial(prop.scope.kind)]
         number = {self.states[0]: 0}
         moves: list[int] = []
         k = 0

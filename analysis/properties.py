@@ -54,139 +54,18 @@ counts only once R closes it, so a run where R never holds satisfies it.
 """
 from __future__ import annotations
 
-import enum
 from collections import deque
 from dataclasses import dataclass
 from typing import Iterable
 
-from mcl2pnml.core.net import Net
 import numpy as np
 
-from mcl2pnml.core.properties import (And, Const, Not, Or, Pattern, Predicate, Property,
-                                      ScopeKind, Tokens, holds, places_of)
+from mcl2pnml.core.net import Net
+from mcl2pnml.core.properties import And, Not, Or, Predicate, Property, Tokens, holds, places_of
 
-
-class Status(enum.Enum):
-    HOLDS = "holds"
-    FAILS = "fails"
-    UNKNOWN = "unknown"
-
-
-class Shape(enum.Enum):
-    """What a counterexample is."""
-
-    PREFIX = "prefix"   # a finite prefix that already violates (any continuation does)
-    FINITE = "finite"   # a whole finite run, ending in a dead marking
-    LASSO = "lasso"     # an infinite run: the prefix, then the cycle from ``loop`` forever
-
-
-Marked = tuple[tuple[str, int], ...]
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """The answer for one property.
-
-    For ``FAILS``: ``transitions`` the firing sequence from M0 (transition ids),
-    ``markings`` the markings it passes through (``len(transitions) + 1``, M0
-    first, each as its marked places); for a lasso, ``loop`` is the index in
-    ``markings`` where the cycle starts (the last marking equals it).
-    ``states`` is the number of product states explored (or, for ``UNKNOWN``,
-    the markings counted when the limit was met); ``reason`` says why unknown.
-    """
-
-    property: Property
-    status: Status
-    transitions: tuple[str, ...] = ()
-    markings: tuple[Marked, ...] = ()
-    shape: Shape | None = None
-    loop: int | None = None
-    states: int = 0
-    reason: str | None = None
-
-
-# -- the observer ------------------------------------------------------------------------------
-
-OUT, IN, DONE = 0, 1, 2
-BAD = ("BAD",)
-
-
-@dataclass(frozen=True)
-class _Obs:
-    scope: int
-    seen: bool = False
-    owed: bool = False
-    count: int = 0
-    last: bool = False
-    broken: bool = False
-
-
-def _initial(kind: ScopeKind) -> _Obs:
-    return _Obs(IN if kind in (ScopeKind.GLOBALLY, ScopeKind.BEFORE) else OUT)
-
-
-def step(prop: Property, obs, p: bool, s: bool, q: bool, r: bool):
-    """The observer's state after reading one marking where P, S, Q, R are as given."""
-    if obs is BAD:
-        return BAD
-    kind, pattern = prop.scope.kind, prop.pattern
-    # scope transitions first: R closes (its marking outside), Q opens (its marking inside)
-    if obs.scope == IN and r and kind in (ScopeKind.BEFORE, ScopeKind.BETWEEN,
-                                          ScopeKind.AFTER_UNTIL):
-        if obs.broken or (pattern is Pattern.EXISTENCE and not obs.seen) or obs.owed:
-            return BAD
-        obs = _Obs(DONE if kind is ScopeKind.BEFORE else OUT)
-    if kind in (ScopeKind.AFTER, ScopeKind.BETWEEN, ScopeKind.AFTER_UNTIL) and q and not (
-            r and kind is not ScopeKind.AFTER):
-        if obs.scope == OUT:
-            obs = _Obs(IN)
-        elif obs.scope == IN and kind is not ScopeKind.AFTER:
-            # a nested interval: existence and precedence are needed afresh in it
-            if pattern in (Pattern.EXISTENCE, Pattern.PRECEDENCE):
-                obs = _Obs(IN, seen=False, broken=obs.broken)
-    if obs.scope != IN:
-        return obs
-    violated = False
-    if pattern is Pattern.ABSENCE:
-        violated = p
-    elif pattern is Pattern.UNIVERSALITY:
-        violated = not p
-    elif pattern is Pattern.EXISTENCE:
-        obs = _Obs(IN, seen=obs.seen or p, broken=obs.broken)
-    elif pattern is Pattern.BOUNDED_EXISTENCE:
-        count = obs.count + (1 if p and not obs.last else 0)
-        violated = count > (prop.bound or 0)
-        obs = _Obs(IN, count=min(count, (prop.bound or 0) + 1), last=p, broken=obs.broken)
-    elif pattern is Pattern.PRECEDENCE:
-        seen = obs.seen or s
-        violated = p and not seen
-        obs = _Obs(IN, seen=seen, broken=obs.broken)
-    elif pattern is Pattern.RESPONSE:
-        obs = _Obs(IN, owed=(obs.owed or p) and not s, broken=obs.broken)
-    if violated:
-        if kind in (ScopeKind.BETWEEN, ScopeKind.BEFORE):
-            # counts only if R closes this interval: remembered until then
-            return _Obs(IN, obs.seen, obs.owed, obs.count, obs.last, broken=True)
-        return BAD
-    return obs
-
-
-def pending(prop: Property, obs) -> bool:
-    """Whether a run ending here, or staying in such states forever, violates the property."""
-    if obs is BAD:
-        return True
-    if obs.scope != IN or prop.scope.kind in (ScopeKind.BETWEEN, ScopeKind.BEFORE):
-        return False   # an interval R never closes does not count
-    if prop.pattern is Pattern.EXISTENCE:
-        return not obs.seen
-    return obs.owed
-
-
-# -- the product -----------------------------------------------------------------------------
-
-def _truths(prop: Property) -> tuple[Predicate, Predicate, Predicate, Predicate]:
-    f = Const(False)
-    return (prop.p, prop.s or f, prop.scope.q or f, prop.scope.r or f)
+# (the observers and verdicts, imported from here by the callers too)
+from analysis.observers import BAD, Marked, Shape, Status, Verdict, pending, step  # noqa: F401
+from analysis.observers import initial as _initial, truths as _truths
 
 
 def check(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:

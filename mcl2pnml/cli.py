@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import json
 import sys
-from fractions import Fraction
 from pathlib import Path
 
 import click
@@ -18,10 +17,9 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
-from mcl2pnml.core.timing import Assumptions, seconds_option
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
-from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS, property_query_files
+from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
 from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
@@ -66,19 +64,6 @@ STRICT_OPTION = click.option(
     "--strict", is_flag=True,
     help="Make the warnings (docs/warnings.md) errors: exit 2 if there is one. A warning "
     "that is meant is acknowledged in the mission: // mcl: allow W001 because ...")
-
-
-def _warnings(mission: Path, checked, strict: bool) -> None:
-    """Print the mission's warnings on standard error; with --strict, refuse it (exit 2)."""
-    from mcl2pnml.language.lint import shown as shown_warnings
-    found = pipeline.warnings_of(checked)
-    for line in shown_warnings(found):
-        click.echo(line, err=True)
-    if strict and found:
-        n = len(found)
-        raise Mcl2PnmlError(f"{mission}: {n} warning{'s' * (n != 1)}, which --strict makes "
-                            "errors (fix them, or acknowledge one that is meant with "
-                            "// mcl: allow CODE because ... on the line before it)")
 
 
 FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
@@ -153,26 +138,13 @@ def check(mission: Path, properties: str | None, max_props_size: str = PROPERTIE
     warnings (docs/warnings.md), on standard error.
     """
     checked = pipeline.check_file(mission)
-    _warnings(mission, checked, strict)
+    pipeline.warned(mission, checked, strict, _note)
     click.echo(f"{mission}: ok ({checked.summary()})")
     if properties is not None:
-        from mcl2pnml.core.properties import describe
-        _, compiled = pipeline.properties_of(mission, extra=_properties_file(mission, properties),
-                                             max_size=max_props_size, max_atoms=max_atoms,
-                                             checked=checked)
-        for prop in compiled:
-            click.echo(f"property {prop.name} ({prop.location.prefix()}): {prop.text}")
-            click.echo(f"  {prop.pattern.value}: P = {describe(prop.p)}"
-                       + (f"; S = {describe(prop.s)}" if prop.s is not None else "")
-                       + (f"; at most {prop.bound} times" if prop.bound is not None else ""))
-            scope = prop.scope
-            click.echo(f"  {scope.kind.value}"
-                       + (f": Q = {describe(scope.q)}" if scope.q is not None else "")
-                       + (f"; R = {describe(scope.r)}" if scope.r is not None and scope.q
-                          is not None else f": R = {describe(scope.r)}" if scope.r is not None
-                          else ""))
-        if not compiled:
-            click.echo("no properties")
+        _, compiled = pipeline.properties_of(
+            mission, extra=pipeline.properties_file(mission, properties),
+            max_size=max_props_size, max_atoms=max_atoms, checked=checked)
+        click.echo("\n".join(pipeline.properties_lines(compiled)))
     return 0
 
 
@@ -224,73 +196,13 @@ def functional(mission: Path, with_functions: bool) -> int:
 @PROPERTIES_SIZE_OPTION
 @ATOMS_OPTION
 @STRICT_OPTION
-def compile_(mission: Path, output: Path | None, fmt: str, layout_engine: str, expand: str,
-             queries: Path | None, tool: str, max_memory: str | None,
-             ack_within: str | None = None, report_gap: str | None = None,
-             properties: str | None = None, max_props_size: str = PROPERTIES_SIZE,
-             max_atoms: int = PROPERTY_ATOMS, strict: bool = False) -> int:
+def compile_(mission: Path, output: Path | None, fmt: str, **options) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
 
     One shared net per task and per function, entered from every call site;
     time-outs and vehicle bindings travel in the PNML as toolspecific data.
     """
-    output = output or mission.with_suffix(FORMATS[fmt].suffixes[0])
-    if queries is not None and queries.resolve() == output.resolve():
-        raise click.BadParameter("the queries go in a file of their own, not the net's",
-                                 param_hint="--queries")
-    if expand and "expand" not in FORMATS[fmt].options:
-        raise click.BadParameter(f"only a drawing has boxes to open, not {fmt}: --format "
-                                 "svg, png or dot", param_hint="--expand")
-    timing = None
-    if fmt == "tapn":
-        timing = Assumptions(
-            ack_within=Fraction(0) if ack_within is None
-            else seconds_option(ack_within, "--ack-within"),
-            report_gap=Fraction(1) if report_gap is None
-            else seconds_option(report_gap, "--report-gap"), priority=False)
-    elif ack_within is not None or report_gap is not None:
-        raise click.BadParameter(
-            f"only a timed-arc net (--format tapn) says what the vehicle is assumed to do, "
-            f"not {fmt}", param_hint="--ack-within" if ack_within is not None else "--report-gap")
-    stem = output.with_suffix("") if output.suffix else output
-    extra = None if properties is None else _properties_file(mission, properties)
-    check_outputs([("-o", output), ("--queries", queries),
-                   *(("--properties", path) for path in
-                     (property_query_files(stem).values() if properties is not None else ()))],
-                  [("the mission", mission), ("the properties file (--properties)", extra)])
-    checked = pipeline.check_file(mission)   # its warnings before anything is written
-    _warnings(mission, checked, strict)
-    props = ()
-    if properties is None:
-        net = pipeline.compile_file(mission, max_memory=max_memory, checked=checked)
-    else:
-        net, props = pipeline.properties_of(
-            mission, extra=extra, max_memory=max_memory, max_size=max_props_size,
-            max_atoms=max_atoms, checked=checked)
-        if not props:
-            raise OptionError("--properties", f"{mission} declares no property, and there "
-                              f"is no {properties or mission.with_suffix('.props')} beside it")
-    opened = None if expand == "all" else tuple(n for n in expand.split(",") if n)
-    if timing is not None:   # the queries beside the net: none of them an input
-        check_outputs([("-o", output), ("--queries", queries),
-                       *(("-o", path) for path in
-                         pipeline.timed_query_paths(net, output, timing, props))],
-                      [("the mission", mission), ("the properties file (--properties)", extra)])
-    pipeline.save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True,
-                      expand=opened, timing=timing)
-    click.echo(f"wrote {output}: {net.summary()}", err=True)
-    if timing is not None:
-        click.echo(f"timed semantics: {timing.words()}", err=True)
-        for path, query, bound in pipeline.save_timed_queries(net, output, timing, props):
-            click.echo(f"wrote {path}: {query.description} "
-                       f"(verifydtapn -k {bound} {output} {path})", err=True)
-    if queries is not None:
-        written = pipeline.save_queries(net, queries, tool)
-        click.echo(f"wrote {queries}: {', '.join(p.id for p in written)} (for {tool})", err=True)
-    if props:
-        for path, qs in pipeline.save_property_queries(props, stem):
-            click.echo(f"wrote {path}: {len(qs)} {'query' if len(qs) == 1 else 'queries'}",
-                       err=True)
+    pipeline.compile_mission(mission, output, fmt, note=_note, **options)
     return 0
 
 
@@ -373,7 +285,7 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
     result = pipeline.run_mission(
         mission, pipeline.RunOptions(**options, explicit=given),
         text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
-        note=lambda line: click.echo(line, err=True))
+        note=_note)
     click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
     return result.outcome.exit_status
 
@@ -519,37 +431,15 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
     never end: the message points at it; or, with --check, a certificate that is
     not one: too large, not JSON, or not of the certificate's shape).
     """
-    if net_file is not None:
-        if output is not None:
-            raise OptionError("-o", "--check writes nothing")
-        cert = pipeline.load_certificate(mission, max_cert)
-        net = pipeline.load_net(net_file, net_id)
-        problems = pipeline.check_certificate(net, cert, shaped=True)
-    else:
-        if net_id is not None:
-            raise OptionError("--net", "only --check reads a net file")
-        if mission.suffix != ".mcl":
-            raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl); to re-check a "
-                                         "certificate, add --check NET.pnml")
-        output = output or mission.with_name(mission.stem + ".cert.json")
-        check_outputs([("-o", output)], [("the mission", mission)])
-        cert, net, problems = pipeline.certify_file(mission, abort_pending)
-        if not problems:
-            pipeline.save_certificate(cert, output)
-            click.echo(f"wrote {output}", err=True)
-    instances = sum(len(t) for t in cert.get("trees", {}).values())
-    if problems:
-        click.echo(f"{net.name}: the certificate does not hold:")
-        for p in problems:
-            click.echo(f"  {p}")
-        return 1
-    tasks, functions = len(cert["tasks"]), len(cert["functions"])
-    click.echo(f"{net.name}: certified from its parts ({instances} instances, "
-               f"{tasks} task{'s' * (tasks != 1)}, {functions} function"
-               f"{'s' * (functions != 1)}): 1-safe, an "
-               "end always reachable, reusable; every end one of "
-               + ", ".join(cert["conclusion"]["ends"]))
-    return 0
+    cert, net, problems = pipeline.certify_command(mission, output, net_file, net_id,
+                                                   abort_pending, max_cert, _note)
+    click.echo("\n".join(pipeline.certificate_lines(net, cert, problems)))
+    return 1 if problems else 0
+
+
+def _note(line: str) -> None:
+    """What a command says on the way (warnings, files written), on standard error."""
+    click.echo(line, err=True)
 
 
 def _progress(states: int, frontier: int) -> None:
@@ -579,16 +469,21 @@ def _progress(states: int, frontier: int) -> None:
               "behaviour.")
 @_certificate_size_option("Refuse a certificate beside FILE larger than this, before "
                           "reading it.")
-@click.option("--counterexamples", "cex_dir", metavar="DIR",
+@click.option("--counterexamples", metavar="DIR",
               type=click.Path(file_okay=False, path_type=Path),
               help="With --properties: for each failing property write DIR/NAME.txt (its run "
                    "in the mission's terms), NAME.vehicle.json (a vehicle script that replays a "
                    "violation on both engines), NAME.log and NAME.html (a page stepping "
                    "through it). No file may be an input: a name that is one is refused "
                    "before anything is written.")
-@click.option("--max-counterexamples", "max_cex", metavar="N", type=click.IntRange(min=0),
+@click.option("--explain", is_flag=True,
+              help="With --properties: tell each failing property's counterexample in the "
+                   "mission's terms and replay it on both engines, with the vehicle script "
+                   "that does (printed, and in --json). Without it (or --counterexamples), "
+                   "a counterexample is its firing sequence only, which costs nothing more.")
+@click.option("--max-counterexamples", metavar="N", type=click.IntRange(min=0),
               default=pipeline.MAX_COUNTEREXAMPLES, show_default=True,
-              help="With --properties: explain (print, and write with --counterexamples) the "
+              help="With --explain or --counterexamples: explain (print, and write) the "
                    "counterexamples of the first N failing properties only; the others are "
                    "given their verdict and firing sequence, and their number is said.")
 @click.option("--timed/--untimed", default=None,
@@ -610,138 +505,16 @@ def _progress(states: int, frontier: int) -> None:
 @PROPERTIES_SIZE_OPTION
 @ATOMS_OPTION
 @NET_OPTION
-def analyze(file: Path, as_json: bool, initial: str | None, state_space: bool, max_states: int,
-            progress: bool | None, explorer: str, max_memory: str | None,
-            net_id: str | None, properties: str | None = None,
-            cex_dir: Path | None = None, explore: bool = False,
-            max_cex: int = pipeline.MAX_COUNTEREXAMPLES, max_props_size: str = PROPERTIES_SIZE,
-            max_atoms: int = PROPERTY_ATOMS, max_cert: str = CERTIFICATE_SIZE,
-            timed: bool | None = None, ack_within: str = "0", report_gap: str = "1",
-            fair_reports: bool = False, urgency_only: bool = False) -> int:
+def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
 
     Invariants, siphons, reachable markings, on any P/T net: PNML from TAPAAL,
     PIPE, pm4py..., TINA and LoLA files (by suffix: .pnml or .xml, .net, .lola).
     Exit status 3: a partial answer (the memory budget was reached).
     """
-    if cex_dir is not None and properties is None:
-        raise OptionError("--counterexamples", "counterexamples are of properties: add "
-                                               "--properties")
-    if cex_dir is not None and initial is not None:
-        raise OptionError("--counterexamples", "a replay starts the mission from its start: "
-                                               "leave out --initial")
-    if timed is None:   # a mission's properties are about the runs it has: in time
-        timed = properties is not None and file.suffix == ".mcl" and initial is None
-    assumptions = _assumptions(timed, ack_within, report_gap, fair_reports, urgency_only)
-    if timed and initial is not None:
-        raise OptionError("--timed", "a timed verdict starts the mission from its start (its "
-                                     "clocks at 0): leave out --initial")
-    props = extra = None
-    if properties is None:
-        net = pipeline.load_net(file, net_id, max_memory)
-    else:   # read, counted and checked before the analysis, which they may make long
-        if file.suffix != ".mcl":
-            raise OptionError("--properties", "properties are a mission's (an .mcl file)")
-        if net_id is not None:
-            raise OptionError("--net", "properties are a mission's, which compiles to one "
-                                       "net; leave out --net")
-        extra = _properties_file(file, properties)
-        net, props = pipeline.properties_of(file, extra=extra, max_memory=max_memory,
-                                            max_size=max_props_size, max_atoms=max_atoms)
-    if cex_dir is not None:     # before the analysis: a folder that cannot be is said at once
-        # and before anything is written: no property's files may be an input
-        inputs = [("the mission", file), ("the properties file (--properties)", extra),
-                  ("the certificate beside it", pipeline.certificate_beside(file))]
-        check_outputs([("--counterexamples", path) for prop in props for path in
-                       pipeline.witness_files(cex_dir, prop.name).values()], inputs,
-                      "give another folder, or rename the property")
-        pipeline.make_folder(cex_dir)
-    start = None if initial is None else pipeline.parse_marking(initial, net, str(file))
-    if timed:   # the runs in time: the timed answers alone, the untimed ones with --untimed
-        result: dict = {}
-        timed_ends = pipeline.timed_ends(net, assumptions, max_states)
-        verdicts = None if props is None else pipeline.check_properties_timed(
-            net, props, assumptions, max_states)
-    else:
-        shown = sys.stderr.isatty() if progress is None else progress
-        # a certificate beside the file proves the behaviour without exploring (mcl2pnml.certify)
-        beside = pipeline.certificate_beside(file)
-        certified = None
-        if beside.is_file() and start is None and not explore:
-            certified, problems = pipeline.certified_facts(net, beside, max_cert)
-            if problems:
-                click.echo(f"{beside}: the certificate does not hold for this net "
-                           f"({problems[0]}"
-                           + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
-                           + "): exploring instead", err=True)
-        result = pipeline.analyze(net, start, state_space_only=state_space,
-                                  max_states=max_states, progress=_progress if shown else None,
-                                  explorer=explorer, max_memory=max_memory,
-                                  explore_states=certified is None)
-        if certified is not None:
-            result.update(certified)
-            click.echo(f"{beside}: the certificate holds: 1-safe, an end always reachable, "
-                       "reusable, proven from the mission's parts; the markings were not "
-                       "explored (--explore to explore them)", err=True)
-        if shown:
-            click.echo("", err=True)
-        timed_ends = None
-        verdicts = None if props is None else pipeline.check_properties(
-            net if start is None else net.with_initial(start), props, max_states)
-    # the mission's terms and the replay start from the mission's own start; only the
-    # counterexamples printed and written are explained, each costing a search and a replay
-    witnesses = (pipeline.witnesses(file, net, verdicts, max_cex,
-                                    assumptions if timed else None)
-                 if verdicts is not None and start is None else None)
-    if witnesses is not None:
-        failing = sum(v.shape is not None for v in verdicts)
-        explained = sum(w is not None for w in witnesses)
-        if explained < failing:
-            click.echo(f"counterexamples of {failing - explained:,} of the {failing:,} "
-                       f"failing properties left out: the first {explained:,} are explained "
-                       "(--max-counterexamples to raise the limit)", err=True)
-    if cex_dir is not None and any(w is not None for w in witnesses):
-        page = pipeline.show_nets(str(file), with_run=True)   # the same for every property
-        for v, w in zip(verdicts, witnesses):
-            if w is not None:
-                for path in pipeline.save_witness(cex_dir, file, v, w, page):
-                    click.echo(f"wrote {path}", err=True)
-    if as_json:
-        if verdicts is not None:
-            result["properties"] = pipeline.verdicts_json(verdicts, witnesses)
-        if timed_ends is not None:
-            result["timed"] = timed_ends.as_json()
-        click.echo(json.dumps(result, indent=2))
-    else:
-        if timed_ends is None:
-            click.echo(pipeline.analysis_text(result))
-        else:
-            click.echo("\n".join(timed_ends.lines()))
-        for k, v in enumerate(verdicts or ()):
-            click.echo("\n".join(pipeline.witness_text(v, witnesses[k] if witnesses else None)))
-    statuses = {v.status.value for v in verdicts or ()}
-    if "fails" in statuses:
-        return 1
-    undecided = timed_ends is not None and timed_ends.always_ends is None
-    return 3 if "partial" in result or "unknown" in statuses or undecided else 0
-
-
-def _assumptions(timed: bool, ack_within: str, report_gap: str, fair: bool, urgency_only: bool):
-    """The vehicle's assumptions of ``--timed`` (docs/time.md); refused without it."""
-    from mcl2pnml.core.timing import Assumptions, seconds_option
-    given = [name for name, said in (("--ack-within", ack_within != "0"),
-                                     ("--report-gap", report_gap != "1"),
-                                     ("--fair-reports", fair), ("--urgency-only", urgency_only))
-             if said]
-    if given and not timed:
-        raise OptionError(given[0], "an assumption of the timed verdicts: add --timed")
-    return Assumptions(seconds_option(ack_within, "--ack-within"),
-                       seconds_option(report_gap, "--report-gap"), fair, not urgency_only)
-
-
-def _properties_file(mission: Path, properties: str) -> Path | None:
-    """The side file of ``--properties [FILE]``: FILE, else MISSION.props if there is one."""
-    extra = Path(properties) if properties else mission.with_suffix(".props")
-    if properties and not extra.is_file():
-        raise OptionError("--properties", f"no file '{properties}'")
-    return extra if extra.is_file() else None
+    shown = sys.stderr.isatty() if progress is None else progress
+    outcome = pipeline.analyze_file(file, progress=_progress if shown else None,
+                                    note=_note, **options)
+    click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
+               else "\n".join(outcome.lines()))
+    return outcome.status

@@ -495,12 +495,12 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
 
     import networkx as nx
 
-    from analysis.properties import BAD, _initial, _truths, pending, step
+    from analysis.observers import BAD, initial, pending, step, truths
     from mcl2pnml.runtime.executor import PetriEngine
 
     root = PetriEngine(net)
     places = root.places
-    preds = _truths(prop)
+    preds = truths(prop)
     trail: list[str] = []
     box: dict[str, Any] = {}
 
@@ -527,7 +527,7 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
         engine = PetriEngine(net)
         box["engine"], box["obs"] = engine, None
         marking = {places[k]: n for k, n in enumerate(engine.marking) if n}
-        box["obs"] = step(prop, _initial(prop.scope.kind), *(holds(x, marking) for x in preds))
+        box["obs"] = step(prop, initial(prop.scope.kind), *(holds(x, marking) for x in preds))
         engine.on_fire = watch
         replied = settle(engine, engine.start(0.0), frozenset())
         return engine, replied

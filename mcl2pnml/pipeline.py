@@ -42,7 +42,8 @@ __all__ = [
     "check_file", "check_source", "warnings_of", "properties_of", "compile_file", "compile_source", "functional_form",
     "load_net", "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net", "template_clusters", "templates",
     "validate_pnml", "analyze", "parse_marking", "run_mission", "RunOptions", "show_nets", "save_show_page", "serve_show_live",
-    "Shown", "save_reachability_json",
+    "Shown", "save_reachability_json", "analyze_file", "AnalyzeOutcome", "compile_mission",
+    "certify_command",
 ]
 
 
@@ -445,13 +446,16 @@ def witnesses(mission: Path, net: Net, verdicts, most: int | None = None,
 
 
 def verdicts_json(verdicts, witnesses=None) -> list[dict[str, Any]]:
-    """Verdicts as ``analyze --json`` prints them, each failing one with its witness if given."""
+    """Verdicts as ``analyze --json`` prints them: each failing one with its counterexample
+    as the checker found it, ``explained`` saying whether its witness was computed (given
+    here, ``analyze --explain``), and the witness's parts when it was."""
     out = []
     for k, v in enumerate(verdicts):
         w = witnesses[k] if witnesses else None
         cex = None if v.shape is None else {
             "shape": v.shape.value, "transitions": list(v.transitions),
-            "loop": v.loop, "markings": [dict(m) for m in v.markings]}
+            "loop": v.loop, "markings": [dict(m) for m in v.markings],
+            "explained": w is not None}
         if cex is not None and w is not None:
             cex["mission"] = w.run.lines()
             cex["vehicle_script"] = None if w.replayed is None else w.replayed.script
@@ -467,9 +471,15 @@ def verdicts_json(verdicts, witnesses=None) -> list[dict[str, Any]]:
     return out
 
 
-def witness_text(v, w) -> list[str]:
+#: What ``analyze`` says under a counterexample it did not explain, unasked.
+EXPLAIN_HINT = ("  (--explain: this run in the mission's terms, and a vehicle script that "
+                "replays it on both engines)")
+
+
+def witness_text(v, w, hint: bool = False) -> list[str]:
     """A verdict as ``analyze --properties`` prints it: the firing sequence, the same run in
-    the mission's terms, and the vehicle script that replays a violation, or why none does."""
+    the mission's terms, and the vehicle script that replays a violation, or why none does;
+    without a witness, ``hint``: how to ask for it (:data:`EXPLAIN_HINT`)."""
     where = v.property.location.prefix() if v.property.location else "-"
     line = f"property {v.property.name} ({where}): {v.status.value}"
     if v.reason:
@@ -484,7 +494,7 @@ def witness_text(v, w) -> list[str]:
     if v.loop is not None:
         out.append(f"  then again from step {v.loop + 1}, forever")
     if w is None:
-        return out
+        return out + [EXPLAIN_HINT] * hint
     out.append("  in the mission's terms (step numbers in brackets):")
     out += [f"  {line}" for line in w.run.lines()]
     if w.replayed is not None and w.replayed is not w.run:
@@ -582,6 +592,419 @@ def parse_marking(text: str, net: Net, where: str = "") -> dict[str, int]:
 def analysis_text(result: dict[str, Any]) -> str:
     from analysis.report import render_text
     return render_text(result)
+
+
+# -- the commands' decisions, for the CLI to print ---------------------------------------
+
+def warned(mission: Path, checked, strict: bool = False,
+           note: Callable[[str], None] = lambda line: None) -> list:
+    """The mission's warnings (:func:`warnings_of`), each line handed to ``note`` (the CLI's
+    standard error); with ``strict``, one or more refuse the mission (exit 2), before
+    anything is written."""
+    from mcl2pnml.core.errors import Mcl2PnmlError
+    from mcl2pnml.language.lint import shown
+    found = warnings_of(checked)
+    for line in shown(found):
+        note(line)
+    if strict and found:
+        n = len(found)
+        raise Mcl2PnmlError(f"{mission}: {n} warning{'s' * (n != 1)}, which --strict makes "
+                            "errors (fix them, or acknowledge one that is meant with "
+                            "// mcl: allow CODE because ... on the line before it)")
+    return found
+
+
+def properties_lines(compiled) -> list[str]:
+    """``check --properties``: each property compiled to place formulas, its pattern's
+    (P, S, the bound) then its scope's (Q, R)."""
+    from mcl2pnml.core.properties import describe
+    out = []
+    for prop in compiled:
+        scope = prop.scope
+        q = f": Q = {describe(scope.q)}" if scope.q is not None else ""
+        r = "" if scope.r is None else f"{'; ' if q else ': '}R = {describe(scope.r)}"
+        out += [f"property {prop.name} ({prop.location.prefix()}): {prop.text}",
+                f"  {prop.pattern.value}: P = {describe(prop.p)}"
+                + (f"; S = {describe(prop.s)}" if prop.s is not None else "")
+                + (f"; at most {prop.bound} times" if prop.bound is not None else ""),
+                f"  {scope.kind.value}{q}{r}"]
+    return out or ["no properties"]
+
+
+def compile_timing(fmt: str, ack_within: str | None, report_gap: str | None
+                   ) -> "Assumptions | None":
+    """What the vehicle is assumed to do, for a format that says it (tapn; supervisor steps
+    urgent, not first: the timed-arc tools' semantics); refused for any other."""
+    from fractions import Fraction
+
+    from mcl2pnml.core.timing import Assumptions, seconds_option
+    if fmt == "tapn":
+        return Assumptions(
+            ack_within=Fraction(0) if ack_within is None
+            else seconds_option(ack_within, "--ack-within"),
+            report_gap=Fraction(1) if report_gap is None
+            else seconds_option(report_gap, "--report-gap"), priority=False)
+    if ack_within is not None or report_gap is not None:
+        raise OptionError("--ack-within" if ack_within is not None else "--report-gap",
+                          "only a timed-arc net (--format tapn) says what the vehicle is "
+                          f"assumed to do, not {fmt}")
+    return None
+
+
+def compile_mission(mission: Path, output: Path | None = None, fmt: str = "pnml", *,
+                    layout_engine: str = "auto", expand: str = "", queries: Path | None = None,
+                    tool: str = "verifypn", max_memory: str | None = None,
+                    ack_within: str | None = None, report_gap: str | None = None,
+                    properties: str | None = None, max_props_size=None, max_atoms=None,
+                    strict: bool = False, note: Callable[[str], None] = lambda line: None
+                    ) -> list[Path]:
+    """``mcl2pnml compile``, its options by their names: the net and what goes beside it
+    (the queries, the properties' files, a timed-arc net's queries), every output checked
+    against the inputs and each other before anything is written; each line said handed to
+    ``note``. Returns the files written."""
+    from mcl2pnml.core.files import check_outputs
+    from mcl2pnml.io.mccquery import property_query_files
+    output = output or mission.with_suffix(FORMATS[fmt].suffixes[0])
+    if queries is not None and queries.resolve() == output.resolve():
+        raise OptionError("--queries", "the queries go in a file of their own, not the net's")
+    if expand and "expand" not in FORMATS[fmt].options:
+        raise OptionError("--expand", f"only a drawing has boxes to open, not {fmt}: "
+                                      "--format svg, png or dot")
+    timing = compile_timing(fmt, ack_within, report_gap)
+    stem = output.with_suffix("") if output.suffix else output
+    extra = None if properties is None else properties_file(mission, properties)
+    inputs = [("the mission", mission), ("the properties file (--properties)", extra)]
+    outputs = [("-o", output), ("--queries", queries)]
+    check_outputs(outputs + [("--properties", path) for path in
+                             (property_query_files(stem).values() if properties is not None
+                              else ())], inputs)
+    checked = check_file(mission)   # its warnings before anything is written
+    warned(mission, checked, strict, note)
+    net, props = _compiled_with_properties(mission, checked, properties, extra, max_memory,
+                                           max_props_size, max_atoms)
+    if timing is not None:   # the queries beside the net: none of them an input
+        check_outputs(outputs + [("-o", path) for path in
+                                 timed_query_paths(net, output, timing, props)], inputs)
+    opened = None if expand == "all" else tuple(n for n in expand.split(",") if n)
+    save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True,
+             expand=opened, timing=timing)
+    note(f"wrote {output}: {net.summary()}")
+    return [output, *_saved_beside(net, output, timing, queries, tool, props, stem, note)]
+
+
+def _compiled_with_properties(mission: Path, checked, properties: str | None,
+                              extra: Path | None, max_memory, max_size, max_atoms):
+    """The compiled net, and with ``--properties`` the properties, at least one."""
+    if properties is None:
+        return compile_file(mission, max_memory=max_memory, checked=checked), ()
+    net, props = properties_of(mission, extra=extra, max_memory=max_memory, max_size=max_size,
+                               max_atoms=max_atoms, checked=checked)
+    if not props:
+        raise OptionError("--properties", f"{mission} declares no property, and there is no "
+                                          f"{properties or mission.with_suffix('.props')} "
+                                          "beside it")
+    return net, props
+
+
+def _saved_beside(net: Net, output: Path, timing, queries: Path | None, tool: str, props,
+                  stem: Path, note: Callable[[str], None]) -> list[Path]:
+    """What ``compile`` writes beside the net: a timed-arc net's queries, the Model
+    Checking Contest's queries, the properties in its categories."""
+    written = []
+    if timing is not None:
+        note(f"timed semantics: {timing.words()}")
+        for path, query, bound in save_timed_queries(net, output, timing, props):
+            note(f"wrote {path}: {query.description} (verifydtapn -k {bound} {output} {path})")
+            written.append(Path(path))
+    if queries is not None:
+        saved = save_queries(net, queries, tool)
+        note(f"wrote {queries}: {', '.join(p.id for p in saved)} (for {tool})")
+        written.append(queries)
+    for path, qs in save_property_queries(props, stem) if props else ():
+        note(f"wrote {path}: {len(qs)} {'query' if len(qs) == 1 else 'queries'}")
+        written.append(Path(path))
+    return written
+
+
+def certify_command(mission: Path, output: Path | None = None, net_file: Path | None = None,
+                    net_id: str | None = None, abort_pending: bool = False,
+                    max_cert: int | str = MAX_CERTIFICATE,
+                    note: Callable[[str], None] = lambda line: None
+                    ) -> tuple[dict[str, Any], Net, list[str]]:
+    """``mcl2pnml certify``: the mission certified and its certificate written (only if it
+    holds), or with ``net_file`` a certificate re-checked against that net; the certificate,
+    the net and what the checker finds wrong (nothing: it holds)."""
+    from mcl2pnml.core.files import check_outputs
+    if net_file is not None:
+        if output is not None:
+            raise OptionError("-o", "--check writes nothing")
+        cert = load_certificate(mission, max_cert)
+        net = load_net(net_file, net_id)
+        return cert, net, check_certificate(net, cert, shaped=True)
+    if net_id is not None:
+        raise OptionError("--net", "only --check reads a net file")
+    if mission.suffix != ".mcl":
+        raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl); to re-check a "
+                                     "certificate, add --check NET.pnml")
+    output = output or mission.with_name(mission.stem + ".cert.json")
+    check_outputs([("-o", output)], [("the mission", mission)])
+    cert, net, problems = certify_file(mission, abort_pending)
+    if not problems:
+        save_certificate(cert, output)
+        note(f"wrote {output}")
+    return cert, net, problems
+
+
+def certificate_lines(net: Net, cert: dict[str, Any], problems: Sequence[str]) -> list[str]:
+    """What ``certify`` prints: what does not hold, or what the certificate proves."""
+    if problems:
+        return [f"{net.name}: the certificate does not hold:", *(f"  {p}" for p in problems)]
+    instances = sum(len(t) for t in cert.get("trees", {}).values())
+    tasks, functions = len(cert["tasks"]), len(cert["functions"])
+    return [f"{net.name}: certified from its parts ({instances} instances, "
+            f"{tasks} task{'s' * (tasks != 1)}, {functions} function"
+            f"{'s' * (functions != 1)}): 1-safe, an end always reachable, reusable; every end "
+            "one of " + ", ".join(cert["conclusion"]["ends"])]
+
+
+# -- a file analysed, as ``mcl2pnml analyze`` does it --------------------------------------
+
+@dataclass(frozen=True)
+class AnalyzeOutcome:
+    """What one :func:`analyze_file` found and did, for the CLI to print and a test or a
+    notebook to read, so that none of them decides anything again.
+
+    ``result``: the analysis (:func:`analyze`, with a certificate's facts where one beside
+    the file holds; empty for a timed one); ``verdicts``: the properties' (None without
+    ``properties``); ``witnesses``: beside them, each failing one's explanation
+    (:func:`witnesses`), None for those not explained, and None in all when none was asked
+    for; ``timed``: the timed ends (:func:`timed_ends`) of a timed analysis; ``messages``:
+    what was said on the way, standard error's, in order; ``written``: the counterexample
+    files; ``status``: the exit status (0 ok, 1 a property fails, 3 a partial answer, a
+    property unknown, or the ends undecided).
+    """
+
+    result: dict[str, Any]
+    verdicts: tuple | None = None
+    witnesses: tuple | None = None
+    timed: Any = None
+    messages: tuple[str, ...] = ()
+    written: tuple[Path, ...] = ()
+    status: int = 0
+    #: The text says, under a counterexample not explained, how to ask (``--explain``):
+    #: no explanation was asked for, and one could be (the run starts at the mission's start).
+    hint: bool = False
+
+    def as_json(self) -> dict[str, Any]:
+        """The object ``analyze --json`` prints."""
+        out = dict(self.result)
+        if self.verdicts is not None:
+            out["properties"] = verdicts_json(self.verdicts, self.witnesses)
+        if self.timed is not None:
+            out["timed"] = self.timed.as_json()
+        return out
+
+    def lines(self) -> list[str]:
+        """What ``analyze`` prints: the analysis (or the timed ends), then each verdict."""
+        out = ["\n".join(self.timed.lines()) if self.timed is not None
+               else analysis_text(self.result)]
+        for k, v in enumerate(self.verdicts or ()):
+            out += witness_text(v, self.witnesses[k] if self.witnesses else None, self.hint)
+        return out
+
+
+def analyze_file(file: str | Path, *, initial: str | None = None, state_space: bool = False,
+                 max_states: int = 5_000_000, explorer: str = "auto",
+                 max_memory: int | str | None = None, net_id: str | None = None,
+                 properties: str | None = None, counterexamples: str | Path | None = None,
+                 explain: bool = False, explore: bool = False,
+                 max_counterexamples: int | None = MAX_COUNTEREXAMPLES,
+                 max_props_size: int | str | None = None, max_atoms: int | None = None,
+                 max_cert: int | str = MAX_CERTIFICATE, timed: bool | None = None,
+                 ack_within: str = "0", report_gap: str = "1", fair_reports: bool = False,
+                 urgency_only: bool = False, progress: Callable[[int, int], None] | None = None,
+                 note: Callable[[str], None] = lambda line: None) -> AnalyzeOutcome:
+    """``mcl2pnml analyze FILE``, its options by their names (``--help`` says them), as one
+    call that the CLI, the tests and a notebook share.
+
+    It decides what the command does: timed or not (a mission's properties are about
+    the runs it has, in time, unless ``timed`` says otherwise), a certificate beside the
+    file taken instead of exploring, the properties checked, and the counterexamples
+    explained (in the mission's terms, replayed on both engines: the costly part) only
+    when ``explain`` or ``counterexamples`` asks, up to ``max_counterexamples``, and
+    written in the folder ``counterexamples``. ``properties``: ``--properties [FILE]``'s
+    value ("" for MISSION.props). Each message is handed to ``note`` when it is said (the
+    CLI prints it on standard error) and kept in the outcome; an input or an option that
+    does not fit raises the project's errors (:class:`~mcl2pnml.core.errors.OptionError`,
+    :class:`~mcl2pnml.core.errors.Mcl2PnmlError`) before anything is explored or written.
+    """
+    file = Path(file)
+    folder = None if counterexamples is None else Path(counterexamples)
+    _explanations_possible(properties, initial, folder, explain)
+    if timed is None:   # a mission's properties are about the runs it has: in time
+        timed = properties is not None and file.suffix == ".mcl" and initial is None
+    assumptions = timed_assumptions(timed, ack_within, report_gap, fair_reports, urgency_only)
+    if timed and initial is not None:
+        raise OptionError("--timed", "a timed verdict starts the mission from its start (its "
+                                     "clocks at 0): leave out --initial")
+    net, props, extra = _analyzed_net(file, net_id, properties, max_memory, max_props_size,
+                                      max_atoms)
+    if folder is not None:      # before the analysis: a folder that cannot be is said at once
+        _counterexample_folder(file, folder, props, extra)
+    start = None if initial is None else parse_marking(initial, net, str(file))
+    said: list[str] = []
+
+    def say(line: str) -> None:
+        said.append(line)
+        note(line)
+    ends = verdicts = None
+    if timed:   # the runs in time: the timed answers alone, the untimed ones with --untimed
+        result: dict[str, Any] = {}
+        ends = timed_ends(net, assumptions, max_states)
+        if props is not None:
+            verdicts = check_properties_timed(net, props, assumptions, max_states)
+    else:
+        result = _explored(file, net, start, say, progress, state_space=state_space,
+                           max_states=max_states, explorer=explorer, max_memory=max_memory,
+                           max_cert=max_cert, explore=explore)
+        if progress is not None:
+            note("")   # the progress line ended
+        if props is not None:
+            verdicts = check_properties(net if start is None else net.with_initial(start),
+                                        props, max_states)
+    asked = explain or folder is not None
+    explained = None
+    if verdicts is not None and asked:
+        explained = witnesses(file, net, verdicts, max_counterexamples,
+                              assumptions if timed else None)
+        _say_left_out(verdicts, explained, say)
+    written = [] if folder is None or explained is None else \
+        _save_witnesses(folder, file, verdicts, explained, say)
+    return AnalyzeOutcome(
+        result, None if verdicts is None else tuple(verdicts),
+        None if explained is None else tuple(explained), ends, tuple(said), tuple(written),
+        _analyze_status(result, verdicts, ends), hint=not asked and start is None)
+
+
+def _explanations_possible(properties: str | None, initial: str | None,
+                           folder: Path | None, explain: bool) -> None:
+    """Refuse an explanation asked for where there can be none: without properties, or
+    from another start than the mission's (the mission's terms and the replay start
+    there)."""
+    for option, asked in (("--counterexamples", folder is not None), ("--explain", explain)):
+        if asked and properties is None:
+            raise OptionError(option, "counterexamples are of properties: add --properties")
+        if asked and initial is not None:
+            raise OptionError(option, "a replay starts the mission from its start: leave "
+                                      "out --initial")
+
+
+def _analyzed_net(file: Path, net_id: str | None, properties: str | None, max_memory,
+                  max_size, max_atoms) -> tuple[Net, tuple | None, Path | None]:
+    """The net ``analyze`` reads, and with ``--properties`` the properties and their side
+    file, read, counted and checked before the analysis, which they may make long."""
+    if properties is None:
+        return load_net(file, net_id, max_memory), None, None
+    if file.suffix != ".mcl":
+        raise OptionError("--properties", "properties are a mission's (an .mcl file)")
+    if net_id is not None:
+        raise OptionError("--net", "properties are a mission's, which compiles to one net; "
+                                   "leave out --net")
+    extra = properties_file(file, properties)
+    net, props = properties_of(file, extra=extra, max_memory=max_memory, max_size=max_size,
+                               max_atoms=max_atoms)
+    return net, props, extra
+
+
+def _counterexample_folder(file: Path, folder: Path, props, extra: Path | None) -> None:
+    """The folder of ``--counterexamples`` made, once no property's file in it is found
+    to be an input: refused before anything is written."""
+    from mcl2pnml.core.files import check_outputs
+    inputs = [("the mission", file), ("the properties file (--properties)", extra),
+              ("the certificate beside it", certificate_beside(file))]
+    check_outputs([("--counterexamples", path) for prop in props for path in
+                   witness_files(folder, prop.name).values()], inputs,
+                  "give another folder, or rename the property")
+    make_folder(folder)
+
+
+def _explored(file: Path, net: Net, start, say: Callable[[str], None], progress,
+              *, max_cert, explore: bool, **options: Any) -> dict[str, Any]:
+    """The untimed analysis of ``net``; a certificate beside the file, if it holds for the
+    net and the run starts at M0, proves the behaviour without exploring
+    (:mod:`mcl2pnml.certify`), and ``explore`` explores anyway."""
+    beside = certificate_beside(file)
+    certified = None
+    if beside.is_file() and start is None and not explore:
+        certified, problems = certified_facts(net, beside, max_cert)
+        if problems:
+            say(f"{beside}: the certificate does not hold for this net ({problems[0]}"
+                + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
+                + "): exploring instead")
+    result = analyze(net, start, state_space_only=options.pop("state_space"),
+                     progress=progress, explore_states=certified is None, **options)
+    if certified is not None:
+        result.update(certified)
+        say(f"{beside}: the certificate holds: 1-safe, an end always reachable, reusable, "
+            "proven from the mission's parts; the markings were not explored (--explore to "
+            "explore them)")
+    return result
+
+
+def _say_left_out(verdicts, explained, say: Callable[[str], None]) -> None:
+    failing = sum(v.shape is not None for v in verdicts)
+    done = sum(w is not None for w in explained)
+    if done < failing:
+        say(f"counterexamples of {failing - done:,} of the {failing:,} failing properties "
+            f"left out: the first {done:,} are explained (--max-counterexamples to raise "
+            "the limit)")
+
+
+def _save_witnesses(folder: Path, file: Path, verdicts, explained,
+                    say: Callable[[str], None]) -> list[Path]:
+    """Each explained counterexample's files (:func:`save_witness`); one page content for
+    all, since a run does not change the mission's drawing."""
+    written: list[Path] = []
+    if not any(w is not None for w in explained):
+        return written
+    page = show_nets(str(file), with_run=True)
+    for v, w in zip(verdicts, explained):
+        if w is not None:
+            for path in save_witness(folder, file, v, w, page):
+                say(f"wrote {path}")
+                written.append(path)
+    return written
+
+
+def _analyze_status(result: dict[str, Any], verdicts, ends) -> int:
+    statuses = {v.status.value for v in verdicts or ()}
+    if "fails" in statuses:
+        return 1
+    undecided = ends is not None and ends.always_ends is None
+    return 3 if "partial" in result or "unknown" in statuses or undecided else 0
+
+
+def timed_assumptions(timed: bool, ack_within: str = "0", report_gap: str = "1",
+                      fair: bool = False, urgency_only: bool = False) -> "Assumptions":
+    """The vehicle's assumptions of ``--timed`` (docs/time.md), from the options as written;
+    one given without ``timed`` is refused."""
+    from mcl2pnml.core.timing import Assumptions, seconds_option
+    given = [name for name, said in (("--ack-within", ack_within != "0"),
+                                     ("--report-gap", report_gap != "1"),
+                                     ("--fair-reports", fair), ("--urgency-only", urgency_only))
+             if said]
+    if given and not timed:
+        raise OptionError(given[0], "an assumption of the timed verdicts: add --timed")
+    return Assumptions(seconds_option(ack_within, "--ack-within"),
+                       seconds_option(report_gap, "--report-gap"), fair, not urgency_only)
+
+
+def properties_file(mission: Path, properties: str) -> Path | None:
+    """The side file of ``--properties [FILE]``: FILE, else MISSION.props if there is one."""
+    extra = Path(properties) if properties else mission.with_suffix(".props")
+    if properties and not extra.is_file():
+        raise OptionError("--properties", f"no file '{properties}'")
+    return extra if extra.is_file() else None
 
 
 # -- running -------------------------------------------------------------------------------

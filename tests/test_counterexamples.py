@@ -278,17 +278,119 @@ def _witnesses_replay(case) -> None:
 
 def test_analyze_json_gives_the_run_in_the_mission_terms_and_its_script():
     out = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--untimed", "--state-space", "--json",
-                  "--properties", EXAMPLES / "multi_leg.false.props")
+                  "--properties", EXAMPLES / "multi_leg.false.props", "--explain")
     assert out.returncode == 1, out.stderr
     [prop] = json.loads(out.stdout)["properties"]
     cex = prop["counterexample"]
+    assert cex["explained"] is True
     assert cex["vehicle_script"] == {"KeepDepth": ["ok@1", "ok@1"]}
     assert cex["why_not"] is None and cex["replayed"]["same_run"]
     assert any("the time-out of Goto (900 s) expires" in line for line in cex["mission"])
 
 
+def _analyze_spied(monkeypatch, *args):
+    """``analyze`` on multi_leg's false property, in this process, with each explanation
+    (:func:`mcl2pnml.counterexample.witness`: the mission's terms and the replay on both
+    engines) and each replay counted as the facade calls them."""
+    from click.testing import CliRunner
+
+    import mcl2pnml.counterexample as counterexample
+    from mcl2pnml.cli import main
+    calls = {"witness": 0, "replay": 0}
+
+    def spy(name):
+        real = getattr(counterexample, name)
+
+        def counted(*a, **k):
+            calls[name] += 1
+            return real(*a, **k)
+        monkeypatch.setattr(counterexample, name, counted)
+    spy("witness")
+    spy("replay")
+    out = CliRunner().invoke(main, ["analyze", str(EXAMPLES / "multi_leg.mcl"), "--untimed",
+                                    "--state-space", "--no-progress", "--properties",
+                                    str(EXAMPLES / "multi_leg.false.props"), *map(str, args)])
+    assert out.exit_code == 1 and "Traceback" not in out.output, out.output
+    return out, calls
+
+
+@pytest.mark.parametrize("as_json", [False, True], ids=["text", "json"])
+def test_a_counterexample_is_not_explained_unless_asked(monkeypatch, as_json):
+    """Without --explain (or --counterexamples) no counterexample is told in the mission's
+    terms nor replayed: the firing sequence is given, and how to ask for the rest."""
+    out, calls = _analyze_spied(monkeypatch, *(["--json"] if as_json else []))
+    assert calls == {"witness": 0, "replay": 0}
+    if as_json:
+        [prop] = json.loads(out.stdout)["properties"]
+        cex = prop["counterexample"]
+        assert cex["explained"] is False and cex["shape"] == "prefix"
+        assert cex["transitions"][-1] == "GpsFix.on" and len(cex["markings"]) > 1
+        assert not {"mission", "vehicle_script", "replayed", "why_not"} & set(cex)
+    else:
+        assert "  counterexample (prefix):" in out.stdout
+        assert "in the mission's terms (step numbers" not in out.stdout
+        assert out.stdout.splitlines()[-1] == pipeline.EXPLAIN_HINT
+    assert "left out" not in out.stderr
+
+
+@pytest.mark.parametrize("as_json", [False, True], ids=["text", "json"])
+def test_explain_tells_the_run_and_replays_it(monkeypatch, as_json):
+    out, calls = _analyze_spied(monkeypatch, "--explain", *(["--json"] if as_json else []))
+    assert calls["witness"] == 1 and calls["replay"] >= 1
+    if as_json:
+        [prop] = json.loads(out.stdout)["properties"]
+        cex = prop["counterexample"]
+        assert cex["explained"] is True and cex["replayed"]["same_run"]
+        assert cex["vehicle_script"] == {"KeepDepth": ["ok@1", "ok@1"]}
+    else:
+        assert "  in the mission's terms (step numbers in brackets):" in out.stdout
+        assert "both engines reach the violation" in out.stdout
+        assert pipeline.EXPLAIN_HINT not in out.stdout
+
+
+def test_explain_with_no_counterexample_to_explain_limited(monkeypatch):
+    """--max-counterexamples 0 explains none: the number left out is said, no hint given."""
+    out, calls = _analyze_spied(monkeypatch, "--explain", "--max-counterexamples", "0")
+    assert calls == {"witness": 0, "replay": 0}
+    assert "counterexamples of 1 of the 1 failing properties left out" in out.stderr
+    assert pipeline.EXPLAIN_HINT not in out.stdout
+
+
+def test_counterexamples_are_explained_for_their_files_without_explain(monkeypatch, tmp_path):
+    out, calls = _analyze_spied(monkeypatch, "--counterexamples", tmp_path / "cx")
+    assert calls["witness"] == 1 and calls["replay"] >= 1
+    assert sorted(p.name for p in (tmp_path / "cx").iterdir()) == [
+        f"FixOnlyAfterNavigationFailure.{s}" for s in ("html", "log", "txt", "vehicle.json")]
+    assert "in the mission's terms" in (tmp_path / "cx" /
+                                        "FixOnlyAfterNavigationFailure.txt").read_text()
+
+
+def test_the_facade_gives_the_outcome_the_cli_prints(tmp_path):
+    """pipeline.analyze_file decides what `analyze` does; the CLI prints its outcome."""
+    outcome = pipeline.analyze_file(EXAMPLES / "multi_leg.mcl", timed=False,
+                                    state_space=True, properties=str(
+                                        EXAMPLES / "multi_leg.false.props"),
+                                    counterexamples=tmp_path / "cx")
+    assert outcome.status == 1 and outcome.timed is None and not outcome.hint
+    [v], [w] = outcome.verdicts, outcome.witnesses
+    assert v.status is Status.FAILS and w.replayed is w.run
+    assert outcome.messages == tuple(f"wrote {p}" for p in outcome.written)
+    assert len(outcome.written) == 4 and all(p.is_file() for p in outcome.written)
+    cli = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--untimed", "--state-space",
+                  "--properties", EXAMPLES / "multi_leg.false.props", "--json", "--explain")
+    assert json.loads(cli.stdout) == json.loads(json.dumps(outcome.as_json()))
+    quiet = pipeline.analyze_file(EXAMPLES / "multi_leg.mcl", properties=str(
+        EXAMPLES / "multi_leg.false.props"))
+    assert quiet.witnesses is None and quiet.hint and quiet.timed is not None
+    assert quiet.lines()[-1] == pipeline.EXPLAIN_HINT and quiet.written == ()
+
+
 @pytest.mark.parametrize("args,message", [
     (["--counterexamples", "{tmp}/cx"], "counterexamples are of properties: add --properties"),
+    (["--explain"], "Invalid value for --explain: counterexamples are of properties: add "
+                    "--properties"),
+    (["--properties", "{props}", "--initial", "mission.B", "--explain"],
+     "Invalid value for --explain: a replay starts the mission from its start"),
     (["--properties", "{props}", "--initial", "mission.B", "--counterexamples", "{tmp}/cx"],
      "leave out --initial"),
     (["--properties", "{props}", "--counterexamples", "{tmp}/file/cx"],

@@ -13,8 +13,9 @@ and why: the comment is held to the verdict both ways.
 The counterexample of each false property is kept as the command prints
 it, in ``tests/data/counterexamples/NAME.PROPNAME.txt``: the lines of that
 property in the output of
-``mcl2pnml analyze examples/NAME.mcl --state-space --properties examples/NAME.false.props``
-run from the repository's root. After a deliberate change to how a verdict
+``mcl2pnml analyze examples/NAME.mcl --state-space --properties examples/NAME.false.props
+--explain`` run from the repository's root (without ``--explain`` the command gives the
+firing sequence only). After a deliberate change to how a verdict
 is printed, rewrite every one of them (dam_inspection's included) with one
 command, then review the diff:
 
@@ -65,7 +66,8 @@ def _verdicts(name: str, suffix: str, timed: bool = True) -> tuple:
 
 @functools.lru_cache(maxsize=None)
 def _printed(name: str) -> str:
-    """What ``mcl2pnml analyze --properties NAME.false.props`` prints, run from the root."""
+    """What ``mcl2pnml analyze --properties NAME.false.props --explain`` prints, run from
+    the root."""
     from click.testing import CliRunner
 
     from mcl2pnml.cli import main
@@ -74,7 +76,7 @@ def _printed(name: str) -> str:
     try:
         out = CliRunner().invoke(main, ["analyze", f"examples/{name}.mcl", "--state-space",
                                         "--no-progress", "--properties",
-                                        f"examples/{name}.false.props"])
+                                        f"examples/{name}.false.props", "--explain"])
     finally:
         os.chdir(here)
     assert out.exit_code == 1, out.output   # a property fails

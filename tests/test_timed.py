@@ -151,7 +151,7 @@ def test_an_unbounded_wait_is_named(tmp_path):
 def test_a_wait_for_ever_is_a_counterexample_both_engines_replay(tmp_path):
     mission = tmp_path / "w.mcl"
     mission.write_text(WAITS + "property Ends: eventually outcome(OK) or outcome(FAIL);\n")
-    out = run_cli("analyze", mission, "--properties", "--no-progress")
+    out = run_cli("analyze", mission, "--properties", "--no-progress", "--explain")
     assert out.returncode == 1, out.stderr
     assert "property Ends" in out.stdout and "counterexample (finite)" in out.stdout
     assert "both engines reach the violation" in out.stdout, out.stdout
