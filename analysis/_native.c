@@ -76,7 +76,7 @@ static inline int64_t candidates(const uint64_t *row, int64_t words, const int64
 
 /* The buffers of one call, released together whatever happens. */
 typedef struct {
-    Py_buffer views[24];
+    Py_buffer views[32];
     int count;
 } Buffers;
 
@@ -439,21 +439,106 @@ static inline int fire_into(const uint64_t *row, uint64_t *nx, const Masks *m, i
     return 0;
 }
 
+/* The net's structure for stubborn sets (analysis/onthefly.py, Valmari's method on a safe
+ * net): the places each transition consumes and needs (consumes or reads), the
+ * transitions that consume, need and mark each place, and which transitions are visible
+ * (change a place the observer reads). */
+typedef struct {
+    const int64_t *t_pre_ptr, *t_pre, *t_need_ptr, *t_need, *p_take_ptr, *p_take,
+        *p_need_ptr, *p_need, *p_make_ptr, *p_make;
+    const uint8_t *visible;
+    int on;
+} Stubborn;
+
+static int stubborn_of(Buffers *b, PyObject **objs, Stubborn *st) {
+    const int64_t **f[10] = {&st->t_pre_ptr, &st->t_pre, &st->t_need_ptr, &st->t_need,
+                             &st->p_take_ptr, &st->p_take, &st->p_need_ptr, &st->p_need,
+                             &st->p_make_ptr, &st->p_make};
+    for (int i = 0; i < 10; i++)
+        if (!(*f[i] = data_of(b, objs[i], 8, 0)))
+            return 0;
+    if (!(st->visible = data_of(b, objs[10], 1, 0)))
+        return 0;
+    return 1;
+}
+
+static inline int marked(const uint64_t *row, int64_t p) {
+    return (int)((row[p >> 6] >> (p & 63)) & 1);
+}
+
+/* The stubborn set grown from the enabled transition `key` (in[t] == stamp marks a member,
+ * work is a stack): an enabled member brings every transition that consumes a place it
+ * needs (which may disable it) and every one that needs a place it consumes (which it may
+ * disable); a disabled one every transition that marks one of its empty needed places
+ * (the first: a reason it waits). Its enabled members go to out; returns their number,
+ * or -1 if one is visible (the set would hide a step the observer sees). */
+static int64_t stubborn_set(const uint64_t *row, const Masks *m, const Stubborn *st,
+                            const uint8_t *is_enabled, int64_t key, int64_t *in, int64_t stamp,
+                            int64_t *work, int64_t *out) {
+    int64_t top = 0, n = 0;
+    in[key] = stamp;
+    work[top++] = key;
+    while (top > 0) {
+        int64_t t = work[--top];
+        if (is_enabled[t]) {
+            if (st->visible[t])
+                return -1;
+            out[n++] = t;
+            for (int64_t k = st->t_need_ptr[t]; k < st->t_need_ptr[t + 1]; k++) {
+                int64_t p = st->t_need[k];
+                for (int64_t j = st->p_take_ptr[p]; j < st->p_take_ptr[p + 1]; j++) {
+                    int64_t u = st->p_take[j];
+                    if (in[u] != stamp) { in[u] = stamp; work[top++] = u; }
+                }
+            }
+            for (int64_t k = st->t_pre_ptr[t]; k < st->t_pre_ptr[t + 1]; k++) {
+                int64_t p = st->t_pre[k];
+                for (int64_t j = st->p_need_ptr[p]; j < st->p_need_ptr[p + 1]; j++) {
+                    int64_t u = st->p_need[j];
+                    if (in[u] != stamp) { in[u] = stamp; work[top++] = u; }
+                }
+            }
+        } else {
+            for (int64_t k = st->t_need_ptr[t]; k < st->t_need_ptr[t + 1]; k++) {
+                int64_t p = st->t_need[k];
+                if (marked(row, p))
+                    continue;
+                for (int64_t j = st->p_make_ptr[p]; j < st->p_make_ptr[p + 1]; j++) {
+                    int64_t u = st->p_make[j];
+                    if (in[u] != stamp) { in[u] = stamp; work[top++] = u; }
+                }
+                break;
+            }
+        }
+    }
+    (void)m;
+    return n;
+}
+
 /* product_step(10 masks, 5 observer arrays, bad, queue, count, head, table, bits, parent,
- * via, depth, found, max_states, budget) -> (count, head, code, found); found: the bad row
- * met so far (-1: none), whose level is being finished. */
+ * via, depth, found, max_states, budget, 11 stubborn arrays, reduce) -> (count, head, code,
+ * found); found: the bad row met so far (-1: none), whose level is being finished. With
+ * reduce, a row fires only the enabled members of a stubborn set with no visible member
+ * (the smallest found from each enabled key), unless one of their successors is a row
+ * met before at this depth or less, which then fires everything (the cycle proviso in
+ * breadth-first form: a cycle has an arc that does not go deeper, so a row of each cycle
+ * fires everything); C0-C3 of partial-order reduction, which keep the verdict of a
+ * stutter-invariant observer (analysis/onthefly.py checks it is one). */
 static PyObject *py_product_step(PyObject *self, PyObject *args) {
-    PyObject *o[20];
+    PyObject *o[31];
     long long bad, count, head, max_states, budget, found_in;
-    int bits;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOLOLLOiOOOLLL", &o[0], &o[1], &o[2], &o[3],
-                          &o[4], &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &o[12],
-                          &o[13], &o[14], &bad, &o[15], &count, &head, &o[16], &bits, &o[17],
-                          &o[18], &o[19], &found_in, &max_states, &budget))
+    int bits, reduce;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOLOLLOiOOOLLLOOOOOOOOOOOp", &o[0], &o[1], &o[2],
+                          &o[3], &o[4], &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11],
+                          &o[12], &o[13], &o[14], &bad, &o[15], &count, &head, &o[16], &bits,
+                          &o[17], &o[18], &o[19], &found_in, &max_states, &budget, &o[20],
+                          &o[21], &o[22], &o[23], &o[24], &o[25], &o[26], &o[27], &o[28],
+                          &o[29], &o[30], &reduce))
         return NULL;
     Buffers b = {.count = 0};
     Masks m;
     Observer ob;
+    Stubborn st;
     uint64_t *queue, *table;
     int64_t *parent, *via, *depth;
     if (!masks_of(&b, o, &m) || !observer_of(&b, o + 10, &ob)) goto fail;
@@ -467,44 +552,93 @@ static PyObject *py_product_step(PyObject *self, PyObject *args) {
         || !(depth = data_of(&b, o[19], 8, 1)))
         goto fail;
     if (items_of(&b) < capacity) { PyErr_SetString(PyExc_ValueError, "depth too short"); goto fail; }
+    if (!stubborn_of(&b, o + 20, &st)) goto fail;
+    st.on = reduce;
 
     int code = GOING;
-    int64_t found = found_in;
-    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
+    int64_t found = found_in, T = m.transitions;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(T + 1));
+    int64_t *fire = PyMem_Malloc(sizeof(int64_t) * (size_t)(T + 1));
+    int64_t *best = PyMem_Malloc(sizeof(int64_t) * (size_t)(T + 1));
+    int64_t *set = PyMem_Malloc(sizeof(int64_t) * (size_t)(T + 1));
+    int64_t *in = PyMem_Calloc((size_t)(T + 1), sizeof(int64_t));
+    int64_t *work = PyMem_Malloc(sizeof(int64_t) * (size_t)(T + 1));
+    uint8_t *is_enabled = PyMem_Calloc((size_t)(T + 1), 1);
     uint64_t *nx = PyMem_Malloc(8 * (size_t)width);
-    if (!cand || !nx) { PyMem_Free(cand); PyMem_Free(nx); PyErr_NoMemory(); goto fail; }
+    if (!cand || !fire || !best || !set || !in || !work || !is_enabled || !nx) {
+        PyMem_Free(cand); PyMem_Free(fire); PyMem_Free(best); PyMem_Free(set); PyMem_Free(in);
+        PyMem_Free(work); PyMem_Free(is_enabled); PyMem_Free(nx);
+        PyErr_NoMemory();
+        goto fail;
+    }
     Py_BEGIN_ALLOW_THREADS
-    int64_t stop = head + budget, tmask = ((int64_t)1 << bits) - 1;
+    int64_t stop = head + budget, tmask = ((int64_t)1 << bits) - 1, stamp = 0;
     while (head < count && head < stop) {
         /* a bad row found, and its level above done: the shortest violation */
         if (found >= 0 && depth[head] >= depth[found]) { code = FOUND_BAD; break; }
-        if (count + m.transitions > capacity) { code = QUEUE_FULL; break; }
-        if (10 * (count + m.transitions) > 7 * table_size) { code = TABLE_FULL; break; }
+        if (count + T > capacity) { code = QUEUE_FULL; break; }
+        if (10 * (count + T) > 7 * table_size) { code = TABLE_FULL; break; }
         const uint64_t *row = queue + head * width;
         int64_t state = (int64_t)row[m.words];
         int64_t n = candidates(row, m.words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
-        int enabled = 0;
-        for (int64_t c = 0; c < n && code == GOING; c++) {
-            int64_t t = cand[c];
-            if (!enables(row, &m, t))
-                continue;
-            enabled = 1;
+        int64_t ne = 0;
+        for (int64_t c = 0; c < n; c++)
+            if (!is_enabled[cand[c]] && enables(row, &m, cand[c])) {
+                is_enabled[cand[c]] = 1;
+                fire[ne++] = cand[c];
+            }
+        int enabled = ne > 0;
+        /* the transitions to fire: a stubborn set's enabled members where one is smaller */
+        int64_t nf = ne, nb = ne;
+        if (st.on && ne > 1) {
+            for (int64_t k = 0; k < ne && nb > 1; k++) {
+                int64_t got = stubborn_set(row, &m, &st, is_enabled, fire[k], in, ++stamp, work,
+                                           set);
+                if (got > 0 && got < nb) {
+                    nb = got;
+                    memcpy(best, set, sizeof(int64_t) * (size_t)got);
+                }
+            }
+            if (nb < ne) {
+                /* the reduced set first, the others after it only if the proviso asks */
+                stamp++;
+                for (int64_t k = 0; k < nb; k++) in[best[k]] = stamp;
+                int64_t r = nb;
+                for (int64_t k = 0; k < ne; k++)
+                    if (in[fire[k]] != stamp) best[r++] = fire[k];
+                memcpy(fire, best, sizeof(int64_t) * (size_t)ne);
+                nf = nb;
+            }
+        }
+        for (int64_t k = 0; k < ne; k++)
+            is_enabled[fire[k]] = 0;
+        int old = 0;
+        for (int64_t c = 0; c < nf && code == GOING; c++) {
+            int64_t t = fire[c];
             if (fire_into(row, nx, &m, t) == NOT_SAFE) { code = NOT_SAFE; break; }
             nx[m.words] = (uint64_t)observe(nx, m.words, &ob, state);
             uint64_t h = hash_row(nx, width);
             int64_t slot = -1;
-            if (probe(queue, width, table, tmask, nx, h & 0xFFFFFFFFULL, slot_of_hash(h, bits),
-                      &slot) >= 0)
-                continue;
-            if (count >= max_states) { code = LIMIT; break; }
-            memcpy(queue + count * width, nx, 8 * (size_t)width);
-            table[slot] = entry(h, count);
-            parent[count] = head;
-            via[count] = t;
-            depth[count] = depth[head] + 1;
-            if ((int64_t)nx[m.words] == ob.bad && found < 0)
-                found = count;
-            count++;
+            int64_t seen = probe(queue, width, table, tmask, nx, h & 0xFFFFFFFFULL,
+                                 slot_of_hash(h, bits), &slot);
+            if (seen >= 0) {
+                /* an arc back to this level or above: the one a cycle must have */
+                if (depth[seen] <= depth[head])
+                    old = 1;
+            } else {
+                if (count >= max_states) { code = LIMIT; break; }
+                memcpy(queue + count * width, nx, 8 * (size_t)width);
+                table[slot] = entry(h, count);
+                parent[count] = head;
+                via[count] = t;
+                depth[count] = depth[head] + 1;
+                if ((int64_t)nx[m.words] == ob.bad && found < 0)
+                    found = count;
+                count++;
+            }
+            /* the proviso: a reduced row that meets a row seen before fires everything */
+            if (c == nf - 1 && nf < ne && old)
+                nf = ne;
         }
         if (code != GOING)
             break;
@@ -514,7 +648,8 @@ static PyObject *py_product_step(PyObject *self, PyObject *args) {
     if (code == GOING && found >= 0 && head == count)
         code = FOUND_BAD;
     Py_END_ALLOW_THREADS
-    PyMem_Free(cand);
+    PyMem_Free(cand); PyMem_Free(fire); PyMem_Free(best); PyMem_Free(set); PyMem_Free(in);
+    PyMem_Free(work); PyMem_Free(is_enabled);
     PyMem_Free(nx);
     release(&b);
     return Py_BuildValue("LLiL", (long long)count, (long long)head, code, (long long)found);

@@ -22,6 +22,21 @@ C loops of the safe-net explorer (``analysis/_native.c``):
   components found by scipy, and the lasso entering a cycle earliest,
   around its shortest cycle, is the counterexample.
 
+With ``stubborn``, partial-order reduction (Valmari's stubborn sets; the
+conditions C0-C3 of Clarke, Grumberg and Peled's *Model Checking*, ch. 10):
+a row fires only the enabled members of a stubborn set that has no visible
+transition (one changing a place the property reads), unless one of their
+successors is a row met before no deeper than it, when it fires everything
+(the cycle proviso in breadth-first form: every cycle has an arc that does
+not go deeper, so each cycle has a row that fires everything). That keeps the verdict of a stutter-invariant property, which the
+observer is if reading a letter twice is reading it once (checked, letter by
+letter, state by state: a property whose observer is not is checked without
+reduction). The reduction only holds on a net proven 1-safe (the bits of a
+marking would otherwise hide the firing that puts a second token in a
+place): the caller says so (``safe``), or a semi-positive P-invariant proves
+it here. A counterexample found with it is a real run, but not always a
+shortest one.
+
 So a failing safety property costs the markings up to its counterexample,
 and a holding one one pass of the product at C speed, where the reference
 method pays the whole state space and a Python loop per property.
@@ -61,12 +76,15 @@ def available() -> bool:
 
 
 def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_000,
-              max_memory: int | None = None) -> list[Verdict] | None:
+              max_memory: int | None = None, stubborn: bool = False,
+              safe: bool = False) -> list[Verdict] | None:
     """Each property's verdict, on the fly; None if the net is not for this checker (not
     1-safe as given, or the loops in C not built), or a property reads too many sums.
 
     ``max_memory`` (bytes; default: :func:`~mcl2pnml.core.memory.default_memory`) bounds
     each search as ``max_states`` does: past either, the verdict is unknown.
+    ``stubborn``: with partial-order reduction, on a net ``safe`` says is proven 1-safe
+    (a certificate) or that a P-invariant proves so here; else :class:`NotProvenSafe`.
     """
     if not available():
         return None
@@ -75,7 +93,10 @@ def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_
     m0 = s.initial_vector()
     if any(k > 1 for k in m0) or any(w != 1 for w in _weights(net)):
         return None
-    search = _Search(s)
+    if stubborn and not safe and not proven_safe(s):
+        raise NotProvenSafe(f"the net '{net.name}' is not proven 1-safe, which the reduction "
+                            "needs (a certificate, or a P-invariant)")
+    search = _Search(s, stubborn)
     budget = default_memory() if max_memory is None else max_memory
     verdicts = []
     for prop in properties:
@@ -88,6 +109,25 @@ def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_
 
 def _weights(net: Net):
     return (a.weight for a in net.arcs)
+
+
+class NotProvenSafe(ValueError):
+    """The reduction was asked for on a net not proven 1-safe."""
+
+
+def proven_safe(s: Structure) -> bool:
+    """Whether semi-positive P-invariants bound every place by 1 (Murata 1989, section
+    VII): then no reachable marking has a second token, whatever the reduction skips."""
+    from analysis.counterspace import invariant_bounds
+    bounds = invariant_bounds(s, s.initial_vector())
+    return all(b is not None and b <= 1 for b in bounds)
+
+
+def stutter_invariant(move: np.ndarray) -> bool:
+    """Whether reading a letter twice leaves the observer where reading it once does, in
+    every state: then runs that differ in repeated markings get one verdict."""
+    table = move.reshape(-1, 16)
+    return bool(np.all(table[table, np.arange(16)] == table))
 
 
 # -- the observer as tables --------------------------------------------------------------------
@@ -163,7 +203,7 @@ class _Automaton:
 class _Search:
     """The net's masks, worked out once for all its properties."""
 
-    def __init__(self, s: Structure):
+    def __init__(self, s: Structure, stubborn: bool = False):
         from analysis.packedmarkings import (key_index, marking_row, masks, place_weights,
                                              touched, word_count)
         self.s = s
@@ -176,6 +216,14 @@ class _Search:
             need, keep, give, *touched(need), *touched(need, take, give),
             *key_index(need, place_weights(m0)))]
         self.index = {p: k for k, p in enumerate(s.places)}
+        self.stubborn = stubborn
+        self.structure = _stubborn_arrays(s)
+
+    def _visible(self, atoms: list[Tokens]) -> np.ndarray:
+        """Per transition, 1 if it changes a place the atoms read (pre and post differ)."""
+        read = {self.index[p] for a in atoms for p in a.places if p in self.index}
+        return np.array([bool(read & (set(pre) ^ set(post)))
+                         for pre, post in zip(self.s.pre, self.s.post)], dtype=np.uint8)
 
     def _atom_arrays(self, atoms: list[Tokens]) -> tuple[np.ndarray, np.ndarray]:
         from analysis.packedmarkings import masks_of
@@ -201,6 +249,8 @@ class _Search:
         letters = _letters(prop, atoms)
         atom_masks, least = self._atom_arrays(atoms)
         observer = [atom_masks, least, letters, auto.move, auto.pending]
+        reduce = self.stubborn and stutter_invariant(auto.move)
+        visible = self._visible(atoms)
         width = self.words + 1
         start = np.zeros(width, dtype=np.uint64)
         start[:-1] = self.m0
@@ -223,7 +273,7 @@ class _Search:
         while True:
             count, head, code, found = c.product_step(
                 *self.masks, *observer, auto.bad, queue, count, head, table, bits, parent, via,
-                depth, found, limit, SLICE)
+                depth, found, limit, SLICE, *self.structure, visible, reduce)
             if code == c.QUEUE_FULL:
                 size = 2 * len(queue)
                 queue, parent, via, depth = (_grown(a, count, size)
@@ -350,6 +400,32 @@ class _Search:
                 names.pop()
         return Verdict(prop, Status.FAILS, tuple(names), tuple(ms), shape, loop=loop,
                        states=states)
+
+
+def _csr(rows) -> tuple[np.ndarray, np.ndarray]:
+    """Sets of integers as compressed rows (ptr, items)."""
+    rows = [sorted(r) for r in rows]
+    ptr = np.zeros(len(rows) + 1, dtype=np.int64)
+    np.cumsum([len(r) for r in rows], out=ptr[1:])
+    items = np.array([x for r in rows for x in r], dtype=np.int64)
+    return ptr, items
+
+
+def _stubborn_arrays(s: Structure) -> list[np.ndarray]:
+    """What the stubborn sets are grown from (``analysis/_native.c``): the places each
+    transition consumes and needs, the transitions consuming, needing and marking each
+    place."""
+    take = [set() for _ in s.places]
+    need = [set() for _ in s.places]
+    make = [set() for _ in s.places]
+    for j, (pre, post, inputs) in enumerate(zip(s.pre, s.post, s.transition_inputs)):
+        for p in pre:
+            take[p].add(j)
+        for p in inputs:
+            need[p].add(j)
+        for p in post:
+            make[p].add(j)
+    return [*_csr(s.pre), *_csr(s.transition_inputs), *_csr(take), *_csr(need), *_csr(make)]
 
 
 def _grown(a: np.ndarray, count: int, size: int) -> np.ndarray:

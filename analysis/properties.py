@@ -79,20 +79,27 @@ METHODS = ("auto", "full", "on-the-fly")
 
 
 def check_all(net: Net, properties: Iterable[Property],
-              max_states: int = 1_000_000, method: str = "auto") -> list[Verdict]:
+              max_states: int = 1_000_000, method: str = "auto", stubborn: bool = False,
+              safe: bool = False) -> list[Verdict]:
     """Each property's verdict, in order.
 
     ``auto``: on the fly (:mod:`analysis.onthefly`: the product in C, stopping at
     the first violation) where the net is safe and the loops in C are built;
     otherwise, or with ``full``, the reference method: one exploration of the
     state space, then each property's product with its observer.
+    ``stubborn``: on the fly with partial-order reduction, on a net proven 1-safe
+    (``safe``: by a certificate; else a P-invariant must prove it), which keeps the
+    verdict but not always the shortest counterexample.
     """
     properties = list(properties)
     if method not in METHODS:
         raise ValueError(f"method {method!r}: one of {', '.join(METHODS)}")
+    if stubborn and method == "full":
+        raise ValueError("the reduction is the on-the-fly checker's: not with method 'full'")
     if method != "full":
         from analysis import onthefly
-        verdicts = onthefly.check_all(net, properties, max_states)
+        verdicts = onthefly.check_all(net, properties, max_states, stubborn=stubborn,
+                                      safe=safe)
         if verdicts is not None:
             return verdicts
         if method == "on-the-fly":

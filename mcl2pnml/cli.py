@@ -486,6 +486,11 @@ def _progress(states: int, frontier: int) -> None:
               help="With --explain or --counterexamples: explain (print, and write) the "
                    "counterexamples of the first N failing properties only; the others are "
                    "given their verdict and firing sequence, and their number is said.")
+@click.option("--stubborn", is_flag=True,
+              help="With --untimed --properties: partial-order reduction (stubborn sets), on "
+                   "a mission proven 1-safe by its certificate: the same verdicts from fewer "
+                   "markings where the mission does things at once, a counterexample not "
+                   "always the shortest (docs/properties.md).")
 @click.option("--timed/--untimed", default=None,
               help="A mission's verdicts in the time it runs in (docs/time.md): whether every "
                    "run ends, its earliest and latest end times, and --properties on the "

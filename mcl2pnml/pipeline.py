@@ -411,12 +411,27 @@ def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> 
     return run(net, initial, **options)
 
 
-def check_properties(net: Net, properties, max_states: int = 1_000_000) -> list:
+def check_properties(net: Net, properties, max_states: int = 1_000_000,
+                     stubborn: bool = False, safe: bool = False) -> list:
     """Each property's :class:`analysis.properties.Verdict` on ``net``'s runs, in order:
-    holds, fails with a shortest counterexample, or unknown past ``max_states``. The state
-    space is explored once for all of them."""
+    holds, fails with a shortest counterexample, or unknown past ``max_states``; each
+    searched on the fly (:mod:`analysis.onthefly`), stopping at its first violation.
+    ``stubborn``: with partial-order reduction, on a net ``safe`` says is proven 1-safe
+    (else a P-invariant must prove it: :class:`~analysis.onthefly.NotProvenSafe`)."""
     from analysis.properties import check_all
-    return check_all(net, properties, max_states)
+    return check_all(net, properties, max_states, stubborn=stubborn, safe=safe)
+
+
+def proven_safe_by_certificate(mission: Path, net: Net) -> bool:
+    """Whether the mission's certificate, made now from its parts, holds for ``net``: the
+    checker then proves it 1-safe (:mod:`mcl2pnml.certify`)."""
+    from mcl2pnml.certify.certificate import certify
+    from mcl2pnml.certify.checker import check
+    from mcl2pnml.certify.templates import current
+    checked = check_file(mission)
+    proofs = current()
+    cert = certify(checked, net_name=net.name, proofs=proofs)
+    return not check(net, json.loads(json.dumps(cert)), proofs)
 
 
 #: How many failing properties ``analyze`` explains, unless told (``--max-counterexamples``):
@@ -822,7 +837,8 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
                  max_props_size: int | str | None = None, max_atoms: int | None = None,
                  max_cert: int | str = MAX_CERTIFICATE, timed: bool | None = None,
                  ack_within: str = "0", report_gap: str = "1", fair_reports: bool = False,
-                 urgency_only: bool = False, progress: Callable[[int, int], None] | None = None,
+                 urgency_only: bool = False, stubborn: bool = False,
+                 progress: Callable[[int, int], None] | None = None,
                  note: Callable[[str], None] = lambda line: None) -> AnalyzeOutcome:
     """``mcl2pnml analyze FILE``, its options by their names (``--help`` says them), as one
     call that the CLI, the tests and a notebook share.
@@ -847,6 +863,9 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
     if timed and initial is not None:
         raise OptionError("--timed", "a timed verdict starts the mission from its start (its "
                                      "clocks at 0): leave out --initial")
+    if stubborn and (timed or properties is None):
+        raise OptionError("--stubborn", "the reduction is of the untimed check of properties: "
+                                        "add --untimed --properties")
     net, props, extra = _analyzed_net(file, net_id, properties, max_memory, max_props_size,
                                       max_atoms)
     if folder is not None:      # before the analysis: a folder that cannot be is said at once
@@ -870,8 +889,9 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
         if progress is not None:
             note("")   # the progress line ended
         if props is not None:
-            verdicts = check_properties(net if start is None else net.with_initial(start),
-                                        props, max_states)
+            verdicts = _untimed_verdicts(file, net, props, start, max_states, stubborn)
+            if stubborn:
+                result["stubborn"] = True
     asked = explain or folder is not None
     explained = None
     if verdicts is not None and asked:
@@ -884,6 +904,21 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
         result, None if verdicts is None else tuple(verdicts),
         None if explained is None else tuple(explained), ends, tuple(said), tuple(written),
         _analyze_status(result, verdicts, ends), hint=not asked and start is None)
+
+
+def _untimed_verdicts(file: Path, net: Net, props, start, max_states: int,
+                      stubborn: bool) -> list:
+    """The properties' verdicts on the net's runs; with ``stubborn`` the reduction, once
+    the mission's certificate proves the net 1-safe (from its own start only: another
+    start needs a P-invariant to), or refused saying why."""
+    from analysis.onthefly import NotProvenSafe
+    safe = stubborn and start is None and proven_safe_by_certificate(file, net)
+    try:
+        return check_properties(net if start is None else net.with_initial(start), props,
+                                max_states, stubborn=stubborn, safe=safe)
+    except NotProvenSafe as e:
+        raise OptionError("--stubborn", f"{e}: the reduction could skip the firing that "
+                                        "shows a second token") from None
 
 
 def _explanations_possible(properties: str | None, initial: str | None,

@@ -10,14 +10,15 @@ and each counterexample must show the violation when judged on its own
 from __future__ import annotations
 
 import pytest
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from analysis import onthefly
 from analysis.properties import Status, check_all, judge
 from helpers import ROOT
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import NetBuilder
-from mcl2pnml.core.properties import Const, Pattern, Property, Tokens
+from mcl2pnml.core.properties import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens
+from mcl2pnml.core.structure import structure
 from test_properties_check import props, small_nets
 
 pytestmark = pytest.mark.skipif(not onthefly.available(),
@@ -43,7 +44,7 @@ def _safe(net) -> bool:
     return onthefly.check_all(net, []) is not None
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
 def test_on_the_fly_agrees_with_the_full_exploration(net, prop):
     assume(_safe(net))
@@ -119,3 +120,150 @@ def test_past_the_memory_budget_the_verdict_is_unknown_and_says_so():
     assert holds
     v = onthefly.check_all(net, [holds[0].property], max_memory=64 * 1024)[0]
     assert v.status is Status.UNKNOWN and "memory budget" in v.reason, v
+
+
+# -- partial-order reduction -------------------------------------------------------------
+
+@st.composite
+def two_machines(draw):
+    """Two state machines of one token each, steps of one (perhaps testing a place of the
+    other: a read arc), of the other, or of both at once, and a third machine on its own:
+    1-safe (a P-invariant per machine proves it), with concurrency to reduce."""
+    b = NetBuilder("two")
+    for m in "abc":
+        for k in range(3):
+            b.place(f"{m}{k}", 1 if k == 0 else 0)
+    # a third machine the properties never read: its steps invisible, the most to reduce
+    for k in range(draw(st.integers(0, 3))):
+        b.transition(f"u{k}")
+        b.arc(f"c{draw(st.integers(0, 2))}", f"u{k}")
+        b.arc(f"u{k}", f"c{draw(st.integers(0, 2))}")
+    for k in range(draw(st.integers(2, 7))):
+        t = f"t{k}"
+        b.transition(t)
+        moves = draw(st.sampled_from(["a", "b", "ab"]))
+        for m in moves:
+            b.arc(f"{m}{draw(st.integers(0, 2))}", t)
+            b.arc(t, f"{m}{draw(st.integers(0, 2))}")
+        if len(moves) == 1 and draw(st.booleans()):     # a test of the other machine
+            b.read(f"{'b' if moves == 'a' else 'a'}{draw(st.integers(0, 2))}", t)
+    return b.build()
+
+
+SAFE_PLACES = [f"{m}{k}" for m in "ab" for k in range(3)]
+safe_atoms = st.sampled_from(SAFE_PLACES).map(lambda p: Tokens((p,), 1))
+safe_preds = safe_atoms | safe_atoms.map(Not) | st.sampled_from([Const(True), Const(False)])
+
+
+@st.composite
+def safe_props(draw):
+    kind = draw(st.sampled_from(list(ScopeKind)))
+    pattern = draw(st.sampled_from(list(Pattern)))
+    two = pattern in (Pattern.PRECEDENCE, Pattern.RESPONSE)
+    return Property("x", pattern, draw(safe_preds), s=draw(safe_preds) if two else None,
+                    bound=draw(st.integers(0, 2)) if pattern is Pattern.BOUNDED_EXISTENCE
+                    else None,
+                    scope=Scope(kind, q=draw(safe_preds) if kind in (
+                        ScopeKind.AFTER, ScopeKind.BETWEEN, ScopeKind.AFTER_UNTIL) else None,
+                        r=draw(safe_preds) if kind in (ScopeKind.BEFORE, ScopeKind.BETWEEN,
+                                                       ScopeKind.AFTER_UNTIL) else None))
+
+
+def assert_reduced_same(net, properties, safe=False):
+    reduced = check_all(net, properties, stubborn=True, safe=safe)
+    full = check_all(net, properties, method="full")
+    for a, b in zip(reduced, full):
+        assert a.status is b.status, (a, b)
+        if a.status is Status.FAILS:     # a real run that shows it, if not a shortest one
+            shown = judge(net, a.property, a.transitions)
+            assert shown is not None and shown.shape is a.shape, (a, shown)
+        assert a.states <= b.states, (a.states, b.states)
+    return reduced, full
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(two_machines(), safe_props())
+def test_the_reduction_keeps_every_verdict(net, prop):
+    assert onthefly.proven_safe(structure(net))
+    assert_reduced_same(net, [prop])
+
+
+@pytest.mark.slow
+@settings(max_examples=3000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(two_machines(), safe_props())
+def test_the_reduction_keeps_every_verdict_long(net, prop):
+    assert_reduced_same(net, [prop])
+
+
+@pytest.mark.parametrize("file", [pytest.param(p.name, marks=pytest.mark.slow)
+                                  if p.name.startswith("dam_inspection") else p.name
+                                  for p in sorted((ROOT / "examples").glob("*.props"))])
+def test_the_reduction_keeps_the_examples_verdicts(file):
+    """The missions are proven 1-safe by their certificates (the facade's proof)."""
+    name = file.split(".")[0]
+    cert, net, problems = pipeline.certify_file(ROOT / "examples" / f"{name}.mcl")
+    assert problems == []
+    _, properties = pipeline.properties_of(ROOT / "examples" / f"{name}.mcl",
+                                           extra=ROOT / "examples" / file)
+    assert_reduced_same(net, properties, safe=True)
+
+
+def chains(n: int, length: int):
+    """``n`` independent chains of ``length`` steps, each with its token at its start."""
+    b = NetBuilder("chains")
+    for c in range(n):
+        for k in range(length + 1):
+            b.place(f"c{c}.{k}", 1 if k == 0 else 0)
+        for k in range(length):
+            b.transition(f"c{c}.t{k}")
+            b.arc(f"c{c}.{k}", f"c{c}.t{k}")
+            b.arc(f"c{c}.t{k}", f"c{c}.{k + 1}")
+    return b.build()
+
+
+@pytest.mark.parametrize("pattern", [Pattern.ABSENCE, Pattern.EXISTENCE, Pattern.RESPONSE])
+def test_the_reduction_explores_one_order_of_independent_steps(pattern):
+    """Six chains of three steps: 4**6 markings; a property of one chain's end sees one
+    order of the others' steps, with the same verdict (absence fails, the others hold)."""
+    net = chains(6, 3)
+    end, start = Tokens(("c0.3",), 1), Tokens(("c0.0",), 1)
+    prop = Property("p", pattern, end if pattern is not Pattern.RESPONSE else start,
+                    s=end if pattern is Pattern.RESPONSE else None)
+    reduced, full = assert_reduced_same(net, [prop])
+    plain = check_all(net, [prop])[0]
+    if plain.status is Status.HOLDS:    # every order explored without the reduction
+        assert reduced[0].states * 10 < plain.states, (reduced[0].states, plain.states)
+    else:                               # a violation found either way, the first one
+        assert reduced[0].states <= plain.states
+
+
+def test_the_reduction_needs_a_net_proven_safe():
+    b = NetBuilder("maybe")
+    for p, k in (("a", 1), ("b", 1), ("c", 0)):
+        b.place(p, k)
+    for t, x in (("t", "a"), ("u", "b")):
+        b.transition(t)
+        b.arc(x, t)
+        b.arc(t, "c")       # both may mark c: not 1-safe, and nothing proves otherwise
+    prop = Property("p", Pattern.ABSENCE, Tokens(("c",), 1))
+    with pytest.raises(onthefly.NotProvenSafe, match="not proven 1-safe"):
+        check_all(b.build(), [prop], stubborn=True)
+
+
+def test_analyze_stubborn_gives_the_same_verdicts_on_the_certified_mission():
+    import json
+    from helpers import run_cli
+    args = ["analyze", ROOT / "examples" / "sauce.mcl", "--untimed", "--properties",
+            ROOT / "examples" / "sauce.false.props", "--json"]
+    plain, reduced = run_cli(*args), run_cli(*args, "--stubborn")
+    assert plain.returncode == reduced.returncode == 1, reduced.stderr
+    a, b = json.loads(plain.stdout), json.loads(reduced.stdout)
+    assert b["stubborn"] is True and "stubborn" not in a
+    assert [p["status"] for p in a["properties"]] == [p["status"] for p in b["properties"]]
+
+
+def test_analyze_stubborn_is_refused_where_it_does_not_apply():
+    from helpers import run_cli
+    out = run_cli("analyze", ROOT / "examples" / "sauce.mcl", "--properties",
+                  ROOT / "examples" / "sauce.false.props", "--stubborn")   # timed
+    assert out.returncode == 2 and "--stubborn" in out.stderr and "Traceback" not in out.stderr

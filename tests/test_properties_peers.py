@@ -251,9 +251,15 @@ def _generated(batch, folder: Path) -> int:
     return sum(o is not None for o in ours)
 
 
-GENERATED = st.lists(st.tuples(missions(depth=2, width=2, function_depth=1),
-                               st.integers(0, 2**32 - 1)), min_size=10, max_size=10,
-                     unique_by=lambda case: case[0])
+def generated(n: int):
+    """Batches of ``n`` distinct generated missions, each with a seed for its properties."""
+    return st.lists(st.tuples(missions(depth=2, width=2, function_depth=1),
+                              st.integers(0, 2**32 - 1)), min_size=n, max_size=n,
+                    unique_by=lambda case: case[0])
+
+
+#: Six here; the slow variant's batches are of ten.
+GENERATED = generated(6)
 
 
 @settings(max_examples=1, deadline=None, phases=NO_SHRINK,
@@ -276,7 +282,7 @@ SLOW_BATCHES = 130
 @pytest.mark.slow
 @settings(max_examples=SLOW_BATCHES, deadline=None, phases=NO_SHRINK,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(GENERATED)
+@given(generated(10))
 def test_peers_agree_on_a_thousand_generated_missions(batch):
     with tempfile.TemporaryDirectory() as folder:
         COMPARED.append(_generated(batch, Path(folder)))
