@@ -323,9 +323,13 @@ def _name(token: Token) -> Token:
 #: check it (a 10,000-call mission parsed in half the time). Whatever is in
 #: doubt, from a syntax error to a keyword used as a name, is parsed again
 #: by :func:`_parse_tree`, as every file was before, so that errors are
-#: found and reported exactly as they were.
-_PARSER = Lark(GRAMMAR, parser="lalr", maybe_placeholders=True, transformer=_Build(),
-               lexer_callbacks={"NAME": _name})
+#: found and reported exactly as they were. Built on the first parse, not at import:
+#: a command that parses no MCL (analyzing a PNML file) does not pay lark's grammar
+#: analysis.
+@lru_cache(maxsize=None)
+def _fast_parser() -> Lark:
+    return Lark(GRAMMAR, parser="lalr", maybe_placeholders=True, transformer=_Build(),
+                lexer_callbacks={"NAME": _name})
 
 
 @lru_cache(maxsize=None)
@@ -338,7 +342,7 @@ def _tree_parser() -> Lark:
 def parse(text: str, filename: str = "<mcl>") -> ast.Program:
     """Parse MCL source into a :class:`~mcl2pnml.language.ast.Program` (no checks beyond syntax)."""
     try:
-        declarations = _PARSER.parse(text)
+        declarations = _fast_parser().parse(text)
     except Exception:   # any fault, or doubt: the tree says which, and where
         declarations = None
     if declarations is None or _deepest(declarations) > MAX_NESTING:

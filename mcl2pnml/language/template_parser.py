@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 from lark import Lark, Token, Transformer, UnexpectedInput, v_args
@@ -99,7 +100,11 @@ _NL: /(\r?\n[\t ]*)+/
 %ignore COMMENT
 """
 
-_PARSER = Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+@lru_cache(maxsize=None)
+def _parser() -> Lark:
+    """The templates' parser, built on first use (not at import: most commands read no
+    template source)."""
+    return Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
 
 
 @dataclass(frozen=True)
@@ -169,7 +174,7 @@ class _ToData(Transformer):
 def _describe(terminal: str) -> str:
     """A terminal as a user knows it: ``':'`` rather than ``COLON``."""
     try:
-        pattern = _PARSER.get_terminal(terminal).pattern
+        pattern = _parser().get_terminal(terminal).pattern
     except KeyError:
         return terminal
     if pattern.type == "str":
@@ -195,7 +200,7 @@ def parse_template(text: str, filename: str = "<template>",
         return Location(filename, line, col, src)
 
     try:
-        items = _ToData().transform(_PARSER.parse(text if text.endswith("\n") else text + "\n"))
+        items = _ToData().transform(_parser().parse(text if text.endswith("\n") else text + "\n"))
     except UnexpectedInput as e:
         expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
                                                    or getattr(e, "allowed", None) or [])})
