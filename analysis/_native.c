@@ -626,7 +626,11 @@ static PyObject *py_product_step(PyObject *self, PyObject *args) {
                 if (depth[seen] <= depth[head])
                     old = 1;
             } else {
-                if (count >= max_states) { code = LIMIT; break; }
+                if (count >= max_states) {
+                    /* a violation already found is one, if not proven the shortest */
+                    code = found >= 0 ? FOUND_BAD : LIMIT;
+                    break;
+                }
                 memcpy(queue + count * width, nx, 8 * (size_t)width);
                 table[slot] = entry(h, count);
                 parent[count] = head;

@@ -267,3 +267,19 @@ def test_analyze_stubborn_is_refused_where_it_does_not_apply():
     out = run_cli("analyze", ROOT / "examples" / "sauce.mcl", "--properties",
                   ROOT / "examples" / "sauce.false.props", "--stubborn")   # timed
     assert out.returncode == 2 and "--stubborn" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_a_violation_found_before_the_limit_is_kept():
+    """The limit met while the violation's level is being finished: the violation found
+    is a real run, and the verdict says fails, not unknown."""
+    b = NetBuilder("fan")
+    for k in range(5):
+        b.place(f"a{k}", 1)
+        b.place(f"b{k}")
+        b.transition(f"t{k}")
+        b.arc(f"a{k}", f"t{k}")
+        b.arc(f"t{k}", f"b{k}")
+    net = b.build()
+    prop = Property("p", Pattern.ABSENCE, Tokens(("b0",), 1))
+    v = check_all(net, [prop], max_states=2, method="on-the-fly")[0]
+    assert v.status is Status.FAILS and judge(net, prop, v.transitions) is not None
