@@ -253,8 +253,8 @@ def test_the_reduction_needs_a_net_proven_safe():
 def test_analyze_stubborn_gives_the_same_verdicts_on_the_certified_mission():
     import json
     from helpers import run_cli
-    args = ["analyze", ROOT / "examples" / "sauce.mcl", "--untimed", "--properties",
-            ROOT / "examples" / "sauce.false.props", "--json"]
+    args = ["analyze", ROOT / "examples" / "sauce.mcl", "--untimed", "--state-space",
+            "--properties", ROOT / "examples" / "sauce.false.props", "--json"]
     plain, reduced = run_cli(*args), run_cli(*args, "--stubborn")
     assert plain.returncode == reduced.returncode == 1, reduced.stderr
     a, b = json.loads(plain.stdout), json.loads(reduced.stdout)
