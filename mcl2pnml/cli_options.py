@@ -1,0 +1,270 @@
+"""The options of each ``mcl2pnml`` command: their names, defaults, types and help.
+
+Declarations only, no logic: :mod:`mcl2pnml.cli` applies them to its commands, which
+parse and print. Each long option stack is one composed decorator (``RUN_OPTIONS``...),
+its options in the order ``--help`` lists them.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
+from mcl2pnml import pipeline
+from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
+from mcl2pnml.io.formats import FORMATS
+from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
+from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
+from mcl2pnml.runtime.simprims import built_in as simulated
+from mcl2pnml.runtime.vehicles import VEHICLES
+from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
+
+FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
+                click.Path(dir_okay=False, path_type=Path))
+NET_OPTION = click.option("--net", "net_id", metavar="ID",
+                          help="The net to read, of a PNML file that holds several.")
+PROPERTIES_SIZE = f"{MAX_PROPERTIES_SIZE >> 20}M"
+PROPERTIES_SIZE_OPTION = click.option(
+    "--max-properties-size", "max_props_size", metavar="SIZE", default=PROPERTIES_SIZE,
+    show_default=True,
+    help="With --properties: refuse a properties file larger than this, before reading it.")
+ATOMS_OPTION = click.option(
+    "--max-atoms", metavar="N", type=click.IntRange(min=1), default=PROPERTY_ATOMS,
+    show_default=True, help="With --properties: refuse properties of more than N atoms in "
+    "all (the mission's and the file's), before checking them.")
+CERTIFICATE_SIZE = f"{pipeline.MAX_CERTIFICATE >> 20}M"
+
+
+def _certificate_size_option(said: str):
+    return click.option("--max-certificate-size", "max_cert", metavar="SIZE",
+                        default=CERTIFICATE_SIZE, show_default=True, help=said)
+
+
+STRICT_OPTION = click.option(
+    "--strict", is_flag=True,
+    help="Make the warnings (docs/warnings.md) errors: exit 2 if there is one. A warning "
+    "that is meant is acknowledged in the mission: // mcl: allow W001 because ...")
+
+
+FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
+                             show_default=True,
+                             help="; ".join(f"{f.name}: {f.says}" for f in FORMATS.values()))
+
+
+def _composed(*options):
+    """One decorator applying ``options`` as if stacked in this order above a function."""
+    def apply(f):
+        for option in reversed(options):   # click applies the nearest one first
+            f = option(f)
+        return f
+    return apply
+
+
+CHECK_OPTIONS = _composed(  # check MISSION
+    click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+                 metavar="[FILE]", help="Also print each property compiled to place formulas "
+                 "(docs/properties.md): the mission's, then FILE's (default: MISSION.props, "
+                 "if there is one)."),
+    PROPERTIES_SIZE_OPTION,
+    ATOMS_OPTION,
+    STRICT_OPTION,
+)
+
+
+COMPILE_OPTIONS = _composed(  # compile MISSION
+    click.option("-o", "--output", type=OUTPUT, help="Write here (default: MISSION.suffix)."),
+    FORMAT_OPTION,
+    click.option("--layout", "layout_engine", type=click.Choice(ENGINES), default="auto",
+                 show_default=True,
+                 help="Node positions in the PNML: graphviz dot, BFS layers, or none "
+                      f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,})."),
+    click.option("--expand", metavar="NAME[,NAME...]|all", default="",
+                 help="For a drawing (svg, png, dot): the calls drawn open, by the names on "
+                      "their boxes, or all; the others are drawn shut, one box each."),
+    click.option("--queries", type=OUTPUT, metavar="FILE.xml",
+                 help="Also write the mission's properties (deadlock, an end always reachable) "
+                      "in the Model Checking Contest's XML, for the tools that read the PNML."),
+    click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)), default="verifypn",
+                 show_default=True, help="How --queries writes a deadlock inside a formula: "
+                 + "; ".join(f"{name}: {form}" for name, form in QUERY_TOOLS.items())),
+    click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+                 metavar="[FILE]", help="Also write the mission's properties (its own, then "
+                 "FILE's; default: MISSION.props, if there is one) in the Model Checking Contest's "
+                 "categories beside the output, OUTPUT.LTLCardinality.xml, .CTLCardinality.xml "
+                 "and .ReachabilityCardinality.xml (docs/properties.md)."),
+    click.option("--max-memory", metavar="SIZE", help="Memory budget: 4G, 500M (default: half "
+                 "free). A mission whose net would not fit is one message, exit 2."),
+    click.option("--ack-within", metavar="SECONDS", help="With --format tapn: the vehicle "
+                 "acknowledges an enable or a disable within this many seconds of the moment "
+                 "it can (default 0: at once)."),
+    click.option("--report-gap", metavar="SECONDS", help="With --format tapn: a primitive's "
+                 "reports are at least this many seconds apart, the first at any time "
+                 "(default 1; 0: any number at one instant)."),
+    PROPERTIES_SIZE_OPTION,
+    ATOMS_OPTION,
+    STRICT_OPTION,
+)
+
+
+RUN_OPTIONS = _composed(  # run MISSION
+    click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
+                 show_default=True, help="petri: the executor plays the compiled net; "
+                 "reference: MCL interpreted directly. Both must give the same result."),
+    click.option("--vehicle", default="sim", show_default=True,
+                 metavar="|".join(kind.name for kind in VEHICLES),
+                 help="The AUV simulator (it offers " + ", ".join(sorted(simulated()))
+                 + ", and those of --sim-primitives and installed packages; docs/simulator.md; "
+                 "a world NAME.world.json beside the mission is its default), a real vehicle "
+                 "through a mapping file and a bridge (see --connect), an autopilot over MAVLink "
+                 "(ArduSub; mavlink: takes another mapping; docs/ardusub.md), or a script "
+                 '({"PRIMITIVE": ["ok@5", "fail@3", "never"]}; each example of examples/ has one '
+                 "beside it, NAME.vehicle.json)."),
+    click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge: "
+                 "(a host name, an IPv4 address, or an IPv6 one in brackets: [::1]:7777); for "
+                 "--vehicle mavlink, the autopilot: tcp:HOST:PORT, udp:HOST:PORT (listen) or "
+                 "serial:DEVICE[:BAUD]."),
+    click.option("--secret", type=FILE, help="Authenticate every line of the bridge's link, both "
+                 "ways (HMAC-SHA256), with the shared secret in this file (mode 600, 16 bytes or "
+                 "more); the bridge server gets the same file."),
+    click.option("--tls-ca", type=FILE, help="Talk TLS to the bridge, checking its certificate "
+                 "against this authority (PEM)."),
+    click.option("--tls-cert", type=FILE, help="With --tls-ca: this end's certificate (PEM), for "
+                 "a bridge that requires one."),
+    click.option("--tls-key", type=FILE, help="The private key of --tls-cert (PEM)."),
+    click.option("--heartbeat", type=click.FloatRange(min=0, min_open=True), default=HEARTBEAT,
+                 show_default=True, help="Seconds between the heartbeats sent to the bridge (to an "
+                 "autopilot: of its clock, so faster on a simulator sped up)."),
+    click.option("--liveness", type=click.FloatRange(min=0, min_open=True), default=LIVENESS,
+                 show_default=True, help="Seconds without a line from the bridge (its heartbeats "
+                 "included; an autopilot's heartbeat) after which the link is lost: the run "
+                 "stops, with its safe stop."),
+    click.option("--send-timeout", type=click.FloatRange(min=0, min_open=True),
+                 default=SEND_TIMEOUT, show_default=True, help="Seconds a line to the bridge may "
+                 "take to send before the link is lost (a bridge that does not read)."),
+    click.option("--max-line", type=click.IntRange(min=256), default=MAX_LINE, show_default=True,
+                 help="The longest line (bytes) the bridge may send; a longer one loses the link."),
+    click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace} "
+                 "(and safe_stop, safe_state, problems where there are: docs/running.md)."),
+    click.option("--log", "log_path", type=OUTPUT, help="Also log the run here as JSON lines."),
+    click.option("--world", type=FILE, help="The simulator's world (JSON: tank, start, cross, "
+                 "dock, obstacles, plumes, noise, seed, limits; docs/simulator.md). Default: "
+                 "NAME.world.json beside the mission if there is one, else the paper's "
+                 "16 x 8 x 5 m tank, a cross at (10, 4)."),
+    click.option("--sim-primitives", type=FILE, multiple=True, metavar="FILE.py",
+                 help="Python file registering simulated primitives of your own "
+                 "(@register on a SimulatedPrimitive, docs/simulator.md); may be repeated."),
+    click.option("--transitions", is_flag=True, help="Show fired transitions in the live log."),
+    click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
+                 show_default=True, help="Stop a mission still running at this time (virtual, or "
+                 "the wall clock's for a real vehicle, the autopilot's own for --vehicle "
+                 "mavlink): outcome TIMELIMIT, with the safe stop."),
+    click.option("--journal", type=OUTPUT,
+                 help="Journal the run here as it happens (a new file), to resume it if killed."),
+    click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "
+                 "engine, vehicle, world, simulated primitives and time limit: replay, check, "
+                 "go on, append."),
+    NET_OPTION,
+)
+
+
+SHOW_OPTIONS = _composed(  # show WHAT
+    click.option("-o", "--output", type=OUTPUT, help="Write the page here (default: NAME.html)."),
+    click.option("--run", "run_log", type=FILE, help="A run to follow: a log of `run --log`."),
+    click.option("--graph-json", "graph_json", type=OUTPUT,
+                 help="Also write the reachability graph the page draws as JSON (up to 2,000 "
+                      "markings; above, why there is none)."),
+    click.option("--live", "live_log", type=click.Path(dir_okay=False, path_type=Path),
+                 help="Serve the page on loopback (127.0.0.1, a random token in its URL) and "
+                      "follow the run of this log as it is written (`run --log`); stops on "
+                      "Ctrl-C or after the run's outcome has been shown (--linger)."),
+    click.option("--port", type=click.IntRange(0, 65535), default=0, show_default=True,
+                 help="With --live: the port (0: one the system picks)."),
+    click.option("--linger", type=click.FloatRange(min=0), default=10.0, show_default=True,
+                 metavar="SECONDS", help="With --live: stop this long after the page was handed "
+                                         "the run's outcome."),
+    NET_OPTION,
+)
+
+
+CERTIFY_OPTIONS = _composed(  # certify MISSION
+    click.option("-o", "--output", type=OUTPUT, help="Write the certificate here "
+                 "(default: MISSION.cert.json)."),
+    click.option("--check", "net_file", type=FILE, metavar="NET.pnml",
+                 help="Do not certify: re-check the certificate MISSION (a .cert.json) against "
+                      "this compiled net, without trusting the compiler."),
+    click.option("--abort-pending", is_flag=True, help="Certify the mission started with "
+                 "mission.A marked too (an abort racing every step): its ends then include "
+                 "mission.ABORTED."),
+    _certificate_size_option("With --check: refuse a certificate larger than this, before "
+                             "reading it."),
+    NET_OPTION,
+)
+
+
+ANALYZE_OPTIONS = _composed(  # analyze FILE
+    click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
+    click.option("--initial", metavar="P,Q,...",
+                 help="Start from this marking instead of the file's (P*2 for two tokens)."),
+    click.option("--state-space", is_flag=True,
+                 help="The reachable markings only (no invariants)."),
+    click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
+                 show_default=True, help="Stop exploring past this many markings."),
+    click.option("--progress/--no-progress", default=None,
+                 help="Show the progress of long explorations (default: on a terminal)."),
+    click.option("--explorer", type=click.Choice(EXPLORERS), default="auto", show_default=True,
+                 help="; ".join(f"{e.name}: {e.doc}" for e in EXPLORER_TABLE.values())
+                 + ". auto: the fastest for the net's kind and size."),
+    click.option("--max-memory", metavar="SIZE",
+                 help="Memory budget: 4G, 500M (default: half free)."),
+    click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+                 metavar="[FILE]", help="Check a mission's properties (docs/properties.md) on its "
+                 "runs: the mission's, then FILE's (default: MISSION.props, if there is one); "
+                 "exit 1 if one fails, 3 if one is unknown."),
+    click.option("--explore", is_flag=True, help="Explore the reachable markings even where a "
+                 "certificate beside FILE (FILE.cert.json, `mcl2pnml certify`) proves the "
+                 "behaviour."),
+    _certificate_size_option("Refuse a certificate beside FILE larger than this, before "
+                             "reading it."),
+    click.option("--counterexamples", metavar="DIR",
+                 type=click.Path(file_okay=False, path_type=Path),
+                 help="With --properties: for each failing property write DIR/NAME.txt (its run "
+                      "in the mission's terms), NAME.vehicle.json (a vehicle script that replays a "
+                      "violation on both engines), NAME.log and NAME.html (a page stepping "
+                      "through it). No file may be an input: a name that is one is refused "
+                      "before anything is written."),
+    click.option("--explain", is_flag=True,
+                 help="With --properties: tell each failing property's counterexample in the "
+                      "mission's terms and replay it on both engines, with the vehicle script "
+                      "that does (printed, and in --json). Without it (or --counterexamples), "
+                      "a counterexample is its firing sequence only, which costs nothing more."),
+    click.option("--max-counterexamples", metavar="N", type=click.IntRange(min=0),
+                 default=pipeline.MAX_COUNTEREXAMPLES, show_default=True,
+                 help="With --explain or --counterexamples: explain (print, and write) the "
+                      "counterexamples of the first N failing properties only; the others are "
+                      "given their verdict and firing sequence, and their number is said."),
+    click.option("--stubborn", is_flag=True,
+                 help="With --untimed --properties: partial-order reduction (stubborn sets), on "
+                      "a mission proven 1-safe by its certificate: the same verdicts from fewer "
+                      "markings where the mission does things at once, a counterexample not "
+                      "always the shortest (docs/properties.md)."),
+    click.option("--timed/--untimed", default=None,
+                 help="A mission's verdicts in the time it runs in (docs/time.md): whether every "
+                      "run ends, its earliest and latest end times, and --properties on the "
+                      "time-divergent runs, under the vehicle's assumptions below. The default "
+                      "for a mission's --properties; --untimed: on every run of the net, as "
+                      "other Petri-net tools read it."),
+    click.option("--ack-within", metavar="SECONDS", default="0", show_default=True,
+                 help="With --timed: the vehicle acknowledges enable and disable within this."),
+    click.option("--report-gap", metavar="SECONDS", default="1", show_default=True,
+                 help="With --timed: a primitive's reports are at least this far apart."),
+    click.option("--fair-reports", is_flag=True,
+                 help="With --timed: a primitive that is on reports eventually (without it, a "
+                      "vehicle may stay silent for ever)."),
+    click.option("--urgency-only", is_flag=True,
+                 help="With --timed: supervisor steps are urgent but vehicle events may come "
+                      "first at their instant (the semantics of timed-arc tools)."),
+    PROPERTIES_SIZE_OPTION,
+    ATOMS_OPTION,
+    NET_OPTION,
+)
