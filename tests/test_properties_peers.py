@@ -186,9 +186,9 @@ def _peers_present():
     peers.need(peers.LOLA)
 
 
-#: Distinct cases: a list's first draw is otherwise forty copies of the simplest one.
+#: Distinct cases: a list's first draw is otherwise copies of the simplest one.
 RANDOM_CASES = st.lists(st.tuples(small_nets(), props()).map(lambda c: (c[0], [c[1]])),
-                        min_size=40, max_size=40, unique_by=repr)
+                        min_size=25, max_size=25, unique_by=repr)
 
 
 @settings(max_examples=1, deadline=None, phases=NO_SHRINK,

@@ -91,7 +91,7 @@ def test_the_zone_graph_agrees_with_one_state_per_second_on_the_examples(name, a
     _agree(_small(name, tmp_path), assumptions)
 
 
-@settings(max_examples=8, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=5, deadline=None, suppress_health_check=list(HealthCheck))
 @given(mission=missions(depth=1, width=2), k=st.sampled_from(range(len(ASSUMED))))
 def test_the_zone_graph_agrees_with_one_state_per_second_on_generated_missions(mission, k):
     net = pipeline.compile_source(_short(mission))
