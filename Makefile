@@ -80,8 +80,7 @@ demo: setup
 # loads numba and a browser), since a third of their time is spent waiting on peer
 # tools, the browser and the autopilot (on 2 cores: 4:39 with 3 workers, 5:14 with 2);
 # a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
-# (loadgroup: the tests of one xdist_group, which share a costly fixture, on one worker)
-TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 ))) --dist loadgroup
+TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 )))
 
 test: setup
 	$(PY) -m pytest $(TEST_WORKERS)

@@ -56,23 +56,3 @@ def dot() -> str:
 def engine(request) -> Engine:
     """Each engine in turn, for the checks that hold of either one alone."""
     return request.param
-
-
-#: Tests that take the longest (the tutorial's hundred commands, the generated missions held
-#: to the peers): collected first, so that the workers start them first and the run does not
-#: end waiting for one of them alone. The order of every other test is kept.
-LONGEST = ("test_tutorial.py::test_",
-           "test_properties_peers.py::test_peers_agree_on_generated_missions",
-           "test_timed.py::test_the_zone_graph_agrees_with_one_state_per_second_on_generated",
-           "test_certificate.py::test_the_certificate_s_verdict_is_what_exploring_finds",
-           "test_analyze.py::test_a_wide_net_ends_with_what_fits_in_its_limits",
-           "test_peers_agree.py::test_generated_missions",
-           "test_template_proofs.py::test_the_stored_proofs_are_the_templates_proven_now",
-           "test_tapn.py::test_verifydtapn_on_generated_missions")
-
-
-def pytest_collection_modifyitems(config, items):
-    def first(item) -> int:
-        name = item.nodeid.rpartition("/")[2]
-        return 0 if name.startswith(LONGEST) else 1
-    items.sort(key=first)   # stable: the rest in their order

@@ -14,9 +14,6 @@ import pytest
 from helpers import REGOLD, ROOT
 from tutorial import DOC, Report, check, render, tool_dir
 
-#: The module's tests share the run of every command (``report``): one worker runs them.
-pytestmark = pytest.mark.xdist_group("tutorial")
-
 
 @pytest.fixture(scope="module")
 def report():
