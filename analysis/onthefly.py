@@ -50,7 +50,7 @@ from typing import Iterable
 import numpy as np
 
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.properties import And, Const, Not, Or, Predicate, Property, Tokens
+from mcl2pnml.core.properties import Property, Tokens, atoms_of, evaluate
 from mcl2pnml.core.structure import Structure, structure
 
 from analysis.observers import BAD, Shape, Status, Verdict, initial, pending, step, truths
@@ -91,7 +91,7 @@ def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_
     from mcl2pnml.core.memory import default_memory
     s = structure(net)
     m0 = s.initial_vector()
-    if any(k > 1 for k in m0) or any(w != 1 for w in _weights(net)):
+    if any(k > 1 for k in m0) or any(a.weight != 1 for a in net.arcs):
         return None
     if stubborn and not safe and not proven_safe(s):
         raise NotProvenSafe(f"the net '{net.name}' is not proven 1-safe, which the reduction "
@@ -105,10 +105,6 @@ def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_
         except _Refused:
             return None
     return verdicts
-
-
-def _weights(net: Net):
-    return (a.weight for a in net.arcs)
 
 
 class NotProvenSafe(ValueError):
@@ -134,32 +130,7 @@ def stutter_invariant(move: np.ndarray) -> bool:
 
 def _atoms(prop: Property) -> list[Tokens]:
     """The ``Tokens`` comparisons of the property's four predicates, each once."""
-    found: dict[Tokens, None] = {}
-
-    def walk(x: Predicate) -> None:
-        if isinstance(x, Tokens):
-            found.setdefault(x)
-        elif isinstance(x, Not):
-            walk(x.arg)
-        elif isinstance(x, (And, Or)):
-            for a in x.args:
-                walk(a)
-    for x in truths(prop):
-        walk(x)
-    return list(found)
-
-
-def _value(x: Predicate, truth: dict[Tokens, bool]) -> bool:
-    if isinstance(x, Tokens):
-        return truth[x]
-    if isinstance(x, Not):
-        return not _value(x.arg, truth)
-    if isinstance(x, And):
-        return all(_value(a, truth) for a in x.args)
-    if isinstance(x, Or):
-        return any(_value(a, truth) for a in x.args)
-    assert isinstance(x, Const)
-    return bool(x.value)
+    return list(dict.fromkeys(t for x in truths(prop) for t in atoms_of(x)))
 
 
 def _letters(prop: Property, atoms: list[Tokens]) -> np.ndarray:
@@ -169,7 +140,7 @@ def _letters(prop: Property, atoms: list[Tokens]) -> np.ndarray:
     letters = np.zeros(1 << len(atoms), dtype=np.int64)
     for bits in range(len(letters)):
         truth = {a: bool(bits >> k & 1) for k, a in enumerate(atoms)}
-        p, s, q, r = (_value(x, truth) for x in predicates)
+        p, s, q, r = (evaluate(x, truth.__getitem__) for x in predicates)
         letters[bits] = 8 * p + 4 * s + 2 * q + r
     return letters
 
@@ -217,7 +188,9 @@ class _Search:
             *key_index(need, place_weights(m0)))]
         self.index = {p: k for k, p in enumerate(s.places)}
         self.stubborn = stubborn
-        self.structure = _stubborn_arrays(s)
+        # (the loop reads them only when it reduces: empty ones otherwise)
+        self.structure = (_stubborn_arrays(s) if stubborn
+                          else [np.zeros(1, dtype=np.int64)] * 10)
 
     def _visible(self, atoms: list[Tokens]) -> np.ndarray:
         """Per transition, 1 if it changes a place the atoms read (pre and post differ)."""
@@ -250,7 +223,7 @@ class _Search:
         atom_masks, least = self._atom_arrays(atoms)
         observer = [atom_masks, least, letters, auto.move, auto.pending]
         reduce = self.stubborn and stutter_invariant(auto.move)
-        visible = self._visible(atoms)
+        visible = self._visible(atoms) if reduce else np.zeros(1, dtype=np.uint8)
         width = self.words + 1
         start = np.zeros(width, dtype=np.uint64)
         start[:-1] = self.m0

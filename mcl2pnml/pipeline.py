@@ -313,18 +313,13 @@ def certify_file(mission: str | Path, abort_pending: bool = False
     """The certificate of ``mission`` (:mod:`mcl2pnml.certify.certificate`), its compiled
     net (with ``mission.A`` marked too if ``abort_pending``), and what the independent
     checker finds wrong with the pair (nothing: it holds)."""
-    from mcl2pnml.certify.certificate import certify
-    from mcl2pnml.certify.checker import check
-    from mcl2pnml.certify.templates import current
     from mcl2pnml.core.payloads import MissionPlace
     checked = check_file(mission)
     net = compile_checked(checked)
     if abort_pending:
         net = net.with_initial({**net.initial, MissionPlace.A.id: 1})
-    proofs = current()      # read once, for the certificate and its check
-    cert = certify(checked, net_name=net.name, abort_pending=abort_pending, proofs=proofs)
-    # checked as it will be read back: plain JSON
-    return cert, net, check(net, json.loads(json.dumps(cert)), proofs)
+    cert, problems = _certified(checked, net, abort_pending)
+    return cert, net, problems
 
 
 #: The largest certificate read, unless raised (``--max-certificate-size``): a 10,000-call
@@ -425,13 +420,21 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000,
 def proven_safe_by_certificate(mission: Path, net: Net) -> bool:
     """Whether the mission's certificate, made now from its parts, holds for ``net``: the
     checker then proves it 1-safe (:mod:`mcl2pnml.certify`)."""
+    _, problems = _certified(check_file(mission), net)
+    return not problems
+
+
+def _certified(checked, net: Net, abort_pending: bool = False
+               ) -> tuple[dict[str, Any], list[str]]:
+    """The certificate of the checked mission, and what the independent checker finds
+    wrong with it for ``net`` (nothing: it holds)."""
     from mcl2pnml.certify.certificate import certify
     from mcl2pnml.certify.checker import check
     from mcl2pnml.certify.templates import current
-    checked = check_file(mission)
-    proofs = current()
-    cert = certify(checked, net_name=net.name, proofs=proofs)
-    return not check(net, json.loads(json.dumps(cert)), proofs)
+    proofs = current()      # read once, for the certificate and its check
+    cert = certify(checked, net_name=net.name, abort_pending=abort_pending, proofs=proofs)
+    # checked as it will be read back: plain JSON
+    return cert, check(net, json.loads(json.dumps(cert)), proofs)
 
 
 #: How many failing properties ``analyze`` explains, unless told (``--max-counterexamples``):

@@ -74,28 +74,40 @@ class Const:
 Predicate = Tokens | Not | And | Or | Const
 
 
+def evaluate(predicate: Predicate, atom) -> bool:
+    """Whether ``predicate`` holds, each of its ``Tokens`` comparisons answered by
+    ``atom(tokens)``: a marking's sums (:func:`holds`), or a table of the atoms' truths (the
+    on-the-fly checker's letters)."""
+    if isinstance(predicate, Tokens):
+        return atom(predicate)
+    if isinstance(predicate, Not):
+        return not evaluate(predicate.arg, atom)
+    if isinstance(predicate, And):
+        return all(evaluate(a, atom) for a in predicate.args)
+    if isinstance(predicate, Or):
+        return any(evaluate(a, atom) for a in predicate.args)
+    return predicate.value
+
+
 def holds(predicate: Predicate, marking) -> bool:
     """Whether ``predicate`` holds in ``marking`` (a mapping: place id -> tokens)."""
+    return evaluate(predicate, lambda t: sum(marking.get(p, 0) for p in t.places) >= t.at_least)
+
+
+def atoms_of(predicate: Predicate) -> tuple[Tokens, ...]:
+    """The ``Tokens`` comparisons a predicate is made of, each once, in the order met."""
     if isinstance(predicate, Tokens):
-        return sum(marking.get(p, 0) for p in predicate.places) >= predicate.at_least
+        return (predicate,)
     if isinstance(predicate, Not):
-        return not holds(predicate.arg, marking)
-    if isinstance(predicate, And):
-        return all(holds(a, marking) for a in predicate.args)
-    if isinstance(predicate, Or):
-        return any(holds(a, marking) for a in predicate.args)
-    return predicate.value
+        return atoms_of(predicate.arg)
+    if isinstance(predicate, (And, Or)):
+        return tuple(dict.fromkeys(t for a in predicate.args for t in atoms_of(a)))
+    return ()
 
 
 def places_of(predicate: Predicate) -> frozenset[str]:
     """Every place a predicate reads."""
-    if isinstance(predicate, Tokens):
-        return frozenset(predicate.places)
-    if isinstance(predicate, Not):
-        return places_of(predicate.arg)
-    if isinstance(predicate, (And, Or)):
-        return frozenset().union(*(places_of(a) for a in predicate.args))
-    return frozenset()
+    return frozenset(p for t in atoms_of(predicate) for p in t.places)
 
 
 # -- patterns and scopes (Dwyer, Avrunin and Corbett) --------------------------------------
