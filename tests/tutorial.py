@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from peers import LOLA, VERIFYPN, find  # noqa: E402  (tests/ is not a package)
+import forkcli  # noqa: E402  (tests/ is not a package)
+from peers import LOLA, VERIFYPN, find  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "tutorial.md"
@@ -67,7 +68,11 @@ def tool_dir(work: Path) -> tuple[Path, dict[str, str]]:
     """A ``bin`` directory of the names a ``$`` line may call, and why each absent peer is."""
     bin_ = work / ".bin"
     bin_.mkdir()
-    wrappers = {"mcl2pnml": f'exec "{sys.executable}" -m mcl2pnml "$@"',
+    # forked from a server that has imported the command (tests/forkcli.py)
+    served = forkcli.server()
+    command = (f'exec "{sys.executable}" -m mcl2pnml "$@"' if served is None else
+               f'{forkcli.ENV}="{served}" exec "{sys.executable}" -S "{forkcli.__file__}" run "$@"')
+    wrappers = {"mcl2pnml": command,
                 "python": f'exec "{sys.executable}" "$@"'}
     absent = {}
     for peer in PEERS:
