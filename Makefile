@@ -78,15 +78,20 @@ demo: setup
 
 # the tests are spread over one worker more than the cores (up to four: each worker
 # loads numba and a browser), since a third of their time is spent waiting on peer
-# tools, the browser and the autopilot (on 2 cores: 4:39 with 3 workers, 5:14 with 2);
+# tools, the browser and the autopilot (on 2 cores: 4:39 with 3 workers, 5:14 with 2, before the
+# commands were forked from one process, tests/forkcli.py);
 # a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
 TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 )))
+# compiled modules are kept (__pycache__, ignored by git) even where the environment
+# says not to: otherwise every worker and every Python process the tests start
+# compiles the package and rewrites the tests' assertions anew
+PYTEST := env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest
 
 test: setup
-	$(PY) -m pytest $(TEST_WORKERS)
+	$(PYTEST) $(TEST_WORKERS)
 
 test-slow: setup
-	$(PY) -m pytest $(TEST_WORKERS) -m slow
+	$(PYTEST) $(TEST_WORKERS) -m slow
 
 bench: setup
 	$(PY) -m bench.suite

@@ -1,5 +1,5 @@
 """Shared fixtures: the official PNML grammar where it is, a validator every PNML test uses,
-graphviz, and the engine under test; what tests import lives in helpers.py."""
+graphviz, headless Chromium, and the engine under test; what tests import lives in helpers.py."""
 from __future__ import annotations
 
 import sys
@@ -50,6 +50,33 @@ def dot() -> str:
         pytest.fail("graphviz 'dot' is needed to lay out and draw nets: `make setup` "
                     "installs it with apt-get (or: apt-get install graphviz)")
     return path
+
+
+#: Chromium as the tests run it: headless, offline, as root in a container.
+CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update",
+                  "--disable-sync"]
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Chromium, one per test process (each test opens its own pages in their
+    own contexts); its absence is a failure that says how to get it."""
+    import shutil
+
+    executable = shutil.which("chromium") or shutil.which("chromium-browser")
+    if executable is None:
+        pytest.fail("Chromium is needed to test the token game page: `make setup` installs "
+                    "it with apt-get (or: apt-get install chromium)")
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        pytest.fail("Playwright is needed to drive Chromium: `make setup` installs the test "
+                    "dependencies (pip install -e '.[test]')")
+    with sync_playwright() as p:
+        b = p.chromium.launch(executable_path=executable, headless=True, args=CHROMIUM_FLAGS)
+        yield b
+        b.close()
 
 
 @pytest.fixture(params=[Engine(name) for name in ENGINES], ids=ENGINES)

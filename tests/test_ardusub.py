@@ -42,7 +42,7 @@ from mcl2pnml.runtime.engine import Outcome
 from mcl2pnml.runtime.mavlink import DO_SET_SERVO
 from mcl2pnml.runtime.reference import ReferenceEngine
 from mcl2pnml.runtime.simulator import World
-from test_show import browser, marking, page_of  # noqa: F401 (fixtures)
+from test_show import marking, page_of  # noqa: F401 (fixtures)
 
 EXAMPLES = ROOT / "examples"
 SAUCE = EXAMPLES / "sauce.mcl"

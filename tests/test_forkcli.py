@@ -24,7 +24,7 @@ CASES = {
     "invalid mission": ("check", DATA / "mcl" / "invalid" / "const_as_task.mcl"),
     "help": ("analyze", "--help"),
     "a net on standard output": ("template", "task"),
-    "json": ("analyze", SAUCE, "--json"),
+    "json": ("analyze", DATA / "pnml" / "foreign" / "pm4py_order_process.pnml", "--json"),
 }
 
 

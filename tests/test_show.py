@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 from pathlib import Path
 
 import pytest
@@ -17,9 +16,6 @@ import pytest
 from helpers import ROOT, run_cli as run
 
 SHOTS = ROOT / "out" / "screenshots"
-CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync"]
 TWO_TASKS = """\
 primitive GoToWayPoint(wp);
 primitive KeepDepth(d);
@@ -30,24 +26,6 @@ mission {
     Goto((10.0, 5.0, 5.0));
 }
 """
-
-
-@pytest.fixture(scope="module")
-def browser():
-    """Headless Chromium; its absence is a failure that says how to get it."""
-    executable = shutil.which("chromium") or shutil.which("chromium-browser")
-    if executable is None:
-        pytest.fail("Chromium is needed to test the token game page: `make setup` installs "
-                    "it with apt-get (or: apt-get install chromium)")
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        pytest.fail("Playwright is needed to drive Chromium: `make setup` installs the test "
-                    "dependencies (pip install -e '.[test]')")
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=executable, headless=True, args=CHROMIUM_FLAGS)
-        yield b
-        b.close()
 
 
 @pytest.fixture

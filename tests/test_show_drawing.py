@@ -25,7 +25,7 @@ from drawcheck import _core
 from helpers import ROOT
 from mcl2pnml import pipeline
 from mcl2pnml.view.layout import drawn_layout
-from test_show import TWO_TASKS, browser, page_of  # noqa: F401 (fixtures)
+from test_show import TWO_TASKS, page_of  # noqa: F401 (fixtures)
 
 pytestmark = pytest.mark.skipif(shutil.which("dot") is None,
                                 reason="graphviz's dot is not installed")

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from helpers import ROOT, run_cli as run
-from test_show import SHOTS, browser, page_of  # noqa: F401 (fixtures)
+from test_show import SHOTS, page_of  # noqa: F401 (fixtures)
 
 from mcl2pnml import pipeline
 from mcl2pnml.core.structure import structure

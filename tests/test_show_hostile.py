@@ -30,8 +30,6 @@ from pathlib import Path
 import pytest
 
 from helpers import run_cli as run
-from test_show import browser  # noqa: F401  (the fixture: headless Chromium)
-
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.io.pnml.reader import load_pnml

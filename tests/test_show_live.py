@@ -24,7 +24,7 @@ from typing import Iterator
 import pytest
 
 from helpers import ROOT, run_cli as run
-from test_show import browser, marking  # noqa: F401 (fixtures)
+from test_show import marking
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from helpers import ROOT, run_cli as run
-from test_show import SHOTS, browser, marking, page_of  # noqa: F401 (fixtures)
+from test_show import SHOTS, marking, page_of  # noqa: F401 (fixtures)
 
 #: The least width and height of a click target, in CSS pixels (WCAG 2.2's target size).
 TARGET = 24

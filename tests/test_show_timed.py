@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from helpers import ROOT, run_cli as run
-from test_show import TWO_TASKS, browser, marking, page_of  # noqa: F401 (fixtures)
+from test_show import TWO_TASKS, marking, page_of  # noqa: F401 (fixtures)
 
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import NetBuilder, Timing

@@ -14,7 +14,7 @@ import re
 import pytest
 
 from helpers import ROOT, run_cli as run
-from test_show import SHOTS, browser, marking, page_of, two_tasks_run  # noqa: F401 (fixtures)
+from test_show import SHOTS, marking, page_of, two_tasks_run  # noqa: F401 (fixtures)
 
 from analysis.statespace import explore
 from mcl2pnml import pipeline
