@@ -15,8 +15,8 @@ import click
 from mcl2pnml import pipeline
 from mcl2pnml.cli_options import (
     ANALYZE_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
-    FORMAT_OPTION, NET_OPTION, OUTPUT, PROPERTIES_SIZE, PROPERTY_ATOMS, RUN_OPTIONS,
-    SHOW_OPTIONS)
+    FORMAT_OPTION, NET_OPTION, ODDS_OPTIONS, OUTPUT, PROPERTIES_SIZE, PROPERTY_ATOMS,
+    RUN_OPTIONS, SHOW_OPTIONS)
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
@@ -35,6 +35,7 @@ Examples:
   mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
   mcl2pnml certify examples/sauce.mcl
+  mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.vehicle.json
 """
 
 
@@ -313,3 +314,21 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return outcome.status
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("mission", type=FILE)
+@ODDS_OPTIONS
+def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Path | None,
+         max_states: int) -> int:
+    """The exact odds of MISSION with a vehicle model: how likely it ends OK, FAIL or
+    ABORTED, or never, and when (docs/odds.md).
+
+    The mission runs as the engines run it (the supervisor first, time-outs
+    exact); every choice of the vehicle is weighed by its probability.
+    """
+    outcome = pipeline.odds_file(mission, model, max_states=max_states,
+                                 sensitivity=sensitivity, prism=prism, note=_note)
+    click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
+               else "\n".join(outcome.lines()))
+    return 0

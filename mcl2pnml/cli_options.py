@@ -268,3 +268,19 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
     ATOMS_OPTION,
     NET_OPTION,
 )
+
+
+ODDS_OPTIONS = _composed(  # odds MISSION
+    click.option("--vehicle-model", "model", type=FILE, required=True, metavar="MODEL.json",
+                 help="How likely each primitive is to achieve or fail, and when it answers "
+                      "(docs/odds.md)."),
+    click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
+    click.option("--sensitivity", is_flag=True,
+                 help="Also P(OK) with each primitive always achieving, and never: which "
+                      "primitive's reliability matters most (the odds again, twice per "
+                      "primitive)."),
+    click.option("--prism", type=OUTPUT, metavar="FILE.pm",
+                 help="Write the chain in PRISM's language (PRISM and Storm read it)."),
+    click.option("--max-states", type=click.IntRange(min=1), default=200_000,
+                 show_default=True, help="Refuse a chain of more states than this."),
+)

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from mcl2pnml.core.properties import Property
     from mcl2pnml.core.timing import Assumptions
     from mcl2pnml.language.functional import Instance
+    from mcl2pnml.runtime.odds import Odds
     from mcl2pnml.runtime.session import RunOptions
 
 
@@ -1210,3 +1211,80 @@ def check_properties_timed(net: Net, properties, assumptions: "Assumptions | Non
     from mcl2pnml import timed
     from mcl2pnml.core.timing import Assumptions
     return timed.check(net, properties, assumptions or Assumptions(), max_states)
+
+
+# -- the exact odds, as ``mcl2pnml odds`` gives them ----------------------------------------
+
+@dataclass(frozen=True)
+class OddsOutcome:
+    """What ``mcl2pnml odds`` prints: the mission's odds with its vehicle model, and
+    (asked for) each primitive's sway on P(OK)."""
+
+    mission: str
+    model: str
+    odds: "Odds"
+    sensitivity: list[dict[str, Any]] = field(default_factory=list)
+
+    def as_json(self) -> dict[str, Any]:
+        out = {"mission": self.mission, "vehicle_model": self.model, **self.odds.as_json()}
+        if self.sensitivity:
+            out["sensitivity"] = self.sensitivity
+        return out
+
+    def lines(self) -> list[str]:
+        o = self.odds
+        lines = [f"{self.mission} with the vehicle model {self.model} "
+                 f"({o.states:,} states, {o.transitions:,} transitions; docs/odds.md):"]
+        for name, p in o.outcomes.items():
+            lines.append(f"  P({name}) = {p:.6f}")
+        if o.mean is None:
+            lines.append("  end time: the mission never ends")
+        else:
+            q = o.quantiles
+            lines.append(f"  end time, if it ends: mean {o.mean:.2f} s, standard deviation "
+                         f"{o.spread:.2f} s; 5% by {_s(q['p5'])}, half by {_s(q['p50'])}, "
+                         f"95% by {_s(q['p95'])}")
+        if o.beyond:
+            lines.append(f"  (the distribution stops at its horizon with {o.beyond:.2e} of "
+                         "the runs still going)")
+        if self.sensitivity:
+            lines.append("  P(OK) by primitive (as modelled; if it always achieved; if it never "
+                         "did):")
+            width = max(len(r["primitive"]) for r in self.sensitivity)
+            for r in self.sensitivity:
+                lines.append(f"    {r['primitive']:<{width}}  {r['ok']:.4f}  "
+                             f"{r['ok_if_it_always_achieves']:.4f}  "
+                             f"{r['ok_if_it_never_achieves']:.4f}  swing {r['swing']:.4f}")
+        return lines
+
+
+def _s(seconds: float | None) -> str:
+    return "never" if seconds is None else f"{seconds:g} s"
+
+
+def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
+              sensitivity: bool = False, prism: Path | None = None,
+              note: Callable[[str], None] = lambda line: None) -> OddsOutcome:
+    """``mcl2pnml odds``: the exact odds of a mission (MCL) with a vehicle model; the
+    chain in PRISM's language to ``prism`` if asked (Storm and PRISM read it)."""
+    from mcl2pnml.core.files import atomic_write_text, check_outputs
+    from mcl2pnml.runtime import odds as exact
+    from mcl2pnml.runtime.executor import PetriEngine
+    from mcl2pnml.runtime.vehicle_model import VehicleModel
+    if mission.suffix != ".mcl":
+        raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl): the odds are a "
+                                     "mission's, run as the engines run it")
+    check_outputs([("--prism", prism)], [("the mission", mission),
+                                          ("the vehicle model", model_path)])
+    model = VehicleModel.load(model_path)
+    net = compile_checked(check_file(mission))
+    limit = max_states or exact.MAX_STATES
+    used = PetriEngine(net).primitives_used()
+    model.check_primitives(used)
+    chain = exact.chain_of(net, model, limit)
+    odds = exact.odds_of(chain)
+    if prism is not None:
+        atomic_write_text(prism, exact.to_prism(chain, f"{mission.name} with {model_path.name}"))
+        note(f"wrote {prism}")
+    table = exact.sensitivity(net, model, used, limit) if sensitivity else []
+    return OddsOutcome(mission.name, model_path.name, odds, table)

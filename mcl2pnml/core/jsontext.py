@@ -10,9 +10,10 @@ it, the last time.
 from __future__ import annotations
 
 import json
-from typing import Callable, Iterable
+from typing import Any, Callable, Iterable
 
-from mcl2pnml.core.errors import Location
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.files import json_fault
 
 _BLANK = " \t\r\n"
 _DECODER = json.JSONDecoder()
@@ -79,3 +80,48 @@ def dotted(path: Iterable) -> str:
     for part in path:
         out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
     return out or "the file"
+
+
+def first_nan(value: Any) -> tuple | None:
+    """The path of the first NaN in a parsed file, or None."""
+    stack = [((), value)]
+    while stack:
+        path, value = stack.pop()
+        if isinstance(value, float) and value != value:
+            return path
+        items = value.items() if isinstance(value, dict) else \
+            enumerate(value) if isinstance(value, list) else ()
+        stack.extend(reversed([((*path, k), v) for k, v in items]))
+    return None
+
+
+def check_schema(value: Any, schema: dict[str, Any], where: Callable[[Iterable], Location],
+                 prefix: tuple = (), what: str = "a valid file") -> None:
+    """``value`` against the JSON Schema ``schema``: the first fault, at its line and column
+    (``where`` of its path), or nothing. ``prefix`` is the path of ``value`` in its file;
+    ``what`` says what the file should have been."""
+    from jsonschema import Draft202012Validator
+    from jsonschema.exceptions import best_match
+
+    try:
+        error = best_match(Draft202012Validator(schema).iter_errors(value))
+        if error is None:
+            return
+        path = at = tuple(error.absolute_path)
+        message = error.message
+        if error.validator == "additionalProperties":
+            valid = sorted(error.schema.get("properties", {}))
+            message = message.replace("Additional properties are not allowed ",
+                                      "unknown setting ")
+            message += "; valid: " + ", ".join(valid)
+            # shown where the first unknown setting is, as a world file's is
+            at += tuple(key for key in error.instance if key not in valid)[:1]
+        elif "propertyNames" in error.absolute_schema_path:    # a bad name: where it is
+            at += (error.instance,)
+        elif error.validator == "enum":
+            message = f"{json.dumps(error.instance)[:80]} is not one of " + ", ".join(
+                map(str, error.validator_value))
+    except RecursionError as e:   # a value nested a little less deep than json reads: its repr
+        raise Mcl2PnmlError(f"not {what}: {json_fault(e)}",
+                            Location(where(()).file)) from None
+    raise Mcl2PnmlError(f"{dotted(prefix + path)}: {message[:300]}", where(at))

@@ -253,7 +253,29 @@ class Reply:
         return cls(kinds[word], seconds)
 
 
-class ScriptedVehicle(Vehicle):
+class QueuedVehicle(Vehicle):
+    """A simulated vehicle that schedules its events when it is told to act: each
+    primitive's events in time order, given one at a time in the order of
+    :class:`Vehicle` (by time, ties by primitive name)."""
+
+    def __init__(self) -> None:
+        self.pending: dict[str, list[Event]] = {}   # primitive -> events in time order
+
+    def _next(self) -> tuple[float, str] | None:
+        due = [(events[0].t, name) for name, events in self.pending.items() if events]
+        return min(due) if due else None
+
+    def next_event_time(self) -> float | None:
+        nxt = self._next()
+        return None if nxt is None else nxt[0]
+
+    def take_event(self) -> Event:
+        nxt = self._next()
+        assert nxt is not None, "no event is pending"
+        return self.pending[nxt[1]].pop(0)
+
+
+class ScriptedVehicle(QueuedVehicle):
     """The vehicle script of cli.md: ``{"PRIMITIVE": ["ok@5", "fail@3", "never"], ...}``.
 
     Each enabling of a primitive takes the next reply of its list: achieved
@@ -264,9 +286,9 @@ class ScriptedVehicle(Vehicle):
     """
 
     def __init__(self, script: Mapping[str, Iterable[Reply]]):
+        super().__init__()
         self.replies = {name: list(replies) for name, replies in script.items()}
         self.used: dict[str, int] = {}
-        self.pending: dict[str, list[Event]] = {}   # primitive -> events in time order
         self.enabled: set[str] = set()
         self.where: dict[str, Location] = {}         # where the script names each primitive
 
@@ -334,19 +356,6 @@ class ScriptedVehicle(Vehicle):
             # disabling is acknowledged at once, and silences what was to come
             self.pending[name] = [Event(action.t, EventKind.OFF, name)]
             self.enabled.discard(name)
-
-    def _next(self) -> tuple[float, str] | None:
-        due = [(events[0].t, name) for name, events in self.pending.items() if events]
-        return min(due) if due else None
-
-    def next_event_time(self) -> float | None:
-        nxt = self._next()
-        return None if nxt is None else nxt[0]
-
-    def take_event(self) -> Event:
-        nxt = self._next()
-        assert nxt is not None, "no event is pending"
-        return self.pending[nxt[1]].pop(0)
 
 
 class _Duplicate(Exception):

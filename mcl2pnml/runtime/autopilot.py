@@ -40,7 +40,7 @@ from typing import Any, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, read_text
-from mcl2pnml.core.jsontext import dotted, locator
+from mcl2pnml.core.jsontext import check_schema, dotted, first_nan, locator
 
 #: The largest mapping file read, in bytes.
 MAX_MAPPING = 1 << 20
@@ -141,18 +141,18 @@ class AutopilotMapping:
             raise Mcl2PnmlError(f"not an autopilot mapping: {json_fault(e)}",
                                 Location(filename)) from None
         where = locator(text, filename)
-        nan = _nan(data)
+        nan = first_nan(data)
         if nan is not None:     # Python's json reads NaN, and NaN passes every bound
             raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
-        _check(data, SCHEMA, where)
+        check_schema(data, SCHEMA, where, what="an autopilot mapping")
         bindings = {}
         for name, spec in data["primitives"].items():
             kind = spec["by"]
             schema = {"type": "object", "additionalProperties": False,
                       "required": ["by"] + _REQUIRED.get(kind, []),
                       "properties": {"by": {}, **_BINDING[kind]}}
-            _check(spec, schema, lambda path, n=name: where(("primitives", n, *path)),
-                   ("primitives", name))
+            check_schema(spec, schema, lambda path, n=name: where(("primitives", n, *path)),
+                         ("primitives", name), what="an autopilot mapping")
             bindings[name] = Binding(name, **spec)
         steps = tuple(data.get("safe_state", SAFE_STEPS))
         if list(steps) != sorted(steps, key=SAFE_STEPS.index):
@@ -172,45 +172,3 @@ class AutopilotMapping:
         """The package's own mapping for ArduSub (``ardusub.json``)."""
         source = resources.files("mcl2pnml.runtime").joinpath("ardusub.json")
         return cls.from_json(source.read_text("utf-8"), "ardusub.json (mcl2pnml's own)")
-
-
-def _nan(value: Any) -> tuple | None:
-    """The path of the first NaN in a parsed file, or None."""
-    stack = [((), value)]
-    while stack:
-        path, value = stack.pop()
-        if isinstance(value, float) and value != value:
-            return path
-        items = value.items() if isinstance(value, dict) else \
-            enumerate(value) if isinstance(value, list) else ()
-        stack.extend(reversed([((*path, k), v) for k, v in items]))
-    return None
-
-
-def _check(value: Any, schema: dict[str, Any], where, prefix: tuple = ()) -> None:
-    """``value`` against ``schema``: the first fault, at its line and column, or nothing."""
-    from jsonschema import Draft202012Validator
-    from jsonschema.exceptions import best_match
-
-    try:
-        error = best_match(Draft202012Validator(schema).iter_errors(value))
-        if error is None:
-            return
-        path = at = tuple(error.absolute_path)
-        message = error.message
-        if error.validator == "additionalProperties":
-            valid = sorted(error.schema.get("properties", {}))
-            message = message.replace("Additional properties are not allowed ",
-                                      "unknown setting ")
-            message += "; valid: " + ", ".join(valid)
-            # shown where the first unknown setting is, as a world file's is
-            at += tuple(key for key in error.instance if key not in valid)[:1]
-        elif "propertyNames" in error.absolute_schema_path:    # a bad name: where it is
-            at += (error.instance,)
-        elif error.validator == "enum":
-            message = f"{json.dumps(error.instance)[:80]} is not one of " + ", ".join(
-                map(str, error.validator_value))
-    except RecursionError as e:   # a value nested a little less deep than json reads: its repr
-        raise Mcl2PnmlError(f"not an autopilot mapping: {json_fault(e)}",
-                            Location(where(()).file)) from None
-    raise Mcl2PnmlError(f"{dotted(prefix + path)}: {message[:300]}", where(at))

@@ -34,6 +34,7 @@ thousand (a test counts the transitions each event makes it examine).
 """
 from __future__ import annotations
 
+import copy
 import heapq
 from typing import Any
 
@@ -202,6 +203,34 @@ class PetriEngine(Engine):
                     f"the mission fires for ever at t={self.now:g} s without time passing "
                     "(a while loop whose condition and body end at once?)")
         return actions
+
+    # -- copies, for the exact odds ----------------------------------------------------
+
+    def clone(self) -> "PetriEngine":
+        """A copy that runs on alone from here: the net's tables shared, the run's state
+        copied (the exact odds run every choice of the vehicle from one state,
+        :mod:`mcl2pnml.runtime.odds`). What it ignored so far is not copied."""
+        other = copy.copy(self)
+        other.marking = list(self.marking)
+        other.watch = [set(w) for w in self.watch]
+        other.enabled_on = [set(e) for e in self.enabled_on]
+        other.watching = list(self.watching)
+        other.env = {scope: dict(values) for scope, values in self.env.items()}
+        other.ready, other.entries = list(self.ready), list(self.entries)
+        other.timers = list(self.timers)
+        other.version, other.enabled = list(self.version), list(self.enabled)
+        other.ignored = []
+        return other
+
+    def state(self) -> tuple:
+        """What decides this engine's future between stimuli: the marking, the time-outs
+        running (their time left) and the outcome. Two engines settled at their instant
+        with equal states fire alike on equal stimuli (the event transitions in net
+        order, the immediate ones from an empty queue); the call arguments (``env``) only
+        name the actions' arguments."""
+        running = sorted((due - self.now, i) for due, _, i, version in self.timers
+                         if version == self.version[i] and self.enabled[i])
+        return tuple(self.marking), tuple(running), self.outcome
 
     # -- the engine interface ----------------------------------------------------------
 

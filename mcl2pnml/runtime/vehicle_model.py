@@ -1,0 +1,445 @@
+"""A vehicle's odds: how likely each primitive is to achieve or fail, and when it answers.
+
+The proofs say what a mission does for *every* vehicle; a mission engineer
+signing off a dive also asks how likely each ending is with *this* vehicle.
+A vehicle model (a JSON file, docs/odds.md) says, per primitive, what one
+enabling of it does:
+
+* it is acknowledged (``on``) after the ``ack`` delay;
+* then it reports ``achieved`` with probability ``achieve``, ``failed`` with
+  probability ``fail``, or never reports (the rest, ``1 - achieve - fail``),
+  after the ``achieved_after`` or ``failed_after`` delay (``after``: both);
+* a goal achieved is later lost (reported ``failed``, as a kept goal's loss
+  is: section 2.1) with probability ``lose``, ``lost_after`` after;
+* a disable is acknowledged (``off``) after the ``ack`` delay, and silences
+  every report still to come (as the scripted vehicle does, docs/running.md).
+
+Delays are distributions of seconds: ``{"fixed": 5}``, ``{"uniform": [20, 60]}``
+(whole seconds, both ends included), ``{"table": {"30": 0.5, "40": 0.5}}``,
+and, for simulated campaigns only, ``{"exponential": {"mean": 30}}`` and
+``{"lognormal": {"mu": 3, "sigma": 0.5}}``. Probabilities are numbers or
+exact fractions (``"2/3"``), read exactly (0.1 is 1/10).
+
+One :class:`ModelVehicle` serves both uses of a model, so that they cannot
+disagree on what it means: a simulated run draws each choice at random
+(:class:`Draw`, seeded), and the exact odds (:mod:`mcl2pnml.runtime.odds`)
+enumerate every choice with its probability (:class:`Replay`).
+"""
+from __future__ import annotations
+
+import json
+import random
+from dataclasses import dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, Mapping, Sequence, TypeVar
+
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.files import json_fault, read_text
+from mcl2pnml.core.jsontext import check_schema, dotted, first_nan, locator
+from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Vehicle
+
+#: The largest vehicle model read, in bytes.
+MAX_MODEL = 1 << 20
+#: The longest delay a model may give, in seconds (a week).
+MAX_DELAY = 7 * 24 * 3600
+#: The most values a discrete delay may take (a uniform range, a table).
+MAX_SUPPORT = 10_000
+
+T = TypeVar("T")
+
+_PROBABILITY = {"anyOf": [{"type": "number", "minimum": 0, "maximum": 1},
+                          {"type": "string", "pattern": r"^\s*\d+\s*/\s*\d+\s*$",
+                           "maxLength": 40}]}
+_SECONDS = {"type": "number", "minimum": 0, "maximum": MAX_DELAY}
+_WHOLE = {"type": "integer", "minimum": 0, "maximum": MAX_DELAY}
+_DELAY = {
+    "type": "object", "minProperties": 1, "maxProperties": 1,
+    "properties": {
+        "fixed": _SECONDS,
+        "uniform": {"type": "array", "items": _WHOLE, "minItems": 2, "maxItems": 2},
+        "table": {"type": "object", "minProperties": 1, "maxProperties": MAX_SUPPORT,
+                  "propertyNames": {"pattern": r"^\d+(\.\d+)?$", "maxLength": 12},
+                  "additionalProperties": _PROBABILITY},
+        "exponential": {"type": "object", "required": ["mean"], "additionalProperties": False,
+                        "properties": {"mean": {"type": "number", "exclusiveMinimum": 0,
+                                                "maximum": MAX_DELAY}}},
+        "lognormal": {"type": "object", "required": ["mu", "sigma"],
+                      "additionalProperties": False,
+                      "properties": {"mu": {"type": "number", "minimum": -50, "maximum": 50},
+                                     "sigma": {"type": "number", "minimum": 0,
+                                               "maximum": 10}}},
+    },
+    "additionalProperties": False,
+}
+_SETTINGS = {
+    "achieve": _PROBABILITY, "fail": _PROBABILITY, "lose": _PROBABILITY,
+    "after": _DELAY, "achieved_after": _DELAY, "failed_after": _DELAY, "lost_after": _DELAY,
+    "ack": _DELAY,
+}
+_PRIMITIVE = {"type": "object", "additionalProperties": False, "properties": _SETTINGS}
+
+#: The file's JSON Schema (docs/odds.md); sums and ranges are checked after it.
+SCHEMA: dict[str, Any] = {
+    "type": "object", "additionalProperties": False,
+    "properties": {
+        "description": {"type": "string", "maxLength": 2000},
+        "defaults": _PRIMITIVE,
+        "primitives": {"type": "object", "maxProperties": 1000,
+                       "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_]*$",
+                                         "maxLength": 200},
+                       "additionalProperties": _PRIMITIVE},
+    },
+}
+
+
+class NotDiscrete(Mcl2PnmlError):
+    """A delay the exact odds cannot enumerate (exponential, log-normal)."""
+
+
+@dataclass(frozen=True)
+class Delay:
+    """A distribution of delays in seconds: discrete (``support``) or continuous."""
+
+    #: how the file gave it: fixed, uniform, table, exponential or lognormal
+    kind: str
+    #: the values and their probabilities, for the discrete kinds
+    support: tuple[tuple[float, Fraction], ...] = ()
+    #: the continuous kinds' parameters (mean; mu and sigma)
+    parameters: tuple[float, ...] = ()
+    #: where the file gave it, for the exact odds' refusal of a continuous one
+    where: Location | None = field(default=None, compare=False)
+
+    @classmethod
+    def fixed(cls, seconds: float) -> "Delay":
+        return cls("fixed", ((float(seconds), Fraction(1)),))
+
+    def values(self) -> tuple[tuple[float, Fraction], ...]:
+        """The delays with their probabilities; a continuous delay is refused."""
+        if not self.support:
+            raise NotDiscrete(f"a {self.kind} delay has no exact odds: give a fixed, uniform "
+                              "or table delay (exponential and log-normal delays are for "
+                              "simulated campaigns)", self.where)
+        return self.support
+
+    def draw(self, rng: random.Random) -> float:
+        if self.kind == "exponential":
+            return rng.expovariate(1.0 / self.parameters[0])
+        if self.kind == "lognormal":
+            return rng.lognormvariate(*self.parameters)
+        return pick(self.support, rng)
+
+
+@dataclass(frozen=True)
+class PrimitiveModel:
+    """What one enabling of a primitive does (the module's documentation)."""
+
+    achieve: Fraction = Fraction(1)
+    fail: Fraction = Fraction(0)
+    achieved_after: Delay = Delay.fixed(1)
+    failed_after: Delay = Delay.fixed(1)
+    lose: Fraction = Fraction(0)
+    lost_after: Delay = Delay.fixed(1)
+    ack: Delay = Delay.fixed(0)
+
+    @property
+    def never(self) -> Fraction:
+        """The probability that it never reports."""
+        return 1 - self.achieve - self.fail
+
+
+#: The model of a primitive a file does not name, and the settings a file leaves out:
+#: acknowledged at once, achieved one second later, never failing or lost (docs/odds.md).
+DEFAULT = PrimitiveModel()
+
+
+@dataclass(frozen=True)
+class VehicleModel:
+    """A loaded vehicle model: each named primitive's, and the rest's (``default``)."""
+
+    primitives: Mapping[str, PrimitiveModel]
+    default: PrimitiveModel = DEFAULT
+    description: str = ""
+    filename: str = field(default="<model>", compare=False)
+    #: where the file names each primitive (a name the mission does not use is refused)
+    where: Mapping[str, Location] = field(default_factory=dict, compare=False)
+
+    def of(self, primitive: str) -> PrimitiveModel:
+        return self.primitives.get(primitive, self.default)
+
+    def check_primitives(self, used: set[str]) -> None:
+        """Refuse a model of a primitive the mission does not use (a typo)."""
+        for name in self.primitives:
+            if name not in used:
+                raise Mcl2PnmlError(f"the vehicle model gives '{name}', which the mission does "
+                                    "not use; it uses " + ", ".join(sorted(used)),
+                                    self.where.get(name))
+
+    def replaced(self, primitive: str, **changes) -> "VehicleModel":
+        """The model with one primitive's settings changed (the sensitivity table's)."""
+        from dataclasses import replace
+        return replace(self, primitives={**self.primitives,
+                                         primitive: replace(self.of(primitive), **changes)})
+
+    # -- reading ------------------------------------------------------------------------
+
+    @classmethod
+    def from_json(cls, text: str, filename: str = "<model>") -> "VehicleModel":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise Mcl2PnmlError(f"not a vehicle model: {e.msg}",
+                                Location(filename, e.lineno, e.colno)) from None
+        except (ValueError, RecursionError) as e:
+            raise Mcl2PnmlError(f"not a vehicle model: {json_fault(e)}",
+                                Location(filename)) from None
+        where = locator(text, filename)
+        nan = first_nan(data)
+        if nan is not None:
+            raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
+        check_schema(data, SCHEMA, where, what="a vehicle model")
+        default = _primitive(data.get("defaults", {}), DEFAULT, ("defaults",), where)
+        primitives = {name: _primitive(spec, default, ("primitives", name), where)
+                      for name, spec in data.get("primitives", {}).items()}
+        return cls(primitives, default, data.get("description", ""), filename,
+                   {name: where(("primitives", name)) for name in primitives})
+
+    @classmethod
+    def load(cls, path: str | Path) -> "VehicleModel":
+        return cls.from_json(read_text(path, "vehicle model", MAX_MODEL), str(path))
+
+
+def _probability(value: Any) -> Fraction:
+    if isinstance(value, str):
+        top, bottom = (int(part) for part in value.split("/"))
+        if bottom == 0:
+            raise ZeroDivisionError
+        return Fraction(top, bottom)
+    return Fraction(str(value))      # as written: 0.1 is 1/10, not the nearest double
+
+
+def _delay(spec: Mapping[str, Any], path: tuple, where) -> Delay:
+    (kind, value), = spec.items()
+    at = where(path)
+    if kind == "fixed":
+        return Delay("fixed", ((float(value), Fraction(1)),), where=at)
+    if kind == "uniform":
+        low, high = value
+        if high < low:
+            raise Mcl2PnmlError(f"{dotted(path)}.uniform: [{low}, {high}] is empty: the first "
+                                "bound is the smaller", at)
+        if high - low + 1 > MAX_SUPPORT:
+            raise Mcl2PnmlError(f"{dotted(path)}.uniform: {high - low + 1:,} values, more "
+                                f"than {MAX_SUPPORT:,}", at)
+        n = high - low + 1
+        return Delay("uniform", tuple((float(d), Fraction(1, n)) for d in range(low, high + 1)),
+                     where=at)
+    if kind == "table":
+        support = []
+        for key, p in value.items():
+            seconds = float(key)
+            if seconds > MAX_DELAY:
+                raise Mcl2PnmlError(f"{dotted(path)}.table: {key} s is longer than "
+                                    f"{MAX_DELAY:,} s", where((*path, "table", key)))
+            try:
+                support.append((seconds, _probability(p)))
+            except ZeroDivisionError:
+                raise Mcl2PnmlError(f"{dotted((*path, 'table', key))}: {p} divides by zero",
+                                    where((*path, "table", key))) from None
+        total = sum(p for _, p in support)
+        if total != 1:
+            raise Mcl2PnmlError(f"{dotted(path)}.table: the probabilities add up to {total}, "
+                                "not 1", where((*path, "table")))
+        return Delay("table", tuple(sorted((s, p) for s, p in support if p)), where=at)
+    if kind == "exponential":
+        return Delay("exponential", parameters=(float(value["mean"]),), where=at)
+    return Delay("lognormal", parameters=(float(value["mu"]), float(value["sigma"])), where=at)
+
+
+def _primitive(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
+               where) -> PrimitiveModel:
+    """One primitive's settings over ``base`` (the defaults)."""
+    from dataclasses import replace
+    changes: dict[str, Any] = {}
+    for key in ("achieve", "fail", "lose"):
+        if key in spec:
+            try:
+                changes[key] = _probability(spec[key])
+            except ZeroDivisionError:
+                raise Mcl2PnmlError(f"{dotted((*path, key))}: {spec[key]} divides by zero",
+                                    where((*path, key))) from None
+            if changes[key] > 1:
+                raise Mcl2PnmlError(f"{dotted((*path, key))}: {spec[key]} is more than 1",
+                                    where((*path, key)))
+    for key in ("after", "achieved_after", "failed_after", "lost_after", "ack"):
+        if key in spec:
+            changes[key] = _delay(spec[key], (*path, key), where)
+    after = changes.pop("after", None)
+    if after is not None:
+        changes.setdefault("achieved_after", after)
+        changes.setdefault("failed_after", after)
+    model = replace(base, **changes)
+    if model.achieve + model.fail > 1:
+        raise Mcl2PnmlError(f"{dotted(path)}: achieve {model.achieve} and fail {model.fail} "
+                            "add up to more than 1 (the rest is the chance it never reports)",
+                            where(path))
+    return model
+
+
+# -- choosing ---------------------------------------------------------------------------
+
+def pick(options: Sequence[tuple[T, Fraction]], rng: random.Random) -> T:
+    """One of ``options`` (value, probability), drawn with ``rng``."""
+    u = rng.random()
+    for value, p in options:
+        u -= float(p)
+        if u < 0:
+            return value
+    return options[-1][0]
+
+
+class Chooser:
+    """How a :class:`ModelVehicle` makes each of its choices: one among ``options``
+    (value, probability; the probabilities add up to 1), and when a delay may end."""
+
+    def choose(self, options: Sequence[tuple[T, Fraction]]) -> T:
+        raise NotImplementedError
+
+    def schedule(self, delay: Delay, t: float) -> tuple[tuple[float, Fraction], ...]:
+        """The times an event ``delay`` after ``t`` may come at, with their probabilities."""
+        return tuple((t + d, p) for d, p in delay.values())
+
+
+class Draw(Chooser):
+    """At random: a simulated run (``random.Random(seed)``, so that a run is replayed by
+    its seed)."""
+
+    def __init__(self, rng: random.Random):
+        self.rng = rng
+
+    def choose(self, options):
+        return pick(options, self.rng)
+
+    def schedule(self, delay: Delay, t: float) -> tuple[tuple[float, Fraction], ...]:
+        return ((t + delay.draw(self.rng), Fraction(1)),)    # drawn at once: the same law
+
+
+class Choice(Exception):
+    """A :class:`Replay` has no more choices made: these are the options of the next one."""
+
+    def __init__(self, options: Sequence[tuple[Any, Fraction]]):
+        super().__init__("a choice to make")
+        self.options = list(options)
+
+
+class Replay(Chooser):
+    """The choices made already, by their index; the next one raises :class:`Choice`,
+    so that the caller tries each option in turn (the exact odds' enumeration)."""
+
+    def __init__(self, made: Sequence[int]):
+        self.made, self.k = made, 0
+
+    def choose(self, options):
+        if len(options) == 1:       # no choice at all
+            return options[0][0]
+        if self.k == len(self.made):
+            raise Choice(options)
+        self.k += 1
+        return options[self.made[self.k - 1]][0]
+
+
+def _outcomes(model: PrimitiveModel) -> list[tuple[EventKind | None, Fraction]]:
+    out = [(EventKind.ACHIEVED, model.achieve), (EventKind.FAILED, model.fail),
+           (None, model.never)]
+    return [(kind, p) for kind, p in out if p]
+
+
+@dataclass(frozen=True)
+class Due:
+    """A primitive's next event: its kind, and the times it may come at with their
+    probabilities (not normalised: what is left of its delay's distribution once the
+    earlier times have passed without it)."""
+
+    kind: EventKind
+    support: tuple[tuple[float, Fraction], ...]
+
+
+class ModelVehicle(Vehicle):
+    """A vehicle that answers as its model says, each choice made by ``chooser``.
+
+    Each primitive has at most one event due (:class:`Due`): its acknowledgement,
+    then its report, then the loss of a goal achieved. Where a delay may end at
+    several times, whether the event comes at the earliest of them is chosen
+    when that time comes, with the probability that it comes then given that it
+    has not come before (its hazard): a run draws the same delays as it would by
+    drawing them at once, and the exact odds branch two ways at an instant instead
+    of once per value of every delay at the enabling.
+    """
+
+    def __init__(self, model: VehicleModel, chooser: Chooser | None):
+        self.model, self.chooser = model, chooser
+        self.pending: dict[str, Due] = {}
+
+    def copy(self, chooser: Chooser) -> "ModelVehicle":
+        other = ModelVehicle(self.model, chooser)
+        other.pending = dict(self.pending)
+        return other
+
+    def state(self, now: float) -> tuple:
+        """What the vehicle will still do, relative to ``now``: equal states, equal futures."""
+        return tuple(sorted((name, due.kind.value, tuple((t - now, p) for t, p in due.support))
+                            for name, due in self.pending.items()))
+
+    def check_primitives(self, used: set[str]) -> None:
+        self.model.check_primitives(used)
+
+    def _due(self, kind: EventKind, delay: Delay, t: float) -> Due:
+        return Due(kind, self.chooser.schedule(delay, t))
+
+    def act(self, action: Action) -> None:
+        kind = EventKind.ON if action.kind is ActionKind.ENABLE else EventKind.OFF
+        # a disable silences whatever was still to come
+        self.pending[action.primitive] = self._due(kind, self.model.of(action.primitive).ack,
+                                                   action.t)
+
+    def earliest(self) -> float | None:
+        """The earliest time an event may come at (no choice made)."""
+        return min((due.support[0][0] for due in self.pending.values()), default=None)
+
+    def _head(self) -> tuple[float, str] | None:
+        return min(((due.support[0][0], name) for name, due in self.pending.items()),
+                   default=None)
+
+    def next_event_time(self, until: float | None = None) -> float | None:
+        """When the next event comes; whether one comes at a time up to ``until`` only is
+        chosen (past it, the earliest time one may come at), so that the exact odds
+        make the choices of one instant at that instant."""
+        while True:
+            head = self._head()
+            if head is None:
+                return None
+            t, name = head
+            due = self.pending[name]
+            if len(due.support) == 1 or (until is not None and t > until):
+                return t
+            now = due.support[0][1] / sum(p for _, p in due.support)
+            if self.chooser.choose([(True, now), (False, 1 - now)]):
+                self.pending[name] = Due(due.kind, due.support[:1])
+            else:
+                self.pending[name] = Due(due.kind, due.support[1:])
+
+    def take_event(self) -> Event:
+        t, name = self._head()
+        due = self.pending.pop(name)
+        assert len(due.support) == 1, "take_event before next_event_time"
+        m = self.model.of(name)
+        if due.kind is EventKind.ON:
+            outcome = self.chooser.choose(_outcomes(m))
+            if outcome is EventKind.ACHIEVED:
+                self.pending[name] = self._due(outcome, m.achieved_after, t)
+            elif outcome is EventKind.FAILED:
+                self.pending[name] = self._due(outcome, m.failed_after, t)
+        elif due.kind is EventKind.ACHIEVED and m.lose:
+            if self.chooser.choose([(True, m.lose), (False, 1 - m.lose)]):
+                self.pending[name] = self._due(EventKind.FAILED, m.lost_after, t)
+        return Event(t, due.kind, name)
