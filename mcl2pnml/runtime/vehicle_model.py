@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import random
+import re
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -48,9 +49,9 @@ MAX_SUPPORT = 10_000
 
 T = TypeVar("T")
 
-_PROBABILITY = {"anyOf": [{"type": "number", "minimum": 0, "maximum": 1},
-                          {"type": "string", "pattern": r"^\s*\d+\s*/\s*\d+\s*$",
-                           "maxLength": 40}]}
+#: a number, or a string of an exact one ("2/3", "0.1"): read by :func:`_probability`
+_PROBABILITY = {"type": ["number", "string"], "minimum": 0, "maximum": 1, "maxLength": 40}
+_EXACT = re.compile(r"\s*\d+(\.\d+)?\s*(/\s*\d+\s*)?")
 _SECONDS = {"type": "number", "minimum": 0, "maximum": MAX_DELAY}
 _WHOLE = {"type": "integer", "minimum": 0, "maximum": MAX_DELAY}
 _DELAY = {
@@ -209,13 +210,21 @@ class VehicleModel:
         return cls.from_json(read_text(path, "vehicle model", MAX_MODEL), str(path))
 
 
-def _probability(value: Any) -> Fraction:
+def _probability(value: Any, path: tuple, where) -> Fraction:
+    """A probability as written: 0.1 is 1/10 (not the nearest double), "2/3" two thirds."""
     if isinstance(value, str):
-        top, bottom = (int(part) for part in value.split("/"))
-        if bottom == 0:
-            raise ZeroDivisionError
-        return Fraction(top, bottom)
-    return Fraction(str(value))      # as written: 0.1 is 1/10, not the nearest double
+        if not _EXACT.fullmatch(value):
+            raise Mcl2PnmlError(f'{dotted(path)}: "{value}" is not a probability: a number from '
+                                '0 to 1, or a fraction such as "2/3"', where(path))
+        top, _, bottom = value.replace(" ", "").partition("/")
+        if bottom and int(bottom) == 0:
+            raise Mcl2PnmlError(f"{dotted(path)}: {value} divides by zero", where(path))
+        p = Fraction(top) / (int(bottom) if bottom else 1)
+    else:
+        p = Fraction(str(value))
+    if p > 1:
+        raise Mcl2PnmlError(f"{dotted(path)}: {value} is more than 1", where(path))
+    return p
 
 
 def _delay(spec: Mapping[str, Any], path: tuple, where) -> Delay:
@@ -227,10 +236,10 @@ def _delay(spec: Mapping[str, Any], path: tuple, where) -> Delay:
         low, high = value
         if high < low:
             raise Mcl2PnmlError(f"{dotted(path)}.uniform: [{low}, {high}] is empty: the first "
-                                "bound is the smaller", at)
+                                "bound is the smaller", where((*path, "uniform")))
         if high - low + 1 > MAX_SUPPORT:
             raise Mcl2PnmlError(f"{dotted(path)}.uniform: {high - low + 1:,} values, more "
-                                f"than {MAX_SUPPORT:,}", at)
+                                f"than {MAX_SUPPORT:,}", where((*path, "uniform")))
         n = high - low + 1
         return Delay("uniform", tuple((float(d), Fraction(1, n)) for d in range(low, high + 1)),
                      where=at)
@@ -241,11 +250,7 @@ def _delay(spec: Mapping[str, Any], path: tuple, where) -> Delay:
             if seconds > MAX_DELAY:
                 raise Mcl2PnmlError(f"{dotted(path)}.table: {key} s is longer than "
                                     f"{MAX_DELAY:,} s", where((*path, "table", key)))
-            try:
-                support.append((seconds, _probability(p)))
-            except ZeroDivisionError:
-                raise Mcl2PnmlError(f"{dotted((*path, 'table', key))}: {p} divides by zero",
-                                    where((*path, "table", key))) from None
+            support.append((seconds, _probability(p, (*path, "table", key), where)))
         total = sum(p for _, p in support)
         if total != 1:
             raise Mcl2PnmlError(f"{dotted(path)}.table: the probabilities add up to {total}, "
@@ -263,14 +268,7 @@ def _primitive(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
     changes: dict[str, Any] = {}
     for key in ("achieve", "fail", "lose"):
         if key in spec:
-            try:
-                changes[key] = _probability(spec[key])
-            except ZeroDivisionError:
-                raise Mcl2PnmlError(f"{dotted((*path, key))}: {spec[key]} divides by zero",
-                                    where((*path, key))) from None
-            if changes[key] > 1:
-                raise Mcl2PnmlError(f"{dotted((*path, key))}: {spec[key]} is more than 1",
-                                    where((*path, key)))
+            changes[key] = _probability(spec[key], (*path, key), where)
     for key in ("after", "achieved_after", "failed_after", "lost_after", "ack"):
         if key in spec:
             changes[key] = _delay(spec[key], (*path, key), where)
