@@ -35,7 +35,7 @@ Examples:
   mcl2pnml show examples/sauce.mcl --run run.jsonl
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
   mcl2pnml certify examples/sauce.mcl
-  mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.vehicle.json
+  mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.model.json
 """
 
 

@@ -112,7 +112,7 @@ def _wilson(k: int, n: int, z: float = 3.29) -> tuple[float, float]:
 
 
 MODELS = {
-    "sonar": ROOT / "examples" / "sauce.vehicle.json",
+    "sonar": ROOT / "examples" / "sauce.model.json",
     "unreliable": {"defaults": {"achieve": "9/10", "fail": "1/20", "after": {"fixed": 5},
                                 "ack": {"table": {"0": 0.5, "1": 0.5}}},
                    "primitives": {
