@@ -14,7 +14,7 @@ import click
 
 from mcl2pnml import pipeline
 from mcl2pnml.cli_options import (
-    ANALYZE_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
+    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
     FORMAT_OPTION, NET_OPTION, ODDS_OPTIONS, OUTPUT, PROPERTIES_SIZE, PROPERTY_ATOMS,
     RUN_OPTIONS, SHOW_OPTIONS)
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
@@ -36,6 +36,7 @@ Examples:
   mcl2pnml validate task.pnml --grammar ~/pnml/grammar
   mcl2pnml certify examples/sauce.mcl
   mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.model.json
+  mcl2pnml campaign examples/sauce.mcl --vehicle-model examples/sauce.model.json --runs 10000
 """
 
 
@@ -332,3 +333,25 @@ def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Pa
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return 0
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("mission", type=FILE)
+@CAMPAIGN_OPTIONS
+def campaign(mission: Path, model: Path, as_json: bool, progress: bool | None,
+             **options) -> int:
+    """Fly MISSION many times with a vehicle model, on Dask: each ending's frequency with
+    its interval, the end times, and optionally a sequential test (docs/odds.md)."""
+    from mcl2pnml.campaign import lines
+    shown = sys.stderr.isatty() if progress is None else progress
+    flown = pipeline.campaign_file(mission, model, progress=_runs_done if shown else None,
+                                   note=_note, **options)
+    if shown:
+        click.echo("", err=True)
+    click.echo(json.dumps(flown.as_json(), indent=2) if as_json
+               else "\n".join(lines(flown, mission.name)))
+    return 0
+
+
+def _runs_done(done: int, total: int) -> None:
+    click.echo(f"\r{done:,} of {total:,} runs", nl=False, err=True)

@@ -117,7 +117,8 @@ RUN_OPTIONS = _composed(  # run MISSION
                  + ", and those of --sim-primitives and installed packages; docs/simulator.md; "
                  "a world NAME.world.json beside the mission is its default), a real vehicle "
                  "through a mapping file and a bridge (see --connect), an autopilot over MAVLink "
-                 "(ArduSub; mavlink: takes another mapping; docs/ardusub.md), or a script "
+                 "(ArduSub; mavlink: takes another mapping; docs/ardusub.md), a vehicle model "
+                 "drawing its answers (docs/odds.md; @SEED picks the run), or a script "
                  '({"PRIMITIVE": ["ok@5", "fail@3", "never"]}; each example of examples/ has one '
                  "beside it, NAME.vehicle.json)."),
     click.option("--connect", metavar="HOST:PORT", help="The bridge server, for --vehicle bridge: "
@@ -283,4 +284,33 @@ ODDS_OPTIONS = _composed(  # odds MISSION
                  help="Write the chain in PRISM's language (PRISM and Storm read it)."),
     click.option("--max-states", type=click.IntRange(min=1), default=200_000,
                  show_default=True, help="Refuse a chain of more states than this."),
+)
+
+
+CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
+    click.option("--vehicle-model", "model", type=FILE, required=True, metavar="MODEL.json",
+                 help="The vehicle model the runs draw their answers from (docs/odds.md)."),
+    click.option("--runs", type=click.IntRange(min=1, max=10_000_000), default=1000,
+                 show_default=True, help="How many runs (fewer if --target decides first)."),
+    click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
+                 show_default=True, help="The engine that runs the mission."),
+    click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+                 help="Run k draws with seed SEED+k (run --vehicle model:MODEL.json@SEED "
+                      "flies it again alone)."),
+    click.option("--confidence", type=click.FloatRange(0.5, 0.999999), default=0.99,
+                 show_default=True, help="Of the intervals and the sequential test."),
+    click.option("--target", type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True),
+                 help="Stop as soon as P(OK) >= TARGET is decided, either way (Wald's "
+                      "sequential test)."),
+    click.option("--workers", type=click.IntRange(min=1, max=256),
+                 help="Processes of the local Dask cluster (default: one per core)."),
+    click.option("--scheduler", metavar="tcp://HOST:8786",
+                 help="Send the runs to this Dask scheduler instead of a local cluster."),
+    click.option("--table", type=OUTPUT, metavar="FILE.csv|FILE.parquet",
+                 help="Write every run (seed, outcome, end time)."),
+    click.option("--plot", type=OUTPUT, metavar="FILE.png|FILE.svg",
+                 help="Draw the outcomes with their intervals and the end times."),
+    click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
+    click.option("--progress/--no-progress", default=None,
+                 help="Show the runs done (default: on a terminal)."),
 )

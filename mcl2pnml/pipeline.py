@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from mcl2pnml.core.properties import Property
     from mcl2pnml.core.timing import Assumptions
     from mcl2pnml.language.functional import Instance
-    from mcl2pnml.runtime.odds import Odds
+    from mcl2pnml.odds import Odds
     from mcl2pnml.runtime.session import RunOptions
 
 
@@ -1268,7 +1268,7 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
     """``mcl2pnml odds``: the exact odds of a mission (MCL) with a vehicle model; the
     chain in PRISM's language to ``prism`` if asked (Storm and PRISM read it)."""
     from mcl2pnml.core.files import atomic_write_text, check_outputs
-    from mcl2pnml.runtime import odds as exact
+    from mcl2pnml import odds as exact
     from mcl2pnml.runtime.executor import PetriEngine
     from mcl2pnml.runtime.vehicle_model import VehicleModel
     if mission.suffix != ".mcl":
@@ -1288,3 +1288,36 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
         note(f"wrote {prism}")
     table = exact.sensitivity(net, model, used, limit) if sensitivity else []
     return OddsOutcome(mission.name, model_path.name, odds, table)
+
+
+def campaign_file(mission: Path, model_path: Path, runs: int, *, engine: str = "petri",
+                  seed: int = 0, confidence: float = 0.99, target: float | None = None,
+                  workers: int | None = None, scheduler: str | None = None,
+                  table: Path | None = None, plot: Path | None = None,
+                  max_time: float = 24 * 3600.0,
+                  progress: Callable[[int, int], None] | None = None,
+                  note: Callable[[str], None] = lambda line: None):
+    """``mcl2pnml campaign``: ``runs`` simulated runs of a mission with a vehicle model on
+    Dask (:mod:`mcl2pnml.campaign`), the table and the plot written if asked."""
+    from mcl2pnml.core.files import check_outputs
+    from mcl2pnml import campaign as campaigns
+    from mcl2pnml.runtime.executor import PetriEngine
+    from mcl2pnml.runtime.vehicle_model import VehicleModel
+    if mission.suffix != ".mcl":
+        raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl)")
+    if scheduler is not None and workers is not None:
+        raise OptionError("--workers", "the scheduler's cluster has its own workers")
+    check_outputs([("--table", table), ("--plot", plot)],
+                  [("the mission", mission), ("the vehicle model", model_path)])
+    model = VehicleModel.load(model_path)     # refused here, not on a worker
+    model.check_primitives(PetriEngine(compile_checked(check_file(mission))).primitives_used())
+    flown = campaigns.fly(mission, model_path, runs, engine=engine, seed=seed,
+                          confidence=confidence, target=target, workers=workers,
+                          scheduler=scheduler, max_time=max_time, progress=progress)
+    if table is not None:
+        campaigns.write_table(flown, table)
+        note(f"wrote {table}")
+    if plot is not None:
+        campaigns.plot(flown, plot, f"{mission.name} with {model_path.name}")
+        note(f"wrote {plot}")
+    return flown

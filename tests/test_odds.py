@@ -24,7 +24,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.runtime.engine import run
 from mcl2pnml.runtime.executor import PetriEngine
-from mcl2pnml.runtime.odds import TooManyStates, chain_of, odds, odds_of
+from mcl2pnml.odds import TooManyStates, chain_of, odds, odds_of
 from mcl2pnml.runtime.reference import ReferenceEngine
 from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle, VehicleModel
 
@@ -172,7 +172,7 @@ def test_odds_prints_the_outcomes_and_writes_the_chain(tmp_path):
 def test_sensitivity_ranks_the_primitives_by_their_swing():
     model = VehicleModel.load(MODELS["sonar"])
     net = pipeline.compile_checked(pipeline.check_file(SAUCE))
-    from mcl2pnml.runtime.odds import sensitivity
+    from mcl2pnml.odds import sensitivity
     rows = sensitivity(net, model, PetriEngine(net).primitives_used())
     assert [r["swing"] for r in rows] == sorted((r["swing"] for r in rows), reverse=True)
     for r in rows:

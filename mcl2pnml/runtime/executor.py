@@ -209,7 +209,7 @@ class PetriEngine(Engine):
     def clone(self) -> "PetriEngine":
         """A copy that runs on alone from here: the net's tables shared, the run's state
         copied (the exact odds run every choice of the vehicle from one state,
-        :mod:`mcl2pnml.runtime.odds`). What it ignored so far is not copied."""
+        :mod:`mcl2pnml.odds`). What it ignored so far is not copied."""
         other = copy.copy(self)
         other.marking = list(self.marking)
         other.watch = [set(w) for w in self.watch]

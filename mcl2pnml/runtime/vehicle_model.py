@@ -22,7 +22,7 @@ exact fractions (``"2/3"``), read exactly (0.1 is 1/10).
 
 One :class:`ModelVehicle` serves both uses of a model, so that they cannot
 disagree on what it means: a simulated run draws each choice at random
-(:class:`Draw`, seeded), and the exact odds (:mod:`mcl2pnml.runtime.odds`)
+(:class:`Draw`, seeded), and the exact odds (:mod:`mcl2pnml.odds`)
 enumerate every choice with its probability (:class:`Replay`).
 """
 from __future__ import annotations

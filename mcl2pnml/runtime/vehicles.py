@@ -79,6 +79,23 @@ def _mapping_path(spec: str) -> Path | None:
     return Path(spec[len("mavlink:"):]) if spec.startswith("mavlink:") else None
 
 
+def _model_spec(spec: str) -> tuple[Path, int]:
+    """``model:FILE.json`` or ``model:FILE.json@SEED``: the model's file and the seed."""
+    path, at, seed = spec[len("model:"):].rpartition("@")
+    if at and seed.isdigit():
+        return Path(path), int(seed)
+    return Path(spec[len("model:"):]), 0
+
+
+def _model(spec: str, connect: str | None, world: Path | None,
+           link: LinkOptions) -> Vehicle:
+    import random
+
+    from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle, VehicleModel
+    path, seed = _model_spec(spec)
+    return ModelVehicle(VehicleModel.load(path), Draw(random.Random(seed)))
+
+
 def _script(spec: str, connect: str | None, world: Path | None,
             link: LinkOptions) -> Vehicle:
     from mcl2pnml.runtime.aal import ScriptedVehicle
@@ -87,8 +104,9 @@ def _script(spec: str, connect: str | None, world: Path | None,
 
 #: Every kind of vehicle, the first that matches wins: the kinematic AUV
 #: simulator, a real vehicle through a mapping file and a bridge server, an
-#: autopilot over MAVLink (ArduSub, docs/ardusub.md), and
-#: (whatever else is given) a vehicle script (docs/running.md).
+#: autopilot over MAVLink (ArduSub, docs/ardusub.md), a vehicle model drawing its
+#: answers (docs/odds.md; the seed after @ replays a run), and (whatever else is
+#: given) a vehicle script (docs/running.md).
 VEHICLES: tuple[VehicleKind, ...] = (
     VehicleKind("sim", lambda spec: spec == "sim", _simulator, takes_world=True),
     VehicleKind("bridge:MAPPING.json", lambda spec: spec.startswith("bridge:"), _bridge,
@@ -96,6 +114,8 @@ VEHICLES: tuple[VehicleKind, ...] = (
     VehicleKind("mavlink[:MAPPING.json]",
                 lambda spec: spec == "mavlink" or spec.startswith("mavlink:"), _mavlink,
                 realtime=True, takes_world=True, source=_mapping_path),
+    VehicleKind("model:MODEL.json[@SEED]", lambda spec: spec.startswith("model:"), _model,
+                source=lambda spec: _model_spec(spec)[0]),
     VehicleKind("SCRIPT.json", lambda spec: True, _script, source=Path),
 )
 

@@ -1,0 +1,154 @@
+"""`mcl2pnml campaign`: simulated runs on Dask agree with the exact odds, and survive their
+workers.
+
+A campaign's outcome frequencies must hold the exact odds (`mcl2pnml odds`) within their
+99% intervals; its runs are exactly its seeds, each once, whatever the cluster: the same
+for a local cluster, a scheduler and workers started as separate processes on loopback,
+and that cluster with a worker killed mid-campaign (Dask reschedules its batches).
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from helpers import ROOT, one_error, run_cli
+from mcl2pnml import pipeline
+from mcl2pnml.campaign import BATCH, fly_batch
+from mcl2pnml.odds import odds
+from mcl2pnml.runtime.vehicle_model import VehicleModel
+
+distributed = pytest.importorskip("distributed", reason="Dask's distributed is not installed "
+                                  "(pip install -e '.[test]' installs it)")
+
+SAUCE = ROOT / "examples" / "sauce.mcl"
+MODEL = ROOT / "examples" / "sauce.model.json"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def exact():
+    return odds(pipeline.compile_checked(pipeline.check_file(SAUCE)), VehicleModel.load(MODEL))
+
+
+@pytest.fixture(scope="module")
+def local(tmp_path_factory):
+    """1,500 runs on a local cluster of two workers, with their table."""
+    table = tmp_path_factory.mktemp("campaign") / "runs.csv"
+    out = run_cli("campaign", SAUCE, "--vehicle-model", MODEL, "--runs", 1500, "--workers", 2,
+                  "--json", "--table", table, "--seed", 100, timeout=240)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout), table.read_text().splitlines()
+
+
+def test_a_campaign_holds_the_exact_odds_within_its_intervals(local, exact):
+    data, _ = local
+    for outcome, d in data["outcomes"].items():
+        low, high = d["interval"]
+        assert low <= exact.outcomes[outcome] <= high, (outcome, d, exact.outcomes)
+    t = data["end_time"]
+    assert abs(t["mean"] - exact.mean) <= t["mean_interval_halfwidth"], (t, exact.mean)
+
+
+def test_every_seed_is_flown_once_and_replays_alone(local):
+    data, rows = local
+    seeds = [int(r.split(",")[0]) for r in rows[1:]]
+    assert seeds == list(range(100, 1600)) and data["runs"] == 1500
+    # any run flown again alone, by its seed: the same end
+    seed, outcome, t = rows[1 + 737].split(",")
+    again = run_cli("run", SAUCE, "--vehicle", f"model:{MODEL}@{seed}", "--json")
+    assert json.loads(again.stdout)["outcome"] == outcome
+    assert float(json.loads(again.stdout)["time"]) == float(t)
+
+
+def test_the_sequential_test_stops_as_soon_as_it_decides(exact):
+    target = exact.outcomes["OK"] - 0.1       # plainly true: decided early
+    flown = pipeline.campaign_file(SAUCE, MODEL, 20_000, target=target, workers=1)
+    data = flown.as_json()
+    assert data["test"]["decided"] == f"P(OK) >= {target:g}"
+    assert data["runs"] == data["test"]["after_runs"] < 20_000
+
+
+@pytest.fixture
+def cluster(tmp_path):
+    """A scheduler and two workers, separate processes on loopback; killed at the end."""
+    port = _free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    dask = str(Path(sys.executable).with_name("dask"))
+    procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                               "--no-dashboard"], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, start_new_session=True)]
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                time.sleep(0.2)
+        for _ in range(2):
+            procs.append(subprocess.Popen(
+                [dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                 "--no-dashboard", "--local-directory", str(tmp_path)],
+                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
+        client = distributed.Client(address, timeout="30s")
+        client.wait_for_workers(2, timeout=60)
+        client.close()
+        yield address, procs
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait(10)
+
+
+def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_worker(cluster):
+    address, procs = cluster
+    runs = 12 * BATCH
+    done, result = [], {}
+
+    def fly():
+        result["campaign"] = pipeline.campaign_file(
+            SAUCE, MODEL, runs, seed=5, scheduler=address,
+            progress=lambda n, total: done.append(n))
+    thread = threading.Thread(target=fly)
+    thread.start()
+    deadline = time.monotonic() + 60
+    while not done and time.monotonic() < deadline:
+        time.sleep(0.05)
+    os.killpg(procs[1].pid, signal.SIGKILL)       # one worker gone mid-campaign
+    thread.join(240)
+    assert not thread.is_alive()
+    flown = result["campaign"]
+    assert [r.seed for r in flown.runs] == list(range(5, 5 + runs))
+    # the same runs as flown here, batch by batch, without Dask
+    alone = [r for k in range(0, runs, BATCH)
+             for r in fly_batch(str(SAUCE), str(MODEL), "petri",
+                                list(range(5 + k, 5 + min(k + BATCH, runs))), 24 * 3600.0)]
+    assert flown.runs == alone
+
+
+def test_a_scheduler_that_is_not_there_is_one_message():
+    out = run_cli("campaign", SAUCE, "--vehicle-model", MODEL, "--runs", 10,
+                  "--scheduler", f"tcp://127.0.0.1:{_free_port()}", timeout=120)
+    one_error(out, "cannot reach the Dask scheduler")
+
+
+def test_a_bad_model_is_refused_before_any_run(tmp_path):
+    bad = tmp_path / "m.json"
+    bad.write_text('{"primitives": {"DetectCross": {"achieve": 2}}}')
+    out = run_cli("campaign", SAUCE, "--vehicle-model", bad, "--runs", 10)
+    one_error(out, "m.json:1:44:", "greater than the maximum")
