@@ -29,7 +29,7 @@ from typing import Callable, Iterable
 from mcl2pnml.core.errors import Mcl2PnmlError
 
 #: Runs per task sent to a worker.
-BATCH = 250
+BATCH = 500
 #: How long a scheduler may take to answer, in seconds.
 CONNECT_TIMEOUT = 5
 #: The indifference region of the sequential test, either side of its target.
@@ -47,28 +47,44 @@ class Flown:
 
 def fly_batch(mission: str, model: str, engine: str, seeds: list[int],
               max_time: float) -> list[Flown]:
-    """Fly the runs of ``seeds`` (a task of a worker: it compiles the mission once)."""
-    from mcl2pnml.language.checker import check
-    from mcl2pnml.language.compiler import compile_checked
-    from mcl2pnml.language.parser import parse_file
+    """Fly the runs of ``seeds`` (a task of a worker)."""
     from mcl2pnml.runtime.engine import run
-    from mcl2pnml.runtime.executor import PetriEngine
-    from mcl2pnml.runtime.reference import ReferenceEngine
-    from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle, VehicleModel
-    checked = check(parse_file(mission))
-    vehicle_model = VehicleModel.load(model)
-    if engine == "petri":
-        first = PetriEngine(compile_checked(checked))
-        make = first.clone
-    else:
-        def make():
-            return ReferenceEngine(checked)
+    from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle
+    make, vehicle_model = _prepared(mission, model, engine)
     out = []
     for seed in seeds:
         r = run(make(), ModelVehicle(vehicle_model, Draw(random.Random(seed))),
                 max_time=max_time)
         out.append(Flown(seed, r.outcome.value, float(r.time)))
     return out
+
+
+#: What a worker has compiled, by mission, model and engine (and their files' times):
+#: the batches of one campaign compile the mission once per worker.
+_PREPARED: dict[tuple, tuple] = {}
+
+
+def _prepared(mission: str, model: str, engine: str) -> tuple[Callable, object]:
+    import os
+
+    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.compiler import compile_checked
+    from mcl2pnml.language.parser import parse_file
+    from mcl2pnml.runtime.executor import PetriEngine
+    from mcl2pnml.runtime.reference import ReferenceEngine
+    from mcl2pnml.runtime.vehicle_model import VehicleModel
+    key = (mission, model, engine, os.stat(mission).st_mtime_ns, os.stat(model).st_mtime_ns)
+    found = _PREPARED.get(key)
+    if found is None:
+        checked = check(parse_file(mission))
+        if engine == "petri":
+            make = PetriEngine(compile_checked(checked)).clone
+        else:
+            def make():
+                return ReferenceEngine(checked)
+        _PREPARED.clear()
+        found = _PREPARED[key] = (make, VehicleModel.load(model))
+    return found
 
 
 def wilson(k: int, n: int, confidence: float) -> tuple[float, float]:

@@ -170,14 +170,20 @@ def test_odds_prints_the_outcomes_and_writes_the_chain(tmp_path):
 
 
 def test_sensitivity_ranks_the_primitives_by_their_swing():
+    """Ranked by swing; KeepDepth, which the mission's last step needs, never achieving
+    leaves no OK; and a better sonar lowers P(OK) (a cross found starts the dive and the
+    release, which can fail), which a ranking by swing shows as a negative one."""
     model = VehicleModel.load(MODELS["sonar"])
     net = pipeline.compile_checked(pipeline.check_file(SAUCE))
     from mcl2pnml.odds import sensitivity
-    rows = sensitivity(net, model, PetriEngine(net).primitives_used())
-    assert [r["swing"] for r in rows] == sorted((r["swing"] for r in rows), reverse=True)
-    for r in rows:
-        assert r["ok_if_it_never_achieves"] <= r["ok"] + 1e-12 <= \
-            r["ok_if_it_always_achieves"] + 2e-12
+    rows = {r["primitive"]: r for r in sensitivity(net, model,
+                                                    PetriEngine(net).primitives_used())}
+    swings = [r["swing"] for r in rows.values()]
+    assert swings == sorted(swings, reverse=True)
+    base = odds(net, model).outcomes["OK"]
+    assert all(r["ok"] == pytest.approx(base, abs=1e-12) for r in rows.values())
+    assert rows["KeepDepth"]["ok_if_it_never_achieves"] == pytest.approx(0.0, abs=1e-12)
+    assert rows["DetectCross"]["swing"] < 0
 
 
 BAD = [  # the file, what its message says, and where its caret points (the value's start)
