@@ -20,7 +20,9 @@ Measures, on this machine, in one run (about fifteen minutes on 2 cores):
 * compiling: surveys of 100 to 100,000 calls, MCL to PNML on disk, with
   the fitted exponent of time against size (:mod:`bench.compile_scale`);
 * the executor: median and 99th-percentile time per vehicle event, on
-  missions of 10 to 10,000 tasks (:mod:`bench.executor_latency`).
+  missions of 10 to 10,000 tasks (:mod:`bench.executor_latency`);
+* campaigns: 100,000 simulated runs of the paper's mission on 1 and 2 Dask
+  workers, against the exact odds (:mod:`bench.campaign_scale`).
 
 Each section ends with the targets the project set itself and whether they
 hold. ``--quick`` runs small sizes only (a smoke test of the suite).
@@ -41,7 +43,7 @@ from mcl2pnml.core.files import atomic_write_text
 
 from analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
-from bench import certify_scale, properties_peers, real_models
+from bench import campaign_scale, certify_scale, properties_peers, real_models
 from bench import statespace_peers as peers
 from bench.core_scale import slope
 from bench.missions import survey
@@ -365,6 +367,12 @@ def executor_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool,
     return lines, targets
 
 
+def campaign_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    runs = 10_000 if quick else 100_000
+    log(f"  campaign: {runs:,} runs on 1, then 2 workers")
+    return campaign_scale.section(campaign_scale.measure(runs))
+
+
 def main(argv: list[str]) -> int:
     quick = "--quick" in argv
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
@@ -374,7 +382,8 @@ def main(argv: list[str]) -> int:
                           ("mission properties", properties_section),
                           ("certificates", certify_section),
                           ("invariants", invariants_section),
-                          ("compile", compile_section), ("executor", executor_section)):
+                          ("compile", compile_section), ("executor", executor_section),
+                          ("campaigns", campaign_section)):
         log(f"{name}...")
         lines, found = section(quick, log)
         sections += [*lines, ""]

@@ -152,3 +152,32 @@ def test_a_bad_model_is_refused_before_any_run(tmp_path):
     bad.write_text('{"primitives": {"DetectCross": {"achieve": 2}}}')
     out = run_cli("campaign", SAUCE, "--vehicle-model", bad, "--runs", 10)
     one_error(out, "m.json:1:44:", "greater than the maximum")
+
+
+EXAMPLE_MODELS = sorted((ROOT / "examples").glob("*.model.json"))
+
+
+def _holds_the_exact_odds(model: Path, runs: int) -> None:
+    mission = model.with_name(model.name.replace(".model.json", ".mcl"))
+    exact = odds(pipeline.compile_checked(pipeline.check_file(mission)), VehicleModel.load(model))
+    data = pipeline.campaign_file(mission, model, runs, workers=2).as_json()
+    for outcome in ("OK", "FAIL", "ABORTED"):
+        d = data["outcomes"].get(outcome)
+        if d is None:   # never seen: the exact odds make that likely at this many runs
+            assert (1 - exact.outcomes[outcome]) ** runs > 0.001, (outcome, exact.outcomes)
+            continue
+        low, high = d["interval"]
+        assert low <= exact.outcomes[outcome] <= high, (model.name, outcome, d, exact.outcomes)
+    t = data["end_time"]
+    assert abs(t["mean"] - exact.mean) <= t["mean_interval_halfwidth"], (model.name, t, exact.mean)
+
+
+@pytest.mark.parametrize("model", EXAMPLE_MODELS, ids=lambda p: p.name)
+def test_every_example_model_s_campaign_holds_its_exact_odds(model):
+    _holds_the_exact_odds(model, 1000)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", EXAMPLE_MODELS, ids=lambda p: p.name)
+def test_ten_thousand_runs_of_every_example_model_hold_its_exact_odds(model):
+    _holds_the_exact_odds(model, 10_000)
