@@ -277,7 +277,8 @@ def to_prism(chain: MarkovChain, title: str) -> str:
         body = " | ".join(f"s={s}" for s in states) if states else "false"
         lines.append(f'label "{name}" = {body};')
     lines += ["", 'rewards "time"']
-    lines += [f"  s={s} : {Fraction(d).limit_denominator(10**6)};"
-              for s, d in enumerate(chain.duration) if d]
+    lasting = [f"  s={s} : {Fraction(d).limit_denominator(10**6)};"
+               for s, d in enumerate(chain.duration) if d]
+    lines += lasting or ["  true : 0;"]     # a mission that takes no time: PRISM needs one
     lines += ["endrewards", ""]
     return "\n".join(lines)
