@@ -74,9 +74,19 @@ def test_every_seed_is_flown_once_and_replays_alone(local):
     assert float(json.loads(again.stdout)["time"]) == float(t)
 
 
-def test_the_sequential_test_stops_as_soon_as_it_decides(exact):
+@pytest.fixture(scope="module")
+def shared():
+    """One local cluster of two worker processes for the tests that need no cluster of
+    their own (a campaign's default one is the command's test, above)."""
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=50)
+    yield cluster.scheduler_address
+    cluster.close()
+
+
+def test_the_sequential_test_stops_as_soon_as_it_decides(exact, shared):
     target = exact.outcomes["OK"] - 0.1       # plainly true: decided early
-    flown = pipeline.campaign_file(SAUCE, MODEL, 20_000, target=target, workers=1)
+    flown = pipeline.campaign_file(SAUCE, MODEL, 20_000, target=target, scheduler=shared)
     data = flown.as_json()
     assert data["test"]["decided"] == f"P(OK) >= {target:g}"
     assert data["runs"] == data["test"]["after_runs"] < 20_000
@@ -157,10 +167,10 @@ def test_a_bad_model_is_refused_before_any_run(tmp_path):
 EXAMPLE_MODELS = sorted((ROOT / "examples").glob("*.model.json"))
 
 
-def _holds_the_exact_odds(model: Path, runs: int) -> None:
+def _holds_the_exact_odds(model: Path, runs: int, scheduler: str) -> None:
     mission = model.with_name(model.name.replace(".model.json", ".mcl"))
     exact = odds(pipeline.compile_checked(pipeline.check_file(mission)), VehicleModel.load(model))
-    data = pipeline.campaign_file(mission, model, runs, workers=2).as_json()
+    data = pipeline.campaign_file(mission, model, runs, scheduler=scheduler).as_json()
     for outcome in ("OK", "FAIL", "ABORTED"):
         d = data["outcomes"].get(outcome)
         if d is None:   # never seen: the exact odds make that likely at this many runs
@@ -173,11 +183,11 @@ def _holds_the_exact_odds(model: Path, runs: int) -> None:
 
 
 @pytest.mark.parametrize("model", EXAMPLE_MODELS, ids=lambda p: p.name)
-def test_every_example_model_s_campaign_holds_its_exact_odds(model):
-    _holds_the_exact_odds(model, 1000)
+def test_every_example_model_s_campaign_holds_its_exact_odds(model, shared):
+    _holds_the_exact_odds(model, 1000, shared)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("model", EXAMPLE_MODELS, ids=lambda p: p.name)
-def test_ten_thousand_runs_of_every_example_model_hold_its_exact_odds(model):
-    _holds_the_exact_odds(model, 10_000)
+def test_ten_thousand_runs_of_every_example_model_hold_its_exact_odds(model, shared):
+    _holds_the_exact_odds(model, 10_000, shared)
