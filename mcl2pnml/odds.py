@@ -205,9 +205,13 @@ class Odds:
     transitions: int
     #: the probability still unresolved past the distribution's horizon
     beyond: float = 0.0
+    #: the outcomes as exact fractions, for a chain small enough (None: too large)
+    exact: dict[str, Fraction] | None = None
 
     def as_json(self) -> dict:
-        return {"outcomes": self.outcomes, "end_time": {
+        exact = {"exact_outcomes": {k: str(v) for k, v in self.exact.items()}} \
+            if self.exact is not None else {}
+        return {"outcomes": self.outcomes, **exact, "end_time": {
             "mean": self.mean, "std": self.spread, **self.quantiles},
             "distribution": [{"t": t, "ended": p} for t, p in self.distribution],
             "states": self.states, "transitions": self.transitions,
@@ -215,6 +219,48 @@ class Odds:
 
 
 QUANTILES = (0.05, 0.5, 0.95)
+#: Chains of at most this many transient states get their outcomes as exact fractions too.
+EXACT_STATES = 1_000
+
+
+def exact_outcomes(chain: MarkovChain) -> dict[str, Fraction] | None:
+    """The probability of each ending as an exact fraction (None: a chain of more than
+    :data:`EXACT_STATES` transient states): (I - Q) X = B solved over the rationals
+    (FLINT's ``fmpq_mat``), from the model's exact probabilities."""
+    import flint
+
+    from analysis.markov import CYCLES, closed_classes
+    label = list(chain.label)
+    for s in closed_classes(chain.as_analysis()):
+        label[s] = CYCLES
+    names = [*ENDS, WAITS, CYCLES]
+    if label[0]:
+        return _endings({name: Fraction(int(label[0] == name)) for name in names})
+    transient = [s for s, x in enumerate(label) if not x]
+    if len(transient) > EXACT_STATES:
+        return None
+    index = {s: k for k, s in enumerate(transient)}
+    a = flint.fmpq_mat(len(transient), len(transient))
+    b = flint.fmpq_mat(len(transient), len(names))
+    for k, s in enumerate(transient):
+        a[k, k] += 1
+        for j, p in chain.successors[s]:
+            q = flint.fmpq(p.numerator, p.denominator)
+            if j in index:
+                a[k, index[j]] -= q
+            else:
+                b[k, names.index(label[j])] += q
+    x = a.solve(b)
+    row = index[0]
+    return _endings({name: Fraction(int(x[row, c].p), int(x[row, c].q))
+                     for c, name in enumerate(names)})
+
+
+def _endings(by_label: dict[str, Fraction]) -> dict[str, Fraction]:
+    """The results, and "never" for waiting or cycling for ever."""
+    out = {e: by_label.get(e, Fraction(0)) for e in ENDS}
+    out["never"] = by_label.get(WAITS, Fraction(0)) + by_label.get("cycles", Fraction(0))
+    return out
 
 
 def odds_of(chain: MarkovChain) -> Odds:
@@ -225,7 +271,7 @@ def odds_of(chain: MarkovChain) -> Odds:
     quantiles = {f"p{round(q * 100)}": a.quantile(q) for q in QUANTILES}
     return Odds(outcomes, a.mean, a.spread, quantiles,
                 [(float(t), float(p)) for t, p in zip(a.times, a.cdf)], chain.size,
-                sum(len(s) for s in chain.successors), a.beyond)
+                sum(len(s) for s in chain.successors), a.beyond, exact_outcomes(chain))
 
 
 def odds(net: Net, model: VehicleModel, max_states: int = MAX_STATES) -> Odds:

@@ -1236,7 +1236,10 @@ class OddsOutcome:
         lines = [f"{self.mission} with the vehicle model {self.model} "
                  f"({o.states:,} states, {o.transitions:,} transitions; docs/odds.md):"]
         for name, p in o.outcomes.items():
-            lines.append(f"  P({name}) = {p:.6f}")
+            exact = o.exact.get(name) if o.exact is not None else None
+            said = f" = {exact}" if exact is not None and exact.denominator > 1 and \
+                len(str(exact)) <= 40 else ""
+            lines.append(f"  P({name}) = {p:.6f}{said}")
         if o.mean is None:
             lines.append("  end time: the mission never ends")
         else:

@@ -55,7 +55,7 @@ def test_the_papers_mission_ends_as_the_paper_says():
     assert "ReleaseMarker" not in {e["primitive"] for e in petri["trace"]}
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(missions(), scripts)
 def test_generated_missions_run_the_same_on_both_engines(source, script):
     checked = check_source(source, "generated.mcl")

@@ -131,7 +131,7 @@ def test_simulated_runs_on_both_engines_agree_with_the_exact_odds(name):
     checked = pipeline.check_file(SAUCE)
     net = pipeline.compile_checked(checked)
     exact = odds(net, model)
-    runs = 400
+    runs = 200
     for engine in (lambda: PetriEngine(net), lambda: ReferenceEngine(checked)):
         ends, times = {}, []
         for seed in range(runs):

@@ -485,13 +485,13 @@ def _generated(tmp_path_factory, source, assumptions=AT_ONCE, max_states=1_000_0
 
 
 @seed(7)
-@settings(max_examples=25, deadline=None, database=None,
+@settings(max_examples=15, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(source=SMALL)
 def test_verifydtapn_on_generated_missions(tmp_path_factory, source):
     """Small generated missions: verifydtapn gives a verdict on "an end is always reached"
     (a time-out bounds every task of some; others may wait for ever for a report), held to
-    our own checker (twenty-five here, two thousand larger ones in the slow variant)."""
+    our own checker (fifteen here, two thousand larger ones in the slow variant)."""
     _generated(tmp_path_factory, source)
 
 
