@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import random
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
@@ -201,8 +202,11 @@ def fly(mission: Path, model: Path, runs: int, *, engine: str = "petri", seed: i
         raise Mcl2PnmlError(f"cannot reach the Dask scheduler {scheduler or '(local)'} "
                             f"within {CONNECT_TIMEOUT} s: {e}") from None
     try:
+        # keys of this campaign alone: a scheduler shared with other campaigns (another
+        # user's, another mission) must never take one's batch for another's
+        tag = uuid.uuid4().hex
         futures = {client.submit(fly_batch, *args, batch, max_time, pure=False,
-                                 key=f"mcl2pnml-runs-{batch[0]}-{id(campaign)}"): batch[0]
+                                 key=f"mcl2pnml-runs-{tag}-{batch[0]}"): batch[0]
                    for batch in batches}
         arrived: dict[int, list[Flown]] = {}
         order = [b[0] for b in batches]
