@@ -83,3 +83,14 @@ def browser():
 def engine(request) -> Engine:
     """Each engine in turn, for the checks that hold of either one alone."""
     return request.param
+
+
+#: Modules whose tests wait the longest on other processes (the tutorial's hundred commands
+#: and its peers, the autopilot's flights, the Dask clusters): collected first, whole, so
+#: that the workers start them first and the run does not end waiting for one of them
+#: alone; every other module, and the order within each, is kept.
+FIRST = ("test_tutorial.py", "test_ardusub.py", "test_campaign.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    items.sort(key=lambda item: item.path.name not in FIRST)    # stable
