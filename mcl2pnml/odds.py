@@ -110,8 +110,7 @@ class MarkovChain:
 
     #: each state's successors, with their exact probabilities
     successors: list[list[tuple[int, Fraction]]] = field(default_factory=list)
-    #: each state's time, and how long its step lasts (0 for an absorbing state)
-    time: list[float] = field(default_factory=list)
+    #: how long each state's step lasts (0 for an absorbing state, and the start's)
     duration: list[float] = field(default_factory=list)
     #: each absorbing state's label (ENDS, WAITS), "" for the others
     label: list[str] = field(default_factory=list)
@@ -140,7 +139,7 @@ def chain_of(net: Net, model: VehicleModel, max_states: int = MAX_STATES) -> Mar
     """The chain of ``net`` run against ``model`` (the module's documentation)."""
     chain = MarkovChain()
     index: dict[tuple, int] = {}
-    instants: list[Instant] = []
+    instants: list[Instant | None] = []     # None: the start, or explored
 
     def state(inst: Instant) -> int:
         key = inst.key()
@@ -151,15 +150,13 @@ def chain_of(net: Net, model: VehicleModel, max_states: int = MAX_STATES) -> Mar
                                     "mission and its vehicle (raise --max-states)")
             found = index[key] = len(instants)
             instants.append(inst)
-            chain.successors.append([]), chain.time.append(inst.now)
-            chain.duration.append(0.0), chain.label.append("")
+            chain.successors.append([]), chain.duration.append(0.0), chain.label.append("")
         return found
 
     # state 0: the mission before its start, whose first actions the vehicle may answer
     # in several ways (a step that takes no time)
     instants.append(None)
-    chain.successors.append([]), chain.time.append(0.0)
-    chain.duration.append(0.0), chain.label.append("")
+    chain.successors.append([]), chain.duration.append(0.0), chain.label.append("")
     first: dict[int, Fraction] = {}
     for p, inst in _branches(None, net, model, 0.0):
         j = state(inst)
