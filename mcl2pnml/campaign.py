@@ -90,10 +90,9 @@ def _prepared(mission: str, model: str, engine: str) -> tuple[Callable, object]:
 
 def wilson(k: int, n: int, confidence: float) -> tuple[float, float]:
     """The Wilson score interval of ``k`` successes in ``n`` trials."""
-    from statistics import NormalDist
     if n == 0:
         return 0.0, 1.0
-    z = NormalDist().inv_cdf(0.5 + confidence / 2)
+    z = _z(confidence)
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)

@@ -278,11 +278,12 @@ def odds(net: Net, model: VehicleModel, max_states: int = MAX_STATES) -> Odds:
 
 
 def sensitivity(net: Net, model: VehicleModel, primitives: Iterable[str],
-                max_states: int = MAX_STATES) -> list[dict]:
-    """For each primitive, P(OK) as modelled, if it always achieved, and if it never did
-    (its failures taking the place of its successes): which primitive's reliability
-    moves the mission's odds most."""
-    base = odds(net, model, max_states).outcomes["OK"]
+                max_states: int = MAX_STATES, base: float | None = None) -> list[dict]:
+    """For each primitive, P(OK) as modelled (``base``, when the caller has it), if it
+    always achieved, and if it never did (its failures taking the place of its
+    successes): which primitive's reliability moves the mission's odds most."""
+    if base is None:
+        base = odds(net, model, max_states).outcomes["OK"]
     rows = []
     for name in sorted(primitives):
         m = model.of(name)

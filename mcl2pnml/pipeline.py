@@ -1289,7 +1289,8 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
     if prism is not None:
         atomic_write_text(prism, exact.to_prism(chain, f"{mission.name} with {model_path.name}"))
         note(f"wrote {prism}")
-    table = exact.sensitivity(net, model, used, limit) if sensitivity else []
+    table = exact.sensitivity(net, model, used, limit, odds.outcomes["OK"]) if sensitivity \
+        else []
     return OddsOutcome(mission.name, model_path.name, odds, table)
 
 

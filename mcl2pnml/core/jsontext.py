@@ -82,6 +82,24 @@ def dotted(path: Iterable) -> str:
     return out or "the file"
 
 
+def parse_located(text: str, filename: str, what: str) -> tuple[Any, Callable[[Iterable], Location]]:
+    """A configuration file's JSON and its locator (:func:`locator`); a file that is not
+    JSON, or holds a NaN (Python's json reads one, and NaN passes every bound), is one
+    message at its line and column saying it is not ``what``."""
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise Mcl2PnmlError(f"not {what}: {e.msg}", Location(filename, e.lineno, e.colno)) \
+            from None
+    except (ValueError, RecursionError) as e:
+        raise Mcl2PnmlError(f"not {what}: {json_fault(e)}", Location(filename)) from None
+    where = locator(text, filename)
+    nan = first_nan(data)
+    if nan is not None:
+        raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
+    return data, where
+
+
 def first_nan(value: Any) -> tuple | None:
     """The path of the first NaN in a parsed file, or None."""
     stack = [((), value)]

@@ -32,15 +32,14 @@ this module (``--vehicle mavlink``).
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
-from mcl2pnml.core.files import json_fault, read_text
-from mcl2pnml.core.jsontext import check_schema, dotted, first_nan, locator
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.files import read_text
+from mcl2pnml.core.jsontext import check_schema, parse_located
 
 #: The largest mapping file read, in bytes.
 MAX_MAPPING = 1 << 20
@@ -132,18 +131,7 @@ class AutopilotMapping:
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<mapping>") -> "AutopilotMapping":
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise Mcl2PnmlError(f"not an autopilot mapping: {e.msg}",
-                                Location(filename, e.lineno, e.colno)) from None
-        except (ValueError, RecursionError) as e:
-            raise Mcl2PnmlError(f"not an autopilot mapping: {json_fault(e)}",
-                                Location(filename)) from None
-        where = locator(text, filename)
-        nan = first_nan(data)
-        if nan is not None:     # Python's json reads NaN, and NaN passes every bound
-            raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
+        data, where = parse_located(text, filename, "an autopilot mapping")
         check_schema(data, SCHEMA, where, what="an autopilot mapping")
         bindings = {}
         for name, spec in data["primitives"].items():

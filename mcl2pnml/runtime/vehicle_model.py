@@ -27,7 +27,6 @@ enumerate every choice with its probability (:class:`Replay`).
 """
 from __future__ import annotations
 
-import json
 import random
 import re
 from dataclasses import dataclass, field
@@ -36,8 +35,8 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence, TypeVar
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
-from mcl2pnml.core.files import json_fault, read_text
-from mcl2pnml.core.jsontext import check_schema, dotted, first_nan, locator
+from mcl2pnml.core.files import read_text
+from mcl2pnml.core.jsontext import check_schema, dotted, parse_located
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Vehicle
 
 #: The largest vehicle model read, in bytes.
@@ -186,18 +185,7 @@ class VehicleModel:
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<model>") -> "VehicleModel":
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise Mcl2PnmlError(f"not a vehicle model: {e.msg}",
-                                Location(filename, e.lineno, e.colno)) from None
-        except (ValueError, RecursionError) as e:
-            raise Mcl2PnmlError(f"not a vehicle model: {json_fault(e)}",
-                                Location(filename)) from None
-        where = locator(text, filename)
-        nan = first_nan(data)
-        if nan is not None:
-            raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
+        data, where = parse_located(text, filename, "a vehicle model")
         check_schema(data, SCHEMA, where, what="a vehicle model")
         default = _primitive(data.get("defaults", {}), DEFAULT, ("defaults",), where)
         primitives = {name: _primitive(spec, default, ("primitives", name), where)
