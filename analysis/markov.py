@@ -117,13 +117,8 @@ def solve(chain: Chain, ends: tuple[str, ...], horizon: float = 1e7,
         h0 = g0 = k0 = None
     else:
         Q = P[transient][:, transient]
-        lu = splu(sparse.identity(len(transient), format="csc") - Q.tocsc())
-        into = P[transient]
-        column = {}
-        for x in names:
-            hits = np.array([lab == x for lab in label], dtype=float)
-            column[x] = lu.solve(into @ hits)
-            probability[x] = float(column[x][index[0]])
+        lu, column = _absorbed(P, label, transient, names)
+        probability = {x: float(column[x][index[0]]) for x in names}
         h = sum((column[x] for x in ends if x in column), np.zeros(len(transient)))
         d = chain.duration[transient].astype(float)
         g = lu.solve(d * h)
@@ -137,6 +132,44 @@ def solve(chain: Chain, ends: tuple[str, ...], horizon: float = 1e7,
         mean, spread = 0.0, 0.0
     times, cdf, beyond = _distribution(chain, label, ends, horizon, tolerance)
     return Absorption(probability, tuple(ends), mean, spread, times, cdf, beyond)
+
+
+def _absorbed(P: sparse.csr_matrix, label: list[str], transient: np.ndarray,
+              names: list[str]) -> tuple:
+    """The LU factors of I - Q and, for each label, the probability of ending in its
+    states from each transient state: (I - Q) x = P[transient] 1_label."""
+    Q = P[transient][:, transient]
+    lu = splu(sparse.identity(len(transient), format="csc") - Q.tocsc())
+    into = P[transient]
+    return lu, {x: lu.solve(into @ np.array([lab == x for lab in label], dtype=float))
+                for x in names}
+
+
+def bottom_components(chain: Chain) -> list[np.ndarray]:
+    """The bottom strongly connected components of the chain (no step leaves them; an
+    absorbing state, with its self-loop, is one): where every run ends up, and then
+    visits every state of its component infinitely often with probability 1."""
+    count, component = csgraph.connected_components(chain.P, directed=True,
+                                                    connection="strong")
+    coo = chain.P.tocoo()
+    leaves = component[coo.row] != component[coo.col]
+    bottom = np.ones(count, dtype=bool)
+    bottom[component[coo.row[leaves]]] = False
+    order = np.argsort(component, kind="stable")
+    groups = np.split(order, np.cumsum(np.bincount(component, minlength=count))[:-1])
+    return [g for c, g in enumerate(groups) if bottom[c]]
+
+
+def reaching(chain: Chain, label: list[str]) -> dict[str, float]:
+    """The probability, from state 0, of reaching each label's states first, when every
+    run reaches a labelled state (as when each bottom component is labelled)."""
+    names = sorted({x for x in label if x})
+    if label[0]:
+        return {x: float(label[0] == x) for x in names}
+    transient = np.flatnonzero(np.array([not x for x in label]))
+    _, column = _absorbed(chain.P, label, transient, names)
+    start = int(np.searchsorted(transient, 0))
+    return {x: float(column[x][start]) for x in names}
 
 
 def _distribution(chain: Chain, label: list[str], ends: tuple[str, ...], horizon: float,

@@ -5,13 +5,16 @@ Shared by the two ways a property is checked: :mod:`analysis.properties` (the
 reference: every reachable marking first, then the product in Python) and
 :mod:`analysis.onthefly` (the product searched on the fly in C). The observer
 and its states are explained in :mod:`analysis.properties`' docstring.
+:class:`Watcher` reads them along one run, for the runs of a mission with a
+vehicle (the exact odds' chain and the campaigns' runs, in :mod:`mcl2pnml`).
 """
 from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from typing import Callable, Sequence
 
-from mcl2pnml.core.properties import Const, Pattern, Predicate, Property, ScopeKind
+from mcl2pnml.core.properties import Const, Pattern, Predicate, Property, ScopeKind, evaluate
 
 
 class Status(enum.Enum):
@@ -133,3 +136,38 @@ def pending(prop: Property, obs) -> bool:
 def truths(prop: Property) -> tuple[Predicate, Predicate, Predicate, Predicate]:
     f = Const(False)
     return (prop.p, prop.s or f, prop.scope.q or f, prop.scope.r or f)
+
+
+# -- observers along one run ---------------------------------------------------------------
+
+class Watcher:
+    """The observers of ``properties`` along one run, read one marking at a time: a
+    marking as a list of token counts in the order of ``places`` (an engine's), each
+    property's predicates compiled once to functions of it. The runs of a mission with
+    a vehicle (the exact odds' chain, a campaign's runs) are judged with it."""
+
+    def __init__(self, properties: Sequence[Property], places: Sequence[str]):
+        index = {p: i for i, p in enumerate(places)}
+        self.properties = tuple(properties)
+        self.truths = [tuple(_compiled(x, index) for x in truths(prop))
+                       for prop in self.properties]
+
+    def start(self, marking: Sequence[int]) -> tuple:
+        """The observers after reading the initial marking."""
+        return self.read(tuple(initial(p.scope.kind) for p in self.properties),
+                         marking)
+
+    def read(self, states: tuple, marking: Sequence[int]) -> tuple:
+        return tuple(step(prop, obs, *(f(marking) for f in fs))
+                     for prop, obs, fs in zip(self.properties, states, self.truths))
+
+    def pending(self, states: tuple) -> tuple[bool, ...]:
+        """For each property: does a run that ends here, or stays in such states for
+        ever, violate it?"""
+        return tuple(pending(p, obs) for p, obs in zip(self.properties, states))
+
+
+def _compiled(predicate, index: dict[str, int]) -> Callable[[Sequence[int]], bool]:
+    def atom(tokens, m) -> bool:
+        return sum(m[index[p]] for p in tokens.places) >= tokens.at_least
+    return lambda m: evaluate(predicate, lambda t: atom(t, m))

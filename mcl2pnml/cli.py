@@ -321,7 +321,8 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
 @click.argument("mission", type=FILE)
 @ODDS_OPTIONS
 def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Path | None,
-         max_states: int) -> int:
+         max_states: int, properties: str | None, max_props_size: str | None,
+         max_atoms: int | None) -> int:
     """The exact odds of MISSION with a vehicle model: how likely it ends OK, FAIL or
     ABORTED, or never, and when (docs/odds.md).
 
@@ -329,7 +330,9 @@ def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Pa
     exact); every choice of the vehicle is weighed by its probability.
     """
     outcome = pipeline.odds_file(mission, model, max_states=max_states,
-                                 sensitivity=sensitivity, prism=prism, note=_note)
+                                 sensitivity=sensitivity, prism=prism, properties=properties,
+                                 max_props_size=max_props_size, max_atoms=max_atoms,
+                                 note=_note)
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return 0
@@ -338,10 +341,12 @@ def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Pa
 @main.command(epilog=EXAMPLES)
 @click.argument("mission", type=FILE)
 @CAMPAIGN_OPTIONS
-def campaign(mission: Path, model: Path, as_json: bool, progress: bool | None,
+def campaign(mission: Path, model: Path | None, as_json: bool, progress: bool | None,
              **options) -> int:
-    """Fly MISSION many times with a vehicle model, on Dask: each ending's frequency with
-    its interval, the end times, and optionally a sequential test (docs/odds.md)."""
+    """Fly MISSION many times, on Dask, with a vehicle model or on the kinematic
+    simulator, faults injected if asked: each ending's frequency with its interval, the
+    end times, how often each property holds, and optionally a sequential test
+    (docs/odds.md)."""
     from mcl2pnml.campaign import lines
     shown = sys.stderr.isatty() if progress is None else progress
     flown = pipeline.campaign_file(mission, model, progress=_runs_done if shown else None,

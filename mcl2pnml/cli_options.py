@@ -61,13 +61,20 @@ def _composed(*options):
     return apply
 
 
+def _properties_options(what: str):
+    """``--properties [FILE]`` (the mission's properties, then FILE's, default
+    MISSION.props beside it) and its bounds; ``what`` says what the command does
+    with them."""
+    return _composed(
+        click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
+                     metavar="[FILE]", help=f"{what} (docs/properties.md): the mission's, then "
+                     "FILE's (default: MISSION.props, if there is one)."),
+        PROPERTIES_SIZE_OPTION,
+        ATOMS_OPTION)
+
+
 CHECK_OPTIONS = _composed(  # check MISSION
-    click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
-                 metavar="[FILE]", help="Also print each property compiled to place formulas "
-                 "(docs/properties.md): the mission's, then FILE's (default: MISSION.props, "
-                 "if there is one)."),
-    PROPERTIES_SIZE_OPTION,
-    ATOMS_OPTION,
+    _properties_options("Also print each property compiled to place formulas"),
     STRICT_OPTION,
 )
 
@@ -155,6 +162,10 @@ RUN_OPTIONS = _composed(  # run MISSION
     click.option("--sim-primitives", type=FILE, multiple=True, metavar="FILE.py",
                  help="Python file registering simulated primitives of your own "
                  "(@register on a SimulatedPrimitive, docs/simulator.md); may be repeated."),
+    click.option("--faults", type=FILE, metavar="FAULTS.json",
+                 help="Inject these faults into a simulated vehicle's events (sim, a model, "
+                      "a script; docs/faults.md), drawn with the seed of sim@SEED or "
+                      "model:MODEL.json@SEED (else 0): a campaign's run flown again alone."),
     click.option("--transitions", is_flag=True, help="Show fired transitions in the live log."),
     click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
                  show_default=True, help="Stop a mission still running at this time (virtual, or "
@@ -282,21 +293,31 @@ ODDS_OPTIONS = _composed(  # odds MISSION
                       "primitive)."),
     click.option("--prism", type=OUTPUT, metavar="FILE.pm",
                  help="Write the chain in PRISM's language (PRISM and Storm read it)."),
+    _properties_options("Also the probability that each property holds"),
     click.option("--max-states", type=click.IntRange(min=1), default=200_000,
                  show_default=True, help="Refuse a chain of more states than this."),
 )
 
 
 CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
-    click.option("--vehicle-model", "model", type=FILE, required=True, metavar="MODEL.json",
-                 help="The vehicle model the runs draw their answers from (docs/odds.md)."),
+    click.option("--vehicle-model", "model", type=FILE, metavar="MODEL.json",
+                 help="The vehicle model the runs draw their answers from (docs/odds.md); "
+                      "without it, the runs fly the kinematic simulator."),
+    click.option("--world", type=FILE, metavar="WORLD.json",
+                 help="The simulator's world (docs/simulator.md; default: MISSION.world.json "
+                      "beside the mission, if there is one, else the paper's tank). Its "
+                      "\"noise\" makes runs differ; run k seeds it with SEED+k."),
+    click.option("--faults", type=FILE, metavar="FAULTS.json",
+                 help="Inject these faults into every run (docs/faults.md): reports lost, "
+                      "repeated, late, goals failed."),
+    _properties_options("Judge each run on the properties, how often each holds"),
     click.option("--runs", type=click.IntRange(min=1, max=10_000_000), default=1000,
                  show_default=True, help="How many runs (fewer if --target decides first)."),
     click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
                  show_default=True, help="The engine that runs the mission."),
     click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
-                 help="Run k draws with seed SEED+k (run --vehicle model:MODEL.json@SEED "
-                      "flies it again alone)."),
+                 help="Run k draws with seed SEED+k (run --vehicle model:MODEL.json@SEED, "
+                      "or sim@SEED, flies it again alone)."),
     click.option("--confidence", type=click.FloatRange(0.5, 0.999999), default=0.99,
                  show_default=True, help="Of the intervals and the sequential test."),
     click.option("--target", type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True),

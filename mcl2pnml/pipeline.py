@@ -1250,6 +1250,13 @@ class OddsOutcome:
         if o.beyond:
             lines.append(f"  (the distribution stops at its horizon with {o.beyond:.2e} of "
                          "the runs still going)")
+        if o.properties:
+            lines.append("  the properties (the probability that each holds):")
+            width = max(len(p.name) for p in o.properties)
+            for p in o.properties:
+                said = f" = {p.exact}" if p.exact is not None and p.exact.denominator > 1 \
+                    and len(str(p.exact)) <= 40 else ""
+                lines.append(f"    {p.name:<{width}}  {p.holds:.6f}{said}")
         if self.sensitivity:
             lines.append("  P(OK) by primitive (as modelled; if it always achieved; if it never "
                          "did):")
@@ -1267,9 +1274,12 @@ def _s(seconds: float | None) -> str:
 
 def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
               sensitivity: bool = False, prism: Path | None = None,
+              properties: str | None = None, max_props_size=None, max_atoms=None,
               note: Callable[[str], None] = lambda line: None) -> OddsOutcome:
-    """``mcl2pnml odds``: the exact odds of a mission (MCL) with a vehicle model; the
-    chain in PRISM's language to ``prism`` if asked (Storm and PRISM read it)."""
+    """``mcl2pnml odds``: the exact odds of a mission (MCL) with a vehicle model; with
+    ``properties`` (``--properties [FILE]``, as :func:`properties_file` reads it) the
+    probability that each of the mission's properties holds; the chain in PRISM's
+    language to ``prism`` if asked (Storm and PRISM read it)."""
     from mcl2pnml.core.files import atomic_write_text, check_outputs
     from mcl2pnml import odds as exact
     from mcl2pnml.runtime.executor import PetriEngine
@@ -1277,14 +1287,20 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
     if mission.suffix != ".mcl":
         raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl): the odds are a "
                                      "mission's, run as the engines run it")
+    extra = None if properties is None else properties_file(mission, properties)
     check_outputs([("--prism", prism)], [("the mission", mission),
-                                          ("the vehicle model", model_path)])
+                                          ("the vehicle model", model_path),
+                                          ("the properties file (--properties)", extra)])
     model = VehicleModel.load(model_path)
-    net = compile_checked(check_file(mission))
+    if properties is None:
+        net, props = compile_checked(check_file(mission)), ()
+    else:
+        net, props = properties_of(mission, extra=extra, max_size=max_props_size,
+                                   max_atoms=max_atoms)
     limit = max_states or exact.MAX_STATES
     used = PetriEngine(net).primitives_used()
     model.check_primitives(used)
-    chain = exact.chain_of(net, model, limit)
+    chain = exact.chain_of(net, model, limit, props)
     odds = exact.odds_of(chain)
     if prism is not None:
         atomic_write_text(prism, exact.to_prism(chain, f"{mission.name} with {model_path.name}"))
@@ -1294,34 +1310,83 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
     return OddsOutcome(mission.name, model_path.name, odds, table)
 
 
-def campaign_file(mission: Path, model_path: Path, runs: int, *, engine: str = "petri",
+def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: str = "petri",
                   seed: int = 0, confidence: float = 0.99, target: float | None = None,
                   workers: int | None = None, scheduler: str | None = None,
+                  world: Path | None = None, faults: Path | None = None,
+                  properties: str | None = None, max_props_size=None, max_atoms=None,
                   table: Path | None = None, plot: Path | None = None,
                   max_time: float = 24 * 3600.0,
                   progress: Callable[[int, int], None] | None = None,
                   note: Callable[[str], None] = lambda line: None):
-    """``mcl2pnml campaign``: ``runs`` simulated runs of a mission with a vehicle model on
-    Dask (:mod:`mcl2pnml.campaign`), the table and the plot written if asked."""
+    """``mcl2pnml campaign``: ``runs`` simulated runs of a mission on Dask
+    (:mod:`mcl2pnml.campaign`), with a vehicle model (``model_path``) or on the
+    kinematic simulator (``world``, else the one beside the mission, else the default
+    world), the faults of ``faults`` injected; each run judged on the mission's
+    properties if asked (``--properties [FILE]``); the table and the plot written if
+    asked. Every file is read and checked here, before any run."""
     from mcl2pnml.core.files import check_outputs
     from mcl2pnml import campaign as campaigns
     from mcl2pnml.runtime.executor import PetriEngine
+    from mcl2pnml.runtime.faults import Faults
+    from mcl2pnml.runtime.session import WORLD_SUFFIX
+    from mcl2pnml.runtime.simulator import AUVSimulator, World
     from mcl2pnml.runtime.vehicle_model import VehicleModel
     if mission.suffix != ".mcl":
         raise OptionError("MISSION", f"'{mission}' is not a mission (.mcl)")
     if scheduler is not None and workers is not None:
         raise OptionError("--workers", "the scheduler's cluster has its own workers")
+    if model_path is not None and world is not None:
+        raise OptionError("--world", "a world is for the simulator; a vehicle model answers "
+                                     "without one (give --vehicle-model or --world)")
+    if properties is not None and engine != "petri":
+        raise OptionError("--properties", "properties are judged on the net's markings: "
+                                          "--engine petri")
+    beside = mission.with_name(mission.name[:-len(".mcl")] + WORLD_SUFFIX)
+    if model_path is None and world is None and beside.is_file():
+        world = beside
+        note(f"world: {world}, the one beside the mission (--world to give another)")
+    extra = None if properties is None else properties_file(mission, properties)
     check_outputs([("--table", table), ("--plot", plot)],
-                  [("the mission", mission), ("the vehicle model", model_path)])
-    model = VehicleModel.load(model_path)     # refused here, not on a worker
-    model.check_primitives(PetriEngine(compile_checked(check_file(mission))).primitives_used())
-    flown = campaigns.fly(mission, model_path, runs, engine=engine, seed=seed,
+                  [("the mission", mission), ("the vehicle model", model_path),
+                   ("the world (--world)", world), ("the faults (--faults)", faults),
+                   ("the properties file (--properties)", extra)])
+    # every file refused here, with its place, not on a worker
+    if properties is None:
+        net, props = compile_checked(check_file(mission)), ()
+    else:
+        net, props = properties_of(mission, extra=extra, max_size=max_props_size,
+                                   max_atoms=max_atoms)
+    used = PetriEngine(net).primitives_used()
+    if model_path is not None:
+        VehicleModel.load(model_path).check_primitives(used)
+    else:
+        offered = AUVSimulator(World.load(world) if world else World()).primitives
+        if used - offered:
+            raise OptionError("--vehicle-model", f"the mission uses "
+                              f"'{sorted(used - offered)[0]}', which the simulator does not "
+                              f"offer (it offers {', '.join(sorted(offered))}): fly it with "
+                              "a vehicle model")
+    if faults is not None:
+        Faults.load(faults).check_primitives(used)
+    fleet = campaigns.Fleet(*(str(f.resolve()) if f is not None else None
+                              for f in (model_path, world, faults)))
+    flown = campaigns.fly(mission, fleet, runs, engine=engine, seed=seed,
                           confidence=confidence, target=target, workers=workers,
-                          scheduler=scheduler, max_time=max_time, progress=progress)
+                          scheduler=scheduler, max_time=max_time, properties=props,
+                          progress=progress)
+    first = next((r for r in flown.runs if r.outcome != "OK"), None)
+    if first is not None:     # the command as the user wrote the files
+        given = campaigns.Fleet(*(str(f) if f is not None else None
+                                  for f in (model_path, world, faults)))
+        flown.again = (first.seed, first.outcome, given.replay(str(mission), first.seed))
     if table is not None:
         campaigns.write_table(flown, table)
         note(f"wrote {table}")
     if plot is not None:
-        campaigns.plot(flown, plot, f"{mission.name} with {model_path.name}")
+        what = model_path.name if model_path is not None else \
+            (world.name if world is not None else "the default world")
+        what += f", faults of {faults.name}" if faults is not None else ""
+        campaigns.plot(flown, plot, f"{mission.name} with {what}")
         note(f"wrote {plot}")
     return flown

@@ -22,8 +22,8 @@ import pytest
 
 from helpers import ROOT, one_error, run_cli
 from mcl2pnml import pipeline
-from mcl2pnml.campaign import BATCH, fly_batch
-from mcl2pnml.odds import odds
+from mcl2pnml.campaign import BATCH, TRACKS, Fleet, fly_batch
+from mcl2pnml.odds import chain_of, odds, odds_of
 from mcl2pnml.runtime.vehicle_model import VehicleModel
 
 distributed = pytest.importorskip("distributed", reason="Dask's distributed is not installed "
@@ -146,7 +146,7 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
     assert [r.seed for r in flown.runs] == list(range(5, 5 + runs))
     # the same runs as flown here, batch by batch, without Dask
     alone = [r for k in range(0, runs, BATCH)
-             for r in fly_batch(str(SAUCE), str(MODEL), "petri",
+             for r in fly_batch(str(SAUCE), Fleet(model=str(MODEL)), "petri",
                                 list(range(5 + k, 5 + min(k + BATCH, runs))), 24 * 3600.0)]
     assert flown.runs == alone
 
@@ -164,13 +164,75 @@ def test_a_bad_model_is_refused_before_any_run(tmp_path):
     one_error(out, "m.json:1:44:", "greater than the maximum")
 
 
+def test_a_campaign_on_the_simulator_with_faults(shared, tmp_path):
+    """The kinematic simulator in a noisy world, with KeepDepth's goal reports turned
+    into failures one time in five: the paper's mission, which fails when a depth
+    change fails, ends OK when none of its depth changes' reports is turned,
+    (4/5)^k for its k calls of AchieveDepth. Every property the untimed net proves
+    holds on every run (a run of an engine is a run of the net); the first runs'
+    tracks are kept for the map; and any run flies again alone, by its seed."""
+    from analysis.observers import Status
+    world = tmp_path / "noisy.world.json"
+    world.write_text('{"noise": 0.05}')
+    faults = tmp_path / "depth.faults.json"
+    faults.write_text(json.dumps({"faults": {"KeepDepth": {"fail": "1/5"}}}))
+    table, plot = tmp_path / "runs.csv", tmp_path / "runs.png"
+    runs = 200
+    flown = pipeline.campaign_file(SAUCE, None, runs, world=world, faults=faults, seed=40,
+                                   properties="", scheduler=shared, table=table, plot=plot)
+    data = flown.as_json()
+    calls = sum(line.count("AchieveDepth(") for line in SAUCE.read_text().splitlines()
+                if not line.lstrip().startswith(("task", "//")))
+    assert calls == 2
+    low, high = data["outcomes"]["OK"]["interval"]
+    assert low <= (4 / 5) ** calls <= high, data["outcomes"]
+    assert set(data["outcomes"]) == {"OK", "FAIL"}
+
+    net, props = pipeline.properties_of(SAUCE, extra=SAUCE.with_suffix(".props"))
+    proven = {v.property.name for v in pipeline.check_properties(net, props)
+              if v.status is Status.HOLDS}
+    assert proven
+    for p in data["properties"]:
+        assert p["runs_judged"] == runs, p
+        if p["property"] in proven:
+            assert p["holds"] == 1.0, p
+
+    assert [bool(r.track) for r in flown.runs] == [k < TRACKS for k in range(runs)]
+    assert plot.read_bytes().startswith(b"\x89PNG")
+    rows = table.read_text().splitlines()
+    assert rows[0].startswith("seed,outcome,time,fails_")
+    for outcome in ("OK", "FAIL"):
+        seed, _, t = next(r for r in rows[1:] if r.split(",")[1] == outcome).split(",")[:3]
+        again = run_cli("run", SAUCE, "--vehicle", f"sim@{seed}", "--world", world,
+                        "--faults", faults, "--json")
+        assert again.returncode in (0, 1), again.stderr
+        assert (json.loads(again.stdout)["outcome"], float(json.loads(again.stdout)["time"])) \
+            == (outcome, float(t))
+
+
+def test_a_campaign_flies_either_a_model_or_the_simulator(tmp_path):
+    world = tmp_path / "w.world.json"
+    world.write_text("{}")
+    out = run_cli("campaign", SAUCE, "--vehicle-model", MODEL, "--world", world, "--runs", 10)
+    one_error(out, "--world", "a vehicle model answers without one")
+    bad = tmp_path / "f.json"
+    bad.write_text('{"faults": {"Thruster": {"fail": 0.5}}}')
+    one_error(run_cli("campaign", SAUCE, "--faults", bad, "--runs", 10), "f.json:1:")
+
+
 EXAMPLE_MODELS = sorted((ROOT / "examples").glob("*.model.json"))
 
 
 def _holds_the_exact_odds(model: Path, runs: int, scheduler: str) -> None:
+    """The campaign's frequencies of each outcome and of each property holding (the
+    mission's .props and .false.props) hold the exact odds within their intervals."""
     mission = model.with_name(model.name.replace(".model.json", ".mcl"))
-    exact = odds(pipeline.compile_checked(pipeline.check_file(mission)), VehicleModel.load(model))
-    data = pipeline.campaign_file(mission, model, runs, scheduler=scheduler).as_json()
+    props = mission.with_suffix(".false.props")
+    net, watched = pipeline.properties_of(mission, extra=props)
+    exact = odds_of(chain_of(pipeline.compile_checked(pipeline.check_file(mission)),
+                             VehicleModel.load(model), properties=watched))
+    data = pipeline.campaign_file(mission, model, runs, scheduler=scheduler,
+                                  properties=str(props)).as_json()
     for outcome in ("OK", "FAIL", "ABORTED"):
         d = data["outcomes"].get(outcome)
         if d is None:   # never seen: the exact odds make that likely at this many runs
@@ -180,6 +242,12 @@ def _holds_the_exact_odds(model: Path, runs: int, scheduler: str) -> None:
         assert low <= exact.outcomes[outcome] <= high, (model.name, outcome, d, exact.outcomes)
     t = data["end_time"]
     assert abs(t["mean"] - exact.mean) <= t["mean_interval_halfwidth"], (model.name, t, exact.mean)
+    assert [p["property"] for p in data["properties"]] == [p.name for p in exact.properties]
+    for flown, weighed in zip(data["properties"], exact.properties):
+        assert flown["runs_judged"] == runs, flown
+        low, high = flown["interval"]
+        assert low <= weighed.holds <= high, (model.name, flown, weighed)
+    assert any(0 < p.holds < 1 for p in exact.properties), exact.properties
 
 
 @pytest.mark.parametrize("model", EXAMPLE_MODELS, ids=lambda p: p.name)

@@ -101,6 +101,51 @@ def test_the_chain_is_bounded_and_says_so():
         chain_of(pipeline.compile_checked(pipeline.check_file(SAUCE)), model, 5)
 
 
+# -- the properties, worked out by hand ---------------------------------------------------
+
+LOOP = """primitive P();
+task T() = AchieveGoal(P()) timeout 100;
+mission { while (T()) { } }
+property Responds: ended(T, OK) leads to running(T);
+property NeverDone: never ended(T, OK);
+property Ends: eventually outcome(OK) or outcome(FAIL) or outcome(ABORTED);
+"""
+
+
+@pytest.mark.parametrize("achieve, held", [
+    # T always achieves: the loop runs for ever, in one bottom component of the chain
+    # where a response's obligations are met again and again (it holds), the absence
+    # is broken (it fails) and no end comes (it fails)
+    ("1", {"Responds": 1, "NeverDone": 0, "Ends": 0}),
+    # T fails one round in four: the loop (and the mission, OK) ends after a geometric
+    # number of rounds; no round ends OK only if the first one fails
+    ("3/4", {"Responds": 1, "NeverDone": Fraction(1, 4), "Ends": 1})])
+def test_the_probability_of_each_property(achieve, held, tmp_path):
+    mission = tmp_path / "loop.mcl"
+    mission.write_text(LOOP)
+    net, props = pipeline.properties_of(mission)
+    model = _model({"primitives": {"P": {"achieve": achieve, "fail": str(1 - Fraction(achieve)),
+                                         "after": {"fixed": 2}}}})
+    o = odds_of(chain_of(net, model, properties=props))
+    assert {p.name: p.exact for p in o.properties} == held
+    assert {p.name: p.holds for p in o.properties} == pytest.approx(
+        {k: float(v) for k, v in held.items()}, abs=1e-12)
+
+
+def test_the_properties_are_judged_on_every_marking_of_an_instant(tmp_path):
+    """The markings an instant passes through, not only the settled ones: the call is
+    entered and left again within the instant its report comes, a marking no settled
+    state shows."""
+    mission = tmp_path / "one.mcl"
+    mission.write_text(ONE_TASK.format(timeout=10) +
+                       "property NeverOK: never ended(T, OK);\n")
+    net, props = pipeline.properties_of(mission)
+    model = _model({"primitives": {"P": {"achieve": "2/3", "fail": "1/3",
+                                         "after": {"fixed": 1}}}})
+    o = odds_of(chain_of(net, model, properties=props))
+    assert o.properties[0].exact == Fraction(1, 3)
+
+
 # -- simulated runs on both engines ------------------------------------------------------
 
 def _wilson(k: int, n: int, z: float = 3.29) -> tuple[float, float]:
@@ -167,6 +212,25 @@ def test_odds_prints_the_outcomes_and_writes_the_chain(tmp_path):
     text = pm.read_text()
     assert text.count("[] s=") == data["states"] and 'rewards "time"' in text
     assert f"wrote {pm}" in out.stderr
+
+
+def test_odds_weighs_the_mission_s_properties(tmp_path):
+    """``--properties FILE``: the mission's own (none in sauce.mcl), then the file's; a
+    property that says "it ends OK" holds exactly as often as the mission does."""
+    out = run_cli("odds", SAUCE, "--vehicle-model", MODELS["sonar"], "--json",
+                  "--properties", ROOT / "examples" / "sauce.false.props")
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    held = {p["property"]: p for p in data["properties"]}
+    assert held["AlwaysOK"]["exact_holds"] == data["exact_outcomes"]["OK"]
+    assert 0 < held["SurveyAlwaysFlown"]["holds"] < 1
+    text = run_cli("odds", SAUCE, "--vehicle-model", MODELS["sonar"], "--properties")
+    assert text.returncode == 0, text.stderr
+    assert "the properties (the probability that each holds):" in text.stdout
+    bad = tmp_path / "bad.props"
+    bad.write_text("property X: never enabled(Nothing);\n")
+    one_error(run_cli("odds", SAUCE, "--vehicle-model", MODELS["sonar"], "--properties", bad),
+              "bad.props:1:")
 
 
 def test_sensitivity_ranks_the_primitives_by_their_swing():

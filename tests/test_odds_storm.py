@@ -40,7 +40,8 @@ from hypothesis import HealthCheck, assume, given, seed, settings, strategies as
 from analysis.markov import CYCLES, solve  # noqa: E402
 from mcl2pnml import pipeline  # noqa: E402
 from mcl2pnml.runtime.executor import PetriEngine  # noqa: E402
-from mcl2pnml.odds import ENDS, WAITS, TooManyStates, chain_of, odds_of, to_prism  # noqa: E402
+from mcl2pnml.odds import (ENDS, WAITS, TooManyStates, chain_of, odds_of, owes_labels,  # noqa: E402
+                           to_prism)
 from mcl2pnml.runtime.vehicle_model import VehicleModel  # noqa: E402
 
 from helpers import ROOT  # noqa: E402
@@ -162,6 +163,18 @@ def storm_agrees(chain, title: str, pm: Path, context: str) -> dict:
     close(absorption.probability.get(CYCLES, 0.0), 1 - p["ended"] - p[WAITS],
           "P(cycles) against 1 - P(F ended) - P(F waits)")
     assert p["ended"] + p[WAITS] <= 1, context
+    # the properties: Storm's LTL model checking of "eventually always owed" (a finite
+    # run ends in an absorbing state, its self-loop for ever) is their failure
+    for prop, label, held in zip(chain.properties, owes_labels(chain.properties),
+                                 odds.properties):
+        formula = f'P=? [F G "{label}"]'
+        parsed = stormpy.parse_properties(formula, program)[0]
+        fails = _exact(stormpy.model_checking(model, parsed, only_initial_states=True)
+                       .get_value(init))
+        close(held.holds, 1 - fails, f"P({prop.name} holds) against 1 - {formula}")
+        if held.exact is not None:
+            assert held.exact == 1 - fails, \
+                f"{context}: {prop.name}: ours {held.exact}, Storm's {1 - fails}"
     if p["ended"] == 1:
         storm_mean = _exact(value['R{"time"}=? [F "ended"]'])
         assert odds.mean is not None, f"{context}: it surely ends, yet we give no mean"
@@ -181,6 +194,18 @@ def _net(path: Path):
     return pipeline.compile_checked(pipeline.check_file(path))
 
 
+def _watched(mission: Path) -> tuple:
+    """The mission's properties: its own, then those of MISSION.props and
+    MISSION.false.props (which hold or fail on the untimed net; with a vehicle, each
+    has its probability)."""
+    own = pipeline.properties_of(mission)[1]
+    out = list(own)
+    for side in (mission.with_suffix(".props"), mission.with_suffix(".false.props")):
+        if side.is_file():
+            out += pipeline.properties_of(mission, extra=side)[1][len(own):]
+    return tuple(out)
+
+
 # -- the cases -------------------------------------------------------------------------------
 
 MODELLED = sorted((ROOT / "examples").glob("*.model.json"))
@@ -197,7 +222,8 @@ def test_every_example_with_its_own_vehicle_model(model_path, tmp_path):
     net = _net(mission)
     model = VehicleModel.load(model_path)
     model.check_primitives(PetriEngine(net).primitives_used())
-    chain = chain_of(net, model, MAX_STATES)
+    chain = chain_of(net, model, MAX_STATES, _watched(mission))
+    assert chain.properties, f"{mission.name} has no properties to weigh"
     p = storm_agrees(chain, mission.stem, tmp_path / f"{mission.stem}.pm",
                      f"{mission.name} with {model_path.name}")
     assert sum(p[name] for name in ENDS) == p["ended"]
@@ -213,7 +239,7 @@ def test_every_example_with_drawn_vehicles(path, tmp_path):
         text = random_model(used, rng)
         model = VehicleModel.from_json(text, f"<drawn for {path.name}, seed {s}>")
         try:
-            chain = chain_of(net, model, MAX_STATES)
+            chain = chain_of(net, model, MAX_STATES, _watched(path))
         except TooManyStates:
             continue
         storm_agrees(chain, f"{path.stem} seed {s}", tmp_path / f"{path.stem}-{s}.pm",

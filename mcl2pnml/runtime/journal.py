@@ -50,6 +50,7 @@ from typing import IO, Any
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, open_regular, read_bytes
+from mcl2pnml.runtime.vehicles import is_simulator
 
 VERSION = 1
 KILL_AFTER = "MCL2PNML_JOURNAL_KILL_AFTER"
@@ -238,7 +239,7 @@ def check_header(header: dict[str, Any], filename: str, line: str = "") -> None:
         if not isinstance(world, str) or not world:
             raise fault("world", '"world" is the world file\'s name, or null, not '
                                  f"{json.dumps(world)[:80]}")
-        if vehicle != "sim":
+        if not is_simulator(vehicle):
             raise fault("world", "a world is for the simulator (vehicle sim), not for "
                                  f"'{vehicle[:80]}'")
     if "max_time" not in header:
@@ -248,7 +249,7 @@ def check_header(header: dict[str, Any], filename: str, line: str = "") -> None:
             or not math.isfinite(max_time) or max_time < 0:
         raise fault("max_time", '"max_time" is the time limit, a finite number of seconds '
                                 f">= 0, not {json.dumps(max_time)[:80]}")
-    needed = {"mission_sha256": True, "vehicle_sha256": vehicle != "sim",
+    needed = {"mission_sha256": True, "vehicle_sha256": not is_simulator(vehicle),
               "world_sha256": world is not None}
     for key in DIGESTS:
         value = header.get(key)

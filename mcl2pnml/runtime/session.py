@@ -43,6 +43,8 @@ class RunOptions:
     #: Python files of simulated primitives the simulator offers besides its own
     #: (:mod:`mcl2pnml.runtime.simprims`)
     sim_primitives: tuple[Path, ...] = ()
+    #: faults injected into a simulated vehicle's events (:mod:`mcl2pnml.runtime.faults`)
+    faults: Path | None = None
     max_time: float = 24 * 3600.0
     #: show fired transitions in the live log
     transitions: bool = False
@@ -103,6 +105,12 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
             if getattr(options, name) != _DEFAULTS[name]:
                 raise OptionError(f"--{name.replace('_', '-')}", "only for a real vehicle "
                                   "(--vehicle bridge:MAPPING.json --connect HOST:PORT)")
+    if options.faults and kind.realtime:
+        raise OptionError("--faults", "faults are injected into a simulated vehicle (sim, a "
+                                      "vehicle model, a script), not a real one")
+    if options.faults and (options.journal or options.resume):
+        raise OptionError("--faults", "a journal does not record injected faults: a run "
+                                      "with --faults is replayed by its seed, not resumed")
     link = LinkOptions(**{name: getattr(options, name) for name in _LINK})
     vehicle = kind.build(options.vehicle, options.connect, options.world, link)
     if options.sim_primitives:
@@ -111,6 +119,15 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
         for path in options.sim_primitives:
             table = load_file(path, table)
         vehicle.offer(table)
+    if options.faults:
+        import random
+
+        from mcl2pnml.runtime.faults import Faults, FaultyVehicle
+        from mcl2pnml.runtime.vehicles import seed_of
+        # the stream a campaign draws run SEED's faults from (mcl2pnml.campaign)
+        seed = seed_of(options.vehicle) or 0
+        vehicle = FaultyVehicle(vehicle, Faults.load(options.faults),
+                                random.Random(f"faults-{seed}"))
     return kind, vehicle
 
 
@@ -210,6 +227,7 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     # no output may be a file the run reads, nor the other output (--journal j --log j)
     check_outputs([("--journal", options.journal), ("--log", log_path)],
                   [("the mission", mission), ("the world (--world)", options.world),
+                   ("the faults (--faults)", options.faults),
                    ("the vehicle script (--vehicle)", kind_of(options.vehicle).source(
                        options.vehicle)), ("the journal it resumes (--resume)", options.resume)])
     if loaded is not None and loaded.torn:

@@ -22,6 +22,7 @@ Enabling and disabling are acknowledged at once (``on``, ``off``).
 """
 from __future__ import annotations
 
+import copy
 import json
 import math
 import random
@@ -36,6 +37,10 @@ from mcl2pnml.runtime.simprims import Context, SimulatedPrimitive, built_in, ins
 
 #: The built-in simulated primitives' names (:mod:`mcl2pnml.runtime.simprims` has the table).
 PRIMITIVES: tuple[str, ...] = tuple(sorted(built_in()))
+
+#: The longest description a world file may give, in characters.
+MAX_DESCRIPTION = 4000
+
 
 @dataclass(frozen=True)
 class World:
@@ -100,7 +105,8 @@ class World:
         except (ValueError, RecursionError) as e:   # a number past Python's digit limit
             raise Mcl2PnmlError(f"not a world file: {json_fault(e)}", Location(filename)) \
                 from None
-        valid = set(cls.__dataclass_fields__)
+        # "description": words for the reader, as a vehicle model's and a fault file's
+        valid = set(cls.__dataclass_fields__) | {"description"}
         if not isinstance(data, dict):
             raise Mcl2PnmlError("a world file is a JSON object with some of: "
                                 + ", ".join(sorted(valid)), Location(filename))
@@ -109,6 +115,10 @@ class World:
         if unknown:
             raise Mcl2PnmlError(f"unknown world setting '{unknown[0]}'; valid: "
                                 + ", ".join(sorted(valid)), where(unknown[0]))
+        described = data.pop("description", "")
+        if not isinstance(described, str) or len(described) > MAX_DESCRIPTION:
+            raise Mcl2PnmlError(f"description: a string of at most {MAX_DESCRIPTION:,} "
+                                "characters", where("description"))
         return cls(**_checked_fields(data, where))
 
     @classmethod
@@ -211,6 +221,18 @@ class AUVSimulator(Vehicle):
         self.enablings: dict[str, int] = {}
         self.achievements: dict[str, int] = {}
         self._lookahead: tuple[float, Event, dict[str, dict]] | None = None
+
+    def fork(self) -> "AUVSimulator":
+        """A copy that runs on alone from here, to look ahead at its events (a fault
+        injector does, :mod:`mcl2pnml.runtime.faults`): all of it copied but the track
+        drawn so far (the trajectory and the set points: their last points only), which
+        no event depends on and which grows with the run."""
+        kept = self.trajectory, self.setpoints
+        self.trajectory, self.setpoints = kept[0][-1:], kept[1][-1:]
+        try:
+            return copy.deepcopy(self, {id(self.world): self.world})
+        finally:
+            self.trajectory, self.setpoints = kept
 
     def offer(self, primitives: Mapping[str, SimulatedPrimitive]) -> None:
         """Offer these simulated primitives instead (before the run: a user's added)."""

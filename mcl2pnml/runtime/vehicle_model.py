@@ -32,7 +32,7 @@ import re
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
-from typing import Any, Mapping, Sequence, TypeVar
+from typing import Any, Iterable, Mapping, Sequence, TypeVar
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import read_text
@@ -153,6 +153,16 @@ class PrimitiveModel:
 DEFAULT = PrimitiveModel()
 
 
+def refuse_unused(named: Iterable[str], used: set[str], where: Mapping[str, Location],
+                  says: str) -> None:
+    """One message at the first primitive a file names that the mission does not use:
+    a typo would otherwise leave the primitive it meant as the defaults say."""
+    for name in named:
+        if name not in used:
+            raise Mcl2PnmlError(f"{says} '{name}', which the mission does not use; it uses "
+                                + ", ".join(sorted(used)), where.get(name))
+
+
 @dataclass(frozen=True)
 class VehicleModel:
     """A loaded vehicle model: each named primitive's, and the rest's (``default``)."""
@@ -169,11 +179,7 @@ class VehicleModel:
 
     def check_primitives(self, used: set[str]) -> None:
         """Refuse a model of a primitive the mission does not use (a typo)."""
-        for name in self.primitives:
-            if name not in used:
-                raise Mcl2PnmlError(f"the vehicle model gives '{name}', which the mission does "
-                                    "not use; it uses " + ", ".join(sorted(used)),
-                                    self.where.get(name))
+        refuse_unused(self.primitives, used, self.where, "the vehicle model gives")
 
     def replaced(self, primitive: str, **changes) -> "VehicleModel":
         """The model with one primitive's settings changed (the sensitivity table's)."""

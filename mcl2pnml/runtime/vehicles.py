@@ -42,8 +42,25 @@ class VehicleKind:
 
 def _simulator(spec: str, connect: str | None, world: Path | None,
                link: LinkOptions) -> Vehicle:
+    """The simulator in ``world``; ``sim@SEED`` seeds its noise with SEED instead of the
+    world's seed (a campaign's run, flown again alone)."""
+    from dataclasses import replace
+
     from mcl2pnml.runtime.simulator import AUVSimulator, World
-    return AUVSimulator(World.load(world) if world else World())
+    w = World.load(world) if world else World()
+    seed = seed_of(spec)
+    return AUVSimulator(w if seed is None else replace(w, seed=seed))
+
+
+def seed_of(spec: str) -> int | None:
+    """The seed after ``@`` in ``sim@SEED`` or ``model:FILE.json@SEED`` (None: none)."""
+    _, at, seed = spec.rpartition("@")
+    return int(seed) if at and seed.isdigit() and len(seed) <= 18 else None
+
+
+def is_simulator(spec: str) -> bool:
+    """Does ``spec`` name the simulator (``sim``, ``sim@SEED``)?"""
+    return spec == "sim" or (spec.startswith("sim@") and seed_of(spec) is not None)
 
 
 def _bridge(spec: str, connect: str | None, world: Path | None,
@@ -81,9 +98,9 @@ def _mapping_path(spec: str) -> Path | None:
 
 def _model_spec(spec: str) -> tuple[Path, int]:
     """``model:FILE.json`` or ``model:FILE.json@SEED``: the model's file and the seed."""
-    path, at, seed = spec[len("model:"):].rpartition("@")
-    if at and seed.isdigit():
-        return Path(path), int(seed)
+    seed = seed_of(spec)
+    if seed is not None:
+        return Path(spec[len("model:"):].rpartition("@")[0]), seed
     return Path(spec[len("model:"):]), 0
 
 
@@ -108,7 +125,7 @@ def _script(spec: str, connect: str | None, world: Path | None,
 #: answers (docs/odds.md; the seed after @ replays a run), and (whatever else is
 #: given) a vehicle script (docs/running.md).
 VEHICLES: tuple[VehicleKind, ...] = (
-    VehicleKind("sim", lambda spec: spec == "sim", _simulator, takes_world=True),
+    VehicleKind("sim[@SEED]", is_simulator, _simulator, takes_world=True),
     VehicleKind("bridge:MAPPING.json", lambda spec: spec.startswith("bridge:"), _bridge,
                 realtime=True),
     VehicleKind("mavlink[:MAPPING.json]",
