@@ -101,6 +101,23 @@ def test_the_chain_is_bounded_and_says_so():
         chain_of(pipeline.compile_checked(pipeline.check_file(SAUCE)), model, 5)
 
 
+@pytest.mark.parametrize("calls, ok", [
+    # the primitive's own settings for both enablings: both must achieve
+    ([], Fraction(1, 4)),
+    # the enabling with argument 2 always achieves (2.0 is the trace's 2)
+    ([{"args": [2.0], "achieve": 1, "fail": 0}], Fraction(1, 2)),
+    # ... and the one with 1 never reports: its time-out fails it
+    ([{"args": [1], "achieve": 0, "fail": 0}, {"args": [2], "achieve": 1, "fail": 0}],
+     Fraction(0)),
+    # arguments no enabling has change nothing
+    ([{"args": [3], "achieve": 0}], Fraction(1, 4))])
+def test_a_call_s_arguments_choose_its_settings(calls, ok):
+    net = _net("primitive P(x);\ntask T(x) = AchieveGoal(P(x)) timeout 10;\n"
+               "mission { T(1); T(2); }\n")
+    model = _model({"primitives": {"P": {"achieve": "1/2", "fail": "1/2", "calls": calls}}})
+    assert odds(net, model).exact["OK"] == ok
+
+
 # -- the properties, worked out by hand ---------------------------------------------------
 
 LOOP = """primitive P();
@@ -164,7 +181,10 @@ MODELS = {
                        "DetectCross": {"achieve": "2/3", "after": {"uniform": [20, 40]}},
                        "GoToWayPoint": {"after": {"table": {"30": 0.5, "400": 0.5}}},
                        "KeepDepth": {"achieve": 0.8, "fail": 0.1, "after": {"uniform": [5, 70]},
-                                     "lose": 0.2, "lost_after": {"fixed": 3}},
+                                     "lose": 0.2, "lost_after": {"fixed": 3},
+                                     # the surfacing: its own odds
+                                     "calls": [{"args": [0], "achieve": 0.6, "fail": 0.4,
+                                                "after": {"fixed": 9}, "lose": 0}]},
                        "ReleaseMarker": {"achieve": 0.7, "fail": 0.2, "after": {"fixed": 2}}}},
 }
 
@@ -264,6 +284,13 @@ BAD = [  # the file, what its message says, and where its caret points (the valu
     ('{"primitives": {"P": {"achieve": NaN}}}', "NaN is not a number", "NaN"),
     ('{"primitives": {"P": {"fail": -0.5}}}', "less than the minimum", "-0.5"),
     ('{"primitives": {"Q": {}}}', "which the mission does not use", "{}"),
+    ('{"primitives": {"P": {"calls": [{"args": [1]}, {"args": [1.0]}]}}}',
+     "the same arguments as calls[0]", "[1.0]"),
+    ('{"primitives": {"P": {"calls": [{"achieve": 1}]}}}', "'args' is a required property",
+     '{"achieve": 1}'),
+    ('{"primitives": {"P": {"achieve": 0.5, "calls": [{"args": [], "fail": 0.6}]}}}',
+     "add up to more than 1", '{"args": []'),
+    ('{"defaults": {"calls": []}}', "unknown setting", "[]"),
 ]
 
 

@@ -12,7 +12,9 @@ enabling of it does:
 * a goal achieved is later lost (reported ``failed``, as a kept goal's loss
   is: section 2.1) with probability ``lose``, ``lost_after`` after;
 * a disable is acknowledged (``off``) after the ``ack`` delay, and silences
-  every report still to come (as the scripted vehicle does, docs/running.md).
+  every report still to come (as the scripted vehicle does, docs/running.md);
+* the enablings with given arguments (a primitive's ``calls``) may have
+  settings of their own: the vehicle tells a call by what it is asked.
 
 Delays are distributions of seconds: ``{"fixed": 5}``, ``{"uniform": [20, 60]}``
 (whole seconds, both ends included), ``{"table": {"30": 0.5, "40": 0.5}}``,
@@ -45,6 +47,8 @@ MAX_MODEL = 1 << 20
 MAX_DELAY = 7 * 24 * 3600
 #: The most values a discrete delay may take (a uniform range, a table).
 MAX_SUPPORT = 10_000
+#: The most calls (argument lists with settings of their own) a primitive may give.
+MAX_CALLS = 100
 
 T = TypeVar("T")
 
@@ -78,6 +82,18 @@ _SETTINGS = {
     "ack": _DELAY,
 }
 _PRIMITIVE = {"type": "object", "additionalProperties": False, "properties": _SETTINGS}
+#: A call's arguments as the trace writes them (numbers, strings, lists of them)
+_ARGUMENT = {"type": ["number", "string", "boolean", "array"], "maxLength": 200,
+             "maxItems": 32, "items": {"type": ["number", "string", "boolean"],
+                                       "maxLength": 200}}
+#: A named primitive: its settings, and optionally other settings for the enablings
+#: with given arguments ("calls")
+_NAMED = {"type": "object", "additionalProperties": False, "properties": {
+    **_SETTINGS,
+    "calls": {"type": "array", "maxItems": MAX_CALLS, "items": {
+        "type": "object", "required": ["args"], "additionalProperties": False,
+        "properties": {**_SETTINGS, "args": {"type": "array", "maxItems": 32,
+                                             "items": _ARGUMENT}}}}}}
 
 #: The file's JSON Schema (docs/odds.md); sums and ranges are checked after it.
 SCHEMA: dict[str, Any] = {
@@ -88,7 +104,7 @@ SCHEMA: dict[str, Any] = {
         "primitives": {"type": "object", "maxProperties": 1000,
                        "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_]*$",
                                          "maxLength": 200},
-                       "additionalProperties": _PRIMITIVE},
+                       "additionalProperties": _NAMED},
     },
 }
 
@@ -141,11 +157,31 @@ class PrimitiveModel:
     lose: Fraction = Fraction(0)
     lost_after: Delay = Delay.fixed(1)
     ack: Delay = Delay.fixed(0)
+    #: the enablings with these arguments (as the trace writes them, lists as tuples)
+    #: behave as their own settings say instead (the file's "calls", in its order)
+    calls: tuple[tuple[tuple, "PrimitiveModel"], ...] = ()
 
     @property
     def never(self) -> Fraction:
         """The probability that it never reports."""
         return 1 - self.achieve - self.fail
+
+    def call(self, args: tuple) -> int:
+        """The index of the call whose arguments are ``args`` (-1: none, the primitive's
+        own settings)."""
+        key = _arguments(args)
+        return next((k for k, (a, _) in enumerate(self.calls) if a == key), -1)
+
+    def settings(self, call: int) -> "PrimitiveModel":
+        """The settings of call ``call`` (-1: the primitive's own)."""
+        return self if call < 0 else self.calls[call][1]
+
+
+def _arguments(args: Any) -> Any:
+    """Arguments compared as values: lists as tuples, recursively (1 equals 1.0)."""
+    if isinstance(args, (list, tuple)):
+        return tuple(_arguments(a) for a in args)
+    return args
 
 
 #: The model of a primitive a file does not name, and the settings a file leaves out:
@@ -184,8 +220,10 @@ class VehicleModel:
     def replaced(self, primitive: str, **changes) -> "VehicleModel":
         """The model with one primitive's settings changed (the sensitivity table's)."""
         from dataclasses import replace
+        m = self.of(primitive)
+        calls = tuple((args, replace(c, **changes)) for args, c in m.calls)
         return replace(self, primitives={**self.primitives,
-                                         primitive: replace(self.of(primitive), **changes)})
+                                         primitive: replace(m, **changes, calls=calls)})
 
     # -- reading ------------------------------------------------------------------------
 
@@ -194,7 +232,7 @@ class VehicleModel:
         data, where = parse_located(text, filename, "a vehicle model")
         check_schema(data, SCHEMA, where, what="a vehicle model")
         default = _primitive(data.get("defaults", {}), DEFAULT, ("defaults",), where)
-        primitives = {name: _primitive(spec, default, ("primitives", name), where)
+        primitives = {name: _named(spec, default, ("primitives", name), where)
                       for name, spec in data.get("primitives", {}).items()}
         return cls(primitives, default, data.get("description", ""), filename,
                    {name: where(("primitives", name)) for name in primitives})
@@ -278,6 +316,23 @@ def _primitive(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
     return model
 
 
+def _named(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
+           where) -> PrimitiveModel:
+    """A named primitive's settings over the defaults, and its calls' over its own."""
+    from dataclasses import replace
+    own = _primitive({k: v for k, v in spec.items() if k != "calls"}, base, path, where)
+    calls: list[tuple[tuple, PrimitiveModel]] = []
+    for k, call in enumerate(spec.get("calls", ())):
+        args = _arguments(call["args"])
+        same = next((j for j, (a, _) in enumerate(calls) if a == args), None)
+        if same is not None:
+            raise Mcl2PnmlError(f"{dotted((*path, 'calls', k, 'args'))}: the same arguments "
+                                f"as calls[{same}]", where((*path, "calls", k, "args")))
+        settings = {key: v for key, v in call.items() if key != "args"}
+        calls.append((args, _primitive(settings, own, (*path, "calls", k), where)))
+    return replace(own, calls=tuple(calls))
+
+
 # -- choosing ---------------------------------------------------------------------------
 
 def pick(options: Sequence[tuple[T, Fraction]], rng: random.Random) -> T:
@@ -354,6 +409,8 @@ class Due:
 
     kind: EventKind
     support: tuple[tuple[float, Fraction], ...]
+    #: whose settings it follows: the call of the enabling (-1: the primitive's own)
+    call: int = -1
 
 
 class ModelVehicle(Vehicle):
@@ -379,20 +436,25 @@ class ModelVehicle(Vehicle):
 
     def state(self, now: float) -> tuple:
         """What the vehicle will still do, relative to ``now``: equal states, equal futures."""
-        return tuple(sorted((name, due.kind.value, tuple((t - now, p) for t, p in due.support))
+        return tuple(sorted((name, due.kind.value, due.call,
+                             tuple((t - now, p) for t, p in due.support))
                             for name, due in self.pending.items()))
 
     def check_primitives(self, used: set[str]) -> None:
         self.model.check_primitives(used)
 
-    def _due(self, kind: EventKind, delay: Delay, t: float) -> Due:
-        return Due(kind, self.chooser.schedule(delay, t))
+    def _due(self, kind: EventKind, delay: Delay, t: float, call: int) -> Due:
+        return Due(kind, self.chooser.schedule(delay, t), call)
 
     def act(self, action: Action) -> None:
-        kind = EventKind.ON if action.kind is ActionKind.ENABLE else EventKind.OFF
-        # a disable silences whatever was still to come
-        self.pending[action.primitive] = self._due(kind, self.model.of(action.primitive).ack,
-                                                   action.t)
+        m = self.model.of(action.primitive)
+        if action.kind is ActionKind.ENABLE:
+            # the enabling's arguments choose its settings: its ack, report and loss
+            call = m.call(action.args)
+            self.pending[action.primitive] = self._due(EventKind.ON, m.settings(call).ack,
+                                                       action.t, call)
+        else:       # a disable silences whatever was still to come; the primitive's ack
+            self.pending[action.primitive] = self._due(EventKind.OFF, m.ack, action.t, -1)
 
     def earliest(self) -> float | None:
         """The earliest time an event may come at (no choice made)."""
@@ -416,22 +478,22 @@ class ModelVehicle(Vehicle):
                 return t
             now = due.support[0][1] / sum(p for _, p in due.support)
             if self.chooser.choose([(True, now), (False, 1 - now)]):
-                self.pending[name] = Due(due.kind, due.support[:1])
+                self.pending[name] = Due(due.kind, due.support[:1], due.call)
             else:
-                self.pending[name] = Due(due.kind, due.support[1:])
+                self.pending[name] = Due(due.kind, due.support[1:], due.call)
 
     def take_event(self) -> Event:
         t, name = self._head()
         due = self.pending.pop(name)
         assert len(due.support) == 1, "take_event before next_event_time"
-        m = self.model.of(name)
+        m = self.model.of(name).settings(due.call)
         if due.kind is EventKind.ON:
             outcome = self.chooser.choose(_outcomes(m))
             if outcome is EventKind.ACHIEVED:
-                self.pending[name] = self._due(outcome, m.achieved_after, t)
+                self.pending[name] = self._due(outcome, m.achieved_after, t, due.call)
             elif outcome is EventKind.FAILED:
-                self.pending[name] = self._due(outcome, m.failed_after, t)
+                self.pending[name] = self._due(outcome, m.failed_after, t, due.call)
         elif due.kind is EventKind.ACHIEVED and m.lose:
             if self.chooser.choose([(True, m.lose), (False, 1 - m.lose)]):
-                self.pending[name] = self._due(EventKind.FAILED, m.lost_after, t)
+                self.pending[name] = self._due(EventKind.FAILED, m.lost_after, t, due.call)
         return Event(t, due.kind, name)
