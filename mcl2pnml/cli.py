@@ -347,16 +347,21 @@ def campaign(mission: Path, model: Path | None, as_json: bool, progress: bool | 
     simulator, faults injected if asked: each ending's frequency with its interval, the
     end times, how often each property holds, and optionally a sequential test
     (docs/odds.md)."""
+    from tqdm import tqdm
+
     from mcl2pnml.campaign import lines
     shown = sys.stderr.isatty() if progress is None else progress
-    flown = pipeline.campaign_file(mission, model, progress=_runs_done if shown else None,
-                                   note=_note, **options)
-    if shown:
-        click.echo("", err=True)
+    bar = tqdm(total=options["runs"], unit=" runs", file=sys.stderr, disable=not shown,
+               dynamic_ncols=True)
+    try:
+        # a note (a file written) printed above the bar, not through it
+        flown = pipeline.campaign_file(
+            mission, model, **options, progress=lambda done, _: bar.update(done - bar.n),
+            note=(lambda line: tqdm.write(line, file=sys.stderr)) if shown else _note)
+    finally:
+        bar.close()
     click.echo(json.dumps(flown.as_json(), indent=2) if as_json
                else "\n".join(lines(flown, mission.name)))
     return 0
 
 
-def _runs_done(done: int, total: int) -> None:
-    click.echo(f"\r{done:,} of {total:,} runs", nl=False, err=True)

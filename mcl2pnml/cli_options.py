@@ -333,5 +333,6 @@ CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
                  help="Draw the outcomes with their intervals and the end times."),
     click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
     click.option("--progress/--no-progress", default=None,
-                 help="Show the runs done (default: on a terminal)."),
+                 help="Show a bar of the runs done, their rate and the time left (default: "
+                      "on a terminal)."),
 )

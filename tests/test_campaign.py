@@ -49,8 +49,10 @@ def local(tmp_path_factory):
     """800 runs on a local cluster of two workers, with their table."""
     table = tmp_path_factory.mktemp("campaign") / "runs.csv"
     out = run_cli("campaign", SAUCE, "--vehicle-model", MODEL, "--runs", 800, "--workers", 2,
-                  "--json", "--table", table, "--seed", 100, timeout=240)
+                  "--json", "--table", table, "--seed", 100, "--progress", timeout=240)
     assert out.returncode == 0, out.stderr
+    # the bar, and the note of the table written above it, on standard error only
+    assert "800/800" in out.stderr and f"wrote {table}" in out.stderr, out.stderr
     return json.loads(out.stdout), table.read_text().splitlines()
 
 
