@@ -295,7 +295,14 @@ def guard(budget: Budget, what: str) -> Iterator[None]:
     except _Stop:
         stopped = True
     finally:
-        closing.set()
+        # an interruption may still land until ``closing`` is set (the body ended just
+        # as the watcher tripped): taken here, never let out of the guard as a traceback
+        while True:
+            try:
+                closing.set()
+                break
+            except _Stop:
+                stopped = True
         stop.set()
         watcher.join()
         _land()
