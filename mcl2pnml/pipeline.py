@@ -1361,7 +1361,11 @@ def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: 
     if model_path is not None:
         VehicleModel.load(model_path).check_primitives(used)
     else:
-        offered = AUVSimulator(World.load(world) if world else World()).primitives
+        flown_in = World.load(world) if world else World()
+        offered = AUVSimulator(flown_in).primitives
+        if not flown_in.noise and faults is None:
+            note("every run flies alike: the world has no noise and no faults are injected "
+                 '("noise" in the world file, or --faults, makes runs differ)')
         if used - offered:
             raise OptionError("--vehicle-model", f"the mission uses "
                               f"'{sorted(used - offered)[0]}', which the simulator does not "

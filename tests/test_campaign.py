@@ -220,6 +220,14 @@ def test_a_campaign_flies_either_a_model_or_the_simulator(tmp_path):
     bad = tmp_path / "f.json"
     bad.write_text('{"faults": {"Thruster": {"fail": 0.5}}}')
     one_error(run_cli("campaign", SAUCE, "--faults", bad, "--runs", 10), "f.json:1:")
+    one_error(run_cli("run", SAUCE, "--vehicle", "sim@x"), "the seed after sim@ is a whole number")
+
+
+def test_a_campaign_whose_runs_are_all_alike_says_so(shared):
+    said = []
+    flown = pipeline.campaign_file(SAUCE, None, 5, scheduler=shared, note=said.append)
+    assert any("every run flies alike" in line for line in said), said
+    assert len({(r.outcome, r.time) for r in flown.runs}) == 1
 
 
 EXAMPLE_MODELS = sorted((ROOT / "examples").glob("*.model.json"))

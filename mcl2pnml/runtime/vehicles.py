@@ -47,8 +47,11 @@ def _simulator(spec: str, connect: str | None, world: Path | None,
     from dataclasses import replace
 
     from mcl2pnml.runtime.simulator import AUVSimulator, World
-    w = World.load(world) if world else World()
     seed = seed_of(spec)
+    if spec != "sim" and seed is None:
+        raise OptionError("--vehicle", f"'{spec[:80]}': the seed after sim@ is a whole number "
+                                       "(sim@SEED)")
+    w = World.load(world) if world else World()
     return AUVSimulator(w if seed is None else replace(w, seed=seed))
 
 
@@ -60,7 +63,7 @@ def seed_of(spec: str) -> int | None:
 
 def is_simulator(spec: str) -> bool:
     """Does ``spec`` name the simulator (``sim``, ``sim@SEED``)?"""
-    return spec == "sim" or (spec.startswith("sim@") and seed_of(spec) is not None)
+    return spec == "sim" or spec.startswith("sim@")
 
 
 def _bridge(spec: str, connect: str | None, world: Path | None,
