@@ -15,10 +15,12 @@ OUT    := out
 # packages where missing (machines here run as root). GLPK lets TAPAAL's verifypn, one of
 # the peer tools the external-corpus tests compare us with, start.
 # A C compiler builds the safe-net explorer's loops (analysis/_native.c) at install;
-# without one mcl2pnml installs all the same and explores with numba's.
+# without one mcl2pnml installs all the same and explores with numba's. Java 17 runs
+# the PNML readers of the editors WoPeD and PIPE, which the tests hold our files to.
 APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium) \
                 $(if $(shell /sbin/ldconfig -p 2>/dev/null | grep libglpk.so.40),,libglpk40) \
-                $(if $(shell command -v cc),,gcc)
+                $(if $(shell command -v cc),,gcc) \
+                $(if $(shell command -v java),,openjdk-17-jre-headless)
 
 system-deps:
 	@if [ -n "$(strip $(APT_PACKAGES))" ]; then \

@@ -219,7 +219,8 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
         click.echo(pipeline.to_pnml_bytes(net).decode(), nl=False)
         return 0
     output = output or Path(name + FORMATS[fmt].suffixes[0])
-    pipeline.save_net(net, output, fmt, clusters=pipeline.template_clusters(name), expand=None)
+    pipeline.save_net(net, output, fmt, clusters=pipeline.template_clusters(name), expand=None,
+                      note=_note)
     click.echo(f"wrote {output}: {net.summary()}", err=True)
     return 0
 

@@ -191,7 +191,8 @@ def load_net(path: str | Path, net_id: str | None = None,
 def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
              title: str | None = None, mission: bool = False,
              clusters: Mapping[str, Sequence[str]] | None = None,
-             expand: Sequence[str] | None = (), timing: "Assumptions | None" = None) -> Path:
+             expand: Sequence[str] | None = (), timing: "Assumptions | None" = None,
+             note: Callable[[str], None] = lambda line: None) -> Path:
     """Write ``net`` to ``path`` in format ``fmt`` (a name of the format table).
 
     ``layout`` places the nodes where the format keeps positions (PNML):
@@ -200,16 +201,19 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     executor's timing. A drawing (svg, png, dot) shows ``clusters`` as boxes
     (None: a mission's calls, :func:`template_clusters` for a template) and
     opens those ``expand`` names (None: all). ``timing``: what the vehicle is assumed to
-    do, for the formats that write a mission's timed semantics (tapn).
+    do, for the formats that write a mission's timed semantics (tapn). ``note`` hears
+    what the format could not say of the net (PIPE's: the time-outs' delays).
     """
     form = FORMATS.get(fmt)
     if form is None:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     drawn = _drawn(net, layout) if "positions" in form.options else None
-    form.save(net, path, SaveOptions(positions=drawn and drawn.positions,
-                                     bends=drawn and drawn.bends, title=title,
-                                     urgent=mission, clusters=clusters, expand=expand,
-                                     timing=timing))
+    said = form.save(net, path, SaveOptions(positions=drawn and drawn.positions,
+                                            bends=drawn and drawn.bends, title=title,
+                                            urgent=mission, clusters=clusters, expand=expand,
+                                            timing=timing))
+    for line in said:
+        note(f"{Path(path).name} ({form.title}): {line}")
     return Path(path)
 
 
@@ -265,12 +269,12 @@ def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
 
 
 def _drawn(net: Net, layout: str):
-    """Node positions and arc bend points from ``layout`` (None for ``none``, which
-    imports nothing of the view)."""
+    """Node positions and arc bend points from ``layout``, in whole points (None for
+    ``none``, which imports nothing of the view)."""
     if layout == "none":
         return None
     from mcl2pnml.view.layout import drawn_layout
-    return drawn_layout(net, layout)
+    return drawn_layout(net, layout).whole()
 
 
 def validate_pnml(path: str | Path, grammar: str | Path | None = None,
@@ -706,7 +710,7 @@ def compile_mission(mission: Path, output: Path | None = None, fmt: str = "pnml"
                                  timed_query_paths(net, output, timing, props)], inputs)
     opened = None if expand == "all" else tuple(n for n in expand.split(",") if n)
     save_net(net, output, fmt, layout=layout_engine, title=mission.name, mission=True,
-             expand=opened, timing=timing)
+             expand=opened, timing=timing, note=note)
     note(f"wrote {output}: {net.summary()}")
     return [output, *_saved_beside(net, output, timing, queries, tool, props, stem, note)]
 

@@ -179,7 +179,7 @@ def test_a_campaign_on_the_simulator_with_faults(shared, tmp_path):
     faults = tmp_path / "depth.faults.json"
     faults.write_text(json.dumps({"faults": {"KeepDepth": {"fail": "1/5"}}}))
     table, plot = tmp_path / "runs.csv", tmp_path / "runs.png"
-    runs = 200
+    runs = 120
     flown = pipeline.campaign_file(SAUCE, None, runs, world=world, faults=faults, seed=40,
                                    properties="", scheduler=shared, table=table, plot=plot)
     data = flown.as_json()

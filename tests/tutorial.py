@@ -12,7 +12,9 @@ A ``$`` line is a bash command line (pipes and redirections work), with
 these names first on PATH: ``mcl2pnml`` is this checkout's, ``python`` this
 interpreter (the virtualenv's, with pm4py and SNAKES), and
 ``verifypn-linux64`` and ``lola`` the peer tools, found as tests/peers.py
-finds them (``$MCL2PNML_PEERS``, ``../shared/peers/bin``, PATH). A block that
+finds them (``$MCL2PNML_PEERS``, ``../shared/peers/bin``, PATH), and
+``woped-pnml-import`` and ``pipe-pnml-import`` the editors' readers, run as
+tests/editors.py runs them (Java and ``../shared/peers``). A block that
 calls a peer that is not there is left as it is and not compared; the check
 says which blocks and why (tests/test_tutorial.py skips with that reason),
 and the rest of the documents is still checked.
@@ -35,6 +37,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import forkcli  # noqa: E402  (tests/ is not a package)
+from editors import find as find_editor  # noqa: E402
 from peers import LOLA, VERIFYPN, find  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,8 +49,11 @@ PICTURES = ROOT / "docs" / "tutorial"
 #: What the commands find in their scratch directory, copied from the checkout.
 COPIED = ("examples", "docs/interop")
 BLOCK = re.compile(r"(?:<!-- lines: (\d+) -->\n)?```console\n(.*?)```", re.S)
+#: The editors' PNML readers a ``$`` line may call, headless (tests/editors.py), by the
+#: name the documents give them.
+EDITORS = {"woped-pnml-import": "woped", "pipe-pnml-import": "pipe"}
 #: The peer tools a ``$`` line may call.
-PEERS = (VERIFYPN, LOLA)
+PEERS = (VERIFYPN, LOLA, *EDITORS)
 #: A peer called by a command line: first, or after a pipe, ``;``, ``&&`` or ``(``.
 CALLS = re.compile(r"(?:^|[|;&(]\s*)(" + "|".join(map(re.escape, PEERS)) + r")(?=\s|$)")
 
@@ -76,11 +82,16 @@ def tool_dir(work: Path) -> tuple[Path, dict[str, str]]:
                 "python": f'exec "{sys.executable}" "$@"'}
     absent = {}
     for peer in PEERS:
-        path, why = find(peer)
+        if peer in EDITORS:
+            command, why = find_editor(EDITORS[peer])
+            path = command and " ".join(f'"{c}"' for c in command)
+        else:
+            path, why = find(peer)
+            path = path and f'"{path}"'
         if path is None:
             absent[peer] = why
         else:
-            wrappers[peer] = f'exec "{path}" "$@"'
+            wrappers[peer] = f'exec {path} "$@"'
     for name, body in wrappers.items():
         (bin_ / name).write_text(f"#!/bin/sh\n{body}\n")
         (bin_ / name).chmod(0o755)

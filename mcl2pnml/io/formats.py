@@ -81,10 +81,12 @@ class Format:
             raise OptionError("--net", f"a {self.title} file holds one net; leave out --net")
         return self._function(self.loader)(path, net_id)
 
-    def save(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> None:
-        """Write ``net`` to ``path``, whole or not at all."""
+    def save(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> list[str]:
+        """Write ``net`` to ``path``, whole or not at all; returns what the format could
+        not say of it, in words (a writer that says nothing of it returns nothing)."""
         given = {f.name: getattr(options, f.name) for f in fields(options)}
-        self._function(self.saver)(net, path, **{k: given[k] for k in self.options})
+        said = self._function(self.saver)(net, path, **{k: given[k] for k in self.options})
+        return said if isinstance(said, list) else []
 
 
 FORMATS: dict[str, Format] = {f.name: f for f in (
@@ -95,6 +97,10 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
     Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
            "mcl2pnml.io.lola", "load_lola", "save_lola"),
+    Format("pipe", "PIPE", (".xml",),
+           "PIPE's own dialect of PNML, with the layout (untimed: the time-outs' delays "
+           "in a note on the canvas)", "mcl2pnml.io.pipe", None, "save_pipe",
+           ("positions", "bends")),
     Format("tapn", "TAPAAL timed-arc", (".tapn",),
            "TAPAAL's timed-arc PNML for verifydtapn: a mission under its timed semantics "
            "(time-outs, acknowledgements, report gaps in token ages), queries beside it",

@@ -28,7 +28,7 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Mapping, Sequence
 
 from mcl2pnml.core.net import Marking, Net
@@ -75,6 +75,15 @@ class Drawn:
     bends: dict[tuple[str, str], list[tuple[float, float]]] = field(default_factory=dict)
     copies: dict[str, tuple[str, tuple[float, float]]] = field(default_factory=dict)
     boxes: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+
+    def whole(self) -> "Drawn":
+        """The positions and bend points in whole points, as a file keeps them: WoPeD
+        truncates every coordinate to an integer (817.5 becomes 817), so a file of
+        whole coordinates reads the same in every editor as in ours."""
+        def point(xy: tuple[float, float]) -> tuple[float, float]:
+            return float(round(xy[0])), float(round(xy[1]))
+        return replace(self, positions={k: point(v) for k, v in self.positions.items()},
+                       bends={k: [point(p) for p in v] for k, v in self.bends.items()})
 
 
 def layout(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:

@@ -14,6 +14,10 @@ where other tools skip it and our reader restores it:
   each tool (verifypn adds them up, pm4py keeps one, SNAKES refuses them,
   LoLA crashes), so a file never has any.
 
+Every arc carries its inscription, weight 1 included: the standard lets a
+file leave 1 out, but WoPeD logs a warning per arc without one and PIPE
+reads it as weight 0 (docs/interop.md).
+
 One flat ``<page>`` per net, because nested pages break LoLA and SNAKES and
 make pm4py silently wrong. Every node gets a ``<graphics><position>`` when
 the caller hands positions (a layout: :mod:`mcl2pnml.view.layout`), or when
@@ -61,6 +65,9 @@ _XML = {"&": "&amp;", "<": "&lt;", ">": "&gt;"}
 _TEXT = str.maketrans({**_XML, "\r": "&#13;"})  # a bare CR in text would read back as LF
 _ATTR = str.maketrans({**_XML, '"': "&quot;", "\n": "&#10;", "\r": "&#13;", "\t": "&#9;"})
 _SPECIAL = re.compile(r"[&<>\r]")
+#: The inscription of an arc of weight 1. PNML lets a file leave it out, but WoPeD logs
+#: a warning for every arc without one, and PIPE reads such an arc as weight 0.
+_ONE = "<inscription><text>1</text></inscription>"
 
 
 def _text(value: str) -> str:
@@ -265,7 +272,7 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None,
         stop = min(start + CHUNK, len(sources))
         if (not bent and weights[start:stop].count(1) == stop - start
                 and kinds[start:stop].count(ArcKind.NORMAL) == stop - start):
-            yield "".join([f'<arc id="{stem}{k}" source="{a}" target="{b}"/>\n'
+            yield "".join([f'<arc id="{stem}{k}" source="{a}" target="{b}">{_ONE}</arc>\n'
                            for k, a, b in zip(range(number + 1, number + 1 + stop - start),
                                               sources[start:stop], targets[start:stop])])
             number += stop - start
@@ -275,16 +282,14 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None,
                 zip(sources[start:stop], targets[start:stop], weights[start:stop],
                     kinds[start:stop], extras[start:stop] if own else extras), start):
             number += 1
-            inscription = (f"<inscription><text>{weight}</text></inscription>"
-                           if weight != 1 else "")
+            inscription = f"<inscription><text>{weight}</text></inscription>"
             there = back = ""
             if bent:
                 there = bent.get(lines[k], "")
                 back = bent.get(lines[k][::-1], "")
             if kind is ArcKind.NORMAL:
                 chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
-                             f"{inscription}{there}</arc>\n" if inscription or there else
-                             f'<arc id="{stem}{number}" source="{src}" target="{dst}"/>\n')
+                             f"{inscription}{there}</arc>\n")
             else:
                 # a read arc is a self-loop to P/T tools, each half marked as read
                 chunk.append(f'<arc id="{stem}{number}" source="{src}" target="{dst}">'
@@ -295,6 +300,24 @@ def _chunks(net: Net, xid: _Ids, positions: Positions | None,
                 chunk.append(f'<arc id="{stem}{number}" source="{dst}" target="{src}">'
                              f"{inscription}{back}{_READ}</arc>\n")
         yield "".join(chunk)
+
+
+def pt_arcs(net: Net) -> list[tuple[str, str, int, bool]]:
+    """The arcs as a P/T tool sees them, as this writer writes them: (source, target,
+    weight, read?), a read arc as the two arcs of a self-loop whose return carries also
+    the tokens the transition's own arc puts back into the place (for writers of other
+    dialects: :mod:`mcl2pnml.io.pipe`)."""
+    sources, targets, weights, kinds = net.columns
+    own = _into_read_places(sources, targets, weights, kinds)
+    out = []
+    for s, d, w, k in zip(sources, targets, weights, kinds):
+        if (d, s) in own:
+            continue    # goes with the read arc's return
+        if k is ArcKind.NORMAL:
+            out.append((s, d, w, False))
+        else:
+            out += [(s, d, w, True), (d, s, w + own.get((s, d), 0), True)]
+    return out
 
 
 def _into_read_places(sources, targets, weights, kinds) -> dict[tuple[str, str], int]:

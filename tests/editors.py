@@ -1,0 +1,122 @@
+"""The Petri-net editors' own readers, headless: WoPeD's PNML import and PIPE's reader.
+
+``../shared/peers/woped/woped-pnml-import.jar`` and
+``../shared/peers/pipe/pipe-pnml-import.jar`` (their READMEs say how they were
+built) call the readers behind each editor's File > Open and print what they
+read: counts, warnings, and with ``--list`` one line per place, transition and
+arc. They need Java 17 (``make setup`` installs ``openjdk-17-jre-headless``
+where ``java`` is missing). A test that needs one calls :func:`need`, which
+skips with the reason when Java or the jar is absent.
+
+A JVM takes about a second to start; each test process keeps a class-data
+archive of each reader (``-XX:ArchiveClassesAtExit``, written by its first
+run) so that the later runs start in about half that. Every run has a time
+bound.
+"""
+from __future__ import annotations
+
+import atexit
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+
+from helpers import ROOT
+
+PEERS = ROOT.parent / "shared" / "peers"
+JARS = {"woped": PEERS / "woped" / "woped-pnml-import.jar",
+        "pipe": PEERS / "pipe" / "pipe-pnml-import.jar"}
+TIMEOUT = 120.0
+#: Flags that shorten a short-lived JVM: the client compiler only, the serial collector.
+FAST = ("-XX:TieredStopAtLevel=1", "-XX:+UseSerialGC")
+
+
+@lru_cache(maxsize=None)
+def find(editor: str) -> tuple[list[str] | None, str]:
+    """The command that runs ``editor``'s reader (``woped`` or ``pipe``), or None and why."""
+    jar = JARS[editor]
+    java = shutil.which("java")
+    if java is None:
+        return None, "no java on PATH (make setup installs openjdk-17-jre-headless)"
+    if not jar.is_file():
+        return None, f"{jar} is not there (../shared/peers beside the checkout)"
+    return [java, *FAST, "-jar", str(jar)], ""
+
+
+def need(editor: str) -> list[str]:
+    command, why = find(editor)
+    if command is None:
+        pytest.skip(why)
+    return command
+
+
+_ARCHIVES = Path(tempfile.mkdtemp(prefix="mcl2pnml-jsa-"))
+atexit.register(shutil.rmtree, _ARCHIVES, True)
+
+
+@dataclass
+class Read:
+    """What an editor's reader read of a file."""
+
+    counts: dict[str, int] = field(default_factory=dict)
+    #: id -> (tokens, x, y)
+    places: dict[str, tuple[int, int | None, int | None]] = field(default_factory=dict)
+    #: id -> (x, y)
+    transitions: dict[str, tuple[int | None, int | None]] = field(default_factory=dict)
+    #: id -> (source, target, weight, points: its ends and bend points)
+    arcs: dict[str, tuple[str, str, int, int]] = field(default_factory=dict)
+    #: what the reader complained of (WoPeD's warnings, PIPE's unexpected elements)
+    complaints: list[str] = field(default_factory=list)
+    output: str = ""
+
+
+_PAIRS = re.compile(r"(\w+)=(\S*)")
+
+
+def _number(text: str | None) -> int | None:
+    return None if text is None else round(float(text))
+
+
+def read(editor: str, path: Path) -> Read:
+    """Run ``editor``'s reader on ``path`` with ``--list`` (and PIPE's ``--verbose``, which
+    shows the elements it skipped); fails the test on an error."""
+    command = need(editor)
+    archive = _ARCHIVES / f"{editor}-{os.getpid()}.jsa"
+    share = (f"-XX:SharedArchiveFile={archive}" if archive.is_file()
+             else f"-XX:ArchiveClassesAtExit={archive}")
+    args = [command[0], share, *command[1:], "--list",
+            *(["--verbose"] if editor == "pipe" else []), str(path)]
+    out = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT)
+    assert out.returncode == 0, f"{editor} could not read {path.name}:\n{out.stdout}{out.stderr}"
+    got = Read(output=out.stdout)
+    for line in out.stdout.splitlines():
+        words = line.split()
+        if not words:
+            continue
+        kv = dict(_PAIRS.findall(line))
+        if words[0] == "place" and len(words) > 2:
+            got.places[words[1]] = (int(kv["tokens"]), _number(kv.get("x")),
+                                    _number(kv.get("y")))
+        elif words[0] == "transition" and len(words) > 2:
+            got.transitions[words[1]] = (_number(kv.get("x")), _number(kv.get("y")))
+        elif words[0] == "arc" and len(words) > 2:
+            source, target = words[2].split("->")
+            weight = kv.get("weight")
+            if weight is None:      # PIPE: weights={Default=2}
+                weight = sum(map(int, re.findall(r"=(\d+)", kv.get("weights", ""))))
+            got.arcs[words[1]] = (source, target, int(weight), int(kv.get("points", 0)))
+        elif words[0] == "warning":
+            got.complaints.append(line)
+        elif len(words) == 2 and words[1].lstrip("-").isdigit():
+            got.counts[words[0]] = int(words[1])
+        elif "unexpected element" in line or "ValidationEvent" in line:
+            got.complaints.append(line.strip())
+    if got.counts.get("warnings"):
+        got.complaints.append(f"warnings {got.counts['warnings']}")
+    return got
