@@ -201,3 +201,8 @@ def test_compile_says_what_pipe_cannot(tmp_path):
     assert sorted((a.source, a.target, a.weight) for a in back.arcs) == \
         sorted((s, d, w) for s, d, w, _ in pt_arcs(net))
     assert all(t.timing is None for t in back.transitions)
+    # a template too, which has no time-outs: only its payloads are left out
+    out = run_cli("template", "task", "--format", "pipe", "-o", tmp_path / "task.xml")
+    assert out.returncode == 0, out.stderr
+    assert "payloads" in out.stderr and "time-out" not in out.stderr
+    assert pipeline.load_net(tmp_path / "task.xml").summary().startswith("task: 19 places")
