@@ -14,7 +14,7 @@ import click
 
 from mcl2pnml import pipeline
 from mcl2pnml.cli_options import (
-    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
+    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, QUERY_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
     FORMAT_OPTION, NET_OPTION, ODDS_OPTIONS, OUTPUT, PROPERTIES_SIZE, PROPERTY_ATOMS,
     RUN_OPTIONS, SHOW_OPTIONS)
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
@@ -313,6 +313,22 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
     shown = sys.stderr.isatty() if progress is None else progress
     outcome = pipeline.analyze_file(file, progress=_progress if shown else None,
                                     note=_note, **options)
+    click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
+               else "\n".join(outcome.lines()))
+    return outcome.status
+
+
+@main.command(epilog=EXAMPLES)
+@click.argument("net", type=FILE)
+@click.argument("formulas", type=FILE, nargs=-1)
+@QUERY_OPTIONS
+def query(net: Path, formulas: tuple[Path, ...], examinations: tuple[str, ...], as_json: bool,
+          max_states: int, max_memory: str | None, net_id: str | None) -> int:
+    """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
+    LTL, upper bounds) and generic examinations on NET, one answer line each in the
+    contest's format; exit 3 if one is not answered (docs/interop.md)."""
+    outcome = pipeline.query_file(net, formulas, examinations, net_id=net_id,
+                                  max_states=max_states, max_memory=max_memory)
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return outcome.status

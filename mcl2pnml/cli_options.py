@@ -282,6 +282,20 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
 )
 
 
+QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
+    click.option("--examination", "examinations", multiple=True,
+                 type=click.Choice(["ReachabilityDeadlock", "OneSafe", "StableMarking",
+                                    "QuasiLiveness", "Liveness"]),
+                 help="Also a generic examination of the contest (may be repeated)."),
+    click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
+    click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
+                 show_default=True, help="Answer nothing past this many markings."),
+    click.option("--max-memory", metavar="SIZE",
+                 help="Memory budget: 4G, 500M (default: half free)."),
+    NET_OPTION,
+)
+
+
 ODDS_OPTIONS = _composed(  # odds MISSION
     click.option("--vehicle-model", "model", type=FILE, required=True, metavar="MODEL.json",
                  help="How likely each primitive is to achieve or fail, and when it answers "

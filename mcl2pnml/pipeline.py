@@ -1217,6 +1217,49 @@ def check_properties_timed(net: Net, properties, assumptions: "Assumptions | Non
     return timed.check(net, properties, assumptions or Assumptions(), max_states)
 
 
+# -- the contest's questions, as ``mcl2pnml query`` answers them ----------------------------
+
+@dataclass(frozen=True)
+class QueryOutcome:
+    """What ``mcl2pnml query`` prints: one answer per formula and examination."""
+
+    net: str
+    answers: list[Any]
+
+    @property
+    def status(self) -> int:
+        """0 when every question is answered, 3 when one is not."""
+        return 3 if any(a.value is None for a in self.answers) else 0
+
+    def lines(self) -> list[str]:
+        return [a.line() for a in self.answers]
+
+    def as_json(self) -> dict[str, Any]:
+        return {"net": self.net, "answers": [
+            {"id": a.id, "value": a.value, **({"technique": a.technique} if a.technique else {}),
+             **({"reason": a.reason} if a.reason else {})} for a in self.answers]}
+
+
+def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[str] = (), *,
+               net_id: str | None = None, max_states: int = 5_000_000,
+               max_memory: int | str | None = None) -> QueryOutcome:
+    """``mcl2pnml query``: the Model Checking Contest's formula files (and generic
+    examinations) answered on any net we read (:mod:`analysis.mcc`)."""
+    from analysis import mcc
+    from mcl2pnml.io.mccquery import read_queries
+    if not formulas and not examinations:
+        raise OptionError("FORMULAS", "give a formula file of the contest, or --examination")
+    queries = [x for path in formulas for x in read_queries(path)]
+    net = load_net(net_path, net_id, max_memory)
+    if isinstance(max_memory, str):
+        max_memory = parse_size(max_memory)
+    answers = mcc.answer(net, queries, max_states=max_states, max_memory=max_memory) \
+        if queries else []
+    if examinations:
+        answers += mcc.generic(net, examinations, max_states=max_states, max_memory=max_memory)
+    return QueryOutcome(net.name, answers)
+
+
 # -- the exact odds, as ``mcl2pnml odds`` gives them ----------------------------------------
 
 @dataclass(frozen=True)

@@ -294,3 +294,131 @@ def save_property_queries(props, stem: str | Path) -> list[tuple[Path, tuple[Pro
         atomic_write_text(path, to_xml(queries))
         written.append((path, queries))
     return written
+
+
+# -- reading the contest's files ----------------------------------------------------------------
+
+#: The largest property file read, in bytes (the contest's are some tens of kilobytes).
+MAX_QUERIES = 16 << 20
+#: The deepest formula read (the contest's nest about 20 deep).
+MAX_DEPTH = 400
+
+
+class QueryError(Mcl2PnmlError):
+    """A property file that is not the contest's language, or asks what we cannot say."""
+
+
+def read_queries(path: str | Path) -> tuple["Query", ...]:
+    """The queries of a contest property file (``<property-set>``), each with its location.
+
+    Every element the contest's 2021 files use is read with its meaning; any
+    other is refused, at its line and column, never guessed."""
+    from mcl2pnml.core.files import read_bytes
+    data = read_bytes(path, "property file", MAX_QUERIES)
+    return parse_queries(data, str(path))
+
+
+def parse_queries(data: bytes, filename: str = "<queries>") -> tuple["Query", ...]:
+    from mcl2pnml.core import queries as q
+    from mcl2pnml.io.pnml.reader import _local, _parse_xml, _Source
+    src = _Source(filename, data)
+    root = _parse_xml(data, src).getroot()
+
+    def fail(message: str, el) -> QueryError:
+        return QueryError(message, src.locate(el))
+
+    def children(el) -> list:
+        return [c for c in el if isinstance(c.tag, str)]
+
+    def text(el) -> str:
+        value = (el.text or "").strip()
+        if not value or children(el):
+            raise fail(f"<{_local(el)}> holds a name or a number, and nothing else", el)
+        return value
+
+    def names(el, tag: str) -> tuple[str, ...]:
+        found = []
+        for c in children(el):
+            if _local(c) != tag:
+                raise fail(f"<{_local(el)}> holds <{tag}> elements, not <{_local(c)}>", c)
+            found.append(text(c))
+        if not found:
+            raise fail(f"<{_local(el)}> names no {tag}", el)
+        return tuple(found)
+
+    def integer(el):
+        tag = _local(el)
+        if tag == "integer-constant":
+            value = text(el)
+            if not value.isdigit() or len(value) > 18:
+                raise fail(f"'{value[:40]}' is not a natural number", el)
+            return q.IntConst(int(value))
+        if tag == "tokens-count":
+            return q.TokensCount(names(el, "place"))
+        raise fail(f"<{tag}> is not an integer expression; one of <integer-constant>, "
+                   "<tokens-count>", el)
+
+    def one(el):
+        kids = children(el)
+        if len(kids) != 1:
+            raise fail(f"<{_local(el)}> holds one formula, not {len(kids)}", el)
+        return kids[0]
+
+    unary = {"negation": q.Not, "next": q.Next, "globally": q.Globally, "finally": q.Finally,
+             "all-paths": q.AllPaths, "exists-path": q.ExistsPath}
+
+    def formula(el, depth: int = 0):
+        if depth > MAX_DEPTH:
+            raise fail(f"a formula nested more than {MAX_DEPTH} deep", el)
+        tag = _local(el)
+        if tag in unary:
+            return unary[tag](formula(one(el), depth + 1))
+        if tag in ("conjunction", "disjunction"):
+            args = tuple(formula(c, depth + 1) for c in children(el))
+            if not args:
+                raise fail(f"<{tag}> of nothing", el)
+            return (q.And if tag == "conjunction" else q.Or)(args)
+        if tag == "until":
+            parts = {_local(c): c for c in children(el)}
+            if set(parts) != {"before", "reach"} or len(children(el)) != 2:
+                raise fail("<until> holds <before> and <reach>", el)
+            return q.Until(formula(one(parts["before"]), depth + 1),
+                           formula(one(parts["reach"]), depth + 1))
+        if tag == "integer-le":
+            kids = children(el)
+            if len(kids) != 2:
+                raise fail(f"<integer-le> compares two integers, not {len(kids)}", el)
+            return q.IntLe(integer(kids[0]), integer(kids[1]))
+        if tag == "is-fireable":
+            return q.Fireable(names(el, "transition"))
+        if tag == "deadlock":
+            return q.Deadlock()
+        if tag in ("true", "false"):
+            return q.BoolConst(tag == "true")
+        raise fail(f"<{tag}> is not an element of the contest's property language we read",
+                   el)
+
+    if _local(root) != "property-set":
+        raise fail(f"the root element is <{_local(root)}>, not <property-set>", root)
+    out, seen = [], set()
+    for prop in children(root):
+        if _local(prop) != "property":
+            raise fail(f"<property-set> holds <property> elements, not <{_local(prop)}>", prop)
+        parts = {}
+        for c in children(prop):
+            if _local(c) in parts:
+                raise fail(f"a second <{_local(c)}> in one property", c)
+            parts[_local(c)] = c
+        if "id" not in parts or "formula" not in parts:
+            raise fail("a <property> has an <id> and a <formula>", prop)
+        pid = text(parts["id"])
+        if pid in seen:
+            raise fail(f"a second property '{pid}'", parts["id"])
+        seen.add(pid)
+        body = one(parts["formula"])
+        if _local(body) == "place-bound":
+            asks = q.PlaceBound(names(body, "place"))
+        else:
+            asks = formula(body)
+        out.append(q.Query(pid, asks, src.locate(prop)))
+    return tuple(out)

@@ -1,0 +1,479 @@
+"""The Model Checking Contest's questions answered on a net's reachability graph.
+
+Any bounded P/T net, any formula of :mod:`mcl2pnml.core.queries`: its
+reachable markings explored (:func:`analysis.statespace.explore`), then
+each question decided on the graph, exactly:
+
+* state atoms, for every marking at once (numpy columns of token counts);
+* CTL by the classic labelling (Clarke, Emerson and Sistla, 1986): ``EX``
+  by the successors, ``EU`` backwards from its goal, ``EG`` as the states
+  that reach, inside the formula's states, a cycle of them or a dead marking
+  (strongly connected components); the other operators from these three.
+  The reachability examinations are CTL's ``EF`` and ``AG``;
+* LTL (the contest's ``A φ``): the generalised Büchi automaton of ``not φ``
+  by Gerth, Peled, Vardi and Wolper's tableau (1995), in product with the
+  graph, and an accepting cycle searched among the product's strongly
+  connected components;
+* the upper bounds: the largest token sum over the markings;
+* the generic examinations: a reachable deadlock, one-safety, a stable
+  place (its count the same in every marking), quasi-liveness (every
+  transition fires somewhere) and liveness (every transition fires in every
+  bottom strongly connected component).
+
+Dead markings, as the contest's 2021 consensus answers read them (every one
+of its 2,223 verdicts on the 19 models in ``../shared/external-nets/mcc-queries``
+agrees, tests/test_mcc.py): in CTL a path is maximal, so a dead marking has
+no next marking (``EX`` false, ``AX`` true there) and ends its path (``EG φ``
+holds there where ``φ`` does); in LTL a finite path is extended by repeating
+its dead marking. The two differ only on ``X`` at a dead marking: a formula of
+both kinds with an ``X`` is decided both ways, and left unanswered, with the
+reason, where they disagree.
+
+What is not answered is said with its reason, never guessed: a formula that
+is neither CTL nor LTL, a net past the exploration's limits, an unbounded net
+(whose coverability graph does not decide these questions).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.net import Net
+
+
+@dataclass(frozen=True)
+class Answer:
+    """One question's answer: True/False, a bound, or None with the reason."""
+
+    id: str
+    value: bool | int | None
+    technique: str
+    reason: str = ""
+
+    def line(self) -> str:
+        """The contest's answer line (``FORMULA id TRUE TECHNIQUES ...``), or a line
+        saying why there is none."""
+        if self.value is None:
+            return f"FORMULA {self.id} CANNOT_COMPUTE ({self.reason})"
+        shown = self.value if isinstance(self.value, int) and not isinstance(self.value, bool) \
+            else ("TRUE" if self.value else "FALSE")
+        return f"FORMULA {self.id} {shown} TECHNIQUES {self.technique}"
+
+
+class UnknownName(Mcl2PnmlError):
+    """A query names a place or a transition the net does not have."""
+
+
+class Graph:
+    """The reachability graph of a bounded net, as the checker reads it."""
+
+    def __init__(self, space):
+        self.space = space
+        s = space.structure
+        self.structure = s
+        self.n = space.states
+        src, dst = np.asarray(space.src, dtype=np.int64), np.asarray(space.dst, dtype=np.int64)
+        self.trans = np.asarray(space.trans, dtype=np.int64)
+        self.src, self.dst = src, dst
+        self.dead = np.ones(self.n, dtype=bool)
+        self.dead[src] = False
+        loops = np.flatnonzero(self.dead)
+        # the temporal operators' graph: a dead marking repeats for ever
+        rows = np.concatenate([src, loops])
+        cols = np.concatenate([dst, loops])
+        data = np.ones(len(rows), dtype=np.int8)
+        self.succ = sparse.csr_matrix((data, (rows, cols)), shape=(self.n, self.n))
+        self.pred = self.succ.T.tocsr()
+        self.real = sparse.csr_matrix((np.ones(len(src), dtype=np.int8), (src, dst)),
+                                      shape=(self.n, self.n))
+        self.place_index = {p: i for i, p in enumerate(s.places)}
+        self.transition_index = {t: i for i, t in enumerate(s.transitions)}
+        self._tokens: dict[int, np.ndarray] = {}
+        self._ends: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+    # -- atoms ---------------------------------------------------------------------------------
+
+    def tokens(self, places: Sequence[str], where) -> np.ndarray:
+        total = np.zeros(self.n, dtype=np.int64)
+        for p in places:
+            i = self.place_index.get(p)
+            if i is None:
+                raise UnknownName(f"no place '{p}' in the net", where)
+            column = self._tokens.get(i)
+            if column is None:
+                column = self._tokens[i] = np.asarray(self.space.tokens(i), dtype=np.int64)
+            total += column
+        return total
+
+    def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
+        out = np.zeros(self.n, dtype=bool)
+        s = self.structure
+        for t in transitions:
+            j = self.transition_index.get(t)
+            if j is None:
+                raise UnknownName(f"no transition '{t}' in the net", where)
+            # enabled exactly where it fires: the graph's edges are its firings
+            out[self.src[self.trans == j]] = True
+            if not s.pre[j] and not s.read[j]:
+                out[:] = True
+        return out
+
+    def edge_ends(self, dtype) -> tuple[np.ndarray, np.ndarray]:
+        """The temporal operators' edges (dead markings' self-loops included) as two
+        columns, sources and targets."""
+        key = np.dtype(dtype).str
+        found = self._ends.get(key)
+        if found is None:
+            coo = self.succ.tocoo()
+            found = self._ends[key] = (coo.row.astype(dtype), coo.col.astype(dtype))
+        return found
+
+    def integer(self, e, where) -> np.ndarray:
+        if isinstance(e, q.IntConst):
+            return np.full(self.n, e.value, dtype=np.int64)
+        return self.tokens(e.places, where)
+
+    # -- CTL -----------------------------------------------------------------------------------
+
+    def ex(self, sat: np.ndarray) -> np.ndarray:
+        """EX sat: a firing leads to ``sat`` (none from a dead marking)."""
+        return (self.real @ sat.astype(np.int8)) > 0
+
+    def eu(self, before: np.ndarray, reach: np.ndarray) -> np.ndarray:
+        """E(before U reach): backwards from ``reach`` through ``before``."""
+        out = reach.copy()
+        frontier = np.flatnonzero(reach)
+        pred = self.pred
+        while len(frontier):
+            found = np.unique(pred[frontier].indices)
+            new = found[before[found] & ~out[found]]
+            out[new] = True
+            frontier = new
+        return out
+
+    def eg(self, sat: np.ndarray) -> np.ndarray:
+        """EG sat: the states that reach, through ``sat``, a cycle inside ``sat``."""
+        keep = np.flatnonzero(sat)
+        if not len(keep):
+            return np.zeros(self.n, dtype=bool)
+        sub = self.succ[keep][:, keep]
+        count, label = csgraph.connected_components(sub, directed=True, connection="strong")
+        size = np.bincount(label, minlength=count)
+        looped = np.zeros(count, dtype=bool)
+        looped[size > 1] = True
+        diagonal = sub.diagonal() > 0
+        looped[label[diagonal]] = True
+        core = np.zeros(self.n, dtype=bool)
+        core[keep[looped[label]]] = True
+        return self.eu(sat, core)
+
+    def check(self, f, where) -> np.ndarray:
+        """The states where CTL formula ``f`` holds."""
+        if isinstance(f, q.BoolConst):
+            return np.full(self.n, f.value)
+        if isinstance(f, q.IntLe):
+            return self.integer(f.left, where) <= self.integer(f.right, where)
+        if isinstance(f, q.Fireable):
+            return self.enabled(f.transitions, where)
+        if isinstance(f, q.Deadlock):
+            return self.dead.copy()
+        if isinstance(f, q.Not):
+            return ~self.check(f.arg, where)
+        if isinstance(f, q.And):
+            out = np.ones(self.n, dtype=bool)
+            for a in f.args:
+                out &= self.check(a, where)
+            return out
+        if isinstance(f, q.Or):
+            out = np.zeros(self.n, dtype=bool)
+            for a in f.args:
+                out |= self.check(a, where)
+            return out
+        if isinstance(f, (q.AllPaths, q.ExistsPath)):
+            return self._quantified(f, where)
+        raise NotCTL("a temporal operator outside a path quantifier")
+
+    def _quantified(self, f, where) -> np.ndarray:
+        inner, exists = f.arg, isinstance(f, q.ExistsPath)
+        if q.is_state(inner) or isinstance(inner, (q.AllPaths, q.ExistsPath)):
+            return self.check(inner, where)        # a quantifier over a state formula
+        true = np.ones(self.n, dtype=bool)
+        if isinstance(inner, q.Next):
+            sat = self.check(inner.arg, where)
+            return self.ex(sat) if exists else ~self.ex(~sat)
+        if isinstance(inner, q.Finally):
+            sat = self.check(inner.arg, where)
+            return self.eu(true, sat) if exists else ~self.eg(~sat)
+        if isinstance(inner, q.Globally):
+            sat = self.check(inner.arg, where)
+            return self.eg(sat) if exists else ~self.eu(true, ~sat)
+        if isinstance(inner, q.Until):
+            a, b = self.check(inner.before, where), self.check(inner.reach, where)
+            if exists:
+                return self.eu(a, b)
+            # A(a U b) = not E(not b U (not a and not b)) and not EG not b
+            return ~self.eu(~b, ~a & ~b) & ~self.eg(~b)
+        raise NotCTL("a path formula that is not CTL (LTL under a path quantifier)")
+
+
+class NotCTL(Exception):
+    """A formula this labelling cannot decide (LTL)."""
+
+
+# -- LTL: the negation's Büchi automaton, in product with the graph -----------------------------
+#
+# Formulas in negation normal form as tuples: ("lit", k) an atom (a column of
+# ``atoms``, a state formula's truth in every marking, negations included),
+# ("and", a, b), ("or", a, b), ("X", a), ("U", a, b), ("R", a, b); ("true",) and
+# ("false",).
+
+def _nnf(f, negate: bool, atoms: list, graph: "Graph", where):
+    """``f`` (negated if ``negate``) in negation normal form, its state subformulas as
+    atoms: each maximal state subformula one column of truths."""
+    if q.is_state(f):
+        sat = graph.check(f, where)
+        atoms.append(~sat if negate else sat)
+        return ("lit", len(atoms) - 1)
+    if isinstance(f, q.Not):
+        return _nnf(f.arg, not negate, atoms, graph, where)
+    if isinstance(f, (q.And, q.Or)):
+        parts = [_nnf(a, negate, atoms, graph, where) for a in f.args]
+        op = "and" if isinstance(f, q.And) != negate else "or"
+        out = parts[0]
+        for p in parts[1:]:
+            out = (op, out, p)
+        return out
+    if isinstance(f, q.Next):
+        return ("X", _nnf(f.arg, negate, atoms, graph, where))
+    if isinstance(f, q.Finally):        # F a = true U a;  not F a = false R not a
+        a = _nnf(f.arg, negate, atoms, graph, where)
+        return ("R", ("false",), a) if negate else ("U", ("true",), a)
+    if isinstance(f, q.Globally):       # G a = false R a;  not G a = true U not a
+        a = _nnf(f.arg, negate, atoms, graph, where)
+        return ("U", ("true",), a) if negate else ("R", ("false",), a)
+    if isinstance(f, q.Until):          # not (a U b) = not a R not b
+        a = _nnf(f.before, negate, atoms, graph, where)
+        b = _nnf(f.reach, negate, atoms, graph, where)
+        return ("R", a, b) if negate else ("U", a, b)
+    raise NotCTL("a path quantifier inside an LTL formula")
+
+
+def _tableau(phi) -> tuple[list[frozenset], list[set[int]], set[int], list[tuple]]:
+    """The generalised Büchi automaton of ``phi`` by Gerth, Peled, Vardi and Wolper's
+    tableau (1995): each node's literals (its ``old`` set's), its predecessors, the
+    initial nodes, and the ``U`` subformulas (one acceptance set each)."""
+    nodes: list[dict] = []
+    INIT = -1
+    stack = [{"incoming": {INIT}, "new": [phi], "old": set(), "next": set()}]
+    while stack:
+        node = stack.pop()
+        if not node["new"]:
+            same = next((n for n in nodes if n["old"] == node["old"]
+                         and n["next"] == node["next"]), None)
+            if same is not None:
+                same["incoming"] |= node["incoming"]
+                continue
+            node["id"] = len(nodes)
+            nodes.append(node)
+            stack.append({"incoming": {node["id"]}, "new": list(node["next"]), "old": set(),
+                          "next": set()})
+            continue
+        f = node["new"].pop()
+        if f in node["old"]:
+            stack.append(node)
+            continue
+        kind = f[0]
+        if kind == "false":
+            continue
+        if kind in ("true", "lit"):
+            node["old"].add(f)
+            stack.append(node)
+        elif kind == "and":
+            node["old"].add(f)
+            node["new"] += [g for g in f[1:] if g not in node["old"]]
+            stack.append(node)
+        elif kind == "X":
+            node["old"].add(f)
+            node["next"].add(f[1])
+            stack.append(node)
+        else:
+            a, b = f[1], f[2]
+            if kind == "or":
+                one, two = ([a], set()), ([b], set())
+            elif kind == "U":                   # a U b = b or (a and X(a U b))
+                one, two = ([a], {f}), ([b], set())
+            else:                               # a R b = b and (a or X(a R b))
+                one, two = ([b], {f}), ([a, b], set())
+            for new, nxt in (one, two):
+                stack.append({"incoming": set(node["incoming"]),
+                              "new": node["new"] + [g for g in new if g not in node["old"]],
+                              "old": node["old"] | {f}, "next": node["next"] | nxt})
+    untils = sorted({g for n in nodes for g in n["old"] if g[0] == "U"}, key=repr)
+    literals = [frozenset(g[1] for g in n["old"] if g[0] == "lit") for n in nodes]
+    accepting = [{k for k, n in enumerate(nodes) if u not in n["old"] or u[2] in n["old"]}
+                 for u in untils]
+    initial = {k for k, n in enumerate(nodes) if INIT in n["incoming"]}
+    edges = [(j, k) for k, n in enumerate(nodes) for j in n["incoming"] if j != INIT]
+    return literals, accepting, initial, edges
+
+
+def ltl_holds(graph: "Graph", f: q.AllPaths, where) -> bool:
+    """``A φ``: no path of the graph (a dead marking repeated for ever) satisfies ``not φ``,
+    the product with the negation's automaton having no accepting cycle reachable."""
+    atoms: list[np.ndarray] = []
+    literals, accepting, initial, edges = _tableau(_nnf(f.arg, True, atoms, graph, where))
+    n, k = graph.n, len(literals)
+    label = np.ones((k, n), dtype=bool)
+    for j, lits in enumerate(literals):
+        for a in lits:
+            label[j] &= atoms[a]
+    start = [j for j in initial if label[j][0]]
+    if not start:
+        return True
+    # the product's edges, an automaton edge at a time over every edge of the graph (a
+    # dead marking's self-loop included): product state = graph state * k + node
+    dtype = np.int32 if n * k < 2 ** 31 else np.int64
+    source, target = graph.edge_ends(dtype)
+    rows, cols = [], []
+    at_source, at_target = label[:, source], label[:, target]   # one gather each
+    for a, b in edges:
+        keep = at_source[a] & at_target[b]
+        rows.append(source[keep] * k + a)
+        cols.append(target[keep] * k + b)
+    rows = np.concatenate(rows) if rows else np.zeros(0, dtype=dtype)
+    cols = np.concatenate(cols) if cols else np.zeros(0, dtype=dtype)
+    product = sparse.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)),
+                                shape=(n * k, n * k))
+    # only what the initial product states reach
+    seen = np.zeros(n * k, dtype=bool)
+    for j in start:
+        seen[csgraph.breadth_first_order(product, j, directed=True,
+                                         return_predecessors=False)] = True
+    # an accepting cycle: a strongly connected component, reached, with a cycle in it,
+    # meeting every acceptance set (a component is reached whole or not at all)
+    count, comp = csgraph.connected_components(product, directed=True, connection="strong")
+    fair = np.zeros(count, dtype=bool)
+    fair[comp[seen]] = True
+    sizes = np.bincount(comp, minlength=count)
+    looped = sizes > 1
+    looped[comp[product.diagonal() > 0]] = True
+    fair &= looped
+    node = np.arange(n * k) % k
+    for acc in accepting:
+        meets = np.zeros(count, dtype=bool)
+        meets[comp[np.isin(node, list(acc)) & seen]] = True
+        fair &= meets
+    return not fair.any()
+
+
+# -- the questions --------------------------------------------------------------------------------
+
+
+def _space(net: Net, max_states: int, max_memory: int | None):
+    from analysis.statespace import ExplorationLimit, explore
+    try:
+        space = explore(net, max_states=max_states, max_memory=max_memory)
+    except ExplorationLimit as e:
+        return None, f"the state space is past its limit: {e.message}"
+    if getattr(space, "coverability", False):
+        return None, "the net is unbounded: its coverability graph does not decide these"
+    return space, ""
+
+
+def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = 5_000_000,
+           max_memory: int | None = None) -> list[Answer]:
+    """Each query's answer, in order (the module's documentation)."""
+    space, why = _space(net, max_states, max_memory)
+    if space is None:
+        return [Answer(x.id, None, "", why) for x in queries]
+    graph = Graph(space)
+    out = []
+    for x in queries:
+        if isinstance(x.asks, q.PlaceBound):
+            out.append(Answer(x.id, int(graph.tokens(x.asks.places, x.location).max()),
+                              "EXPLICIT STATE_SPACE"))
+            continue
+        out.append(_decide(graph, x))
+    return out
+
+
+def _decide(graph: Graph, x: q.Query) -> Answer:
+    """A formula's answer: by CTL's labelling, by LTL's automaton, or by both where the
+    formula is both (``A F p``). The two semantics differ only on ``X`` at a dead marking
+    (CTL: no next marking; LTL: the dead marking repeated): where a formula of both
+    kinds has an ``X`` and the answers differ, none is given."""
+    f = x.asks
+    ctl, ltl = q.is_ctl(f), q.is_ltl(f)
+    if not ctl and not ltl:
+        return Answer(x.id, None, "", "neither CTL nor LTL (a path formula under a "
+                                      "quantifier mixes them)")
+    by_ctl = bool(graph.check(f, x.location)[0]) if ctl else None
+    by_ltl = ltl_holds(graph, f, x.location) if ltl and (not ctl or _has_next(f)) else None
+    if by_ctl is not None and by_ltl is not None and by_ctl != by_ltl:
+        return Answer(x.id, None, "", "CTL and LTL semantics differ here (X of a dead "
+                                      "marking): the contest's category decides, which the "
+                                      "file does not say")
+    return Answer(x.id, by_ctl if by_ctl is not None else by_ltl,
+                  f"EXPLICIT {'CTL' if by_ctl is not None else 'LTL'}")
+
+
+def _has_next(f) -> bool:
+    if isinstance(f, q.Next):
+        return True
+    return any(_has_next(g) for g in (*getattr(f, "args", ()),
+                                      *(getattr(f, a) for a in ("arg", "before", "reach")
+                                        if hasattr(f, a))))
+
+
+#: The contest's generic examinations, by name.
+GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", "Liveness")
+
+
+def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = 5_000_000,
+            max_memory: int | None = None) -> list[Answer]:
+    """The generic examinations' answers (the module's documentation)."""
+    space, why = _space(net, max_states, max_memory)
+    if space is None:
+        return [Answer(name, None, "", why) for name in examinations]
+    g = Graph(space)
+    s = g.structure
+    out = []
+    for name in examinations:
+        if name == "ReachabilityDeadlock":
+            value = bool(g.dead.any())
+        elif name == "OneSafe":
+            value = all(int(g.tokens([p], None).max()) <= 1 for p in s.places)
+        elif name == "StableMarking":
+            value = any(int(c.min()) == int(c.max())
+                        for c in (g.tokens([p], None) for p in s.places))
+        elif name == "QuasiLiveness":
+            value = len(np.unique(g.trans)) == len(s.transitions)
+        elif name == "Liveness":
+            value = _live(g, len(s.transitions))
+        else:
+            raise Mcl2PnmlError(f"unknown examination '{name}'; known: {', '.join(GENERIC)}")
+        out.append(Answer(name, value, "EXPLICIT STATE_SPACE"))
+    return out
+
+
+def _live(g: Graph, transitions: int) -> bool:
+    """Every transition fires in every bottom strongly connected component: from every
+    reachable marking, every transition can fire again."""
+    real = sparse.csr_matrix((np.ones(len(g.src), dtype=np.int8), (g.src, g.dst)),
+                             shape=(g.n, g.n))
+    count, label = csgraph.connected_components(real, directed=True, connection="strong")
+    leaving = label[g.src] != label[g.dst]
+    bottom = np.ones(count, dtype=bool)
+    bottom[label[g.src[leaving]]] = False
+    inside = ~leaving
+    for c in np.flatnonzero(bottom):
+        fired = np.unique(g.trans[inside & (label[g.src] == c)])
+        if len(fired) < transitions:
+            return False
+    return True
