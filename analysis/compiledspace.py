@@ -179,6 +179,8 @@ def _drive(kernels, step, masks: tuple, state: tuple, max_states: int, limit_err
 
 def _dead(rows: np.ndarray, need: np.ndarray) -> int:
     """How many of ``rows`` (markings, or one word each) enable no transition."""
+    if not len(rows):   # stopped before any marking was explored (a limit of one or two)
+        return 0
     rows = rows.reshape(len(rows), -1)
     need = need.reshape(len(need), -1)
     dead = 0

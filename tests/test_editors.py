@@ -12,7 +12,7 @@ A JVM takes a second to start and WoPeD's reader takes time quadratic in a
 file's size, so ``make test`` reads several nets per file, as their disjoint
 union (each net's ids prefixed, each laid out as the command writing it alone
 lays it out, side by side): the templates in one file, the examples in
-another, twenty generated missions ten to a file. The ``slow`` variants
+another, ten generated missions in a third. The ``slow`` variants
 read all hundred generated missions, and every template, example and
 generated mission alone, as ``compile`` and ``template`` write them.
 """
@@ -40,8 +40,8 @@ GENERATED = 100
 #: Generated missions per file: WoPeD's reader takes time quadratic in a file's size
 #: (1.5 s for 10 missions, 870 places; 5.7 s for 25)
 BATCH = 10
-#: The batches ``make test`` reads (the first 20 missions); the rest are ``slow``.
-FAST_BATCHES = 2
+#: The batches ``make test`` reads (the first 10 missions); the rest are ``slow``.
+FAST_BATCHES = 1
 
 
 def _expected(net, drawn):
