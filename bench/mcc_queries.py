@@ -12,7 +12,6 @@ answered. Every answer is held to the 2021 consensus (``oracle/``).
 from __future__ import annotations
 
 import re
-import resource
 import subprocess
 import sys
 import time
@@ -27,15 +26,17 @@ TIMEOUT = 60.0
 
 
 def run(args: list[str]) -> tuple[float, float, str]:
-    """Wall seconds (None past the timeout), peak MiB, stdout."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    """Wall seconds (None past the timeout), the process's peak MiB (GNU time's %M),
+    stdout."""
     start = time.perf_counter()
     try:
-        out = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT).stdout
+        done = subprocess.run(["/usr/bin/time", "-f", "%M", *args], capture_output=True,
+                              text=True, timeout=TIMEOUT)
     except subprocess.TimeoutExpired:
         return None, 0.0, ""
     seconds = time.perf_counter() - start
-    return seconds, max(before, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss) / 1024, out
+    peak = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else "0"
+    return seconds, int(peak) / 1024 if peak.isdigit() else 0.0, done.stdout
 
 
 def answers(out: str) -> dict[str, str]:
