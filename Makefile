@@ -86,7 +86,10 @@ demo: setup
 # tools, the browser and the autopilot (on 2 cores: 4:39 with 3 workers, 5:14 with 2, before the
 # commands were forked from one process, tests/forkcli.py);
 # a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
-TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 )))
+# --dist worksteal: a worker that runs out takes tests queued on the others, so that the
+# run does not end on one worker's tail of long tests
+TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 ))) \
+                --dist worksteal
 # compiled modules are kept (__pycache__, ignored by git) even where the environment
 # says not to: otherwise every worker and every Python process the tests start
 # compiles the package and rewrites the tests' assertions anew
