@@ -505,7 +505,7 @@ def test_verifydtapn_on_two_thousand_generated_missions(tmp_path_factory, source
 
 
 @seed(11)
-@settings(max_examples=5, deadline=None, database=None,
+@settings(max_examples=3, deadline=None, database=None,
           suppress_health_check=list(HealthCheck))
 @given(source=SMALL, k=st.sampled_from([1, 3]))
 def test_verifydtapn_on_generated_missions_with_late_acknowledgements(tmp_path_factory,
