@@ -659,7 +659,9 @@ def test_an_altered_replayed_or_unsigned_line_ends_the_run(tmp_path, attack, why
     key = secret_file(tmp_path)
     peer = Peer(authenticated_peer(key.read_bytes().strip(), attack))
     recorder = Recorder()
-    result = run_bridge(peer.address, with_secret(key), recorder=recorder)
+    # the attacking bridge sends no heartbeats before its attack: a liveness time-out that
+    # a loaded machine cannot trip first
+    result = run_bridge(peer.address, with_secret(key, liveness=5.0), recorder=recorder)
     assert_lost(result, why, recorder)
     # the forged `done` was not acted on
     assert not any(isinstance(e, Event) and e.kind.value == "achieved" for e in result.entries)
