@@ -116,8 +116,7 @@ def solve(chain: Chain, ends: tuple[str, ...], horizon: float = 1e7,
         probability = {x: float(label[0] == x) for x in names}
         h0 = g0 = k0 = None
     else:
-        Q = P[transient][:, transient]
-        lu, column = _absorbed(P, label, transient, names)
+        Q, lu, column = _absorbed(P, label, transient, names)
         probability = {x: float(column[x][index[0]]) for x in names}
         h = sum((column[x] for x in ends if x in column), np.zeros(len(transient)))
         d = chain.duration[transient].astype(float)
@@ -136,13 +135,13 @@ def solve(chain: Chain, ends: tuple[str, ...], horizon: float = 1e7,
 
 def _absorbed(P: sparse.csr_matrix, label: list[str], transient: np.ndarray,
               names: list[str]) -> tuple:
-    """The LU factors of I - Q and, for each label, the probability of ending in its
+    """Q, the LU factors of I - Q and, for each label, the probability of ending in its
     states from each transient state: (I - Q) x = P[transient] 1_label."""
-    Q = P[transient][:, transient]
-    lu = splu(sparse.identity(len(transient), format="csc") - Q.tocsc())
     into = P[transient]
-    return lu, {x: lu.solve(into @ np.array([lab == x for lab in label], dtype=float))
-                for x in names}
+    Q = into[:, transient]
+    lu = splu(sparse.identity(len(transient), format="csc") - Q.tocsc())
+    return Q, lu, {x: lu.solve(into @ np.array([lab == x for lab in label], dtype=float))
+                   for x in names}
 
 
 def bottom_components(chain: Chain) -> list[np.ndarray]:
@@ -167,7 +166,7 @@ def reaching(chain: Chain, label: list[str]) -> dict[str, float]:
     if label[0]:
         return {x: float(label[0] == x) for x in names}
     transient = np.flatnonzero(np.array([not x for x in label]))
-    _, column = _absorbed(chain.P, label, transient, names)
+    _, _, column = _absorbed(chain.P, label, transient, names)
     start = int(np.searchsorted(transient, 0))
     return {x: float(column[x][start]) for x in names}
 

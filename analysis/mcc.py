@@ -113,15 +113,12 @@ class Graph:
 
     def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
         out = np.zeros(self.n, dtype=bool)
-        s = self.structure
         for t in transitions:
             j = self.transition_index.get(t)
             if j is None:
                 raise UnknownName(f"no transition '{t}' in the net", where)
             # enabled exactly where it fires: the graph's edges are its firings
             out[self.src[self.trans == j]] = True
-            if not s.pre[j] and not s.read[j]:
-                out[:] = True
         return out
 
     def edge_ends(self, dtype) -> tuple[np.ndarray, np.ndarray]:
@@ -183,14 +180,14 @@ class Graph:
             return self.enabled(f.transitions, where)
         if isinstance(f, q.Deadlock):
             return self.dead.copy()
-        if isinstance(f, q.Not):
+        if isinstance(f, q.Neg):
             return ~self.check(f.arg, where)
-        if isinstance(f, q.And):
+        if isinstance(f, q.Conj):
             out = np.ones(self.n, dtype=bool)
             for a in f.args:
                 out &= self.check(a, where)
             return out
-        if isinstance(f, q.Or):
+        if isinstance(f, q.Disj):
             out = np.zeros(self.n, dtype=bool)
             for a in f.args:
                 out |= self.check(a, where)
@@ -240,11 +237,11 @@ def _nnf(f, negate: bool, atoms: list, graph: "Graph", where):
         sat = graph.check(f, where)
         atoms.append(~sat if negate else sat)
         return ("lit", len(atoms) - 1)
-    if isinstance(f, q.Not):
+    if isinstance(f, q.Neg):
         return _nnf(f.arg, not negate, atoms, graph, where)
-    if isinstance(f, (q.And, q.Or)):
+    if isinstance(f, (q.Conj, q.Disj)):
         parts = [_nnf(a, negate, atoms, graph, where) for a in f.args]
-        op = "and" if isinstance(f, q.And) != negate else "or"
+        op = "and" if isinstance(f, q.Conj) != negate else "or"
         out = parts[0]
         for p in parts[1:]:
             out = (op, out, p)
@@ -414,21 +411,14 @@ def _decide(graph: Graph, x: q.Query) -> Answer:
         return Answer(x.id, None, "", "neither CTL nor LTL (a path formula under a "
                                       "quantifier mixes them)")
     by_ctl = bool(graph.check(f, x.location)[0]) if ctl else None
-    by_ltl = ltl_holds(graph, f, x.location) if ltl and (not ctl or _has_next(f)) else None
+    by_ltl = ltl_holds(graph, f, x.location) if ltl and (not ctl or q.contains(f, q.Next)) \
+        else None
     if by_ctl is not None and by_ltl is not None and by_ctl != by_ltl:
         return Answer(x.id, None, "", "CTL and LTL semantics differ here (X of a dead "
                                       "marking): the contest's category decides, which the "
                                       "file does not say")
     return Answer(x.id, by_ctl if by_ctl is not None else by_ltl,
                   f"EXPLICIT {'CTL' if by_ctl is not None else 'LTL'}")
-
-
-def _has_next(f) -> bool:
-    if isinstance(f, q.Next):
-        return True
-    return any(_has_next(g) for g in (*getattr(f, "args", ()),
-                                      *(getattr(f, a) for a in ("arg", "before", "reach")
-                                        if hasattr(f, a))))
 
 
 #: The contest's generic examinations, by name.
@@ -465,9 +455,7 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
 def _live(g: Graph, transitions: int) -> bool:
     """Every transition fires in every bottom strongly connected component: from every
     reachable marking, every transition can fire again."""
-    real = sparse.csr_matrix((np.ones(len(g.src), dtype=np.int8), (g.src, g.dst)),
-                             shape=(g.n, g.n))
-    count, label = csgraph.connected_components(real, directed=True, connection="strong")
+    count, label = csgraph.connected_components(g.real, directed=True, connection="strong")
     leaving = label[g.src] != label[g.dst]
     bottom = np.ones(count, dtype=bool)
     bottom[label[g.src[leaving]]] = False

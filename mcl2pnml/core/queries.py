@@ -17,6 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mcl2pnml.core.errors import Location
+from mcl2pnml.core.temporal import (AllPaths, Conj, Disj, ExistsPath, Finally,  # noqa: F401
+                                    Globally, Neg, Until)
 
 
 # -- integers and atoms -----------------------------------------------------------------------
@@ -62,54 +64,16 @@ class BoolConst:
 
 
 # -- connectives, temporal operators, path quantifiers ---------------------------------------
-
-@dataclass(frozen=True)
-class Not:
-    arg: "Formula"
-
-
-@dataclass(frozen=True)
-class And:
-    args: tuple["Formula", ...]
-
-
-@dataclass(frozen=True)
-class Or:
-    args: tuple["Formula", ...]
-
+#
+# Those of a property's temporal form (:mod:`mcl2pnml.core.temporal`), the same tree, and
+# the next-marking operator, which the contest's language has and the patterns do not use.
 
 @dataclass(frozen=True)
 class Next:
     arg: "Formula"
 
 
-@dataclass(frozen=True)
-class Until:
-    before: "Formula"
-    reach: "Formula"
-
-
-@dataclass(frozen=True)
-class Globally:
-    arg: "Formula"
-
-
-@dataclass(frozen=True)
-class Finally:
-    arg: "Formula"
-
-
-@dataclass(frozen=True)
-class AllPaths:
-    arg: "Formula"
-
-
-@dataclass(frozen=True)
-class ExistsPath:
-    arg: "Formula"
-
-
-Formula = (IntLe | Fireable | Deadlock | BoolConst | Not | And | Or | Next | Until | Globally
+Formula = (IntLe | Fireable | Deadlock | BoolConst | Neg | Conj | Disj | Next | Until | Globally
            | Finally | AllPaths | ExistsPath)
 ATOMS = (IntLe, Fireable, Deadlock, BoolConst)
 
@@ -131,47 +95,40 @@ class Query:
     location: Location | None = None
 
 
+def children(f: Formula) -> tuple[Formula, ...]:
+    """The formulas directly under ``f`` (none under an atom)."""
+    if isinstance(f, (Conj, Disj)):
+        return f.args
+    if isinstance(f, Until):
+        return (f.before, f.reach)
+    if isinstance(f, ATOMS):
+        return ()
+    return (f.arg,)
+
+
+def contains(f: Formula, kind: type) -> bool:
+    """Whether an operator of ``kind`` occurs in ``f``."""
+    return isinstance(f, kind) or any(contains(g, kind) for g in children(f))
+
+
 def is_state(f: Formula) -> bool:
     """Whether ``f`` is a state formula without temporal operators (a marking decides it)."""
-    if isinstance(f, ATOMS):
-        return True
-    if isinstance(f, Not):
-        return is_state(f.arg)
-    if isinstance(f, (And, Or)):
-        return all(is_state(a) for a in f.args)
-    return False
+    return isinstance(f, (*ATOMS, Neg, Conj, Disj)) and all(map(is_state, children(f)))
 
 
 def is_ctl(f: Formula) -> bool:
     """Whether ``f`` is a CTL formula: each temporal operator right under a quantifier."""
-    if isinstance(f, ATOMS):
-        return True
-    if isinstance(f, Not):
-        return is_ctl(f.arg)
-    if isinstance(f, (And, Or)):
-        return all(is_ctl(a) for a in f.args)
+    if isinstance(f, (*ATOMS, Neg, Conj, Disj)):
+        return all(map(is_ctl, children(f)))
     if isinstance(f, (AllPaths, ExistsPath)):
         inner = f.arg
-        if isinstance(inner, (Next, Globally, Finally)):
-            return is_ctl(inner.arg)
-        if isinstance(inner, Until):
-            return is_ctl(inner.before) and is_ctl(inner.reach)
-        return is_state(inner) or is_ctl(inner) and isinstance(inner, (AllPaths, ExistsPath))
+        if isinstance(inner, (Next, Globally, Finally, Until)):
+            return all(map(is_ctl, children(inner)))
+        return is_state(inner) or isinstance(inner, (AllPaths, ExistsPath)) and is_ctl(inner)
     return False
 
 
 def is_ltl(f: Formula) -> bool:
     """Whether ``f`` is ``A φ`` with ``φ`` free of path quantifiers (the contest's LTL)."""
-    def free(g: Formula) -> bool:
-        if isinstance(g, ATOMS):
-            return True
-        if isinstance(g, (AllPaths, ExistsPath)):
-            return False
-        if isinstance(g, (Not, Next, Globally, Finally)):
-            return free(g.arg)
-        if isinstance(g, (And, Or)):
-            return all(free(a) for a in g.args)
-        if isinstance(g, Until):
-            return free(g.before) and free(g.reach)
-        return False
-    return isinstance(f, AllPaths) and free(f.arg)
+    return isinstance(f, AllPaths) and not any(contains(g, (AllPaths, ExistsPath))
+                                               for g in children(f))

@@ -364,7 +364,7 @@ def parse_queries(data: bytes, filename: str = "<queries>") -> tuple["Query", ..
             raise fail(f"<{_local(el)}> holds one formula, not {len(kids)}", el)
         return kids[0]
 
-    unary = {"negation": q.Not, "next": q.Next, "globally": q.Globally, "finally": q.Finally,
+    unary = {"negation": q.Neg, "next": q.Next, "globally": q.Globally, "finally": q.Finally,
              "all-paths": q.AllPaths, "exists-path": q.ExistsPath}
 
     def formula(el, depth: int = 0):
@@ -377,7 +377,7 @@ def parse_queries(data: bytes, filename: str = "<queries>") -> tuple["Query", ..
             args = tuple(formula(c, depth + 1) for c in children(el))
             if not args:
                 raise fail(f"<{tag}> of nothing", el)
-            return (q.And if tag == "conjunction" else q.Or)(args)
+            return (q.Conj if tag == "conjunction" else q.Disj)(args)
         if tag == "until":
             parts = {_local(c): c for c in children(el)}
             if set(parts) != {"before", "reach"} or len(children(el)) != 2:
