@@ -1269,6 +1269,228 @@ static PyObject *py_slot_of_word(PyObject *self, PyObject *args) {
     return PyLong_FromLongLong(slot_one((uint64_t)m, bits));
 }
 
+/* -- the reachability graph, asked by the contest's questions (analysis/mcc.py) -------- */
+
+/* A growable int64 stack, scratch of one call (freed before it returns). */
+typedef struct { int64_t *at; int64_t size, cap; } Stack;
+
+static int push(Stack *s, int64_t v) {
+    if (s->size == s->cap) {
+        int64_t cap = s->cap ? 2 * s->cap : 1024;
+        int64_t *at = PyMem_RawRealloc(s->at, sizeof(int64_t) * (size_t)cap);
+        if (!at) return 0;
+        s->at = at;
+        s->cap = cap;
+    }
+    s->at[s->size++] = v;
+    return 1;
+}
+
+/* scc(indptr, indices, keep, label) -> count: the strongly connected components of the
+ * graph (CSR) restricted to the nodes with keep[v], by Tarjan's algorithm (1972) without
+ * recursion; label[v] is v's component (-1 where not kept). Components are numbered in
+ * the order they complete: a component's successors have smaller numbers. */
+static PyObject *py_scc(PyObject *self, PyObject *args) {
+    PyObject *o[4];
+    if (!PyArg_ParseTuple(args, "OOOO", &o[0], &o[1], &o[2], &o[3]))
+        return NULL;
+    Buffers b = {.count = 0};
+    const int64_t *ptr, *idx;
+    const uint8_t *keep;
+    int64_t *label;
+    if (!(ptr = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t n = items_of(&b) - 1;
+    if (!(idx = data_of(&b, o[1], 8, 0)) || !(keep = data_of(&b, o[2], 1, 0))
+        || !(label = data_of(&b, o[3], 8, 1)))
+        goto fail;
+    int64_t *low = PyMem_RawMalloc(sizeof(int64_t) * (size_t)(2 * n + 1));
+    Stack call = {0}, open = {0};
+    int64_t count = 0, ok = 1;
+    if (!low) { PyErr_NoMemory(); goto fail; }
+    int64_t *num = low + n;                     /* 0: not met; -1: its component is done */
+    Py_BEGIN_ALLOW_THREADS
+    int64_t next = 1;
+    for (int64_t v = 0; v < n; v++) { num[v] = 0; label[v] = -1; }
+    for (int64_t root = 0; root < n && ok; root++) {
+        if (!keep[root] || num[root]) continue;
+        num[root] = low[root] = next++;
+        ok = push(&open, root) && push(&call, root) && push(&call, ptr[root]);
+        while (call.size && ok) {
+            int64_t v = call.at[call.size - 2], e = call.at[call.size - 1];
+            if (e < ptr[v + 1]) {
+                call.at[call.size - 1] = e + 1;
+                int64_t w = idx[e];
+                if (!keep[w]) continue;
+                if (!num[w]) {
+                    num[w] = low[w] = next++;
+                    ok = push(&open, w) && push(&call, w) && push(&call, ptr[w]);
+                } else if (num[w] > 0 && num[w] < low[v]) {
+                    low[v] = num[w];
+                }
+                continue;
+            }
+            call.size -= 2;
+            if (low[v] == num[v]) {
+                int64_t w;
+                do {
+                    w = open.at[--open.size];
+                    num[w] = -1;
+                    label[w] = count;
+                } while (w != v);
+                count++;
+            }
+            if (call.size) {
+                int64_t u = call.at[call.size - 2];
+                if (low[v] > 0 && low[v] < low[u]) low[u] = low[v];
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_RawFree(low);
+    PyMem_RawFree(call.at);
+    PyMem_RawFree(open.at);
+    release(&b);
+    if (!ok) return PyErr_NoMemory();
+    return PyLong_FromLongLong(count);
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* back_reach(indptr, indices, through, out): with the predecessors' CSR, add to out (its
+ * nodes marked 1) every node of `through` from which a path inside `through` reaches
+ * one of them: E(through U out), the backward search of CTL's labelling. */
+static PyObject *py_back_reach(PyObject *self, PyObject *args) {
+    PyObject *o[4];
+    if (!PyArg_ParseTuple(args, "OOOO", &o[0], &o[1], &o[2], &o[3]))
+        return NULL;
+    Buffers b = {.count = 0};
+    const int64_t *ptr, *idx;
+    const uint8_t *through;
+    uint8_t *out;
+    if (!(ptr = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t n = items_of(&b) - 1;
+    if (!(idx = data_of(&b, o[1], 8, 0)) || !(through = data_of(&b, o[2], 1, 0))
+        || !(out = data_of(&b, o[3], 1, 1)))
+        goto fail;
+    Stack todo = {0};
+    int ok = 1;
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t v = 0; v < n && ok; v++)
+        if (out[v]) ok = push(&todo, v);
+    while (todo.size && ok) {
+        int64_t v = todo.at[--todo.size];
+        for (int64_t e = ptr[v]; e < ptr[v + 1] && ok; e++) {
+            int64_t u = idx[e];
+            if (!out[u] && through[u]) { out[u] = 1; ok = push(&todo, u); }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_RawFree(todo.at);
+    release(&b);
+    if (!ok) return PyErr_NoMemory();
+    Py_RETURN_NONE;
+fail:
+    release(&b);
+    return NULL;
+}
+
+/* ltl_product(indptr, indices, a_ptr, a_succ, label, acc, all, initial, num, max_states)
+ *   -> (found, states):
+ * whether the product of the graph (CSR, node 0 the initial marking) and a generalised
+ * Büchi automaton (its successors' CSR a_ptr/a_succ, label[b * n + t]: node b may read
+ * marking t, acc[b] the acceptance sets node b is in, all every set, initial the
+ * product's initial states) has a
+ * reachable cycle meeting every set: Couvreur's on-the-fly emptiness check (1999), a
+ * depth-first search that merges strongly connected components as their cycles close
+ * and stops at the first that meets them all. num (int32, n * k zeros) numbers the
+ * product's states (graph node * k + automaton node; -1 once its component is done).
+ * found: 1 an accepting cycle, 0 none, -1 past max_states. */
+static PyObject *py_ltl_product(PyObject *self, PyObject *args) {
+    PyObject *o[8];
+    long long max_states;
+    unsigned long long all;
+    if (!PyArg_ParseTuple(args, "OOOOOOKOOL", &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &all,
+                          &o[6], &o[7], &max_states))
+        return NULL;
+    Buffers b = {.count = 0};
+    const int64_t *ptr, *idx, *aptr, *asucc, *initial;
+    const uint8_t *label;
+    const uint64_t *acc;
+    int32_t *num;
+    if (!(ptr = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t n = items_of(&b) - 1;
+    if (!(idx = data_of(&b, o[1], 8, 0)) || !(aptr = data_of(&b, o[2], 8, 0)))
+        goto fail;
+    int64_t k = items_of(&b) - 1;
+    if (!(asucc = data_of(&b, o[3], 8, 0)) || !(label = data_of(&b, o[4], 1, 0))
+        || !(acc = data_of(&b, o[5], 8, 0)) || !(initial = data_of(&b, o[6], 8, 0)))
+        goto fail;
+    int64_t starts = items_of(&b);
+    if (!(num = data_of(&b, o[7], 4, 1))) goto fail;
+    if (items_of(&b) < n * k) {
+        PyErr_SetString(PyExc_ValueError, "num must hold n * k states");
+        goto fail;
+    }
+    Stack call = {0}, open = {0}, roots = {0};   /* roots: (number, acceptance) pairs */
+    int64_t found = 0, next = 1, ok = 1;
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t i = 0; i < starts && ok && !found; i++) {
+        int64_t first = initial[i];
+        if (num[first]) continue;
+        num[first] = (int32_t)next++;
+        ok = push(&open, first) && push(&roots, num[first]) && push(&roots, (int64_t)acc[first])
+             && push(&call, first) && push(&call, 0);
+        while (call.size && ok && !found) {
+            int64_t p = call.at[call.size - 2], cursor = call.at[call.size - 1];
+            int64_t s = p / k, a = p % k;
+            int64_t degree = ptr[s + 1] - ptr[s], moves = aptr[a + 1] - aptr[a];
+            if (cursor < degree * moves) {
+                call.at[call.size - 1] = cursor + 1;
+                int64_t bnode = asucc[aptr[a] + cursor / degree];
+                int64_t t = idx[ptr[s] + cursor % degree];
+                if (!label[bnode * n + t]) continue;
+                int64_t q = t * k + bnode;
+                if (!num[q]) {
+                    if (next > max_states) { found = -1; break; }
+                    num[q] = (int32_t)next++;
+                    ok = push(&open, q) && push(&roots, num[q]) && push(&roots, (int64_t)acc[bnode])
+                         && push(&call, q) && push(&call, 0);
+                } else if (num[q] > 0) {
+                    /* a cycle closes: every root above q's joins the component below */
+                    uint64_t met = 0;
+                    while (roots.at[roots.size - 2] > num[q]) {
+                        met |= (uint64_t)roots.at[roots.size - 1];
+                        roots.size -= 2;
+                    }
+                    roots.at[roots.size - 1] = (int64_t)((uint64_t)roots.at[roots.size - 1] | met);
+                    if ((uint64_t)roots.at[roots.size - 1] == all) found = 1;
+                }
+                continue;
+            }
+            call.size -= 2;
+            if (roots.at[roots.size - 2] == num[p]) {      /* p roots a finished component */
+                roots.size -= 2;
+                int64_t w;
+                do {
+                    w = open.at[--open.size];
+                    num[w] = -1;
+                } while (w != p);
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_RawFree(call.at);
+    PyMem_RawFree(open.at);
+    PyMem_RawFree(roots.at);
+    release(&b);
+    if (!ok) return PyErr_NoMemory();
+    return Py_BuildValue("(LL)", (long long)found, (long long)(next - 1));
+fail:
+    release(&b);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
     {"step_words", py_step_words, METH_VARARGS, "Expand markings of several words."},
     {"step_one_word", py_step_one_word, METH_VARARGS, "Expand markings of one word."},
@@ -1288,6 +1510,10 @@ static PyMethodDef methods[] = {
      "Expand rows of a property's product until a violation."},
     {"product_edges", py_product_edges, METH_VARARGS,
      "The arcs between a product's pending rows."},
+    {"scc", py_scc, METH_VARARGS, "Strongly connected components of a CSR graph."},
+    {"back_reach", py_back_reach, METH_VARARGS, "What reaches a set, backwards."},
+    {"ltl_product", py_ltl_product, METH_VARARGS,
+     "An accepting cycle of a graph's product with a Buchi automaton, on the fly."},
     {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
     {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
     {NULL, NULL, 0, NULL},

@@ -39,12 +39,12 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
 
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
+
+from analysis import _native
 
 
 @dataclass(frozen=True)
@@ -71,31 +71,29 @@ class UnknownName(Mcl2PnmlError):
 
 
 class Graph:
-    """The reachability graph of a bounded net, as the checker reads it."""
+    """The reachability graph of a bounded net, as the checker reads it: its edges in
+    compressed rows (successors with a dead marking's self-loop, the temporal operators'
+    graph; the firings alone; predecessors), searched by the loops in C."""
 
     def __init__(self, space):
         self.space = space
         s = space.structure
         self.structure = s
-        self.n = space.states
+        self.n = n = space.states
         src, dst = np.asarray(space.src, dtype=np.int64), np.asarray(space.dst, dtype=np.int64)
         self.trans = np.asarray(space.trans, dtype=np.int64)
         self.src, self.dst = src, dst
-        self.dead = np.ones(self.n, dtype=bool)
+        self.dead = np.ones(n, dtype=bool)
         self.dead[src] = False
-        loops = np.flatnonzero(self.dead)
+        self.real = _csr(src, dst, n)
         # the temporal operators' graph: a dead marking repeats for ever
-        rows = np.concatenate([src, loops])
-        cols = np.concatenate([dst, loops])
-        data = np.ones(len(rows), dtype=np.int8)
-        self.succ = sparse.csr_matrix((data, (rows, cols)), shape=(self.n, self.n))
-        self.pred = self.succ.T.tocsr()
-        self.real = sparse.csr_matrix((np.ones(len(src), dtype=np.int8), (src, dst)),
-                                      shape=(self.n, self.n))
+        loops = np.flatnonzero(self.dead)
+        with_loops = (np.concatenate([src, loops]), np.concatenate([dst, loops]))
+        self.succ = _csr(*with_loops, n)
+        self.pred = _csr(with_loops[1], with_loops[0], n)
         self.place_index = {p: i for i, p in enumerate(s.places)}
         self.transition_index = {t: i for i, t in enumerate(s.transitions)}
         self._tokens: dict[int, np.ndarray] = {}
-        self._ends: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
     # -- atoms ---------------------------------------------------------------------------------
 
@@ -121,16 +119,6 @@ class Graph:
             out[self.src[self.trans == j]] = True
         return out
 
-    def edge_ends(self, dtype) -> tuple[np.ndarray, np.ndarray]:
-        """The temporal operators' edges (dead markings' self-loops included) as two
-        columns, sources and targets."""
-        key = np.dtype(dtype).str
-        found = self._ends.get(key)
-        if found is None:
-            coo = self.succ.tocoo()
-            found = self._ends[key] = (coo.row.astype(dtype), coo.col.astype(dtype))
-        return found
-
     def integer(self, e, where) -> np.ndarray:
         if isinstance(e, q.IntConst):
             return np.full(self.n, e.value, dtype=np.int64)
@@ -140,34 +128,32 @@ class Graph:
 
     def ex(self, sat: np.ndarray) -> np.ndarray:
         """EX sat: a firing leads to ``sat`` (none from a dead marking)."""
-        return (self.real @ sat.astype(np.int8)) > 0
+        out = np.zeros(self.n, dtype=bool)
+        out[self.src[sat[self.dst]]] = True
+        return out
 
     def eu(self, before: np.ndarray, reach: np.ndarray) -> np.ndarray:
         """E(before U reach): backwards from ``reach`` through ``before``."""
-        out = reach.copy()
-        frontier = np.flatnonzero(reach)
-        pred = self.pred
-        while len(frontier):
-            found = np.unique(pred[frontier].indices)
-            new = found[before[found] & ~out[found]]
-            out[new] = True
-            frontier = new
-        return out
+        out = reach.astype(np.uint8)
+        _native.back_reach(*self.pred, before.astype(np.uint8), out)
+        return out.view(bool)
 
     def eg(self, sat: np.ndarray) -> np.ndarray:
-        """EG sat: the states that reach, through ``sat``, a cycle inside ``sat``."""
-        keep = np.flatnonzero(sat)
-        if not len(keep):
+        """EG sat: the states that reach, through ``sat``, a cycle inside ``sat`` (a dead
+        marking's self-loop is one)."""
+        if not sat.any():
             return np.zeros(self.n, dtype=bool)
-        sub = self.succ[keep][:, keep]
-        count, label = csgraph.connected_components(sub, directed=True, connection="strong")
-        size = np.bincount(label, minlength=count)
-        looped = np.zeros(count, dtype=bool)
-        looped[size > 1] = True
-        diagonal = sub.diagonal() > 0
-        looped[label[diagonal]] = True
-        core = np.zeros(self.n, dtype=bool)
-        core[keep[looped[label]]] = True
+        keep = sat.astype(np.uint8)
+        label = np.empty(self.n, dtype=np.int64)
+        count = _native.scc(*self.succ, keep, label)
+        ptr, idx = self.succ
+        inside = label >= 0
+        size = np.bincount(label[inside], minlength=count)
+        looped = size > 1
+        tail = np.repeat(np.arange(self.n), np.diff(ptr))
+        loop = (tail == idx) & inside[tail]
+        looped[label[tail[loop]]] = True
+        core = inside & looped[np.where(inside, label, 0)]
         return self.eu(sat, core)
 
     def check(self, f, where) -> np.ndarray:
@@ -320,53 +306,58 @@ def _tableau(phi) -> tuple[list[frozenset], list[set[int]], set[int], list[tuple
     return literals, accepting, initial, edges
 
 
-def ltl_holds(graph: "Graph", f: q.AllPaths, where) -> bool:
-    """``A φ``: no path of the graph (a dead marking repeated for ever) satisfies ``not φ``,
-    the product with the negation's automaton having no accepting cycle reachable."""
+class TooLarge(Exception):
+    """A product past the limits: the question is left unanswered, with this reason."""
+
+
+def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
+              max_memory: int | None = None) -> bool:
+    """``A φ``: no path of the graph (a dead marking repeated for ever) satisfies ``not φ``:
+    the product with the negation's automaton, searched on the fly from its initial states
+    (Couvreur's check, in C), has no reachable cycle meeting every acceptance set. Only
+    the product states the search meets are numbered; it stops at the first such cycle."""
     atoms: list[np.ndarray] = []
     literals, accepting, initial, edges = _tableau(_nnf(f.arg, True, atoms, graph, where))
+    if any(not acc for acc in accepting):
+        return True                     # a set no node is in: no run of not-φ is accepted
+    if len(accepting) > 64:
+        raise TooLarge(f"the automaton of the negation has {len(accepting)} acceptance sets "
+                       "(the search holds 64)")
     n, k = graph.n, len(literals)
+    from mcl2pnml.core.memory import default_memory, size_text
+    need = n * k * 5                    # the numbering (4 bytes) and the labels (1 byte)
+    budget = default_memory() if max_memory is None else max_memory
+    if need > budget or n * k >= 2 ** 31:
+        raise TooLarge(f"the product of {n:,} markings and the {k} nodes of the negation's "
+                       f"automaton needs {size_text(need)}, past the limit of "
+                       f"{size_text(budget)}")
     label = np.ones((k, n), dtype=bool)
     for j, lits in enumerate(literals):
         for a in lits:
             label[j] &= atoms[a]
-    start = [j for j in initial if label[j][0]]
-    if not start:
+    start = np.array([j for j in sorted(initial) if label[j][0]], dtype=np.int64)
+    if not len(start):
         return True
-    # the product's edges, an automaton edge at a time over every edge of the graph (a
-    # dead marking's self-loop included): product state = graph state * k + node
-    dtype = np.int32 if n * k < 2 ** 31 else np.int64
-    source, target = graph.edge_ends(dtype)
-    rows, cols = [], []
-    at_source, at_target = label[:, source], label[:, target]   # one gather each
-    for a, b in edges:
-        keep = at_source[a] & at_target[b]
-        rows.append(source[keep] * k + a)
-        cols.append(target[keep] * k + b)
-    rows = np.concatenate(rows) if rows else np.zeros(0, dtype=dtype)
-    cols = np.concatenate(cols) if cols else np.zeros(0, dtype=dtype)
-    product = sparse.csr_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)),
-                                shape=(n * k, n * k))
-    # only what the initial product states reach
-    seen = np.zeros(n * k, dtype=bool)
-    for j in start:
-        seen[csgraph.breadth_first_order(product, j, directed=True,
-                                         return_predecessors=False)] = True
-    # an accepting cycle: a strongly connected component, reached, with a cycle in it,
-    # meeting every acceptance set (a component is reached whole or not at all)
-    count, comp = csgraph.connected_components(product, directed=True, connection="strong")
-    fair = np.zeros(count, dtype=bool)
-    fair[comp[seen]] = True
-    sizes = np.bincount(comp, minlength=count)
-    looped = sizes > 1
-    looped[comp[product.diagonal() > 0]] = True
-    fair &= looped
-    node = np.arange(n * k) % k
-    for acc in accepting:
-        meets = np.zeros(count, dtype=bool)
-        meets[comp[np.isin(node, list(acc)) & seen]] = True
-        fair &= meets
-    return not fair.any()
+    a_src = np.array([e[0] for e in edges], dtype=np.int64)
+    a_dst = np.array([e[1] for e in edges], dtype=np.int64)
+    acc = np.zeros(k, dtype=np.uint64)
+    for bit, members in enumerate(accepting):
+        acc[sorted(members)] |= np.uint64(1 << bit)
+    found, states = _native.ltl_product(
+        *graph.succ, *_csr(a_src, a_dst, k), label.view(np.uint8).ravel(), acc,
+        (1 << len(accepting)) - 1, start, np.zeros(n * k, dtype=np.int32),
+        min(max_states, 2 ** 31 - 2))
+    if found < 0:
+        raise TooLarge(f"the product is past its limit of {max_states:,} states")
+    return not found
+
+
+def _csr(src: np.ndarray, dst: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A graph's edges as compressed rows: row pointers, then the targets in source order."""
+    order = np.argsort(src, kind="stable")
+    ptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src, minlength=n), out=ptr[1:])
+    return ptr, np.ascontiguousarray(dst[order], dtype=np.int64)
 
 
 # -- the questions --------------------------------------------------------------------------------
@@ -396,11 +387,11 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = 5_000_000,
             out.append(Answer(x.id, int(graph.tokens(x.asks.places, x.location).max()),
                               "EXPLICIT STATE_SPACE"))
             continue
-        out.append(_decide(graph, x))
+        out.append(_decide(graph, x, max_memory))
     return out
 
 
-def _decide(graph: Graph, x: q.Query) -> Answer:
+def _decide(graph: Graph, x: q.Query, max_memory: int | None = None) -> Answer:
     """A formula's answer: by CTL's labelling, by LTL's automaton, or by both where the
     formula is both (``A F p``). The two semantics differ only on ``X`` at a dead marking
     (CTL: no next marking; LTL: the dead marking repeated): where a formula of both
@@ -411,8 +402,11 @@ def _decide(graph: Graph, x: q.Query) -> Answer:
         return Answer(x.id, None, "", "neither CTL nor LTL (a path formula under a "
                                       "quantifier mixes them)")
     by_ctl = bool(graph.check(f, x.location)[0]) if ctl else None
-    by_ltl = ltl_holds(graph, f, x.location) if ltl and (not ctl or q.contains(f, q.Next)) \
-        else None
+    try:
+        by_ltl = ltl_holds(graph, f, x.location, max_memory=max_memory) \
+            if ltl and (not ctl or q.contains(f, q.Next)) else None
+    except TooLarge as e:
+        return Answer(x.id, None, "", str(e))
     if by_ctl is not None and by_ltl is not None and by_ctl != by_ltl:
         return Answer(x.id, None, "", "CTL and LTL semantics differ here (X of a dead "
                                       "marking): the contest's category decides, which the "
@@ -455,7 +449,8 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
 def _live(g: Graph, transitions: int) -> bool:
     """Every transition fires in every bottom strongly connected component: from every
     reachable marking, every transition can fire again."""
-    count, label = csgraph.connected_components(g.real, directed=True, connection="strong")
+    label = np.empty(g.n, dtype=np.int64)
+    count = _native.scc(*g.real, np.ones(g.n, dtype=np.uint8), label)
     leaving = label[g.src] != label[g.dst]
     bottom = np.ones(count, dtype=bool)
     bottom[label[g.src[leaving]]] = False

@@ -1,4 +1,5 @@
-"""The Model Checking Contest's questions: ours against verifypn on the contest's own files.
+"""The Model Checking Contest's questions: ours against verifypn and LoLA on the contest's
+own files.
 
 Run:  .venv/bin/python -m bench.mcc_queries   (prints the section of bench/RESULTS.md)
 
@@ -6,8 +7,10 @@ For each of the 19 models of ``../shared/external-nets/mcc-queries`` and each of
 seven formula files, the whole command a user runs, in a fresh process: ours,
 ``mcl2pnml query model.pnml FILE.xml``; verifypn with its defaults (reductions on),
 ``verifypn-linux64 -n 1 -x 1,...,16 model.pnml FILE.xml`` (``-ltl`` for the LTL
-files). Wall seconds and the process's peak memory; a call past 60 s counts as not
-answered. Every answer is held to the 2021 consensus (``oracle/``).
+files); LoLA with its defaults (reductions on), ``lola --pnmlnet model.pnml --xmlformula
+--formula=FILE.xml --mcc --quiet``. Wall seconds and the process's peak memory; a call
+past 60 s counts as not answered. Every answer is held to the 2021 consensus (``oracle/``).
+Run with ``--only ours`` to time ours alone.
 """
 from __future__ import annotations
 
@@ -19,7 +22,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 CORPUS = ROOT.parent / "shared" / "external-nets" / "mcc-queries"
-VERIFYPN = ROOT.parent / "shared" / "peers" / "bin" / "verifypn-linux64"
+PEERS = ROOT.parent / "shared" / "peers" / "bin"
+VERIFYPN = PEERS / "verifypn-linux64"
+LOLA = PEERS / "lola"
+TOOLS = ("ours", "verifypn", "lola")
 FILES = ("ReachabilityCardinality", "ReachabilityFireability", "CTLCardinality",
          "CTLFireability", "LTLCardinality", "LTLFireability", "UpperBounds")
 TIMEOUT = 60.0
@@ -40,7 +46,7 @@ def run(args: list[str]) -> tuple[float, float, str]:
 
 
 def answers(out: str) -> dict[str, str]:
-    return dict(re.findall(r"^FORMULA (\S+) (TRUE|FALSE|\d+)", out, re.M))
+    return dict(re.findall(r"^FORMULA (\S+)\s+(TRUE|FALSE|\d+)\s", out, re.M))
 
 
 def oracle(model: str) -> dict[str, str]:
@@ -50,17 +56,28 @@ def oracle(model: str) -> dict[str, str]:
     return found
 
 
+def commands(model: Path, name: str) -> dict[str, list[str]]:
+    """Each tool's whole command for one formula file of one model."""
+    net, file = str(model / "model.pnml"), str(model / f"{name}.xml")
+    return {
+        "ours": [sys.executable, "-m", "mcl2pnml", "query", net, file],
+        "verifypn": [str(VERIFYPN), "-n", "1", *(["-ltl"] if name.startswith("LTL") else []),
+                     "-x", ",".join(map(str, range(1, 17))), net, file],
+        "lola": [str(LOLA), "--pnmlnet", net, "--xmlformula", f"--formula={file}", "--mcc",
+                 "--quiet"],
+    }
+
+
 def main() -> None:
-    rows = {name: {"ours": [0.0, 0, 0, 0.0], "verifypn": [0.0, 0, 0, 0.0]} for name in FILES}
+    tools = sys.argv[sys.argv.index("--only") + 1].split(",") if "--only" in sys.argv \
+        else list(TOOLS)
+    rows = {name: {who: [0.0, 0, 0, 0.0] for who in tools} for name in FILES}
     for model in sorted(p for p in CORPUS.iterdir() if p.is_dir() and p.name != "oracle"):
         truth = oracle(model.name)
         for name in FILES:
-            file = model / f"{name}.xml"
-            ours = [sys.executable, "-m", "mcl2pnml", "query", str(model / "model.pnml"),
-                    str(file)]
-            peer = [str(VERIFYPN), "-n", "1", *(["-ltl"] if name.startswith("LTL") else []),
-                    "-x", ",".join(map(str, range(1, 17))), str(model / "model.pnml"), str(file)]
-            for who, args in (("ours", ours), ("verifypn", peer)):
+            for who, args in commands(model, name).items():
+                if who not in tools:
+                    continue
                 seconds, mib, out = run(args)
                 got = answers(out)
                 row = rows[name][who]
@@ -68,14 +85,21 @@ def main() -> None:
                 row[1] += sum(1 for k, v in got.items() if truth.get(k) == v)
                 row[2] += sum(1 for k, v in got.items() if truth.get(k) not in (v, "?", None))
                 row[3] = max(row[3], mib)
-    print("| examination | ours: right | ours: wrong | ours (s) | ours peak MiB | "
-          "verifypn: right | verifypn: wrong | verifypn (s) | verifypn peak MiB | "
-          "ours / verifypn |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| examination | " + " | ".join(f"{w}: right / wrong | {w} (s) | {w} peak MiB"
+                                          for w in tools) + " |")
+    print("|---|" + "---:|---:|---:|" * len(tools))
+    total = {w: [0.0, 0, 0] for w in tools}
     for name, r in rows.items():
-        o, v = r["ours"], r["verifypn"]
-        print(f"| {name} | {o[1]} | {o[2]} | {o[0]:.1f} | {o[3]:.0f} | {v[1]} | {v[2]} | "
-              f"{v[0]:.1f} | {v[3]:.0f} | {o[0] / max(v[0], 1e-9):.1f}x |")
+        cells = []
+        for w in tools:
+            t, right, wrong, mib = r[w]
+            cells.append(f"{right} / {wrong} | {t:.1f} | {mib:.0f}")
+            total[w][0] += t
+            total[w][1] += right
+            total[w][2] += wrong
+        print(f"| {name} | " + " | ".join(cells) + " |")
+    print("| **total** | " + " | ".join(f"**{right} / {wrong}** | **{t:.1f}** | "
+                                        for t, right, wrong in total.values()) + " |")
 
 
 if __name__ == "__main__":
