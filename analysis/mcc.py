@@ -94,6 +94,8 @@ class Graph:
         self.place_index = {p: i for i, p in enumerate(s.places)}
         self.transition_index = {t: i for i, t in enumerate(s.transitions)}
         self._tokens: dict[int, np.ndarray] = {}
+        self._firings: tuple[np.ndarray, np.ndarray] | None = None
+        self._loops: np.ndarray | None = None
 
     # -- atoms ---------------------------------------------------------------------------------
 
@@ -111,12 +113,15 @@ class Graph:
 
     def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
         out = np.zeros(self.n, dtype=bool)
+        if self._firings is None:          # the edges grouped by transition, once
+            self._firings = _csr(self.trans, self.src, len(self.transition_index))
+        ptr, sources = self._firings
         for t in transitions:
             j = self.transition_index.get(t)
             if j is None:
                 raise UnknownName(f"no transition '{t}' in the net", where)
             # enabled exactly where it fires: the graph's edges are its firings
-            out[self.src[self.trans == j]] = True
+            out[sources[ptr[j]:ptr[j + 1]]] = True
         return out
 
     def integer(self, e, where) -> np.ndarray:
@@ -150,9 +155,11 @@ class Graph:
         inside = label >= 0
         size = np.bincount(label[inside], minlength=count)
         looped = size > 1
-        tail = np.repeat(np.arange(self.n), np.diff(ptr))
-        loop = (tail == idx) & inside[tail]
-        looped[label[tail[loop]]] = True
+        if self._loops is None:             # the markings with an edge to themselves
+            tail = np.repeat(np.arange(self.n), np.diff(ptr))
+            self._loops = np.unique(tail[tail == idx])
+        loops = self._loops[inside[self._loops]]
+        looped[label[loops]] = True
         core = inside & looped[np.where(inside, label, 0)]
         return self.eu(sat, core)
 

@@ -15,7 +15,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
-from mcl2pnml.runtime.link import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
+from mcl2pnml.runtime.limits import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
 from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT

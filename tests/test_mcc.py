@@ -6,9 +6,8 @@ formula files (reachability, CTL and LTL over cardinality and fireability atoms,
 bounds: 16 formulas each) and, in ``oracle/``, the consensus verdicts, with the
 generic examinations' (a reachable deadlock, one-safety, a stable marking,
 quasi-liveness, liveness). Every answer must equal the oracle's, and every question be
-answered: a test suite nobody here wrote. ``make test`` takes the models answered in a
-few seconds; the ``slow`` variant the rest (the LTL products of the three largest take
-half a minute each).
+answered: a test suite nobody here wrote. ``make test`` takes all 19 (a few seconds in
+all: the LTL products are searched on the fly, tests/test_graph_kernels.py).
 
 And ours: a mission's properties written by ``compile --properties`` and read back give
 ``analyze --properties``'s verdicts; a malformed file is one message at its line and
@@ -34,11 +33,6 @@ FILES = ("ReachabilityCardinality", "ReachabilityFireability", "CTLCardinality",
          "CTLFireability", "LTLCardinality", "LTLFireability", "UpperBounds")
 MODELS = sorted(p.name for p in CORPUS.iterdir() if p.is_dir() and p.name != "oracle") \
     if CORPUS.is_dir() else []
-#: The models whose answers take more than a few seconds (their LTL products, or their
-#: state spaces): the slow variant's.
-SLOW = {"Referendum-PT-0010", "SwimmingPool-PT-01", "Philosophers-PT-000010", "Dekker-PT-010",
-        "Peterson-PT-2", "Raft-PT-02", "CSRepetitions-PT-02", "FMS-PT-00002",
-        "RwMutex-PT-r0010w0010"}
 
 
 def _oracle(model: str) -> dict[str, str]:
@@ -74,15 +68,8 @@ def _corpus():
         pytest.skip(f"{CORPUS} is not there (../shared beside the checkout)")
 
 
-@pytest.mark.parametrize("model", [m for m in MODELS if m not in SLOW] or ["(none)"])
+@pytest.mark.parametrize("model", MODELS or ["(none)"])
 def test_every_answer_is_the_contests(model):
-    _corpus()
-    _agrees(model)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("model", [m for m in MODELS if m in SLOW] or ["(none)"])
-def test_every_answer_of_the_larger_models_is_the_contests(model):
     _corpus()
     _agrees(model)
 

@@ -62,16 +62,9 @@ from typing import Any, Mapping
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 from mcl2pnml.core.files import read_bytes
+from mcl2pnml.runtime.limits import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT  # noqa: F401
 
 PROTOCOL = 1
-#: Seconds between heartbeats, from each end.
-HEARTBEAT = 1.0
-#: Seconds without any line from the other end before the link counts as lost.
-LIVENESS = 5.0
-#: Seconds a send may take (written to the kernel) before the link counts as lost.
-SEND_TIMEOUT = 5.0
-#: The longest line, in bytes (its newline excluded).
-MAX_LINE = 64 * 1024
 #: Messages received and not yet handled; the reading pauses while it is full.
 INBOX = 1024
 #: Lines waiting to be sent (each sender waits for its own: this bounds many senders).

@@ -1,0 +1,126 @@
+"""The reachability graph's searches in C (``analysis/_native.c``) that answer the contest's
+questions (:mod:`analysis.mcc`), each held to networkx on random graphs: Tarjan's
+components on a subset of the nodes, the backward search of ``E(a U b)``, and Couvreur's
+on-the-fly emptiness check of a graph's product with a generalised Büchi automaton,
+against the product built whole and its components searched by networkx."""
+from __future__ import annotations
+
+import networkx as nx
+import numpy as np
+import pytest
+
+from analysis.mcc import _csr
+
+native = pytest.importorskip("analysis._native", reason="the loops in C are not built")
+
+
+def _graph(rng, n: int, m: int):
+    src, dst = rng.integers(0, n, m), rng.integers(0, n, m)
+    g = nx.DiGraph()
+    g.add_nodes_from(range(n))
+    g.add_edges_from(zip(src.tolist(), dst.tolist()))
+    return src.astype(np.int64), dst.astype(np.int64), g
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_components_are_networkxs(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        n = int(rng.integers(1, 40))
+        src, dst, g = _graph(rng, n, int(rng.integers(0, 3 * n)))
+        keep = rng.random(n) < 0.8
+        label = np.empty(n, dtype=np.int64)
+        count = native.scc(*_csr(src, dst, n), keep.astype(np.uint8), label)
+        theirs = list(nx.strongly_connected_components(g.subgraph(np.flatnonzero(keep).tolist())))
+        assert count == len(theirs)
+        assert {frozenset(np.flatnonzero(label == c).tolist()) for c in range(count)} \
+            == {frozenset(c) for c in theirs}
+        assert (label[~keep] == -1).all()
+        # numbered as they complete: an edge between two components goes to a smaller one
+        for a, b in zip(src, dst):
+            if keep[a] and keep[b] and label[a] != label[b]:
+                assert label[b] < label[a]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_backward_search_is_until(seed):
+    rng = np.random.default_rng(100 + seed)
+    for _ in range(100):
+        n = int(rng.integers(1, 40))
+        src, dst, g = _graph(rng, n, int(rng.integers(0, 3 * n)))
+        before, reach = rng.random(n) < 0.6, rng.random(n) < 0.15
+        out = reach.astype(np.uint8)
+        native.back_reach(*_csr(dst, src, n), before.astype(np.uint8), out)
+        # E(before U reach), the least fixpoint: reach, or before with a successor in it
+        expected = {v for v in range(n) if reach[v]}
+        while True:
+            more = {v for v in range(n) if before[v] and v not in expected
+                    and any(w in expected for w in g.successors(v))}
+            if not more:
+                break
+            expected |= more
+        assert set(np.flatnonzero(out).tolist()) == expected
+
+
+def _accepting_cycle_by_networkx(src, dst, n, a_edges, k, label, acc, sets, start) -> bool:
+    product = nx.DiGraph()
+    initial = [a for a in start]
+    for s, t in zip(src.tolist(), dst.tolist()):
+        for a, b in a_edges:
+            if label[b, t]:
+                product.add_edge((s, a), (t, b))
+    reached = set()
+    for a in initial:
+        reached |= {(0, a)} | (nx.descendants(product, (0, a)) if (0, a) in product else set())
+    sub = product.subgraph(reached)
+    for comp in nx.strongly_connected_components(sub):
+        node = next(iter(comp))
+        if len(comp) == 1 and not sub.has_edge(node, node):
+            continue
+        if all(any(acc[b] >> bit & 1 for _, b in comp) for bit in range(sets)):
+            return True
+    return False
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_on_the_fly_emptiness_check_is_the_whole_products(seed):
+    rng = np.random.default_rng(200 + seed)
+    found_both = set()
+    for _ in range(150):
+        n, k = int(rng.integers(1, 12)), int(rng.integers(1, 5))
+        src, dst, _ = _graph(rng, n, int(rng.integers(0, 3 * n)))
+        dead = np.setdiff1d(np.arange(n), src)          # a dead node repeats for ever
+        src, dst = np.concatenate([src, dead]), np.concatenate([dst, dead])
+        a_edges = sorted({(int(a), int(b)) for a, b in rng.integers(0, k, (2 * k, 2))})
+        label = rng.random((k, n)) < 0.7
+        sets = int(rng.integers(0, 3))
+        acc = np.zeros(k, dtype=np.uint64)
+        for bit in range(sets):
+            acc[rng.random(k) < 0.5] |= np.uint64(1 << bit)
+        start = [a for a in range(k) if rng.random() < 0.6 and label[a, 0]]
+        if not start:
+            continue
+        a_src = np.array([a for a, _ in a_edges], dtype=np.int64)
+        a_dst = np.array([b for _, b in a_edges], dtype=np.int64)
+        found, states = native.ltl_product(
+            *_csr(src, dst, n), *_csr(a_src, a_dst, k), label.view(np.uint8).ravel(), acc,
+            (1 << sets) - 1, np.array(start, dtype=np.int64), np.zeros(n * k, dtype=np.int32),
+            10 ** 6)
+        expected = _accepting_cycle_by_networkx(src, dst, n, a_edges, k, label,
+                                                [int(x) for x in acc], sets, start)
+        assert bool(found) == expected
+        assert 1 <= states <= n * k
+        found_both.add(expected)
+    assert found_both == {True, False}
+
+
+def test_the_product_search_stops_at_its_limit():
+    n = 50                                   # a ring: one product state per node
+    src = np.arange(n, dtype=np.int64)
+    dst = (src + 1) % n
+    one = np.zeros(1, dtype=np.int64)
+    args = (*_csr(src, dst, n), *_csr(one, one, 1), np.ones(n, dtype=np.uint8),
+            np.zeros(1, dtype=np.uint64), 1, one)
+    assert native.ltl_product(*args, np.zeros(n, dtype=np.int32), 10)[0] == -1
+    # with room, the ring's one cycle misses the acceptance set: empty
+    assert native.ltl_product(*args, np.zeros(n, dtype=np.int32), 100) == (0, n)
