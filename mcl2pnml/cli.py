@@ -323,12 +323,13 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
 @click.argument("formulas", type=FILE, nargs=-1)
 @QUERY_OPTIONS
 def query(net: Path, formulas: tuple[Path, ...], examinations: tuple[str, ...], as_json: bool,
-          max_states: int, max_memory: str | None, net_id: str | None) -> int:
+          max_states: int, max_memory: str | None, stubborn: bool, net_id: str | None) -> int:
     """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
     LTL, upper bounds) and generic examinations on NET, one answer line each in the
     contest's format; exit 3 if one is not answered (docs/interop.md)."""
     outcome = pipeline.query_file(net, formulas, examinations, net_id=net_id,
-                                  max_states=max_states, max_memory=max_memory)
+                                  max_states=max_states, max_memory=max_memory,
+                                  stubborn=stubborn)
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return outcome.status

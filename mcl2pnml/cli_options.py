@@ -289,9 +289,17 @@ QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
                  help="Also a generic examination of the contest (may be repeated)."),
     click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
     click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
-                 show_default=True, help="Answer nothing past this many markings."),
+                 show_default=True,
+                 help="Build no reachability graph past this many markings: then the "
+                      "reachability questions are searched on the fly (up to as many), and "
+                      "what the P-invariants settle is answered; the rest is not."),
     click.option("--max-memory", metavar="SIZE",
                  help="Memory budget: 4G, 500M (default: half free)."),
+    click.option("--stubborn", is_flag=True,
+                 help="Search the reachability questions of a 1-safe net on the fly under "
+                      "partial-order reduction (stubborn sets), once a P-invariant proves the "
+                      "net safe: the same answers from fewer markings where the net does "
+                      "things at once (docs/interop.md)."),
     NET_OPTION,
 )
 

@@ -1242,7 +1242,7 @@ class QueryOutcome:
 
 def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[str] = (), *,
                net_id: str | None = None, max_states: int = 5_000_000,
-               max_memory: int | str | None = None) -> QueryOutcome:
+               max_memory: int | str | None = None, stubborn: bool = False) -> QueryOutcome:
     """``mcl2pnml query``: the Model Checking Contest's formula files (and generic
     examinations) answered on any net we read (:mod:`analysis.mcc`)."""
     from analysis import mcc
@@ -1253,8 +1253,8 @@ def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[
     net = load_net(net_path, net_id, max_memory)
     if isinstance(max_memory, str):
         max_memory = parse_size(max_memory)
-    answers = mcc.answer(net, queries, max_states=max_states, max_memory=max_memory) \
-        if queries else []
+    answers = mcc.answer(net, queries, max_states=max_states, max_memory=max_memory,
+                         stubborn=stubborn) if queries else []
     if examinations:
         answers += mcc.generic(net, examinations, max_states=max_states, max_memory=max_memory)
     return QueryOutcome(net.name, answers)

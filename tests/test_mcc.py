@@ -130,3 +130,44 @@ def test_a_place_the_net_does_not_have_is_named(tmp_path):
     net = tmp_path / "task.pnml"
     net.write_bytes(pipeline.to_pnml_bytes(pipeline.template_net("task")))
     one_error(run_cli("query", net, bad), "q.xml:3:3:", "no place 'Nowhere'")
+
+
+@pytest.mark.parametrize("model", MODELS or ["(none)"])
+def test_past_the_graphs_limits_what_is_answered_is_the_contests(model, monkeypatch):
+    """When the reachability graph cannot be built, the reachability questions are
+    searched on the fly and what the initial marking and the P-invariants settle is
+    answered: every answer given is the oracle's, the rest unanswered with the reason."""
+    _corpus()
+    folder = CORPUS / model
+    net = pipeline.load_net(folder / "model.pnml")
+    queries = [x for name in FILES for x in read_queries(folder / f"{name}.xml")]
+    monkeypatch.setattr(mcc, "_space", lambda *a: (None, "the state space is past its limit"))
+    answers = mcc.answer(net, queries)
+    oracle = _oracle(model)
+    wrong = [(a.id, _shown(a.value), oracle[a.id]) for a in answers
+             if a.value is not None and oracle[a.id] not in ("?", _shown(a.value))]
+    assert not wrong, f"{model}: ours, the oracle's: {wrong}"
+    assert all(a.reason for a in answers if a.value is None)
+    assert any(a.value is not None for a in answers), "nothing settled without the graph"
+
+
+#: Whose P-invariants take seconds to find (the proof of safety the reduction needs).
+SLOW_PROOF = {"Dekker-PT-010"}
+
+
+@pytest.mark.parametrize("model", [pytest.param(m, marks=pytest.mark.slow) if m in SLOW_PROOF
+                                   else m for m in MODELS] or ["(none)"])
+def test_the_reduced_search_answers_as_the_contest(model):
+    """``--stubborn``: the reachability questions of a net proven 1-safe searched on the fly
+    under stubborn sets; the answers stay the oracle's, and on a net not proven safe the
+    search runs unreduced."""
+    _corpus()
+    folder = CORPUS / model
+    net = pipeline.load_net(folder / "model.pnml")
+    queries = [x for name in FILES[:2] for x in read_queries(folder / f"{name}.xml")]
+    answers = mcc.answer(net, queries, stubborn=True)
+    oracle = _oracle(model)
+    wrong = [(a.id, _shown(a.value), oracle[a.id]) for a in answers
+             if oracle[a.id] not in ("?", _shown(a.value))]
+    assert not wrong, f"{model}: ours, the oracle's: {wrong}"
+    assert all(a.value is not None for a in answers)
