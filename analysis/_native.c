@@ -887,6 +887,104 @@ fail:
     return NULL;
 }
 
+/* packed_edges(packed, pairs, bits, need, keep, give, need_ptr, need_word, key_ptr, key_t,
+ *              free_t, ids, order, node, src, dst, trans) -> count: every edge of the
+ * explored markings (sorted rows; pairs: paired_index's table of them), in node order:
+ * the node i's marking is row order[i], row j is node[j]; an edge's transition is
+ * ids[firing row], and a node's edges are sorted by transition, as the numpy path sorts
+ * them. The arrays (int32) hold the out-degrees' sum. The successors of a marking are
+ * built and looked up in batches, as backward's predecessors are. */
+static PyObject *py_packed_edges(PyObject *self, PyObject *args) {
+    PyObject *o[16];
+    int bits;
+    if (!PyArg_ParseTuple(args, "OOiOOOOOOOOOOOOOO", &o[0], &o[1], &bits, &o[2], &o[3], &o[4],
+                          &o[5], &o[6], &o[7], &o[8], &o[9], &o[10], &o[11], &o[12], &o[13],
+                          &o[14], &o[15]))
+        return NULL;
+    Buffers b = {.count = 0};
+    Masks m;
+    const uint64_t *packed, *pairs;
+    const int64_t *ids, *order, *node;
+    int32_t *src, *dst, *trans;
+    if (!(packed = data_of(&b, o[0], 8, 0))) goto fail;
+    int64_t states = b.views[0].shape[0];
+    m.words = b.views[0].ndim == 2 ? b.views[0].shape[1] : 1;
+    if (!(pairs = data_of(&b, o[1], 8, 0)) || !(m.need = data_of(&b, o[2], 8, 0))) goto fail;
+    m.transitions = items_of(&b) / m.words;
+    if (!(m.keep = data_of(&b, o[3], 8, 0)) || !(m.give = data_of(&b, o[4], 8, 0))
+        || !(m.need_ptr = data_of(&b, o[5], 8, 0)) || !(m.need_word = data_of(&b, o[6], 8, 0))
+        || !(m.key_ptr = data_of(&b, o[7], 8, 0)) || !(m.key_t = data_of(&b, o[8], 8, 0))
+        || !(m.free_t = data_of(&b, o[9], 8, 0)))
+        goto fail;
+    m.nfree = items_of(&b);
+    if (!(ids = data_of(&b, o[10], 8, 0)) || !(order = data_of(&b, o[11], 8, 0))
+        || !(node = data_of(&b, o[12], 8, 0)) || !(src = data_of(&b, o[13], 4, 1)))
+        goto fail;
+    int64_t room = items_of(&b);
+    if (!(dst = data_of(&b, o[14], 4, 1)) || !(trans = data_of(&b, o[15], 4, 1))) goto fail;
+    int64_t words = m.words, mask = ((int64_t)1 << bits) - 1;
+    int64_t *cand = PyMem_Malloc(sizeof(int64_t) * (size_t)(m.transitions + 1));
+    uint64_t *after = PyMem_Malloc(8 * BATCH * (size_t)words), hashes[BATCH];
+    int64_t fired[BATCH];
+    if (!cand || !after) {
+        PyMem_Free(cand); PyMem_Free(after);
+        PyErr_NoMemory();
+        goto fail;
+    }
+    int64_t count = 0, lost = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t i = 0; i < states && !lost; i++) {
+        const uint64_t *row = packed + order[i] * words;
+        int64_t n = candidates(row, words, m.key_ptr, m.key_t, m.free_t, m.nfree, cand);
+        int64_t c = 0, first = count;
+        while (c < n && !lost) {
+            int nb = 0;
+            for (; c < n && nb < BATCH; c++) {
+                int64_t t = cand[c];
+                if (!enables(row, &m, t))
+                    continue;
+                uint64_t *af = after + nb * words;
+                for (int64_t w = 0; w < words; w++)
+                    af[w] = (row[w] & m.keep[t * words + w]) | m.give[t * words + w];
+                hashes[nb] = hash_row(af, words);
+                __builtin_prefetch(&pairs[slot_of_hash(hashes[nb], bits)]);
+                fired[nb++] = t;
+            }
+            prefetch_rows(packed, words, pairs, bits, hashes, nb);
+            for (int k = 0; k < nb; k++) {
+                int64_t slot;
+                int64_t j = probe(packed, words, pairs, mask, after + k * words,
+                                  hashes[k] & 0xFFFFFFFFULL, slot_of_hash(hashes[k], bits), &slot);
+                if (j < 0 || count == room) { lost = 1; break; }
+                /* in place among the node's edges, by transition (a node has few) */
+                int32_t t = (int32_t)ids[fired[k]], d = (int32_t)node[j];
+                src[count] = (int32_t)i;      /* every edge of the node starts there */
+                int64_t at = count++;
+                while (at > first && trans[at - 1] > t) {
+                    trans[at] = trans[at - 1];
+                    dst[at] = dst[at - 1];
+                    at--;
+                }
+                trans[at] = t;
+                dst[at] = d;
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_Free(cand);
+    PyMem_Free(after);
+    release(&b);
+    if (lost) {
+        PyErr_SetString(PyExc_RuntimeError, "a successor is not among the explored markings, "
+                        "or the arrays are too short");
+        return NULL;
+    }
+    return PyLong_FromLongLong(count);
+fail:
+    release(&b);
+    return NULL;
+}
+
 /* backward_one_word(packed, table, bits, need, take, give, key_ptr, key_t, free_t, seen,
  *                   frontier): backward for markings of one word, in the slots of a table of
  * the markings themselves (rehash by value). A predecessor is found by its value alone, one
@@ -1498,6 +1596,7 @@ static PyMethodDef methods[] = {
     {"out_degree", py_out_degree, METH_VARARGS, "Enabled transitions per marking."},
     {"paired_index", py_paired_index, METH_VARARGS, "The backward search's table."},
     {"backward", py_backward, METH_VARARGS, "Markings that reach the frontier."},
+    {"packed_edges", py_packed_edges, METH_VARARGS, "Every edge of the explored markings."},
     {"backward_one_word", py_backward_one_word, METH_VARARGS,
      "Markings of one word that reach the frontier."},
     {"permute_rows", py_permute_rows, METH_VARARGS, "Reorder rows in place."},

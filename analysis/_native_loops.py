@@ -119,6 +119,26 @@ def live(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.ndarra
     return alive
 
 
+def edges(packed, need, keep, give, ids, order, need_ptr, need_word, key_ptr, key_t, free_t
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every edge of the explored markings (sorted rows; node ``i`` is row ``order[i]``,
+    ``order`` its own inverse) as int32 columns source, transition (``ids`` of the
+    firing's row), target, in node order and by transition within a node."""
+    packed = np.ascontiguousarray(packed)
+    index = _contiguous(need_ptr, need_word, key_ptr, key_t, free_t)
+    total = int(out_degree(packed, need, *index).sum())
+    bits = 12                               # paired_index's table, whatever the width
+    while 10 * len(packed) > 7 << bits:
+        bits += 1
+    table = np.zeros(1 << bits, dtype=np.uint64)
+    c.paired_index(packed, table, bits)
+    src, trans, dst = (np.empty(total, dtype=np.int32) for _ in range(3))
+    order = np.ascontiguousarray(order, dtype=np.int64)
+    c.packed_edges(packed, table, bits, *_contiguous(need, keep, give), *index,
+                   np.ascontiguousarray(ids, dtype=np.int64), order, order, src, dst, trans)
+    return src, trans, dst
+
+
 def paired_index(queue: np.ndarray, count: int) -> tuple[np.ndarray, int]:
     """The backward search's table of the first ``count`` rows: entries as in
     :func:`start_table`, at most 70% full: the fingerprints make a search for a

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 from collections import Counter
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Sequence
 
 import numpy as np
@@ -88,16 +89,23 @@ class Graph:
         self.dead = np.ones(n, dtype=bool)
         self.dead[src] = False
         self.real = _csr(src, dst, n)
-        # the temporal operators' graph: a dead marking repeats for ever
-        loops = np.flatnonzero(self.dead)
-        with_loops = (np.concatenate([src, loops]), np.concatenate([dst, loops]))
-        self.succ = _csr(*with_loops, n)
-        self.pred = _csr(with_loops[1], with_loops[0], n)
         self.place_index = {p: i for i, p in enumerate(s.places)}
         self.transition_index = {t: i for i, t in enumerate(s.transitions)}
         self._tokens: dict[int, np.ndarray] = {}
         self._firings: tuple[np.ndarray, np.ndarray] | None = None
         self._loops: np.ndarray | None = None
+
+    @cached_property
+    def succ(self) -> tuple[np.ndarray, np.ndarray]:
+        """The temporal operators' graph: the firings, and a dead marking repeats for ever."""
+        loops = np.flatnonzero(self.dead)
+        return _csr(np.concatenate([self.src, loops]), np.concatenate([self.dst, loops]), self.n)
+
+    @cached_property
+    def pred(self) -> tuple[np.ndarray, np.ndarray]:
+        """The temporal operators' graph backwards."""
+        loops = np.flatnonzero(self.dead)
+        return _csr(np.concatenate([self.dst, loops]), np.concatenate([self.src, loops]), self.n)
 
     # -- atoms ---------------------------------------------------------------------------------
 
@@ -700,10 +708,9 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
         if name == "ReachabilityDeadlock":
             value = bool(g.dead.any())
         elif name == "OneSafe":
-            value = all(int(g.tokens([p], None).max()) <= 1 for p in s.places)
+            value = bool(space.safe)
         elif name == "StableMarking":
-            value = any(int(c.min()) == int(c.max())
-                        for c in (g.tokens([p], None) for p in s.places))
+            value = _stable_place(space)
         elif name == "QuasiLiveness":
             value = len(np.unique(g.trans)) == len(s.transitions)
         elif name == "Liveness":
@@ -712,6 +719,24 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
             raise Mcl2PnmlError(f"unknown examination '{name}'; known: {', '.join(GENERIC)}")
         out.append(Answer(name, value, "EXPLICIT STATE_SPACE"))
     return out
+
+
+def _stable_place(space) -> bool:
+    """Whether some place holds the same number of tokens in every reachable marking: on
+    markings packed one bit per place, a bit the same in the OR and the AND of them all;
+    else a place at a time (its column not kept: a large net has many)."""
+    from analysis.packedmarkings import PackedStateSpace
+    places = len(space.structure.places)
+    if isinstance(space, PackedStateSpace) and space.states:
+        ones = np.bitwise_or.reduce(space.packed, axis=0)
+        both = np.bitwise_and.reduce(space.packed, axis=0)
+        same = ~(ones ^ both)
+        return any(int(same[i // 64]) >> (i % 64) & 1 for i in range(places))
+    for i in range(places):
+        column = space.tokens(i)
+        if column.min() == column.max():
+            return True
+    return False
 
 
 def _live(g: Graph, transitions: int) -> bool:

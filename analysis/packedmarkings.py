@@ -358,6 +358,11 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
     def _edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The explicit edge list, in node order, built only when asked for."""
         f = self.firing
+        kernels = self._kernels()
+        if kernels is not None and hasattr(kernels, "edges"):
+            # in C, already in node order (position and node_of are one permutation)
+            return kernels.edges(self.packed, f.need, f.keep, f.give, f.ids,
+                                 self.position(np.arange(self.states)), *self._firing_index)
         src, trans, dst = [], [], []
         for r, j in self._enabled():
             after = self._lookup((self.packed[r] & f.keep[j]) | f.give[j])

@@ -124,3 +124,29 @@ def test_the_product_search_stops_at_its_limit():
     assert native.ltl_product(*args, np.zeros(n, dtype=np.int32), 10)[0] == -1
     # with room, the ring's one cycle misses the acceptance set: empty
     assert native.ltl_product(*args, np.zeros(n, dtype=np.int32), 100) == (0, n)
+
+
+def _packed_spaces():
+    from analysis.statespace import explore
+    from mcl2pnml import pipeline
+    from helpers import ROOT
+    nets = [pipeline.compile_file(ROOT / "examples" / "sauce.mcl")]
+    corpus = ROOT.parent / "shared" / "external-nets" / "mcc-queries"
+    nets += [pipeline.load_net(corpus / m / "model.pnml")
+             for m in ("Dekker-PT-010", "Philosophers-PT-000010", "Raft-PT-02")
+             if (corpus / m).is_dir()]
+    return [explore(net) for net in nets]
+
+
+def test_the_edges_of_packed_markings_listed_in_c_are_numpys():
+    """The edges of a safe net's packed markings, listed by the loop in C, are those the
+    numpy path finds, in the same order (node, then transition) and types."""
+    from analysis.packedmarkings import PackedStateSpace
+    spaces = [s for s in _packed_spaces() if isinstance(s, PackedStateSpace)]
+    assert spaces, "no safe net explored with packed markings"
+    for space in spaces:
+        in_c = space._edges
+        del space.__dict__["_edges"]
+        space._kernels = lambda: None                 # the numpy path
+        for a, b in zip(in_c, space._edges):
+            assert a.dtype == b.dtype and np.array_equal(a, b)
