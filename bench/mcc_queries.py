@@ -11,12 +11,19 @@ files); LoLA with its defaults (reductions on), ``lola --pnmlnet model.pnml --xm
 --formula=FILE.xml --mcc --quiet``. Wall seconds and the process's peak memory; a call
 past 60 s counts as not answered. Every answer is held to the 2021 consensus (``oracle/``).
 Run with ``--only ours`` to time ours alone.
+
+Then the generic examinations, one process each: ours, ``mcl2pnml query model.pnml
+--examination NAME``; LoLA, ``lola --pnmlnet model.pnml --check=CHECK --mcc`` (verifypn
+has no such command), on the 19 models (held to the oracle) and on the larger contest
+models of ``../shared/external-nets/bench-models`` (where ours and LoLA's must agree).
+LoLA runs in a scratch folder: it leaves files behind.
 """
 from __future__ import annotations
 
 import re
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -29,6 +36,12 @@ TOOLS = ("ours", "verifypn", "lola")
 FILES = ("ReachabilityCardinality", "ReachabilityFireability", "CTLCardinality",
          "CTLFireability", "LTLCardinality", "LTLFireability", "UpperBounds")
 TIMEOUT = 60.0
+BENCH_MODELS = ROOT.parent / "shared" / "external-nets" / "bench-models"
+#: The generic examinations, and the check LoLA names each by.
+GENERIC = {"ReachabilityDeadlock": "deadlockfreedom", "OneSafe": "OneSafe",
+           "StableMarking": "StableMarking", "QuasiLiveness": "QuasiLiveness",
+           "Liveness": "Liveness"}
+SCRATCH = tempfile.mkdtemp(prefix="mcc-bench-")
 
 
 def run(args: list[str]) -> tuple[float, float, str]:
@@ -37,7 +50,7 @@ def run(args: list[str]) -> tuple[float, float, str]:
     start = time.perf_counter()
     try:
         done = subprocess.run(["/usr/bin/time", "-f", "%M", *args], capture_output=True,
-                              text=True, timeout=TIMEOUT)
+                              text=True, timeout=TIMEOUT, cwd=SCRATCH)
     except subprocess.TimeoutExpired:
         return None, 0.0, ""
     seconds = time.perf_counter() - start
@@ -100,6 +113,39 @@ def main() -> None:
         print(f"| {name} | " + " | ".join(cells) + " |")
     print("| **total** | " + " | ".join(f"**{right} / {wrong}** | **{t:.1f}** | "
                                         for t, right, wrong in total.values()) + " |")
+    if "--generic" in sys.argv:
+        generic()
+
+
+def generic() -> None:
+    """The generic examinations: ours against LoLA, per model, one process each."""
+    models = [(p.name, p / "model.pnml", oracle(p.name)) for p in sorted(CORPUS.iterdir())
+              if p.is_dir() and p.name != "oracle"]
+    models += [(p.stem, p, None) for p in sorted(BENCH_MODELS.glob("*.pnml"))]
+    print()
+    print("| model | ours: answered / wrong | ours (s) | ours peak MiB | lola: answered / "
+          "wrong | lola (s) | lola peak MiB | disagreements |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for name, net, truth in models:
+        rows = {"ours": [0, 0, 0.0, 0.0], "lola": [0, 0, 0.0, 0.0]}
+        said: dict[str, dict[str, str]] = {"ours": {}, "lola": {}}
+        for exam, check in GENERIC.items():
+            for who, args in (("ours", [sys.executable, "-m", "mcl2pnml", "query", str(net),
+                                        "--examination", exam]),
+                              ("lola", [str(LOLA), "--pnmlnet", str(net), f"--check={check}",
+                                        "--mcc", "--quiet"])):
+                seconds, mib, out = run(args)
+                got = answers(out).get(exam)
+                row = rows[who]
+                row[2] += seconds if seconds is not None else TIMEOUT
+                row[3] = max(row[3], mib)
+                if got is not None:
+                    said[who][exam] = got
+                    row[0] += 1
+                    row[1] += truth is not None and truth.get(exam) not in (got, "?", None)
+        differ = sum(1 for e, v in said["ours"].items() if said["lola"].get(e, v) != v)
+        cells = " | ".join(f"{a} / {w} | {t:.1f} | {m:.0f}" for a, w, t, m in rows.values())
+        print(f"| {name}{'' if truth is not None else ' (no oracle)'} | {cells} | {differ} |")
 
 
 if __name__ == "__main__":
