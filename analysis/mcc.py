@@ -701,20 +701,27 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
     space, why = _space(net, max_states, max_memory)
     if space is None:
         return [Answer(name, None, "", why) for name in examinations]
-    g = Graph(space)
-    s = g.structure
+    s = space.structure
+    graph: list[Graph] = []
+
+    def edges() -> Graph:                # only the liveness questions need the edges
+        if not graph:
+            graph.append(Graph(space))
+        return graph[0]
+
     out = []
     for name in examinations:
         if name == "ReachabilityDeadlock":
-            value = bool(g.dead.any())
+            value = bool(space.terminal)
         elif name == "OneSafe":
             value = bool(space.safe)
         elif name == "StableMarking":
             value = _stable_place(space)
         elif name == "QuasiLiveness":
-            value = len(np.unique(g.trans)) == len(s.transitions)
+            fired = np.unique(np.asarray(space.trans)) if not graph else np.unique(graph[0].trans)
+            value = len(fired) == len(s.transitions)
         elif name == "Liveness":
-            value = _live(g, len(s.transitions))
+            value = _live(edges(), len(s.transitions))
         else:
             raise Mcl2PnmlError(f"unknown examination '{name}'; known: {', '.join(GENERIC)}")
         out.append(Answer(name, value, "EXPLICIT STATE_SPACE"))
