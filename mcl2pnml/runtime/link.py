@@ -514,7 +514,9 @@ class Link:
         except (ssl.SSLWantReadError, ssl.SSLWantWriteError, BlockingIOError):
             return pending
         except OSError as e:
-            self._break(f"cannot send to {self.peer}: {e.strerror or e}", sending=True)
+            # a reset is a reset whichever end of the socket notices it first
+            said = "the link was reset: " if isinstance(e, ConnectionResetError) else ""
+            self._break(f"{said}cannot send to {self.peer}: {e.strerror or e}", sending=True)
             return b""
         return pending[n:]
 
