@@ -171,3 +171,20 @@ def test_the_reduced_search_answers_as_the_contest(model):
              if oracle[a.id] not in ("?", _shown(a.value))]
     assert not wrong, f"{model}: ours, the oracle's: {wrong}"
     assert all(a.value is not None for a in answers)
+
+
+@pytest.mark.parametrize("tool", ["ours", "verifypn", "lola"])
+def test_the_benchmark_reads_each_tools_answers(tool):
+    """bench/mcc_queries.py's commands, on one model's LTL file: every tool's answer lines
+    are read (LoLA pads them with two spaces) and are the oracle's."""
+    _corpus()
+    from bench import mcc_queries
+    model = CORPUS / "TokenRing-PT-005"
+    command = mcc_queries.commands(model, "LTLCardinality")[tool]
+    if tool != "ours" and not Path(command[0]).is_file():
+        pytest.skip(f"{command[0]} is not there (the benchmark runs the peers of ../shared)")
+    seconds, _, out = mcc_queries.run(command)
+    assert seconds is not None, f"{tool} past {mcc_queries.TIMEOUT} s"
+    got = mcc_queries.answers(out)
+    oracle = _oracle("TokenRing-PT-005")
+    assert len(got) == 16 and all(oracle[k] in (v, "?") for k, v in got.items()), (got, out)
