@@ -81,14 +81,14 @@ demo: setup
 	@echo "  paper_repro/out/fig1-4.svg/.png  Figs. 1 to 4 redrawn from the templates"
 	@echo "  paper_repro/out/fig5.png         Fig. 5: the mission on the simulated AUV, with and without the cross"
 
-# the tests are spread over one worker more than the cores (up to four: each worker
+# the tests are spread over two workers more than the cores (up to four: each worker
 # loads numba and a browser), since a third of their time is spent waiting on peer
-# tools, the browser and the autopilot (on 2 cores: 4:39 with 3 workers, 5:14 with 2, before the
-# commands were forked from one process, tests/forkcli.py);
+# tools, the browser and the autopilot (on 2 cores: 5:35 with 4 workers, 5:57 with 3;
+# 5:22 with 6, where tests that time a wait fail under the load);
 # a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
 # --dist worksteal: a worker that runs out takes tests queued on the others, so that the
 # run does not end on one worker's tail of long tests
-TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 4 ? n + 1 : 4 ))) \
+TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 2 ? n + 2 : 4 ))) \
                 --dist worksteal
 # compiled modules are kept (__pycache__, ignored by git) even where the environment
 # says not to: otherwise every worker and every Python process the tests start

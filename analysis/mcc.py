@@ -1,24 +1,34 @@
 """The Model Checking Contest's questions answered on a net's reachability graph.
 
 Any bounded P/T net, any formula of :mod:`mcl2pnml.core.queries`: its
-reachable markings explored (:func:`analysis.statespace.explore`), then
-each question decided on the graph, exactly:
+reachable markings explored (:func:`analysis.statespace.explore`), its edges
+held as compressed rows, then each question decided on the graph, exactly,
+by searches in C (``analysis/_native.c``; the same in Python,
+``analysis/_graph_loops.py``, where C was not built):
 
 * state atoms, for every marking at once (numpy columns of token counts);
 * CTL by the classic labelling (Clarke, Emerson and Sistla, 1986): ``EX``
   by the successors, ``EU`` backwards from its goal, ``EG`` as the states
   that reach, inside the formula's states, a cycle of them or a dead marking
-  (strongly connected components); the other operators from these three.
-  The reachability examinations are CTL's ``EF`` and ``AG``;
+  (Tarjan's strongly connected components); the other operators from these
+  three. The reachability examinations are CTL's ``EF`` and ``AG``;
 * LTL (the contest's ``A φ``): the generalised Büchi automaton of ``not φ``
-  by Gerth, Peled, Vardi and Wolper's tableau (1995), in product with the
-  graph, and an accepting cycle searched among the product's strongly
-  connected components;
+  by Gerth, Peled, Vardi and Wolper's tableau (1995), its product with the
+  graph searched on the fly by Couvreur's emptiness check (1999), which
+  numbers only the product states it meets and stops at the first cycle
+  meeting every acceptance set;
 * the upper bounds: the largest token sum over the markings;
 * the generic examinations: a reachable deadlock, one-safety, a stable
   place (its count the same in every marking), quasi-liveness (every
   transition fires somewhere) and liveness (every transition fires in every
   bottom strongly connected component).
+
+Where the graph cannot be built (past the limits, or an unbounded net), the
+reachability questions of a 1-safe net are searched on the fly by the
+property checker's engine (:mod:`analysis.onthefly`), stopping at the first
+witness, and what the initial marking and the P-invariants' bounds settle is
+answered. With ``stubborn``, those questions go to that engine first, under
+stubborn sets.
 
 Dead markings, as the contest's 2021 consensus answers read them (every one
 of its 2,223 verdicts on the 19 models in ``../shared/external-nets/mcc-queries``
@@ -30,8 +40,8 @@ both kinds with an ``X`` is decided both ways, and left unanswered, with the
 reason, where they disagree.
 
 What is not answered is said with its reason, never guessed: a formula that
-is neither CTL nor LTL, a net past the exploration's limits, an unbounded net
-(whose coverability graph does not decide these questions).
+is neither CTL nor LTL, a question past the limits that nothing else settles,
+an LTL product past the memory budget.
 """
 from __future__ import annotations
 
@@ -46,8 +56,12 @@ from mcl2pnml.core import queries as q
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 
-from analysis import _native
 from analysis.observers import Status
+
+try:                      # the graph searches in C, else the same in Python
+    from analysis import _native as _loops
+except ImportError:       # pragma: no cover - a machine without a C compiler at install
+    from analysis import _graph_loops as _loops
 
 
 @dataclass(frozen=True)
@@ -150,7 +164,7 @@ class Graph:
     def eu(self, before: np.ndarray, reach: np.ndarray) -> np.ndarray:
         """E(before U reach): backwards from ``reach`` through ``before``."""
         out = reach.astype(np.uint8)
-        _native.back_reach(*self.pred, before.astype(np.uint8), out)
+        _loops.back_reach(*self.pred, before.astype(np.uint8), out)
         return out.view(bool)
 
     def eg(self, sat: np.ndarray) -> np.ndarray:
@@ -160,7 +174,7 @@ class Graph:
             return np.zeros(self.n, dtype=bool)
         keep = sat.astype(np.uint8)
         label = np.empty(self.n, dtype=np.int64)
-        count = _native.scc(*self.succ, keep, label)
+        count = _loops.scc(*self.succ, keep, label)
         ptr, idx = self.succ
         inside = label >= 0
         size = np.bincount(label[inside], minlength=count)
@@ -360,7 +374,7 @@ def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
     acc = np.zeros(k, dtype=np.uint64)
     for bit, members in enumerate(accepting):
         acc[sorted(members)] |= np.uint64(1 << bit)
-    found, states = _native.ltl_product(
+    found, states = _loops.ltl_product(
         *graph.succ, *_csr(a_src, a_dst, k), label.view(np.uint8).ravel(), acc,
         (1 << len(accepting)) - 1, start, np.zeros(n * k, dtype=np.int32),
         min(max_states, 2 ** 31 - 2))
@@ -750,7 +764,7 @@ def _live(g: Graph, transitions: int) -> bool:
     """Every transition fires in every bottom strongly connected component: from every
     reachable marking, every transition can fire again."""
     label = np.empty(g.n, dtype=np.int64)
-    count = _native.scc(*g.real, np.ones(g.n, dtype=np.uint8), label)
+    count = _loops.scc(*g.real, np.ones(g.n, dtype=np.uint8), label)
     leaving = label[g.src] != label[g.dst]
     bottom = np.ones(count, dtype=bool)
     bottom[label[g.src[leaving]]] = False

@@ -1,8 +1,10 @@
-"""The reachability graph's searches in C (``analysis/_native.c``) that answer the contest's
-questions (:mod:`analysis.mcc`), each held to networkx on random graphs: Tarjan's
-components on a subset of the nodes, the backward search of ``E(a U b)``, and Couvreur's
-on-the-fly emptiness check of a graph's product with a generalised Büchi automaton,
-against the product built whole and its components searched by networkx."""
+"""The reachability graph's searches that answer the contest's questions
+(:mod:`analysis.mcc`), in C (``analysis/_native.c``) and in Python
+(``analysis/_graph_loops.py``, where C was not built), one suite for both, each held to
+networkx on random graphs: Tarjan's components on a subset of the nodes, the backward
+search of ``E(a U b)``, and Couvreur's on-the-fly emptiness check of a graph's product
+with a generalised Büchi automaton, against the product built whole and its components
+searched by networkx."""
 from __future__ import annotations
 
 import networkx as nx
@@ -11,7 +13,14 @@ import pytest
 
 from analysis.mcc import _csr
 
-native = pytest.importorskip("analysis._native", reason="the loops in C are not built")
+
+@pytest.fixture(params=["c", "python"])
+def native(request):
+    """One backend of the searches."""
+    if request.param == "python":
+        from analysis import _graph_loops
+        return _graph_loops
+    return pytest.importorskip("analysis._native", reason="the loops in C are not built")
 
 
 def _graph(rng, n: int, m: int):
@@ -23,7 +32,7 @@ def _graph(rng, n: int, m: int):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_the_components_are_networkxs(seed):
+def test_the_components_are_networkxs(seed, native):
     rng = np.random.default_rng(seed)
     for _ in range(100):
         n = int(rng.integers(1, 40))
@@ -43,7 +52,7 @@ def test_the_components_are_networkxs(seed):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_the_backward_search_is_until(seed):
+def test_the_backward_search_is_until(seed, native):
     rng = np.random.default_rng(100 + seed)
     for _ in range(100):
         n = int(rng.integers(1, 40))
@@ -83,7 +92,7 @@ def _accepting_cycle_by_networkx(src, dst, n, a_edges, k, label, acc, sets, star
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_the_on_the_fly_emptiness_check_is_the_whole_products(seed):
+def test_the_on_the_fly_emptiness_check_is_the_whole_products(seed, native):
     rng = np.random.default_rng(200 + seed)
     found_both = set()
     for _ in range(150):
@@ -114,7 +123,7 @@ def test_the_on_the_fly_emptiness_check_is_the_whole_products(seed):
     assert found_both == {True, False}
 
 
-def test_the_product_search_stops_at_its_limit():
+def test_the_product_search_stops_at_its_limit(native):
     n = 50                                   # a ring: one product state per node
     src = np.arange(n, dtype=np.int64)
     dst = (src + 1) % n

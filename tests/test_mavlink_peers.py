@@ -148,7 +148,8 @@ def test_a_peer_that_sends_garbage_is_no_autopilot_and_no_traceback():
     assert "Traceback" not in out.stderr and out.stderr == "", out.stderr
     assert out.returncode == Outcome.STALLED.exit_status, out.stdout
     assert f"no autopilot heartbeat from {fake.address} within 1 s" in out.stdout
-    assert elapsed < LIVENESS + SLACK + 2, elapsed      # and the interpreter's start
+    # and the interpreter's start, which a loaded machine (the whole suite at once) makes slow
+    assert elapsed < LIVENESS + SLACK + 6, elapsed
 
 
 @pytest.mark.timeout(15)

@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
 from analysis import compiledspace, counterspace, generalspace, packedspace, statespace
 from analysis.explorers import EXPLORERS
@@ -248,7 +248,10 @@ def _same_space(fast, slow):
 @settings(max_examples=120, deadline=None)
 @given(spread_safe_nets())
 def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
-    fast = explore(net, max_states=5000, backend=backend)
+    try:
+        fast = explore(net, max_states=5000, backend=backend)
+    except ExplorationLimit:
+        assume(False)       # a drawn net past the limit compares nothing: another is drawn
     slow = statespace._explore_general(fast.structure, tuple(fast.markings[0]), 5000, None)
     if fast.bounded and max(max(m) for m in slow.markings) <= 1:
         assert type(fast).__name__ == "PackedStateSpace"
