@@ -456,7 +456,13 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
     s = structure(net)
     m0 = dict(zip(s.places, s.initial_vector()))
     found: dict[str, Answer] = {}
-    bound_of = _invariant_bounds(s) if queries else None
+    invariants: list = []
+
+    def bound_of(places) -> int | None:     # the P-invariants found once, if ever asked
+        if not invariants:
+            invariants.append(_invariant_bounds(s))
+        return invariants[0](places)
+
     for x in queries:
         try:
             if isinstance(x.asks, q.PlaceBound):
@@ -469,12 +475,13 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
             if r is None:
                 continue
             exists, phi = r
+            if _three_valued(phi, s, None, m0) is exists:
+                # φ in the initial marking (E F), or not φ there (A G)
+                found[x.id] = Answer(x.id, exists, "INITIAL_STATE")
+                continue
             always = _three_valued(phi, s, bound_of)
             if always is not None:
                 found[x.id] = Answer(x.id, always, "STRUCTURAL P_INVARIANTS")
-            elif _three_valued(phi, s, None, m0) is exists:
-                # φ (E F) or not φ (A G) in the initial marking
-                found[x.id] = Answer(x.id, exists, "INITIAL_STATE")
         except KeyError:            # a name the net does not have: said by the graph's path
             continue
     return found
