@@ -1,0 +1,273 @@
+"""The contest's reachability questions without the reachability graph
+(:func:`analysis.mcc.answer` asks here when the graph is past its limits, or with
+``--stubborn``).
+
+* On the fly: on a 1-safe net, ``A G φ`` is the universality of φ and ``E F φ`` the
+  failure of the universality of not φ, for the property checker's engine
+  (:mod:`analysis.onthefly`), which searches breadth first in C and stops at the first
+  marking that decides; under stubborn sets when asked, on a net proven safe.
+* Without a marking beyond the initial one: ``E F φ`` where φ holds initially, ``A G φ``
+  where it does not; and what the bounds of the semi-positive P-invariants settle
+  (Murata 1989, section VII).
+"""
+from __future__ import annotations
+
+from collections import Counter
+from typing import Sequence
+
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.net import Net
+
+from analysis.observers import Status
+
+#: A question settled here: its value (True/False, a bound) and what decided it, as the
+#: contest's TECHNIQUES words.
+Settled = tuple[bool | int, str]
+
+
+# -- without exploring: the initial marking and the P-invariants -----------------------------------
+
+def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str, Settled]:
+    """The questions decided without a reachable marking beyond the initial one, by id:
+
+    * ``E F φ`` where φ holds initially (true), ``A G φ`` where it does not (false);
+    * with the bounds of the semi-positive P-invariants (Murata 1989, section VII: a
+      place set whose invariant weights are all at least 1 never holds more than the
+      invariant's initial value): a state formula true or false in every marking those
+      bounds allow decides both ``E F`` and ``A G`` of it; an upper bound the initial
+      marking already reaches is the bound.
+    """
+    from mcl2pnml.core.structure import structure
+    s = structure(net)
+    m0 = dict(zip(s.places, s.initial_vector()))
+    found: dict[str, Settled] = {}
+    invariants: list = []
+
+    def bound_of(places) -> int | None:     # the P-invariants found once, if ever asked
+        if not invariants:
+            invariants.append(_invariant_bounds(s))
+        return invariants[0](places)
+
+    for x in queries:
+        try:
+            if isinstance(x.asks, q.PlaceBound):
+                start = sum(m0[p] for p in x.asks.places)
+                ub = bound_of(x.asks.places)
+                if ub is not None and ub == start:
+                    found[x.id] = (ub, "STRUCTURAL P_INVARIANTS INITIAL_STATE")
+                continue
+            r = reachability(x.asks)
+            if r is None:
+                continue
+            exists, phi = r
+            if _three_valued(phi, s, None, m0) is exists:
+                # φ in the initial marking (E F), or not φ there (A G)
+                found[x.id] = (exists, "INITIAL_STATE")
+                continue
+            always = _three_valued(phi, s, bound_of)
+            if always is not None:
+                found[x.id] = (always, "STRUCTURAL P_INVARIANTS")
+        except KeyError:            # a name the net does not have: said by the graph's path
+            continue
+    return found
+
+
+def _invariant_bounds(s):
+    """A function bounding a sum of places by the P-invariants (None: not bounded)."""
+    from analysis.counterspace import INVARIANT_PLACES, INVARIANT_ROWS
+    from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants
+    invariants = []
+    if len(s.places) <= INVARIANT_PLACES:
+        try:
+            invariants = minimal_semipositive_p_invariants(s, INVARIANT_ROWS)
+        except AnalysisLimit:
+            pass
+    m0 = dict(zip(s.places, s.initial_vector()))
+    values = [sum(c * m0[p] for p, c in y.items()) for y in invariants]
+
+    def one(p: str) -> int | None:
+        found = [v // y[p] for y, v in zip(invariants, values) if p in y]
+        return min(found) if found else None
+
+    def bound(places) -> int | None:
+        if any(p not in m0 for p in places):
+            raise KeyError
+        counts = Counter(places)
+        # sum(P) <= y M = y M0 for an invariant y that weighs each place of P at least as
+        # often as P names it; or the sum of the places' own bounds
+        found = [v for y, v in zip(invariants, values)
+                 if all(y.get(p, 0) >= c for p, c in counts.items())]
+        singles = [one(p) for p in counts]
+        if None not in singles:
+            found.append(sum(b * c for b, c in zip(singles, counts.values())))
+        return min(found) if found else None
+
+    return bound
+
+
+def _three_valued(phi, s, bound_of, marking=None) -> bool | None:
+    """φ's truth in the initial ``marking`` (given), or in every marking the invariants'
+    bounds allow (``bound_of``): True, False, or None where the bounds leave it open."""
+    def total(e):
+        if isinstance(e, q.IntConst):
+            return e.value, e.value
+        if any(p not in s.place_index for p in e.places):
+            raise KeyError
+        if marking is not None:
+            v = sum(marking[p] for p in e.places)
+            return v, v
+        return 0, bound_of(e.places)            # (at least, at most: None unbounded)
+
+    def go(f):
+        if isinstance(f, q.BoolConst):
+            return f.value
+        if isinstance(f, q.Neg):
+            v = go(f.arg)
+            return None if v is None else not v
+        if isinstance(f, (q.Conj, q.Disj)):
+            vs = [go(a) for a in f.args]
+            stop = isinstance(f, q.Disj)       # or: one true settles; and: one false
+            if stop in vs:
+                return stop
+            return None if None in vs else not stop
+        if isinstance(f, q.IntLe):
+            (llo, lhi), (rlo, rhi) = total(f.left), total(f.right)
+            if lhi is not None and lhi <= rlo:
+                return True
+            if rhi is not None and llo > rhi:
+                return False
+            return None
+        if isinstance(f, q.Fireable):
+            if any(t not in s.transition_index for t in f.transitions):
+                raise KeyError
+            if marking is not None:
+                return any(all(marking[s.places[i]] >= w
+                               for i, w in (*s.pre[j].items(), *s.read[j].items()))
+                           for j in (s.transition_index[t] for t in f.transitions))
+            # dead when some place it needs is bounded below its weight
+            dead = all(any((b := bound_of([s.places[i]])) is not None and b < w
+                           for i, w in (*s.pre[j].items(), *s.read[j].items()))
+                       for j in (s.transition_index[t] for t in f.transitions))
+            return False if dead else None
+        if isinstance(f, q.Deadlock) and marking is not None:
+            return not any(all(marking[s.places[i]] >= w
+                               for i, w in (*s.pre[j].items(), *s.read[j].items()))
+                           for j in range(len(s.transitions)))
+        return None
+
+    return go(phi)
+
+
+# -- on the fly: the property checker's engine ---------------------------------------
+
+def reachability(f) -> tuple[bool, object] | None:
+    """``(exists, φ)`` for ``E F φ`` (``exists``) or ``A G φ``, φ a state formula, under
+    any negations; None for any other formula."""
+    negated = False
+    while isinstance(f, q.Neg):
+        negated, f = not negated, f.arg
+    if isinstance(f, q.ExistsPath) and isinstance(f.arg, q.Finally) and q.is_state(f.arg.arg):
+        exists, phi = True, f.arg.arg
+    elif isinstance(f, q.AllPaths) and isinstance(f.arg, q.Globally) \
+            and q.is_state(f.arg.arg):
+        exists, phi = False, f.arg.arg
+    else:
+        return None
+    # not E F φ = A G not φ; not A G φ = E F not φ
+    return (not exists, q.Neg(phi)) if negated else (exists, phi)
+
+
+def safe_predicate(phi, s) -> object | None:
+    """A state formula as the property checker's predicate on a 1-safe net (its sums are
+    counts of marked places); None where it has none (a deadlock, a place named twice in
+    a sum, a name the net does not have)."""
+    from mcl2pnml.core import properties as pr
+
+    def sum_of(e):
+        if isinstance(e, q.IntConst):
+            return e.value
+        if len(set(e.places)) != len(e.places) or not set(e.places) <= s.place_index.keys():
+            raise LookupError
+        return tuple(e.places)
+
+    def at_least(places, v):           # sum(places) >= v
+        return pr.Const(True) if v <= 0 else pr.Const(False) if v > len(places) \
+            else pr.Tokens(places, v)
+
+    def go(f):
+        if isinstance(f, q.BoolConst):
+            return pr.Const(f.value)
+        if isinstance(f, q.Neg):
+            return pr.Not(go(f.arg))
+        if isinstance(f, (q.Conj, q.Disj)):
+            return (pr.And if isinstance(f, q.Conj) else pr.Or)(tuple(go(a) for a in f.args))
+        if isinstance(f, q.Fireable):
+            out = []
+            for t in f.transitions:
+                j = s.transition_index.get(t)
+                if j is None:
+                    raise LookupError
+                need = tuple(s.places[i] for i in sorted(set(s.pre[j]) | set(s.read[j])))
+                out.append(at_least(need, len(need)))
+            return pr.Or(tuple(out))
+        if isinstance(f, q.IntLe):
+            left, right = sum_of(f.left), sum_of(f.right)
+            if isinstance(left, int) and isinstance(right, int):
+                return pr.Const(left <= right)
+            if isinstance(left, int):
+                return at_least(right, left)
+            if isinstance(right, int):
+                return pr.Not(at_least(left, right + 1))
+            # sum(P) <= sum(Q) on counts: whenever P holds v tokens, so does Q
+            return pr.And(tuple(pr.Or((pr.Not(at_least(left, v)), at_least(right, v)))
+                                for v in range(1, len(left) + 1)))
+        raise LookupError              # a deadlock: not a sum of marked places
+
+    try:
+        return go(phi)
+    except LookupError:
+        return None
+
+
+def reach_on_the_fly(net: Net, queries: Sequence[q.Query], max_states: int,
+                     max_memory: int | None, stubborn: bool = False,
+                     safe: bool = False) -> dict[str, Settled]:
+    """The reachability questions the on-the-fly checker (:mod:`analysis.onthefly`) settles,
+    by id: on a net it takes (1-safe as given), each ``A G φ`` is the universality of φ
+    and each ``E F φ`` the failure of the universality of not φ, searched breadth first
+    in C and stopped at the first marking that decides it. With ``stubborn``, stubborn
+    sets keep only the interleavings the atoms can see (a safety property keeps its
+    verdict: :mod:`analysis.onthefly`), on a net proven 1-safe (``safe``, or a P-invariant
+    found here). A question past the limits is left to the graph."""
+    from analysis import onthefly
+    from mcl2pnml.core import properties as pr
+    from mcl2pnml.core.structure import structure
+    shaped = [(x, reachability(x.asks)) for x in queries]
+    shaped = [(x, r) for x, r in shaped if r is not None]
+    if not shaped or not onthefly.available():
+        return {}
+    s = structure(net)
+    props, asked = [], []
+    for x, (exists, phi) in shaped:
+        pred = safe_predicate(q.Neg(phi) if exists else phi, s)
+        if pred is None or len(pr.atoms_of(pred)) > onthefly.ATOMS:
+            continue
+        props.append(pr.Property(x.id, pr.Pattern.UNIVERSALITY, pred))
+        asked.append((x, exists))
+    if not props:
+        return {}
+    try:
+        verdicts = onthefly.check_all(net, props, max_states, max_memory, stubborn, safe)
+    except onthefly.NotProvenSafe:
+        verdicts = onthefly.check_all(net, props, max_states, max_memory)
+        stubborn = False
+    if verdicts is None:
+        return {}
+    technique = "EXPLICIT ON_THE_FLY" + (" STUBBORN_SETS" if stubborn else "")
+    found = {}
+    for (x, exists), v in zip(asked, verdicts):
+        if v.status is Status.UNKNOWN:
+            continue
+        holds = v.status is Status.HOLDS
+        found[x.id] = (not holds if exists else holds, technique)
+    return found
