@@ -77,6 +77,8 @@ MIN_SECRET = 16
 CHUNK = 16 * 1024
 #: Characters of a bad line quoted in a message.
 QUOTED = 80
+#: Seconds a closing link reads and drops what the other end still sends.
+DRAIN = 0.5
 
 HEARTBEAT_LINE = {"link": "heartbeat"}
 _MAC_LABEL = b"mcl2pnml-link-1"
@@ -155,6 +157,22 @@ def decode(line: bytes) -> dict[str, Any]:
 def encode(obj: Mapping[str, Any]) -> bytes:
     """One line: the object's JSON (ASCII, so that a line's length is its bytes) and ``\\n``."""
     return json.dumps(obj, separators=(",", ":")).encode() + b"\n"
+
+
+def _end_gracefully(sock: socket.socket) -> None:
+    """End our side after the last line sent (a FIN), then read and drop what the other
+    end sent that was not read, for at most :data:`DRAIN` seconds: a socket closed with
+    bytes unread makes the kernel reset the connection, and a reset can destroy the lines
+    still on their way to the other end, the safe stop among them (a bridge that sent too
+    long a line would never see its vehicle told to stop)."""
+    try:
+        sock.shutdown(socket.SHUT_WR)
+        sock.settimeout(DRAIN / 10)
+        deadline = time.monotonic() + DRAIN
+        while time.monotonic() < deadline and sock.recv(CHUNK):
+            pass
+    except (OSError, ValueError):      # closed already, timed out, or a TLS end: done
+        pass
 
 
 class _Lines:
@@ -604,6 +622,7 @@ class Link:
             pass
         if self.thread is not None and self.thread is not threading.current_thread():
             self.thread.join(timeout=1.0)
+        _end_gracefully(self.sock)
         for s in (self.sock, self.wake_r, self.wake_w):
             try:
                 s.close()
