@@ -414,18 +414,19 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = 5_000_000,
     witness, and what the P-invariants and the initial marking settle is answered
     (:func:`analysis.mccreach.settled_without_exploring`); the rest is unanswered, with
     the reason."""
-    from analysis.mccreach import reach_on_the_fly, settled_without_exploring
-
     def answers(settled: dict) -> dict[str, Answer]:
         return {k: Answer(k, value, technique) for k, (value, technique) in settled.items()}
 
-    found = answers(reach_on_the_fly(net, queries, max_states, max_memory, True, safe)) \
-        if stubborn else {}
+    found: dict[str, Answer] = {}
+    if stubborn:          # (the module, and the observers it reads, loaded only if asked)
+        from analysis.mccreach import reach_on_the_fly
+        found = answers(reach_on_the_fly(net, queries, max_states, max_memory, True, safe))
     rest = [x for x in queries if x.id not in found]
     if not rest:
         return [found[x.id] for x in queries]
     space, why = _space(net, max_states, max_memory)
     if space is None:
+        from analysis.mccreach import reach_on_the_fly, settled_without_exploring
         if not stubborn:
             found.update(answers(reach_on_the_fly(net, rest, max_states, max_memory)))
         found.update(answers(settled_without_exploring(
