@@ -127,11 +127,7 @@ def edges(packed, need, keep, give, ids, order, need_ptr, need_word, key_ptr, ke
     packed = np.ascontiguousarray(packed)
     index = _contiguous(need_ptr, need_word, key_ptr, key_t, free_t)
     total = int(out_degree(packed, need, *index).sum())
-    bits = 12                               # paired_index's table, whatever the width
-    while 10 * len(packed) > 7 << bits:
-        bits += 1
-    table = np.zeros(1 << bits, dtype=np.uint64)
-    c.paired_index(packed, table, bits)
+    table, bits = paired_index(packed, len(packed), by_value=False)
     src, trans, dst = (np.empty(total, dtype=np.int32) for _ in range(3))
     order = np.ascontiguousarray(order, dtype=np.int64)
     c.packed_edges(packed, table, bits, *_contiguous(need, keep, give), *index,
@@ -139,17 +135,19 @@ def edges(packed, need, keep, give, ids, order, need_ptr, need_word, key_ptr, ke
     return src, trans, dst
 
 
-def paired_index(queue: np.ndarray, count: int) -> tuple[np.ndarray, int]:
+def paired_index(queue: np.ndarray, count: int, by_value: bool = True
+                 ) -> tuple[np.ndarray, int]:
     """The backward search's table of the first ``count`` rows: entries as in
     :func:`start_table`, at most 70% full: the fingerprints make a search for a
     predecessor that is not there cheap, so a table twice as full costs no
-    time and half the memory."""
+    time and half the memory. Rows of one word are keyed by their value unless
+    ``by_value`` is false (:func:`edges` probes every width alike)."""
     bits = 12
     while 10 * count > 7 << bits:
         bits += 1
     table = np.zeros(1 << bits, dtype=np.uint64)
     rows = np.ascontiguousarray(queue[:count])
-    if rows.ndim == 2 and rows.shape[1] == 1:
+    if by_value and rows.ndim == 2 and rows.shape[1] == 1:
         c.rehash(rows, count, table, bits, True)   # one word: the markings themselves
     else:
         c.paired_index(rows, table, bits)

@@ -480,13 +480,6 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
     if space is None:
         return [Answer(name, None, "", why) for name in examinations]
     s = space.structure
-    graph: list[Graph] = []
-
-    def edges() -> Graph:                # only the liveness questions need the edges
-        if not graph:
-            graph.append(Graph(space))
-        return graph[0]
-
     out = []
     for name in examinations:
         if name == "ReachabilityDeadlock":
@@ -496,10 +489,9 @@ def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int 
         elif name == "StableMarking":
             value = _stable_place(space)
         elif name == "QuasiLiveness":
-            fired = np.unique(np.asarray(space.trans)) if not graph else np.unique(graph[0].trans)
-            value = len(fired) == len(s.transitions)
+            value = len(np.unique(np.asarray(space.trans))) == len(s.transitions)
         elif name == "Liveness":
-            value = _live(edges(), len(s.transitions))
+            value = _live(Graph(space), len(s.transitions))   # the one that needs the graph
         else:
             raise Mcl2PnmlError(f"unknown examination '{name}'; known: {', '.join(GENERIC)}")
         out.append(Answer(name, value, "EXPLICIT STATE_SPACE"))

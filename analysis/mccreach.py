@@ -39,7 +39,7 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
     """
     from mcl2pnml.core.structure import structure
     s = structure(net)
-    m0 = dict(zip(s.places, s.initial_vector()))
+    m0 = s.initial_vector()
     found: dict[str, Settled] = {}
     invariants: list = []
 
@@ -51,7 +51,7 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
     for x in queries:
         try:
             if isinstance(x.asks, q.PlaceBound):
-                start = sum(m0[p] for p in x.asks.places)
+                start = sum(m0[s.place_index[p]] for p in x.asks.places)
                 ub = bound_of(x.asks.places)
                 if ub is not None and ub == start:
                     found[x.id] = (ub, "STRUCTURAL P_INVARIANTS INITIAL_STATE")
@@ -106,15 +106,16 @@ def _invariant_bounds(s):
 
 
 def _three_valued(phi, s, bound_of, marking=None) -> bool | None:
-    """φ's truth in the initial ``marking`` (given), or in every marking the invariants'
-    bounds allow (``bound_of``): True, False, or None where the bounds leave it open."""
+    """φ's truth in the initial ``marking`` (given: token counts by place index), or in
+    every marking the invariants' bounds allow (``bound_of``): True, False, or None where
+    the bounds leave it open."""
     def total(e):
         if isinstance(e, q.IntConst):
             return e.value, e.value
         if any(p not in s.place_index for p in e.places):
             raise KeyError
         if marking is not None:
-            v = sum(marking[p] for p in e.places)
+            v = sum(marking[s.place_index[p]] for p in e.places)
             return v, v
         return 0, bound_of(e.places)            # (at least, at most: None unbounded)
 
@@ -141,18 +142,14 @@ def _three_valued(phi, s, bound_of, marking=None) -> bool | None:
             if any(t not in s.transition_index for t in f.transitions):
                 raise KeyError
             if marking is not None:
-                return any(all(marking[s.places[i]] >= w
-                               for i, w in (*s.pre[j].items(), *s.read[j].items()))
-                           for j in (s.transition_index[t] for t in f.transitions))
+                return any(s.enabled(marking, s.transition_index[t]) for t in f.transitions)
             # dead when some place it needs is bounded below its weight
             dead = all(any((b := bound_of([s.places[i]])) is not None and b < w
                            for i, w in (*s.pre[j].items(), *s.read[j].items()))
                        for j in (s.transition_index[t] for t in f.transitions))
             return False if dead else None
         if isinstance(f, q.Deadlock) and marking is not None:
-            return not any(all(marking[s.places[i]] >= w
-                               for i, w in (*s.pre[j].items(), *s.read[j].items()))
-                           for j in range(len(s.transitions)))
+            return not any(s.enabled(marking, j) for j in range(len(s.transitions)))
         return None
 
     return go(phi)
@@ -207,7 +204,7 @@ def safe_predicate(phi, s) -> object | None:
                 j = s.transition_index.get(t)
                 if j is None:
                     raise LookupError
-                need = tuple(s.places[i] for i in sorted(set(s.pre[j]) | set(s.read[j])))
+                need = tuple(s.places[i] for i in sorted(s.transition_inputs[j]))
                 out.append(at_least(need, len(need)))
             return pr.Or(tuple(out))
         if isinstance(f, q.IntLe):
