@@ -144,7 +144,7 @@ def compile_(mission: Path, output: Path | None, fmt: str, **options) -> int:
 @RUN_OPTIONS
 @click.pass_context
 def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
-        net_id: str | None, **options) -> int:
+        net_id: str | None, lenient: bool, **options) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows each action
@@ -162,7 +162,7 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
     result = pipeline.run_mission(
         mission, pipeline.RunOptions(**options, explicit=given),
         text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
-        note=_note)
+        lenient=lenient, note=_note)
     click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
     return result.outcome.exit_status
 
@@ -229,7 +229,8 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
 @click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE")
 @SHOW_OPTIONS
 def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path | None,
-         live_log: Path | None, port: int, linger: float, net_id: str | None) -> int:
+         live_log: Path | None, port: int, linger: float, net_id: str | None,
+         lenient: bool) -> int:
     """Write one self-contained HTML page to play the token game on a net.
 
     WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
@@ -245,14 +246,15 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
     if live_log is not None:
         if output is not None or run_log is not None or graph_json is not None:
             raise click.UsageError("--live serves the page: leave out -o, --run and --graph-json")
-        shown = pipeline.show_nets(what, with_run=True, net_id=net_id)
+        shown = pipeline.show_nets(what, with_run=True, net_id=net_id, lenient=lenient)
 
         def ready(url: str) -> None:
             click.echo(f"serving {shown.title} on {url} , following {live_log} "
                        f"(Ctrl-C stops)", err=True)
         pipeline.serve_show_live(shown, live_log, port=port, linger=linger, ready=ready)
         return 0
-    shown = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id)
+    shown = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id,
+                               lenient=lenient)
     output = output or Path(f"{shown.title}.html")
     check_outputs([("-o", output), ("--graph-json", graph_json)],
                   [("the run log (--run)", run_log),
@@ -323,13 +325,14 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
 @click.argument("formulas", type=FILE, nargs=-1)
 @QUERY_OPTIONS
 def query(net: Path, formulas: tuple[Path, ...], examinations: tuple[str, ...], as_json: bool,
-          max_states: int, max_memory: str | None, stubborn: bool, net_id: str | None) -> int:
+          max_states: int, max_memory: str | None, stubborn: bool, net_id: str | None,
+          lenient: bool) -> int:
     """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
     LTL, upper bounds) and generic examinations on NET, one answer line each in the
     contest's format; exit 3 if one is not answered (docs/interop.md)."""
     outcome = pipeline.query_file(net, formulas, examinations, net_id=net_id,
                                   max_states=max_states, max_memory=max_memory,
-                                  stubborn=stubborn)
+                                  stubborn=stubborn, lenient=lenient)
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return outcome.status

@@ -24,6 +24,12 @@ FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
 NET_OPTION = click.option("--net", "net_id", metavar="ID",
                           help="The net to read, of a PNML file that holds several.")
+LENIENT_OPTION = click.option(
+    "--lenient", is_flag=True,
+    help="Read a PNML file the forgiving way: other tools' dialects (PIPE, pm4py's final "
+         "markings, TAPAAL's own format, WoPeD's subprocesses, several nets) that the strict "
+         "reading refuses (docs/pnml.md). A proof never rests on it: a certificate beside "
+         "the file is not taken, and certify --check always reads strictly.")
 PROPERTIES_SIZE = f"{MAX_PROPERTIES_SIZE >> 20}M"
 PROPERTIES_SIZE_OPTION = click.option(
     "--max-properties-size", "max_props_size", metavar="SIZE", default=PROPERTIES_SIZE,
@@ -177,6 +183,7 @@ RUN_OPTIONS = _composed(  # run MISSION
                  "engine, vehicle, world, simulated primitives and time limit: replay, check, "
                  "go on, append."),
     NET_OPTION,
+    LENIENT_OPTION,
 )
 
 
@@ -196,6 +203,7 @@ SHOW_OPTIONS = _composed(  # show WHAT
                  metavar="SECONDS", help="With --live: stop this long after the page was handed "
                                          "the run's outcome."),
     NET_OPTION,
+    LENIENT_OPTION,
 )
 
 
@@ -279,6 +287,7 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
     PROPERTIES_SIZE_OPTION,
     ATOMS_OPTION,
     NET_OPTION,
+    LENIENT_OPTION,
 )
 
 
@@ -301,6 +310,7 @@ QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
                       "net safe: the same answers from fewer markings where the net does "
                       "things at once (docs/interop.md)."),
     NET_OPTION,
+    LENIENT_OPTION,
 )
 
 

@@ -167,9 +167,11 @@ def functional_form(checked, *, functions: bool = False) -> list[str]:
 # -- nets in files -------------------------------------------------------------------------
 
 def load_net(path: str | Path, net_id: str | None = None,
-             max_memory: int | str | None = None) -> Net:
+             max_memory: int | str | None = None, lenient: bool = False) -> Net:
     """A net from any file: a mission (``.mcl``, compiled) or a format of the table.
 
+    A PNML file is read strictly (docs/pnml.md: refused, or read as the net other
+    tools read), or with ``lenient`` the forgiving way, which no proof trusts.
     ``net_id`` chooses one net of a file that holds several (PNML). A net file
     that reading could not hold within ``max_memory`` (bytes, or as
     ``--max-memory`` takes it; default half the memory available) is refused
@@ -180,11 +182,14 @@ def load_net(path: str | Path, net_id: str | None = None,
         if isinstance(max_memory, str):
             max_memory = parse_size(max_memory)
         check_load(path, Budget(max_memory))
-        net = reader_of(path).load(path, net_id)
+        net = reader_of(path).load(path, net_id, lenient)
         release()   # the parsed file is freed: what the analysis may use is back
         return net
     if net_id is not None:
         raise OptionError("--net", "a mission compiles to one net; leave out --net")
+    if lenient:
+        raise OptionError("--lenient", "a mission is compiled, not read as PNML; leave out "
+                                       "--lenient")
     return compile_file(path, max_memory=max_memory)
 
 
@@ -845,7 +850,7 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
                  max_props_size: int | str | None = None, max_atoms: int | None = None,
                  max_cert: int | str = MAX_CERTIFICATE, timed: bool | None = None,
                  ack_within: str = "0", report_gap: str = "1", fair_reports: bool = False,
-                 urgency_only: bool = False, stubborn: bool = False,
+                 urgency_only: bool = False, stubborn: bool = False, lenient: bool = False,
                  progress: Callable[[int, int], None] | None = None,
                  note: Callable[[str], None] = lambda line: None) -> AnalyzeOutcome:
     """``mcl2pnml analyze FILE``, its options by their names (``--help`` says them), as one
@@ -875,7 +880,7 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
         raise OptionError("--stubborn", "the reduction is of the untimed check of properties: "
                                         "add --untimed --properties")
     net, props, extra = _analyzed_net(file, net_id, properties, max_memory, max_props_size,
-                                      max_atoms)
+                                      max_atoms, lenient)
     if folder is not None:      # before the analysis: a folder that cannot be is said at once
         _counterexample_folder(file, folder, props, extra)
     start = None if initial is None else parse_marking(initial, net, str(file))
@@ -893,7 +898,7 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
     else:
         result = _explored(file, net, start, say, progress, state_space=state_space,
                            max_states=max_states, explorer=explorer, max_memory=max_memory,
-                           max_cert=max_cert, explore=explore)
+                           max_cert=max_cert, explore=explore or lenient)
         if progress is not None:
             note("")   # the progress line ended
         if props is not None:
@@ -943,11 +948,16 @@ def _explanations_possible(properties: str | None, initial: str | None,
 
 
 def _analyzed_net(file: Path, net_id: str | None, properties: str | None, max_memory,
-                  max_size, max_atoms) -> tuple[Net, tuple | None, Path | None]:
+                  max_size, max_atoms, lenient: bool = False
+                  ) -> tuple[Net, tuple | None, Path | None]:
     """The net ``analyze`` reads, and with ``--properties`` the properties and their side
-    file, read, counted and checked before the analysis, which they may make long."""
+    file, read, counted and checked before the analysis, which they may make long. A net
+    read with ``lenient`` is explored: a certificate beside it is never taken for it."""
     if properties is None:
-        return load_net(file, net_id, max_memory), None, None
+        return load_net(file, net_id, max_memory, lenient), None, None
+    if lenient:
+        raise OptionError("--lenient", "properties are a mission's, compiled, not read as "
+                                       "PNML; leave out --lenient")
     if file.suffix != ".mcl":
         raise OptionError("--properties", "properties are a mission's (an .mcl file)")
     if net_id is not None:
@@ -1052,7 +1062,8 @@ def properties_file(mission: Path, properties: str) -> Path | None:
 
 # -- running -------------------------------------------------------------------------------
 
-def _engine_for(mission: Path, net_id: str | None) -> Callable[[str], Any]:
+def _engine_for(mission: Path, net_id: str | None, lenient: bool = False
+                ) -> Callable[[str], Any]:
     """How to build each engine for ``mission`` (the reference engine reads MCL only)."""
     def make(kind: str):
         from mcl2pnml.runtime.executor import PetriEngine
@@ -1068,21 +1079,27 @@ def _engine_for(mission: Path, net_id: str | None) -> Callable[[str], Any]:
         from mcl2pnml.core.memory import Budget, check_load
         from mcl2pnml.io.pnml.reader import load_pnml
         check_load(mission, Budget())
-        return PetriEngine(load_pnml(mission, net_id))
+        return PetriEngine(load_pnml(mission, net_id, lenient))
+    if lenient and mission.suffix == ".mcl":
+        raise OptionError("--lenient", "a mission is compiled, not read as PNML; leave out "
+                                       "--lenient")
     return make
 
 
 def run_mission(mission: str | Path, options: "RunOptions | None" = None, *,
                 text: IO[str] | None = None, log_path: str | Path | None = None,
-                note: Callable[[str], None] = lambda line: None, net_id: str | None = None):
-    """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle.
+                note: Callable[[str], None] = lambda line: None, net_id: str | None = None,
+                lenient: bool = False):
+    """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle;
+    ``lenient``: a PNML read the forgiving way (docs/pnml.md).
 
     Returns the run (outcome, time, trace, safe stop); see
     :func:`mcl2pnml.runtime.session.run_session` for the rest.
     """
     from mcl2pnml.runtime.session import RunOptions, run_session
     mission = Path(mission)
-    return run_session(mission, options or RunOptions(), _engine_for(mission, net_id), text=text,
+    return run_session(mission, options or RunOptions(), _engine_for(mission, net_id, lenient),
+                       text=text,
                        log_path=Path(log_path) if log_path else None, note=note)
 
 
@@ -1106,7 +1123,8 @@ class Shown:
     drawn: list[dict[str, Any]] = field(default_factory=list, compare=False, repr=False)
 
 
-def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None) -> Shown:
+def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
+              lenient: bool = False) -> Shown:
     """The page's title, the nets it shows for ``what``, each with its label, and the tree.
 
     A mission: the mission and its reduced model (Fig. 3), and its
@@ -1124,7 +1142,7 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None) -
         if not path.is_file():
             raise OptionError("MISSION.mcl|NET|TEMPLATE", f"no file '{what}'")
         if path.suffix != ".mcl":
-            return Shown(path.stem, [(load_net(path, net_id), "the net")])
+            return Shown(path.stem, [(load_net(path, net_id, lenient=lenient), "the net")])
         from mcl2pnml.core.payloads import MISSION
         from mcl2pnml.language.functional import (function_expression, instances,
                                                   mission_expression)
@@ -1242,7 +1260,8 @@ class QueryOutcome:
 
 def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[str] = (), *,
                net_id: str | None = None, max_states: int = 5_000_000,
-               max_memory: int | str | None = None, stubborn: bool = False) -> QueryOutcome:
+               max_memory: int | str | None = None, stubborn: bool = False,
+               lenient: bool = False) -> QueryOutcome:
     """``mcl2pnml query``: the Model Checking Contest's formula files (and generic
     examinations) answered on any net we read (:mod:`analysis.mcc`)."""
     from analysis import mcc
@@ -1250,7 +1269,7 @@ def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[
     if not formulas and not examinations:
         raise OptionError("FORMULAS", "give a formula file of the contest, or --examination")
     queries = [x for path in formulas for x in read_queries(path)]
-    net = load_net(net_path, net_id, max_memory)
+    net = load_net(net_path, net_id, max_memory, lenient)
     if isinstance(max_memory, str):
         max_memory = parse_size(max_memory)
     answers = mcc.answer(net, queries, max_states=max_states, max_memory=max_memory,

@@ -69,17 +69,26 @@ class Format:
     options: tuple[str, ...] = ()
     #: a file may hold several nets, one chosen by its id (``--net``)
     several: bool = False
+    #: its reader has a forgiving reading besides the strict one (``--lenient``)
+    lenient: bool = False
 
     def _function(self, name: str) -> Callable:
         return getattr(importlib.import_module(self.module), name)
 
-    def load(self, path: str | Path, net_id: str | None = None) -> Net:
-        """The net of ``path``; ``net_id`` chooses one where a file holds several."""
+    def load(self, path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
+        """The net of ``path``; ``net_id`` chooses one where a file holds several;
+        ``lenient``: the reader's forgiving reading (docs/pnml.md), never a proof's."""
+        given = {}
+        if lenient:
+            if not self.lenient:
+                raise OptionError("--lenient", f"a {self.title} file has one reading; leave "
+                                               "out --lenient")
+            given["lenient"] = True
         if net_id is None:
-            return self._function(self.loader)(path)
+            return self._function(self.loader)(path, **given)
         if not self.several:
             raise OptionError("--net", f"a {self.title} file holds one net; leave out --net")
-        return self._function(self.loader)(path, net_id)
+        return self._function(self.loader)(path, net_id, **given)
 
     def save(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> list[str]:
         """Write ``net`` to ``path``, whole or not at all; returns what the format could
@@ -92,7 +101,8 @@ class Format:
 FORMATS: dict[str, Format] = {f.name: f for f in (
     Format("pnml", "PNML", (".pnml", ".xml"),
            "PNML (ISO/IEC 15909-2), with time-outs and bindings as toolspecific data",
-           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions", "bends"), several=True),
+           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions", "bends"), several=True,
+           lenient=True),
     Format("tina", "TINA", (".net",), "TINA's .net: a time Petri net, time-outs as intervals",
            "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
     Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
@@ -130,6 +140,6 @@ def reader_of(path: str | Path) -> Format:
     return fmt
 
 
-def load_net(path: str | Path, net_id: str | None = None) -> Net:
+def load_net(path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
     """A net from a file of any format that has a reader, chosen by its suffix."""
-    return reader_of(path).load(path, net_id)
+    return reader_of(path).load(path, net_id, lenient)

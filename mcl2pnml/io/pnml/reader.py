@@ -544,9 +544,18 @@ def _parse_xml(data: bytes, src: _Source):
     return tree
 
 
+def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None,
+               lenient: bool = False) -> Net:
+    """Read one P/T net from PNML bytes: strictly (:mod:`mcl2pnml.io.pnml.strict`), or with
+    ``lenient`` the forgiving way of this module. Raises :class:`PnmlError` (or several)."""
+    if not lenient:
+        from mcl2pnml.io.pnml.strict import parse_strict
+        return parse_strict(data, filename, net_id)
+    return _parse_lenient(data, filename, net_id)
+
+
 @without_gc  # a large file is millions of small objects, all alive (see gcpause)
-def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None) -> Net:
-    """Read one P/T net from PNML bytes. Raises :class:`PnmlError` (or several)."""
+def _parse_lenient(data: bytes, filename: str = "<input>", net_id: str | None = None) -> Net:
     src = _Source(filename, data)
     root = _parse_xml(data, src).getroot()
     if _local(root) != "pnml":
@@ -605,6 +614,10 @@ def read_file(path: str | Path) -> bytes:
         raise PnmlError(e.message, e.location) from None
 
 
-def load_pnml(path: str | Path, net_id: str | None = None) -> Net:
-    """Read one P/T net from a PNML file."""
-    return parse_pnml(read_file(path), str(path), net_id)
+def load_pnml(path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
+    """Read one P/T net from a PNML file: strictly, as a stream (the proofs' reading,
+    :mod:`mcl2pnml.io.pnml.strict`), or with ``lenient`` the forgiving way."""
+    if not lenient:
+        from mcl2pnml.io.pnml.strict import load_strict
+        return load_strict(path, net_id)
+    return _parse_lenient(read_file(path), str(path), net_id)
