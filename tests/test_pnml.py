@@ -1,4 +1,15 @@
-"""PNML out and in: round trips, the official grammar, real tools' files, bad files."""
+"""PNML out and in: round trips, the official grammar, real tools' files, bad files.
+
+Files are read strictly by default (``mcl2pnml/io/pnml/strict.py``): one net, the
+one verifypn reads, or a refusal at a line and column. Other tools' dialects
+(``data/pnml/foreign``) are read with ``lenient=True``, the forgiving reading
+that is still supported, and the strict reading must refuse each of them,
+located, naming the construct. Each bad file (``data/pnml/invalid``) has the
+strict message as its golden ``.expected``, and the forgiving reading's as
+``.lenient.expected`` where it says something else.
+"""
+
+import re
 
 import pytest
 from hypothesis import given, settings
@@ -8,12 +19,81 @@ from mcl2pnml import (ArcKind, NetBuilder, PnmlError, Timing, load_pnml, parse_p
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.io import ids
 
-from helpers import DATA, assert_error_golden, everything
+from helpers import DATA, assert_error_golden, assert_golden, everything
 from strategies import nets
 from examples.handbuilt_primitive import primitive
 
 INVALID = sorted((DATA / "pnml" / "invalid").glob("*.pnml"))
 FOREIGN = sorted((DATA / "pnml" / "foreign").glob("*.pnml"))
+
+#: What the strict reading names in each file of another tool's dialect (a regular
+#: expression on one of its located messages); the forgiving reading reads them all.
+FOREIGN_REFUSED = {
+    "nested_pages_with_references.pnml":
+        r"<reference(Place|Transition)> is a reference (place|transition): tools disagree",
+    "pipe_value_labels.pnml":
+        r"<value> in <initialMarking> is the pre-standard form of a label's value \(PIPE's\)",
+    "pm4py_alpha_miner.pnml": r"<finalmarkings> is a final marking \(ProM, pm4py\)",
+    "pm4py_order_process.pnml": r"<finalmarkings> is a final marking \(ProM, pm4py\)",
+    "prom_no_page.pnml": r"<finalmarkings> is a final marking \(ProM, pm4py\)",
+    "read_arcs_prom.pnml": r"arc 'a2' has the type 'read': only 'normal' arcs are P/T arcs",
+    "tapaal_native.pnml": r"this is TAPAAL's own format",
+    "woped_subprocess.pnml": r"a <net> inside <page> 'sub1' \(a WoPeD subprocess\)",
+}
+#: Bad files whose strict message is worse than the one their ``.expected`` holds (the
+#: forgiving reader's): reported, to be mended in strict.py; the test fails until then.
+_LOCATED_AT_LINE_ONLY = (
+    "strict.py locates the faults it finds once the arcs are added up (an end that is no "
+    "node, an arc joining two places) by the arc's line alone: column 1, under the "
+    "indentation, not at <arc (column 7), and column 1 of the only line of a file ProM or "
+    "pm4py writes")
+WORSE_STRICT = {
+    "dangling_arc.pnml": _LOCATED_AT_LINE_ONLY,
+    "place_to_place.pnml": _LOCATED_AT_LINE_ONLY + "; and it drops the arc's id ('a')",
+    "several_errors.pnml": _LOCATED_AT_LINE_ONLY + "; and it drops the arc's id ('a2')",
+    "coloured_pipe.pnml":
+        "strict.py lists PIPE's dialect (11 faults: every <value> label twice, as '<... > has "
+        "no <text>' and as '<value> in <...>'; PIPE's net type 'P/T net' as 'not a P/T net'; "
+        "the arc's <type value=\"normal\"/> as 'a place's sort: this is a coloured net') and "
+        "never says that the marking 'Default,1,red,2' is of several colours",
+    "coloured_snakes.pnml":
+        "strict.py adds '<initialMarking> has no <text>' and '<inscription> has no <text>' "
+        "beside the coloured content that stands there, and calls the arc inscription's "
+        "<variable> 'a variable of a data Petri net' (it is the coloured net's)",
+    "inhibitor_pipe.pnml":
+        "strict.py calls PIPE's inhibitor arc (<type value=\"inhibitor\"/> in the arc) 'a "
+        "place's sort: this is a coloured net', among 15 faults of PIPE's dialect, and never "
+        "says 'inhibitor'",
+}
+#: Bad files that the strict reading reads, with what it reads (the forgiving one refuses).
+STRICT_READS = {
+    "unpaired_read_arc.pnml":
+        "half of our read arc's pair, marked <read/>: read as the ordinary arc it is, as "
+        "verifypn reads it",
+}
+
+
+def assert_strict_refuses(path, construct: str, data: bytes | None = None, **options) -> str:
+    """The default (strict) reading refuses ``path`` (or ``data`` under its name), of
+    PnmlErrors only, one of them located at a line and column of the file and naming
+    ``construct`` (a regular expression); the whole message is returned."""
+    with pytest.raises(Mcl2PnmlError) as info:
+        if data is None:
+            load_pnml(path, **options)
+        else:
+            parse_pnml(data, str(path), **options)
+    assert all(isinstance(e, PnmlError) for e in getattr(info.value, "errors", [info.value]))
+    message = str(info.value)
+    assert re.search(rf"^{re.escape(str(path))}:[1-9][0-9]*:[1-9][0-9]*: [^\n]*(?:{construct})",
+                     message, re.MULTILINE), message
+    return message
+
+
+def read_foreign(name: str):
+    """Another tool's file, read the forgiving way, which the strict reading refuses."""
+    path = DATA / "pnml" / "foreign" / name
+    assert_strict_refuses(path, FOREIGN_REFUSED[name])
+    return load_pnml(path, lenient=True)
 
 
 def test_round_trip_keeps_everything(assert_valid, tmp_path):
@@ -93,14 +173,19 @@ def test_ids_that_are_not_xml_names_are_escaped_and_restored(node_id):
     etree.fromstring(f"<{encoded}/>")
 
 
+def test_every_foreign_file_says_what_strict_refuses_in_it():
+    assert {p.name for p in FOREIGN} == set(FOREIGN_REFUSED)
+
+
 @pytest.mark.parametrize("path", FOREIGN, ids=lambda p: p.name)
 def test_reads_what_other_tools_write(path):
-    net = load_pnml(path)
+    """Read the forgiving way; refused by the strict reading, located, naming the construct."""
+    net = read_foreign(path.name)
     assert net.places and net.transitions and net.arcs and net.initial
 
 
 def test_reader_flattens_pages_and_resolves_references():
-    net = load_pnml(DATA / "pnml" / "foreign" / "nested_pages_with_references.pnml")
+    net = read_foreign("nested_pages_with_references.pnml")
     assert {p.id for p in net.places} == {"ready", "busy", "log"}
     assert {(a.source, a.target, a.weight) for a in net.arcs} == {
         ("ready", "start", 1), ("start", "busy", 1), ("busy", "finish", 1),
@@ -109,21 +194,21 @@ def test_reader_flattens_pages_and_resolves_references():
 
 
 def test_reader_takes_pipe_value_labels():
-    net = load_pnml(DATA / "pnml" / "foreign" / "pipe_value_labels.pnml")
+    net = read_foreign("pipe_value_labels.pnml")
     assert net.initial["P0"] == 3
     assert {(a.source, a.target, a.weight) for a in net.arcs} == {("P0", "T0", 2), ("T0", "P1", 1)}
 
 
 def test_tapaal_native_files_keep_their_markings_and_weights():
     """TAPAAL's own format says markings and weights in attributes: read, not dropped."""
-    net = load_pnml(DATA / "pnml" / "foreign" / "tapaal_native.pnml")
+    net = read_foreign("tapaal_native.pnml")
     assert dict(net.initial.items()) == {"P0": 2}
     assert {(a.source, a.target, a.weight) for a in net.arcs} == {("P0", "T0", 2),
                                                                  ("T0", "P1", 3)}
 
 
 def test_read_arcs_of_other_tools_are_read_arcs():
-    net = load_pnml(DATA / "pnml" / "foreign" / "read_arcs_prom.pnml")
+    net = read_foreign("read_arcs_prom.pnml")
     assert {(a.source, a.target, a.kind) for a in net.arcs} == {
         ("todo", "work", ArcKind.NORMAL), ("work", "done", ArcKind.NORMAL),
         ("lights_on", "work", ArcKind.READ)}
@@ -131,7 +216,7 @@ def test_read_arcs_of_other_tools_are_read_arcs():
 
 def test_a_woped_subprocess_stands_in_for_its_transition():
     """The subprocess page refines its transition: the net read is the flattened one."""
-    net = load_pnml(DATA / "pnml" / "foreign" / "woped_subprocess.pnml")
+    net = read_foreign("woped_subprocess.pnml")
     assert {t.id for t in net.transitions} == {"sub1_t1", "sub1_t2", "sub1_t3"}
     assert {p.id for p in net.places} == {"p1", "p2", "sub1_p1"}
     assert {(a.source, a.target) for a in net.arcs} == {
@@ -151,22 +236,75 @@ def test_errors_in_one_line_files_point_at_the_faulty_element():
     assert line[column - 1:].startswith("<inscription><text>0"), column
 
 
+@pytest.mark.xfail(strict=True, reason=_LOCATED_AT_LINE_ONLY)
+def test_an_arc_to_nothing_in_a_one_line_file_is_pointed_at():
+    line = ('<pnml><net id="n"><page id="g"><place id="p"/><transition id="t"/>'
+            '<arc id="a1" source="p" target="t"/><arc id="a2" source="t" target="q"/>'
+            '</page></net></pnml>')
+    with pytest.raises(PnmlError, match="arc target 'q' is not a place or transition") as info:
+        parse_pnml(line.encode(), "one_line.pnml")
+    column = info.value.location.column
+    assert line[column - 1:].startswith('<arc id="a2"'), column
+
+
 def test_foreign_nets_round_trip_through_our_writer(assert_valid):
+    """What the forgiving reading makes of another tool's file, once written by us, is
+    read strictly as the same net."""
     for path in FOREIGN:
-        net = load_pnml(path)
+        net = load_pnml(path, lenient=True)
         data = to_pnml_bytes(net)
         assert_valid(data, path.name)
         assert parse_pnml(data) == net, path.name
 
 
-@pytest.mark.parametrize("path", INVALID, ids=lambda p: p.name)
-def test_bad_files_give_the_expected_message(path):
-    """Golden messages: file:line:col, the line, a caret; one error type only."""
+def _refusal(path, lenient: bool) -> Mcl2PnmlError:
     with pytest.raises(Mcl2PnmlError) as info:
-        parse_pnml(path.read_bytes(), path.name)
+        parse_pnml(path.read_bytes(), path.name, lenient=lenient)
     assert isinstance(info.value, PnmlError) or all(
         isinstance(e, PnmlError) for e in getattr(info.value, "errors", ()))
-    assert_error_golden(path, info.value)
+    return info.value
+
+
+def _invalid(path):
+    reason = WORSE_STRICT.get(path.name)
+    return pytest.param(path, id=path.name, marks=[pytest.mark.xfail(strict=True, reason=reason)]
+                        if reason else [])
+
+
+@pytest.mark.parametrize("path", [_invalid(p) for p in INVALID if p.name not in STRICT_READS])
+def test_bad_files_give_the_expected_message(path):
+    """Golden messages of the strict reading: file:line:col, the line, a caret; one error
+    type only."""
+    error = _refusal(path, lenient=False)
+    if path.name in WORSE_STRICT:   # the better message, never rewritten by a regold
+        assert str(error) + "\n" == path.with_suffix(".expected").read_text()
+    else:
+        assert_error_golden(path, error)
+
+
+@pytest.mark.parametrize("path", INVALID, ids=lambda p: p.name)
+def test_bad_files_give_the_expected_message_read_leniently(path):
+    """The forgiving reading refuses every bad file too, with the message of its
+    ``.lenient.expected`` where it says something else than the strict one."""
+    error = _refusal(path, lenient=True)
+    lenient = path.with_name(path.stem + ".lenient.expected")
+    assert_golden(lenient if lenient.exists() else path.with_suffix(".expected"),
+                  str(error) + "\n")
+
+
+def test_the_lists_of_bad_files_name_bad_files():
+    names = {p.name for p in INVALID}
+    assert set(WORSE_STRICT) <= names and set(STRICT_READS) <= names
+    assert not (set(WORSE_STRICT) & set(STRICT_READS))
+    assert all(not (p.with_suffix(".expected").exists()) for p in INVALID
+               if p.name in STRICT_READS)
+
+
+def test_half_of_a_read_arc_is_read_strictly_as_the_arc_it_is():
+    path = DATA / "pnml" / "invalid" / "unpaired_read_arc.pnml"
+    net = load_pnml(path)
+    assert [(a.source, a.target, a.weight, a.kind) for a in net.arcs] == [
+        ("p", "t", 1, ArcKind.NORMAL)]
 
 
 def test_entities_are_never_expanded_or_fetched():
@@ -176,10 +314,29 @@ def test_entities_are_never_expanded_or_fetched():
 
 
 def test_choosing_one_of_several_nets():
-    data = (DATA / "pnml" / "invalid" / "two_nets.pnml").read_bytes()
-    assert parse_pnml(data, net_id="second").name == "second"
+    """The forgiving reading chooses one net of several; the strict one holds one net per
+    file, and says which where another is asked for."""
+    path = DATA / "pnml" / "invalid" / "two_nets.pnml"
+    data = path.read_bytes()
+    assert parse_pnml(data, net_id="second", lenient=True).name == "second"
     with pytest.raises(PnmlError, match="no net with id 'third'; nets in this file: first, second"):
-        parse_pnml(data, net_id="third")
+        parse_pnml(data, net_id="third", lenient=True)
+    assert_strict_refuses(path, r"a second <net> in this file", data)
+    one = DATA / "pnml" / "schema" / "valid" / "core_model_type.pnml"
+    assert_strict_refuses(one, r"no net with id 'zz'; the net in this file: n", one.read_bytes(),
+                          net_id="zz")
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "strict.py checks --net before the faults found: asked for 'second' in a file of two "
+    "nets, it says \"no net with id 'second'; the net in this file: first\" (at 3:1) where "
+    "the file holds a net 'second', and hides the fault, the second <net> at 4:3"))
+def test_choosing_a_net_of_a_file_of_two_is_refused_for_its_second_net():
+    path = DATA / "pnml" / "invalid" / "two_nets.pnml"
+    for net_id in ("first", "second", "third"):
+        message = assert_strict_refuses(path, "a second <net> in this file", path.read_bytes(),
+                                        net_id=net_id)
+        assert "no net with id" not in message, net_id
 
 
 def test_save_is_atomic(tmp_path, monkeypatch):
