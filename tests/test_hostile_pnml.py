@@ -121,11 +121,17 @@ def test_external_entities_dtds_and_includes_are_never_fetched(tmp_path, server)
             parse_pnml(data, name)
         assert str(info.value).startswith(f"{name}:2:1: document type declarations are refused")
         assert SECRET not in str(info.value) and "REMOTE-CONTENT" not in str(info.value)
-    # an XInclude is an element like any other unknown one: skipped, never followed
+    # an XInclude is an element like any other unknown one, never followed: refused by
+    # the strict reading, at its place, for its namespace; skipped by the forgiving one
     data = (HEAD + b'<place id="p"><name><text>x</text></name>'
             b'<include xmlns="http://www.w3.org/2001/XInclude" href="' + secret.as_uri().encode()
             + b'" parse="text"/></place>\n' + TAIL)
-    net = parse_pnml(data, "xinclude.pnml")
+    with pytest.raises(PnmlError) as info:
+        parse_pnml(data, "xinclude.pnml")
+    assert str(info.value).startswith("xinclude.pnml:4:42: <include> in the namespace "
+                                      "'http://www.w3.org/2001/XInclude' in place 'p'")
+    assert SECRET not in str(info.value)
+    net = parse_pnml(data, "xinclude.pnml", lenient=True)
     assert [p.name for p in net.places] == ["x"]
     assert _Recorder.requests == []  # nothing reached the network
 
