@@ -18,6 +18,7 @@ generated mission alone, as ``compile`` and ``template`` write them.
 """
 from __future__ import annotations
 
+import re
 from collections import Counter
 from functools import lru_cache
 from pathlib import Path
@@ -29,6 +30,7 @@ import editors
 from helpers import ROOT, run_cli
 from mcl2pnml import pipeline
 from mcl2pnml.core.compose import union
+from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.io.pipe import save_pipe
 from mcl2pnml.io.pnml.writer import pt_arcs, save_pnml
 from mcl2pnml.view.layout import Drawn
@@ -188,14 +190,20 @@ def test_each_generated_mission_opens_in_both_editors_alone(tmp_path):
 
 def test_compile_says_what_pipe_cannot(tmp_path):
     """A mission's time-outs are written immediate, their delays said on the canvas and
-    in the command's message; the file reads back as the same untimed net."""
+    in the command's message; the file reads back, the forgiving way (PIPE's labels are
+    refused by the strict reading), as the same untimed net."""
     out = run_cli("compile", ROOT / "examples" / "sauce.mcl", "--format", "pipe", "-o",
                   tmp_path / "sauce.xml")
     assert out.returncode == 0, out.stderr
     assert "3 time-outs written as immediate transitions" in out.stderr
     text = (tmp_path / "sauce.xml").read_text()
     assert "AchieveDepth.t03: after 60 s" in text and "toolspecific" not in text
-    back = pipeline.load_net(tmp_path / "sauce.xml")
+    with pytest.raises(Mcl2PnmlError) as refused:
+        pipeline.load_net(tmp_path / "sauce.xml")
+    assert re.search(rf"^{re.escape(str(tmp_path / 'sauce.xml'))}:\d+:\d+: <value> in "
+                     r"<initialMarking> is the pre-standard form of a label's value \(PIPE's\)",
+                     str(refused.value), re.MULTILINE), str(refused.value)[:2000]
+    back = pipeline.load_net(tmp_path / "sauce.xml", lenient=True)
     net = pipeline.compile_checked(pipeline.check_file(ROOT / "examples" / "sauce.mcl"))
     assert {p.id for p in back.places} == {p.id for p in net.places}
     assert {t.id for t in back.transitions} == {t.id for t in net.transitions}
@@ -208,4 +216,5 @@ def test_compile_says_what_pipe_cannot(tmp_path):
     out = run_cli("template", "task", "--format", "pipe", "-o", tmp_path / "task.xml")
     assert out.returncode == 0, out.stderr
     assert "payloads" in out.stderr and "time-out" not in out.stderr
-    assert pipeline.load_net(tmp_path / "task.xml").summary().startswith("task: 19 places")
+    assert pipeline.load_net(tmp_path / "task.xml", lenient=True).summary().startswith(
+        "task: 19 places")
