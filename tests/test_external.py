@@ -8,6 +8,14 @@ it with a located message naming the construct a P/T net cannot say
 (inhibitor, transport and timed arcs, coloured content, guards).
 PROVENANCE.md beside it tells the sources.
 
+Files are read strictly by default (``mcl2pnml/io/pnml/strict.py``): the net
+verifypn reads, or a refusal at a line and column. A row whose ``strict``
+says ``refuse`` (a regular expression on one of the located messages) is a
+file the strict reading refuses, another tool's dialect or a net of another
+class; its ``expect`` is then what the forgiving reading (``lenient=True``)
+finds or refuses. Every other row is read strictly, as the same net as the
+forgiving reading makes of it.
+
 The files themselves are other projects' data and are not kept in this
 repository: the tests look for them in ``$MCL2PNML_EXTERNAL_NETS``, then in
 ``../shared/external-nets`` beside the repository, then in
@@ -75,9 +83,14 @@ def test_the_table_is_whole():
         assert r["repo"].startswith("PyPI") or re.fullmatch(r"[0-9a-f]{40}", r["commit"]), r["file"]
 
 
+STRICT_REFUSED = [r for r in ROWS if "strict" in r]
+STRICT_READ = [r for r in ROWS if "strict" not in r]
+
+
 @pytest.mark.parametrize("row", _params(ACCEPTED))
 def test_we_find_the_published_answer(row):
-    net = load_net(corpus_file(row))
+    """Strictly where the strict reading reads the file, else the forgiving way."""
+    net = load_net(corpus_file(row), lenient="strict" in row)
     space = explore(net)
     want = row["expect"]
     if "bounded" in want:
@@ -91,15 +104,43 @@ def test_we_find_the_published_answer(row):
 
 @pytest.mark.parametrize("row", _params(REFUSED))
 def test_we_refuse_what_a_pt_net_cannot_say(row):
+    """Even the forgiving reading refuses these (the strict one too: test_strict_reading)."""
     path = corpus_file(row)
     with pytest.raises(Mcl2PnmlError) as caught:
-        load_net(path)
+        load_net(path, lenient=True)
     message = str(caught.value)
     assert LOCATED.search(message), f"the refusal is not located (file:line:col): {message}"
     # the messages themselves, not the source lines shown under them
     said = " ".join(e.message for e in getattr(caught.value, "errors", [caught.value]))
     assert re.search(row["expect"]["refuse"], said, re.IGNORECASE), (
         f"the refusal does not name the construct /{row['expect']['refuse']}/: {message}")
+
+
+def test_every_row_the_strict_reading_refuses_says_so():
+    """Refused by either reading, refused by the strict one: its row says how."""
+    assert all("strict" in r for r in REFUSED)
+    assert all(set(r["strict"]) == {"refuse"} and re.compile(r["strict"]["refuse"])
+               for r in STRICT_REFUSED)
+
+
+@pytest.mark.parametrize("row", _params(STRICT_REFUSED))
+def test_the_strict_reading_refuses_these_at_a_line(row):
+    path = corpus_file(row)
+    with pytest.raises(Mcl2PnmlError) as caught:
+        load_net(path)
+    errors = getattr(caught.value, "errors", [caught.value])
+    named = [e for e in errors if re.search(row["strict"]["refuse"], e.message)]
+    assert named, (f"the strict refusal does not name /{row['strict']['refuse']}/: "
+                   f"{str(caught.value)[:3000]}")
+    # located in this file, at a line and a column
+    assert all(e.location.file == str(path) and e.location.line and e.location.column
+               for e in named), str(caught.value)[:3000]
+
+
+@pytest.mark.parametrize("row", _params(STRICT_READ))
+def test_the_strict_reading_reads_the_others_as_the_forgiving_one(row):
+    path = corpus_file(row)
+    assert load_net(path) == load_net(path, lenient=True)
 
 
 VERIFYPN_READS = [r for r in ACCEPTED if r["peers"]["verifypn"] is not None]
