@@ -37,6 +37,8 @@ import mmap
 import os
 import re
 from array import array
+from itertools import compress
+from operator import not_
 from bisect import bisect_right
 from pathlib import Path
 
@@ -73,6 +75,7 @@ NODE_NAMES = frozenset({
     "initialMarking", "inscription", "hlinitialMarking", "hlinscription", "declaration",
     "declarations", "variable", "queries", "query", "k-bound", "finalmarkings"})
 VALUE_NAMES = frozenset({"text", "value"})
+_IN_LABEL = NODE_NAMES | VALUE_NAMES
 #: Why a construct of another class of nets or another dialect is refused.
 REFUSED = {
     "referencePlace": "a reference place: tools disagree on it (verifypn ignores it and "
@@ -100,13 +103,10 @@ _NUMBER = re.compile(r"[ \t\r\n]*([0-9]+)[ \t\r\n]*\Z")
 _WEIGHT = re.compile(r"[ \t]*([0-9]+)[ \t]*\Z")   # verifypn refuses a line break here
 _NOT_ASCII = re.compile(rb"[\x80-\xff]")
 _ENCODING = re.compile(rb"""\A(?:\xef\xbb\xbf)?<\?xml[^>]*?encoding\s*=\s*["']([^"']*)["']""")
-# tabs and line breaks in an attribute are folded into spaces by an XML parser and kept by
-# others (verifypn's), and a space at either end is trimmed by some tools: either way
-# two readers would name the node differently
-_BLANK_ID = re.compile(r"[\x00-\x1f\x7f]|\A\s|\s\Z")
+# an empty id, white space at either end, a control character (NUL separates the ids)
+_BAD_IDS = re.compile(r"\x00(?:\x00|\s)|\s\x00|[\x01-\x1f\x7f]")
 LENIENT_HINT = ("; --lenient reads it the forgiving way, but no proof (certify --check, "
                 "a certificate beside the file) ever trusts that reading")
-
 
 class _Lines:
     """The lines of a buffer (bytes or a memory map), found only when a message needs one.
@@ -165,16 +165,22 @@ class _StrictReader:
         self.cdata = cdata        # the file has a CDATA section somewhere: look closer
         self.ns = None            # the document's namespace: PNML's, or "" for none
         self.errors: list[PnmlError] = []
-        self.seen: dict[str, int] = {}              # xml id -> its line
-        self.places: list = []                      # (id, name, interface, payload, pos, el line)
-        self.transitions: list = []                 # (id, name, timing, payload, pos)
+        # plain values only, no element kept: ids are checked in bulk at the end and
+        # a fault found then is located by searching the file for its id
+        self.ids: list[str] = []                    # every id: nets, pages, nodes, arcs
+        self.places: list = []                      # (id, name, interface, payload, position)
+        self.transitions: list = []                 # (id, name, timing, payload, position)
         self.marking: dict[str, int] = {}
-        self.arcs: list = []                        # (source, target, weight, read?, line)
-        self.node_kind: dict[str, bool] = {}        # xml id -> is a place
+        self.arc_ids: list = []                     # the arcs, in four aligned columns
+        self.sources: list = []
+        self.targets: list = []
+        self.weights: list = []
+        self.read: set = set()                      # indices of arcs marked <read/>
         self.decode = False
         self.nets = 0
         self.net_name = None
         self.net_id = None
+        self.fast = not cdata     # a CDATA section somewhere: every node the careful way
         self._payloads: dict[str, object] = {}
 
     # -- messages ------------------------------------------------------------------------
@@ -196,6 +202,8 @@ class _StrictReader:
              "net", "page", "place", "transition", "arc", "name", "text", "initialMarking",
              "inscription", "graphics", "toolspecific", "position", "arctype"))
         self.containers = {self.T_NET, self.T_PAGE}
+        self.T_INTERFACE, self.T_PAYLOAD, self.T_TIMING, self.T_READ = map(
+            q, ("interface", "payload", "timing", "read"))
 
     # -- what may stand where --------------------------------------------------------------
 
@@ -366,19 +374,12 @@ class _StrictReader:
     # -- nodes -----------------------------------------------------------------------------
 
     def node_id(self, el) -> str | None:
+        """The element's id, kept for the checks of all ids at the end (:meth:`check_ids`)."""
         xml_id = el.get("id")
         if xml_id is None:
             self.error(el, f"<{_raw_name(el)}> has no id")
             return None
-        if not xml_id or _BLANK_ID.search(xml_id):
-            self.error(el, f"{_local(el.tag)} id {xml_id!r} is empty, starts or ends with white "
-                           "space, or holds a tab, a line break or a control character, which "
-                           "readers keep, trim or fold differently")
-            return None
-        if xml_id in self.seen:
-            self.error(el, f"duplicate id '{xml_id}' (first used on line {self.seen[xml_id]})")
-            return None
-        self.seen[xml_id] = el.sourceline
+        self.ids.append(xml_id)
         return xml_id
 
     def placed(self, el) -> bool:
@@ -424,7 +425,6 @@ class _StrictReader:
                 self.stray(child, f"in place '{xml_id}'")
         self.mixed(el)
         if xml_id is not None:
-            self.node_kind[xml_id] = True
             self.places.append((xml_id, name, interface, payload, position))
             if tokens:
                 self.marking[xml_id] = tokens
@@ -457,10 +457,12 @@ class _StrictReader:
                 self.stray(child, f"in transition '{xml_id}'")
         self.mixed(el)
         if xml_id is not None:
-            self.node_kind[xml_id] = False
             self.transitions.append((xml_id, name, timing, payload, position))
 
     def timing(self, el, xml_id) -> Timing | None:
+        timing = _timing_value(el)
+        if timing is not None:
+            return timing
         try:
             latest = el.get("latest")
             timing = Timing(float(el.get("earliest", "0")),
@@ -518,12 +520,183 @@ class _StrictReader:
         if source is None or target is None:
             self.error(el, f"arc '{xml_id}' needs both a source and a target")
             return
-        for end in (source, target):
-            if not end or _BLANK_ID.search(end):
-                self.error(el, f"arc '{xml_id}' names {end!r}, which is no id")
-                return
         if xml_id is not None and weight is not None:
-            self.arcs.append((source, target, weight, read, el.sourceline))
+            self.add_arc(xml_id, source, target, weight, read)
+
+    def add_arc(self, xml_id: str, source: str, target: str, weight: int, read: bool) -> None:
+        if read:
+            self.read.add(len(self.arc_ids))
+        self.arc_ids.append(xml_id)
+        self.sources.append(source)
+        self.targets.append(target)
+        self.weights.append(weight)
+
+    # -- the fast paths: the shapes writers use, checked in few steps; anything else (or
+    # anything wrong) is left to the careful methods above, which say where and why
+
+    def fast_text(self, label):
+        """The plain text of a simple label, None if it has no <text>, _NO if it is not
+        simple (the careful :meth:`text_of` then reads it, or says what is wrong)."""
+        text = label.text
+        if (text is not None and text.strip()) or label.keys():
+            return _NO
+        found = None
+        for child in label:
+            tag = child.tag
+            tail = child.tail
+            if tail is not None and tail.strip():
+                return _NO
+            if tag == self.T_TEXT:
+                if found is not None or len(child) or child.keys():
+                    return _NO
+                found = child
+            elif tag == self.T_GRAPHICS or tag == self.T_TOOL:
+                if not _free_ok(child, True):
+                    return _NO
+            elif isinstance(tag, str):
+                return _NO
+        return None if found is None else (found.text or "")
+
+    def fast_common(self, el, child, tag, state: list) -> bool:
+        """A node's name, graphics or other tools' data; False where not simple."""
+        if tag == self.T_NAME:
+            if state[0] is not _UNSET:
+                return False
+            state[0] = self.fast_text(child)
+            return state[0] is not _NO
+        if tag == self.T_GRAPHICS:
+            if state[1] is not _UNSET or not _free_ok(child, False):
+                return False
+            state[1] = self.position(child)
+            return True
+        return False
+
+    def fast_place(self, el) -> bool:
+        if el.prefix is not None or el.keys() != _ID_KEYS:
+            return False
+        text = el.text
+        if text is not None and text.strip():
+            return False
+        state = [_UNSET, _UNSET]
+        tokens = interface = payload = None
+        for child in el:
+            tail = child.tail
+            if tail is not None and tail.strip():
+                return False
+            tag = child.tag
+            if tag == self.T_MARKING:
+                if tokens is not None:
+                    return False
+                text = self.fast_text(child)
+                match = _NUMBER.match(text) if isinstance(text, str) else None
+                if match is None or len(match.group(1)) > 10:
+                    return False
+                tokens = int(match.group(1))
+                if tokens > MAX_MARKING:
+                    return False
+            elif tag == self.T_TOOL:
+                if child.get("tool") == TOOL:
+                    for inner in child:
+                        name = inner.tag
+                        if name == self.T_INTERFACE and interface is None and not len(inner):
+                            interface = inner.get("label")
+                        elif name == self.T_PAYLOAD and payload is None and not len(inner):
+                            payload = self.payload(inner)
+                        elif isinstance(name, str):
+                            return False
+                elif not _free_ok(child, False):
+                    return False
+            elif not self.fast_common(el, child, tag, state) and isinstance(tag, str):
+                return False
+        xml_id = el.get("id")
+        self.ids.append(xml_id)
+        name, position = state
+        self.places.append((xml_id, None if name is _UNSET else name, interface, payload,
+                            None if position is _UNSET else position))
+        if tokens:
+            self.marking[xml_id] = tokens
+        return True
+
+    def fast_transition(self, el) -> bool:
+        if el.prefix is not None or el.keys() != _ID_KEYS:
+            return False
+        text = el.text
+        if text is not None and text.strip():
+            return False
+        state = [_UNSET, _UNSET]
+        timing = payload = None
+        for child in el:
+            tail = child.tail
+            if tail is not None and tail.strip():
+                return False
+            tag = child.tag
+            if tag == self.T_TOOL:
+                if child.get("tool") == TOOL:
+                    for inner in child:
+                        name = inner.tag
+                        if name == self.T_PAYLOAD and payload is None and not len(inner):
+                            payload = self.payload(inner)
+                        elif name == self.T_TIMING and timing is None and not len(inner):
+                            timing = _timing_value(inner)
+                            if timing is None:
+                                return False
+                        elif isinstance(name, str):
+                            return False
+                elif not _free_ok(child, False):
+                    return False
+            elif not self.fast_common(el, child, tag, state) and isinstance(tag, str):
+                return False
+        xml_id = el.get("id")
+        self.ids.append(xml_id)
+        name, position = state
+        self.transitions.append((xml_id, None if name is _UNSET else name, timing, payload,
+                                 None if position is _UNSET else position))
+        return True
+
+    def fast_arc(self, el) -> bool:
+        if el.prefix is not None or el.keys() != _ARC_KEYS:
+            return False
+        text = el.text
+        if text is not None and text.strip():
+            return False
+        weight = None
+        read = False
+        state = [_UNSET, _UNSET]
+        for child in el:
+            tail = child.tail
+            if tail is not None and tail.strip():
+                return False
+            tag = child.tag
+            if tag == self.T_INSCRIPTION:
+                if weight is not None:
+                    return False
+                text = self.fast_text(child)
+                match = _WEIGHT.match(text) if isinstance(text, str) else None
+                if match is None or len(match.group(1)) > 10:
+                    return False
+                weight = int(match.group(1))
+                if not 0 < weight <= MAX_WEIGHT:
+                    return False
+            elif tag == self.T_TOOL:
+                if child.get("tool") == TOOL:
+                    for inner in child:
+                        if inner.tag == self.T_READ and not len(inner):
+                            read = True
+                        elif isinstance(inner.tag, str):
+                            return False
+                elif not _free_ok(child, False):
+                    return False
+            elif not self.fast_common(el, child, tag, state) and isinstance(tag, str):
+                return False
+        xml_id = el.get("id")
+        self.ids.append(xml_id)
+        if read:
+            self.read.add(len(self.arc_ids))
+        self.arc_ids.append(xml_id)
+        self.sources.append(el.get("source"))
+        self.targets.append(el.get("target"))
+        self.weights.append(weight or 1)
+        return True
 
     def page(self, el) -> None:
         if self.placed(el):
@@ -560,7 +733,7 @@ class _StrictReader:
     # -- the net -------------------------------------------------------------------------------
 
     def build(self) -> Net:
-        """The net: arcs added up by their ends, as verifypn adds parallel arcs.
+        """The net: ids checked, arcs added up by their ends as verifypn adds parallel arcs.
 
         Our read arc is the pair (p -> t, t -> p), both halves marked, whose
         return may also carry the transition's own arc into the place (one
@@ -569,50 +742,188 @@ class _StrictReader:
         Anything else marked read is read as the arcs it is, which is what
         it does.
         """
-        decode = ids.decode if self.decode else (lambda s: s)
-        kinds = self.node_kind
+        self.check_ids()
+        place_ids = [p[0] for p in self.places]
+        transition_ids = [t[0] for t in self.transitions]
+        places, transitions = set(place_ids), set(transition_ids)
+        sources, targets, weights = self.sources, self.targets, self.weights
+        # each arc joins a place and a transition: in C over all arcs, said arc by arc
+        # only when one does not
+        from_place = list(map(places.__contains__, sources))
+        if not (all(map(transitions.__contains__, compress(targets, from_place)))
+                and all(map(transitions.__contains__,
+                            compress(sources, map(not_, from_place))))
+                and all(map(places.__contains__, compress(targets, map(not_, from_place))))):
+            self.say_bad_arcs(places, transitions)
+        raise_all(_in_order(self.errors))
+        rename = self.renaming(place_ids + transition_ids)
+        if rename:
+            sources = list(map(rename.get, sources, sources))
+            targets = list(map(rename.get, targets, targets))
+            places = {rename.get(p, p) for p in places}
+        pairs = list(zip(sources, targets))
+        if len(set(pairs)) == len(pairs):     # no two arcs to add up: only read arcs to join
+            arcs = list(map(Arc, sources, targets, weights))
+            if self.read:
+                arcs = self.joined(arcs, places)
+        else:
+            arcs = self.summed(pairs, weights, places)
+        if rename:
+            get = rename.get
+            nodes = ([Place(get(i, i), *rest) for i, *rest in self.places],
+                     [Transition(get(i, i), *rest) for i, *rest in self.transitions])
+            marking = Marking({get(p, p): n for p, n in self.marking.items()})
+        else:
+            nodes = ([Place(*p) for p in self.places], [Transition(*t) for t in self.transitions])
+            marking = Marking(self.marking)
+        return Net(self.net_name or self.net_id or "net", tuple(nodes[0]), tuple(nodes[1]),
+                   tuple(arcs), marking)
+
+    def summed(self, pairs: list, weights: list, places: set) -> list:
+        """Arcs between the same ends added up, and our read arcs joined again."""
         take: dict[tuple[str, str], int] = {}     # (place, transition) -> tokens taken
         give: dict[tuple[str, str], int] = {}     # (transition, place) -> tokens given
         marked: set = set()                       # (place, transition) pairs marked read
         plain: set = set()                        # ... with an unmarked arc between them
-        for source, target, weight, read, line in self.arcs:
-            s_place, t_place = kinds.get(source), kinds.get(target)
-            if s_place is None or t_place is None:
-                missing = source if s_place is None else target
-                end = "source" if s_place is None else "target"
-                self.error_at(line, f"arc {end} '{missing}' is not a place or transition of "
-                                    "this net")
-                continue
-            if s_place == t_place:
-                kind = "place" if s_place else "transition"
-                self.error_at(line, f"arc from {kind} '{source}' to {kind} '{target}': an arc "
-                                    "joins a place and a transition")
-                continue
-            if s_place:
-                take[(source, target)] = take.get((source, target), 0) + weight
-                pair = (source, target)
+        read = self.read
+        for k, ((s, d), w) in enumerate(zip(pairs, weights)):
+            if s in places:
+                take[(s, d)] = take.get((s, d), 0) + w
+                pair = (s, d)
             else:
-                give[(source, target)] = give.get((source, target), 0) + weight
-                pair = (target, source)
-            (marked if read else plain).add(pair)
-        raise_all(_in_order(self.errors))
+                give[(s, d)] = give.get((s, d), 0) + w
+                pair = (d, s)
+            (marked if k in read else plain).add(pair)
         arcs = []
         for (p, t), w in take.items():
             back = give.get((t, p))
             if back is not None and back >= w and (p, t) in marked and (p, t) not in plain:
-                arcs.append(Arc(decode(p), decode(t), w, ArcKind.READ))
+                arcs.append(Arc(p, t, w, ArcKind.READ))
                 if back > w:
-                    arcs.append(Arc(decode(t), decode(p), back - w))
+                    arcs.append(Arc(t, p, back - w))
                 give[(t, p)] = 0
             else:
-                arcs.append(Arc(decode(p), decode(t), w))
-        arcs += [Arc(decode(t), decode(p), w) for (t, p), w in give.items() if w]
-        places = [Place(decode(i), n, f, p, pos) for i, n, f, p, pos in self.places]
-        transitions = [Transition(decode(i), n, t, p, pos)
-                       for i, n, t, p, pos in self.transitions]
-        marking = Marking({decode(p): n for p, n in self.marking.items()})
-        return Net(self.net_name or self.net_id or "net", tuple(places), tuple(transitions),
-                   tuple(arcs), marking)
+                arcs.append(Arc(p, t, w))
+        arcs += [Arc(t, p, w) for (t, p), w in give.items() if w]
+        return arcs
+
+    def joined(self, arcs: list, places: set) -> list:
+        """Our read arcs joined again, in a net with no two arcs between the same ends:
+        both halves of a pair are then marked (:meth:`summed` says the rule)."""
+        marked = {(arcs[k].source, arcs[k].target): k for k in self.read}
+        drop, out = set(), []
+        for (s, d), k in marked.items():
+            back = marked.get((d, s))
+            w = arcs[k].weight
+            # which end is the place: the one that is a place in the net
+            if back is None or s not in places or arcs[back].weight < w:
+                continue
+            drop.update((k, back))
+            out.append(Arc(s, d, w, ArcKind.READ))
+            if arcs[back].weight > w:
+                out.append(Arc(d, s, arcs[back].weight - w))
+        if not drop:
+            return arcs
+        return [a for k, a in enumerate(arcs) if k not in drop] + out
+
+    def check_ids(self) -> None:
+        """Every id of the file: unique, and read alike by every reader (checked over all
+        ids at once; a fault is then found and located id by id)."""
+        ids = self.ids
+        joined = "\x00" + "\x00".join(ids) + "\x00"    # XML has no NUL: a safe separator
+        if _BAD_IDS.search(joined):
+            for xml_id in ids:
+                if not xml_id or _BAD_IDS.search(f"\x00{xml_id}\x00"):
+                    self.error_id(xml_id, f"the id {xml_id!r} is empty, starts or ends with "
+                                          "white space, or holds a control character, which "
+                                          "readers keep, trim or fold differently")
+        if len(set(ids)) != len(ids):
+            first: set = set()
+            for xml_id in ids:
+                if xml_id in first:
+                    self.error_id(xml_id, f"duplicate id '{xml_id}' (first used on line "
+                                          f"{self.line_of_id(xml_id)})", nth=2)
+                first.add(xml_id)
+        # an XML parser folds a tab or a line break in an attribute into a space, a reader
+        # of bytes keeps it: an id with a space must be written with spaces only
+        spaced = [i for i in (*ids, *self.sources, *self.targets) if " " in i] \
+            if " " in joined or " " in "".join(self.sources) or " " in "".join(self.targets) \
+            else []
+        for value in dict.fromkeys(spaced):
+            if not self.written_as_is(value):
+                self.error_id(value, f"the id {value!r} is written with a tab or a line "
+                                     "break (or a character reference) where it reads a "
+                                     "space: readers of bytes keep them, XML parsers fold "
+                                     "them, so the two name different nodes")
+
+    def written_as_is(self, value: str) -> bool:
+        quoted = [f'"{value}"'.encode(), f"'{value}'".encode()]
+        buffer = self.lines.buffer
+        return any(buffer.find(q) >= 0 for q in quoted)
+
+    def renaming(self, node_ids: list) -> dict:
+        """Our writer's escaped ids (``_xHHHH_``) decoded, where the file says it escapes
+        them; two ids that decode to one are refused where the second is."""
+        if not self.decode:
+            return {}
+        rename = {i: ids.decode(i) for i in node_ids if "_x" in i}
+        rename = {k: v for k, v in rename.items() if k != v}
+        if rename:
+            seen: dict[str, str] = {}
+            for raw in node_ids:
+                name = rename.get(raw, raw)
+                if name in seen:
+                    self.error_id(raw, f"the id '{raw}' reads as '{name}' once its escapes "
+                                       f"are decoded (the file says its ids are escaped), as "
+                                       f"'{seen[name]}' does: two nodes of one name")
+                seen.setdefault(name, raw)
+            raise_all(_in_order(self.errors))
+        return rename
+
+    def say_bad_arcs(self, places: set, transitions: set) -> None:
+        for xml_id, s, d in zip(self.arc_ids, self.sources, self.targets):
+            s_place, d_place = s in places, d in places
+            for end, name in (("source", s), ("target", d)):
+                if name not in places and name not in transitions:
+                    self.error_id(xml_id, f"arc '{xml_id}': its {end} '{name}' is not a place "
+                                          "or transition of this net")
+                    break
+            else:
+                if s_place == d_place:
+                    kind = "place" if s_place else "transition"
+                    self.error_id(xml_id, f"arc '{xml_id}' goes from {kind} '{s}' to {kind} "
+                                          f"'{d}'; an arc joins a place and a transition")
+
+    def line_of_id(self, xml_id: str, nth: int = 1) -> int | None:
+        at = self.find_id(xml_id, nth)
+        return None if at is None else self.lines.line_of(at[0])
+
+    def find_id(self, xml_id: str, nth: int = 1):
+        """Where the ``nth`` element with this id starts in the file: (offset, column)."""
+        buffer = self.lines.buffer
+        needles = [f'id="{xml_id}"'.encode(), f"id='{xml_id}'".encode()]
+        start = 0
+        for _ in range(nth):
+            found = [i for i in (buffer.find(n, start) for n in needles) if i >= 0]
+            if not found:
+                return None
+            at = min(found)
+            start = at + 1
+        tag = buffer.rfind(b"<", 0, at)
+        return (tag if tag >= 0 else at), None
+
+    def error_id(self, xml_id: str, message: str, nth: int = 1) -> None:
+        """A fault found once the file was read, at the element with this id."""
+        at = self.find_id(xml_id, nth)
+        if at is None:
+            self.error_at(None, message)
+            return
+        line = self.lines.line_of(at[0])
+        column = at[0] - self.lines._index()[line - 1] + 1
+        if len(self.errors) < MAX_FAULTS:
+            self.errors.append(PnmlError(message, self.src.at(line, column)))
+        if len(self.errors) >= MAX_FAULTS:
+            raise _TooMany()
 
     def error_at(self, line: int | None, message: str) -> None:
         if len(self.errors) < MAX_FAULTS:
@@ -642,6 +953,33 @@ class _StrictReader:
 _ID_ONLY = frozenset({"id"})
 _ARC_ATTRIBUTES = frozenset({"id", "source", "target", "type"})
 _NET_ATTRIBUTES = frozenset({"id", "type"})
+
+
+_ID_KEYS = ["id"]
+_ARC_KEYS = ["id", "source", "target"]
+_UNSET = object()     # a label not met yet
+_NO = object()        # a shape the fast path leaves to the careful one
+
+
+def _free_ok(el, in_label: bool) -> bool:
+    """Whether free content (:meth:`_StrictReader.free`) holds nothing to refuse."""
+    forbidden = _IN_LABEL if in_label else NODE_NAMES
+    for inner in el.iter():
+        tag = inner.tag
+        if isinstance(tag, str) and inner is not el and \
+                tag.rsplit("}", 1)[-1] in forbidden:
+            return False
+    return True
+
+
+def _timing_value(el) -> Timing | None:
+    """Our timing data, or None where it is not a good one (said by the careful path)."""
+    try:
+        latest = el.get("latest")
+        timing = Timing(float(el.get("earliest", "0")), None if latest is None else float(latest))
+    except (ValueError, Mcl2PnmlError):
+        return None
+    return timing if max(timing.earliest, timing.latest or 0.0) <= MAX_SECONDS else None
 
 
 def _in_order(errors: list) -> list:
@@ -698,10 +1036,15 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
                 root = _root(el.getroottree().getroot(), reader, src)
                 handlers = {reader.T_PLACE: reader.place, reader.T_TRANSITION: reader.transition,
                             reader.T_ARC: reader.arc, reader.T_PAGE: reader.page}
+                fast = {reader.T_PLACE: reader.fast_place,
+                        reader.T_TRANSITION: reader.fast_transition, reader.T_ARC: reader.fast_arc}
             handler = handlers.get(el.tag)
             if handler is not None:
-                handler(el)
-                el.getparent().remove(el)     # read: dropped, so the stream stays small
+                parent = el.getparent()
+                quick = fast.get(el.tag) if reader.fast else None
+                if quick is None or parent.tag not in reader.containers or not quick(el):
+                    handler(el)               # the careful way: it says what is wrong
+                parent.remove(el)             # read: dropped, so the stream stays small
             elif el.tag == reader.T_NET:
                 reader.net(el, root)
             elif not _inside_free(el, reader):
@@ -725,7 +1068,7 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
         raise PnmlError("no <net> in this document", src.locate(root))
     if net_id is not None and reader.net_id is not None and net_id != reader.net_id:
         raise PnmlError(f"no net with id '{net_id}'; the net in this file: {reader.net_id}",
-                        src.at(reader.seen.get(reader.net_id)))
+                        src.at(reader.line_of_id(reader.net_id)))
     try:
         return reader.build()
     except _TooMany:
