@@ -905,6 +905,11 @@ class _StrictReader:
         start = 0
         for _ in range(nth):
             found = [i for i in (buffer.find(n, start) for n in needles) if i >= 0]
+            if not found and " " in xml_id:   # written with a tab, a line break, a reference
+                spaced = rb"(?:\s|&#x?[0-9a-fA-F]+;)".join(
+                    re.escape(part.encode()) for part in xml_id.split(" "))
+                match = re.compile(rb"""\bid=["']""" + spaced + rb"""["']""").search(buffer, start)
+                found = [match.start()] if match else []
             if not found:
                 return None
             at = min(found)
