@@ -42,15 +42,7 @@ FOREIGN_REFUSED = {
 }
 #: Bad files whose strict message is worse than the one their ``.expected`` holds (the
 #: forgiving reader's): reported, to be mended in strict.py; the test fails until then.
-_LOCATED_AT_LINE_ONLY = (
-    "strict.py locates the faults it finds once the arcs are added up (an end that is no "
-    "node, an arc joining two places) by the arc's line alone: column 1, under the "
-    "indentation, not at <arc (column 7), and column 1 of the only line of a file ProM or "
-    "pm4py writes")
 WORSE_STRICT = {
-    "dangling_arc.pnml": _LOCATED_AT_LINE_ONLY,
-    "place_to_place.pnml": _LOCATED_AT_LINE_ONLY + "; and it drops the arc's id ('a')",
-    "several_errors.pnml": _LOCATED_AT_LINE_ONLY + "; and it drops the arc's id ('a2')",
     "coloured_pipe.pnml":
         "strict.py lists PIPE's dialect (11 faults: every <value> label twice, as '<... > has "
         "no <text>' and as '<value> in <...>'; PIPE's net type 'P/T net' as 'not a P/T net'; "
@@ -236,12 +228,12 @@ def test_errors_in_one_line_files_point_at_the_faulty_element():
     assert line[column - 1:].startswith("<inscription><text>0"), column
 
 
-@pytest.mark.xfail(strict=True, reason=_LOCATED_AT_LINE_ONLY)
 def test_an_arc_to_nothing_in_a_one_line_file_is_pointed_at():
+    """Found once the whole net is read, still located at the arc on its one line."""
     line = ('<pnml><net id="n"><page id="g"><place id="p"/><transition id="t"/>'
             '<arc id="a1" source="p" target="t"/><arc id="a2" source="t" target="q"/>'
             '</page></net></pnml>')
-    with pytest.raises(PnmlError, match="arc target 'q' is not a place or transition") as info:
+    with pytest.raises(PnmlError, match="arc 'a2': its target 'q' is not a place or transition") as info:
         parse_pnml(line.encode(), "one_line.pnml")
     column = info.value.location.column
     assert line[column - 1:].startswith('<arc id="a2"'), column
