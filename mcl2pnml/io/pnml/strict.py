@@ -653,50 +653,73 @@ class _StrictReader:
                                  None if position is _UNSET else position))
         return True
 
-    def fast_arc(self, el) -> bool:
-        if el.prefix is not None or el.keys() != _ARC_KEYS:
-            return False
-        text = el.text
-        if text is not None and text.strip():
-            return False
-        weight = None
-        read = False
-        state = [_UNSET, _UNSET]
-        for child in el:
-            tail = child.tail
-            if tail is not None and tail.strip():
+    def fast_arc_of(self):
+        """The fast path of arcs, a closure over what it needs: a million arcs make every
+        attribute lookup count."""
+        T_INSCRIPTION, T_TEXT, T_TOOL, T_READ = (self.T_INSCRIPTION, self.T_TEXT, self.T_TOOL,
+                                                 self.T_READ)
+        weight_match, fast_text, common = _WEIGHT.match, self.fast_text, self.fast_common
+        add_id, add_arc_id = self.ids.append, self.arc_ids.append
+        add_source, add_target, add_weight = (self.sources.append, self.targets.append,
+                                              self.weights.append)
+        read_arcs, arc_ids = self.read, self.arc_ids
+
+        def fast_arc(el) -> bool:
+            if el.prefix is not None or el.keys() != _ARC_KEYS:
                 return False
-            tag = child.tag
-            if tag == self.T_INSCRIPTION:
-                if weight is not None:
+            text = el.text
+            if text is not None and text.strip():
+                return False
+            weight = None
+            read = False
+            state = None
+            for child in el:
+                tail = child.tail
+                if tail is not None and tail.strip():
                     return False
-                text = self.fast_text(child)
-                match = _WEIGHT.match(text) if isinstance(text, str) else None
-                if match is None or len(match.group(1)) > 10:
-                    return False
-                weight = int(match.group(1))
-                if not 0 < weight <= MAX_WEIGHT:
-                    return False
-            elif tag == self.T_TOOL:
-                if child.get("tool") == TOOL:
-                    for inner in child:
-                        if inner.tag == self.T_READ and not len(inner):
-                            read = True
-                        elif isinstance(inner.tag, str):
+                tag = child.tag
+                if tag == T_INSCRIPTION and weight is None:
+                    # the common label: one plain <text>, nothing else
+                    if len(child) == 1 and child.text is None and not child.keys():
+                        inner = child[0]
+                        if inner.tag != T_TEXT or len(inner) or inner.tail is not None \
+                                or inner.keys():
                             return False
-                elif not _free_ok(child, False):
-                    return False
-            elif not self.fast_common(el, child, tag, state) and isinstance(tag, str):
-                return False
-        xml_id = el.get("id")
-        self.ids.append(xml_id)
-        if read:
-            self.read.add(len(self.arc_ids))
-        self.arc_ids.append(xml_id)
-        self.sources.append(el.get("source"))
-        self.targets.append(el.get("target"))
-        self.weights.append(weight or 1)
-        return True
+                        text = inner.text or ""
+                    else:
+                        text = fast_text(child)
+                        if not isinstance(text, str):
+                            return False
+                    match = weight_match(text)
+                    if match is None or len(match.group(1)) > 10:
+                        return False
+                    weight = int(match.group(1))
+                    if not 0 < weight <= MAX_WEIGHT:
+                        return False
+                elif tag == T_TOOL:
+                    if child.get("tool") == TOOL:
+                        for inner in child:
+                            if inner.tag == T_READ and not len(inner):
+                                read = True
+                            elif isinstance(inner.tag, str):
+                                return False
+                    elif not _free_ok(child, False):
+                        return False
+                elif isinstance(tag, str):
+                    if state is None:
+                        state = [_UNSET, _UNSET]
+                    if not common(el, child, tag, state):
+                        return False
+            xml_id = el.get("id")
+            add_id(xml_id)
+            if read:
+                read_arcs.add(len(arc_ids))
+            add_arc_id(xml_id)
+            add_source(el.get("source"))
+            add_target(el.get("target"))
+            add_weight(weight or 1)
+            return True
+        return fast_arc
 
     def page(self, el) -> None:
         if self.placed(el):
@@ -1039,16 +1062,21 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
         for _, el in events:
             if root is None:
                 root = _root(el.getroottree().getroot(), reader, src)
-                handlers = {reader.T_PLACE: reader.place, reader.T_TRANSITION: reader.transition,
-                            reader.T_ARC: reader.arc, reader.T_PAGE: reader.page}
-                fast = {reader.T_PLACE: reader.fast_place,
-                        reader.T_TRANSITION: reader.fast_transition, reader.T_ARC: reader.fast_arc}
+                never = lambda el: False      # noqa: E731  (the careful way only)
+                on = reader.fast
+                # tag -> (its fast path, its careful one)
+                handlers = {
+                    reader.T_PLACE: (reader.fast_place if on else never, reader.place),
+                    reader.T_TRANSITION: (reader.fast_transition if on else never,
+                                          reader.transition),
+                    reader.T_ARC: (reader.fast_arc_of() if on else never, reader.arc),
+                    reader.T_PAGE: (never, reader.page)}
+                containers = reader.containers
             handler = handlers.get(el.tag)
             if handler is not None:
                 parent = el.getparent()
-                quick = fast.get(el.tag) if reader.fast else None
-                if quick is None or parent.tag not in reader.containers or not quick(el):
-                    handler(el)               # the careful way: it says what is wrong
+                if parent.tag not in containers or not handler[0](el):
+                    handler[1](el)            # the careful way: it says what is wrong
                 parent.remove(el)             # read: dropped, so the stream stays small
             elif el.tag == reader.T_NET:
                 reader.net(el, root)
