@@ -14,6 +14,9 @@ Measures, on this machine, in one run (about fifteen minutes on 2 cores):
   their reductions (:mod:`bench.properties_peers`);
 * certificates: a mission proven from its parts against exploring it, and
   certifying surveys of 100 to 10,000 calls (:mod:`bench.certify_scale`);
+* reading PNML: ``certify --check`` of the 10,000-call survey's PNML and the
+  larger contest models against LoLA and verifypn reading the same files
+  (:mod:`bench.pnml_read`);
 * invariants: the exact P-invariant basis of compiled missions of 100 to
   5,000 places against plain ``sympy.Matrix.nullspace``
   (:mod:`bench.invariants_vs_nullspace`);
@@ -373,6 +376,11 @@ def campaign_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool,
     return campaign_scale.section(campaign_scale.measure(runs))
 
 
+def pnml_read_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    from bench import pnml_read
+    return pnml_read.section(pnml_read.measure(quick, log))
+
+
 def main(argv: list[str]) -> int:
     quick = "--quick" in argv
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
@@ -381,6 +389,7 @@ def main(argv: list[str]) -> int:
                           ("MCC models", real_models_section),
                           ("mission properties", properties_section),
                           ("certificates", certify_section),
+                          ("reading PNML", pnml_read_section),
                           ("invariants", invariants_section),
                           ("compile", compile_section), ("executor", executor_section),
                           ("campaigns", campaign_section)):
