@@ -108,6 +108,57 @@ _BAD_IDS = re.compile(r"\x00(?:\x00|\s)|\s\x00|[\x01-\x1f\x7f]")
 LENIENT_HINT = ("; --lenient reads it the forgiving way, but no proof (certify --check, "
                 "a certificate beside the file) ever trusts that reading")
 
+class _Buffer:
+    """The file's bytes, mapped only when a message or a rare check needs them.
+
+    The reading itself streams; the scans before it read a chunk at a time
+    (:meth:`first`), so that a large file's pages never count in the process's memory.
+    """
+
+    def __init__(self, data: bytes | None = None, fd: int | None = None, size: int = 0):
+        self.data, self.fd = data, fd
+        self.size = len(data) if data is not None else size
+        self._map = None
+
+    @property
+    def view(self):
+        if self.data is not None:
+            return self.data
+        if self._map is None:
+            self._map = mmap.mmap(self.fd, 0, access=mmap.ACCESS_READ) if self.size else b""
+        return self._map
+
+    def read_at(self, at: int, n: int) -> bytes:
+        if self.data is not None:
+            return self.data[at:at + n]
+        return os.pread(self.fd, n, at)
+
+    def first(self, patterns: tuple[bytes, ...]) -> dict[bytes, int]:
+        """The offset of each pattern's first occurrence (-1: none), a chunk at a time."""
+        found = dict.fromkeys(patterns, -1)
+        overlap = max(map(len, patterns)) - 1
+        at = 0
+        while at < self.size and -1 in found.values():
+            chunk = self.read_at(at, _CHUNK + overlap)
+            for pattern, where in found.items():
+                if where < 0:
+                    i = chunk.find(pattern)
+                    found[pattern] = at + i if i >= 0 else -1
+            at += _CHUNK
+        return found
+
+    def any_beyond_ascii(self) -> bool:
+        return any(_NOT_ASCII.search(self.read_at(at, _CHUNK))
+                   for at in range(0, self.size, _CHUNK))
+
+    def close(self) -> None:
+        if self._map is not None and not isinstance(self._map, bytes):
+            self._map.close()
+
+
+_CHUNK = 16 << 20
+
+
 class _Lines:
     """The lines of a buffer (bytes or a memory map), found only when a message needs one.
 
@@ -115,9 +166,13 @@ class _Lines:
     breaks are found on the first fault, and each line decoded on demand.
     """
 
-    def __init__(self, buffer):
-        self.buffer = buffer
+    def __init__(self, source: _Buffer):
+        self.source = source
         self._starts: array | None = None
+
+    @property
+    def buffer(self):
+        return self.source.view
 
     def _index(self) -> array:
         if self._starts is None:
@@ -135,7 +190,7 @@ class _Lines:
         return self._starts
 
     def __len__(self) -> int:
-        return len(self._index()) if len(self.buffer) else 0
+        return len(self._index()) if self.source.size else 0
 
     def __getitem__(self, i: int) -> str:
         starts = self._index()
@@ -181,6 +236,9 @@ class _StrictReader:
         self.net_name = None
         self.net_id = None
         self.fast = not cdata     # a CDATA section somewhere: every node the careful way
+        # one string per name, however many arcs name it: a million arcs' ends are then
+        # references to the nodes' own ids, not two million strings
+        self.names: dict[str, str] = {}
         self._payloads: dict[str, object] = {}
 
     # -- messages ------------------------------------------------------------------------
@@ -425,6 +483,7 @@ class _StrictReader:
                 self.stray(child, f"in place '{xml_id}'")
         self.mixed(el)
         if xml_id is not None:
+            xml_id = self.names.setdefault(xml_id, xml_id)
             self.places.append((xml_id, name, interface, payload, position))
             if tokens:
                 self.marking[xml_id] = tokens
@@ -457,7 +516,8 @@ class _StrictReader:
                 self.stray(child, f"in transition '{xml_id}'")
         self.mixed(el)
         if xml_id is not None:
-            self.transitions.append((xml_id, name, timing, payload, position))
+            self.transitions.append((self.names.setdefault(xml_id, xml_id), name, timing,
+                                     payload, position))
 
     def timing(self, el, xml_id) -> Timing | None:
         timing = _timing_value(el)
@@ -527,8 +587,8 @@ class _StrictReader:
         if read:
             self.read.add(len(self.arc_ids))
         self.arc_ids.append(xml_id)
-        self.sources.append(source)
-        self.targets.append(target)
+        self.sources.append(self.names.setdefault(source, source))
+        self.targets.append(self.names.setdefault(target, target))
         self.weights.append(weight)
 
     # -- the fast paths: the shapes writers use, checked in few steps; anything else (or
@@ -611,6 +671,7 @@ class _StrictReader:
         xml_id = el.get("id")
         self.ids.append(xml_id)
         name, position = state
+        xml_id = self.names.setdefault(xml_id, xml_id)
         self.places.append((xml_id, None if name is _UNSET else name, interface, payload,
                             None if position is _UNSET else position))
         if tokens:
@@ -649,7 +710,8 @@ class _StrictReader:
         xml_id = el.get("id")
         self.ids.append(xml_id)
         name, position = state
-        self.transitions.append((xml_id, None if name is _UNSET else name, timing, payload,
+        self.transitions.append((self.names.setdefault(xml_id, xml_id),
+                                 None if name is _UNSET else name, timing, payload,
                                  None if position is _UNSET else position))
         return True
 
@@ -662,6 +724,7 @@ class _StrictReader:
         add_id, add_arc_id = self.ids.append, self.arc_ids.append
         add_source, add_target, add_weight = (self.sources.append, self.targets.append,
                                               self.weights.append)
+        name = self.names.setdefault
         read_arcs, arc_ids = self.read, self.arc_ids
 
         def fast_arc(el) -> bool:
@@ -715,8 +778,9 @@ class _StrictReader:
             if read:
                 read_arcs.add(len(arc_ids))
             add_arc_id(xml_id)
-            add_source(el.get("source"))
-            add_target(el.get("target"))
+            source, target = el.get("source"), el.get("target")
+            add_source(name(source, source))
+            add_target(name(target, target))
             add_weight(weight or 1)
             return True
         return fast_arc
@@ -1021,16 +1085,16 @@ class _TooMany(Exception):
     """Enough faults for one message: stop reading."""
 
 
-def _prolog_faults(buffer, filename: str) -> None:
+def _prolog_faults(buffer: _Buffer, filename: str) -> None:
     """What is refused before parsing: another encoding, a document type declaration."""
-    head = bytes(buffer[:4])
+    head = buffer.read_at(0, 4)
     if head[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in head:
         raise PnmlError("the file is not UTF-8 (it looks like UTF-16 or UTF-32): readers "
                         "that take bytes as UTF-8 read it differently; save it as UTF-8",
                         Location(filename, 1, 1))
-    declared = _ENCODING.match(bytes(buffer[:512]))
+    declared = _ENCODING.match(buffer.read_at(0, 512))
     if declared and declared.group(1).decode("ascii", "replace").lower() not in (
-            "utf-8", "utf8", "us-ascii", "ascii") and _NOT_ASCII.search(buffer):
+            "utf-8", "utf8", "us-ascii", "ascii") and buffer.any_beyond_ascii():
         name = declared.group(1).decode("ascii", "replace")
         raise PnmlError(f"the file declares the encoding '{name}' and holds characters "
                         "beyond ASCII: readers that take bytes as UTF-8 read them "
@@ -1044,13 +1108,14 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     lines = _Lines(buffer)
     src = _Source.__new__(_Source)
     src.filename, src.lines = filename, lines
-    doctype = buffer.find(b"<!DOCTYPE")
+    first = buffer.first((b"<!DOCTYPE", b"<![CDATA["))
+    doctype = first[b"<!DOCTYPE"]
     if doctype >= 0:
         line = lines.line_of(doctype)
         raise XmlError("document type declarations are refused: PNML needs none, and "
                        "entities are never expanded or fetched",
                        src.at(line, doctype - lines._index()[line - 1] + 1))
-    reader = _StrictReader(src, lines, cdata=buffer.find(b"<![CDATA[") >= 0)
+    reader = _StrictReader(src, lines, cdata=first[b"<![CDATA["] >= 0)
     try:
         # end tags only, of the elements read as they end: everything else is checked
         # inside the node, page or net that holds it
@@ -1144,7 +1209,7 @@ def _inside_free(el, reader) -> bool:
 @without_gc   # a large file is millions of small objects, all alive (see gcpause)
 def parse_strict(data: bytes, filename: str = "<input>", net_id: str | None = None) -> Net:
     """Read one P/T net from PNML bytes, strictly (this module's docstring)."""
-    return _parse(io.BytesIO(data), data, filename, net_id)
+    return _parse(io.BytesIO(data), _Buffer(data), filename, net_id)
 
 
 @without_gc
@@ -1156,7 +1221,11 @@ def load_strict(path: str | Path, net_id: str | None = None) -> Net:
     except Mcl2PnmlError as e:
         raise PnmlError(e.message, e.location) from None
     with os.fdopen(fd, "rb") as f:
-        if os.fstat(f.fileno()).st_size == 0:
+        size = os.fstat(f.fileno()).st_size
+        if size == 0:
             return parse_strict(read_file(path), str(path), net_id)
-        with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as buffer:
+        buffer = _Buffer(fd=f.fileno(), size=size)
+        try:
             return _parse(f, buffer, str(path), net_id)
+        finally:
+            buffer.close()
