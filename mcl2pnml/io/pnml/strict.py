@@ -50,6 +50,7 @@ from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.files import json_fault, open_regular
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze
 from mcl2pnml.io import ids
+from mcl2pnml.io.pnml.reader import HIGH_LEVEL
 
 PNML = "http://www.pnml.org/version-2009/grammar/pnml"
 TAPAAL = "http://www.informatik.hu-berlin.de/top/pnml/ptNetb"
@@ -96,7 +97,7 @@ REFUSED = {
                      "that matches names anywhere takes its <place> elements for places",
     "capacity": "a place capacity (PIPE): a transition that would exceed it cannot fire, "
                 "which a P/T net cannot say",
-    "variable": "a variable of a data Petri net",
+    "variable": "a variable (of a coloured or a data Petri net)",
     "variables": "variables of a data Petri net",
 }
 _NUMBER = re.compile(r"[ \t\r\n]*([0-9]+)[ \t\r\n]*\Z")
@@ -269,6 +270,13 @@ class _StrictReader:
         """An element the grammar does not put here: refused with what it is."""
         name = _raw_name(el)
         local = _local(el.tag)
+        coloured = HIGH_LEVEL.get(local) or ("a place's sort" if local == "type" and
+                                            where.startswith("in place") else None)
+        if coloured:   # one message says it: the rest of the net is coloured alike
+            raise _Fatal(PnmlError(
+                f"<{name}> is {coloured}: this is a coloured (high-level) net, whatever its "
+                "type says, and a P/T reading would drop its colours and tokens; unfold it "
+                "to a P/T net first", self.src.locate(el)))
         ns = el.tag[1:].split("}", 1)[0] if el.tag.startswith("{") else ""
         if el.prefix is not None or ns != self.ns:
             said = f"<{name}>" + (f" in the namespace '{ns}'" if ns else " in no namespace")
@@ -351,7 +359,7 @@ class _StrictReader:
         self.attributes(label, frozenset())
         self.mixed(label)
         if found is None:
-            if required:
+            if required and not any(isinstance(c.tag, str) for c in label):
                 self.error(label, f"<{_raw_name(label)}> has no <text>")
             return None
         self.attributes(found, frozenset())
@@ -1085,6 +1093,49 @@ class _TooMany(Exception):
     """Enough faults for one message: stop reading."""
 
 
+class _Fatal(Exception):
+    """A fault that says all there is to say of the file (coloured content)."""
+
+    def __init__(self, error: PnmlError):
+        super().__init__(error.message)
+        self.error = error
+
+
+#: Another tool's own dialect, told by the head of the file: (pattern, what it is).
+DIALECTS = (
+    (re.compile(rb"""xmlns\s*=\s*["']http://www\.informatik\.hu-berlin\.de/top/pnml/ptNetb["']"""
+                rb"""|<place\b[^>]*\sinitialMarking\s*=|<(?:input|output|transport|inhibitor)Arc\b"""),
+     "TAPAAL's own format (a timed-arc net, its markings and weights in attributes), which "
+     "P/T tools read differently (verifypn refuses its timed arcs); export PNML from TAPAAL, "
+     "or read it"),
+    (re.compile(rb"""<net\b[^>]*\btype\s*=\s*["']P/T net["']"""),
+     "PIPE's own dialect of PNML (net type 'P/T net', labels in <value>: 'Default,1'), which "
+     "P/T tools read differently (verifypn reads every marking as 0); export standard PNML, "
+     "or read it"),
+)
+#: The largest dialect file read the forgiving way to say what it holds that a P/T net
+#: cannot (past it, the dialect alone is named).
+DIALECT_EXPLAINED = 64 << 20
+
+
+def _dialect(buffer: _Buffer, filename: str) -> None:
+    """Refuse another tool's dialect: with the forgiving reader's own refusal where it
+    finds what a P/T net cannot say (colours, inhibitor arcs, time), else as the dialect."""
+    head = buffer.read_at(0, 1 << 16)
+    for pattern, what in DIALECTS:
+        match = pattern.search(head)
+        if match is None:
+            continue
+        if buffer.size <= DIALECT_EXPLAINED:
+            from mcl2pnml.io.pnml.reader import _parse_lenient
+            _parse_lenient(buffer.read_at(0, buffer.size), filename)   # raises what it finds
+        line = head.count(b"\n", 0, match.start()) + 1
+        column = match.start() - (head.rfind(b"\n", 0, match.start()) + 1) + 1
+        src_line = head.split(b"\n")[line - 1].decode("utf-8", "replace")
+        raise PnmlError(f"this is {what} with --lenient, which no proof trusts",
+                        Location(filename, line, column, src_line))
+
+
 def _prolog_faults(buffer: _Buffer, filename: str) -> None:
     """What is refused before parsing: another encoding, a document type declaration."""
     head = buffer.read_at(0, 4)
@@ -1105,6 +1156,7 @@ def _prolog_faults(buffer: _Buffer, filename: str) -> None:
 def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     from mcl2pnml.io.pnml.reader import XmlError, _Source
     _prolog_faults(buffer, filename)
+    _dialect(buffer, filename)
     lines = _Lines(buffer)
     src = _Source.__new__(_Source)
     src.filename, src.lines = filename, lines
@@ -1162,9 +1214,12 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
         raise XmlError(f"not well-formed XML: {msg}", src.at(line, col)) from None
     except _TooMany:
         raise_all(_in_order(reader.errors))
+    except _Fatal as fatal:
+        raise fatal.error from None
     if reader.nets == 0 and not reader.errors:
         raise PnmlError("no <net> in this document", src.locate(root))
-    if net_id is not None and reader.net_id is not None and net_id != reader.net_id:
+    if net_id is not None and reader.net_id is not None and net_id != reader.net_id \
+            and not reader.errors:
         raise PnmlError(f"no net with id '{net_id}'; the net in this file: {reader.net_id}",
                         src.at(reader.line_of_id(reader.net_id)))
     try:
@@ -1183,11 +1238,10 @@ def _root(root, reader, src):
         raise PnmlError(f"the root element is <{name}>, not <pnml>",
                         src.locate(root) if root is not None else src.at(1))
     ns = root.tag[1:].split("}", 1)[0] if root.tag.startswith("{") else ""
-    if ns == TAPAAL:
+    if ns == TAPAAL:   # written with a prefix, past the head: the dialect all the same
         raise PnmlError("this is TAPAAL's own format (a timed-arc net, its markings and "
                         "weights in attributes), which P/T tools read differently (verifypn "
-                        "refuses its timed arcs); export PNML from TAPAAL" + LENIENT_HINT
-                        + " (read as the untimed P/T net it draws, where time cannot matter)",
+                        "refuses its timed arcs); export PNML from TAPAAL" + LENIENT_HINT,
                         src.locate(root))
     if ns not in (PNML, ""):
         raise PnmlError(f"<pnml> is in the namespace '{ns}', not PNML's ({PNML})",
