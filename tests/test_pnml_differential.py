@@ -279,3 +279,27 @@ def test_lola_reads_the_net_we_read(source, file_of):
         pytest.skip("LoLA reads no net from the file")
     found = pnml_peer.differences(ours, theirs, peer="lola")
     assert not found, f"LoLA reads {path.name} otherwise than we do:\n  " + "\n  ".join(found)
+
+
+def _outcome(path: Path):
+    """The strict reading of ``path``: the net, or every message of its refusal."""
+    try:
+        return load_pnml(path)
+    except Mcl2PnmlError as e:
+        return [str(x) for x in getattr(e, "errors", [e])]
+
+
+INVALID_DIRS = ("invalid", "foreign", "schema/invalid", "schema/valid", "hostile")
+LOCAL = sorted(p for d in INVALID_DIRS for p in (DATA / "pnml" / d).glob("*.pnml"))
+
+
+@pytest.mark.parametrize("source", [_param(s) for s in EXTERNAL + EXAMPLES + TEMPLATES]
+                         + [pytest.param(p, id=str(p.relative_to(DATA))) for p in LOCAL])
+def test_the_fast_paths_read_as_the_careful_one(source, file_of, monkeypatch):
+    """The shapes writers use are read in few steps, anything else the careful way
+    (mcl2pnml/io/pnml/strict.py): both give the same net, or the same messages."""
+    from mcl2pnml.io.pnml import strict
+    path = source if isinstance(source, Path) else file_of(source)
+    fast = _outcome(path)
+    monkeypatch.setattr(strict, "FAST", False)
+    assert _outcome(path) == fast
