@@ -108,7 +108,7 @@ _WEIGHT = re.compile(r"[ \t]*([0-9]+)[ \t]*\Z")   # verifypn refuses a line brea
 _NOT_ASCII = re.compile(rb"[\x80-\xff]")
 _ENCODING = re.compile(rb"""\A(?:\xef\xbb\xbf)?<\?xml[^>]*?encoding\s*=\s*["']([^"']*)["']""")
 # an empty id, white space at either end, a control character (NUL separates the ids)
-_BAD_IDS = re.compile(r"\x00(?:\x00|\s)|\s\x00|[\x01-\x1f\x7f]")
+_BAD_IDS = re.compile(r"\x00(?:\x00|\s)|\s\x00|[\x01-\x1f\x7f&<>\"']")
 LENIENT_HINT = ("; --lenient reads it the forgiving way, but no proof (certify --check, "
                 "a certificate beside the file) ever trusts that reading")
 
@@ -218,10 +218,10 @@ def _raw_name(el) -> str:
 class _StrictReader:
     """One pass over the stream: checks each node and keeps its plain values."""
 
-    def __init__(self, src, lines: _Lines, cdata: bool):
+    def __init__(self, src, lines: _Lines, careful: bool):
         self.src = src            # the lenient reader's locator, over lazy lines
         self.lines = lines
-        self.cdata = cdata        # the file has a CDATA section somewhere: look closer
+        self.cdata = careful      # a CDATA section or a prefix somewhere: look closer
         self.ns = None            # the document's namespace: PNML's, or "" for none
         self.errors: list[PnmlError] = []
         # plain values only, no element kept: ids are checked in bulk at the end and
@@ -239,7 +239,7 @@ class _StrictReader:
         self.nets = 0
         self.net_name = None
         self.net_id = None
-        self.fast = FAST and not cdata   # a CDATA section somewhere: all the careful way
+        self.fast = FAST and not careful
         # one string per name, however many arcs name it: a million arcs' ends are then
         # references to the nodes' own ids, not two million strings
         self.names: dict[str, str] = {}
@@ -349,7 +349,9 @@ class _StrictReader:
         found = None
         for child in label:
             tag = child.tag
-            if tag == self.T_TEXT:
+            if child.prefix is not None and isinstance(tag, str):
+                self.stray(child, f"in <{_raw_name(label)}>")
+            elif tag == self.T_TEXT:
                 if found is not None:
                     self.error(child, f"a second <text> in <{_raw_name(label)}>: tools read "
                                       "the first or the last; refused")
@@ -431,6 +433,11 @@ class _StrictReader:
         return value
 
     def position(self, graphics):
+        """A node's position, None if it has none or a bad one (a drawing hint only:
+        dropped), _NO if a <position> lacks a coordinate."""
+        for child in graphics:
+            if child.tag == self.T_POSITION and (child.get("x") is None or child.get("y") is None):
+                return _NO
         for child in graphics:
             if child.tag == self.T_POSITION:
                 try:
@@ -472,7 +479,9 @@ class _StrictReader:
         seen: set = set()
         for child in el:
             tag = child.tag
-            if tag == self.T_NAME:
+            if child.prefix is not None and isinstance(tag, str):
+                self.stray(child, f"in {_local(el.tag)} '{xml_id}'")
+            elif tag == self.T_NAME:
                 if self.once(el, seen, child):
                     name = self.text_of(child, required=False)
             elif tag == self.T_MARKING:
@@ -490,6 +499,11 @@ class _StrictReader:
                 if self.once(el, seen, child):
                     self.free(child, in_label=False)
                     position = self.position(child)
+                    if position is _NO:
+                        position = None
+                        self.error(child, f"a <position> without both x and y in "
+                                          f"{_local(el.tag)} '{xml_id}': verifypn's reader "
+                                          "crashes on it; give both or none")
             elif isinstance(tag, str):
                 self.stray(child, f"in place '{xml_id}'")
         self.mixed(el)
@@ -508,7 +522,9 @@ class _StrictReader:
         seen: set = set()
         for child in el:
             tag = child.tag
-            if tag == self.T_NAME:
+            if child.prefix is not None and isinstance(tag, str):
+                self.stray(child, f"in {_local(el.tag)} '{xml_id}'")
+            elif tag == self.T_NAME:
                 if self.once(el, seen, child):
                     name = self.text_of(child, required=False)
             elif tag == self.T_TOOL:
@@ -523,6 +539,11 @@ class _StrictReader:
                 if self.once(el, seen, child):
                     self.free(child, in_label=False)
                     position = self.position(child)
+                    if position is _NO:
+                        position = None
+                        self.error(child, f"a <position> without both x and y in "
+                                          f"{_local(el.tag)} '{xml_id}': verifypn's reader "
+                                          "crashes on it; give both or none")
             elif isinstance(tag, str):
                 self.stray(child, f"in transition '{xml_id}'")
         self.mixed(el)
@@ -564,7 +585,9 @@ class _StrictReader:
         seen: set = set()
         for child in el:
             tag = child.tag
-            if tag == self.T_INSCRIPTION:
+            if child.prefix is not None and isinstance(tag, str):
+                self.stray(child, f"in arc '{xml_id}'")
+            elif tag == self.T_INSCRIPTION:
                 if self.once(el, seen, child):
                     weight = self.number(child, f"arc '{xml_id}'", weight=True)
             elif tag == self.T_TOOL:
@@ -639,7 +662,7 @@ class _StrictReader:
             if state[1] is not _UNSET or not _free_ok(child, False):
                 return False
             state[1] = self.position(child)
-            return True
+            return state[1] is not _NO
         return False
 
     def fast_place(self, el) -> bool:
@@ -809,7 +832,9 @@ class _StrictReader:
         seen: set = set()
         for child in el:
             tag = child.tag
-            if tag == self.T_NAME:
+            if child.prefix is not None and isinstance(tag, str):
+                self.stray(child, f"in <{_raw_name(el)}> '{el.get('id')}'")
+            elif tag == self.T_NAME:
                 if self.once(el, seen, child):
                     text = self.text_of(child, required=False)
                     if kind == "net":
@@ -933,8 +958,10 @@ class _StrictReader:
             for xml_id in ids:
                 if not xml_id or _BAD_IDS.search(f"\x00{xml_id}\x00"):
                     self.error_id(xml_id, f"the id {xml_id!r} is empty, starts or ends with "
-                                          "white space, or holds a control character, which "
-                                          "readers keep, trim or fold differently")
+                                          "white space, or holds a control character or one "
+                                          "of & < > \" ' (readers keep, trim or fold white "
+                                          "space differently, and write those characters "
+                                          "back unescaped, breaking their own files)")
         if len(set(ids)) != len(ids):
             first: set = set()
             for xml_id in ids:
@@ -1116,6 +1143,7 @@ DIALECTS = (
      "P/T tools read differently (verifypn reads every marking as 0); export standard PNML, "
      "or read it"),
 )
+_STANDARD = re.compile(rb"""<pnml\b[^>]*\bxmlns\s*=\s*["']http://www\.pnml\.org/version-2009/grammar/pnml["']""")
 #: The largest dialect file read the forgiving way to say what it holds that a P/T net
 #: cannot (past it, the dialect alone is named).
 DIALECT_EXPLAINED = 64 << 20
@@ -1125,6 +1153,8 @@ def _dialect(buffer: _Buffer, filename: str) -> None:
     """Refuse another tool's dialect: with the forgiving reader's own refusal where it
     finds what a P/T net cannot say (colours, inhibitor arcs, time), else as the dialect."""
     head = buffer.read_at(0, 1 << 16)
+    if _STANDARD.search(head):
+        return   # in PNML's namespace: what another dialect would mean there is said strictly
     for pattern, what in DIALECTS:
         match = pattern.search(head)
         if match is None:
@@ -1163,14 +1193,17 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     lines = _Lines(buffer)
     src = _Source.__new__(_Source)
     src.filename, src.lines = filename, lines
-    first = buffer.first((b"<!DOCTYPE", b"<![CDATA["))
+    first = buffer.first((b"<!DOCTYPE", b"<![CDATA[", b"xmlns:"))
     doctype = first[b"<!DOCTYPE"]
     if doctype >= 0:
         line = lines.line_of(doctype)
         raise XmlError("document type declarations are refused: PNML needs none, and "
                        "entities are never expanded or fetched",
                        src.at(line, doctype - lines._index()[line - 1] + 1))
-    reader = _StrictReader(src, lines, cdata=first[b"<![CDATA["] >= 0)
+    # a prefix must be declared to be used: where none is, no element has one, and the
+    # fast paths need not look (a CDATA section alike)
+    reader = _StrictReader(src, lines, careful=first[b"<![CDATA["] >= 0
+                           or first[b"xmlns:"] >= 0)
     try:
         # end tags only, of the elements read as they end: everything else is checked
         # inside the node, page or net that holds it
