@@ -200,8 +200,8 @@ def test_compile_says_what_pipe_cannot(tmp_path):
     assert "AchieveDepth.t03: after 60 s" in text and "toolspecific" not in text
     with pytest.raises(Mcl2PnmlError) as refused:
         pipeline.load_net(tmp_path / "sauce.xml")
-    assert re.search(rf"^{re.escape(str(tmp_path / 'sauce.xml'))}:\d+:\d+: <value> in "
-                     r"<initialMarking> is the pre-standard form of a label's value \(PIPE's\)",
+    assert re.search(rf"^{re.escape(str(tmp_path / 'sauce.xml'))}:\d+:\d+: this is PIPE's "
+                     r"own dialect of PNML \(net type 'P/T net', labels in <value>",
                      str(refused.value), re.MULTILINE), str(refused.value)[:2000]
     back = pipeline.load_net(tmp_path / "sauce.xml", lenient=True)
     net = pipeline.compile_checked(pipeline.check_file(ROOT / "examples" / "sauce.mcl"))
