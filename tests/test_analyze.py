@@ -79,8 +79,12 @@ def test_text_report_is_tables(task_pnml):
 
 
 def test_a_net_written_by_pm4py():
-    r = json.loads(run("analyze", DATA / "pnml" / "foreign" / "pm4py_order_process.pnml",
-                       "--json").stdout)
+    """Its final marking is refused by the strict reading, at its line; --lenient reads it."""
+    path = DATA / "pnml" / "foreign" / "pm4py_order_process.pnml"
+    out = run("analyze", path)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert out.stderr.startswith(f"{path}:80:5: <finalmarkings> is a final marking"), out.stderr
+    r = json.loads(run("analyze", path, "--lenient", "--json").stdout)
     assert r["places"] == 6 and r["safe"]
     assert r["terminal_markings"] == [["sink"]]
     # no mission interface: its dead marking is a deadlock, as other tools count it,
@@ -124,14 +128,22 @@ def test_a_state_space_too_large_still_gives_the_structure(task_pnml):
 
 
 def test_one_net_of_several_is_chosen_with_net():
+    """The forgiving reading chooses one net of a file of several; the strict one refuses
+    the file at its second net, whichever is asked for."""
     two = DATA / "pnml" / "invalid" / "two_nets.pnml"
-    r = json.loads(run("analyze", two, "--net", "second", "--state-space", "--json").stdout)
+    r = json.loads(run("analyze", two, "--lenient", "--net", "second", "--state-space",
+                       "--json").stdout)
     assert r["net"] == "second" and r["states"] == 1
-    out = run("analyze", two)
+    out = run("analyze", two, "--lenient")
     assert out.returncode == 2 and "choose one with --net ID" in out.stderr
-    for command in (["validate", two], ["show", two, "-o", "/dev/null"]):
-        out = run(*command, "--net", "third")
-        assert out.returncode == 2 and "no net with id 'third'" in out.stderr, command
+    out = run("show", two, "-o", "/dev/null", "--lenient", "--net", "third")
+    assert out.returncode == 2 and "no net with id 'third'" in out.stderr
+    for command in (["analyze", two], ["analyze", two, "--net", "second"],
+                    ["validate", two, "--net", "third"],
+                    ["show", two, "-o", "/dev/null", "--net", "second"]):
+        out = run(*command)
+        assert out.returncode == 2 and "Traceback" not in out.stderr, command
+        assert f"{two}:4:3: a second <net> in this file" in out.stderr, command
 
 
 def test_net_is_refused_where_a_file_holds_one_net(tmp_path):

@@ -43,7 +43,9 @@ def test_bad_arguments_are_one_line_and_exit_2(args, message):
     assert "Traceback" not in out.stderr
 
 
-@pytest.mark.parametrize("path", sorted((DATA / "pnml" / "invalid").glob("*.pnml")),
+@pytest.mark.parametrize("path", sorted(p for p in (DATA / "pnml" / "invalid").glob("*.pnml")
+                                       # those the strict reading refuses (a golden message)
+                                       if p.with_suffix(".expected").exists()),
                          ids=lambda p: p.name)
 def test_bad_pnml_exits_2_with_positions(path):
     out = run("validate", path)
