@@ -24,3 +24,22 @@ def survey(calls: int) -> str:
             lines.append(f"    Depth({2.0 + i % 7});")
     lines.append("}")
     return "\n".join(lines) + "\n"
+
+
+def relay(functions: int) -> str:
+    """A chain of ``functions`` functions, each running the next in parallel with a depth
+    change: the shape that makes the warnings' check of what runs at once (W002) look
+    through every function below a call, the whole chain at each level if it were not
+    found once per function."""
+    lines = [
+        f"// a generated relay of {functions:,} functions",
+        "primitive GoToWayPoint(wp);",
+        "primitive KeepDepth(d);",
+        "task Goto(wp) = AchieveGoal(GoToWayPoint(wp)) timeout 100;",
+        "task Depth(d) = AchieveGoal(KeepDepth(d)) timeout 60;",
+    ]
+    for i in range(functions):
+        lines.append(f"function Leg{i}() {{ parallel(Leg{i + 1}(), Depth({2.0 + i % 7})); }}")
+    lines.append(f"function Leg{functions}() {{ Goto((0.0, 0.0, 5.0)); }}")
+    lines.append("mission { Leg0(); }")
+    return "\n".join(lines) + "\n"

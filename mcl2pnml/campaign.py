@@ -131,6 +131,7 @@ def _prepared(mission: str, fleet: Fleet, engine: str) -> tuple[Callable, Callab
            *(os.stat(f).st_mtime_ns for f in fleet.files()))
     found = _PREPARED.get(key)
     if found is None:
+        # not bounded again: the facade read it within --max-mission-size before any batch
         checked = check(parse_file(mission))
         if engine == "petri":
             make = PetriEngine(compile_checked(checked)).clone

@@ -15,8 +15,8 @@ import click
 from mcl2pnml import pipeline
 from mcl2pnml.cli_options import (
     ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, QUERY_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
-    FORMAT_OPTION, NET_OPTION, ODDS_OPTIONS, OUTPUT, PROPERTIES_SIZE, PROPERTY_ATOMS,
-    RUN_OPTIONS, SHOW_OPTIONS)
+    FORMAT_OPTION, MISSION_SIZE, MISSION_SIZE_OPTION, NET_OPTION, ODDS_OPTIONS, OUTPUT,
+    PROPERTIES_SIZE, PROPERTY_ATOMS, RUN_OPTIONS, SHOW_OPTIONS)
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
@@ -94,13 +94,14 @@ def main() -> None:
 @click.argument("mission", type=FILE)
 @CHECK_OPTIONS
 def check(mission: Path, properties: str | None, max_props_size: str = PROPERTIES_SIZE,
-          max_atoms: int = PROPERTY_ATOMS, strict: bool = False) -> int:
+          max_atoms: int = PROPERTY_ATOMS, strict: bool = False,
+          max_mission_size: str = MISSION_SIZE) -> int:
     """Parse and check MISSION (MCL): names, arities, patterns, recursion, properties.
 
     Every error of the file is reported at once, each with file:line:col; then the
     warnings (docs/warnings.md), on standard error.
     """
-    checked = pipeline.check_file(mission)
+    checked = pipeline.check_file(mission, max_mission_size)
     pipeline.warned(mission, checked, strict, _note)
     click.echo(f"{mission}: ok ({checked.summary()})")
     if properties is not None:
@@ -115,13 +116,15 @@ def check(mission: Path, properties: str | None, max_props_size: str = PROPERTIE
 @click.argument("mission", type=FILE)
 @click.option("--functions", "with_functions", is_flag=True,
               help="Also print each function's body in functional form.")
-def functional(mission: Path, with_functions: bool) -> int:
+@MISSION_SIZE_OPTION
+def functional(mission: Path, with_functions: bool, max_mission_size: str = MISSION_SIZE) -> int:
     """Print the functional form of MISSION (the paper's Algorithm 2).
 
     Structures are written sequence, parallel, if-then-else, while and
     monitor; an empty block or a missing else is NULL; functions stay calls.
     """
-    for line in pipeline.functional_form(pipeline.check_file(mission), functions=with_functions):
+    checked = pipeline.check_file(mission, max_mission_size)
+    for line in pipeline.functional_form(checked, functions=with_functions):
         click.echo(line)
     return 0
 
@@ -144,7 +147,7 @@ def compile_(mission: Path, output: Path | None, fmt: str, **options) -> int:
 @RUN_OPTIONS
 @click.pass_context
 def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
-        net_id: str | None, lenient: bool, **options) -> int:
+        net_id: str | None, lenient: bool, max_mission_size: str, **options) -> int:
     """Run MISSION (MCL, or a compiled PNML for the petri engine) against a vehicle.
 
     Time is virtual: a mission of hours runs in a moment. The live log shows each action
@@ -162,7 +165,7 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
     result = pipeline.run_mission(
         mission, pipeline.RunOptions(**options, explicit=given),
         text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
-        lenient=lenient, note=_note)
+        lenient=lenient, max_mission_size=max_mission_size, note=_note)
     click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
     return result.outcome.exit_status
 
@@ -230,7 +233,7 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
 @SHOW_OPTIONS
 def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path | None,
          live_log: Path | None, port: int, linger: float, net_id: str | None,
-         lenient: bool) -> int:
+         lenient: bool, max_mission_size: str = MISSION_SIZE) -> int:
     """Write one self-contained HTML page to play the token game on a net.
 
     WHAT is a mission (.mcl), a net (.pnml, TINA .net, LoLA .lola) or a
@@ -246,7 +249,8 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
     if live_log is not None:
         if output is not None or run_log is not None or graph_json is not None:
             raise click.UsageError("--live serves the page: leave out -o, --run and --graph-json")
-        shown = pipeline.show_nets(what, with_run=True, net_id=net_id, lenient=lenient)
+        shown = pipeline.show_nets(what, with_run=True, net_id=net_id, lenient=lenient,
+                                   max_mission_size=max_mission_size)
 
         def ready(url: str) -> None:
             click.echo(f"serving {shown.title} on {url} , following {live_log} "
@@ -254,7 +258,7 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
         pipeline.serve_show_live(shown, live_log, port=port, linger=linger, ready=ready)
         return 0
     shown = pipeline.show_nets(what, with_run=run_log is not None, net_id=net_id,
-                               lenient=lenient)
+                               lenient=lenient, max_mission_size=max_mission_size)
     output = output or Path(f"{shown.title}.html")
     check_outputs([("-o", output), ("--graph-json", graph_json)],
                   [("the run log (--run)", run_log),
@@ -275,7 +279,7 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
 @CERTIFY_OPTIONS
 def certify(mission: Path, output: Path | None, net_file: Path | None,
             net_id: str | None, abort_pending: bool = False,
-            max_cert: str = CERTIFICATE_SIZE) -> int:
+            max_cert: str = CERTIFICATE_SIZE, max_mission_size: str = MISSION_SIZE) -> int:
     """Prove MISSION from its parts, without exploring: write its certificate.
 
     Every task pattern and control structure was proven once against the
@@ -288,7 +292,8 @@ def certify(mission: Path, output: Path | None, net_file: Path | None,
     not one: too large, not JSON, or not of the certificate's shape).
     """
     cert, net, problems = pipeline.certify_command(mission, output, net_file, net_id,
-                                                   abort_pending, max_cert, _note)
+                                                   abort_pending, max_cert, _note,
+                                                   max_mission_size=max_mission_size)
     click.echo("\n".join(pipeline.certificate_lines(net, cert, problems)))
     return 1 if problems else 0
 
@@ -326,13 +331,14 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
 @QUERY_OPTIONS
 def query(net: Path, formulas: tuple[Path, ...], examinations: tuple[str, ...], as_json: bool,
           max_states: int, max_memory: str | None, stubborn: bool, net_id: str | None,
-          lenient: bool) -> int:
+          lenient: bool, max_mission_size: str = MISSION_SIZE) -> int:
     """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
     LTL, upper bounds) and generic examinations on NET, one answer line each in the
     contest's format; exit 3 if one is not answered (docs/interop.md)."""
     outcome = pipeline.query_file(net, formulas, examinations, net_id=net_id,
                                   max_states=max_states, max_memory=max_memory,
-                                  stubborn=stubborn, lenient=lenient)
+                                  stubborn=stubborn, lenient=lenient,
+                                  max_mission_size=max_mission_size)
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return outcome.status
@@ -343,7 +349,7 @@ def query(net: Path, formulas: tuple[Path, ...], examinations: tuple[str, ...], 
 @ODDS_OPTIONS
 def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Path | None,
          max_states: int, properties: str | None, max_props_size: str | None,
-         max_atoms: int | None) -> int:
+         max_atoms: int | None, max_mission_size: str = MISSION_SIZE) -> int:
     """The exact odds of MISSION with a vehicle model: how likely it ends OK, FAIL or
     ABORTED, or never, and when (docs/odds.md).
 
@@ -353,7 +359,7 @@ def odds(mission: Path, model: Path, as_json: bool, sensitivity: bool, prism: Pa
     outcome = pipeline.odds_file(mission, model, max_states=max_states,
                                  sensitivity=sensitivity, prism=prism, properties=properties,
                                  max_props_size=max_props_size, max_atoms=max_atoms,
-                                 note=_note)
+                                 max_mission_size=max_mission_size, note=_note)
     click.echo(json.dumps(outcome.as_json(), indent=2) if as_json
                else "\n".join(outcome.lines()))
     return 0

@@ -12,7 +12,8 @@ import click
 
 from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
-from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
+from mcl2pnml.core.bounds import (MAX_MISSION_SIZE, MAX_PROPERTIES_SIZE,
+                                  MAX_PROPERTY_ATOMS as PROPERTY_ATOMS)
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 from mcl2pnml.runtime.limits import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
@@ -30,6 +31,11 @@ LENIENT_OPTION = click.option(
          "markings, TAPAAL's own format, WoPeD's subprocesses, several nets) that the strict "
          "reading refuses (docs/pnml.md). A proof never rests on it: a certificate beside "
          "the file is not taken, and certify --check always reads strictly.")
+MISSION_SIZE = f"{MAX_MISSION_SIZE >> 20}M"
+MISSION_SIZE_OPTION = click.option(
+    "--max-mission-size", "max_mission_size", metavar="SIZE", default=MISSION_SIZE,
+    show_default=True, help="Refuse a mission (an .mcl file) larger than this, before "
+    "reading it.")
 PROPERTIES_SIZE = f"{MAX_PROPERTIES_SIZE >> 20}M"
 PROPERTIES_SIZE_OPTION = click.option(
     "--max-properties-size", "max_props_size", metavar="SIZE", default=PROPERTIES_SIZE,
@@ -82,6 +88,7 @@ def _properties_options(what: str):
 CHECK_OPTIONS = _composed(  # check MISSION
     _properties_options("Also print each property compiled to place formulas"),
     STRICT_OPTION,
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -117,6 +124,7 @@ COMPILE_OPTIONS = _composed(  # compile MISSION
     PROPERTIES_SIZE_OPTION,
     ATOMS_OPTION,
     STRICT_OPTION,
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -184,6 +192,7 @@ RUN_OPTIONS = _composed(  # run MISSION
                  "go on, append."),
     NET_OPTION,
     LENIENT_OPTION,
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -204,6 +213,7 @@ SHOW_OPTIONS = _composed(  # show WHAT
                                          "the run's outcome."),
     NET_OPTION,
     LENIENT_OPTION,
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -218,6 +228,7 @@ CERTIFY_OPTIONS = _composed(  # certify MISSION
                  "mission.ABORTED."),
     _certificate_size_option("With --check: refuse a certificate larger than this, before "
                              "reading it."),
+    MISSION_SIZE_OPTION,
     NET_OPTION,
 )
 
@@ -288,6 +299,7 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
     ATOMS_OPTION,
     NET_OPTION,
     LENIENT_OPTION,
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -311,6 +323,7 @@ QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
                       "things at once (docs/interop.md)."),
     NET_OPTION,
     LENIENT_OPTION,
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -328,6 +341,7 @@ ODDS_OPTIONS = _composed(  # odds MISSION
     _properties_options("Also the probability that each property holds"),
     click.option("--max-states", type=click.IntRange(min=1), default=200_000,
                  show_default=True, help="Refuse a chain of more states than this."),
+    MISSION_SIZE_OPTION,
 )
 
 
@@ -367,4 +381,5 @@ CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
     click.option("--progress/--no-progress", default=None,
                  help="Show a bar of the runs done, their rate and the time left (default: "
                       "on a terminal)."),
+    MISSION_SIZE_OPTION,
 )

@@ -50,11 +50,24 @@ __all__ = [
 
 # -- the language: MCL to a net (section 2.4) ---------------------------------------------
 
-def check_file(path: str | Path):
-    """Parse and check an MCL file: the resolved program the compiler takes."""
+def check_file(path: str | Path, max_size: int | str | None = None):
+    """Parse and check an MCL file: the resolved program the compiler takes.
+
+    A file over ``max_size`` bytes (or as ``--max-mission-size`` takes it; default
+    :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`) is refused before it is read: every
+    command and call that reads a mission reads it here."""
     from mcl2pnml.language.checker import check
     from mcl2pnml.language.parser import parse_file
-    return check(parse_file(path))
+    return check(parse_file(path, None, mission_limit(max_size), "--max-mission-size"))
+
+
+def mission_limit(max_size: int | str | None = None) -> int:
+    """The largest mission read, in bytes: ``max_size`` (or as ``--max-mission-size``
+    takes it, :func:`parse_size`), else :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`."""
+    from mcl2pnml.core.bounds import MAX_MISSION_SIZE
+    if max_size is None:
+        return MAX_MISSION_SIZE
+    return parse_size(max_size, "--max-mission-size") if isinstance(max_size, str) else max_size
 
 
 def check_source(text: str, filename: str = "<mcl>"):
@@ -94,7 +107,8 @@ def _user_templates_proven() -> None:
 
 def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,
                   max_memory: int | str | None = None, max_size: int | str | None = None,
-                  max_atoms: int | None = None, checked=None
+                  max_atoms: int | None = None, checked=None,
+                  max_mission_size: int | str | None = None
                   ) -> tuple[Net, tuple["Property", ...]]:
     """The compiled net of ``mission`` and its properties compiled to predicates on its
     places (:mod:`mcl2pnml.language.properties`): those the mission declares, then those
@@ -105,13 +119,13 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
     refused before it is read, and properties of more than ``max_atoms`` atoms in all
     once parsed, before they are checked (defaults: the limits of
     :mod:`mcl2pnml.core.bounds`). ``checked``: the mission already checked, not read
-    again."""
+    again; else it is read within ``max_mission_size`` (:func:`check_file`)."""
     from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS
     from mcl2pnml.language.parser import parse_file
     from mcl2pnml.language.properties import check_atoms, check_side_file, compile_properties
     if isinstance(max_size, str):
         max_size = parse_size(max_size, "--max-properties-size")
-    checked = check_file(mission) if checked is None else checked
+    checked = check_file(mission, max_mission_size) if checked is None else checked
     side = None if extra is None else parse_file(
         extra, "properties file", MAX_PROPERTIES_SIZE if max_size is None else max_size,
         "--max-properties-size")
@@ -128,7 +142,8 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
 
 
 def compile_file(path: str | Path, *, reduced: bool = False,
-                 max_memory: int | str | None = None, checked=None) -> Net:
+                 max_memory: int | str | None = None, checked=None,
+                 max_mission_size: int | str | None = None) -> Net:
     """The mission in ``path`` compiled to one net, within the memory budget.
 
     A mission's net is about as large as its text is long, but only the
@@ -136,12 +151,13 @@ def compile_file(path: str | Path, *, reduced: bool = False,
     (:func:`mcl2pnml.core.memory.guard`; ``max_memory`` in bytes or as
     ``--max-memory`` takes it, default half the memory available), which
     stops it with one message instead of the kernel killing the process.
-    ``checked``: the file already checked (:func:`check_file`), not read again.
+    ``checked``: the file already checked (:func:`check_file`), not read again; else it
+    is read within ``max_mission_size``.
     """
     from mcl2pnml.core.memory import Budget, guard
     if isinstance(max_memory, str):
         max_memory = parse_size(max_memory)
-    checked = check_file(path) if checked is None else checked
+    checked = check_file(path, max_mission_size) if checked is None else checked
     with guard(Budget(max_memory), f"compiling {path}"):
         return compile_checked(checked, reduced=reduced)
 
@@ -167,7 +183,8 @@ def functional_form(checked, *, functions: bool = False) -> list[str]:
 # -- nets in files -------------------------------------------------------------------------
 
 def load_net(path: str | Path, net_id: str | None = None,
-             max_memory: int | str | None = None, lenient: bool = False) -> Net:
+             max_memory: int | str | None = None, lenient: bool = False,
+             max_mission_size: int | str | None = None) -> Net:
     """A net from any file: a mission (``.mcl``, compiled) or a format of the table.
 
     A PNML file is read strictly (docs/pnml.md: refused, or read as the net other
@@ -190,7 +207,7 @@ def load_net(path: str | Path, net_id: str | None = None,
     if lenient:
         raise OptionError("--lenient", "a mission is compiled, not read as PNML; leave out "
                                        "--lenient")
-    return compile_file(path, max_memory=max_memory)
+    return compile_file(path, max_memory=max_memory, max_mission_size=max_mission_size)
 
 
 def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
@@ -318,13 +335,14 @@ def template_clusters(name: str) -> dict[str, list[str]]:
 
 # -- certificates (sections 2.3-2.5: proven from the parts) --------------------------------
 
-def certify_file(mission: str | Path, abort_pending: bool = False
+def certify_file(mission: str | Path, abort_pending: bool = False,
+                 max_mission_size: int | str | None = None
                  ) -> tuple[dict[str, Any], Net, list[str]]:
     """The certificate of ``mission`` (:mod:`mcl2pnml.certify.certificate`), its compiled
     net (with ``mission.A`` marked too if ``abort_pending``), and what the independent
     checker finds wrong with the pair (nothing: it holds)."""
     from mcl2pnml.core.payloads import MissionPlace
-    checked = check_file(mission)
+    checked = check_file(mission, max_mission_size)
     net = compile_checked(checked)
     if abort_pending:
         net = net.with_initial({**net.initial, MissionPlace.A.id: 1})
@@ -427,10 +445,11 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000,
     return check_all(net, properties, max_states, stubborn=stubborn, safe=safe)
 
 
-def proven_safe_by_certificate(mission: Path, net: Net) -> bool:
+def proven_safe_by_certificate(mission: Path, net: Net,
+                               max_mission_size: int | str | None = None) -> bool:
     """Whether the mission's certificate, made now from its parts, holds for ``net``: the
     checker then proves it 1-safe (:mod:`mcl2pnml.certify`)."""
-    _, problems = _certified(check_file(mission), net)
+    _, problems = _certified(check_file(mission, max_mission_size), net)
     return not problems
 
 
@@ -454,14 +473,15 @@ MAX_COUNTEREXAMPLES = 100
 
 
 def witnesses(mission: Path, net: Net, verdicts, most: int | None = None,
-              timing: "Assumptions | None" = None) -> list:
+              timing: "Assumptions | None" = None,
+              max_mission_size: int | str | None = None) -> list:
     """For each verdict, its :class:`~mcl2pnml.counterexample.Witness` when it fails
     (the counterexample in the mission's terms, the vehicle script that replays a violation
     on both engines, or why none does), else None. ``net`` is ``mission``'s compiled net.
     ``most``: only the first ``most`` failing verdicts are explained, the others' are None,
     and cost nothing."""
     from mcl2pnml.counterexample import witness
-    checked = check_file(mission)
+    checked = check_file(mission, max_mission_size)
     out, left = [], most
     for v in verdicts:
         if v.shape is None or left == 0:
@@ -684,8 +704,8 @@ def compile_mission(mission: Path, output: Path | None = None, fmt: str = "pnml"
                     tool: str = "verifypn", max_memory: str | None = None,
                     ack_within: str | None = None, report_gap: str | None = None,
                     properties: str | None = None, max_props_size=None, max_atoms=None,
-                    strict: bool = False, note: Callable[[str], None] = lambda line: None
-                    ) -> list[Path]:
+                    strict: bool = False, max_mission_size: int | str | None = None,
+                    note: Callable[[str], None] = lambda line: None) -> list[Path]:
     """``mcl2pnml compile``, its options by their names: the net and what goes beside it
     (the queries, the properties' files, a timed-arc net's queries), every output checked
     against the inputs and each other before anything is written; each line said handed to
@@ -706,7 +726,7 @@ def compile_mission(mission: Path, output: Path | None = None, fmt: str = "pnml"
     check_outputs(outputs + [("--properties", path) for path in
                              (property_query_files(stem).values() if properties is not None
                               else ())], inputs)
-    checked = check_file(mission)   # its warnings before anything is written
+    checked = check_file(mission, max_mission_size)   # its warnings before anything is written
     warned(mission, checked, strict, note)
     net, props = _compiled_with_properties(mission, checked, properties, extra, max_memory,
                                            max_props_size, max_atoms)
@@ -757,7 +777,8 @@ def _saved_beside(net: Net, output: Path, timing, queries: Path | None, tool: st
 def certify_command(mission: Path, output: Path | None = None, net_file: Path | None = None,
                     net_id: str | None = None, abort_pending: bool = False,
                     max_cert: int | str = MAX_CERTIFICATE,
-                    note: Callable[[str], None] = lambda line: None
+                    note: Callable[[str], None] = lambda line: None,
+                    max_mission_size: int | str | None = None
                     ) -> tuple[dict[str, Any], Net, list[str]]:
     """``mcl2pnml certify``: the mission certified and its certificate written (only if it
     holds), or with ``net_file`` a certificate re-checked against that net; the certificate,
@@ -767,7 +788,7 @@ def certify_command(mission: Path, output: Path | None = None, net_file: Path | 
         if output is not None:
             raise OptionError("-o", "--check writes nothing")
         cert = load_certificate(mission, max_cert)
-        net = load_net(net_file, net_id)
+        net = load_net(net_file, net_id, max_mission_size=max_mission_size)
         return cert, net, check_certificate(net, cert, shaped=True)
     if net_id is not None:
         raise OptionError("--net", "only --check reads a net file")
@@ -776,7 +797,7 @@ def certify_command(mission: Path, output: Path | None = None, net_file: Path | 
                                      "certificate, add --check NET.pnml")
     output = output or mission.with_name(mission.stem + ".cert.json")
     check_outputs([("-o", output)], [("the mission", mission)])
-    cert, net, problems = certify_file(mission, abort_pending)
+    cert, net, problems = certify_file(mission, abort_pending, max_mission_size)
     if not problems:
         save_certificate(cert, output)
         note(f"wrote {output}")
@@ -851,6 +872,7 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
                  max_cert: int | str = MAX_CERTIFICATE, timed: bool | None = None,
                  ack_within: str = "0", report_gap: str = "1", fair_reports: bool = False,
                  urgency_only: bool = False, stubborn: bool = False, lenient: bool = False,
+                 max_mission_size: int | str | None = None,
                  progress: Callable[[int, int], None] | None = None,
                  note: Callable[[str], None] = lambda line: None) -> AnalyzeOutcome:
     """``mcl2pnml analyze FILE``, its options by their names (``--help`` says them), as one
@@ -880,7 +902,7 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
         raise OptionError("--stubborn", "the reduction is of the untimed check of properties: "
                                         "add --untimed --properties")
     net, props, extra = _analyzed_net(file, net_id, properties, max_memory, max_props_size,
-                                      max_atoms, lenient)
+                                      max_atoms, lenient, max_mission_size)
     if folder is not None:      # before the analysis: a folder that cannot be is said at once
         _counterexample_folder(file, folder, props, extra)
     start = None if initial is None else parse_marking(initial, net, str(file))
@@ -902,17 +924,18 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
         if progress is not None:
             note("")   # the progress line ended
         if props is not None:
-            verdicts = _untimed_verdicts(file, net, props, start, max_states, stubborn)
+            verdicts = _untimed_verdicts(file, net, props, start, max_states, stubborn,
+                                         max_mission_size)
             if stubborn:
                 result["stubborn"] = True
     asked = explain or folder is not None
     explained = None
     if verdicts is not None and asked:
         explained = witnesses(file, net, verdicts, max_counterexamples,
-                              assumptions if timed else None)
+                              assumptions if timed else None, max_mission_size)
         _say_left_out(verdicts, explained, say)
     written = [] if folder is None or explained is None else \
-        _save_witnesses(folder, file, verdicts, explained, say)
+        _save_witnesses(folder, file, verdicts, explained, say, max_mission_size)
     return AnalyzeOutcome(
         result, None if verdicts is None else tuple(verdicts),
         None if explained is None else tuple(explained), ends, tuple(said), tuple(written),
@@ -920,12 +943,13 @@ def analyze_file(file: str | Path, *, initial: str | None = None, state_space: b
 
 
 def _untimed_verdicts(file: Path, net: Net, props, start, max_states: int,
-                      stubborn: bool) -> list:
+                      stubborn: bool, max_mission_size: int | str | None = None) -> list:
     """The properties' verdicts on the net's runs; with ``stubborn`` the reduction, once
     the mission's certificate proves the net 1-safe (from its own start only: another
     start needs a P-invariant to), or refused saying why."""
     from analysis.onthefly import NotProvenSafe
-    safe = stubborn and start is None and proven_safe_by_certificate(file, net)
+    safe = stubborn and start is None and proven_safe_by_certificate(file, net,
+                                                                     max_mission_size)
     try:
         return check_properties(net if start is None else net.with_initial(start), props,
                                 max_states, stubborn=stubborn, safe=safe)
@@ -948,13 +972,14 @@ def _explanations_possible(properties: str | None, initial: str | None,
 
 
 def _analyzed_net(file: Path, net_id: str | None, properties: str | None, max_memory,
-                  max_size, max_atoms, lenient: bool = False
+                  max_size, max_atoms, lenient: bool = False,
+                  max_mission_size: int | str | None = None
                   ) -> tuple[Net, tuple | None, Path | None]:
     """The net ``analyze`` reads, and with ``--properties`` the properties and their side
     file, read, counted and checked before the analysis, which they may make long. A net
     read with ``lenient`` is explored: a certificate beside it is never taken for it."""
     if properties is None:
-        return load_net(file, net_id, max_memory, lenient), None, None
+        return load_net(file, net_id, max_memory, lenient, max_mission_size), None, None
     if lenient:
         raise OptionError("--lenient", "properties are a mission's, compiled, not read as "
                                        "PNML; leave out --lenient")
@@ -965,7 +990,7 @@ def _analyzed_net(file: Path, net_id: str | None, properties: str | None, max_me
                                    "leave out --net")
     extra = properties_file(file, properties)
     net, props = properties_of(file, extra=extra, max_memory=max_memory, max_size=max_size,
-                               max_atoms=max_atoms)
+                               max_atoms=max_atoms, max_mission_size=max_mission_size)
     return net, props, extra
 
 
@@ -1014,13 +1039,14 @@ def _say_left_out(verdicts, explained, say: Callable[[str], None]) -> None:
 
 
 def _save_witnesses(folder: Path, file: Path, verdicts, explained,
-                    say: Callable[[str], None]) -> list[Path]:
+                    say: Callable[[str], None],
+                    max_mission_size: int | str | None = None) -> list[Path]:
     """Each explained counterexample's files (:func:`save_witness`); one page content for
     all, since a run does not change the mission's drawing."""
     written: list[Path] = []
     if not any(w is not None for w in explained):
         return written
-    page = show_nets(str(file), with_run=True)
+    page = show_nets(str(file), with_run=True, max_mission_size=max_mission_size)
     for v, w in zip(verdicts, explained):
         if w is not None:
             for path in save_witness(folder, file, v, w, page):
@@ -1062,13 +1088,13 @@ def properties_file(mission: Path, properties: str) -> Path | None:
 
 # -- running -------------------------------------------------------------------------------
 
-def _engine_for(mission: Path, net_id: str | None, lenient: bool = False
-                ) -> Callable[[str], Any]:
+def _engine_for(mission: Path, net_id: str | None, lenient: bool = False,
+                max_mission_size: int | str | None = None) -> Callable[[str], Any]:
     """How to build each engine for ``mission`` (the reference engine reads MCL only)."""
     def make(kind: str):
         from mcl2pnml.runtime.executor import PetriEngine
         if mission.suffix == ".mcl":
-            checked = check_file(mission)
+            checked = check_file(mission, max_mission_size)
             if kind == "reference":
                 from mcl2pnml.runtime.reference import ReferenceEngine
                 return ReferenceEngine(checked)
@@ -1089,7 +1115,7 @@ def _engine_for(mission: Path, net_id: str | None, lenient: bool = False
 def run_mission(mission: str | Path, options: "RunOptions | None" = None, *,
                 text: IO[str] | None = None, log_path: str | Path | None = None,
                 note: Callable[[str], None] = lambda line: None, net_id: str | None = None,
-                lenient: bool = False):
+                lenient: bool = False, max_mission_size: int | str | None = None):
     """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle;
     ``lenient``: a PNML read the forgiving way (docs/pnml.md).
 
@@ -1098,8 +1124,8 @@ def run_mission(mission: str | Path, options: "RunOptions | None" = None, *,
     """
     from mcl2pnml.runtime.session import RunOptions, run_session
     mission = Path(mission)
-    return run_session(mission, options or RunOptions(), _engine_for(mission, net_id, lenient),
-                       text=text,
+    return run_session(mission, options or RunOptions(),
+                       _engine_for(mission, net_id, lenient, max_mission_size), text=text,
                        log_path=Path(log_path) if log_path else None, note=note)
 
 
@@ -1124,7 +1150,7 @@ class Shown:
 
 
 def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
-              lenient: bool = False) -> Shown:
+              lenient: bool = False, max_mission_size: int | str | None = None) -> Shown:
     """The page's title, the nets it shows for ``what``, each with its label, and the tree.
 
     A mission: the mission and its reduced model (Fig. 3), and its
@@ -1146,7 +1172,7 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
         from mcl2pnml.core.payloads import MISSION
         from mcl2pnml.language.functional import (function_expression, instances,
                                                   mission_expression)
-        checked = check_file(path)
+        checked = check_file(path, max_mission_size)
         trees = [(MISSION, instances(mission_expression(checked.mission), MISSION, ""))]
         trees += [(name, instances(function_expression(checked.functions[name]), name, name))
                   for name in checked.function_order]
@@ -1261,7 +1287,8 @@ class QueryOutcome:
 def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[str] = (), *,
                net_id: str | None = None, max_states: int = 5_000_000,
                max_memory: int | str | None = None, stubborn: bool = False,
-               lenient: bool = False) -> QueryOutcome:
+               lenient: bool = False, max_mission_size: int | str | None = None
+               ) -> QueryOutcome:
     """``mcl2pnml query``: the Model Checking Contest's formula files (and generic
     examinations) answered on any net we read (:mod:`analysis.mcc`)."""
     from analysis import mcc
@@ -1269,7 +1296,7 @@ def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[
     if not formulas and not examinations:
         raise OptionError("FORMULAS", "give a formula file of the contest, or --examination")
     queries = [x for path in formulas for x in read_queries(path)]
-    net = load_net(net_path, net_id, max_memory, lenient)
+    net = load_net(net_path, net_id, max_memory, lenient, max_mission_size)
     if isinstance(max_memory, str):
         max_memory = parse_size(max_memory)
     answers = mcc.answer(net, queries, max_states=max_states, max_memory=max_memory,
@@ -1341,6 +1368,7 @@ def _s(seconds: float | None) -> str:
 def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
               sensitivity: bool = False, prism: Path | None = None,
               properties: str | None = None, max_props_size=None, max_atoms=None,
+              max_mission_size: int | str | None = None,
               note: Callable[[str], None] = lambda line: None) -> OddsOutcome:
     """``mcl2pnml odds``: the exact odds of a mission (MCL) with a vehicle model; with
     ``properties`` (``--properties [FILE]``, as :func:`properties_file` reads it) the
@@ -1359,10 +1387,10 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
                                           ("the properties file (--properties)", extra)])
     model = VehicleModel.load(model_path)
     if properties is None:
-        net, props = compile_checked(check_file(mission)), ()
+        net, props = compile_checked(check_file(mission, max_mission_size)), ()
     else:
         net, props = properties_of(mission, extra=extra, max_size=max_props_size,
-                                   max_atoms=max_atoms)
+                                   max_atoms=max_atoms, max_mission_size=max_mission_size)
     limit = max_states or exact.MAX_STATES
     used = PetriEngine(net).primitives_used()
     model.check_primitives(used)
@@ -1381,6 +1409,7 @@ def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: 
                   workers: int | None = None, scheduler: str | None = None,
                   world: Path | None = None, faults: Path | None = None,
                   properties: str | None = None, max_props_size=None, max_atoms=None,
+                  max_mission_size: int | str | None = None,
                   table: Path | None = None, plot: Path | None = None,
                   max_time: float = 24 * 3600.0,
                   progress: Callable[[int, int], None] | None = None,
@@ -1419,10 +1448,10 @@ def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: 
                    ("the properties file (--properties)", extra)])
     # every file refused here, with its place, not on a worker
     if properties is None:
-        net, props = compile_checked(check_file(mission)), ()
+        net, props = compile_checked(check_file(mission, max_mission_size)), ()
     else:
         net, props = properties_of(mission, extra=extra, max_size=max_props_size,
-                                   max_atoms=max_atoms)
+                                   max_atoms=max_atoms, max_mission_size=max_mission_size)
     used = PetriEngine(net).primitives_used()
     if model_path is not None:
         VehicleModel.load(model_path).check_primitives(used)

@@ -1,6 +1,7 @@
-"""Every input has a bound, checked before the work it would cost: a properties file's
-size before it is read, its atoms before they are checked, the counterexamples explained
-before they are searched for; and no counterexample is written over an input.
+"""Every input has a bound, checked before the work it would cost: a mission's size and a
+properties file's before they are read, the atoms before they are checked, the
+counterexamples explained before they are searched for; and no counterexample is written
+over an input. What a mission's size lets through is read and checked in linear work.
 
 Each case is the command line and its one message, exit status 2, no traceback, nothing
 written or overwritten. Nothing is timed: each refusal is shown to come before the stage
@@ -14,9 +15,10 @@ import os
 import pytest
 
 from helpers import ROOT, cli, one_error, run_cli
+from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.files import read_bytes, read_text
-from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS
+from mcl2pnml.core.bounds import MAX_MISSION_SIZE, MAX_PROPERTY_ATOMS
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
 
@@ -231,3 +233,168 @@ def test_a_query_file_of_compile_is_not_written_over_the_properties_file(mission
     one_error(out, "--properties: 'x.LTLCardinality.xml' is the properties file "
                    "(--properties), which this command reads")
     assert contents(mission.parent) == kept
+
+
+# -- a mission's size, checked before it is read, by every command that reads one ------------
+
+#: Each command that reads a mission (MISSION.mcl, or FILE given as one), with what else it
+#: needs to reach the reading.
+READ_A_MISSION = {
+    "check": (), "functional": (), "compile": (), "run": (), "analyze": (), "certify": (),
+    "show": (), "query": ("--examination", "OneSafe"), "campaign": ("--runs", "1"),
+    "odds": ("--vehicle-model", str(ROOT / "examples" / "sauce.model.json")),
+}
+TOO_LARGE = ("m.mcl: cannot read: it is 17.0 MiB, over the limit of 16.0 MiB "
+             "(--max-mission-size to raise it)")
+
+
+def test_every_command_that_reads_a_mission_has_the_bound():
+    from mcl2pnml.cli import main
+    bounded = {name for name, command in main.commands.items()
+               if any(p.name == "max_mission_size" for p in command.params)}
+    assert bounded == set(READ_A_MISSION)
+    # one default, in core/bounds.py: the option's is the same number of bytes
+    from mcl2pnml.cli_options import MISSION_SIZE
+    assert pipeline.parse_size(MISSION_SIZE) == pipeline.mission_limit() == MAX_MISSION_SIZE
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("command", sorted(READ_A_MISSION))
+def test_a_mission_too_large_is_refused_before_it_is_read(tmp_path, monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    sparse(tmp_path / "m.mcl", 17 << 20)
+    kept = contents(tmp_path)
+    out = cli(command, "m.mcl", *READ_A_MISSION[command])
+    one_error(out)
+    assert first_line(out) == TOO_LARGE
+    assert contents(tmp_path) == kept                 # nothing written
+    # raised to its size, it is read, and refused for what it holds: NUL bytes
+    out = cli(command, "m.mcl", *READ_A_MISSION[command], "--max-mission-size", "17M")
+    one_error(out, "m.mcl:1:1: this is not an MCL text file (a NUL byte: binary?)")
+    assert contents(tmp_path) == kept
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("command", sorted(READ_A_MISSION))
+def test_a_mission_that_is_a_fifo_is_refused_not_waited_on(tmp_path, command):
+    fifo = tmp_path / "m.mcl"
+    os.mkfifo(fifo)
+    out = run_cli(command, "m.mcl", *READ_A_MISSION[command], "--max-mission-size", "1G",
+                  cwd=tmp_path, timeout=30)
+    # show takes a template's name too: a mission is a regular file, or no file of its
+    one_error(out, "no file 'm.mcl'" if command == "show" else
+              "m.mcl: cannot read: this is a FIFO (named pipe), not a regular file")
+
+
+def test_a_bad_size_is_the_options_error(mission):
+    out = run_cli("check", "m.mcl", "--max-mission-size", "lots", cwd=mission.parent)
+    one_error(out)
+    assert out.stderr.splitlines() == ["mcl2pnml check: error: Invalid value for --max-mission-size: "
+                               "'lots': a size is a number with K, M, G or T (4G, 500M) (see "
+                               "'mcl2pnml check --help')"]
+
+
+@pytest.mark.timeout(120)
+def test_the_facade_bounds_every_mission_it_reads(tmp_path):
+    big = sparse(tmp_path / "m.mcl", 17 << 20)
+    reads = {
+        "check_file": lambda **size: pipeline.check_file(big, *size.values()),
+        "compile_file": lambda **size: pipeline.compile_file(big, **size),
+        "load_net": lambda **size: pipeline.load_net(big, **size),
+        "properties_of": lambda **size: pipeline.properties_of(big, **size),
+        "certify_file": lambda **size: pipeline.certify_file(big, **size),
+        "show_nets": lambda **size: pipeline.show_nets(str(big), **size),
+        "run_mission": lambda **size: pipeline.run_mission(big, **size),
+        "analyze_file": lambda **size: pipeline.analyze_file(big, **size),
+        "query_file": lambda **size: pipeline.query_file(big, (), ("OneSafe",), **size),
+    }
+    for name, read in reads.items():
+        with pytest.raises(Mcl2PnmlError) as refused:
+            read()
+        assert str(refused.value) == TOO_LARGE.replace("m.mcl", str(big)), name
+        # raised, in bytes or as the option writes it, the file is read
+        for size in (17 << 20, "17M"):
+            with pytest.raises(Mcl2PnmlError, match="a NUL byte"):
+                read(max_mission_size=size) if name != "check_file" else read(max_size=size)
+
+
+# -- what the bound lets through is read in linear work ----------------------------------------
+
+HEAD = """primitive GoToWayPoint(wp);
+primitive KeepDepth(d);
+task Goto(wp) = AchieveGoal(GoToWayPoint(wp)) timeout 100;
+task Depth(d) = AchieveGoal(KeepDepth(d)) timeout 60;
+"""
+
+
+def _consts(n: int) -> str:        # each const named by the one before: a chain n long
+    return (HEAD + "".join(f"const C{i} = C{i + 1};\n" for i in range(n))
+            + f"const C{n} = 1;\nmission {{ Depth(C0); }}\n")
+
+
+def _relay(n: int) -> str:         # each function running the next in parallel (W002's walk)
+    from bench.missions import relay
+    return relay(n)
+
+
+def _watched(n: int) -> str:       # each function watching the next (W005's walk)
+    return (HEAD + "".join(f"function F{i}() {{ if (monitor(F{i + 1}(), Depth({i}))) then "
+                           f"{{ Goto({i}); }} }}\n" for i in range(n))
+            + f"function F{n}() {{ Goto(0); }}\nmission {{ F0(); }}\n")
+
+
+def _undeclared(n: int) -> str:    # n errors, each of which could search n names
+    return ("".join(f"primitive P{i}(x);\ntask T{i}(x) = AchieveGoal(P{i}(x)) timeout 5;\n"
+                    for i in range(n))
+            + "mission {\n" + "".join(f"U{i}({i});\nP{i}({i});\n" for i in range(n)) + "}\n")
+
+
+def _recursive(n: int) -> str:     # n cycles, each through the whole chain
+    return (HEAD + "".join(f"function F{i}() {{ F{i + 1}(); F0(); }}\n" for i in range(n))
+            + f"function F{n}() {{ Depth(2); }}\nmission {{ F0(); }}\n")
+
+
+def _survey(n: int) -> str:
+    from bench.missions import survey
+    return survey(n)
+
+
+def work(text: str) -> tuple[int, int]:
+    """What ``check`` does with ``text`` (parse, check, the warnings, the message of every
+    error), counted: the Python and C functions called, and the peak of the memory
+    allocated (tracemalloc). Both are the same on every run: no clock is read."""
+    import sys
+    import tracemalloc
+
+    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.lint import lint
+    from mcl2pnml.language.parser import parse
+    parse("mission { }", "warm.mcl")             # the parser is built once, not counted
+    calls = 0
+
+    def count(frame, event, arg):
+        nonlocal calls
+        calls += event in ("call", "c_call")
+    tracemalloc.start()
+    sys.setprofile(count)
+    try:
+        lint(check(parse(text, "m.mcl")))
+    except Mcl2PnmlError as e:
+        str(e)
+    finally:
+        sys.setprofile(None)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+    return calls, peak
+
+
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("shape", [_survey, _consts, _relay, _watched, _undeclared, _recursive],
+                         ids=lambda f: f.__name__[1:])
+def test_reading_and_checking_a_mission_is_linear_in_its_size(shape):
+    # four times the mission, four times the work: a quadratic step gives sixteen (the
+    # warnings' walk through the functions below each parallel or monitor, "did you
+    # mean" searching every name for every error, every cycle spelled out in full)
+    (calls, peak), (calls4, peak4) = work(shape(200)), work(shape(800))
+    assert calls4 / calls < 5, (calls, calls4)
+    assert peak4 / peak < 5, (peak, peak4)

@@ -16,8 +16,9 @@ through the analysis's 64-bit counters):
 * any other number in MCL: an integer of at most :data:`MAX_INTEGER` in
   size, or a finite decimal (a double).
 
-And the properties a command reads: a side file of at most
-:data:`MAX_PROPERTIES_SIZE` bytes, checked before it is read, and at most
+And the missions and properties a command reads: a mission of at most
+:data:`MAX_MISSION_SIZE` bytes and a side file of properties of at most
+:data:`MAX_PROPERTIES_SIZE`, each checked before it is read, and at most
 :data:`MAX_PROPERTY_ATOMS` atoms in all, counted once they are parsed.
 """
 from __future__ import annotations
@@ -30,6 +31,13 @@ MAX_TOKENS_TEXT = "2^63-1 (9,223,372,036,854,775,807)"
 MAX_SECONDS = 1_000_000_000
 #: The largest integer literal of MCL, in size (a decimal may be larger, up to a double's).
 MAX_INTEGER = 2 ** 63 - 1
+#: The largest MCL mission read, unless raised (``--max-mission-size``): a mission a person
+#: writes is a few KB (the examples' largest is 2 KB) and a generated survey of 100,000
+#: calls 2.3 MiB; reading and checking cost about 2 s and 65 MB a MiB, in proportion
+#: (bench/mission_scale.py), so that a mission at the limit is checked in under a minute
+#: within about 1 GB, and a file of gigabytes, which would exhaust the memory, is refused
+#: before a byte of it is read.
+MAX_MISSION_SIZE = 16 << 20
 #: The largest side file of properties read, unless raised (``--max-properties-size``):
 #: the examples' are a few KB; reading and parsing cost about 2 s and 50 MB a MiB.
 MAX_PROPERTIES_SIZE = 4 << 20

@@ -18,6 +18,10 @@ from typing import Iterable, Sequence
 EXCERPT_WIDTH = 100
 #: Error messages name at most this many of the valid choices.
 LISTED = 20
+#: "Did you mean" compares a name with at most this many choices, the nearest in
+#: alphabetical order: a comparison costs tens of microseconds, and a generated mission
+#: may declare hundreds of thousands of names.
+COMPARED = 2_000
 
 
 @dataclass(frozen=True)
@@ -130,10 +134,13 @@ def raise_all(errors: Iterable[Mcl2PnmlError]) -> None:
 
 def did_you_mean(name: str, valid: Iterable[str], what: str) -> str:
     """``"; did you mean 'Go'? declared tasks: Go, Stop"`` for error messages."""
+    import bisect
     import difflib
 
     valid = sorted(set(valid))
-    close = difflib.get_close_matches(name, valid, n=1)
+    at = bisect.bisect(valid, name)
+    near = valid[max(0, at - COMPARED // 2):at + COMPARED // 2]
+    close = difflib.get_close_matches(name, near, n=1)
     hint = f"; did you mean '{close[0]}'?" if close else ""
     listing = ", ".join(valid[:LISTED]) if valid else "none"
     if len(valid) > LISTED:

@@ -45,7 +45,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO, Iterable, Iterator
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import EXCERPT_WIDTH, Location, Mcl2PnmlError, OptionError
 
 #: The test hook: kill the process once an output is whole in its temporary file.
 KILL_BEFORE_REPLACE = "MCL2PNML_WRITE_KILL"
@@ -367,7 +367,10 @@ def decode_text(data: bytes, filename: str, what: str) -> str:
         line = before.count(b"\n") + 1
         start = before.rfind(b"\n") + 1
         end = data.find(b"\n", offset)
-        text = data[start:end if end >= 0 else len(data)]
+        # the line as far as its excerpt can show (a window around the fault, marked as
+        # cut): a file of megabytes on one line is not turned into text whole
+        end = min(end if end >= 0 else len(data), offset + 16 * EXCERPT_WIDTH)
+        text = data[start:end]
         # the line as far as it can be shown: undecodable bytes as U+FFFD,
         # control bytes as '?', so that the caret still lands under the fault
         shown = "".join(c if c.isprintable() or c == "\t" else "?"

@@ -15,7 +15,8 @@ from typing import Any, Iterable
 
 from mcl2pnml.language import ast
 from mcl2pnml.core.bounds import MAX_SECONDS
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
+from mcl2pnml.core.errors import (SHOWN_ERRORS, Location, Mcl2PnmlError, did_you_mean, raise_all,
+                                  source_lines)
 from mcl2pnml.language.library import Library, default_library
 from mcl2pnml.language.properties import property_errors
 from mcl2pnml.language.template_parser import Template, TemplateKind
@@ -51,14 +52,32 @@ class _Checker:
         self.lines = source_lines(program.source)
         self.errors: list[Mcl2PnmlError] = []
         self.names: dict[str, Any] = {}
+        self._of_kind: dict[type, list[str]] = {}
+        self._users: dict[str, list[str]] | None = None
 
     def error(self, pos: ast.Pos, message: str) -> None:
         src = self.lines[pos.line - 1] if 0 < pos.line <= len(self.lines) else None
         self.errors.append(Mcl2PnmlError(message, Location(self.p.file, pos.line or None,
                                                            pos.column or None, src)))
 
+    @property
+    def said(self) -> bool:
+        """Whether the next error is one of those shown (the first :data:`SHOWN_ERRORS`,
+        which come first): only those are worth their hint ("did you mean", a cycle), whose
+        search costs the size of the program, so that a file broken everywhere is not
+        searched once per error."""
+        return len(self.errors) < SHOWN_ERRORS
+
     def of_kind(self, kind) -> list[str]:
-        return [n for n, d in self.names.items() if isinstance(d, kind)]
+        """The names declared of ``kind``, sorted, found once (the declarations are all
+        in): :func:`did_you_mean` sorts sorted lists in linear time."""
+        if kind not in self._of_kind:
+            self._of_kind[kind] = sorted(n for n, d in self.names.items() if isinstance(d, kind))
+        return self._of_kind[kind]
+
+    def suggest(self, name: str, valid, what: str) -> str:
+        """:func:`did_you_mean` for an error that is shown, else nothing."""
+        return did_you_mean(name, valid(), what) if self.said else ""
 
     # -- declarations ------------------------------------------------------------------
 
@@ -100,6 +119,7 @@ class _Checker:
         """
         values: dict[str, Any] = {}
         visiting: list[str] = []
+        on_path: set[str] = set()       # visiting's names: a chain of consts is not searched
 
         def evaluate(v: ast.Value, where: str):
             if isinstance(v, ast.Number):
@@ -124,13 +144,14 @@ class _Checker:
                 """(known, its value), or (False, None) when its evaluation is pushed."""
                 if c.name in values:
                     return True, values[c.name]
-                if c.name in visiting:
+                if c.name in on_path:
                     cycle = visiting[visiting.index(c.name):] + [c.name]
                     self.error(c.pos, f"const '{c.name}' is defined in terms of itself: "
                                       + " -> ".join(cycle))
                     values[c.name] = None
                     return True, None
                 visiting.append(c.name)
+                on_path.add(c.name)
                 stack.append((c, evaluate(c.value, c.name)))
                 return False, None
 
@@ -142,7 +163,7 @@ class _Checker:
                     wanted = evaluation.send(sent)
                 except StopIteration as done:
                     stack.pop()
-                    visiting.pop()
+                    on_path.discard(visiting.pop())
                     values[c.name] = sent = done.value
                     continue
                 _, sent = enter(wanted)   # pushed: its evaluation starts with None
@@ -160,10 +181,9 @@ class _Checker:
                               "a value is a const, a literal"
                               + (", or a parameter" if params else ""))
             return
-        valid = self.of_kind(ast.Const) + params
         what = ("parameters and consts" if params else "consts")
         self.error(v.pos, f"undeclared name '{v.name}' in {where}"
-                   + did_you_mean(v.name, valid, what))
+                   + self.suggest(v.name, lambda: self.of_kind(ast.Const) + params, what))
 
     def check_args(self, args: Iterable[ast.Value], params: tuple[str, ...], where: str) -> None:
         for a in args:
@@ -191,7 +211,7 @@ class _Checker:
             template = patterns.get(task.pattern)
             if template is None:
                 self.error(task.pattern_pos, f"unknown task pattern '{task.pattern}'"
-                           + did_you_mean(task.pattern, patterns, "patterns"))
+                           + self.suggest(task.pattern, lambda: patterns, "patterns"))
             else:
                 out[task.name] = template
                 slots = len(template.primitives)
@@ -203,8 +223,9 @@ class _Checker:
                 prim = self.names.get(call.name)
                 if not isinstance(prim, ast.Primitive):
                     if prim is None:
-                        self.error(call.pos, f"undeclared primitive '{call.name}'" + did_you_mean(
-                            call.name, self.of_kind(ast.Primitive), "declared primitives"))
+                        self.error(call.pos, f"undeclared primitive '{call.name}'" + self.suggest(
+                            call.name, lambda: self.of_kind(ast.Primitive),
+                            "declared primitives"))
                     else:
                         self.error(call.pos, f"'{call.name}' is a {KIND[type(prim)]}, not a "
                                              "primitive")
@@ -229,12 +250,11 @@ class _Checker:
                 if isinstance(target, ast.Function):
                     calls.append(stmt.name)
             elif target is None:
-                self.error(stmt.pos, f"unknown task or function '{stmt.name}'" + did_you_mean(
-                    stmt.name, self.of_kind(ast.Task) + self.of_kind(ast.Function),
+                self.error(stmt.pos, f"unknown task or function '{stmt.name}'" + self.suggest(
+                    stmt.name, lambda: self.of_kind(ast.Task) + self.of_kind(ast.Function),
                     "declared tasks and functions"))
             elif isinstance(target, ast.Primitive):
-                users = [t.name for t in self.p.of(ast.Task)
-                         if any(c.name == stmt.name for c in t.primitives)]
+                users = self.users().get(stmt.name, [])
                 hint = (f"; call a task that uses it: {', '.join(users)}" if users else
                         f"; declare a task that uses it, e.g. task Do{stmt.name}() = "
                         f"AchieveGoal({stmt.name}(...));")
@@ -262,6 +282,15 @@ class _Checker:
             self.statements(stmt.condition, params, where, calls)
             self.statements(stmt.body, params, where, calls)
 
+    def users(self) -> dict[str, list[str]]:
+        """Each primitive's tasks, in declaration order, found once."""
+        if self._users is None:
+            self._users = {}
+            for t in self.p.of(ast.Task):
+                for name in dict.fromkeys(c.name for c in t.primitives):
+                    self._users.setdefault(name, []).append(t.name)
+        return self._users
+
     def functions(self) -> tuple[str, ...]:
         graph: dict[str, list[str]] = {}
         for f in self.p.of(ast.Function):
@@ -275,26 +304,32 @@ class _Checker:
         # legitimate program, far deeper than Python's recursion limit)
         order: list[str] = []
         state: dict[str, int] = {}         # 1: on the current path, 2: done
-        reported: set[frozenset[str]] = set()
+        at: dict[str, int] = {}            # where each function on the path is in it
+        # a cycle is found once per call that closes it (the call from the path's end): the
+        # path from its callee is the same at each, so that the call names the cycle
+        reported: set[tuple[str, str]] = set()
         for root in graph:
             if state.get(root) is not None:
                 continue
             state[root] = 1
             path = [root]
+            at[root] = 0
             stack = [iter(graph[root])]
             while stack:
                 for callee in stack[-1]:
                     if state.get(callee) == 1:
-                        cycle = path[path.index(callee):] + [callee]
-                        key = frozenset(cycle)
+                        key = (path[-1], callee)
                         if key not in reported:
                             reported.add(key)
-                            f = self.names[callee]
-                            self.error(f.pos, "recursion: " + " calls ".join(cycle)
+                            # spelled out where it is shown: a cycle may be the whole program
+                            cycle = (" calls ".join(path[at[callee]:] + [callee]) if self.said
+                                     else f"{callee} calls itself through {path[-1]}")
+                            self.error(self.names[callee].pos, "recursion: " + cycle
                                        + "; a mission must be finite, so functions may not "
                                          "call themselves, directly or not")
                     elif callee in graph and state.get(callee) is None:
                         state[callee] = 1
+                        at[callee] = len(path)
                         path.append(callee)
                         stack.append(iter(graph[callee]))
                         break

@@ -61,6 +61,7 @@ from dataclasses import dataclass
 from typing import Iterator, Sequence
 
 from mcl2pnml.core.errors import Location, shown as shown_errors, source_lines
+from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.language import ast
 from mcl2pnml.language.checker import Checked
 from mcl2pnml.language.functional import format_node, to_functional
@@ -97,6 +98,7 @@ class Warning:  # noqa: A001 (the name lark and sqlglot give it; this module's o
         return "\n".join([head] + ([excerpt] if excerpt else []) + [f"    fix: {self.fix}"])
 
 
+@without_gc     # a record per statement, nothing cyclic: millions of them in a 16 MiB mission
 def lint(checked: Checked) -> list[Warning]:
     """Every warning of a checked program, in source order, less those acknowledged."""
     found = _Lint(checked).run()
@@ -183,6 +185,18 @@ class _Lint:
                     self.up[id(c)] = _Up(s, role, i)
                 if isinstance(s, ast.Call) and s.name in checked.functions:
                     self.sites.setdefault(s.name, []).append(s)
+        # what can be shared: a name used through two calls or more (:meth:`reaches`)
+        edges: dict[str, int] = {}
+        for owner in [checked.mission, *checked.functions.values()]:
+            for s in _walk(owner.body):
+                if isinstance(s, ast.Call):
+                    edges[s.name] = edges.get(s.name, 0) + 1
+        for task in checked.tasks.values():
+            for prim in task.primitives:
+                edges["primitive " + prim.name] = edges.get("primitive " + prim.name, 0) + 1
+        self.shareable = {name for name, n in edges.items() if n > 1}
+        self._reached: dict[str, tuple[str, ...]] = {}
+        self._rank = {name: k for k, name in enumerate(checked.function_order)}
         self._ends: dict[str, bool] = {}
         self._ended: dict[int, bool] = {}
         self._fails: dict[str, bool] = {}
@@ -312,28 +326,55 @@ class _Lint:
         return flags
 
     def uses(self, s) -> dict[str, ast.Call]:
-        """The tasks, functions and primitives ``s`` uses, through functions too, each with
-        the call in ``s`` that leads to it."""
+        """The tasks, functions and primitives ``s`` uses that two parts of a program can
+        share (:meth:`reaches`), through functions too, each with the call in ``s`` that
+        leads to it, in the order a depth-first walk of the calls meets them."""
         out: dict[str, ast.Call] = {}
-        seen: set[str] = set()
         for x in _walk(s):
-            if not isinstance(x, ast.Call):
-                continue
-            todo = [x.name]
-            while todo:
-                name = todo.pop()
-                if name in seen:
-                    continue
-                seen.add(name)
-                out.setdefault(name, x)
-                task = self.c.tasks.get(name)
-                if task is not None:
-                    for prim in task.primitives:
-                        out.setdefault("primitive " + prim.name, x)
-                elif name in self.c.functions:
-                    todo.extend(c.name for c in _walk(self.c.functions[name].body)
-                                if isinstance(c, ast.Call))
+            if isinstance(x, ast.Call):
+                for name in self.reaches(x.name):
+                    out.setdefault(name, x)
         return out
+
+    def reaches(self, name: str) -> tuple[str, ...]:
+        """What a call of ``name`` uses, itself included, that can be shared, in the order a
+        depth-first walk of the calls meets it; each function's found once, callees first.
+
+        Only a name used by two calls or more (a task's use of a primitive counts as
+        one) can be used by two parts: two walks that meet first meet at such a name,
+        which is then the first shared one a walk finds. The rest is left out, so that
+        what a function reaches is not walked again for each call, nor kept whole for
+        each of a chain of functions: the rules stay linear in the program.
+        """
+        known = self._reached.get(name)
+        if known is not None:
+            return known
+        if name not in self.c.functions:             # a task: itself, then its primitives
+            task = self.c.tasks[name]
+            found = dict.fromkeys(n for n in [name] + ["primitive " + p.name
+                                                       for p in task.primitives]
+                                  if n in self.shareable)
+            self._reached[name] = tuple(found)
+            return self._reached[name]
+        pending, stack = set(), [name]              # the functions not yet known it reaches
+        while stack:
+            f = stack.pop()
+            if f in pending or f in self._reached or f not in self.c.functions:
+                continue
+            pending.add(f)
+            stack.extend(self._callees(f))
+        for f in sorted(pending, key=self._rank.__getitem__):
+            found = dict.fromkeys([f] if f in self.shareable else [])
+            # the walk takes a body's calls last first (a stack), each as deep as it goes
+            for callee in reversed(self._callees(f)):
+                found.update(dict.fromkeys(self.reaches(callee)))
+            self._reached[f] = tuple(found)
+        return self._reached[name]
+
+    def _callees(self, function: str) -> list[str]:
+        """The calls of a function's body, in source order."""
+        return [c.name for c in _walk(self.c.functions[function].body)
+                if isinstance(c, ast.Call)]
 
     def statements(self) -> Iterator[object]:
         for owner in self.callers_first:

@@ -41,7 +41,8 @@ from typing import Mapping, Sequence
 
 from mcl2pnml.core import properties as typed
 from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS, MAX_TOKENS, MAX_TOKENS_TEXT
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean, raise_all, source_lines
+from mcl2pnml.core.errors import (SHOWN_ERRORS, Location, Mcl2PnmlError, did_you_mean, raise_all,
+                                  source_lines)
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language import ast
@@ -169,8 +170,10 @@ def property_errors(program: ast.Program, props: Sequence[ast.Property],
                         adjective = "unknown" if kind == "result" else "undeclared"
                         # results are upper case: "Ok" is offered "OK"
                         near = arg.upper() if kind == "result" else arg
-                        errors.add(pos, f"{adjective} {what[kind]} '{arg}'"
-                                   + did_you_mean(near, names[kind], listing[kind]))
+                        # the hint searches every name: only for the errors shown
+                        hint = did_you_mean(near, names[kind], listing[kind]) \
+                            if len(errors.errors) < SHOWN_ERRORS else ""
+                        errors.add(pos, f"{adjective} {what[kind]} '{arg}'" + hint)
     return errors.errors
 
 
