@@ -44,7 +44,7 @@ from pathlib import Path
 
 from lxml import etree
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all
+from mcl2pnml.core.errors import ErrorList, Location, Mcl2PnmlError, NetError, PnmlError
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.files import json_fault, open_regular
@@ -65,8 +65,10 @@ TOOL = "mcl2pnml"
 #: (verifypn refuses markings past 2^32-1 and reads weights with ``atoi``).
 MAX_MARKING = 2 ** 32 - 1
 MAX_WEIGHT = 2 ** 31 - 1
-#: Faults reported in one message: past them the file is not worth reading on.
+#: Faults said in one message, each with its line; past them faults are only counted...
 MAX_FAULTS = 50
+#: ... up to this many, where the file is not worth reading on.
+MAX_COUNTED = 10_000
 #: The fast paths on: off, every node is read the careful way (the tests hold the two
 #: to the same outcome on every file they have).
 FAST = True
@@ -236,6 +238,7 @@ class _StrictReader:
         self.weights: list = []
         self.read: set = set()                      # indices of arcs marked <read/>
         self.decode = False
+        self.more = 0             # faults past those said: counted only
         self.nets = 0
         self.net_name = None
         self.net_id = None
@@ -248,11 +251,23 @@ class _StrictReader:
     # -- messages ------------------------------------------------------------------------
 
     def error(self, el, message: str) -> None:
-        if len(self.errors) < MAX_FAULTS:
+        if self.counted():
             loc = self.src.locate(el) if el is not None else Location(self.src.filename)
             self.errors.append(PnmlError(message, loc))
-        if len(self.errors) >= MAX_FAULTS:
+
+    def counted(self) -> bool:
+        """One more fault: whether it is one of those said (else it is counted only)."""
+        if len(self.errors) < MAX_FAULTS:
+            return True
+        self.more += 1
+        if self.more + len(self.errors) >= MAX_COUNTED:
             raise _TooMany()
+        return False
+
+    def refuse(self, stopped: bool = False) -> None:
+        """Raise the faults found, if any: those said, and how many more."""
+        if self.errors:
+            raise _Faults(_in_order(self.errors), self.more, stopped)
 
     def tags(self, ns: str) -> None:
         """The names of the grammar's elements in the document's namespace."""
@@ -878,7 +893,7 @@ class _StrictReader:
                             compress(sources, map(not_, from_place))))
                 and all(map(places.__contains__, compress(targets, map(not_, from_place))))):
             self.say_bad_arcs(places, transitions)
-        raise_all(_in_order(self.errors))
+        self.refuse()
         rename = self.renaming(place_ids + transition_ids)
         if rename:
             sources = list(map(rename.get, sources, sources))
@@ -1002,7 +1017,7 @@ class _StrictReader:
                                        f"are decoded (the file says its ids are escaped), as "
                                        f"'{seen[name]}' does: two nodes of one name")
                 seen.setdefault(name, raw)
-            raise_all(_in_order(self.errors))
+            self.refuse()
         return rename
 
     def say_bad_arcs(self, places: set, transitions: set) -> None:
@@ -1044,22 +1059,19 @@ class _StrictReader:
 
     def error_id(self, xml_id: str, message: str, nth: int = 1) -> None:
         """A fault found once the file was read, at the element with this id."""
+        if not self.counted():
+            return
         at = self.find_id(xml_id, nth)
         if at is None:
-            self.error_at(None, message)
+            self.errors.append(PnmlError(message, self.src.at(None)))
             return
         line = self.lines.line_of(at[0])
         column = at[0] - self.lines._index()[line - 1] + 1
-        if len(self.errors) < MAX_FAULTS:
-            self.errors.append(PnmlError(message, self.src.at(line, column)))
-        if len(self.errors) >= MAX_FAULTS:
-            raise _TooMany()
+        self.errors.append(PnmlError(message, self.src.at(line, column)))
 
     def error_at(self, line: int | None, message: str) -> None:
-        if len(self.errors) < MAX_FAULTS:
+        if self.counted():
             self.errors.append(PnmlError(message, self.src.at(line)))
-        if len(self.errors) >= MAX_FAULTS:
-            raise _TooMany()
 
     def net(self, el, root) -> None:
         """A net's end tag: the one net of the file, straight under <pnml>."""
@@ -1123,6 +1135,22 @@ class _TooMany(Exception):
     """Enough faults for one message: stop reading."""
 
 
+class _Faults(ErrorList):
+    """The faults of a file: the first :data:`MAX_FAULTS` with their lines, and how many
+    more were counted (at least, where reading stopped at :data:`MAX_COUNTED`)."""
+
+    def __init__(self, errors: list, more: int, stopped: bool):
+        self.more, self.stopped = more, stopped
+        super().__init__(errors)
+
+    def __str__(self) -> str:
+        lines = [str(e) for e in self.errors]
+        if self.more:
+            lines.append(f"... and {'at least ' if self.stopped else ''}{self.more:,} more "
+                         f"errors (the first {len(self.errors)} are shown)")
+        return "\n".join(lines)
+
+
 class _Fatal(Exception):
     """A fault that says all there is to say of the file (coloured content)."""
 
@@ -1161,7 +1189,13 @@ def _dialect(buffer: _Buffer, filename: str) -> None:
             continue
         if buffer.size <= DIALECT_EXPLAINED:
             from mcl2pnml.io.pnml.reader import _parse_lenient
-            _parse_lenient(buffer.read_at(0, buffer.size), filename)   # raises what it finds
+            try:
+                _parse_lenient(buffer.read_at(0, buffer.size), filename)
+            except PnmlError as e:   # what it finds, with advice the strict reading keeps
+                for fault in getattr(e, "errors", [e]):
+                    fault.message = fault.message.replace("with --net ID",
+                                                          "with --lenient --net ID")
+                raise
         line = head.count(b"\n", 0, match.start()) + 1
         column = match.start() - (head.rfind(b"\n", 0, match.start()) + 1) + 1
         src_line = head.split(b"\n")[line - 1].decode("utf-8", "replace")
@@ -1249,7 +1283,7 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
         msg = str(e.msg).split(f", line {line}")[0]
         raise XmlError(f"not well-formed XML: {msg}", src.at(line, col)) from None
     except _TooMany:
-        raise_all(_in_order(reader.errors))
+        reader.refuse(stopped=True)
     except _Fatal as fatal:
         raise fatal.error from None
     if reader.nets == 0 and not reader.errors:
@@ -1261,7 +1295,7 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     try:
         return reader.build()
     except _TooMany:
-        raise_all(_in_order(reader.errors))
+        reader.refuse(stopped=True)
         raise
     except NetError as e:   # a rule of the core, e.g. a name with a control character
         raise PnmlError(e.message, Location(filename)) from None
