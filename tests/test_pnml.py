@@ -313,10 +313,6 @@ def test_choosing_a_net_of_a_file_of_two_is_refused_for_its_second_net():
         assert "no net with id" not in message, net_id
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "strict.py refuses a TAPAAL model of several components with the forgiving reader's "
-    "advice, 'or read one component alone with --net ID', which the strict reading never "
-    "does (--net Producer is refused with the same message): only --lenient --net reads one"))
 def test_a_tapaal_model_of_components_is_refused_with_advice_that_works():
     path = DATA / "pnml" / "invalid" / "tapaal_native_components.pnml"
     assert load_pnml(path, "Producer", lenient=True).name == "Producer"
@@ -324,6 +320,44 @@ def test_a_tapaal_model_of_components_is_refused_with_advice_that_works():
         message = assert_strict_refuses(path, "this TAPAAL model has 2 components",
                                         net_id=net_id)
         assert "--lenient" in message, message
+
+
+UNDEFINED_ENTITY = (b'<pnml xmlns="http://www.pnml.org/version-2009/grammar/pnml">\n'
+                    b'  <net id="n" type="http://www.pnml.org/version-2009/grammar/ptnet">\n'
+                    b'    <page id="pg"><place id="p"><name><text>&x;</text></name></place>'
+                    b'</page>\n  </net>\n</pnml>')
+
+
+def test_an_undefined_entity_is_located_by_the_forgiving_reading():
+    with pytest.raises(PnmlError) as info:
+        parse_pnml(UNDEFINED_ENTITY, "entity.pnml", lenient=True)
+    assert str(info.value).startswith("entity.pnml:3:48: not well-formed XML: Entity 'x' not "
+                                      "defined")
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "strict.py says 'entity.pnml: not well-formed XML: no element found', with no line or "
+    "column, of a reference to an entity never declared (&x; at 3:48, no DOCTYPE): the "
+    "forgiving reader says \"3:48: not well-formed XML: Entity 'x' not defined\" (found by "
+    "test_fuzz.py's test_pnml_reader_mutants)"))
+def test_an_undefined_entity_is_located():
+    with pytest.raises(PnmlError) as info:
+        parse_pnml(UNDEFINED_ENTITY, "entity.pnml")
+    assert str(info.value).startswith("entity.pnml:3:48: not well-formed XML: Entity 'x' not "
+                                      "defined")
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "strict.py's excerpt (Location.source_line) of a fault on the last line of a file that "
+    "ends with a line break keeps that line break (_Lines.__getitem__ reads the last line "
+    "to the end of the buffer); found by test_fuzz.py's test_pnml_reader_mutants"))
+def test_the_excerpt_of_a_fault_on_the_last_line_is_that_line():
+    data = (b'<?xml version="1.0"?>\n<pnml><net id="n"><page id="g"><place id="p" x="1"/>'
+            b'</page></net></pnml>\n')
+    with pytest.raises(PnmlError) as info:
+        parse_pnml(data, "last_line.pnml")
+    assert (info.value.location.line, info.value.location.column) == (2, 32)
+    assert info.value.location.source_line == data.decode().splitlines()[1]
 
 
 def test_save_is_atomic(tmp_path, monkeypatch):

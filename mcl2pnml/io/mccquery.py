@@ -320,7 +320,7 @@ def read_queries(path: str | Path) -> tuple["Query", ...]:
 
 def parse_queries(data: bytes, filename: str = "<queries>") -> tuple["Query", ...]:
     from mcl2pnml.core import queries as q
-    from mcl2pnml.io.pnml.reader import _local, _parse_xml, _Source
+    from mcl2pnml.io.pnml.source import Source as _Source, local as _local, parse_xml as _parse_xml
     src = _Source(filename, data)
     root = _parse_xml(data, src).getroot()
 

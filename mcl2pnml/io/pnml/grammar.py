@@ -42,7 +42,8 @@ from pathlib import Path
 from lxml import etree
 
 from mcl2pnml.core.errors import ErrorList, Location, Mcl2PnmlError, PnmlError
-from mcl2pnml.io.pnml.reader import XmlError, _parse_xml, _Source, parse_pnml, read_file
+from mcl2pnml.io.pnml.reader import parse_pnml
+from mcl2pnml.io.pnml.source import Source, XmlError, parse_xml, read_file
 from mcl2pnml.io.pnml.writer import NS, PTNET
 
 ENV = "MCL2PNML_PNML_GRAMMAR"
@@ -179,9 +180,9 @@ def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None
     official = find_grammar(grammar)
     if official is not None:
         judges.append((OFFICIAL, official_grammar(str(official))))
-    src = _Source(filename, data)
+    src = Source(filename, data)
     try:
-        doc = _parse_xml(data, src)
+        doc = parse_xml(data, src)
     except XmlError as e:   # no schema can judge what is not XML
         return Verdict(filename, (e,), tuple(SchemaVerdict(name, False) for name, _ in judges))
     # the element at fault -> what each schema says of it: one message per element, in
@@ -206,7 +207,7 @@ def validate_bytes(data: bytes, filename: str, grammar: str | Path | None = None
     return Verdict(filename, tuple(errors), tuple(schemas))
 
 
-def _schema_errors(log, doc, src: _Source) -> list[tuple[Location, str]]:
+def _schema_errors(log, doc, src: Source) -> list[tuple[Location, str]]:
     """libxml2's complaints, one message per element at fault, located at its start tag.
 
     libxml2 logs a fault from the inside out: details without a node

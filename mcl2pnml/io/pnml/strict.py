@@ -50,7 +50,7 @@ from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.files import json_fault, open_regular
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze
 from mcl2pnml.io import ids
-from mcl2pnml.io.pnml.reader import HIGH_LEVEL
+from mcl2pnml.io.pnml.source import HIGH_LEVEL, Source, XmlError, read_file
 
 PNML = "http://www.pnml.org/version-2009/grammar/pnml"
 TAPAAL = "http://www.informatik.hu-berlin.de/top/pnml/ptNetb"
@@ -202,6 +202,7 @@ class _Lines:
         starts = self._index()
         end = starts[i + 1] - 1 if i + 1 < len(starts) else len(self.buffer)
         line = bytes(self.buffer[starts[i]:end]).decode("utf-8", "replace")
+        line = line[:-1] if line.endswith("\n") else line     # the file's final newline
         return line[:-1] if line.endswith("\r") else line
 
     def line_of(self, offset: int) -> int:
@@ -221,7 +222,7 @@ class _StrictReader:
     """One pass over the stream: checks each node and keeps its plain values."""
 
     def __init__(self, src, lines: _Lines, careful: bool):
-        self.src = src            # the lenient reader's locator, over lazy lines
+        self.src = src            # the locator of messages, over lazy lines
         self.lines = lines
         self.cdata = careful      # a CDATA section or a prefix somewhere: look closer
         self.ns = None            # the document's namespace: PNML's, or "" for none
@@ -266,6 +267,8 @@ class _StrictReader:
 
     def refuse(self, stopped: bool = False) -> None:
         """Raise the faults found, if any: those said, and how many more."""
+        if len(self.errors) == 1 and not self.more:
+            raise self.errors[0]
         if self.errors:
             raise _Faults(_in_order(self.errors), self.more, stopped)
 
@@ -1188,9 +1191,9 @@ def _dialect(buffer: _Buffer, filename: str) -> None:
         if match is None:
             continue
         if buffer.size <= DIALECT_EXPLAINED:
-            from mcl2pnml.io.pnml.reader import _parse_lenient
+            from mcl2pnml.io.pnml.lenient import parse_lenient
             try:
-                _parse_lenient(buffer.read_at(0, buffer.size), filename)
+                parse_lenient(buffer.read_at(0, buffer.size), filename)
             except PnmlError as e:   # what it finds, with advice the strict reading keeps
                 for fault in getattr(e, "errors", [e]):
                     fault.message = fault.message.replace("with --net ID",
@@ -1221,11 +1224,10 @@ def _prolog_faults(buffer: _Buffer, filename: str) -> None:
 
 
 def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
-    from mcl2pnml.io.pnml.reader import XmlError, _Source
     _prolog_faults(buffer, filename)
     _dialect(buffer, filename)
     lines = _Lines(buffer)
-    src = _Source.__new__(_Source)
+    src = Source.__new__(Source)
     src.filename, src.lines = filename, lines
     first = buffer.first((b"<!DOCTYPE", b"<![CDATA[", b"xmlns:"))
     doctype = first[b"<!DOCTYPE"]
@@ -1339,7 +1341,6 @@ def parse_strict(data: bytes, filename: str = "<input>", net_id: str | None = No
 @without_gc
 def load_strict(path: str | Path, net_id: str | None = None) -> Net:
     """Read one P/T net from a PNML file, strictly, as a stream (never whole in memory)."""
-    from mcl2pnml.io.pnml.reader import read_file
     try:
         fd = open_regular(path)
     except Mcl2PnmlError as e:
