@@ -347,11 +347,8 @@ def test_an_undefined_entity_is_located():
                                       "defined")
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "strict.py's excerpt (Location.source_line) of a fault on the last line of a file that "
-    "ends with a line break keeps that line break (_Lines.__getitem__ reads the last line "
-    "to the end of the buffer); found by test_fuzz.py's test_pnml_reader_mutants"))
 def test_the_excerpt_of_a_fault_on_the_last_line_is_that_line():
+    """Without the file's final line break (test_fuzz.py's mutants found it kept once)."""
     data = (b'<?xml version="1.0"?>\n<pnml><net id="n"><page id="g"><place id="p" x="1"/>'
             b'</page></net></pnml>\n')
     with pytest.raises(PnmlError) as info:
