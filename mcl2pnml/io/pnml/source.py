@@ -111,7 +111,8 @@ def parse_xml(data: bytes, src: Source):
             raise doctype_refused(src) from None
         line, col = getattr(e, "position", (e.lineno, None))
         msg = str(e.msg).split(f", line {line}")[0]
-        raise XmlError(f"not well-formed XML: {msg}", src.at(line, col)) from None
+        where = src.at(line or 1, col) if src.lines else Location(src.filename, 1, 1, "")
+        raise XmlError(f"not well-formed XML: {msg}", where) from None
     except ValueError as e:  # e.g. a str with an encoding declaration
         raise XmlError(f"cannot parse as XML: {e}", src.at(None)) from None
     if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:

@@ -1283,7 +1283,11 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     except etree.XMLSyntaxError as e:
         line, col = getattr(e, "position", (e.lineno, None))
         msg = str(e.msg).split(f", line {line}")[0]
-        raise XmlError(f"not well-formed XML: {msg}", src.at(line, col)) from None
+        if not line:   # no element at all: said where the file ends
+            line = max(1, len(lines))
+            col = len(lines[line - 1]) + 1 if len(lines) else 1
+        where = src.at(line, col) if len(lines) else Location(filename, 1, 1, "")
+        raise XmlError(f"not well-formed XML: {msg}", where) from None
     except _TooMany:
         reader.refuse(stopped=True)
     except _Fatal as fatal:
