@@ -198,7 +198,9 @@ def load_net(path: str | Path, net_id: str | None = None,
         from mcl2pnml.core.memory import Budget, check_load, release
         if isinstance(max_memory, str):
             max_memory = parse_size(max_memory)
-        check_load(path, Budget(max_memory))
+        # the strict PNML reading streams: its need is the net's, not a tree's
+        check_load(path, Budget(max_memory),
+                   streamed=not lenient and reader_of(path).name == "pnml")
         net = reader_of(path).load(path, net_id, lenient)
         release()   # the parsed file is freed: what the analysis may use is back
         return net

@@ -181,13 +181,14 @@ def _counts(path: Path, patterns: tuple[bytes, ...]) -> list[int]:
     return counts
 
 
-def load_estimate(path: str | Path) -> tuple[int, str]:
+def load_estimate(path: str | Path, streamed: bool = False) -> tuple[int, str]:
     """Bytes reading ``path`` takes at its peak, and what it holds, in words for messages.
 
     Counted from the file without parsing it: PNML's place, transition and
     arc elements and its other elements; a text format's words. A ``.mcl``
     mission compiles to a net about as large as its text is long, and its
-    file size is counted as PNML would be.
+    file size is counted as PNML would be. ``streamed``: a PNML file read as a
+    stream (the strict reading), which holds the net but never the file's tree.
     """
     path = Path(path)
     size = path.stat().st_size
@@ -196,6 +197,13 @@ def load_estimate(path: str | Path) -> tuple[int, str]:
         blanks, newlines = _counts(path, (b" ", b"\n"))
         words = blanks + newlines
         return (size + words * TEXT_WORD[suffix]) * SAFETY // 100, f"{words:,} words"
+    if streamed:   # read as a stream (the strict PNML reading): no tree, only the net
+        places, transitions, arcs, payloads = _counts(
+            path, (b"<place", b"<transition", b"<arc", b"<payload"))
+        need = (places + transitions) * PNML_NODE + arcs * PNML_ARC + payloads * PNML_PAYLOAD
+        what = (f"{places:,} places, {transitions:,} transitions and {arcs:,} arcs"
+                if places + transitions + arcs else f"{size:,} bytes")
+        return need * SAFETY // 100, what
     places, transitions, arcs, payloads, opens, closes, heads = _counts(
         path, (b"<place", b"<transition", b"<arc", b"<payload", b"<", b"</", b"<?"))
     other = max(0, opens - closes - heads - places - transitions - arcs - payloads)
@@ -206,7 +214,7 @@ def load_estimate(path: str | Path) -> tuple[int, str]:
     return need * SAFETY // 100, what
 
 
-def check_load(path: str | Path, budget: Budget) -> None:
+def check_load(path: str | Path, budget: Budget, streamed: bool = False) -> None:
     """Refuse, before reading it, a file whose net the budget cannot hold.
 
     The message names the file, what it holds, what reading it would take
@@ -214,7 +222,7 @@ def check_load(path: str | Path, budget: Budget) -> None:
     to read; the budget is 2.0 GB (--max-memory)``.
     """
     try:
-        need, what = load_estimate(path)
+        need, what = load_estimate(path, streamed)
     except OSError:
         return   # the reader names the file and why it cannot be read
     budget.check(need, f"{what} to read", Location(str(path)))
