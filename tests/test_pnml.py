@@ -335,11 +335,6 @@ def test_an_undefined_entity_is_located_by_the_forgiving_reading():
                                       "defined")
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "strict.py says 'entity.pnml:5:8: not well-formed XML: no element found' (at the end tag "
-    "</pnml>) of a reference to an entity never declared (&x; at 3:48, no DOCTYPE): the "
-    "forgiving reader says \"3:48: not well-formed XML: Entity 'x' not defined\" (found by "
-    "test_fuzz.py's test_pnml_reader_mutants)"))
 def test_an_undefined_entity_is_located():
     with pytest.raises(PnmlError) as info:
         parse_pnml(UNDEFINED_ENTITY, "entity.pnml")

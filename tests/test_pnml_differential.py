@@ -94,7 +94,7 @@ HOSTILE: dict[str, str] = {
     "inscription_leading_zero.pnml": READ,
     # verifypn: marking 1; the weight refused (a line break is not a blank)
     "marking_newline.pnml": READ,
-    "inscription_newline.pnml": r"positive integer in ASCII digits",
+    "inscription_newline.pnml": r"has a line break around it, which verifypn refuses",
     # verifypn: marking refused (over 2^32 - 1); weight 2 (2^32 + 2 cut to 32 bits)
     "marking_over_2_32.pnml": r"initialMarking 4294967297 is too large",
     "inscription_over_2_32.pnml": r"inscription 4294967298 is too large",

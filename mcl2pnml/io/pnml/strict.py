@@ -240,6 +240,7 @@ class _StrictReader:
         self.read: set = set()                      # indices of arcs marked <read/>
         self.decode = False
         self.more = 0             # faults past those said: counted only
+        self.refused_ids: set = set()   # ids of refused nodes, which their arcs do not name
         self.nets = 0
         self.net_name = None
         self.net_id = None
@@ -305,6 +306,8 @@ class _StrictReader:
                            f"('{self.ns or 'none'}'), written without a prefix; tools that "
                            "match names read it differently, so it is refused" + LENIENT_HINT)
         elif local in REFUSED:
+            if local.startswith("reference") and el.get("id"):
+                self.refused_ids.add(el.get("id"))   # its arcs go without saying
             self.error(el, f"<{name}> is {REFUSED[local]}; mcl2pnml reads P/T nets"
                            + LENIENT_HINT * (local in ("finalmarkings",)))
         elif local == "net" and where.startswith("in <page"):
@@ -330,9 +333,14 @@ class _StrictReader:
                        "invariant": "TAPAAL's age invariant of a timed-arc net",
                        "name": "TAPAAL's own format names nodes in attributes",
                        "inscription": "TAPAAL reads it as the arc's time interval",
-                       "guard": "a data Petri net's guard"}.get(key, "not in the P/T grammar")
-                self.error(el, f"<{_raw_name(el)}> has the attribute {shown}: {why}; "
-                               "refused, since tools give it different meanings" + LENIENT_HINT)
+                       "guard": "a data Petri net's guard"}.get(key)
+                if why is None:
+                    self.error(el, f"<{_raw_name(el)}> has the attribute {shown}, which is not "
+                                   "in the P/T grammar")
+                else:
+                    self.error(el, f"<{_raw_name(el)}> has the attribute {shown}: {why}; "
+                                   "refused, since tools give it different meanings"
+                                   + LENIENT_HINT)
 
     def mixed(self, el) -> None:
         """Character data between elements of the grammar (only <text> holds any)."""
@@ -406,6 +414,11 @@ class _StrictReader:
             return None
         match = (_WEIGHT if weight else _NUMBER).match(text)
         limit = MAX_WEIGHT if weight else MAX_MARKING
+        if weight and match is None and _NUMBER.match(text):
+            self.error(label, f"{what}: the inscription's number {text.strip()!r} has a line "
+                              "break around it, which verifypn refuses; write it on the line "
+                              "of its <text>" + LENIENT_HINT)
+            return None
         if match is None or (weight and int(match.group(1)) == 0):
             kind = "a positive integer" if weight else "a natural number"
             blanks = "spaces and tabs" if weight else "spaces, tabs and line breaks"
@@ -479,6 +492,9 @@ class _StrictReader:
     def placed(self, el) -> bool:
         """Is a node (or page) where the grammar puts it: in a page or straight in the net?"""
         parent = el.getparent()
+        if parent is not None and parent.tag not in self.containers and any(
+                _local(a.tag) in REFUSED for a in el.iterancestors()):
+            return False   # inside a construct refused for what it is (a final marking)
         if parent is None or parent.tag not in self.containers:
             self.stray(el, f"in <{_raw_name(parent)}>" if parent is not None else "at the top")
             return False
@@ -975,11 +991,7 @@ class _StrictReader:
         if _BAD_IDS.search(joined):
             for xml_id in ids:
                 if not xml_id or _BAD_IDS.search(f"\x00{xml_id}\x00"):
-                    self.error_id(xml_id, f"the id {xml_id!r} is empty, starts or ends with "
-                                          "white space, or holds a control character or one "
-                                          "of & < > \" ' (readers keep, trim or fold white "
-                                          "space differently, and write those characters "
-                                          "back unescaped, breaking their own files)")
+                    self.error_id(xml_id, f"the id {xml_id!r} {_id_fault(xml_id)}")
         if len(set(ids)) != len(ids):
             first: set = set()
             for xml_id in ids:
@@ -1026,6 +1038,8 @@ class _StrictReader:
     def say_bad_arcs(self, places: set, transitions: set) -> None:
         for xml_id, s, d in zip(self.arc_ids, self.sources, self.targets):
             s_place, d_place = s in places, d in places
+            if s in self.refused_ids or d in self.refused_ids:
+                continue
             for end, name in (("source", s), ("target", d)):
                 if name not in places and name not in transitions:
                     self.error_id(xml_id, f"arc '{xml_id}': its {end} '{name}' is not a place "
@@ -1080,6 +1094,11 @@ class _StrictReader:
         """A net's end tag: the one net of the file, straight under <pnml>."""
         parent = el.getparent()
         self.nets += parent is root
+        if parent is not None and parent.tag == self.T_PAGE:
+            raise _Fatal(PnmlError(
+                f"a <net> inside <page> '{parent.get('id')}' (a WoPeD subprocess): tools read "
+                "it as a separate net, as part of this one, or as the refinement of a "
+                "transition; flatten it into one page" + LENIENT_HINT, self.src.locate(el)))
         if parent is not root or el.prefix is not None:
             self.stray(el, f"in <{_raw_name(parent)}>")
         elif self.nets > 1:
@@ -1125,6 +1144,18 @@ def _timing_value(el) -> Timing | None:
     except (ValueError, Mcl2PnmlError):
         return None
     return timing if max(timing.earliest, timing.latest or 0.0) <= MAX_SECONDS else None
+
+
+def _id_fault(xml_id: str) -> str:
+    """What is wrong with an id that :data:`_BAD_IDS` finds."""
+    if not xml_id:
+        return "is empty"
+    if xml_id != xml_id.strip():
+        return "starts or ends with white space, which some tools trim and others keep"
+    if re.search(r"[&<>\"']", xml_id):
+        return ("holds one of & < > \" ', which tools write back unescaped, breaking their own "
+                "files")
+    return "holds a control character, which readers keep or fold differently"
 
 
 def _in_order(errors: list) -> list:
@@ -1283,6 +1314,9 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     except etree.XMLSyntaxError as e:
         line, col = getattr(e, "position", (e.lineno, None))
         msg = str(e.msg).split(f", line {line}")[0]
+        logged = [x for x in e.error_log if x.line]   # the first fault, where it is
+        if logged and (not line or logged[0].line < line):
+            line, col, msg = logged[0].line, logged[0].column, logged[0].message
         if not line:   # no element at all: said where the file ends
             line = max(1, len(lines))
             col = len(lines[line - 1]) + 1 if len(lines) else 1
