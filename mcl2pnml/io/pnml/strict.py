@@ -502,29 +502,39 @@ class _StrictReader:
         return True
 
     def place(self, el) -> None:
+        self.node(el, place=True)
+
+    def transition(self, el) -> None:
+        self.node(el, place=False)
+
+    def node(self, el, place: bool) -> None:
+        """A place or a transition the careful way: every child checked, every fault said.
+        A place may have its marking and our fusion label, a transition our timing."""
         if not self.placed(el):
             return
         self.attributes(el, _ID_ONLY)
         xml_id = self.node_id(el)
-        name = interface = payload = position = None
+        kind = "place" if place else "transition"
+        ours = "interface" if place else "timing"
+        name = extra = payload = position = None
         tokens = 0
         seen: set = set()
         for child in el:
             tag = child.tag
             if child.prefix is not None and isinstance(tag, str):
-                self.stray(child, f"in {_local(el.tag)} '{xml_id}'")
+                self.stray(child, f"in {kind} '{xml_id}'")
             elif tag == self.T_NAME:
                 if self.once(el, seen, child):
                     name = self.text_of(child, required=False)
-            elif tag == self.T_MARKING:
+            elif place and tag == self.T_MARKING:
                 if self.once(el, seen, child):
                     tokens = self.number(child, f"place '{xml_id}'", weight=False) or 0
             elif tag == self.T_TOOL:
                 self.free(child, in_label=False)
                 if self.ours(child):
                     for inner in child:
-                        if _local(inner.tag) == "interface":
-                            interface = inner.get("label")
+                        if _local(inner.tag) == ours:
+                            extra = inner.get("label") if place else self.timing(inner, xml_id)
                         elif _local(inner.tag) == "payload":
                             payload = self.payload(inner)
             elif tag == self.T_GRAPHICS:
@@ -533,55 +543,18 @@ class _StrictReader:
                     position = self.position(child)
                     if position is _NO:
                         position = None
-                        self.error(child, f"a <position> without both x and y in "
-                                          f"{_local(el.tag)} '{xml_id}': verifypn's reader "
-                                          "crashes on it; give both or none")
+                        self.error(child, f"a <position> without both x and y in {kind} "
+                                          f"'{xml_id}': verifypn's reader crashes on it; give "
+                                          "both or none")
             elif isinstance(tag, str):
-                self.stray(child, f"in place '{xml_id}'")
+                self.stray(child, f"in {kind} '{xml_id}'")
         self.mixed(el)
         if xml_id is not None:
             xml_id = self.names.setdefault(xml_id, xml_id)
-            self.places.append((xml_id, name, interface, payload, position))
+            (self.places if place else self.transitions).append(
+                (xml_id, name, extra, payload, position))
             if tokens:
                 self.marking[xml_id] = tokens
-
-    def transition(self, el) -> None:
-        if not self.placed(el):
-            return
-        self.attributes(el, _ID_ONLY)
-        xml_id = self.node_id(el)
-        name = timing = payload = position = None
-        seen: set = set()
-        for child in el:
-            tag = child.tag
-            if child.prefix is not None and isinstance(tag, str):
-                self.stray(child, f"in {_local(el.tag)} '{xml_id}'")
-            elif tag == self.T_NAME:
-                if self.once(el, seen, child):
-                    name = self.text_of(child, required=False)
-            elif tag == self.T_TOOL:
-                self.free(child, in_label=False)
-                if self.ours(child):
-                    for inner in child:
-                        if _local(inner.tag) == "timing":
-                            timing = self.timing(inner, xml_id)
-                        elif _local(inner.tag) == "payload":
-                            payload = self.payload(inner)
-            elif tag == self.T_GRAPHICS:
-                if self.once(el, seen, child):
-                    self.free(child, in_label=False)
-                    position = self.position(child)
-                    if position is _NO:
-                        position = None
-                        self.error(child, f"a <position> without both x and y in "
-                                          f"{_local(el.tag)} '{xml_id}': verifypn's reader "
-                                          "crashes on it; give both or none")
-            elif isinstance(tag, str):
-                self.stray(child, f"in transition '{xml_id}'")
-        self.mixed(el)
-        if xml_id is not None:
-            self.transitions.append((self.names.setdefault(xml_id, xml_id), name, timing,
-                                     payload, position))
 
     def timing(self, el, xml_id) -> Timing | None:
         timing = _timing_value(el)
