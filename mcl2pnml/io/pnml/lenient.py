@@ -34,17 +34,14 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from lxml import etree
-
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all, source_lines
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.bounds import MAX_SECONDS, MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
-from mcl2pnml.core.files import json_fault, read_bytes
+from mcl2pnml.core.files import json_fault
 from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml.tapaal import is_tapaal, parse_tapaal
-from mcl2pnml.io.pnml.source import (HIGH_LEVEL, Source, XmlError, local as _local, parse_xml,
-                                     read_file)
+from mcl2pnml.io.pnml.source import HIGH_LEVEL, Source, local as _local, parse_xml, read_file
 from mcl2pnml.io.pnml.writer import TOOL
 
 P_T_TYPES = {
