@@ -219,10 +219,10 @@ def _raw_name(el) -> str:
 class _StrictReader:
     """One pass over the stream: checks each node and keeps its plain values."""
 
-    def __init__(self, src, lines: _Lines, careful: bool):
+    def __init__(self, src, lines: _Lines, careful: bool, cdata: bool):
         self.src = src            # the locator of messages, over lazy lines
         self.lines = lines
-        self.cdata = careful      # a CDATA section or a prefix somewhere: look closer
+        self.cdata = cdata        # a CDATA section somewhere: each <text> looked at closer
         self.ns = None            # the document's namespace: PNML's, or "" for none
         self.errors: list[PnmlError] = []
         # plain values only, no element kept: ids are checked in bulk at the end and
@@ -1250,11 +1250,11 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
         raise XmlError("document type declarations are refused: PNML needs none, and "
                        "entities are never expanded or fetched",
                        src.at(line, doctype - lines._index()[line - 1] + 1))
-    # a prefix must be declared to be used: where none is, no element has one, and the
-    # fast paths need not look (a CDATA section alike)
     etree.clear_error_log()   # this thread's log: from here on, this parse's faults only
-    reader = _StrictReader(src, lines, careful=first[b"<![CDATA["] >= 0
-                           or first[b"xmlns:"] >= 0)
+    # a prefix must be declared to be used: where none is, no element has one, and the
+    # fast paths need not look; a CDATA section can hide in any <text>
+    cdata = first[b"<![CDATA["] >= 0
+    reader = _StrictReader(src, lines, careful=cdata or first[b"xmlns:"] >= 0, cdata=cdata)
     try:
         # end tags only, of the elements read as they end: everything else is checked
         # inside the node, page or net that holds it
