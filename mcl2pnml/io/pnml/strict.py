@@ -27,7 +27,11 @@ behaviour as the pair.
 
 The file is read as a stream (lxml's ``iterparse``): each node is checked
 and turned into plain values when its end tag is read, then dropped, so that
-a file of a million arcs never becomes a tree in memory.
+a file of a million arcs never becomes a tree in memory. The shapes writers
+use are checked in few steps (the fast paths); any other shape, or any fault,
+is read again the careful way, which says where and why; the tests hold the
+two to the same outcome. Ids, arc ends and read arcs are checked over the
+whole net at the end, and a fault found then is located by its id in the file.
 """
 from __future__ import annotations
 
