@@ -29,7 +29,6 @@ file are reported together.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,11 +36,11 @@ from pathlib import Path
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, NetError, PnmlError, raise_all
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.bounds import MAX_SECONDS, MAX_TOKENS, MAX_TOKENS_TEXT, natural_at_most
-from mcl2pnml.core.files import json_fault
-from mcl2pnml.core.net import (Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze)
+from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml.tapaal import is_tapaal, parse_tapaal
-from mcl2pnml.io.pnml.source import HIGH_LEVEL, Source, local as _local, parse_xml, read_file
+from mcl2pnml.io.pnml.source import (HIGH_LEVEL, Source, local as _local, parse_xml,
+                                     payload_value, read_file)
 from mcl2pnml.io.pnml.writer import TOOL
 
 P_T_TYPES = {
@@ -169,12 +168,10 @@ class _Reader:
         for ts in self._ours(el):
             p = _child(ts, "payload")
             if p is not None:
-                try:
-                    return freeze(json.loads(p.text or "null"))
-                except (ValueError, RecursionError) as e:
-                    self.error(p, f"payload is not JSON data: {json_fault(e)}")
-                except Mcl2PnmlError as e:
-                    self.error(p, f"payload is not JSON data: {e}")
+                value, fault = payload_value(p.text)
+                if fault:
+                    self.error(p, fault)
+                return value
         return None
 
     # -- nodes -----------------------------------------------------------------

@@ -2,12 +2,14 @@
 fetches, and elements mapped back to their line and column for messages with a caret."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from lxml import etree
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, PnmlError, source_lines
-from mcl2pnml.core.files import read_bytes
+from mcl2pnml.core.files import json_fault, read_bytes
+from mcl2pnml.core.net import freeze
 
 #: Elements that only coloured (high-level) nets have, with what they are.
 HIGH_LEVEL = {
@@ -127,3 +129,14 @@ def read_file(path: str | Path) -> bytes:
         return read_bytes(path)
     except Mcl2PnmlError as e:
         raise PnmlError(e.message, e.location) from None
+
+
+def payload_value(text: str | None):
+    """Our toolspecific payload, its JSON text as frozen data: ``(value, None)``, or
+    ``(None, fault)`` with what is wrong, for the reader to say where it is."""
+    try:
+        return freeze(json.loads(text or "null")), None
+    except (ValueError, RecursionError) as e:
+        return None, f"payload is not JSON data: {json_fault(e)}"
+    except Mcl2PnmlError as e:
+        return None, f"payload is not JSON data: {e}"

@@ -36,7 +36,6 @@ whole net at the end, and a fault found then is located by its id in the file.
 from __future__ import annotations
 
 import io
-import json
 import mmap
 import os
 import re
@@ -49,10 +48,10 @@ from lxml import etree
 from mcl2pnml.core.errors import ErrorList, Location, Mcl2PnmlError, NetError, PnmlError
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.bounds import MAX_SECONDS
-from mcl2pnml.core.files import json_fault, open_regular
-from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition, freeze
+from mcl2pnml.core.files import open_regular
+from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition
 from mcl2pnml.io import ids
-from mcl2pnml.io.pnml.source import HIGH_LEVEL, Source, XmlError, read_file
+from mcl2pnml.io.pnml.source import HIGH_LEVEL, Source, XmlError, payload_value, read_file
 
 PNML = "http://www.pnml.org/version-2009/grammar/pnml"
 TAPAAL = "http://www.informatik.hu-berlin.de/top/pnml/ptNetb"
@@ -454,14 +453,9 @@ class _StrictReader:
         text = el.text or ""
         value = self._payloads.get(text, self)
         if value is self:
-            try:
-                value = freeze(json.loads(text or "null"))
-            except (ValueError, RecursionError) as e:
-                self.error(el, f"payload is not JSON data: {json_fault(e)}")
-                value = None
-            except Mcl2PnmlError as e:
-                self.error(el, f"payload is not JSON data: {e}")
-                value = None
+            value, fault = payload_value(text)
+            if fault:
+                self.error(el, fault)
             self._payloads[text] = value
         return value
 
@@ -670,7 +664,7 @@ class _StrictReader:
                 return inner.text or ""
         return self.fast_text(label)
 
-    def fast_common(self, el, child, tag, state: list) -> bool:
+    def fast_common(self, child, tag, state: list) -> bool:
         """A node's name, graphics or other tools' data; False where not simple."""
         if tag == self.T_NAME:
             if state[0] is not _UNSET:
@@ -685,19 +679,28 @@ class _StrictReader:
         return False
 
     def fast_place(self, el) -> bool:
+        return self.fast_node(el, place=True)
+
+    def fast_transition(self, el) -> bool:
+        return self.fast_node(el, place=False)
+
+    def fast_node(self, el, place: bool) -> bool:
+        """A place or a transition in few steps, as :meth:`node` reads it; False where it
+        is not of the simple shapes (the careful way then reads it, or says what is wrong)."""
         if el.keys() != _ID_KEYS:    # (no prefix: the fast paths run where none is declared)
             return False
         text = el.text
         if text is not None and text.strip():
             return False
         state = [_UNSET, _UNSET]
-        tokens = interface = payload = None
+        tokens = extra = payload = None    # extra: a place's fusion label, a transition's timing
+        ours = self.T_INTERFACE if place else self.T_TIMING
         for child in el:
             tail = child.tail
             if tail is not None and tail.strip():
                 return False
             tag = child.tag
-            if tag == self.T_MARKING:
+            if place and tag == self.T_MARKING:
                 if tokens is not None:
                     return False
                 text = self.plain(child)
@@ -711,61 +714,27 @@ class _StrictReader:
                 if child.get("tool") == TOOL:
                     for inner in child:
                         name = inner.tag
-                        if name == self.T_INTERFACE and interface is None and not len(inner):
-                            interface = inner.get("label")
+                        if name == ours and extra is None and not len(inner):
+                            extra = inner.get("label") if place else _timing_value(inner)
+                            if extra is None and not place:
+                                return False
                         elif name == self.T_PAYLOAD and payload is None and not len(inner):
                             payload = self.payload(inner)
                         elif isinstance(name, str):
                             return False
                 elif not _free_ok(child, False):
                     return False
-            elif not self.fast_common(el, child, tag, state) and isinstance(tag, str):
+            elif not self.fast_common(child, tag, state) and isinstance(tag, str):
                 return False
         xml_id = el.get("id")
         self.ids.append(xml_id)
-        name, position = state
         xml_id = self.names.setdefault(xml_id, xml_id)
-        self.places.append((xml_id, None if name is _UNSET else name, interface, payload,
-                            None if position is _UNSET else position))
+        name, position = state
+        (self.places if place else self.transitions).append(
+            (xml_id, None if name is _UNSET else name, extra, payload,
+             None if position is _UNSET else position))
         if tokens:
             self.marking[xml_id] = tokens
-        return True
-
-    def fast_transition(self, el) -> bool:
-        if el.keys() != _ID_KEYS:
-            return False
-        text = el.text
-        if text is not None and text.strip():
-            return False
-        state = [_UNSET, _UNSET]
-        timing = payload = None
-        for child in el:
-            tail = child.tail
-            if tail is not None and tail.strip():
-                return False
-            tag = child.tag
-            if tag == self.T_TOOL:
-                if child.get("tool") == TOOL:
-                    for inner in child:
-                        name = inner.tag
-                        if name == self.T_PAYLOAD and payload is None and not len(inner):
-                            payload = self.payload(inner)
-                        elif name == self.T_TIMING and timing is None and not len(inner):
-                            timing = _timing_value(inner)
-                            if timing is None:
-                                return False
-                        elif isinstance(name, str):
-                            return False
-                elif not _free_ok(child, False):
-                    return False
-            elif not self.fast_common(el, child, tag, state) and isinstance(tag, str):
-                return False
-        xml_id = el.get("id")
-        self.ids.append(xml_id)
-        name, position = state
-        self.transitions.append((self.names.setdefault(xml_id, xml_id),
-                                 None if name is _UNSET else name, timing, payload,
-                                 None if position is _UNSET else position))
         return True
 
     def fast_arc_of(self):
@@ -825,7 +794,7 @@ class _StrictReader:
                 elif isinstance(tag, str):
                     if state is None:
                         state = [_UNSET, _UNSET]
-                    if not common(el, child, tag, state):
+                    if not common(child, tag, state):
                         return False
             xml_id, source, target = el.values()     # in the order of _ARC_KEYS
             add_id(xml_id)
