@@ -671,10 +671,12 @@ def test_an_altered_replayed_or_unsigned_line_ends_the_run(tmp_path, attack, why
     key = secret_file(tmp_path)
     peer = Peer(authenticated_peer(key.read_bytes().strip(), attack))
     recorder = Recorder()
-    # the attacking bridge sends no heartbeats before its attack: a liveness time-out that
-    # a loaded machine cannot trip first (5 s was tripped twice in one run of the whole
-    # suite on 2 cores; the attack is read at once, so a longer one costs nothing)
-    result = run_bridge(peer.address, with_secret(key, liveness=20.0), recorder=recorder)
+    # the attacking bridge sends no heartbeats before its attack: a liveness time-out, and
+    # a time limit past it, that a loaded machine cannot trip first (5 s and 10 s were
+    # tripped in runs of the whole suite on 2 cores, beside a second one; the attack is
+    # read at once, so longer ones cost nothing)
+    result = run_bridge(peer.address, with_secret(key, liveness=20.0), recorder=recorder,
+                        max_time=30.0)
     assert_lost(result, why, recorder)
     # the forged `done` was not acted on
     assert not any(isinstance(e, Event) and e.kind.value == "achieved" for e in result.entries)
