@@ -82,6 +82,7 @@ SCHEMA: dict[str, Any] = {
         "hold_within": _seconds(0, 600),
         "surface_depth": {"type": "number", "minimum": 0, "maximum": 100},
         "surface_within": _seconds(0, 3600),
+        "secure_within": _seconds(0, 3600),
         "primitives": {
             "type": "object", "maxProperties": 1000,
             "propertyNames": {"pattern": "^[A-Za-z_][A-Za-z0-9_]*$", "maxLength": 200},
@@ -127,6 +128,9 @@ class AutopilotMapping:
     hold_within: float = 10.0
     surface_depth: float = 0.3
     surface_within: float = 120.0
+    #: wall seconds the safe state keeps trying to reach a silent autopilot (frozen, or its
+    #: link down for a while) before its steps are given up as not done
+    secure_within: float = 30.0
     filename: str = field(default="<mapping>", compare=False)
 
     @classmethod
