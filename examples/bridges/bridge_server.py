@@ -21,7 +21,12 @@ file as ``mcl2pnml run --secret``), every line authenticated both ways;
 controller's certificate. Who may command the vehicle:
 
 * **one client at a time**: a second connection is refused with an
-  ``{"link": "error", "reason": ...}`` line and closed;
+  ``{"link": "error", "reason": ...}`` line and closed; a connection takes
+  the place only once it has opened (TLS, its hello and, with ``--secret``,
+  a first line MAC'd with the key), within one deadline of ``connect_timeout``
+  (10 s) however slowly it sends; at most ``OPENING`` (8) connections open at
+  once, a ninth is dropped at once, so one without the key, trickling its
+  hello, never keeps the controller out;
 * the server listens on the loopback interface unless ``--host`` says
   otherwise; on any other interface, anyone who can reach the port can
   command the vehicle unless ``--secret`` (or ``--tls-ca``) is given;
@@ -44,8 +49,9 @@ from pathlib import Path
 from typing import Callable
 
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.runtime.link import (HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT, BadLine, Link,
-                                   LinkBroken, LinkOptions, Side, read_secret, server_tls)
+from mcl2pnml.runtime.link import (HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT, BadLine,
+                                   Deadline, Link, LinkBroken, LinkOptions, Side, encode,
+                                   read_secret, server_tls, tls_handshake)
 
 
 class FakeMiddleware:
@@ -96,9 +102,17 @@ class BridgeServer(socketserver.ThreadingTCPServer):
                                                  type=socket.SOCK_STREAM)[0][0]
         self.middleware, self.delay = middleware, delay
         self.options, self.secret, self.tls = options, secret, tls
-        self.busy = threading.Lock()
+        self.busy = threading.Lock()                # the one controller served
+        self.opening = threading.BoundedSemaphore(OPENING)
         self.served: list[FakeMiddleware] = []     # the middlewares made, in order
         super().__init__(address, Handler)
+
+    def free(self) -> bool:
+        """Is no controller served (waiting :data:`RECONNECT_GRACE` for one closing)?"""
+        if not self.busy.acquire(timeout=RECONNECT_GRACE):
+            return False
+        self.busy.release()
+        return True
 
     def make_middleware(self, reply: Callable[[dict], None]):
         if self.middleware == "fake":
@@ -113,28 +127,38 @@ class BridgeServer(socketserver.ThreadingTCPServer):
 
 #: Seconds a new connection waits for the one being served to finish closing.
 RECONNECT_GRACE = 1.0
+#: Connections at most in their opening at once (the TLS handshake, the hellos, the first
+#: authenticated line, each within the link's opening deadline); one more is dropped at once.
+OPENING = 8
 
 
 class Handler(socketserver.BaseRequestHandler):
-    """One connection: refused if another is served, else its commands to the middleware."""
+    """One connection: refused if another is served, else its commands to the middleware.
+
+    The one place (a controller at a time) is taken only once the connection
+    has opened: its hello, and with ``--secret`` its first line, MAC'd with the
+    key, all within one deadline (the link's ``connect_timeout``). Until then it
+    holds one of :data:`OPENING` places, so a connection that trickles its bytes
+    or has no key never keeps the controller out.
+    """
 
     server: BridgeServer
 
     def handle(self) -> None:
-        server, sock = self.server, self.request
-        sock.settimeout(server.options.connect_timeout)
-        if server.tls is not None:
-            try:
-                sock = server.tls.wrap_socket(sock, server_side=True)
-            except (OSError, ValueError) as e:
-                print(f"bridge: TLS refused {self.client_address}: {e}", file=sys.stderr)
-                return
-        link = Link(sock, Side.BRIDGE, server.options, server.secret,
-                    peer="the mission's controller")
+        server = self.server
+        if not server.opening.acquire(blocking=False):
+            _drop(self.request, f"busy: {OPENING} connections are opening already")
+            return
+        try:
+            link = self.open()
+        finally:
+            server.opening.release()
+        if link is None:
+            return
         # a controller reconnecting right after its link dropped may find the bridge
         # still closing the old one (its failsafe, the socket): it waits that long
         if not server.busy.acquire(timeout=RECONNECT_GRACE):
-            link.refuse("busy: this bridge serves one client at a time, and one is connected")
+            link.refuse(BUSY)
             link.close()
             return
         try:
@@ -143,13 +167,33 @@ class Handler(socketserver.BaseRequestHandler):
             server.busy.release()
             link.close()
 
-    def serve(self, link: Link) -> None:
+    def open(self) -> Link | None:
+        """The link opened within its deadline (TLS, hellos, the first authenticated line);
+        None, the other end told why, if it is not."""
+        server, sock = self.server, self.request
+        deadline = Deadline.after(server.options.opening)
+        if server.tls is not None:
+            try:
+                sock = tls_handshake(sock, server.tls, deadline, server_side=True)
+            except (OSError, ValueError) as e:
+                print(f"bridge: TLS refused {self.client_address}: {e}", file=sys.stderr)
+                return None
+        link = Link(sock, Side.BRIDGE, server.options, server.secret,
+                    peer="the mission's controller")
         try:
-            link.handshake()
+            if not server.free():      # told at once: no hello to wait for
+                raise LinkBroken(BUSY)
+            link.handshake(deadline)
+            if server.secret is not None:
+                link.authenticated(deadline)
         except LinkBroken as e:
             print(f"bridge: {e}", file=sys.stderr)
             link.refuse(str(e))
-            return
+            link.close()
+            return None
+        return link
+
+    def serve(self, link: Link) -> None:
         link.start()
 
         def reply(message: dict) -> None:
@@ -181,6 +225,19 @@ class Handler(socketserver.BaseRequestHandler):
             lost = getattr(mw, "link_lost", None)
             if lost is not None:
                 lost()
+
+
+#: Why a connection is refused while a controller is served.
+BUSY = "busy: this bridge serves one client at a time, and one is connected"
+
+
+def _drop(sock: socket.socket, reason: str) -> None:
+    """Tell a connection why it is dropped (one line, bounded in time), before it is closed."""
+    try:
+        sock.settimeout(1.0)
+        sock.sendall(encode({"link": "error", "reason": reason}))
+    except OSError:
+        pass        # it is gone already
 
 
 def serve(port: int, middleware: str = "fake", delay: float = 0.05,

@@ -48,8 +48,9 @@ from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost
                                   VehicleInputError, _strings)
 from mcl2pnml.core.errors import LISTED, Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, read_text
-from mcl2pnml.runtime.link import (BadLine, Link, LinkBroken, LinkOptions, Side, client_tls,
-                                   parse_address, quote_line, read_secret)
+from mcl2pnml.runtime.link import (BadLine, Deadline, Link, LinkBroken, LinkOptions, Side,
+                                   client_tls, connect, parse_address, quote_line, read_secret,
+                                   tls_handshake)
 
 #: Messages from the vehicle that no rule matched, kept for the log (the oldest dropped first).
 UNMATCHED_KEPT = 100
@@ -304,18 +305,21 @@ class TcpTransport(Transport):
         self.link: Link | None = None
 
     def open(self) -> None:
+        """Connect, the TLS handshake and the hellos, all within one deadline: the link's
+        ``opening`` (``connect_timeout``, or the run's ``max_time`` when smaller), however
+        slowly the bridge sends its bytes."""
         if self.link is not None:
             return
         sock = link = None
+        deadline = Deadline.after(self.options.opening)
         try:
-            sock = socket.create_connection((self.host, self.port),
-                                            timeout=self.options.connect_timeout)
+            sock = connect(self.host, self.port, deadline)
             if self.tls is not None:
-                sock = self.tls.wrap_socket(sock, server_hostname=self.host)
+                sock = tls_handshake(sock, self.tls, deadline, server_hostname=self.host)
             link = Link(sock, Side.CONTROLLER, self.options, self.secret,
                         peer="the vehicle's bridge")
             try:
-                link.handshake()
+                link.handshake(deadline)
             except LinkBroken as e:
                 link.refuse(str(e))
                 raise
@@ -326,6 +330,9 @@ class TcpTransport(Transport):
                 sock.close()
             if isinstance(e, ssl.SSLCertVerificationError):
                 why = f"TLS: {e.verify_message} ({e.reason})"
+            elif isinstance(e, (TimeoutError, socket.timeout)):
+                why = (f"no answer within {deadline.seconds:g} s (the bound on opening the "
+                       "link)")
             else:
                 why = e if isinstance(e, LinkBroken) else (
                     getattr(e, "reason", None) or e.strerror or e)

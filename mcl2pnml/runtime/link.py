@@ -12,6 +12,12 @@ bounded frames, optional signing), so a link here:
   seconds breaks the link;
 * is **alive**: each end sends a heartbeat every ``heartbeat`` seconds, and
   no line for ``liveness`` seconds breaks the link;
+* **opens within one deadline**: connecting, the TLS handshake and the
+  hellos both ways (and, at the bridge, the controller's first
+  authenticated line) share one :class:`Deadline` of ``connect_timeout``
+  seconds (or the run's ``max_time``, when smaller), however the other end
+  trickles its bytes: every read and write of the opening is given what is
+  left of it, never a time-out of its own;
 * may be **authenticated**: with a shared secret every line carries an
   HMAC-SHA256 over both ends' session nonces and its sequence number, so a
   line from anyone without the key, altered, replayed or reordered breaks
@@ -69,7 +75,8 @@ PROTOCOL = 1
 INBOX = 1024
 #: Lines waiting to be sent (each sender waits for its own: this bounds many senders).
 OUTBOX = 64
-#: Seconds to connect, and for the hellos (and TLS handshake) to cross.
+#: Seconds for the whole opening of a link: connecting, the TLS handshake, the hellos
+#: both ways (and at the bridge the first authenticated line), one deadline for all.
 CONNECT_TIMEOUT = 10.0
 #: A shared secret is at least this many bytes.
 MIN_SECRET = 16
@@ -113,6 +120,8 @@ class LinkOptions:
     max_line: int = MAX_LINE
     inbox: int = INBOX
     connect_timeout: float = CONNECT_TIMEOUT
+    #: the run's time limit (``run --max-time``): the opening never waits longer
+    max_time: float | None = None
     #: a file holding the shared secret (HMAC-SHA256 of every line)
     secret: Path | None = None
     #: TLS: the certificate authority to check the other end's certificate with,
@@ -120,6 +129,37 @@ class LinkOptions:
     tls_ca: Path | None = None
     tls_cert: Path | None = None
     tls_key: Path | None = None
+
+
+    @property
+    def opening(self) -> float:
+        """Seconds the whole opening may take: ``connect_timeout``, or ``max_time`` if smaller."""
+        return self.connect_timeout if self.max_time is None else \
+            max(0.0, min(self.connect_timeout, self.max_time))
+
+
+@dataclass(frozen=True)
+class Deadline:
+    """A moment on the monotonic clock by which a wait must end, and the bound it came from.
+
+    One deadline covers a whole exchange: each read or write is given what is
+    left of it (:meth:`left`), so a peer that trickles a byte every few seconds
+    cannot stretch the exchange past the bound, as a time-out per read would let it.
+    """
+
+    at: float
+    seconds: float
+
+    @classmethod
+    def after(cls, seconds: float) -> "Deadline":
+        return cls(time.monotonic() + seconds, seconds)
+
+    def left(self) -> float:
+        """Seconds left, never negative."""
+        return max(0.0, self.at - time.monotonic())
+
+    def passed(self) -> bool:
+        return time.monotonic() >= self.at
 
 
 def quote_line(line: bytes | str, why: str = "") -> str:
@@ -266,6 +306,50 @@ def parse_address(text: str) -> tuple[str, int]:
     return host, int(port)
 
 
+def connect(host: str, port: int, deadline: Deadline) -> socket.socket:
+    """A TCP connection to ``host:port`` made before ``deadline``: each of the host's
+    addresses is tried in turn with what is left of it (:class:`TimeoutError` once it
+    has passed; the last address's :class:`OSError` if none answers)."""
+    error: OSError = TimeoutError(f"no connection within {deadline.seconds:g} s")
+    for family, kind, proto, _, address in socket.getaddrinfo(host, port,
+                                                              type=socket.SOCK_STREAM):
+        if deadline.passed():
+            raise TimeoutError(f"no connection within {deadline.seconds:g} s")
+        sock = socket.socket(family, kind, proto)
+        try:
+            sock.settimeout(deadline.left())
+            sock.connect(address)
+            return sock
+        except OSError as e:
+            sock.close()
+            error = e
+    raise error
+
+
+def tls_handshake(sock: socket.socket, context: ssl.SSLContext, deadline: Deadline, *,
+                  server_side: bool = False, server_hostname: str | None = None) -> ssl.SSLSocket:
+    """``sock`` wrapped in TLS, its handshake done before ``deadline`` whatever the pace of
+    the other end's bytes (non-blocking, each wait given what is left); :class:`TimeoutError`
+    once it has passed, an :class:`ssl.SSLError` for a handshake that fails."""
+    tls = context.wrap_socket(sock, server_side=server_side, server_hostname=server_hostname,
+                              do_handshake_on_connect=False)
+    tls.setblocking(False)
+    with selectors.DefaultSelector() as selector:
+        while True:
+            try:
+                tls.do_handshake()
+                return tls
+            except ssl.SSLWantReadError:
+                wanted = selectors.EVENT_READ
+            except ssl.SSLWantWriteError:
+                wanted = selectors.EVENT_WRITE
+            if deadline.passed():
+                raise TimeoutError(f"no TLS handshake within {deadline.seconds:g} s")
+            selector.register(tls, wanted)
+            selector.select(deadline.left())
+            selector.unregister(tls)
+
+
 # -- the link -----------------------------------------------------------------------------
 
 class _Out:
@@ -304,36 +388,56 @@ class Link:
         self.stopping = False
         self.thread: threading.Thread | None = None
 
-    # -- the hellos, before the thread starts (blocking, bounded by connect_timeout)
+    # -- the hellos, before the thread starts (blocking, within one deadline)
 
     def hello(self) -> dict[str, Any]:
         return {"link": "hello", "protocol": PROTOCOL,
                 "auth": "hmac-sha256" if self.secret else "none", "nonce": self.nonce,
                 "heartbeat": self.options.heartbeat}
 
-    def handshake(self) -> None:
-        """Send our hello and check the other end's; :class:`LinkBroken` says what went wrong.
-
-        The caller then tells the other end why (:meth:`refuse`) and closes.
-        """
-        timeout = self.options.connect_timeout
-        self.sock.settimeout(timeout)
-        buffer = b""
+    def _line_by(self, deadline: Deadline, what: str) -> bytes:
+        """The next line received (from :attr:`early` on), read before ``deadline``: each
+        ``recv`` is given what is left of it, so a trickling peer cannot stretch it."""
+        buffer = self.early
         try:
-            self.sock.sendall(encode(self.hello()))
             while b"\n" not in buffer:
                 if len(buffer) > self.options.max_line:
-                    raise LinkBroken(f"{self.peer} sent a hello longer than "
+                    raise LinkBroken(f"{self.peer} sent {what} longer than "
                                      f"{self.options.max_line:,} bytes (the line-length cap)")
+                if deadline.passed():
+                    raise TimeoutError
+                self.sock.settimeout(max(deadline.left(), 1e-3))
                 data = self.sock.recv(CHUNK)
                 if not data:
-                    raise LinkBroken(f"{self.peer} closed the link before its hello")
+                    raise LinkBroken(f"{self.peer} closed the link before {what}")
                 buffer += data
         except (socket.timeout, TimeoutError):
-            raise LinkBroken(f"no hello from {self.peer} within {timeout:g} s") from None
+            raise LinkBroken(f"no {what} from {self.peer} within {deadline.seconds:g} s (the "
+                             "bound on opening the link)") from None
         except OSError as e:
             raise LinkBroken(f"the link failed during the hello: {e.strerror or e}") from None
         first, _, self.early = buffer.partition(b"\n")
+        return first
+
+    def handshake(self, deadline: Deadline | None = None) -> None:
+        """Send our hello and check the other end's, both before ``deadline`` (by default
+        the options' :attr:`~LinkOptions.opening` from now); :class:`LinkBroken` says what
+        went wrong.
+
+        The caller then tells the other end why (:meth:`refuse`) and closes.
+        """
+        deadline = deadline or Deadline.after(self.options.opening)
+        try:
+            if deadline.passed():
+                raise TimeoutError
+            self.sock.settimeout(max(deadline.left(), 1e-3))   # sendall: a total time-out
+            self.sock.sendall(encode(self.hello()))
+        except (socket.timeout, TimeoutError):
+            raise LinkBroken(f"could not send our hello to {self.peer} within "
+                             f"{deadline.seconds:g} s (the bound on opening the link)") from None
+        except OSError as e:
+            raise LinkBroken(f"the link failed during the hello: {e.strerror or e}") from None
+        first = self._line_by(deadline, "hello")
         try:
             hello = decode(first)
         except BadLine as e:
@@ -360,6 +464,25 @@ class Link:
                              "longer --liveness")
         self.peer_nonce = nonce
         self.last_heard = time.monotonic()
+
+    def authenticated(self, deadline: Deadline) -> None:
+        """Read the other end's first line after the hellos, before ``deadline``, and check
+        its MAC (with a secret; without one, any line of the protocol): the bridge serves a
+        controller only once it has shown it holds the key, so that a connection without it
+        never takes the bridge's one place. A command in that line is kept for the
+        caller; :class:`LinkBroken` if the line is late, unauthenticated or an error."""
+        line = self._line_by(deadline, "first line after the hello")
+        self.last_heard = time.monotonic()
+        try:
+            body = self._open(line) if self.secret else decode(line)
+        except BadLine as e:
+            raise LinkBroken(f"{self.peer} sent a first line that is not a JSON object: "
+                             f"{e}") from None
+        kind = body.get("link")
+        if kind == "error":
+            raise LinkBroken(f"{self.peer} ended the link: {said(body.get('reason'))}")
+        if kind is None:
+            self._deliver(body)
 
     def refuse(self, reason: str) -> None:
         """Tell the other end why the link ends (best effort, bounded), before closing it."""
