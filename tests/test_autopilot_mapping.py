@@ -69,7 +69,7 @@ def test_a_small_mapping_takes_the_defaults_for_what_it_leaves_out():
 
 
 def test_a_safe_state_may_leave_steps_out_but_keeps_their_order():
-    for steps in ([], ["hold"], ["disarm"], ["hold", "disarm"], ["surface", "disarm"]):
+    for steps in (["hold"], ["disarm"], ["hold", "disarm"], ["surface", "disarm"]):
         mapping = AutopilotMapping.from_json(json.dumps({**GOOD, "safe_state": steps}))
         assert mapping.safe_state == tuple(steps)
     for steps in (["surface", "hold"], ["disarm", "surface"], ["hold", "disarm", "surface"]):
@@ -114,11 +114,26 @@ def test_an_invalid_mapping_is_one_located_message(path, monkeypatch):
     ('{"primitives": {}, "home": [0, NaN]}', 1, 32, "home[1]: NaN is not a number"),
     ('{"primitives": {"9G": {"by": "autopilot"}}}', 1, 23,
      "primitives: '9G' does not match"),
-    ('{"primitives": {}, "ack_within": 1, "ack_within": 0.01}', 1, 51,
-     "ack_within: 0.01 is less than the minimum of 0.1"),
+    ('{"primitives": {}, "ack_within": 1, "ack_within": 0.01}', 1, 37,
+     'ack_within: the key "ack_within" is given twice (first at 1:20)'),
+    ('{"primitives": {"KeepDepth": {"by": "autopilot"}},\n "primitives": {}}', 2, 2,
+     'primitives: the key "primitives" is given twice (first at 1:2)'),
+    ('{"primitives": {"G": {"by": "autopilot",\n  "settle": 1, "by": "servo"}}}', 2, 16,
+     'primitives.G.by: the key "by" is given twice (first at 1:23)'),
+    ('{"primitives": {"DetectCross": {"by": "autopilot"}}}', 1, 39,
+     'primitives.DetectCross.by: the autopilot cannot fly DetectCross: it steers nothing'),
+    ('{"primitives": {"ReleaseMarker": {"by": "autopilot"}}}', 1, 41,
+     'primitives.ReleaseMarker.by: the autopilot cannot fly ReleaseMarker'),
+    ('{"primitives": {},\n "safe_state": []}', 2, 16,
+     'safe_state: an empty list would leave the vehicle as it is when the run ends (armed, '
+     'wherever it is); to mean that, write "safe_state": "none"'),
+    ('{"primitives": {}, "safe_state": "nothing"}', 1, 34, "safe_state: 'nothing'"),
+    ('{"primitives": {}, "home": [0, Infinity]}', 1, 32, "home[1]: Infinity is not a number"),
 ], ids=["unknown-setting", "unknown-by", "servo-without-channel", "pwm-too-high",
         "pwm-too-low", "safe-state-order", "negative-ready-within", "primitives-not-object",
-        "nan", "nan-in-a-binding", "nan-in-home", "bad-name", "duplicate-key-the-last"])
+        "nan", "nan-in-a-binding", "nan-in-home", "bad-name", "duplicate-key",
+        "duplicate-primitives", "duplicate-key-deep", "sensor-flown", "actuator-flown",
+        "empty-safe-state", "safe-state-word", "infinity"])
 def test_the_message_is_at_the_bad_value(text, line, column, words):
     e = error_of(text)
     assert (e.location.file, e.location.line, e.location.column) == ("m.json", line, column)
@@ -128,13 +143,41 @@ def test_the_message_is_at_the_bad_value(text, line, column, words):
     assert len(excerpt) == 2 and excerpt[1].index("^") == 4 + column - 1, str(e)
 
 
-@pytest.mark.parametrize("text", ["", "{", "[1, 2", '{"primitives": {}}}', "\ufeff{}",
+@pytest.mark.parametrize("text", ["", "  \n\t\n", "{", "{\n", "[1, 2", "[1, 2\n\n",
+                                  '{"primitives": {}}}', "\ufeff", "\ufeff{",
                                   '{"primitives": {}, "ack_within": 1' + "0" * 5000 + "}"],
-                         ids=["empty", "open", "open-array", "trailing", "bom", "huge-int"])
+                         ids=["empty", "blanks", "open", "open-newline", "open-array",
+                              "open-array-newlines", "trailing", "bom-only", "bom-open",
+                              "huge-int"])
 def test_text_that_is_no_json_is_one_message(text):
     e = error_of(text)
     assert str(e).startswith("m.json:") and "not an autopilot mapping: " in str(e)
     assert e.location.file == "m.json"
+
+
+def test_a_safe_state_of_no_step_is_said_on_purpose():
+    mapping = AutopilotMapping.from_json(json.dumps({**GOOD, "safe_state": "none"}))
+    assert mapping.safe_state == ()
+
+
+def test_a_utf8_byte_order_mark_is_ignored_and_columns_count_after_it():
+    mapping = AutopilotMapping.from_json("\ufeff" + json.dumps(GOOD))
+    assert mapping.bindings["GoToWayPoint"].by == "autopilot"
+    e = error_of('\ufeff{"primitives": {}, "ack_within": 0}')
+    assert (e.location.line, e.location.column) == (1, 34)
+
+
+def test_a_mapping_that_is_not_utf8_is_refused_at_its_first_bad_byte(tmp_path):
+    path = tmp_path / "latin1.json"
+    path.write_bytes('{"autopilot": "ArduSub",\n "primitives": {"Caf\u00e9": {}}}'
+                     .encode("latin-1"))
+    with pytest.raises(Mcl2PnmlError) as info:
+        AutopilotMapping.load(path)
+    assert str(info.value) == (
+        f"{path}:2:21: cannot read the autopilot mapping: byte 0xe9 is not UTF-8 (invalid "
+        "continuation byte); save the file as UTF-8\n"
+        ' "primitives": {"Caf\\xe9": {}}}\n'.replace(' "', '     "', 1)
+        + " " * 24 + "^")
 
 
 def test_a_mapping_over_one_mib_is_refused_before_it_is_read(tmp_path):

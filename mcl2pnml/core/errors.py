@@ -7,6 +7,12 @@ and exits with status 2; anything else escaping is a bug.
 Like lark's ``UnexpectedInput``, an error that knows its position renders as
 ``file:line:col: message`` followed by the source line and a caret under the
 fault, so that a user finds the problem without opening the file.
+
+Whatever of the input an error shows (the source line, the file's name, a
+name or a value the message quotes) goes through :func:`visible` first: a
+control character printed raw would act on the user's terminal (``ESC ] 0 ;
+... BEL`` sets its title, ``ESC [ 2 J`` clears it) and a bidirectional
+override would show text other than the file's.
 """
 from __future__ import annotations
 
@@ -24,6 +30,55 @@ LISTED = 20
 COMPARED = 2_000
 
 
+def _escape(char: str) -> str:
+    code = ord(char)
+    if char in "\t\n\r":
+        return repr(char)[1:-1]
+    return f"\\x{code:02x}" if code < 0x100 else \
+        f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"
+
+
+def visible(text: str, keep: str = "") -> str:
+    """``text`` safe to print: each character that is not printable as its Python escape.
+
+    Not printable, by :meth:`str.isprintable`: the C0 and C1 controls (ESC,
+    BEL, CR...), DEL, the bidirectional overrides and isolates (U+202A-202E,
+    U+2066-2069) and other format characters, the line and paragraph
+    separators, unpaired surrogates. They are shown as ``\\x1b``, ``\\t``,
+    ``\\u202e``; ``keep`` names those left as they are (a message's own line
+    breaks). A backslash is left alone, so that ordinary text reads as written;
+    the result is all printable, so that escaping it again changes nothing.
+    """
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() or c in keep else _escape(c) for c in text)
+
+
+def line_of(lines: Sequence[str], line: int | None) -> str | None:
+    """Line ``line`` (from 1) of ``lines``, or None where there is no such line."""
+    return lines[line - 1] if line is not None and 0 < line <= len(lines) else None
+
+
+def text_location(filename: str | None, text: str, line: int | None,
+                  column: int | None = None) -> Location:
+    """Where ``line`` and ``column`` (from 1) are in ``text``, with the source line.
+
+    Total: a position past the end (a parser's "unexpected end" after the last
+    newline, an empty file, a file of blanks) is shown at the end of the last
+    line, where the file stops; a position before the start at 1:1.
+    """
+    lines = source_lines(text)
+    if line is None or line < 1:
+        return Location(filename, 1, 1, lines[0] if lines else "")
+    if line > len(lines):
+        if not lines:
+            return Location(filename, 1, 1, "")
+        line, column = len(lines), len(lines[-1]) + 1
+    source = lines[line - 1]
+    column = min(max(1, column or 1), len(source) + 1)
+    return Location(filename, line, column, source)
+
+
 @dataclass(frozen=True)
 class Location:
     """A position in a source file; line and column count from 1."""
@@ -34,18 +89,27 @@ class Location:
     source_line: str | None = None
 
     def prefix(self) -> str:
-        parts = [self.file or "<input>"]
+        parts = [visible(self.file or "<input>")]
         if self.line is not None:
             parts.append(str(self.line))
             parts.append(str(self.column if self.column is not None else 1))
         return ":".join(parts)
 
     def excerpt(self) -> str:
-        """The source line with a caret under the column, or ``""``."""
+        """The source line with a caret under the column, or ``""``.
+
+        A tab is shown as one space; every other character that is not printable
+        as its escape (:func:`visible`), the caret under the escape of the
+        character it points at.
+        """
         if self.source_line is None or self.line is None:
             return ""
-        text = self.source_line.rstrip("\n").expandtabs(1)
+        text = self.source_line.rstrip("\r\n").replace("\t", " ")
         col = max(1, self.column or 1)
+        if not text.isprintable():
+            shown = [visible(c) for c in text]
+            col = len("".join(shown[:col - 1])) + 1 + max(0, col - 1 - len(shown))
+            text = "".join(shown)
         if len(text) > EXCERPT_WIDTH:  # a window around the fault, marked as cut
             start = max(0, min(col - 1 - EXCERPT_WIDTH // 2, len(text) - EXCERPT_WIDTH))
             left = "..." if start else ""
@@ -81,9 +145,11 @@ class Mcl2PnmlError(Exception):
         self.location = location
 
     def __str__(self) -> str:
+        # what a message quotes of the input is shown visibly; its own line breaks kept
+        message = visible(self.message, keep="\n")
         if self.location is None:
-            return self.message
-        head = f"{self.location.prefix()}: {self.message}"
+            return message
+        head = f"{self.location.prefix()}: {message}"
         excerpt = self.location.excerpt()
         return f"{head}\n{excerpt}" if excerpt else head
 
@@ -141,8 +207,8 @@ def did_you_mean(name: str, valid: Iterable[str], what: str) -> str:
     at = bisect.bisect(valid, name)
     near = valid[max(0, at - COMPARED // 2):at + COMPARED // 2]
     close = difflib.get_close_matches(name, near, n=1)
-    hint = f"; did you mean '{close[0]}'?" if close else ""
-    listing = ", ".join(valid[:LISTED]) if valid else "none"
+    hint = f"; did you mean '{visible(close[0])}'?" if close else ""
+    listing = ", ".join(map(visible, valid[:LISTED])) if valid else "none"
     if len(valid) > LISTED:
         listing += f", ... ({len(valid) - LISTED:,} more)"
     return f"{hint} {what}: {listing}" if hint else f"; {what}: {listing}"
@@ -156,6 +222,7 @@ class OptionError(Exception):
     """
 
     def __init__(self, option: str, message: str):
+        message = visible(message, keep="\n")    # it may quote a file's name
         super().__init__(message)
         self.option = option
         self.message = message

@@ -264,7 +264,20 @@ def read_text(path: str | Path, what: str, limit: int | None = None,
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
-        raise Mcl2PnmlError(f"cannot read the {what}: {e}", Location(str(path))) from None
+        raise Mcl2PnmlError(f"cannot read the {what}: byte 0x{data[e.start]:02x} is not "
+                            f"UTF-8 ({e.reason}); save the file as UTF-8",
+                            byte_location(str(path), data, e.start)) from None
+
+
+def byte_location(filename: str, data: bytes, at: int) -> Location:
+    """Where byte ``at`` of ``data`` is: its line, its column in characters, and its line
+    with the bytes that are not UTF-8 shown as ``\\xNN``."""
+    start = data.rfind(b"\n", 0, at) + 1
+    end = data.find(b"\n", at)
+    line = data[start:end if end >= 0 else len(data)]
+    column = len(data[start:at].decode("utf-8", "backslashreplace")) + 1
+    return Location(filename, data.count(b"\n", 0, at) + 1, column,
+                    line.decode("utf-8", "backslashreplace"))
 
 
 def read_bytes(path: str | Path, what: str | None = None, limit: int | None = None,

@@ -1,18 +1,26 @@
-"""Where a value stands in a JSON text: a JSON path to a line and a column.
+"""The one reader of our JSON inputs, and where a value stands in their text.
 
-A configuration file of ours (a world, a mapping) is parsed by Python's
-``json`` and checked on the parsed value, but a fault must be shown where
-the user wrote it. :func:`locator` walks a text that has parsed already,
-as JSON reads it, and records where each value starts, by its path (keys
-and indices from the root); a key given twice is located where JSON takes
-it, the last time.
+Every JSON file a command reads (a world, a vehicle model, a fault file, an
+autopilot mapping, a vehicle script, a certificate) goes through
+:func:`load_json`: JSON as RFC 8259 says it, no NaN or Infinity (Python's
+json reads them, and NaN passes every bound), no key given twice in one
+object (Python's json keeps the last silently: a second ``"primitives"``
+would drop the first), a UTF-8 byte order mark at the start ignored (RFC
+8259 lets a reader ignore it; Windows editors write one). Each fault is one
+message at its line and column, wherever the text stops (after its last
+newline, an empty file, a file of blanks).
+
+A file is checked on the parsed value, but a fault must be shown where the
+user wrote it. :func:`locator` walks a text that has parsed already, as
+JSON reads it, and records where each value starts, by its path (keys and
+indices from the root).
 """
 from __future__ import annotations
 
 import json
 from typing import Any, Callable, Iterable
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.errors import EXCERPT_WIDTH, Location, Mcl2PnmlError, text_location, visible
 from mcl2pnml.core.files import json_fault
 
 _BLANK = " \t\r\n"
@@ -21,8 +29,14 @@ _DECODER = json.JSONDecoder()
 Path = tuple  # keys (str) and indices (int) from the root
 
 
-def offsets(text: str) -> dict[Path, int]:
-    """The offset in ``text`` where each value starts, by its path; ``text`` is valid JSON."""
+#: A UTF-8 byte order mark, as a decoded text starts with it.
+BOM = "\ufeff"
+
+
+def offsets(text: str, twice: list[tuple[Path, int, int]] | None = None) -> dict[Path, int]:
+    """The offset in ``text`` where each value starts, by its path; ``text`` is valid JSON
+    (but for keys given twice, each appended to ``twice`` as its path and the offsets of
+    its two keys)."""
     found: dict[Path, int] = {}
     # an explicit stack, not recursion: a file nested thousands deep has parsed
     # (Python's json recurses in C) and must not overflow here
@@ -36,9 +50,14 @@ def offsets(text: str) -> dict[Path, int]:
         opening, closing = text[i], "}" if text[i] == "{" else "]"
         i = _skip(text, i + 1)
         index = 0
+        keys: dict[str, int] = {}
         while text[i] != closing:
             if opening == "{":
+                at = i
                 key, i = json.decoder.scanstring(text, i + 1)
+                if twice is not None and key in keys:
+                    twice.append((path + (key,), keys[key], at))
+                keys[key] = at
                 i = _skip(text, i, _BLANK + ":")
                 child: Path = path + (key,)
             else:
@@ -70,43 +89,85 @@ def locator(text: str, filename: str) -> Callable[[Iterable], Location]:
             return Location(filename)
         line = text.count("\n", 0, at)
         column = at - (text.rfind("\n", 0, at) + 1) + 1
-        return Location(filename, line + 1, column, lines[line][:400])
+        return Location(filename, line + 1, column, lines[line][:column + EXCERPT_WIDTH])
     return where
 
 
 def dotted(path: Iterable) -> str:
-    """A JSON path as the messages write it: ``primitives.KeepDepth.band``, ``safe_state[1]``."""
+    """A JSON path as the messages write it: ``primitives.KeepDepth.band``, ``safe_state[1]``
+    (a key's characters that are not printable escaped, a key over 80 characters cut)."""
     out = ""
     for part in path:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+        part = part if isinstance(part, int) else visible(part[:80])
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else part)
     return out or "the file"
 
 
-def parse_located(text: str, filename: str, what: str) -> tuple[Any, Callable[[Iterable], Location]]:
-    """A configuration file's JSON and its locator (:func:`locator`); a file that is not
-    JSON, or holds a NaN (Python's json reads one, and NaN passes every bound), is one
-    message at its line and column saying it is not ``what``."""
+class _Twice(Exception):
+    """A key given twice in one object (raised while parsing, located after)."""
+
+
+class _Constant(str):
+    """NaN, Infinity or -Infinity where the file has it: refused once the file has parsed."""
+
+
+def _unique(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    obj = dict(pairs)
+    if len(obj) != len(pairs):
+        raise _Twice
+    return obj
+
+
+def load_json(text: str, filename: str, what: str) -> Any:
+    """The value of a JSON input (see the module's documentation); a text that is not
+    JSON, holds NaN or Infinity or a key twice is one message at its line and column
+    saying it is not ``what`` (``"an autopilot mapping"``)."""
+    text = text[len(BOM):] if text.startswith(BOM) else text
+    if not text.strip():
+        raise Mcl2PnmlError(f"not {what}: the file is empty" if not text else
+                            f"not {what}: the file holds only blanks", Location(filename, 1, 1))
     try:
-        data = json.loads(text)
+        data = json.loads(text, object_pairs_hook=_unique, parse_constant=_Constant)
     except json.JSONDecodeError as e:
-        raise Mcl2PnmlError(f"not {what}: {e.msg}", Location(filename, e.lineno, e.colno)) \
-            from None
+        raise Mcl2PnmlError(f"not {what}: {e.msg}",
+                            text_location(filename, text, e.lineno, e.colno)) from None
+    except _Twice:
+        twice: list[tuple[Path, int, int]] = []
+        offsets(text, twice)
+        path, first, second = min(twice, key=lambda t: t[2])
+        line, column = _line_column(text, first)
+        raise Mcl2PnmlError(
+            f"{dotted(path)}: the key {json.dumps(path[-1])[:80]} is given twice (first at "
+            f"{line}:{column}), and JSON would keep only the last: give it once",
+            text_location(filename, text, *_line_column(text, second))) from None
     except (ValueError, RecursionError) as e:
         raise Mcl2PnmlError(f"not {what}: {json_fault(e)}", Location(filename)) from None
-    where = locator(text, filename)
-    nan = first_nan(data)
-    if nan is not None:
-        raise Mcl2PnmlError(f"{dotted(nan)}: NaN is not a number", where(nan))
-    return data, where
+    constant = first_constant(data)
+    if constant is not None:
+        path, name = constant
+        raise Mcl2PnmlError(f"{dotted(path)}: {name} is not a number",
+                            locator(text, filename)(path))
+    return data
 
 
-def first_nan(value: Any) -> tuple | None:
-    """The path of the first NaN in a parsed file, or None."""
+def _line_column(text: str, at: int) -> tuple[int, int]:
+    """The line and column (from 1) of offset ``at`` in ``text``."""
+    return text.count("\n", 0, at) + 1, at - (text.rfind("\n", 0, at) + 1) + 1
+
+
+def parse_located(text: str, filename: str, what: str) -> tuple[Any, Callable[[Iterable], Location]]:
+    """A configuration file's JSON (:func:`load_json`) and its locator (:func:`locator`)."""
+    data = load_json(text, filename, what)
+    return data, locator(text[len(BOM):] if text.startswith(BOM) else text, filename)
+
+
+def first_constant(value: Any) -> tuple[tuple, str] | None:
+    """The path of the first NaN or Infinity in a parsed file, and which, or None."""
     stack = [((), value)]
     while stack:
         path, value = stack.pop()
-        if isinstance(value, float) and value != value:
-            return path
+        if isinstance(value, _Constant):
+            return path, str(value)
         items = value.items() if isinstance(value, dict) else \
             enumerate(value) if isinstance(value, list) else ()
         stack.extend(reversed([((*path, k), v) for k, v in items]))

@@ -24,14 +24,25 @@ live on the vehicle's side of the abstraction layer):
   (a camera that sees the cross, a plume detector...), simulated from the
   world file against the autopilot's own position. The log says so.
 
+Only a primitive that moves the vehicle (its simulated counterpart sets a
+point, a depth or a heading) may be flown: a built-in sensor or actuator
+(DetectCross, CheckLatch, ReleaseMarker...) bound ``"by": "autopilot"``
+would send no target and wait for a goal nothing reaches, and is refused.
+
+The safe state is a list of steps, or ``"none"`` for a run that leaves the
+vehicle as it is when it ends; an empty list is refused, since it reads as
+an oversight (and leaves an armed vehicle armed).
+
 Every bound (how long to wait for a position, an acknowledgement, the
 surface) and the safe state a run ends in are settings of the file,
 checked as the world file's are: one message at the setting's line and
-column. The package's own mapping, for ArduSub, is ``ardusub.json`` beside
+column (the file read as every JSON input is, :mod:`mcl2pnml.core.jsontext`:
+a key given twice, NaN, bytes that are not UTF-8 refused). The package's own mapping, for ArduSub, is ``ardusub.json`` beside
 this module (``--vehicle mavlink``).
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -40,6 +51,7 @@ from typing import Any, Mapping
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.files import read_text
 from mcl2pnml.core.jsontext import check_schema, parse_located
+from mcl2pnml.runtime.simprims import SimulatedPrimitive, built_in
 
 #: The largest mapping file read, in bytes.
 MAX_MAPPING = 1 << 20
@@ -47,6 +59,8 @@ MAX_MAPPING = 1 << 20
 SAFE_STEPS = ("hold", "surface", "disarm")
 #: Who carries out a primitive.
 BY = ("autopilot", "servo", "relay", "simulated")
+#: ``"safe_state"``'s spelling of a safe state of no step, said on purpose.
+NO_SAFE_STATE = "none"
 
 
 def _seconds(low: float, high: float) -> dict[str, Any]:
@@ -77,8 +91,9 @@ SCHEMA: dict[str, Any] = {
         "ack_within": _seconds(0.1, 600),
         "position_lost_after": _seconds(0, 3600),
         "telemetry_rate": {"type": "number", "minimum": 1, "maximum": 50},
-        "safe_state": {"type": "array", "maxItems": 3, "uniqueItems": True,
-                       "items": {"enum": list(SAFE_STEPS)}},
+        "safe_state": {"anyOf": [{"type": "array", "minItems": 1, "maxItems": 3,
+                                  "uniqueItems": True, "items": {"enum": list(SAFE_STEPS)}},
+                                 {"const": NO_SAFE_STATE}]},
         "hold_within": _seconds(0, 600),
         "surface_depth": {"type": "number", "minimum": 0, "maximum": 100},
         "surface_within": _seconds(0, 3600),
@@ -91,6 +106,15 @@ SCHEMA: dict[str, Any] = {
         },
     },
 }
+
+
+@functools.cache
+def not_flown() -> frozenset[str]:
+    """The built-in primitives the autopilot cannot fly: the sensors and actuators, whose
+    simulated counterparts steer nothing. (A user's primitive, registered later, is not
+    known when the mapping is read.)"""
+    return frozenset(name for name, prim in built_in().items()
+                     if type(prim).steer is SimulatedPrimitive.steer)
 
 
 @dataclass(frozen=True)
@@ -136,6 +160,11 @@ class AutopilotMapping:
     @classmethod
     def from_json(cls, text: str, filename: str = "<mapping>") -> "AutopilotMapping":
         data, where = parse_located(text, filename, "an autopilot mapping")
+        if isinstance(data, dict) and data.get("safe_state") == []:
+            raise Mcl2PnmlError(
+                'safe_state: an empty list would leave the vehicle as it is when the run '
+                f'ends (armed, wherever it is); to mean that, write "safe_state": '
+                f'"{NO_SAFE_STATE}"', where(("safe_state",)))
         check_schema(data, SCHEMA, where, what="an autopilot mapping")
         bindings = {}
         for name, spec in data["primitives"].items():
@@ -145,8 +174,14 @@ class AutopilotMapping:
                       "properties": {"by": {}, **_BINDING[kind]}}
             check_schema(spec, schema, lambda path, n=name: where(("primitives", n, *path)),
                          ("primitives", name), what="an autopilot mapping")
+            if kind == "autopilot" and name in not_flown():
+                raise Mcl2PnmlError(
+                    f'primitives.{name}.by: the autopilot cannot fly {name}: it steers '
+                    'nothing (no point, depth or heading); bind a sensor "by": "simulated", '
+                    'an actuator "by": "servo" or "relay"', where(("primitives", name, "by")))
             bindings[name] = Binding(name, **spec)
-        steps = tuple(data.get("safe_state", SAFE_STEPS))
+        safe_state = data.get("safe_state", SAFE_STEPS)
+        steps = () if safe_state == NO_SAFE_STATE else tuple(safe_state)
         if list(steps) != sorted(steps, key=SAFE_STEPS.index):
             raise Mcl2PnmlError("safe_state: the steps go in the order hold, surface, disarm "
                                 "(any of them may be left out)", where(("safe_state",)))
@@ -157,6 +192,7 @@ class AutopilotMapping:
 
     @classmethod
     def load(cls, path: str | Path) -> "AutopilotMapping":
+        """The mapping file at ``path`` (at most :data:`MAX_MAPPING` bytes, UTF-8)."""
         return cls.from_json(read_text(path, "autopilot mapping", MAX_MAPPING), str(path))
 
     @classmethod
