@@ -13,6 +13,17 @@ result is counted once, by its first seed, so no run is lost or counted twice.
 Results are taken in seed order, so the figures (and where a sequential test
 stops) depend on the seeds only, not on which worker was faster.
 
+Every wait on a user's scheduler has a deadline (:class:`SchedulerTimeouts`):
+its address is probed first, Dask's opening message read within a size bound
+and the handshake's deadline (a port that says nothing, trickles bytes or
+answers something else than Dask is refused before Dask reads from it, whose
+reader would allocate whatever length it is sent); mid-run, a scheduler that
+answers nothing for the silence bound (frozen, or without a worker) ends the
+campaign. The client runs on an event loop of the call's own, so that what a
+deadline abandons is cancelled with it and no thread is left behind; Dask's
+logs and warnings are silenced while it runs (a lost scheduler is one
+message, not Dask's tracebacks).
+
 The figures: each ending's frequency with its Wilson score interval, the end
 times' mean, spread and quantiles, and optionally Wald's sequential
 probability ratio test of "P(OK) >= target", which stops the campaign as soon
@@ -20,21 +31,134 @@ as it is decided at the asked confidence (Wald, *Sequential Analysis*, 1947).
 """
 from __future__ import annotations
 
+import asyncio
+import logging
 import math
+import os
 import random
+import struct
+import threading
 import uuid
+import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Iterator
+from urllib.parse import urlsplit
 
-from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
 
 #: Runs per task sent to a worker.
 BATCH = 500
-#: How long a scheduler may take to answer, in seconds.
-CONNECT_TIMEOUT = 5
+#: Seconds a user's scheduler may take to complete Dask's handshake (the probe and the
+#: client's registration, together), unless ``--scheduler-timeout`` says otherwise.
+HANDSHAKE_TIMEOUT = 5.0
+#: Seconds mid-run with no batch done and no answer from the scheduler (or no worker
+#: on it) after which a campaign ends, unless ``--scheduler-timeout`` says otherwise.
+SILENCE_TIMEOUT = 60.0
+#: The most seconds either bound may be given (a day).
+MAX_SCHEDULER_TIMEOUT = 86_400.0
+#: The largest opening message the probe reads from a scheduler: Dask's handshake is a
+#: small dictionary (its compression, Python version and pickle protocol), about 100
+#: bytes; a length beyond this is not Dask.
+HANDSHAKE_MAX_BYTES = 64 << 10
+#: The most frames the handshake message may say it has (it has one).
+HANDSHAKE_MAX_FRAMES = 16
+#: Seconds between the watch's questions to the scheduler mid-run (at most: a fourth
+#: of the silence bound when that is shorter).
+PING_EVERY = 2.0
+#: Seconds a local cluster may take to start its worker processes, and any cluster to
+#: close (a frozen scheduler is abandoned then, not waited for).
+LOCAL_START, CLOSE_BOUND = 120.0, 5.0
+#: What ``--plot`` can write (matplotlib's writers, by the file's suffix).
+PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+#: What ``--table`` can write.
+TABLE_SUFFIXES = (".csv", ".parquet")
+#: The loggers of Dask and of what it runs on, silenced while a campaign runs.
+DASK_LOGGERS = ("distributed", "tornado", "asyncio", "bokeh")
 #: The indifference region of the sequential test, either side of its target.
 INDIFFERENCE = 0.02
+
+
+@dataclass(frozen=True)
+class SchedulerTimeouts:
+    """The deadlines on a user's scheduler (``--scheduler-timeout HANDSHAKE[,SILENCE]``)."""
+
+    #: seconds to reach the scheduler and complete Dask's handshake, all told
+    handshake: float = HANDSHAKE_TIMEOUT
+    #: seconds mid-run with no batch done and no answer from a scheduler with workers
+    silence: float = SILENCE_TIMEOUT
+
+    @classmethod
+    def parse(cls, text: str) -> "SchedulerTimeouts":
+        """``HANDSHAKE`` or ``HANDSHAKE,SILENCE``, in seconds; a ValueError saying what is
+        wrong."""
+        parts = text.split(",")
+        if len(parts) > 2 or not all(p.strip() for p in parts):
+            raise ValueError(f"'{text}' is not HANDSHAKE[,SILENCE] (seconds, e.g. "
+                             f"{cls()})")
+        values = []
+        for part in parts:
+            try:
+                value = float(part)
+            except ValueError:
+                raise ValueError(f"'{part.strip()}' is not a number of seconds") from None
+            if not 0 < value <= MAX_SCHEDULER_TIMEOUT:    # NaN fails too
+                raise ValueError(f"'{part.strip()}' is not a number of seconds above 0 and "
+                                 f"at most {MAX_SCHEDULER_TIMEOUT:g}")
+            values.append(value)
+        return cls(*values)
+
+    def __str__(self) -> str:
+        return f"{self.handshake:g},{self.silence:g}"
+
+
+def scheduler_address(text: str) -> str:
+    """A Dask scheduler's address, ``tcp://HOST:PORT`` (or ``HOST:PORT``), as Dask takes it;
+    a ValueError saying what is wrong (another scheme, no port, a port out of range)."""
+    said = text.strip()
+    if not said:
+        raise ValueError("the address is empty (tcp://HOST:PORT)")
+    parts = urlsplit(said if "://" in said else f"tcp://{said}")
+    if parts.scheme != "tcp":
+        raise ValueError(f"'{text}' is not a Dask scheduler's address: it is "
+                         "tcp://HOST:PORT (Dask's default port is 8786)")
+    try:
+        port = parts.port
+    except ValueError:
+        port = 0
+    host = parts.hostname
+    if not host or parts.path not in ("", "/") or parts.query or parts.fragment \
+            or parts.username is not None:
+        raise ValueError(f"'{text}' is not tcp://HOST:PORT")
+    if port is None:
+        raise ValueError(f"'{text}' has no port (tcp://HOST:PORT; Dask's default is 8786)")
+    if not 0 < port < 65536 or not parts.netloc.rsplit(":", 1)[1].isdigit():
+        raise ValueError(f"the port of '{text}' is not a number from 1 to 65535")
+    return f"tcp://[{host}]:{port}" if ":" in host else f"tcp://{host}:{port}"
+
+
+def check_outputs(table: Path | None, plot: Path | None) -> None:
+    """Refuse, before any run, a table or a plot that could not be written once the runs
+    are done: a suffix that says no format we write, a folder that does not exist, a
+    Parquet table without pyarrow (one :class:`OptionError`)."""
+    for option, path, suffixes in (("--table", table, TABLE_SUFFIXES),
+                                   ("--plot", plot, PLOT_SUFFIXES)):
+        if path is None:
+            continue
+        if path.suffix.lower() not in suffixes:
+            raise OptionError(option, f"'{path}' has no suffix of a format it is written "
+                                      f"in: {', '.join(suffixes)}")
+        folder = path.parent if str(path.parent) else Path(".")
+        if not folder.is_dir():
+            raise OptionError(option, f"the folder of '{path}' does not exist")
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise OptionError(option, f"the folder of '{path}' cannot be written to")
+    if table is not None and table.suffix.lower() == ".parquet":
+        from importlib.util import find_spec
+        if find_spec("pyarrow") is None:
+            raise OptionError("--table", "a Parquet table needs pyarrow (pip install "
+                                         "pyarrow); or write .csv")
 
 
 @dataclass(frozen=True)
@@ -286,71 +410,251 @@ def _z(confidence: float) -> float:
 
 def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = "petri", seed: int = 0,
         confidence: float = 0.99, target: float | None = None, workers: int | None = None,
-        scheduler: str | None = None, max_time: float = 24 * 3600.0,
-        properties: tuple = (),
+        scheduler: str | None = None, timeouts: SchedulerTimeouts = SchedulerTimeouts(),
+        max_time: float = 24 * 3600.0, properties: tuple = (),
         progress: Callable[[int, int], None] | None = None) -> Campaign:
     """Fly the campaign (the module's documentation) and return its runs in seed order,
     each judged on ``properties`` (compiled on the mission's net: the Petri-net engine's
-    markings are read)."""
+    markings are read). ``scheduler`` is a user's (:func:`scheduler_address`), held to
+    ``timeouts``; None: a local cluster of ``workers`` processes."""
     try:
-        from distributed import Client, LocalCluster, as_completed
+        import distributed  # noqa: F401 (only whether it is there)
     except ImportError:
         raise Mcl2PnmlError("a campaign runs on Dask: pip install 'dask[distributed]'") \
             from None
+    if scheduler is not None:       # the CLI has checked it; a library caller may not
+        try:
+            scheduler = scheduler_address(scheduler)
+        except ValueError as e:
+            raise OptionError("--scheduler", str(e)) from None
     campaign = Campaign(confidence, sprt=Sprt(target, confidence) if target else None,
                         properties=tuple(p.name for p in properties), fleet=fleet)
-    batches = [list(range(seed + k, seed + min(k + BATCH, runs))) for k in range(0, runs, BATCH)]
-    args = (str(mission.resolve()), fleet, engine)
-    tracks_below = seed + TRACKS if fleet.model is None else -1
-    cluster = None
+    flight = _Flight(campaign, runs, (str(mission.resolve()), fleet, engine), seed,
+                     max_time, tuple(properties), progress)
+    with _quiet():
+        _on_own_loop(lambda: _flown(flight, scheduler, workers, timeouts))
+    return campaign
+
+
+@dataclass
+class _Flight:
+    """What one campaign sends out, and where its runs go."""
+
+    campaign: Campaign
+    runs: int
+    #: the mission's path, the fleet and the engine, as each batch is told them
+    args: tuple
+    seed: int
+    max_time: float
+    properties: tuple
+    progress: Callable[[int, int], None] | None
+
+
+@contextmanager
+def _quiet() -> Iterator[None]:
+    """Dask's logs and warnings silenced (every logger of :data:`DASK_LOGGERS`' families):
+    what goes wrong is the campaign's one message, not Dask's tracebacks."""
+    family = [logging.getLogger(name) for name in logging.root.manager.loggerDict
+              if name.split(".")[0] in DASK_LOGGERS]
+    family += [logging.getLogger(name) for name in DASK_LOGGERS]
+    was = [(logger, logger.disabled) for logger in family]
+    for logger in family:
+        logger.disabled = True
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            yield
+    finally:
+        for logger, disabled in was:
+            logger.disabled = disabled
+
+
+def _on_own_loop(make: Callable) -> None:
+    """Run the coroutine ``make()`` on an event loop of its own, which is closed when it
+    ends (whatever a deadline abandoned in it cancelled then); from a thread of its own
+    when the caller already runs a loop (a notebook)."""
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        asyncio.run(make())
+        return
+    failed: list[BaseException] = []
+
+    def body():
+        try:
+            asyncio.run(make())
+        except BaseException as e:      # noqa: BLE001 (handed to the caller as it is)
+            failed.append(e)
+    thread = threading.Thread(target=body, name="mcl2pnml-campaign")
+    thread.start()
+    thread.join()
+    if failed:
+        raise failed[0]
+
+
+class _NotDask(Exception):
+    """What the probe found at an address that does not speak Dask."""
+
+
+async def _probe(address: str) -> None:
+    """Read the scheduler's opening message (Dask's handshake: a scheduler speaks first)
+    within :data:`HANDSHAKE_MAX_BYTES`, and check that it is one: a length read from the
+    peer is judged before anything is read by it. The caller holds the deadline."""
+    from distributed.protocol.core import loads
+    parts = urlsplit(address)
+    reader, writer = await asyncio.open_connection(parts.hostname, parts.port)
+    try:
+        word = struct.calcsize("Q")     # Dask's frame lengths, in its native layout
+        (size,) = struct.unpack("Q", await reader.readexactly(word))
+        if not 2 * word <= size <= HANDSHAKE_MAX_BYTES:
+            raise _NotDask(f"its opening message claims {size:,} bytes")
+        body = await reader.readexactly(size)
+        (count,) = struct.unpack_from("Q", body)
+        if not 0 < count <= HANDSHAKE_MAX_FRAMES or word * (1 + count) > size:
+            raise _NotDask("its opening message is not Dask's framing")
+        lengths = struct.unpack_from(f"{count}Q", body, word)
+        if word * (1 + count) + sum(lengths) != size:
+            raise _NotDask("its opening message is not Dask's framing")
+        frames, at = [], word * (1 + count)
+        for length in lengths:
+            frames.append(body[at:at + length])
+            at += length
+        try:
+            said = loads(frames, deserialize=False)
+        except Exception:           # noqa: BLE001 (whatever the decoder makes of noise)
+            said = None
+        if not isinstance(said, dict) or "pickle-protocol" not in said:
+            raise _NotDask("its opening message is not Dask's handshake")
+    finally:
+        writer.close()
+
+
+async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
+                 timeouts: SchedulerTimeouts) -> None:
+    """The campaign on this loop: the cluster reached (or started), the batches sent, the
+    runs taken in seed order, the scheduler watched; everything closed within a bound."""
+    from distributed import Client, LocalCluster
+    named = scheduler or "(local)"
+    cluster = client = None
     try:
         if scheduler is None:
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=50)
-            client = Client(cluster)
+            try:
+                async with asyncio.timeout(LOCAL_START):
+                    cluster = await LocalCluster(
+                        n_workers=workers, threads_per_worker=1, processes=True,
+                        dashboard_address=None, silence_logs=logging.CRITICAL,
+                        asynchronous=True)
+                    client = await Client(cluster, asynchronous=True, set_as_default=False)
+            except TimeoutError:
+                raise Mcl2PnmlError(f"the local Dask cluster did not start within "
+                                    f"{LOCAL_START:g} s") from None
         else:
-            client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
-    except OSError as e:
-        raise Mcl2PnmlError(f"cannot reach the Dask scheduler {scheduler or '(local)'} "
-                            f"within {CONNECT_TIMEOUT} s: {e}") from None
-    try:
-        # keys of this campaign alone: a scheduler shared with other campaigns (another
-        # user's, another mission) must never take one's batch for another's
-        tag = uuid.uuid4().hex
-        futures = {client.submit(fly_batch, *args, batch, max_time, tuple(properties),
-                                 tracks_below, pure=False,
-                                 key=f"mcl2pnml-runs-{tag}-{batch[0]}"): batch[0]
-                   for batch in batches}
+            bound = timeouts.handshake
+            try:
+                async with asyncio.timeout(bound):
+                    await _probe(scheduler)
+                    client = Client(scheduler, asynchronous=True, set_as_default=False,
+                                    timeout=bound)
+                    await client
+            except TimeoutError:
+                raise Mcl2PnmlError(f"the Dask scheduler {scheduler} did not complete "
+                                    f"Dask's handshake within {bound:g} s "
+                                    "(--scheduler-timeout)") from None
+            except (OSError, EOFError, asyncio.IncompleteReadError) as e:
+                raise Mcl2PnmlError(f"cannot reach the Dask scheduler {scheduler}: "
+                                    f"{e.strerror or e if isinstance(e, OSError) else e}"
+                                    ) from None
+            except _NotDask as e:
+                raise Mcl2PnmlError(f"{scheduler} is not a Dask scheduler: {e}") from None
+        await _run(flight, client, named, timeouts.silence)
+    finally:
+        for closing in (client, cluster):
+            if closing is not None:
+                try:
+                    async with asyncio.timeout(CLOSE_BOUND):
+                        await closing.close()
+                except Exception:    # noqa: BLE001 (a lost or frozen scheduler: abandoned)
+                    pass
+
+
+async def _run(flight: _Flight, client, named: str, silence: float) -> None:
+    """Send the batches, take their runs in seed order until the campaign is done, and
+    end it if the scheduler says nothing (no batch done, no answer with a worker) for
+    ``silence`` seconds."""
+    from distributed import as_completed
+    loop = asyncio.get_running_loop()
+    campaign, seed, runs = flight.campaign, flight.seed, flight.runs
+    batches = [list(range(seed + k, seed + min(k + BATCH, runs))) for k in range(0, runs, BATCH)]
+    tracks_below = seed + TRACKS if flight.args[1].model is None else -1
+    # keys of this campaign alone: a scheduler shared with other campaigns (another
+    # user's, another mission) must never take one's batch for another's
+    tag = uuid.uuid4().hex
+    futures = {client.submit(fly_batch, *flight.args, batch, flight.max_time,
+                             flight.properties, tracks_below, pure=False,
+                             key=f"mcl2pnml-runs-{tag}-{batch[0]}"): batch[0]
+               for batch in batches}
+    heard = [loop.time()]
+
+    def lost() -> Mcl2PnmlError:
+        return Mcl2PnmlError(f"the Dask scheduler {named} was lost after "
+                             f"{len(campaign.runs):,} runs; nothing was written")
+
+    async def take() -> None:
         arrived: dict[int, list[Flown]] = {}
         order = [b[0] for b in batches]
         nxt = 0
-        for future in as_completed(futures):
+        async for future in as_completed(list(futures), loop=client.loop):
+            heard[0] = loop.time()
             first = futures[future]
             if first in arrived:            # a batch counted already (a retried task)
                 continue
-            try:
-                arrived[first] = future.result()
-            except Exception as e:          # noqa: BLE001 (a worker's error, whatever it is)
-                if future.status == "cancelled" or client.status != "running":
-                    raise Mcl2PnmlError(f"the Dask scheduler was lost after {len(campaign.runs):,} "
-                                        "runs; nothing was written") from None
+            if future.status == "error":
+                e = await future.exception()
                 raise Mcl2PnmlError(f"the runs from seed {first} failed on a worker: "
-                                    f"{type(e).__name__}: {e}") from None
+                                    f"{type(e).__name__}: {e}")
+            if future.status != "finished":     # cancelled: the scheduler is gone
+                raise lost()
+            arrived[first] = await future
             while nxt < len(order) and order[nxt] in arrived and not campaign.done:
                 for flown in arrived.pop(order[nxt]):
                     campaign.add(flown)
                     if campaign.done:
                         break
                 nxt += 1
-            if progress:
-                progress(len(campaign.runs), runs)
+            if flight.progress:
+                flight.progress(len(campaign.runs), runs)
             if campaign.done:
-                break
+                return
+
+    async def watch() -> None:
+        """Return once the scheduler has said nothing for ``silence`` seconds: each
+        question bounded by what is left of it, asked every :data:`PING_EVERY` s."""
+        while (left := heard[0] + silence - loop.time()) > 0:
+            try:
+                async with asyncio.timeout(left):
+                    said = await client.scheduler.identity(n_workers=0)
+                if said.get("n_workers"):
+                    heard[0] = max(heard[0], loop.time())
+            except (OSError, TimeoutError):
+                pass
+            await asyncio.sleep(min(PING_EVERY, silence / 4,
+                                    max(0.0, heard[0] + silence - loop.time())))
+
+    taking, watching = asyncio.create_task(take()), asyncio.create_task(watch())
+    try:
+        done, _ = await asyncio.wait({taking, watching}, return_when=asyncio.FIRST_COMPLETED)
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return campaign
+        for task in (taking, watching):
+            task.cancel()
+        await asyncio.gather(taking, watching, return_exceptions=True)
+    if taking in done:
+        taking.result()
+        return
+    if client.status != "running":
+        raise lost()
+    raise Mcl2PnmlError(f"the Dask scheduler {named} answered nothing, or had no worker, "
+                        f"for {silence:g} s after {len(campaign.runs):,} runs "
+                        "(--scheduler-timeout); nothing was written")
 
 
 def write_table(campaign: Campaign, path: Path) -> None:
@@ -362,7 +666,7 @@ def write_table(campaign: Campaign, path: Path) -> None:
                                 "time": [r.time for r in campaign.runs]}
     for k, name in enumerate(campaign.properties):
         columns[f"fails_{name}"] = [r.fails[k] for r in campaign.runs]
-    if path.suffix == ".parquet":
+    if path.suffix.lower() == ".parquet":
         try:
             import io
 
@@ -419,7 +723,7 @@ def plot(campaign: Campaign, path: Path, title: str) -> None:
     fig.suptitle(title)
     fig.tight_layout()
     sink = io.BytesIO()
-    fig.savefig(sink, format=path.suffix.lstrip(".") or "png")
+    fig.savefig(sink, format=path.suffix.lstrip(".").lower())
     plt.close(fig)
     atomic_write_bytes(path, sink.getvalue())
 

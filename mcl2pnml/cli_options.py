@@ -12,6 +12,7 @@ import click
 
 from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
+from mcl2pnml.campaign import SchedulerTimeouts, scheduler_address
 from mcl2pnml.core.bounds import (MAX_MISSION_SIZE, MAX_PROPERTIES_SIZE,
                                   MAX_PROPERTY_ATOMS as PROPERTY_ATOMS)
 from mcl2pnml.io.formats import FORMATS
@@ -345,6 +346,32 @@ ODDS_OPTIONS = _composed(  # odds MISSION
 )
 
 
+class SchedulerAddress(click.ParamType):
+    """A Dask scheduler's address, checked as it is parsed (tcp://HOST:PORT)."""
+
+    name = "address"
+
+    def convert(self, value, param, ctx):
+        try:
+            return scheduler_address(value)
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
+
+
+class SchedulerTimeoutsType(click.ParamType):
+    """``HANDSHAKE[,SILENCE]`` in seconds, to a :class:`SchedulerTimeouts`."""
+
+    name = "seconds"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, SchedulerTimeouts):
+            return value
+        try:
+            return SchedulerTimeouts.parse(value)
+        except ValueError as e:
+            self.fail(str(e), param, ctx)
+
+
 CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
     click.option("--vehicle-model", "model", type=FILE, metavar="MODEL.json",
                  help="The vehicle model the runs draw their answers from (docs/odds.md); "
@@ -371,11 +398,18 @@ CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
                       "sequential test)."),
     click.option("--workers", type=click.IntRange(min=1, max=256),
                  help="Processes of the local Dask cluster (default: one per core)."),
-    click.option("--scheduler", metavar="tcp://HOST:8786",
+    click.option("--scheduler", type=SchedulerAddress(), metavar="tcp://HOST:8786",
                  help="Send the runs to this Dask scheduler instead of a local cluster."),
+    click.option("--scheduler-timeout", type=SchedulerTimeoutsType(),
+                 metavar="HANDSHAKE[,SILENCE]", default=str(SchedulerTimeouts()),
+                 show_default=True,
+                 help="Seconds a scheduler may take to complete Dask's handshake; and "
+                      "seconds mid-run with no batch done and no answer from the scheduler "
+                      "(or no worker on it) before the campaign ends. Either is one message, "
+                      "exit 2, nothing written."),
     click.option("--table", type=OUTPUT, metavar="FILE.csv|FILE.parquet",
                  help="Write every run (seed, outcome, end time)."),
-    click.option("--plot", type=OUTPUT, metavar="FILE.png|FILE.svg",
+    click.option("--plot", type=OUTPUT, metavar="FILE.png|FILE.svg|FILE.pdf",
                  help="Draw the outcomes with their intervals and the end times."),
     click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
     click.option("--progress/--no-progress", default=None,

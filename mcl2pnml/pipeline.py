@@ -1409,6 +1409,7 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
 def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: str = "petri",
                   seed: int = 0, confidence: float = 0.99, target: float | None = None,
                   workers: int | None = None, scheduler: str | None = None,
+                  scheduler_timeout=None,
                   world: Path | None = None, faults: Path | None = None,
                   properties: str | None = None, max_props_size=None, max_atoms=None,
                   max_mission_size: int | str | None = None,
@@ -1448,6 +1449,7 @@ def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: 
                   [("the mission", mission), ("the vehicle model", model_path),
                    ("the world (--world)", world), ("the faults (--faults)", faults),
                    ("the properties file (--properties)", extra)])
+    campaigns.check_outputs(table, plot)
     # every file refused here, with its place, not on a worker
     if properties is None:
         net, props = compile_checked(check_file(mission, max_mission_size)), ()
@@ -1475,6 +1477,7 @@ def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: 
     flown = campaigns.fly(mission, fleet, runs, engine=engine, seed=seed,
                           confidence=confidence, target=target, workers=workers,
                           scheduler=scheduler, max_time=max_time, properties=props,
+                          timeouts=scheduler_timeout or campaigns.SchedulerTimeouts(),
                           progress=progress)
     first = next((r for r in flown.runs if r.outcome != "OK"), None)
     if first is not None:     # the command as the user wrote the files
