@@ -365,21 +365,12 @@ def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE
     path of the fault."""
     from mcl2pnml.certify import form
     from mcl2pnml.core.errors import Location, Mcl2PnmlError
-    from mcl2pnml.core.files import json_fault, read_text
+    from mcl2pnml.core.files import read_text
+    from mcl2pnml.core.jsontext import load_json
     limit = parse_size(max_size, "--max-certificate-size") if isinstance(max_size, str) \
         else max_size
     text = read_text(path, "certificate", limit, "--max-certificate-size")
-
-    def not_json(constant: str):
-        raise ValueError(f"{constant} is not JSON")
-    try:
-        cert = json.loads(text, parse_constant=not_json)
-    except json.JSONDecodeError as e:
-        lines = text.splitlines()
-        raise Mcl2PnmlError(f"not a certificate: {e.msg}", Location(
-            str(path), e.lineno, e.colno, lines[e.lineno - 1] if lines else None)) from None
-    except (ValueError, RecursionError) as e:
-        raise Mcl2PnmlError(f"not a certificate: {json_fault(e)}", Location(str(path))) from None
+    cert = load_json(text, str(path), "a certificate")
     if not isinstance(cert, dict) or cert.get("format") != form.FORMAT:
         raise Mcl2PnmlError(f"not a certificate of format {form.FORMAT} (`mcl2pnml certify` "
                             "writes them)", Location(str(path), 1, 1))

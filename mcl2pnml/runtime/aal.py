@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, text_location
 from mcl2pnml.core.files import json_fault, read_text
 # The kinds of actions and events are what a compiled net's payloads say, so
 # they are defined with the payload records in core (which may not import
@@ -295,8 +295,8 @@ class ScriptedVehicle(QueuedVehicle):
     @classmethod
     def from_json(cls, text: str, filename: str = "<script>") -> "ScriptedVehicle":
         def fail(message: str, line: int | None = None, column: int | None = None):
-            source = text.splitlines()[line - 1] if line else None
-            return VehicleInputError(message, Location(filename, line, column, source))
+            return VehicleInputError(message, text_location(filename, text, line, column)
+                                     if line else Location(filename))
         try:
             data = json.loads(text, object_pairs_hook=_no_duplicates)
         except json.JSONDecodeError as e:

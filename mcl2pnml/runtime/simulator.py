@@ -32,7 +32,8 @@ from typing import Any, Mapping
 
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind, Reported, Vehicle
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
-from mcl2pnml.core.files import json_fault, read_text
+from mcl2pnml.core.files import read_text
+from mcl2pnml.core.jsontext import parse_located
 from mcl2pnml.runtime.simprims import Context, SimulatedPrimitive, built_in, installed
 
 #: The built-in simulated primitives' names (:mod:`mcl2pnml.runtime.simprims` has the table).
@@ -97,20 +98,15 @@ class World:
         plumes are inside the tank. Angles are in degrees in the file, radians
         inside.
         """
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise Mcl2PnmlError(f"not a world file: {e.msg}",
-                                Location(filename, e.lineno, e.colno)) from None
-        except (ValueError, RecursionError) as e:   # a number past Python's digit limit
-            raise Mcl2PnmlError(f"not a world file: {json_fault(e)}", Location(filename)) \
-                from None
+        data, at = parse_located(text, filename, "a world file")
         # "description": words for the reader, as a vehicle model's and a fault file's
         valid = set(cls.__dataclass_fields__) | {"description"}
         if not isinstance(data, dict):
             raise Mcl2PnmlError("a world file is a JSON object with some of: "
                                 + ", ".join(sorted(valid)), Location(filename))
-        where = _field_locations(text, filename)
+
+        def where(key: str) -> Location:
+            return at((key,))
         unknown = sorted(set(data) - valid)
         if unknown:
             raise Mcl2PnmlError(f"unknown world setting '{unknown[0]}'; valid: "
@@ -496,42 +492,6 @@ def _number(value: Any) -> bool:
 
 def _range_text(low: float, low_allowed: bool, high: float) -> str:
     return f"from {low:g} to {high:g}" if low_allowed else f"above {low:g}, up to {high:g}"
-
-
-def _field_locations(text: str, filename: str):
-    """``where(key)``: the location of a top-level field's value in a world file's text.
-
-    Walks the object as JSON does (the text has parsed already), noting where
-    each value starts; a key given twice is located where JSON takes it, the
-    last time.
-    """
-    decoder = json.JSONDecoder()
-    lines = text.split("\n")
-    starts: dict[str, int] = {}
-    i = text.index("{") + 1
-    blank = " \t\r\n"
-    while True:
-        while text[i] in blank:
-            i += 1
-        if text[i] == "}":
-            break
-        key, i = json.decoder.scanstring(text, i + 1)
-        while text[i] in blank + ":":
-            i += 1
-        starts[key] = i
-        _, i = decoder.raw_decode(text, i)
-        while text[i] in blank + ",":
-            i += 1
-        if text[i] == "}":
-            break
-
-    def where(key: str) -> Location:
-        if key not in starts:
-            return Location(filename)
-        line = text.count("\n", 0, starts[key])
-        column = starts[key] - (text.rfind("\n", 0, starts[key]) + 1) + 1
-        return Location(filename, line + 1, column, lines[line][:400])
-    return where
 
 
 def _checked_fields(data: dict[str, Any], where) -> dict[str, Any]:
