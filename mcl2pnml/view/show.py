@@ -70,7 +70,9 @@ hundred markings, the current one expanded.
 Following a run live (:func:`serve_live`, ``show --live LOG``): the page is
 served on loopback under a random token and asks its own origin for the
 log's new entries (:class:`LiveLog`: complete lines, checked as
-:func:`read_run` checks them, bounded), playing each as it comes.
+:func:`read_run` checks them, bounded, from the one file first opened, which
+must stay the file at its path), playing each as it comes; every connection
+is bounded in time and their number capped.
 
 Everything the page needs is inside it: the data as JSON, the script and
 the style; it fetches nothing, so it opens from a file, offline, in any
@@ -117,10 +119,13 @@ it; the page trusts only its own template, script and style:
 from __future__ import annotations
 
 import base64
+import errno
 import hashlib
 import json
 import math
+import os
 import re
+import stat
 from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Protocol, Sequence
@@ -502,6 +507,14 @@ LIVE_ENTRIES = 500
 LIVE_BYTES = 64 * 1024 * 1024
 #: The server stops this long after it started, whatever the run does.
 LIVE_MAX_SECONDS = 24 * 3600
+#: Seconds a connection may stay silent (a socket time-out): then it is closed.
+LIVE_IDLE = 10.0
+#: Seconds a request may take to arrive whole, however its bytes trickle in (one deadline).
+LIVE_REQUEST = 20.0
+#: Seconds an answer may take to be written (a page that does not read it is dropped).
+LIVE_SEND = 20.0
+#: Connections served at once, each by a thread; one more is closed at once.
+LIVE_CONNECTIONS = 16
 
 
 class LiveLog:
@@ -518,34 +531,73 @@ class LiveLog:
         self.lines = 0
         self.error: str | None = None
         self.outcome = False     # the run's outcome line has been read
-        self._lock = threading.Lock()
+        self.fd: int | None = None   # the log followed, open from the first poll that finds it
+        self._lock = threading.RLock()
 
     def _fail(self, message: str) -> None:
         self.error = message
+        self.close()
+
+    def close(self) -> None:
+        """Let go of the log's file (its descriptor)."""
+        with self._lock:
+            if self.fd is not None:
+                os.close(self.fd)
+                self.fd = None
+
+    def _same_file(self) -> os.stat_result | None:
+        """The followed file's status, once it is checked to be still the file at the path:
+        the same device and inode, not a symbolic link put in its place (which would
+        have the page follow another file, and quote it). None: the reading is over."""
+        try:
+            st = os.fstat(self.fd)
+            there = os.lstat(self.path)
+        except OSError as e:
+            return self._fail(f"{self.path}: the run log is gone while it was followed "
+                              f"({e.strerror})")
+        if stat.S_ISLNK(there.st_mode) or (there.st_dev, there.st_ino) != (st.st_dev, st.st_ino):
+            return self._fail(f"{self.path}: the run log was replaced by another file while it "
+                              "was followed (a symbolic link, or a new file): it is not "
+                              "followed further")
+        return st
+
+    def _open(self) -> bool:
+        """Open the log (not through a symbolic link, never blocking on a FIFO): False if it
+        is not there yet, or cannot be followed (the error said)."""
+        flags = os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0) | \
+            getattr(os, "O_CLOEXEC", 0)
+        try:
+            self.fd = os.open(self.path, flags)
+        except FileNotFoundError:
+            return False         # not written yet: the run has not started
+        except OSError as e:
+            if e.errno == errno.ELOOP:
+                self._fail(f"{self.path}: the run log is a symbolic link; give the file it "
+                           "points to")
+            else:
+                self._fail(f"{self.path}: cannot read the run log: {e.strerror}")
+            return False
+        if not stat.S_ISREG(os.fstat(self.fd).st_mode):
+            self._fail(f"{self.path}: the run log is not a regular file")
+            return False
+        return True
 
     def poll(self) -> None:
-        """Read the complete lines written since the last poll."""
-        import os
-        import stat
-
+        """Read the complete lines written since the last poll, from the file first opened,
+        checked at every reading to be still the one at the path."""
         if self.error is not None or self.outcome:
             return
-        try:
-            st = os.stat(self.path)
-        except FileNotFoundError:
-            return               # not written yet: the run has not started
-        except OSError as e:
-            return self._fail(f"{self.path}: cannot read the run log: {e.strerror}")
-        if not stat.S_ISREG(st.st_mode):
-            return self._fail(f"{self.path}: the run log is not a regular file")
+        if self.fd is None and not self._open():
+            return
+        st = self._same_file()
+        if st is None:
+            return
         if st.st_size < self.offset:
             return self._fail(f"{self.path}: the run log was cut short while it was followed")
         if self.offset >= LIVE_BYTES:
             return self._fail(f"{self.path}: the run log passed {LIVE_BYTES:,} bytes: it is "
                               f"not followed further")
-        with open(self.path, "rb") as f:
-            f.seek(self.offset)
-            data = f.read(min(st.st_size, LIVE_BYTES) - self.offset)
+        data = os.pread(self.fd, min(st.st_size, LIVE_BYTES) - self.offset, self.offset)
         end = data.rfind(b"\n") + 1
         if end == 0 and len(data) > LIVE_LINE:
             return self._fail(f"{self.path}:{self.lines + 1}: a run log's line of more than "
@@ -575,6 +627,7 @@ class LiveLog:
             self.entries.append(entry)
             if "outcome" in entry:
                 self.outcome = True
+                self.close()
                 return
 
     def answer(self, start: int) -> tuple[dict[str, Any], bool]:
@@ -590,19 +643,89 @@ class LiveLog:
                      "error": self.error}, finished)
 
 
+class _RequestReader:
+    """The raw reading of one connection's request, within one deadline: each ``recv`` is
+    given what is left of it (a :class:`TimeoutError` once it has passed, which
+    :mod:`http.server` answers by closing the connection), and at most ``idle`` seconds of
+    silence, so a client that trickles its request a byte at a time cannot hold its
+    thread longer than ``seconds``."""
+
+    def __init__(self, sock: Any, seconds: float, idle: float):
+        import time
+
+        self.sock, self.clock, self.idle = sock, time.monotonic, idle
+        self.deadline = self.clock() + seconds
+
+    def reader(self) -> Any:
+        """A buffered reader (``rfile``) over this deadline."""
+        import io
+
+        owner = self
+
+        class Raw(io.RawIOBase):
+            def readable(self) -> bool:
+                return True
+
+            def readinto(self, buffer: Any) -> int:
+                left = owner.deadline - owner.clock()
+                if left <= 0:
+                    raise TimeoutError("the request took longer than its deadline")
+                owner.sock.settimeout(min(left, owner.idle))
+                return owner.sock.recv_into(buffer)
+        return io.BufferedReader(Raw())
+
+
+def _bounded_server(handler: Any, port: int, connections: int) -> Any:
+    """A threading HTTP server on 127.0.0.1:``port`` that serves at most ``connections``
+    connections at once (a thread each): one more is closed at once, unanswered."""
+    import threading
+    from http.server import ThreadingHTTPServer
+
+    places = threading.BoundedSemaphore(connections)
+
+    class Server(ThreadingHTTPServer):
+        daemon_threads = True
+
+        def process_request(self, request: Any, client_address: Any) -> None:
+            if not places.acquire(blocking=False):
+                self.shutdown_request(request)
+                return
+            try:
+                super().process_request(request, client_address)
+            except BaseException:
+                places.release()
+                raise
+
+        def process_request_thread(self, request: Any, client_address: Any) -> None:
+            try:
+                super().process_request_thread(request, client_address)
+            finally:
+                places.release()
+
+    return Server(("127.0.0.1", port), handler)
+
+
 def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
-               ready: Any = print, max_seconds: float = LIVE_MAX_SECONDS) -> None:
+               ready: Any = print, max_seconds: float = LIVE_MAX_SECONDS,
+               idle: float = LIVE_IDLE, request: float = LIVE_REQUEST,
+               connections: int = LIVE_CONNECTIONS, stop: Any = None) -> None:
     """Serve the live page ``html`` (:func:`page` with ``live``) and the new entries of
     ``log`` on loopback (127.0.0.1) only, at ``port`` (0: one the system picks), under a
     random token: ``ready`` is given the page's URL, which holds it; a request without it
     (or naming another host: DNS rebinding) gets 403. Returns on Ctrl-C, ``linger``
     seconds after the page was handed the run's outcome (or the error that stops the
-    reading), or after ``max_seconds``."""
+    reading), or after ``max_seconds``.
+
+    Every connection is bounded: silent for ``idle`` seconds, or its request not all there
+    ``request`` seconds after it connected, it is closed and its thread ends; an answer
+    not written within :data:`LIVE_SEND` seconds is dropped; at most ``connections`` are
+    served at once (HTTP/1.0: one request a connection). ``stop``, a
+    :class:`threading.Event`, stops the server when set (the command stops on Ctrl-C)."""
     import hmac
     import secrets
     import threading
     import time
-    from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+    from http.server import BaseHTTPRequestHandler
     from urllib.parse import parse_qs, urlsplit
 
     token = secrets.token_urlsafe(24)
@@ -613,11 +736,17 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
     class Handler(BaseHTTPRequestHandler):
         server_version = "mcl2pnml"
         sys_version = ""
+        timeout = idle           # the socket's time-out: a silent connection is closed
+
+        def setup(self) -> None:
+            super().setup()
+            self.rfile = _RequestReader(self.connection, request, idle).reader()
 
         def log_message(self, format: str, *args: Any) -> None:   # quiet: the URL has the token
             pass
 
         def _send(self, status: int, ctype: str, data: bytes) -> None:
+            self.connection.settimeout(LIVE_SEND)    # sendall's time-out is for all of it
             self.send_response(status)
             self.send_header("Content-Type", ctype)
             self.send_header("Content-Length", str(len(data)))
@@ -654,20 +783,22 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
 
         do_HEAD = do_GET
 
-    server = ThreadingHTTPServer(("127.0.0.1", port), Handler)
-    server.daemon_threads = True
+    server = _bounded_server(Handler, port, connections)
     bound = server.server_address[1]
     started = time.monotonic()
-    stop = threading.Event()
+    stop = stop or threading.Event()
 
-    def watch() -> None:          # the run's end served, then linger: stop
-        while not stop.wait(0.1):
+    def watch() -> None:          # the run's end served, then linger (or told to): stop
+        while True:
+            told = stop.wait(0.1)
             now = time.monotonic()
-            if (finished_at and now - finished_at[0] >= linger) or now - started >= max_seconds:
+            if told or (finished_at and now - finished_at[0] >= linger) or \
+                    now - started >= max_seconds:
                 server.shutdown()
                 return
 
-    threading.Thread(target=watch, daemon=True).start()
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
     ready(f"http://127.0.0.1:{bound}/{token}/")
     try:
         server.serve_forever(poll_interval=0.1)
@@ -676,3 +807,4 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
     finally:
         stop.set()
         server.server_close()
+        log.close()
