@@ -19,6 +19,8 @@ import json
 import re
 import socket
 import time
+from importlib import resources
+from pathlib import Path
 
 import pytest
 
@@ -38,17 +40,44 @@ SAUCE = ROOT / "examples" / "sauce.mcl"
 LIVENESS = 1.0
 #: What a run may take past its bound: connecting, the safe state's steps, a busy machine.
 SLACK = 2.5
+#: Wall seconds the safe state keeps trying a silent peer here (the mapping's
+#: ``secure_within``): short, so that a run that ends on a silent peer ends soon after.
+SECURE_WITHIN = 0.5
 #: The first waypoint of sauce.mcl, (10, 0) at 2 m, from the world's start (2, 4): north,
 #: east, down, as the autopilot's position target has it.
 WAYPOINT_1 = (8.0, -4.0, 2.0)
 
 
-def fly(fake: FakeAutopilot, *, max_time: float = 600.0, log=None) -> tuple[Run, float, str]:
+def mapping_file(folder: Path, **settings) -> Path:
+    """The package's ArduSub mapping with ``settings`` changed, written in ``folder``."""
+    data = json.loads(resources.files("mcl2pnml.runtime").joinpath("ardusub.json")
+                      .read_text("utf-8"))
+    data.update(settings)
+    path = folder / ("mapping-" + "-".join(f"{k}{v}" for k, v in sorted(settings.items()))
+                     + ".json")
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _mapping(tmp_path_factory):
+    """Every run here uses the package's mapping with a short ``secure_within``."""
+    global MAPPING
+    MAPPING = mapping_file(tmp_path_factory.mktemp("mapping"), secure_within=SECURE_WITHIN)
+    yield
+
+
+MAPPING: Path
+
+
+def fly(fake: FakeAutopilot, *, max_time: float = 600.0, log=None, mapping: Path | None = None,
+        liveness: float = LIVENESS) -> tuple[Run, float, str]:
     """A run of sauce.mcl against ``fake``: the run, its wall time, its live log."""
     text = io.StringIO()
     start = time.monotonic()
-    result = run_mission(SAUCE, RunOptions(vehicle="mavlink", connect=fake.address,
-                                           liveness=LIVENESS, max_time=max_time),
+    result = run_mission(SAUCE, RunOptions(vehicle=f"mavlink:{mapping or MAPPING}",
+                                           connect=fake.address, liveness=liveness,
+                                           max_time=max_time),
                          text=text, log_path=log)
     elapsed = time.monotonic() - start
     fake.check()

@@ -19,18 +19,35 @@ UDP or a serial line, through ``pymavlink``, the ``mavlink`` extra):
   and relay commands acknowledged by ``COMMAND_ACK``, simulated sensors on
   the autopilot's position. Each achieved or failed says where it came
   from (:class:`Reported`).
-* **Liveness**: heartbeats sent at the speed-up's rate (the autopilot's GCS
-  failsafe counts them on its clock); the autopilot's own heartbeat
-  awaited: none within the liveness, the link is lost, and the run stops
-  with its safe stop. A heartbeat of another kind of vehicle, a clock
-  that runs back, leaps or stands, a peer that sends only garbage: the same.
+* **Liveness**: heartbeats sent at the speed-up's rate from a thread of
+  their own (the autopilot's GCS failsafe counts them on its clock: a busy
+  run loop must not starve them); every write to the link goes under one
+  lock, whole. The autopilot's own heartbeat awaited: none within the
+  liveness, the link is lost, and the run stops with its safe stop. A
+  heartbeat of another kind of vehicle, a clock that runs back, leaps or
+  stands, a peer that sends only garbage: the same.
+* **Fresh data**: every message already received is read before a decision
+  (an acknowledgement's deadline passed, the armed flag, the time an event
+  is awaited until): a deadline on the autopilot's clock is judged on its
+  messages up to now, not on a backlog read halfway.
+* **The vehicle's real state**: a vehicle armed already when we connect is
+  refused (another ground station flies it); another ground station heard
+  on the link while we fly ends the run when it has our system id (the one
+  the autopilot obeys), and is warned of otherwise; the vehicle's own
+  position (the mapping's ``home`` plus LOCAL_POSITION_NED) is held to the
+  world's tank, :data:`TANK_MARGIN` beyond its walls: never armed outside
+  it, and the run ends when it leaves it.
 * **Safe state** (:meth:`MavlinkVehicle.secure`): after the run loop has
   disabled every primitive, the mapping's steps (hold, surface, disarm),
-  each logged acknowledged or not.
+  each logged acknowledged or not; an autopilot that is silent (frozen, its
+  link down for a while) is tried for the mapping's ``secure_within`` wall
+  seconds, so that one that comes back is still brought to it.
 """
 from __future__ import annotations
 
 import math
+import os
+import select
 import threading
 import time
 from collections import deque
@@ -69,6 +86,18 @@ POLL = 0.05
 KEPT_NOTES = 200
 #: The track is logged once per this many seconds of the autopilot's clock.
 TRACK_EVERY = 1.0
+#: Metres beyond the tank's walls and floor the vehicle's position may be before it has
+#: left the tank: the autopilot's position wanders a little (EKF, overshoot at a waypoint
+#: by the wall), and a target is already held inside the tank itself.
+TANK_MARGIN = 1.0
+#: The most messages read at once to bring the state up to now (a flood is cut there).
+MAX_DRAIN = 20_000
+#: Our MAVLink system id: a ground station's (ArduPilot obeys ``MAV_GCS_SYSID``, 255).
+SYSTEM = 255
+#: Our component ids, one per run from the user range (MAV_COMP_ID_USER1..75): ArduPilot
+#: routes a ground station's heartbeats to its other links only when that system and
+#: component has not been seen on them, so two runs with one id would not hear each other.
+COMPONENTS = range(25, 100)
 
 
 @dataclass
@@ -105,7 +134,10 @@ class MavlinkVehicle(LiveVehicle):
         #: where the run's log lines about the autopilot go: ``log(t, kind, text, obj)``
         self.log: Callable[[float, str, str, dict], None] = lambda *entry: None
         self.conn = None
-        self.lock = threading.Lock()
+        #: every write to the link (our heartbeats' thread writes too); re-entrant, as a
+        #: send already under it writes through the guarded connection
+        self.lock = threading.RLock()
+        self.component = COMPONENTS[os.getpid() % len(COMPONENTS)]
         self.stopping = threading.Event()
         self.beat: threading.Thread | None = None
         self.send_fault: str | None = None
@@ -142,6 +174,16 @@ class MavlinkVehicle(LiveVehicle):
         self.next_track = 0.0
         self.unready: Exception | None = None
         self.opened = False
+        #: the link itself broke (closed, reset): nothing can be sent, waiting will not help
+        self.broken: str | None = None
+        #: we asked the autopilot to arm: its safe state then always sends the disarm
+        self.arm_asked = False
+        #: why the vehicle left the tank (said once: the run ends on it)
+        self.escaped: str | None = None
+        #: other ground stations heard on the link, (system, component)
+        self.stations: set[tuple[int, int]] = set()
+        #: the safe state is being reached: what would end the run is only logged
+        self.securing = False
 
     # -- the mission's side ---------------------------------------------------------------
 
@@ -198,7 +240,10 @@ class MavlinkVehicle(LiveVehicle):
         deadline = None if timeout is None else self.clock() + timeout
         while not self.events:
             if deadline is not None and self.clock() >= deadline:
-                return None
+                self._drain()       # what was received by now may still come first
+                if not self.events:
+                    return None
+                break
             self._pump(POLL)
         return self.events.popleft()
 
@@ -215,11 +260,13 @@ class MavlinkVehicle(LiveVehicle):
         try:
             if scheme == "serial":
                 device, _, baud = rest.rpartition(":")
-                self.conn = mavutil.mavlink_connection(device, baud=int(baud), source_system=255,
-                                                       source_component=190)
+                self.conn = mavutil.mavlink_connection(device, baud=int(baud),
+                                                       source_system=SYSTEM,
+                                                       source_component=self.component)
             else:
-                self.conn = mavutil.mavlink_connection(self.url, source_system=255,
-                                                       source_component=190, retries=0)
+                self.conn = mavutil.mavlink_connection(self.url, source_system=SYSTEM,
+                                                       source_component=self.component,
+                                                       retries=0)
         except Exception as e:   # refused, unreachable, no such device
             raise Mcl2PnmlError(f"cannot connect to the autopilot at {self.address}: "
                                 f"{getattr(e, 'strerror', None) or e}") from None
@@ -232,10 +279,43 @@ class MavlinkVehicle(LiveVehicle):
             # after) and reads on from a closed socket: here either breaks the link
             if hasattr(self.conn, hook):
                 setattr(self.conn, hook, _broken(why))
+        self._guard_writes()
         try:
             self._prepare()
         except (VehicleFault, LinkLost) as e:
             self.unready = e
+        except Mcl2PnmlError:     # refused before anything was sent: one message, exit 2
+            self.close()
+            self.conn = None
+            raise
+
+    def _guard_writes(self) -> None:
+        """Every write to the link under :attr:`lock` and whole. pymavlink numbers a frame
+        and writes it in two steps that two threads may interleave, and its TCP link
+        writes to a non-blocking socket once (a full buffer drops the frame or its end,
+        and the frames after it are misread); here the rest is written within the send
+        time-out, after which the link counts as broken."""
+        conn, write = self.conn, self.conn.write
+        sock = getattr(conn, "port", None) if self.url.startswith("tcp:") else None
+        bound = self.link.send_timeout
+
+        def whole(buf) -> None:
+            with self.lock:
+                if sock is None:
+                    write(buf)
+                    return
+                data, end = memoryview(bytes(buf)), time.monotonic() + bound
+                while data:
+                    try:
+                        data = data[sock.send(data):]
+                        continue
+                    except BlockingIOError:
+                        pass
+                    left = end - time.monotonic()
+                    if left <= 0:
+                        raise ConnectionError(f"a write took over {bound:g} s")
+                    select.select([], [sock], [], min(left, POLL))
+        conn.write = whole
 
     def _prepare(self) -> None:
         self._await_heartbeat()
@@ -261,7 +341,13 @@ class MavlinkVehicle(LiveVehicle):
         if not ready:
             self._log_note(f"no position and pre-arm checks after {self.mapping.ready_within:g} "
                            "s; trying GUIDED all the same")
+        self._drain()
+        if self.ned is not None and self._outside(self._state()):
+            raise VehicleFault(self._outside_words(self._state(), "is outside")
+                               + ": not armed (the mapping's home is where its position's "
+                               "origin is in the world)")
         self._set_mode(GUIDED, "GUIDED")
+        self.arm_asked = True
         result = self._ask(ARM_DISARM, 1)
         if result != 0:
             raise VehicleFault(f"the autopilot refused to arm ({_result(result)})"
@@ -289,6 +375,11 @@ class MavlinkVehicle(LiveVehicle):
                     and msg.type != MAV_TYPE_GCS and msg.autopilot != MAV_AUTOPILOT_INVALID:
                 self.target = (msg.get_srcSystem(), msg.get_srcComponent())
                 self._heartbeat(msg)
+                if self.armed:
+                    raise Mcl2PnmlError(
+                        f"the autopilot at {self.address} is armed already (in "
+                        f"{MODES.get(self.mode, self.mode)}): another ground station may be "
+                        "flying it; nothing was sent. Disarm it first")
                 return
         raise LinkLost(f"no autopilot heartbeat from {self.address} within "
                        f"{self.link.liveness:g} s")
@@ -311,8 +402,13 @@ class MavlinkVehicle(LiveVehicle):
 
     def _heartbeats(self) -> None:
         """Our heartbeat, ``heartbeat`` seconds of the autopilot's clock apart, the first at
-        once (one wall second later would be 100 of a simulator's at a speed-up of 100)."""
+        once (one wall second later would be 100 of a simulator's at a speed-up of 100).
+        A thread of its own, so that a run loop busy with a flood, a slow log or a loaded
+        machine does not starve the autopilot's GCS failsafe; each beat is due at a time
+        fixed in advance, so a late one does not push the next ones back."""
         mavlink = _mavutil().mavlink
+        period = self.link.heartbeat / max(1.0, self.speedup)
+        due = time.monotonic()
         while True:
             try:
                 with self.lock:
@@ -322,7 +418,8 @@ class MavlinkVehicle(LiveVehicle):
             except Exception as e:   # the link is gone: the loop hears it as lost
                 self.send_fault = f"cannot send to the autopilot: {e}"
                 return
-            if self.stopping.wait(self.link.heartbeat / max(1.0, self.speedup)):
+            due = max(due + period, time.monotonic() - period)
+            if self.stopping.wait(max(0.0, due - time.monotonic())):
                 return
 
     # -- receiving --------------------------------------------------------------------------
@@ -331,14 +428,25 @@ class MavlinkVehicle(LiveVehicle):
         try:
             return self.conn.recv_match(blocking=True, timeout=timeout)
         except Exception as e:    # a socket error, a device gone
-            raise LinkLost(f"the link to the autopilot broke: {e}") from None
+            self.broken = f"the link to the autopilot broke: {e}"
+            raise LinkLost(self.broken) from None
 
     def _take(self):
         """The next message already received, without waiting (None: none)."""
         try:
             return self.conn.recv_msg()
         except Exception as e:
-            raise LinkLost(f"the link to the autopilot broke: {e}") from None
+            self.broken = f"the link to the autopilot broke: {e}"
+            raise LinkLost(self.broken) from None
+
+    def _drain(self) -> None:
+        """Handle every message already received (up to :data:`MAX_DRAIN`), waiting for
+        none: what the autopilot said by now, before a decision is taken on its state."""
+        for _ in range(MAX_DRAIN):
+            msg = self._take()
+            if msg is None:
+                return
+            self._handle(msg)
 
     def _pump(self, timeout: float) -> None:
         """Take what the autopilot sent within ``timeout`` wall seconds; check liveness."""
@@ -349,6 +457,8 @@ class MavlinkVehicle(LiveVehicle):
             if time.monotonic() > end:
                 break    # a flood: look at the bounds, then read on
             msg = self._take()
+        if self.boot is not None and any(self.boot >= by for _, _, by in self.pending):
+            self._drain()     # an acknowledgement may be among what is received, unread
         self._check_pending()
         if time.monotonic() - self.last_heartbeat > self.link.liveness:
             raise LinkLost(f"no heartbeat from the autopilot for {self.link.liveness:g} s "
@@ -361,11 +471,16 @@ class MavlinkVehicle(LiveVehicle):
                                f" ({at}): no telemetry, or a clock that stands")
 
     def _until(self, done: Callable[[], Any], seconds: float) -> bool:
-        """Pump until ``done()`` or ``seconds`` of the autopilot's clock have passed."""
+        """Pump until ``done()`` or ``seconds`` of the autopilot's clock have passed. The
+        clock starts at the autopilot's time now (what was received is read first), and
+        the deadline is judged passed only once every message received by then is read:
+        a backlog read halfway has times past the deadline before the answer in it."""
+        self._drain()
         start = self.boot
         while not done():
             if start is not None and self.boot is not None and self.boot - start >= seconds:
-                return False
+                self._drain()
+                return bool(done())
             if start is None:
                 start = self.boot
             self._pump(POLL)
@@ -375,6 +490,9 @@ class MavlinkVehicle(LiveVehicle):
         kind = msg.get_type()
         if kind == "BAD_DATA":
             self.bad_data += 1
+            return
+        if kind == "HEARTBEAT" and msg.type == MAV_TYPE_GCS:
+            self._station(msg.get_srcSystem(), msg.get_srcComponent())
             return
         if (msg.get_srcSystem(), msg.get_srcComponent()) != self.target:
             return     # another component (a gimbal, a camera) or another ground station
@@ -429,6 +547,22 @@ class MavlinkVehicle(LiveVehicle):
             self.clock_moved = self.clock_moved and time.monotonic()
         self.boot = seconds if self.boot is None else max(self.boot, seconds)
 
+    def _station(self, system: int, component: int) -> None:
+        """Another ground station's heartbeat, routed to us by the autopilot. One with our
+        system id is one the autopilot obeys as it obeys us (another run, a ground station
+        left at its default): two of them command one vehicle, and the run ends. Another
+        may only watch: it is said once, loudly, in the log."""
+        if (system, component) == (SYSTEM, self.component) or (system, component) in self.stations:
+            return
+        self.stations.add((system, component))
+        if system == SYSTEM and not self.securing:
+            raise VehicleFault(f"another ground station (system {system}, component "
+                               f"{component}) is on the autopilot's link with our system id: "
+                               "it can command the vehicle as we do, and two stations flying "
+                               "one vehicle is not safe")
+        self._log_note(f"WARNING: another ground station (system {system}, component "
+                       f"{component}) is on the link: it can command the vehicle too")
+
     def _heartbeat(self, msg) -> None:
         if msg.type != MAV_TYPE_SUBMARINE:
             raise VehicleFault(f"the autopilot (system {msg.get_srcSystem()}) says it is a "
@@ -450,6 +584,18 @@ class MavlinkVehicle(LiveVehicle):
     def _state(self) -> State:
         n, e, d = self.ned
         return State(self.clock(), self.home[0] + n, self.home[1] + e, d, self.yaw)
+
+    def _outside(self, s: State) -> bool:
+        """The vehicle is out of the world's tank by more than :data:`TANK_MARGIN` (above
+        the surface is not out: it is where it surfaces)."""
+        (ox, oy), (sx, sy, sz) = self.world.origin, self.world.tank
+        return not (ox - TANK_MARGIN <= s.x <= ox + sx + TANK_MARGIN
+                    and oy - TANK_MARGIN <= s.y <= oy + sy + TANK_MARGIN
+                    and s.z <= sz + TANK_MARGIN)
+
+    def _outside_words(self, s: State, verb: str) -> str:
+        return (f"the vehicle {verb} the tank at ({s.x:.1f}, {s.y:.1f}) depth {s.z:.1f} m (the "
+                f"world's {self.world.tank_words()}, {TANK_MARGIN:g} m beyond its walls)")
 
     def _context(self, act: _Active) -> Context:
         b = act.binding
@@ -476,6 +622,10 @@ class MavlinkVehicle(LiveVehicle):
             self.log(t, "track", "", {"track": [round(x, 3), round(y, 3), round(z, 3),
                                                 round(math.degrees(yaw), 1)]})
             self.next_track = t + TRACK_EVERY
+        if self.escaped is None and not self.securing and self._outside(self._state()):
+            # said once: the run ends on it, and its safe state reads on
+            self.escaped = self._outside_words(self._state(), "left")
+            raise VehicleFault(self.escaped)
         lost = self._no_position()
         for name in sorted(self.active):
             act = self.active[name]
@@ -682,10 +832,19 @@ class MavlinkVehicle(LiveVehicle):
     # -- the end ----------------------------------------------------------------------------
 
     def secure(self, t: float) -> list[str]:
-        """Bring the vehicle to the mapping's safe state; each step said, acknowledged or not."""
+        """Bring the vehicle to the mapping's safe state; each step said, acknowledged or not.
+
+        What was received is read before each step (a stale armed flag must not leave an
+        armed vehicle armed), and a vehicle we asked to arm is sent the disarm whatever
+        its last heartbeat said. A step that the autopilot's silence stops (no heartbeat
+        within the liveness, or a clock that stands: frozen, its link down for a while)
+        is tried again once it is heard, for up to the mapping's ``secure_within`` wall
+        seconds; a link that is broken, or a peer never heard, is not waited for."""
         done: list[str] = []
         if self.conn is None:
             return done
+        self.securing = True
+        deadline = time.monotonic() + self.mapping.secure_within
 
         def step(name: str, text: str, ok: bool) -> None:
             line = f"{name}: {text}"
@@ -693,57 +852,108 @@ class MavlinkVehicle(LiveVehicle):
             self.log(self.clock() if self.t0 else 0.0, "safe-state", line,
                      {"safe_state": name, "acknowledged": ok, "detail": text})
 
-        for name in self.mapping.safe_state:
+        steps = list(self.mapping.safe_state)
+        while steps:
             try:
-                # a vehicle that never got ready, or whose clock leapt, is still asked: only
-                # a link that is gone is not (an armed vehicle must not be left armed)
-                if isinstance(self.unready, LinkLost):
-                    raise self.unready
-                if self.send_fault is not None:
-                    raise LinkLost(self.send_fault)
-                if not self.armed:
-                    # motors off is the safe state a step would reach: nothing is sent
-                    # (SURFACE or POSHOLD would only wait to be armed)
-                    where = f"(in {MODES.get(self.mode, self.mode)})"
-                    if name == "disarm":
-                        step(name, f"already disarmed {where}: nothing to send", True)
-                    else:
-                        step(name, f"not sent: the autopilot is disarmed {where}", False)
-                    continue
-                if name == "hold":
-                    mode, word = (POSHOLD, "POSHOLD") if self.ekf & EKF_POS_HORIZ_ABS \
-                        else (ALT_HOLD, "ALT_HOLD")
-                    result = self._ask(SET_MODE, 1, mode)
-                    if result == 0:
-                        slow = self._until(lambda: self.speed < 0.2, self.mapping.hold_within)
-                        step(name, f"{word} acknowledged; "
-                             + ("the vehicle has stopped" if slow else
-                                f"still moving after {self.mapping.hold_within:g} s"), True)
-                    else:
-                        step(name, f"{word} not acknowledged ({_result(result)}){self._said()}",
-                             False)
-                elif name == "surface":
-                    result = self._ask(SET_MODE, 1, SURFACE)
-                    if result == 0:
-                        up = self._until(lambda: self.depth is not None
-                                         and self.depth <= self.mapping.surface_depth,
-                                         self.mapping.surface_within)
-                        depth = "unknown" if self.depth is None else f"{self.depth:.2f} m"
-                        step(name, "SURFACE acknowledged; " + (
-                            f"at the surface (depth {depth})" if up else
-                            f"depth {depth} after {self.mapping.surface_within:g} s"), True)
-                    else:
-                        step(name, f"SURFACE not acknowledged ({_result(result)})"
-                             f"{self._said()}", False)
-                else:
-                    result = self._ask(ARM_DISARM, 0)
-                    off = result == 0 and self._until(lambda: not self.armed,
-                                                      self.mapping.ack_within)
-                    step(name, "disarm acknowledged; disarmed" if off else
-                         f"disarm not acknowledged ({_result(result)}){self._said()}", off)
+                gone = self._gone()
+                if gone is not None:     # nothing can be sent, nor its state known
+                    raise LinkLost(gone)
+                self._drain()
+                if self.armed or self.arm_asked:     # a step will send: it must be heard
+                    self._await_live(deadline)
+                self._secure_step(steps[0], step)
             except (LinkLost, VehicleFault) as e:
-                step(name, f"not done: {e}", False)
+                if self._gone() is None and self._stale() is not None \
+                        and time.monotonic() < deadline:
+                    continue      # silent for now: waited for, then the step again
+                step(steps[0], f"not done: {e}", False)
+            steps.pop(0)
         return done
+
+    def _gone(self) -> str | None:
+        """Why waiting cannot bring the autopilot back: its link broke, or it was never
+        heard (None: it may come back)."""
+        if self.broken is not None or self.send_fault is not None:
+            return self.broken or self.send_fault
+        if not self.last_heartbeat:
+            return str(self.unready or f"no autopilot heartbeat from {self.address}")
+        return None
+
+    def _stale(self) -> str | None:
+        """Why the autopilot is not live now: no heartbeat, or a clock that stands, for the
+        liveness (None: it is)."""
+        now, liveness = time.monotonic(), self.link.liveness
+        if now - self.last_heartbeat > liveness:
+            return f"no heartbeat from the autopilot for {liveness:g} s"
+        if self.clock_moved and now - self.clock_moved > liveness:
+            return f"the autopilot's clock has not moved for {liveness:g} s"
+        return None
+
+    def _await_live(self, deadline: float) -> None:
+        """Return once the autopilot is live; while it is silent, keep listening (said
+        once in the log) up to ``deadline`` (wall), then raise why it is not."""
+        gone = self._gone()
+        if gone is not None:
+            raise LinkLost(gone)
+        why = self._stale()
+        if why is None:
+            return
+        self._log_note(f"the autopilot is silent ({why}): still trying to bring it to its "
+                       f"safe state for {max(0.0, deadline - time.monotonic()):.0f} s")
+        while (why := self._stale()) is not None:
+            if time.monotonic() >= deadline:
+                raise LinkLost(f"{why}; its safe state was tried for "
+                               f"{self.mapping.secure_within:g} s")
+            try:
+                self._pump(POLL)
+            except (LinkLost, VehicleFault):
+                gone = self._gone()
+                if gone is not None:
+                    raise LinkLost(gone) from None
+        self._log_note("the autopilot is heard again: its safe state goes on")
+
+    def _secure_step(self, name: str, step: Callable[[str, str, bool], None]) -> None:
+        """One step of the safe state, said by ``step``."""
+        if not self.armed and not (name == "disarm" and self.arm_asked):
+            # motors off is the safe state a step would reach, and we never armed it:
+            # nothing is sent (SURFACE or POSHOLD would only wait to be armed)
+            where = f"(in {MODES.get(self.mode, self.mode)})"
+            if name == "disarm":
+                step(name, f"already disarmed {where}: nothing to send", True)
+            else:
+                step(name, f"not sent: the autopilot is disarmed {where}", False)
+            return
+        if name == "hold":
+            mode, word = (POSHOLD, "POSHOLD") if self.ekf & EKF_POS_HORIZ_ABS \
+                else (ALT_HOLD, "ALT_HOLD")
+            result = self._ask(SET_MODE, 1, mode)
+            if result == 0:
+                slow = self._until(lambda: self.speed < 0.2, self.mapping.hold_within)
+                step(name, f"{word} acknowledged; "
+                     + ("the vehicle has stopped" if slow else
+                        f"still moving after {self.mapping.hold_within:g} s"), True)
+            else:
+                step(name, f"{word} not acknowledged ({_result(result)}){self._said()}", False)
+        elif name == "surface":
+            result = self._ask(SET_MODE, 1, SURFACE)
+            if result == 0:
+                up = self._until(lambda: self.depth is not None
+                                 and self.depth <= self.mapping.surface_depth,
+                                 self.mapping.surface_within)
+                depth = "unknown" if self.depth is None else f"{self.depth:.2f} m"
+                step(name, "SURFACE acknowledged; " + (
+                    f"at the surface (depth {depth})" if up else
+                    f"depth {depth} after {self.mapping.surface_within:g} s"), True)
+            else:
+                step(name, f"SURFACE not acknowledged ({_result(result)}){self._said()}",
+                     False)
+        else:
+            # sent even when its last heartbeat said disarmed: that heartbeat may predate
+            # the arming we asked for (a backlog), and a disarmed vehicle accepts it
+            result = self._ask(ARM_DISARM, 0)
+            off = result == 0 and self._until(lambda: not self.armed, self.mapping.ack_within)
+            step(name, "disarm acknowledged; disarmed" if off else
+                 f"disarm not acknowledged ({_result(result)}){self._said()}", off)
 
     def close(self) -> None:
         self.stopping.set()
