@@ -93,7 +93,7 @@ def test_an_invalid_mapping_is_one_located_message(path, monkeypatch):
     ('{\n  "primitives": {},\n  "ack_within": 3,\n  "liveness": 5\n}', 4, 15,
      "the file: unknown setting ('liveness' was unexpected); valid: ack_within, autopilot, "
      "hold_within, home, position_lost_after, primitives, ready_within, safe_state, "
-     "surface_depth, surface_within, telemetry_rate"),
+     "secure_within, surface_depth, surface_within, telemetry_rate"),
     ('{"primitives": {"R": {"by": "thrusters"}}}', 1, 29,
      'primitives.R.by: "thrusters" is not one of autopilot, servo, relay, simulated'),
     ('{"primitives": {"R": {"by": "servo", "pwm": 1900}}}', 1, 22,
@@ -174,10 +174,8 @@ def test_a_mapping_that_is_not_utf8_is_refused_at_its_first_bad_byte(tmp_path):
     with pytest.raises(Mcl2PnmlError) as info:
         AutopilotMapping.load(path)
     assert str(info.value) == (
-        f"{path}:2:21: cannot read the autopilot mapping: byte 0xe9 is not UTF-8 (invalid "
-        "continuation byte); save the file as UTF-8\n"
-        ' "primitives": {"Caf\\xe9": {}}}\n'.replace(' "', '     "', 1)
-        + " " * 24 + "^")
+        f"{path}:2:21: not UTF-8 text: byte 0xe9 (invalid continuation byte); save the file "
+        'as UTF-8\n     "primitives": {"Caf\ufffd": {}}}\n' + " " * 24 + "^")
 
 
 def test_a_mapping_over_one_mib_is_refused_before_it_is_read(tmp_path):

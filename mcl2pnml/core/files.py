@@ -255,29 +255,14 @@ def _read(path: str | Path, what: str | None, limit: int | None = None,
 
 def read_text(path: str | Path, what: str, limit: int | None = None,
               option: str | None = None) -> str:
-    """A UTF-8 text file, or one error naming it: "FILE: cannot read the WHAT: why".
+    """A UTF-8 text file, or one error naming it: "FILE: cannot read the WHAT: why", or
+    where its first byte that is not UTF-8 is (:func:`decode_text`).
 
     ``limit``: a file of more bytes is refused before it is read, the message
     naming ``option`` as the way to raise the limit (:func:`_read`).
     """
     data = _read(path, what, limit, option)
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as e:
-        raise Mcl2PnmlError(f"cannot read the {what}: byte 0x{data[e.start]:02x} is not "
-                            f"UTF-8 ({e.reason}); save the file as UTF-8",
-                            byte_location(str(path), data, e.start)) from None
-
-
-def byte_location(filename: str, data: bytes, at: int) -> Location:
-    """Where byte ``at`` of ``data`` is: its line, its column in characters, and its line
-    with the bytes that are not UTF-8 shown as ``\\xNN``."""
-    start = data.rfind(b"\n", 0, at) + 1
-    end = data.find(b"\n", at)
-    line = data[start:end if end >= 0 else len(data)]
-    column = len(data[start:at].decode("utf-8", "backslashreplace")) + 1
-    return Location(filename, data.count(b"\n", 0, at) + 1, column,
-                    line.decode("utf-8", "backslashreplace"))
+    return decode_text(data, str(path), f"a {what}")
 
 
 def read_bytes(path: str | Path, what: str | None = None, limit: int | None = None,
@@ -395,5 +380,5 @@ def decode_text(data: bytes, filename: str, what: str) -> str:
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
-        raise at(e.start, f"not UTF-8 text: byte 0x{data[e.start]:02x} cannot start a "
-                          "character here") from None
+        raise at(e.start, f"not UTF-8 text: byte 0x{data[e.start]:02x} ({e.reason}); save "
+                          "the file as UTF-8") from None
