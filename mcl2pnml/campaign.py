@@ -36,12 +36,14 @@ import logging
 import math
 import os
 import random
+import signal
 import struct
 import threading
 import uuid
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from importlib import import_module
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 from urllib.parse import urlsplit
@@ -74,6 +76,8 @@ LOCAL_START, CLOSE_BOUND = 120.0, 5.0
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 #: What ``--table`` can write.
 TABLE_SUFFIXES = (".csv", ".parquet")
+#: The signals that stop a campaign as Ctrl-C does (besides SIGINT, asyncio's own).
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 #: The loggers of Dask and of what it runs on, silenced while a campaign runs.
 DASK_LOGGERS = ("distributed", "tornado", "asyncio", "bokeh")
 #: The indifference region of the sequential test, either side of its target.
@@ -417,11 +421,9 @@ def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = "petri", seed: 
     each judged on ``properties`` (compiled on the mission's net: the Petri-net engine's
     markings are read). ``scheduler`` is a user's (:func:`scheduler_address`), held to
     ``timeouts``; None: a local cluster of ``workers`` processes."""
-    try:
-        import distributed  # noqa: F401 (only whether it is there)
-    except ImportError:
-        raise Mcl2PnmlError("a campaign runs on Dask: pip install 'dask[distributed]'") \
-            from None
+    from importlib.util import find_spec
+    if find_spec("distributed") is None:
+        raise Mcl2PnmlError("a campaign runs on Dask: pip install 'dask[distributed]'")
     if scheduler is not None:       # the CLI has checked it; a library caller may not
         try:
             scheduler = scheduler_address(scheduler)
@@ -450,16 +452,31 @@ class _Flight:
     progress: Callable[[int, int], None] | None
 
 
+class _DaskOnly(logging.Filter):
+    """Refuses the records of :data:`DASK_LOGGERS`' families."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return record.name.split(".")[0] not in DASK_LOGGERS
+
+
 @contextmanager
 def _quiet() -> Iterator[None]:
-    """Dask's logs and warnings silenced (every logger of :data:`DASK_LOGGERS`' families):
-    what goes wrong is the campaign's one message, not Dask's tracebacks."""
-    family = [logging.getLogger(name) for name in logging.root.manager.loggerDict
-              if name.split(".")[0] in DASK_LOGGERS]
-    family += [logging.getLogger(name) for name in DASK_LOGGERS]
+    """Dask's logs and warnings silenced: what goes wrong is the campaign's one message,
+    not Dask's tracebacks. Dask's loggers are made on import (its own handler on
+    ``distributed``): each is disabled; a logger made later is refused by every handler
+    a record of it could reach (its family's, the root's, the last resort)."""
+    import_module("distributed")    # its loggers made, to be disabled
+    family = {logging.getLogger(name) for name in list(logging.root.manager.loggerDict)
+              if name.split(".")[0] in DASK_LOGGERS}
+    family |= {logging.getLogger(name) for name in DASK_LOGGERS}
     was = [(logger, logger.disabled) for logger in family]
+    handlers = {h for logger in (*family, logging.root) for h in logger.handlers}
+    handlers |= {logging.lastResort} if logging.lastResort else set()
+    only = _DaskOnly()
     for logger in family:
         logger.disabled = True
+    for handler in handlers:
+        handler.addFilter(only)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -467,6 +484,8 @@ def _quiet() -> Iterator[None]:
     finally:
         for logger, disabled in was:
             logger.disabled = disabled
+        for handler in handlers:
+            handler.removeFilter(only)
 
 
 def _on_own_loop(make: Callable) -> None:
@@ -475,14 +494,17 @@ def _on_own_loop(make: Callable) -> None:
     when the caller already runs a loop (a notebook)."""
     try:
         asyncio.get_running_loop()
+        inside = True
     except RuntimeError:
-        asyncio.run(make())
+        inside = False
+    if not inside:      # out of the except block: no error of the campaign's chained to it
+        _stoppable(make)
         return
     failed: list[BaseException] = []
 
     def body():
         try:
-            asyncio.run(make())
+            _stoppable(make)
         except BaseException as e:      # noqa: BLE001 (handed to the caller as it is)
             failed.append(e)
     thread = threading.Thread(target=body, name="mcl2pnml-campaign")
@@ -490,6 +512,36 @@ def _on_own_loop(make: Callable) -> None:
     thread.join()
     if failed:
         raise failed[0]
+
+
+def _stoppable(make: Callable) -> None:
+    """``asyncio.run(make())``, SIGTERM and SIGHUP stopping it as asyncio's own handling
+    of Ctrl-C does (in the main thread, unless the signal is ignored): the coroutine
+    cancelled, its cluster closed, then :class:`KeyboardInterrupt`, which the CLI says as
+    an interruption. The handlers there before are put back."""
+    caught: list[int] = []
+
+    async def main():
+        loop, task = asyncio.get_running_loop(), asyncio.current_task()
+        before = {}
+        if threading.current_thread() is threading.main_thread():
+            for signum in STOP_SIGNALS:
+                if signal.getsignal(signum) not in (signal.SIG_IGN, None):
+                    before[signum] = signal.getsignal(signum)
+                    loop.add_signal_handler(signum, lambda n=signum: (caught.append(n),
+                                                                      task.cancel()))
+        try:
+            await make()
+        finally:
+            for signum, handler in before.items():
+                loop.remove_signal_handler(signum)
+                signal.signal(signum, handler)
+    try:
+        asyncio.run(main())
+    except asyncio.CancelledError:
+        if caught:
+            raise KeyboardInterrupt(signal.Signals(caught[0]).name) from None
+        raise
 
 
 class _NotDask(Exception):
@@ -594,6 +646,8 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
                              key=f"mcl2pnml-runs-{tag}-{batch[0]}"): batch[0]
                for batch in batches}
     heard = [loop.time()]
+    #: the workers the scheduler said it had when it last answered (None: no answer yet)
+    workers: list[int | None] = [None]
 
     def lost() -> Mcl2PnmlError:
         return Mcl2PnmlError(f"the Dask scheduler {named} was lost after "
@@ -633,10 +687,11 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
             try:
                 async with asyncio.timeout(left):
                     said = await client.scheduler.identity(n_workers=0)
-                if said.get("n_workers"):
+                workers[0] = int(said.get("n_workers") or 0)
+                if workers[0]:
                     heard[0] = max(heard[0], loop.time())
             except (OSError, TimeoutError):
-                pass
+                workers[0] = None
             await asyncio.sleep(min(PING_EVERY, silence / 4,
                                     max(0.0, heard[0] + silence - loop.time())))
 
@@ -652,9 +707,10 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
         return
     if client.status != "running":
         raise lost()
-    raise Mcl2PnmlError(f"the Dask scheduler {named} answered nothing, or had no worker, "
-                        f"for {silence:g} s after {len(campaign.runs):,} runs "
-                        "(--scheduler-timeout); nothing was written")
+    what = "had no worker" if workers[0] == 0 else "answered nothing"
+    raise Mcl2PnmlError(f"the Dask scheduler {named} {what} for {silence:g} s, after "
+                        f"{len(campaign.runs):,} runs (--scheduler-timeout); nothing was "
+                        "written")
 
 
 def write_table(campaign: Campaign, path: Path) -> None:

@@ -11,15 +11,13 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
-import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
 
 import pytest
 
+from dask_cluster import free_port, started
 from helpers import ROOT, one_error, run_cli
 from mcl2pnml import pipeline
 from mcl2pnml.campaign import BATCH, TRACKS, Fleet, fly_batch
@@ -31,12 +29,6 @@ distributed = pytest.importorskip("distributed", reason="Dask's distributed is n
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
 MODEL = ROOT / "examples" / "sauce.model.json"
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture(scope="module")
@@ -97,34 +89,8 @@ def test_the_sequential_test_stops_as_soon_as_it_decides(exact, shared):
 @pytest.fixture
 def cluster(tmp_path):
     """A scheduler and two workers, separate processes on loopback; killed at the end."""
-    port = _free_port()
-    address = f"tcp://127.0.0.1:{port}"
-    dask = str(Path(sys.executable).with_name("dask"))
-    procs = [subprocess.Popen([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port),
-                               "--no-dashboard"], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL, start_new_session=True)]
-    try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            try:
-                socket.create_connection(("127.0.0.1", port), timeout=1).close()
-                break
-            except OSError:
-                time.sleep(0.2)
-        for _ in range(2):
-            procs.append(subprocess.Popen(
-                [dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
-                 "--no-dashboard", "--local-directory", str(tmp_path)],
-                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
-        client = distributed.Client(address, timeout="30s")
-        client.wait_for_workers(2, timeout=60)
-        client.close()
-        yield address, procs
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                os.killpg(p.pid, signal.SIGKILL)
-                p.wait(10)
+    with started(tmp_path, workers=2) as running:
+        yield running.address, running.workers
 
 
 def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_worker(cluster):
@@ -141,7 +107,7 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
     deadline = time.monotonic() + 60
     while not done and time.monotonic() < deadline:
         time.sleep(0.05)
-    os.killpg(procs[1].pid, signal.SIGKILL)       # one worker gone mid-campaign
+    os.killpg(procs[0].pid, signal.SIGKILL)       # one worker gone mid-campaign
     thread.join(240)
     assert not thread.is_alive()
     flown = result["campaign"]
@@ -155,7 +121,7 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
 
 def test_a_scheduler_that_is_not_there_is_one_message():
     out = run_cli("campaign", SAUCE, "--vehicle-model", MODEL, "--runs", 10,
-                  "--scheduler", f"tcp://127.0.0.1:{_free_port()}", timeout=120)
+                  "--scheduler", f"tcp://127.0.0.1:{free_port()}", timeout=120)
     one_error(out, "cannot reach the Dask scheduler")
 
 
