@@ -129,7 +129,9 @@ def load_json(text: str, filename: str, what: str) -> Any:
     try:
         data = json.loads(text, object_pairs_hook=_unique, parse_constant=_Constant)
     except json.JSONDecodeError as e:
-        raise Mcl2PnmlError(f"not {what}: {e.msg}",
+        # a file cut short: said as such, where it stops
+        ends = "the file ends too soon: " if not text[e.pos:].strip() else ""
+        raise Mcl2PnmlError(f"not {what}: {ends}{e.msg}",
                             text_location(filename, text, e.lineno, e.colno)) from None
     except _Twice:
         twice: list[tuple[Path, int, int]] = []
