@@ -21,6 +21,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
+from mcl2pnml.runtime import interrupts
 
 EXAMPLES = """\b
 Examples:
@@ -152,13 +153,14 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
 
     Time is virtual: a mission of hours runs in a moment. The live log shows each action
     and event; then the outcome (OK, FAIL, ABORTED, STALLED with what it waits for, or
-    TIMELIMIT: cut short by --max-time) and the safe stop: every primitive still enabled
-    is disabled, however the run ends (docs/faults.md). --journal writes the run as it
-    goes; --resume continues it.
+    TIMELIMIT: cut short by --max-time, INTERRUPTED: by SIGINT, SIGTERM or SIGHUP) and
+    the safe stop: every primitive still enabled is disabled, however the run ends
+    (docs/faults.md); a second signal meanwhile is ignored, a third cuts it short.
+    --journal writes the run as it goes; --resume continues it.
 
     \b
     Exit status, one per outcome: 0 OK, 1 FAIL, 4 ABORTED, 5 STALLED, 6 TIMELIMIT;
-    2 bad input, 130 interrupted.
+    2 bad input; interrupted: 128 + the signal (130 SIGINT, 143 SIGTERM, 129 SIGHUP).
     """
     given = frozenset(k for k in options if ctx.get_parameter_source(k)
                       is click.core.ParameterSource.COMMANDLINE)
@@ -166,8 +168,10 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
         mission, pipeline.RunOptions(**options, explicit=given),
         text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
         lenient=lenient, max_mission_size=max_mission_size, note=_note)
-    click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
-    return result.outcome.exit_status
+    # the run's end: its outcome is written whatever signal comes now (the third stops it)
+    with interrupts.guard(interrupts.Phase.ENDING):
+        click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
+    return result.exit_status
 
 
 @main.command(epilog=EXAMPLES)

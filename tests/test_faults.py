@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import heapq
 import json
+import signal
 
 import pytest
 
@@ -15,7 +16,7 @@ from mcl2pnml.pipeline import check_source
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, SafeStop, ScriptedVehicle,
                           Vehicle, VehicleInputError)
 from mcl2pnml.runtime.bridge import MappedVehicle, QueueTransport, VehicleMapping
-from mcl2pnml.runtime.engine import Outcome, run, run_realtime
+from mcl2pnml.runtime.engine import Outcome, Run, run, run_realtime
 
 from helpers import engines, run_cli as cli
 
@@ -244,8 +245,11 @@ def test_each_outcome_has_an_exit_status_of_its_own():
     statuses = {o: o.exit_status for o in Outcome}
     assert statuses[Outcome.OK] == 0
     assert len(set(statuses.values())) == len(Outcome)
-    # 2 is bad input, 3 a partial analysis, 130 an interrupt: never an outcome
-    assert not set(statuses.values()) & {2, 3, 130}
+    # 2 is bad input, 3 a partial analysis: never an outcome; an interrupt is 128 + its
+    # signal (SIGINT's 130 for the outcome alone)
+    assert not set(statuses.values()) & {2, 3}
+    assert statuses[Outcome.INTERRUPTED] == 128 + signal.SIGINT
+    assert Run(Outcome.INTERRUPTED, 0.0, signum=signal.SIGTERM).exit_status == 143
 
 
 @pytest.mark.parametrize("script, extra, outcome", [

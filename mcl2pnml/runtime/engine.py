@@ -27,8 +27,10 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from mcl2pnml.runtime import interrupts
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, Reported, SafeStop, Vehicle, VehicleFault, VehicleInputError,
                   _time, canonical_trace, causal_order)
+from mcl2pnml.runtime.interrupts import Interrupted, SafeStateCut
 
 
 class Outcome(enum.Enum):
@@ -53,6 +55,11 @@ class Outcome(enum.Enum):
     due (a vehicle event, a time-out) when the run was stopped at the limit,
     with its safe stop. The mission did not stall: it was cut short."""
 
+    INTERRUPTED = "INTERRUPTED"
+    """A signal stopped the run (SIGINT, SIGTERM, SIGHUP: Ctrl-C, ``kill``, a
+    dropped session), with its safe stop and the vehicle's safe state; the
+    diagnosis names the signal (:mod:`mcl2pnml.runtime.interrupts`)."""
+
     # The member values are the words of cli.md's JSON and of the run log:
     # these two methods are the only mapping between the two, both ways.
     def as_json(self) -> str:
@@ -70,17 +77,43 @@ class Outcome(enum.Enum):
 
         One per outcome, so that a test harness or a vehicle's supervisor can
         act on it without parsing the output. 2 is bad input (every command),
-        3 a partial analysis (``analyze``), 130 an interrupt: not used here.
+        3 a partial analysis (``analyze``): never an outcome's. INTERRUPTED's
+        is 128 + SIGINT, 130, as a shell has it; a run stopped by another
+        signal exits 128 + its number (:attr:`Run.exit_status`).
         """
         return _EXIT_STATUS[self]
 
 
 #: ``mcl2pnml run``'s exit status per outcome (README.md, "Running a mission").
 _EXIT_STATUS = {Outcome.OK: 0, Outcome.FAIL: 1, Outcome.ABORTED: 4, Outcome.STALLED: 5,
-                Outcome.TIMELIMIT: 6}
+                Outcome.TIMELIMIT: 6, Outcome.INTERRUPTED: 128 + interrupts.signal.SIGINT}
+
+#: The outcomes that are not the mission's result: the run says why it stopped.
+NO_RESULT = (Outcome.STALLED, Outcome.TIMELIMIT, Outcome.INTERRUPTED)
 
 
-FireListener = Callable[[float, str], None]
+@dataclass(frozen=True)
+class TimedOut:
+    """A task's time-out expired at ``t``: the task ``task``'s declared ``seconds``
+    (None where the engine cannot tell), which ends it as its pattern says (FAIL for
+    AchieveGoal, OK for the Keep patterns; docs/mcl.md)."""
+
+    t: float
+    task: str
+    seconds: float | None = None
+
+    def as_json(self) -> dict[str, Any]:
+        """As the run's ``--json`` lists it under ``timeouts``, and its log line."""
+        return {"t": _time(self.t), "timeout": self.task,
+                **({"seconds": _time(self.seconds)} if self.seconds is not None else {})}
+
+    def named(self) -> str:
+        """"Goto (900 s)": the task, and its time-out where known."""
+        return self.task + (f" ({self.seconds:g} s)" if self.seconds is not None else "")
+
+    def words(self) -> str:
+        """"Goto (900 s), expired at t=901 s"."""
+        return f"{self.named()}, expired at t={self.t:g} s"
 
 
 class Engine(ABC):
@@ -136,6 +169,11 @@ class Engine(ABC):
     def fire_timer(self, t: float, name: str) -> list[Action]:
         """Expire the timer ``name`` (announced by :meth:`next_timer`), and what follows."""
 
+    def timeout_of(self, task: str) -> float | None:
+        """The seconds of ``task``'s declared time-out (its timers' name), or None: this
+        engine cannot tell. Said when the time-out expires (:class:`TimedOut`)."""
+        return None
+
     @abstractmethod
     def waiting(self) -> list[str]:
         """What the mission waits for now, in words (for a run that stalls)."""
@@ -166,16 +204,41 @@ class Run:
     time: float
     entries: list[Action | Event] = field(default_factory=list)
     ignored: list[tuple[Event, str]] = field(default_factory=list)
+    #: why a run without a result stopped (STALLED, TIMELIMIT, INTERRUPTED), first the
+    #: fault or the signal, then what the mission waited for in the engine's words; and
+    #: what the safe stop could not do (the text's lines under the outcome)
     waiting: list[str] = field(default_factory=list)
     #: the disables the run loop sent at the end to primitives still enabled
     safe_stop: list[SafeStop] = field(default_factory=list)
     #: then the vehicle's safe state, step by step (an autopilot's hold, surface, disarm)
     secured: list[str] = field(default_factory=list)
+    #: every time-out that expired, in order
+    timeouts: list[TimedOut] = field(default_factory=list)
+    #: the signal that stopped the run (INTERRUPTED), None otherwise
+    signum: int | None = None
+    #: :attr:`waiting` in the run loop's words, the same for both engines (``--json``'s
+    #: and the log's ``diagnosis``): the fault or the signal, the primitives still enabled
+    #: or awaited off, the next time-out; what the safe stop could not do
+    diagnosis: list[str] = field(default_factory=list)
+
+    @property
+    def exit_status(self) -> int:
+        """``mcl2pnml run``'s exit status: the outcome's, 128 + the signal's number for a
+        run a signal stopped (130 SIGINT, 143 SIGTERM, 129 SIGHUP)."""
+        if self.outcome is Outcome.INTERRUPTED and self.signum is not None:
+            return 128 + self.signum
+        return self.outcome.exit_status
 
     def as_json(self) -> dict[str, Any]:
-        """The object of ``mcl2pnml run --json`` (cli.md), with ``safe_stop`` when there was one."""
+        """The object of ``mcl2pnml run --json`` (cli.md): ``diagnosis`` (why a run without
+        a result stopped), ``timeouts``, ``safe_stop``, ``safe_state`` and ``problems``
+        when there are any."""
         out = {"outcome": self.outcome.as_json(), "time": _time(self.time),
                "trace": canonical_trace(self.entries)}
+        if self.diagnosis:
+            out["diagnosis"] = list(self.diagnosis)
+        if self.timeouts:
+            out["timeouts"] = [x.as_json() for x in self.timeouts]
         if self.safe_stop:
             out["safe_stop"] = [a.as_json() for a in self.safe_stop]
         if self.secured:
@@ -193,8 +256,11 @@ class Run:
                 if isinstance(e, Reported) and e.kind is EventKind.FAILED and e.why]
 
     def report(self) -> list[str]:
-        """The end of ``mcl2pnml run``'s text: the outcome, what it waits for, the safe stop."""
+        """The end of ``mcl2pnml run``'s text: the outcome, why (what it waits for, the
+        signal, the last time-out of a run that failed), the safe stop."""
         lines = [f"outcome {self.outcome.value} at t={self.time:g} s"]
+        if self.outcome is Outcome.FAIL and self.timeouts:
+            lines.append(f"  the last time-out: {self.timeouts[-1].words()}")
         lines += [f"  {line}" for line in self.waiting]
         if self.safe_stop:
             lines.append("  safe stop: disabled " + ", ".join(a.primitive for a in self.safe_stop))
@@ -202,7 +268,7 @@ class Run:
         return lines
 
 
-Listener = Callable[[Action | Event], None]
+Listener = Callable[[Action | Event | TimedOut], None]
 
 
 class _Driver:
@@ -210,17 +276,35 @@ class _Driver:
 
     It keeps the set of primitives the mission has enabled and not disabled,
     so that however the run ends (a result, a stall, the time limit, a
-    vehicle that fails, a link that drops, the operator's Ctrl-C) every
-    primitive still enabled is sent ``disable``: the vehicle is never left
-    holding a depth or driving to a waypoint for a mission that has stopped.
+    vehicle that fails, a link that drops, a signal) every primitive still
+    enabled is sent ``disable``: the vehicle is never left holding a depth or
+    driving to a waypoint for a mission that has stopped.
     """
 
     def __init__(self, engine: Engine, vehicle, listener: Listener | None):
         self.engine, self.vehicle, self.listener = engine, vehicle, listener
         self.entries: list[Action | Event] = []
-        self.enabled: dict[str, None] = {}      # insertion-ordered set
+        self.enabled: dict[str, float] = {}     # since when, in the order they were enabled
+        self.disabling: dict[str, float] = {}   # disabled at, its 'off' not yet come
         self.fault: str | None = None           # what the vehicle or its link did wrong
         self.secured: list[str] = []            # the vehicle's safe state, step by step
+        self.timeouts: list[TimedOut] = []
+        self.stopped_safe = False                # the safe stop and safe state are done
+        self.t = 0.0                             # the time of the last stimulus (virtual time)
+
+    def drive(self, loop: Callable[[], Run], now: Callable[[], float]) -> Run:
+        """Run ``loop`` (a run loop, which ends with :meth:`end`); a signal ends the run
+        INTERRUPTED, an error is passed on after the safe stop.
+
+        A signal can come at any instruction up to the safe stop's start, even in
+        :meth:`end` before it: the safe stop is then made here, as it was not yet."""
+        try:
+            return loop()
+        except Interrupted as stop:
+            return self.interrupted(stop, now())
+        except BaseException:
+            self.safe_stop(now())      # an error of the mission: stop the vehicle, then say it
+            raise
 
     def deliver(self, actions: list[Action]) -> None:
         """Record and send the actions one stimulus caused, in causal order (the trace's)."""
@@ -230,17 +314,28 @@ class _Driver:
                 self.listener(action)
             # counted enabled before it is sent: a failed send may have half-happened
             if action.kind is ActionKind.ENABLE:
-                self.enabled[action.primitive] = None
+                self.enabled[action.primitive] = action.t
             else:
                 self.enabled.pop(action.primitive, None)
+                self.disabling[action.primitive] = action.t
             self.vehicle_call(self.vehicle.act, action, f"{action.kind.value} "
                               f"{action.primitive} at t={_time(action.t)} s")
 
     def event(self, event: Event) -> None:
+        if event.kind is EventKind.OFF:
+            self.disabling.pop(event.primitive, None)
         self.entries.append(event)
         if self.listener:
             self.listener(event)
         self.deliver(self.engine.on_event(event))
+
+    def timer(self, t: float, task: str) -> None:
+        """A task's time-out expires: said (the live log, the run's ``timeouts``), then fired."""
+        expired = TimedOut(t, task, self.engine.timeout_of(task))
+        self.timeouts.append(expired)
+        if self.listener:
+            self.listener(expired)
+        self.deliver(self.engine.fire_timer(t, task))
 
     def vehicle_call(self, call: Callable, arg: Any, what: str) -> Any:
         """Call the vehicle; a failure of the vehicle (not bad input) ends the run as a fault."""
@@ -257,25 +352,82 @@ class _Driver:
                 self.fault = f"the vehicle failed to carry out {what}: {type(e).__name__}: {e}"
             raise _Fault from None
 
-    def end(self, outcome: Outcome | None, t: float, note: list[str] | None = None) -> Run:
+    def end(self, outcome: Outcome | None, t: float, note: list[str] | None = None,
+            signum: int | None = None) -> Run:
         """The run's result, after the safe stop.
 
-        No outcome is a stall; :attr:`Outcome.TIMELIMIT` is given with
-        ``note`` saying what was still due. Either way the diagnosis lists
-        the fault first, then the note, then what the mission waits for.
+        No outcome is a stall; :attr:`Outcome.TIMELIMIT` and
+        :attr:`Outcome.INTERRUPTED` are given with ``note`` saying what was
+        still due, or the signal. Either way the diagnosis lists the fault
+        first, then the note, then what the mission waits for.
         """
+        outcome = outcome or Outcome.STALLED
+        pending = self._pending() if outcome in NO_RESULT else []   # before the safe stop
         stopped, failed = self.safe_stop(t)
         waiting: list[str] = []
-        if outcome in (None, Outcome.TIMELIMIT):   # no result: say why the mission stopped
-            outcome = outcome or Outcome.STALLED
-            waiting = ([self.fault] if self.fault else []) + (note or []) \
-                + self.engine.waiting()
+        why: list[str] = []
+        if outcome in NO_RESULT:   # no result: say why the mission stopped
+            head = ([self.fault] if self.fault else []) + (note or [])
+            waiting, why = head + self._waits(), head + pending
         return Run(outcome, t, self.entries, list(self.engine.ignored), waiting + failed,
-                   stopped, self.secured)
+                   stopped, self.secured, self.timeouts, signum, why + failed)
+
+    def interrupted(self, stop: Interrupted, t: float) -> Run:
+        """The run a signal stopped: INTERRUPTED, naming the signal, after the safe stop."""
+        return self.end(Outcome.INTERRUPTED, t, [stop.reason], stop.signum)
+
+    def _pending(self) -> list[str]:
+        """What the mission waited for, as the run loop saw it (both engines alike)."""
+        out = [f"{name}: enabled at t={_time(t)} s, still enabled" for name, t
+               in self.enabled.items()]
+        out += [f"{name}: disabled at t={_time(t)} s, its 'off' has not come" for name, t
+                in self.disabling.items()]
+        try:
+            timer = self.engine.next_timer()
+        except Exception:   # an engine stopped by a signal half-way through a step
+            timer = None
+        if timer is not None:
+            out.append(f"the time-out of {timer[1]} was due at t={timer[0]:g} s")
+        return out
+
+    def _waits(self) -> list[str]:
+        try:
+            return self.engine.waiting()
+        except Exception as e:    # an engine stopped by a signal half-way through a step
+            return [f"what the mission waits for cannot be said: {type(e).__name__}: {e}"]
 
     def safe_stop(self, t: float) -> tuple[list[SafeStop], list[str]]:
-        """Disable every primitive still enabled; the ones that could not be, in words."""
-        stopped, failed = [], []
+        """Disable every primitive still enabled, then bring the vehicle to its safe state;
+        the primitives that could not be disabled, in words.
+
+        A signal meanwhile is said and changes nothing, but the third of the run cuts
+        the safe state short (:mod:`mcl2pnml.runtime.interrupts`): the run still ends,
+        saying so."""
+        stopped: list[SafeStop] = []
+        failed: list[str] = []
+        try:
+            with interrupts.current().securing():
+                if self.stopped_safe:
+                    return stopped, failed
+                self.stopped_safe = True
+                self._disable_all(t, stopped, failed)
+                secure = getattr(self.vehicle, "secure", None)
+                if secure is not None:
+                    try:
+                        self.secured = secure(t)
+                    except Exception as e:   # an adapter's own failure: say it, the run ends
+                        self.secured = [f"could not be reached: {type(e).__name__}: {e}"]
+        except SafeStateCut as e:
+            # the steps done before are in the vehicle's own log lines (an autopilot's)
+            failed += [f"safe stop: not sent to {name} (cut short)" for name in self.enabled]
+            failed.append(f"the safe state was cut short by {interrupts.name_of(e.signum)}, "
+                          "the run's third signal: the vehicle may not be in its safe state")
+        for action in stopped:      # logged after: a failing log must not keep the vehicle going
+            if self.listener:
+                self.listener(action)
+        return stopped, failed
+
+    def _disable_all(self, t: float, stopped: list[SafeStop], failed: list[str]) -> None:
         for name in list(self.enabled):
             action = SafeStop(t, ActionKind.DISABLE, name)
             del self.enabled[name]
@@ -284,16 +436,6 @@ class _Driver:
                 self.vehicle.act(action)
             except Exception as e:   # the link is gone, or the adapter fails again
                 failed.append(f"safe stop: could not disable {name}: {type(e).__name__}: {e}")
-        for action in stopped:      # logged after: a failing log must not keep the vehicle going
-            if self.listener:
-                self.listener(action)
-        secure = getattr(self.vehicle, "secure", None)
-        if secure is not None and not self.secured:
-            try:
-                self.secured = secure(t)
-            except Exception as e:   # an adapter's own failure: say it, the run still ends
-                self.secured = [f"could not be reached: {type(e).__name__}: {e}"]
-        return stopped, failed
 
 
 class _Fault(Exception):
@@ -307,43 +449,46 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
     ``listener`` sees every action and event as it happens (the live log);
     ``max_time`` stops a mission that would run for ever (a loop whose
     vehicle keeps answering) at that time, with the outcome TIMELIMIT. Whatever the ending,
-    primitives still enabled are disabled (:class:`~mcl2pnml.runtime.aal.SafeStop`),
-    also before an error or an interrupt is passed on (docs/faults.md).
+    primitives still enabled are disabled (:class:`~mcl2pnml.runtime.aal.SafeStop`):
+    a signal (:class:`~mcl2pnml.runtime.interrupts.Interrupted`) ends the run
+    INTERRUPTED, and an error is passed on after the safe stop (docs/faults.md).
     """
     d = _Driver(engine, vehicle, listener)
-    t = 0.0
-    try:
-        d.deliver(engine.start(t))
-        while engine.outcome is None:
-            te = d.vehicle_call(lambda _: vehicle.next_event_time(), None,
-                                "its next event")
-            timer = engine.next_timer()
-            if te is None and timer is None:
-                return d.end(None, t)
-            by_vehicle = timer is None or (te is not None and te <= timer[0])
-            at = te if by_vehicle else timer[0]
-            if max_time is not None and at > max_time:
-                # cut short, not stalled: the stop (and its safe stop) is at the limit
-                due = "a vehicle event" if by_vehicle else f"the time-out of {timer[1]}"
-                return d.end(Outcome.TIMELIMIT, max_time,
-                             [f"stopped at the time limit of {max_time:g} s; {due} was due "
-                              f"at t={at:g} s"])
-            t = at
-            vehicle.advance(t)
-            if by_vehicle:
-                d.event(d.vehicle_call(lambda _: vehicle.take_event(), None, "its next event"))
-            else:
-                d.deliver(engine.fire_timer(t, timer[1]))
-    except _Fault:
-        return d.end(None, t)
-    except BaseException:
-        d.safe_stop(t)      # an error of the mission or Ctrl-C: stop the vehicle, then say it
-        raise
-    return d.end(engine.outcome, t)
+
+    def loop() -> Run:
+        try:
+            d.deliver(engine.start(d.t))
+            while engine.outcome is None:
+                te = d.vehicle_call(lambda _: vehicle.next_event_time(), None,
+                                    "its next event")
+                timer = engine.next_timer()
+                if te is None and timer is None:
+                    return d.end(None, d.t)
+                by_vehicle = timer is None or (te is not None and te <= timer[0])
+                at = te if by_vehicle else timer[0]
+                if max_time is not None and at > max_time:
+                    # cut short, not stalled: the stop (and its safe stop) is at the limit
+                    due = "a vehicle event" if by_vehicle else f"the time-out of {timer[1]}"
+                    return d.end(Outcome.TIMELIMIT, max_time,
+                                 [f"stopped at the time limit of {max_time:g} s; {due} was "
+                                  f"due at t={at:g} s"])
+                d.t = at
+                vehicle.advance(at)
+                if by_vehicle:
+                    d.event(d.vehicle_call(lambda _: vehicle.take_event(), None,
+                                           "its next event"))
+                else:
+                    d.timer(at, timer[1])
+        except _Fault:
+            return d.end(None, d.t)
+        return d.end(engine.outcome, d.t)
+
+    return d.drive(loop, lambda: d.t)
 
 
 def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None = None,
-                 listener: Listener | None = None, max_time: float | None = None) -> Run:
+                 listener: Listener | None = None, max_time: float | None = None,
+                 open_vehicle: bool = False) -> Run:
     """Drive ``engine`` against a real vehicle (a :class:`~mcl2pnml.runtime.bridge.MappedVehicle`).
 
     Time is the wall clock from the start, or the vehicle's own clock where
@@ -351,9 +496,11 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
     gives the same run); time-outs fire when it reaches them, and events
     count from when they arrive. A real vehicle can always
     still answer, so a run ends with a result, at ``max_time`` (TIMELIMIT), when
-    the link drops (STALLED, saying so), or when the operator interrupts it;
+    the link drops (STALLED, saying so), or when a signal stops it (INTERRUPTED);
     each way with the safe stop of :func:`run`, then the vehicle's own safe
-    state (:meth:`~mcl2pnml.runtime.aal.LiveVehicle.secure`).
+    state (:meth:`~mcl2pnml.runtime.aal.LiveVehicle.secure`). ``open_vehicle``:
+    the vehicle is opened here (connected, made ready: an autopilot is armed), so
+    that a signal or an error meanwhile brings it to its safe state too.
     """
     import time
 
@@ -365,25 +512,28 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
         start = clock()
         now = lambda: clock() - start    # noqa: E731
     d = _Driver(engine, vehicle, listener)
-    try:
-        d.deliver(engine.start(0.0))
-        while engine.outcome is None:
-            timer = engine.next_timer()
-            limit = [x for x in (timer[0] if timer else None, max_time) if x is not None]
-            wait = max(0.0, min(limit) - now()) if limit else None
-            event = d.vehicle_call(lambda w: vehicle.wait_event(w, now), wait, "waiting")
-            if event is not None:
-                d.event(event)
-                continue
-            if timer is not None and now() >= timer[0]:
-                d.deliver(engine.fire_timer(timer[0], timer[1]))
-            elif max_time is not None and now() >= max_time:
-                # a real vehicle can always still answer: the limit cuts the run short
-                return d.end(Outcome.TIMELIMIT, max_time,
-                             [f"stopped at the time limit of {max_time:g} s"])
-    except _Fault:
-        return d.end(None, now())
-    except BaseException:
-        d.safe_stop(now())
-        raise
-    return d.end(engine.outcome, now())
+
+    def loop() -> Run:
+        try:
+            if open_vehicle:
+                vehicle.open()
+            d.deliver(engine.start(0.0))
+            while engine.outcome is None:
+                timer = engine.next_timer()
+                limit = [x for x in (timer[0] if timer else None, max_time) if x is not None]
+                wait = max(0.0, min(limit) - now()) if limit else None
+                event = d.vehicle_call(lambda w: vehicle.wait_event(w, now), wait, "waiting")
+                if event is not None:
+                    d.event(event)
+                    continue
+                if timer is not None and now() >= timer[0]:
+                    d.timer(timer[0], timer[1])
+                elif max_time is not None and now() >= max_time:
+                    # a real vehicle can always still answer: the limit cuts the run short
+                    return d.end(Outcome.TIMELIMIT, max_time,
+                                 [f"stopped at the time limit of {max_time:g} s"])
+        except _Fault:
+            return d.end(None, now())
+        return d.end(engine.outcome, now())
+
+    return d.drive(loop, now)

@@ -80,6 +80,7 @@ class PetriEngine(Engine):
         self.enabled_on: list[set[int]] = [set() for _ in self.places]  # enabled, using p
         self.watching: list[int | None] = [None] * n
         self.delay: list[float | None] = []
+        self._timeouts: dict[str, float] | None = None     # each task's, by timeout_of
         self.payload: list[TransitionPayload] = []
         self.by_event: dict[tuple[str, EventKind], list[int]] = {}
         for i, t in enumerate(net.transitions):
@@ -272,6 +273,13 @@ class PetriEngine(Engine):
         self.now = t
         actions = self._fire(i)
         return actions + self._settle()
+
+    def timeout_of(self, task: str) -> float | None:
+        # a timer's name is its transition's task (as _enable names it): found once
+        if self._timeouts is None:
+            self._timeouts = {name.rsplit(".", 1)[0]: delay for name, delay
+                              in zip(self.transitions, self.delay) if delay is not None}
+        return self._timeouts.get(task)
 
     def enable_arguments(self) -> dict[str, list[tuple]] | None:
         # The arguments are constants passed down call sites (no arithmetic),

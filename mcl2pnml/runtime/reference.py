@@ -239,6 +239,11 @@ class ReferenceEngine(Engine):
         self.later(task.timed_out)
         return self._settle()
 
+    def timeout_of(self, task: str) -> float | None:
+        declared = self.c.tasks.get(task)
+        return None if declared is None or declared.timeout is None \
+            else float(declared.timeout.value)
+
     def primitives_used(self) -> set[str]:
         # the primitives of its tasks, whether or not a call reaches them
         return self._used()

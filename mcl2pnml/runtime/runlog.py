@@ -12,8 +12,12 @@ The JSON-lines log has the same entries as objects (``{"t": 30, "event":
 ``{"t": 30, "ignored": {...}, "reason": "..."}``), one per line, so that a
 tool can follow a run while it happens or replay it after. The safe stop
 at the end of a run (docs/faults.md) is logged as ``safe-stop`` lines
-(``"safe_stop": true`` in JSON), and the run's end as ``{"t": ...,
-"outcome": ...}``. An autopilot (docs/ardusub.md) adds its own lines: what
+(``"safe_stop": true`` in JSON), a task's time-out that expires as a
+``time-out`` line (``{"t": 901, "timeout": "Goto", "seconds": 900}``), and
+the run's end as ``{"t": ..., "outcome": ...}``, with ``"diagnosis"`` (why a
+run without a result stopped: the fault, the signal, what it waited for)
+where there is one; a run that ends in an error has ``{"t": ..., "error":
+...}`` as its last line instead. An autopilot (docs/ardusub.md) adds its own lines: what
 it says and is told (``autopilot``), the safe state it is brought to
 (``safe-state``), its track and the markers dropped (JSON only), and each
 achieved or failed says who judged it (``"source"``: the autopilot's
@@ -26,7 +30,7 @@ import json
 from typing import IO, Any
 
 from mcl2pnml.runtime.aal import Action, Event, SafeStop, _time
-from mcl2pnml.runtime.engine import Outcome
+from mcl2pnml.runtime.engine import Outcome, TimedOut
 
 
 def _args(args: tuple) -> str:
@@ -41,8 +45,10 @@ class RunLog:
                  transitions: bool = False, journal: Any = None):
         self.text, self.jsonl, self.transitions = text, jsonl, transitions
         self.journal = journal     # mcl2pnml.runtime.journal's writer: one whole line per write
+        self.last_t: float = 0.0   # the time of the last line: an error's line is stamped with it
 
     def _json(self, obj: dict[str, Any]) -> None:
+        self.last_t = obj.get("t", self.last_t)
         line = json.dumps(obj) + "\n"
         if self.jsonl is not None:
             self.jsonl.write(line)
@@ -55,8 +61,10 @@ class RunLog:
             self.text.flush()
         self._json(obj)
 
-    def entry(self, entry: Action | Event) -> None:
-        if isinstance(entry, SafeStop):    # the run loop's, not the mission's: say so
+    def entry(self, entry: Action | Event | TimedOut) -> None:
+        if isinstance(entry, TimedOut):   # why a task ended that no event ended
+            self._line(entry.t, "time-out", f"{entry.named()} expired", entry.as_json())
+        elif isinstance(entry, SafeStop):    # the run loop's, not the mission's: say so
             self._line(entry.t, "safe-stop", f"{entry.kind.value:<9} {entry.primitive}",
                        entry.as_json())
         elif isinstance(entry, Action):
@@ -90,10 +98,18 @@ class RunLog:
         self._line(event.t, "ignored", f"{event.kind.value} from {event.primitive}: {reason}",
                    {"t": _time(event.t), "ignored": event.as_json(), "reason": reason})
 
-    def end(self, t: float, outcome: Outcome) -> None:
+    def end(self, t: float, outcome: Outcome, diagnosis: list[str] | None = None) -> None:
         """The last line: the run is over (a resumed run has nothing left to do).
 
-        The outcome is written by :meth:`Outcome.as_json`, as the run's
-        ``--json`` object has it.
+        The outcome is written by :meth:`Outcome.as_json`, and the diagnosis
+        (why a run without a result stopped) as the run's ``--json`` object has them.
         """
-        self._json({"t": _time(t), "outcome": outcome.as_json()})
+        self._json({"t": _time(t), "outcome": outcome.as_json(),
+                    **({"diagnosis": list(diagnosis)} if diagnosis else {})})
+
+    def failed(self, t: float, error: str) -> None:
+        """The last line of a run that ended in an error (bad input from the vehicle, a
+        mission's own error), after its safe stop; not journaled: the run did not end,
+        and a resume may take it on."""
+        if self.jsonl is not None:
+            self.jsonl.write(json.dumps({"t": _time(t), "error": error}) + "\n")

@@ -20,7 +20,7 @@ from typing import IO, Callable
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
 from mcl2pnml.core.files import atomic_write_text, check_outputs
-from mcl2pnml.runtime import journal as journals
+from mcl2pnml.runtime import interrupts, journal as journals
 from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
 from mcl2pnml.runtime.link import (HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT,
@@ -216,9 +216,11 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     """Run ``mission`` as ``options`` say; the engine is ``make_engine(options.engine)``.
 
     ``text`` receives the live log, ``log_path`` the JSON-lines log (written
-    whole at the end), ``note`` what the user should know on the side (a
-    torn journal line dropped). However the run ends, the engine loop's
-    safe stop has disabled every primitive still enabled.
+    whole, atomically, at the end: however the run ends, an error's too), ``note``
+    what the user should know on the side (a torn journal line dropped). However
+    the run ends, the engine loop's safe stop has disabled every primitive still
+    enabled and brought the vehicle to its safe state; SIGINT, SIGTERM and SIGHUP
+    end it INTERRUPTED (:mod:`mcl2pnml.runtime.interrupts`).
     """
     beside = with_world(mission, options)
     if beside.world != options.world:   # the user named none: say which world is flown
@@ -243,26 +245,46 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
 
     def listener(entry) -> None:
         nonlocal seen
+        if guard.signum is not None:
+            # a signal stopped the run: what follows (its safe stop) is not the mission's,
+            # and a journal that ends where the run was stopped can be resumed
+            log.journal = None
         log.entry(entry)
         for event, reason in engine.ignored[seen:]:
             log.ignored(event, reason)
         seen = len(engine.ignored)
 
-    if kind.realtime:
-        if hasattr(vehicle, "log"):     # an autopilot's own lines: what it says, its track
-            vehicle.log = log.vehicle
-        vehicle.open()              # connect only now: the mission and mapping are checked
+    result: Run | None = None
+    with interrupts.guard() as guard:
         try:
-            result = run_realtime(engine, vehicle, listener=listener, max_time=options.max_time)
-        finally:
-            vehicle.close()
-    else:
-        result = drive(engine, vehicle, listener=listener, max_time=options.max_time)
-    for event, reason in result.ignored[seen:]:
-        log.ignored(event, reason)
-    log.end(result.time, result.outcome)
-    if isinstance(sink, journals.Replay):
-        sink.finish()
-    if log_path is not None:
-        atomic_write_text(log_path, jsonl.getvalue())
+            if kind.realtime:
+                if hasattr(vehicle, "log"):     # an autopilot's own lines: what it says, its track
+                    vehicle.log = log.vehicle
+                try:
+                    # opened only now, in the run loop: the mission and mapping are checked,
+                    # and a signal while it connects and arms brings it to its safe state
+                    result = run_realtime(engine, vehicle, listener=listener,
+                                          max_time=options.max_time, open_vehicle=True)
+                finally:
+                    vehicle.close()
+            else:
+                result = drive(engine, vehicle, listener=listener, max_time=options.max_time)
+        except BaseException as e:
+            if log_path is not None:    # the log of a run that ended in an error, to the error
+                log.failed(log.last_t, _error_text(e))
+                atomic_write_text(log_path, jsonl.getvalue())
+            raise
+        for event, reason in result.ignored[seen:]:
+            log.ignored(event, reason)
+        if result.signum is not None:
+            log.journal = None
+        log.end(result.time, result.outcome, result.diagnosis)
+        if isinstance(sink, journals.Replay) and result.signum is None:
+            sink.finish()
+        if log_path is not None:
+            atomic_write_text(log_path, jsonl.getvalue())
     return result
+
+
+def _error_text(e: BaseException) -> str:
+    return str(e) if isinstance(e, Mcl2PnmlError) else f"{type(e).__name__}: {e}"
