@@ -586,47 +586,50 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
     """The campaign on this loop: the cluster reached (or started), the batches sent, the
     runs taken in seed order, the scheduler watched; everything closed within a bound."""
     from distributed import Client, LocalCluster
-    named = scheduler or "(local)"
-    cluster = client = None
+    made: list = []     # the cluster and the client, as soon as each exists: to close
+
+    async def local():
+        made.append(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                 dashboard_address=None, silence_logs=logging.CRITICAL,
+                                 asynchronous=True))
+        await made[-1]
+        made.append(Client(made[-1], asynchronous=True, set_as_default=False))
+        await made[-1]
+
+    async def reach():
+        await _probe(scheduler)
+        made.append(Client(scheduler, asynchronous=True, set_as_default=False,
+                           timeout=timeouts.handshake))
+        await made[-1]
     try:
         if scheduler is None:
             try:
-                async with asyncio.timeout(LOCAL_START):
-                    cluster = await LocalCluster(
-                        n_workers=workers, threads_per_worker=1, processes=True,
-                        dashboard_address=None, silence_logs=logging.CRITICAL,
-                        asynchronous=True)
-                    client = await Client(cluster, asynchronous=True, set_as_default=False)
-            except TimeoutError:
+                await asyncio.wait_for(local(), LOCAL_START)
+            except asyncio.TimeoutError:
                 raise Mcl2PnmlError(f"the local Dask cluster did not start within "
                                     f"{LOCAL_START:g} s") from None
         else:
-            bound = timeouts.handshake
             try:
-                async with asyncio.timeout(bound):
-                    await _probe(scheduler)
-                    client = Client(scheduler, asynchronous=True, set_as_default=False,
-                                    timeout=bound)
-                    await client
-            except TimeoutError:
+                await asyncio.wait_for(reach(), timeouts.handshake)
+            except asyncio.TimeoutError:
                 raise Mcl2PnmlError(f"the Dask scheduler {scheduler} did not complete "
-                                    f"Dask's handshake within {bound:g} s "
+                                    f"Dask's handshake within {timeouts.handshake:g} s "
                                     "(--scheduler-timeout)") from None
-            except (OSError, EOFError, asyncio.IncompleteReadError) as e:
+            except asyncio.IncompleteReadError:
+                raise Mcl2PnmlError(f"{scheduler} is not a Dask scheduler: it closed the "
+                                    "connection before Dask's handshake") from None
+            except OSError as e:
                 raise Mcl2PnmlError(f"cannot reach the Dask scheduler {scheduler}: "
-                                    f"{e.strerror or e if isinstance(e, OSError) else e}"
-                                    ) from None
+                                    f"{e.strerror or e}") from None
             except _NotDask as e:
                 raise Mcl2PnmlError(f"{scheduler} is not a Dask scheduler: {e}") from None
-        await _run(flight, client, named, timeouts.silence)
+        await _run(flight, made[-1], scheduler or "(local)", timeouts.silence)
     finally:
-        for closing in (client, cluster):
-            if closing is not None:
-                try:
-                    async with asyncio.timeout(CLOSE_BOUND):
-                        await closing.close()
-                except Exception:    # noqa: BLE001 (a lost or frozen scheduler: abandoned)
-                    pass
+        for closing in reversed(made):      # the client, then its cluster
+            try:
+                await asyncio.wait_for(closing.close(), CLOSE_BOUND)
+            except Exception:    # noqa: BLE001 (a lost or frozen scheduler: abandoned)
+                pass
 
 
 async def _run(flight: _Flight, client, named: str, silence: float) -> None:
@@ -685,12 +688,11 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
         question bounded by what is left of it, asked every :data:`PING_EVERY` s."""
         while (left := heard[0] + silence - loop.time()) > 0:
             try:
-                async with asyncio.timeout(left):
-                    said = await client.scheduler.identity(n_workers=0)
+                said = await asyncio.wait_for(client.scheduler.identity(n_workers=0), left)
                 workers[0] = int(said.get("n_workers") or 0)
                 if workers[0]:
                     heard[0] = max(heard[0], loop.time())
-            except (OSError, TimeoutError):
+            except (OSError, asyncio.TimeoutError):
                 workers[0] = None
             await asyncio.sleep(min(PING_EVERY, silence / 4,
                                     max(0.0, heard[0] + silence - loop.time())))
