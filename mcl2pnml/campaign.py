@@ -31,7 +31,6 @@ as it is decided at the asked confidence (Wald, *Sequential Analysis*, 1947).
 """
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 import os
@@ -492,6 +491,7 @@ def _on_own_loop(make: Callable) -> None:
     """Run the coroutine ``make()`` on an event loop of its own, which is closed when it
     ends (whatever a deadline abandoned in it cancelled then); from a thread of its own
     when the caller already runs a loop (a notebook)."""
+    import asyncio     # where used: the CLI imports this module for its options
     try:
         asyncio.get_running_loop()
         inside = True
@@ -519,6 +519,7 @@ def _stoppable(make: Callable) -> None:
     of Ctrl-C does (in the main thread, unless the signal is ignored): the coroutine
     cancelled, its cluster closed, then :class:`KeyboardInterrupt`, which the CLI says as
     an interruption. The handlers there before are put back."""
+    import asyncio
     caught: list[int] = []
 
     async def main():
@@ -552,6 +553,7 @@ async def _probe(address: str) -> None:
     """Read the scheduler's opening message (Dask's handshake: a scheduler speaks first)
     within :data:`HANDSHAKE_MAX_BYTES`, and check that it is one: a length read from the
     peer is judged before anything is read by it. The caller holds the deadline."""
+    import asyncio
     from distributed.protocol.core import loads
     parts = urlsplit(address)
     reader, writer = await asyncio.open_connection(parts.hostname, parts.port)
@@ -585,6 +587,7 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
                  timeouts: SchedulerTimeouts) -> None:
     """The campaign on this loop: the cluster reached (or started), the batches sent, the
     runs taken in seed order, the scheduler watched; everything closed within a bound."""
+    import asyncio
     from distributed import Client, LocalCluster
     made: list = []     # the cluster and the client, as soon as each exists: to close
 
@@ -636,6 +639,7 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     """Send the batches, take their runs in seed order until the campaign is done, and
     end it if the scheduler says nothing (no batch done, no answer with a worker) for
     ``silence`` seconds."""
+    import asyncio
     from distributed import as_completed
     loop = asyncio.get_running_loop()
     campaign, seed, runs = flight.campaign, flight.seed, flight.runs
