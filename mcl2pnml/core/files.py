@@ -63,8 +63,20 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
     whole); on any exception the temporary file is removed. A failure of the
     file system (no such directory, no permission, disk full) is reported as
     an :class:`~mcl2pnml.core.errors.Mcl2PnmlError` naming the file.
+
+    A device or a FIFO at ``path`` (``-o /dev/null``, ``-o /dev/stdout``) is
+    written into, never replaced: moving a file onto ``/dev/null`` would put a
+    regular file in the device's place for every process of the machine.
     """
     path = Path(path)
+    if _special(path):
+        try:
+            with open(path, "wb") as f:
+                yield f
+        except OSError as e:
+            raise Mcl2PnmlError(f"cannot write: {e.strerror or e}", Location(str(path))) \
+                from None
+        return
     directory = path.parent if str(path.parent) else Path(".")
     tmp = None
     try:
@@ -91,6 +103,15 @@ def atomic_writer(path: str | Path) -> Iterator[BinaryIO]:
             reason = e.strerror or str(e)
             raise Mcl2PnmlError(f"cannot write: {reason}", Location(str(path))) from None
         raise
+
+
+def _special(path: Path) -> bool:
+    """Is there a character device or a FIFO at ``path``?"""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
 
 
 def _kept(name: str) -> str:
