@@ -465,3 +465,84 @@ def test_a_file_broken_everywhere_shows_its_first_errors_and_how_many_more(tmp_p
     net = _broken_everywhere(tmp_path)
     for command in ("analyze", "validate"):
         _a_screenful_and_a_count(net, command)
+
+
+# -- what an error quotes of its input is never printed raw ---------------------------------
+
+#: Bytes that act on a terminal or change how text reads, as UTF-8: the C0 controls but the
+#: newline, DEL, the C1 controls, the bidirectional overrides and isolates.
+RAW = re.compile(rb"[\x00-\x09\x0b-\x1f\x7f]|\xc2[\x80-\x9f]|\xe2\x80[\xaa-\xae]|"
+                 rb"\xe2\x81[\xa6-\xa9]")
+TITLE = "\x1b]0;PWNED\x07"        # sets the terminal's title when printed
+
+
+def stderr_bytes(*args, cwd=None) -> bytes:
+    """``mcl2pnml ARGS``'s exit status and standard error, byte for byte (no decoding, no
+    newline translation: a carriage return must show)."""
+    import subprocess
+    import sys
+    out = subprocess.run([sys.executable, "-m", "mcl2pnml", *map(str, args)],
+                         capture_output=True, cwd=cwd, timeout=120)
+    assert out.returncode == 2 and b"Traceback" not in out.stderr, out.stderr
+    return out.stderr
+
+
+@pytest.mark.timeout(120)
+def test_an_error_never_prints_the_control_characters_of_its_input(tmp_path):
+    mission = tmp_path / "title.mcl"
+    mission.write_text("primitive P(x);\n"
+                       f'task T() = AchieveGoal(Q("{TITLE}\\u\x1b[2J")) timeout 5;\n'
+                       "mission { T(); }\n")
+    named = tmp_path / f"m{TITLE}\r\u202e.mcl"     # the file's name quoted too
+    named.write_text(f"primitive P(x);\ntask T{TITLE}\u2066\x85\x7f() = AchieveGoal(P(1));\n")
+    mapping = tmp_path / "map.json"
+    mapping.write_text('{"primitives": {"K\\u001b]0;T\\u0007": {"by": "servo"}},\n'
+                       f' "autopilot": "{TITLE}"}}\n')
+    cases = [("check", mission), ("check", named),
+             ("run", SAUCE, "--vehicle", f"mavlink:{mapping}", "--connect", "tcp:127.0.0.1:1")]
+    for args in cases:
+        err = stderr_bytes(*args)
+        assert not RAW.search(err), (args, err)
+        assert rb"\x1b]0;" in err or rb"\x1b" in err, (args, err)    # shown, as an escape
+    # the caret stays under the character it points at, after the escapes before it
+    err = stderr_bytes("check", named).decode()
+    line, caret = err.splitlines()[1:3]
+    assert line[caret.index("^"):].startswith(r"\x1b]0;"), err
+
+
+@pytest.mark.parametrize("char, shown", [
+    ("\x1b", r"\x1b"), ("\x07", r"\x07"), ("\r", r"\r"), ("\x7f", r"\x7f"), ("\x85", r"\x85"),
+    ("\u202e", r"\u202e"), ("\u2069", r"\u2069"), ("\x00", r"\x00"), ("\u2028", r"\u2028")])
+def test_an_excerpt_escapes_each_control_and_keeps_its_caret(char, shown):
+    from mcl2pnml.core.errors import Location
+    for column in (1, 3, 4, 6):     # before, on and after the control character
+        source = f"ab{char}cd{char}e"
+        excerpt = Location("f", 1, column, source).excerpt()
+        line, caret = (text[4:] for text in excerpt.split("\n"))
+        assert line == f"ab{shown}cd{shown}e" and line.isprintable()
+        # the caret under the start of what column points at, escaped or not
+        target = source[column - 1]
+        assert line[caret.index("^"):].startswith(shown if target == char else target)
+
+
+@pytest.mark.timeout(60)
+def test_an_output_on_a_fifo_is_written_into_never_replaced(tmp_path):
+    import threading
+    fifo = tmp_path / "out.pnml"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    out = run_cli("compile", SAUCE, "-o", fifo, timeout=60)
+    reader.join(30)
+    assert out.returncode == 0, out.stderr
+    assert os.path.exists(fifo) and not os.path.isfile(fifo)    # still the FIFO
+    assert got and got[0].startswith(b"<?xml")
+
+
+def test_a_string_with_escapes_keeps_its_other_characters():
+    from mcl2pnml.language.parser import parse
+    program = parse('primitive Say(t);\ntask S() = AchieveGoal(Say("caf\u00e9\\n\\u00e9 \u202e'
+                    '\\x1b")) timeout 5;\nmission { S(); }\n')
+    (string,) = program.declarations[1].primitives[0].args
+    assert string.value == "caf\u00e9\n\u00e9 \u202e\x1b"

@@ -142,6 +142,26 @@ def _number_value(text: str) -> int | float | str:
     return value
 
 
+class _BadString(str):
+    """Why a STRING's escapes cannot be read (:func:`_string_value`)."""
+
+
+def _string_value(token: str) -> str:
+    """A STRING token's text, its backslash escapes read as Python reads them (``\\n``,
+    ``\\x1b``, ``\\u00e9``...), or a :class:`_BadString` saying why they cannot be.
+
+    The characters outside Latin-1 are first written as escapes themselves, so that
+    ``unicode_escape`` (which reads bytes as Latin-1) gives every character back.
+    """
+    raw = token[1:-1]
+    if "\\" not in raw:
+        return raw
+    try:
+        return raw.encode("latin-1", "backslashreplace").decode("unicode_escape")
+    except UnicodeDecodeError as e:
+        return _BadString(f"a string's escape cannot be read: {e.reason}")
+
+
 def _pos(item) -> ast.Pos:
     if isinstance(item, Token):
         return ast.Pos(item.line, item.column)
@@ -175,9 +195,10 @@ class _Build(Transformer_NonRecursive):
 
     def string(self, items):
         (tok,) = items
-        raw = str(tok)[1:-1]
-        return ast.String(raw.encode("utf-8").decode("unicode_escape") if "\\" in raw else raw,
-                          _pos(tok))
+        value = _string_value(str(tok))
+        if isinstance(value, _BadString):   # the slow path locates it (:func:`_check_nesting`)
+            raise ValueError(value)
+        return ast.String(value, _pos(tok))
 
     def ref(self, items):
         (tok,) = items
@@ -390,9 +411,20 @@ _NESTING = {"block", "parallel", "monitor", "if_", "while_", "call", "primcall",
 _PROPERTY_NESTING = {"pexpr", "pand", "pnot"}
 
 
+def _token_fault(token: Token) -> str | None:
+    """Why a number is out of range or a string's escapes cannot be read, or None."""
+    if token.type == "NUMBER":
+        value = _number_value(str(token))
+        return value if isinstance(value, str) else None
+    if token.type == "STRING":
+        value = _string_value(str(token))
+        return value if isinstance(value, _BadString) else None
+    return None
+
+
 def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
-    """Refuse nesting deeper than :data:`MAX_NESTING`, keywords used as names, and numbers
-    out of range (:func:`_number_value`).
+    """Refuse nesting deeper than :data:`MAX_NESTING`, keywords used as names, numbers
+    out of range (:func:`_number_value`) and strings whose escapes cannot be read.
 
     One walk in source order, with a stack rather than recursion (a file
     nested 3,000 deep must get this message, not overflow Python's stack);
@@ -402,10 +434,10 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
     while stack:
         node, depth = stack.pop()
         if isinstance(node, Token):
-            value = _number_value(str(node)) if node.type == "NUMBER" else None
-            if isinstance(value, str):      # out of range: the value is why
+            fault = _token_fault(node)
+            if fault is not None:
                 src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
-                raise Mcl2PnmlError(value, Location(filename, node.line, node.column, src))
+                raise Mcl2PnmlError(fault, Location(filename, node.line, node.column, src))
             if node.type == "NAME" and str(node) in KEYWORDS:
                 # the contextual lexer lets a keyword through as a name
                 src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
