@@ -102,6 +102,17 @@ def _trickle(conn, stop):
             return
 
 
+def _dask_then_silent(conn, stop):
+    """Dask's handshake, as a scheduler writes it, then nothing: the probe passes, and
+    the client's registration is what waits."""
+    from distributed.protocol.core import dumps
+    from distributed.protocol.utils import pack_frames
+    message = pack_frames(dumps({"compression": None, "python": tuple(sys.version_info)[:3],
+                                 "pickle-protocol": 5}))
+    conn.sendall(struct.pack("Q", len(message)) + message)
+    stop.wait()
+
+
 def _saying(data: bytes):
     def answer(conn, stop):
         conn.sendall(data)
@@ -145,6 +156,16 @@ def test_a_port_that_trickles_ends_the_handshake_at_its_deadline():
     assert took < 1 + MARGIN, took
 
 
+def test_a_port_that_shakes_hands_then_says_nothing_ends_at_the_same_deadline():
+    with peer(_dask_then_silent) as address:
+        start = time.monotonic()
+        out = _campaign("--scheduler", address, "--scheduler-timeout", "1")
+        took = time.monotonic() - start
+    one_error(out, "did not complete Dask's handshake within 1 s")
+    _alone(out)
+    assert took < 1 + MARGIN, took
+
+
 @pytest.mark.parametrize("said", sorted(GARBAGE))
 def test_a_port_that_answers_something_else_is_refused_before_dask_reads_it(said):
     with peer(GARBAGE[said]) as address:
@@ -167,6 +188,21 @@ def test_a_library_call_ends_at_its_deadline_and_leaves_no_thread_behind():
     while set(threading.enumerate()) - before and time.monotonic() < deadline:
         time.sleep(0.1)
     assert not set(threading.enumerate()) - before, threading.enumerate()
+
+
+def test_a_call_from_a_running_event_loop_keeps_its_deadline():
+    """A notebook runs an event loop: the campaign runs on a loop of its own beside it,
+    and keeps its deadline there too."""
+    import asyncio
+
+    async def notebook():
+        with peer(_silent) as address:
+            with pytest.raises(Mcl2PnmlError, match="within 1 s"):
+                pipeline.campaign_file(SAUCE, MODEL, 10, scheduler=address,
+                                       scheduler_timeout=SchedulerTimeouts(1, 5))
+    start = time.monotonic()
+    asyncio.run(notebook())
+    assert time.monotonic() - start < 1 + MARGIN
 
 
 @pytest.mark.parametrize("address", ["http://127.0.0.1:8786", "127.0.0.1", "", "tcp://",
