@@ -14,7 +14,9 @@ every P-invariant's value at each step (each must keep its value at M0: a
 broken one would be a bug of ours, and is shown in red). A recorded run (the
 JSON-lines log of ``mcl2pnml run --log``) can be followed step by step, with
 the vehicle's actions and events beside the firings (and a counterexample's
-log, ``analyze --counterexamples``, with its notes in the mission's terms); and a mission or a
+log, ``analyze --counterexamples``, with its notes in the mission's terms), read by
+:func:`read_run` or the page's file chooser against one schema (:func:`run_log_schema`);
+and a mission or a
 task can be switched to its reduced model (Fig. 3 of the paper: every task
 started by B, ending in OK, FAIL or ABORTED, without its primitive).
 
@@ -120,6 +122,7 @@ from __future__ import annotations
 
 import base64
 import errno
+import functools
 import hashlib
 import json
 import math
@@ -359,21 +362,75 @@ def _column(line: str, token: str) -> int:
     return 1
 
 
-def read_run(path: str | Path) -> list[dict[str, Any]]:
+#: A run log is read up to this many bytes (``show --run``, the page's file chooser, ``--live``).
+MAX_RUN_LOG = 64 << 20
+
+
+def run_log_schema() -> dict[str, Any]:
+    """The JSON Schema of a run log's line (``runlog.schema.json`` beside this module): the
+    types of the keys the page reads. :func:`run_line` checks each line with it, and the
+    page's file chooser with the same schema, which the page carries in its data."""
+    return json.loads(resources.files("mcl2pnml.view").joinpath("runlog.schema.json")
+                      .read_text("utf-8"))
+
+
+class RunEntries(list):
+    """A run log's entries, and the line each stands at (``lines``)."""
+
+    lines: list[int]
+
+
+def read_run(path: str | Path) -> RunEntries:
     """The entries of a JSON-lines run log (``mcl2pnml run --log``); bad lines are errors.
 
     JSON has no NaN nor infinity, and the page's data holds none: ``NaN``,
     ``Infinity`` and numbers too large for a float (``1e999``), which
     Python's ``json`` would accept, are refused where they stand, as is a
-    ``fire`` that is not a transition id (a string).
+    line whose keys do not have the types :func:`run_log_schema` gives them
+    (a ``fire`` that is not a transition id, a string). A log of more than
+    :data:`MAX_RUN_LOG` bytes is refused before it is read.
     """
-    entries = []
-    text = read_text(path, "run log")
+    entries = RunEntries()
+    entries.lines = []
+    text = read_text(path, "run log", MAX_RUN_LOG)
     for n, line in enumerate(text.split("\n"), 1):
         entry = run_line(line, str(path), n)
         if entry is not None:
             entries.append(entry)
+            entries.lines.append(n)
     return entries
+
+
+def _dotted(path: Iterable[Any]) -> str:
+    """A value's path in a line as the messages say it: ``ignored.event``, ``setpoint[1]``."""
+    out = ""
+    for key in path:
+        out += f"[{key}]" if isinstance(key, int) else (f".{key}" if out else str(key))
+    return out
+
+
+def run_fault(entry: Any) -> tuple[tuple[Any, ...], str] | None:
+    """The first fault of a line's value against :func:`run_log_schema`, in the schema's
+    order (as the page finds it): where it stands (its path) and what the message says;
+    None if there is none."""
+    error = next(_validator().iter_errors(entry), None)
+    if error is None:
+        return None
+    path = tuple(error.absolute_path)
+    if not path and error.validator == "type":
+        return path, "a run log's line is a JSON object"
+    if error.validator == "required":
+        missing = next(k for k in error.validator_value if k not in error.instance)
+        return path, (f"a run log's '{_dotted(path + (missing,))}' is missing: "
+                      f"{error.schema['description']}")
+    return path, f"a run log's '{_dotted(path)}' is {error.schema['description']}"
+
+
+@functools.lru_cache(maxsize=1)
+def _validator() -> Any:
+    """The schema's validator, made once."""
+    from jsonschema import Draft202012Validator
+    return Draft202012Validator(run_log_schema())
 
 
 def run_line(line: str, path: str, n: int) -> dict[str, Any] | None:
@@ -392,21 +449,29 @@ def run_line(line: str, path: str, n: int) -> dict[str, Any] | None:
                             Location(path, n, _column(line, e.token), line)) from None
     except (ValueError, RecursionError) as e:   # an integer of thousands of digits, deep nesting
         raise Mcl2PnmlError(f"not a run log's JSON line: {e}", Location(path, n, 1, line)) from None
-    if not isinstance(entry, dict):
-        raise Mcl2PnmlError("a run log's line is a JSON object", Location(path, n, 1, line))
-    if "fire" in entry and not isinstance(entry["fire"], str):
-        raise Mcl2PnmlError("a run log's 'fire' is a transition id, a JSON string",
-                            Location(path, n, 1, line))
+    try:
+        fault = run_fault(entry)
+    except RecursionError:       # nested too deeply for the check (json read it)
+        raise Mcl2PnmlError("not a run log's JSON line: nested too deeply",
+                            Location(path, n, 1, line)) from None
+    if fault is not None:
+        where, message = fault
+        from mcl2pnml.core.jsontext import offsets
+        column = offsets(line).get(where, 0) + 1
+        raise Mcl2PnmlError(message, Location(path, n, column, line))
     return entry
 
 
 def check_run(net: Net, entries: Iterable[dict[str, Any]], path: str) -> None:
-    """Every transition a run log fires must be one of the net's."""
-    for n, entry in enumerate(entries, 1):
+    """Every transition a run log fires must be one of the net's (the message names its
+    line where :func:`read_run` kept it)."""
+    lines = getattr(entries, "lines", None)
+    for n, entry in enumerate(entries):
         fired = entry.get("fire")
         if fired is not None and fired not in net.transition_index:
             raise Mcl2PnmlError(f"the run fires '{fired}', which is no transition of "
-                                f"'{net.name}': a log of another mission?", Location(path))
+                                f"'{net.name}': a log of another mission?",
+                                Location(path, lines[n]) if lines else Location(path))
 
 
 # -- the page ------------------------------------------------------------------------------
@@ -482,7 +547,9 @@ def page(title: str, variants: list[dict[str, Any]],
     :func:`serve_live` serves, which follows the run as its log is written."""
     try:
         data = json_for_html({"title": title, "variants": variants, "run": run,
-                              "tree": list(tree), "live": live})
+                              "tree": list(tree), "live": live,
+                              # the page's file chooser checks a log as read_run does
+                              "runSchema": run_log_schema(), "runLogBytes": MAX_RUN_LOG})
     except ValueError as e:   # read_run and variant let no NaN through: a bug of ours
         raise Mcl2PnmlError(f"the page's data is not JSON: {e}") from None
     html = template()
@@ -504,7 +571,7 @@ LIVE_LINE = 64 * 1024
 #: One answer to the page carries this many entries at most (it asks again at once).
 LIVE_ENTRIES = 500
 #: A live log is followed up to this many bytes; past them, no further.
-LIVE_BYTES = 64 * 1024 * 1024
+LIVE_BYTES = MAX_RUN_LOG
 #: The server stops this long after it started, whatever the run does.
 LIVE_MAX_SECONDS = 24 * 3600
 #: Seconds a connection may stay silent (a socket time-out): then it is closed.
