@@ -807,6 +807,7 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
 
         def setup(self) -> None:
             super().setup()
+            self.rfile.close()       # the reader made by setup, replaced by one with a deadline
             self.rfile = _RequestReader(self.connection, request, idle).reader()
 
         def log_message(self, format: str, *args: Any) -> None:   # quiet: the URL has the token
