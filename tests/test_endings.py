@@ -19,6 +19,7 @@ import re
 import signal
 import subprocess
 import sys
+import threading
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -123,15 +124,20 @@ class Launched:
 
 
 @contextmanager
-def launched(folder: Path, mission: Path, *options: str) -> Iterator[Launched]:
+def launched(folder: Path, mission: Path, *options: str,
+             ignoring: signal.Signals | None = None) -> Iterator[Launched]:
     """``python -m mcl2pnml run MISSION --log folder/run.jsonl OPTIONS`` (a fresh process, so
-    that signals reach it alone); killed by its process id if the block ends first."""
+    that signals reach it alone; ``ignoring`` a signal, as ``nohup`` starts it); killed by
+    its process id if the block ends first."""
     folder.mkdir(parents=True, exist_ok=True)
     command = [sys.executable, "-m", "mcl2pnml", "run", str(mission),
                "--log", str(folder / "run.jsonl"), *options]
     streams = {"stdout": (folder / "run.out").open("w"), "stderr": (folder / "run.err").open("w")}
     try:
-        process = subprocess.Popen(command, cwd=ROOT, stdin=subprocess.DEVNULL, **streams)
+        process = subprocess.Popen(
+            command, cwd=ROOT, stdin=subprocess.DEVNULL, **streams,
+            preexec_fn=None if ignoring is None else lambda: signal.signal(ignoring,
+                                                                         signal.SIG_IGN))
     finally:
         for stream in streams.values():
             stream.close()      # the child has its own copies
@@ -193,6 +199,39 @@ def last_time(out: str) -> float:
     """The time of the live log's last whole line (-1 before any)."""
     times = re.findall(r"^t=\s*([0-9.]+) ", out.rsplit("\n", 1)[0], re.M)
     return float(times[-1]) if times else -1.0
+
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_signal_ignored_when_the_run_starts_stays_ignored(tmp_path):
+    # nohup's SIGHUP: the run goes on past it, and the next signal stops it
+    mission = tmp_path / "forever.mcl"
+    mission.write_text(FOREVER)
+    with launched(tmp_path / "run", mission, "--max-time", NEVER_ENDS,
+                  ignoring=signal.SIGHUP) as run:
+        run.wait_for(lambda: run.said("enable    KeepDepth"), "the mission's first action")
+        run.signal(signal.SIGHUP)
+        at = len(run.out())
+        run.wait_for(lambda: len(run.out()) > at + 10_000, "the run going on past SIGHUP")
+        run.signal(signal.SIGTERM)
+        ended = run.finish()
+    ended.assert_interrupted_by(signal.SIGTERM)
+
+
+def test_a_run_puts_back_the_handlers_it_found_and_runs_in_a_thread_too(tmp_path):
+    from mcl2pnml.pipeline import RunOptions, run_mission
+    mission, script = tmp_path / "m.mcl", tmp_path / "v.json"
+    mission.write_text(TIMED_OUT)
+    script.write_text(json.dumps({"GoToWayPoint": ["ok@5"]}))
+    before = {sig: signal.getsignal(sig) for sig in SIGNALS}
+    assert run_mission(mission, RunOptions(vehicle=str(script))).outcome.value == "OK"
+    assert {sig: signal.getsignal(sig) for sig in SIGNALS} == before
+    # outside the main thread no handler can be set: the run goes on without
+    results = []
+    worker = threading.Thread(target=lambda: results.append(
+        run_mission(mission, RunOptions(vehicle=str(script)))))
+    worker.start()
+    worker.join(END_BOUND)
+    assert [r.outcome.value for r in results] == ["OK"]
 
 
 # -- on an autopilot -------------------------------------------------------------------------
@@ -275,6 +314,29 @@ def test_a_third_signal_cuts_the_safe_state_short_and_says_so(tmp_path, fake_aut
     assert cut in ended.diagnosis() and cut in ended.last["diagnosis"]
     # cut before the disarm's step
     assert ("disarm", True) not in safe_state(ended)
+
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_signal_stops_a_bridged_vehicle_with_its_safe_stop(tmp_path):
+    # the example bridge server's fake middleware, answering nothing within the test: the
+    # primitives the mission enabled are stopped through the bridge when the run is
+    from test_bridge_safety import SIM_MAPPING, bridge_server
+    server = bridge_server.serve(0, "fake", delay=600.0)
+    host, port = server.server_address[:2]
+    try:
+        with launched(tmp_path / "run", SAUCE, "--vehicle", f"bridge:{SIM_MAPPING}",
+                      "--connect", f"{host}:{port}") as run:
+            run.wait_for(lambda: run.said("enable    GoToWayPoint"), "the first waypoint")
+            run.signal(signal.SIGTERM)
+            ended = run.finish()
+        commands = [c.get("command") for mw in server.served for c in mw.commands]
+    finally:
+        server.shutdown()
+        server.server_close()
+    ended.assert_interrupted_by(signal.SIGTERM)
+    stopped = sorted(e["primitive"] for e in ended.log if e.get("safe_stop"))
+    assert stopped == ["DetectCross", "GoToWayPoint"]
+    assert {"stop_DetectCross", "stop_GoToWayPoint"} <= set(commands), commands
 
 
 # -- on ArduSub (tests/sitl.py) ----------------------------------------------------------------

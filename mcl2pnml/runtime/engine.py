@@ -23,6 +23,7 @@ The rules that make a run deterministic, for both engines alike:
 from __future__ import annotations
 
 import enum
+import signal
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -86,7 +87,8 @@ class Outcome(enum.Enum):
 
 #: ``mcl2pnml run``'s exit status per outcome (README.md, "Running a mission").
 _EXIT_STATUS = {Outcome.OK: 0, Outcome.FAIL: 1, Outcome.ABORTED: 4, Outcome.STALLED: 5,
-                Outcome.TIMELIMIT: 6, Outcome.INTERRUPTED: 128 + interrupts.signal.SIGINT}
+                Outcome.TIMELIMIT: 6,
+                Outcome.INTERRUPTED: interrupts.exit_status(signal.SIGINT)}
 
 #: The outcomes that are not the mission's result: the run says why it stopped.
 NO_RESULT = (Outcome.STALLED, Outcome.TIMELIMIT, Outcome.INTERRUPTED)
@@ -226,7 +228,7 @@ class Run:
         """``mcl2pnml run``'s exit status: the outcome's, 128 + the signal's number for a
         run a signal stopped (130 SIGINT, 143 SIGTERM, 129 SIGHUP)."""
         if self.outcome is Outcome.INTERRUPTED and self.signum is not None:
-            return 128 + self.signum
+            return interrupts.exit_status(self.signum)
         return self.outcome.exit_status
 
     def as_json(self) -> dict[str, Any]:

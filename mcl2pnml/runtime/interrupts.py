@@ -36,6 +36,12 @@ SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 CUT_AT = 3
 
 
+def exit_status(signum: int) -> int:
+    """The exit status of a run a signal stopped: 128 + its number, as a shell reports a
+    process the signal ended (130 SIGINT, 143 SIGTERM, 129 SIGHUP)."""
+    return 128 + signum
+
+
 def name_of(signum: int) -> str:
     """The signal's name, as ``kill -l`` says it (SIGTERM)."""
     try:
@@ -126,8 +132,11 @@ _current: Guard | None = None
 
 
 def current() -> Guard:
-    """The run's guard; a guard that no signal reaches when no run installed one."""
-    return _current if _current is not None else Guard()
+    """The run's guard, in the main thread where one is installed; elsewhere a guard that
+    no signal reaches (a run in another thread must not change the main one's phase)."""
+    if _current is not None and threading.current_thread() is threading.main_thread():
+        return _current
+    return Guard()
 
 
 def _say(text: str) -> None:
@@ -148,11 +157,11 @@ def guard(phase: Phase = Phase.RUNNING) -> Iterator[Guard]:
     Outside the main thread it installs nothing (the guard it yields is never
     signalled)."""
     global _current
-    if _current is not None:
-        yield _current
-        return
     if threading.current_thread() is not threading.main_thread():
         yield Guard(phase)
+        return
+    if _current is not None:
+        yield _current
         return
     g = Guard(phase)
     previous = {}
