@@ -626,7 +626,9 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
                                     f"{e.strerror or e}") from None
             except _NotDask as e:
                 raise Mcl2PnmlError(f"{scheduler} is not a Dask scheduler: {e}") from None
-        await _run(flight, made[-1], scheduler or "(local)", timeouts.silence)
+        named = f"the Dask scheduler {scheduler}" if scheduler else \
+            "the local Dask cluster's scheduler"
+        await _run(flight, made[-1], named, timeouts.silence)
     finally:
         for closing in reversed(made):      # the client, then its cluster
             try:
@@ -637,8 +639,8 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
 
 async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     """Send the batches, take their runs in seed order until the campaign is done, and
-    end it if the scheduler says nothing (no batch done, no answer with a worker) for
-    ``silence`` seconds."""
+    end it if the scheduler (``named`` so in the messages) says nothing (no batch done,
+    no answer with a worker) for ``silence`` seconds."""
     import asyncio
     from distributed import as_completed
     loop = asyncio.get_running_loop()
@@ -657,7 +659,7 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     workers: list[int | None] = [None]
 
     def lost() -> Mcl2PnmlError:
-        return Mcl2PnmlError(f"the Dask scheduler {named} was lost after "
+        return Mcl2PnmlError(f"{named} was lost after "
                              f"{len(campaign.runs):,} runs; nothing was written")
 
     async def take() -> None:
@@ -693,11 +695,12 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
         while (left := heard[0] + silence - loop.time()) > 0:
             try:
                 said = await asyncio.wait_for(client.scheduler.identity(n_workers=0), left)
-                workers[0] = int(said.get("n_workers") or 0)
-                if workers[0]:
-                    heard[0] = max(heard[0], loop.time())
-            except (OSError, asyncio.TimeoutError):
-                workers[0] = None
+            except Exception:       # noqa: BLE001 (no answer, or one Dask raises as an error)
+                said = None
+            count = said.get("n_workers") if isinstance(said, dict) else None
+            workers[0] = count if isinstance(count, int) else None
+            if workers[0]:
+                heard[0] = max(heard[0], loop.time())
             await asyncio.sleep(min(PING_EVERY, silence / 4,
                                     max(0.0, heard[0] + silence - loop.time())))
 
@@ -714,7 +717,7 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     if client.status != "running":
         raise lost()
     what = "had no worker" if workers[0] == 0 else "answered nothing"
-    raise Mcl2PnmlError(f"the Dask scheduler {named} {what} for {silence:g} s, after "
+    raise Mcl2PnmlError(f"{named} {what} for {silence:g} s, after "
                         f"{len(campaign.runs):,} runs (--scheduler-timeout); nothing was "
                         "written")
 
