@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from mcl2pnml.core.properties import Property
     from mcl2pnml.core.timing import Assumptions
     from mcl2pnml.language.functional import Instance
+    from mcl2pnml.campaign import SchedulerTimeouts
     from mcl2pnml.odds import Odds
     from mcl2pnml.runtime.session import RunOptions
 
@@ -1400,7 +1401,7 @@ def odds_file(mission: Path, model_path: Path, *, max_states: int | None = None,
 def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: str = "petri",
                   seed: int = 0, confidence: float = 0.99, target: float | None = None,
                   workers: int | None = None, scheduler: str | None = None,
-                  scheduler_timeout=None,
+                  scheduler_timeout: SchedulerTimeouts | None = None,
                   world: Path | None = None, faults: Path | None = None,
                   properties: str | None = None, max_props_size=None, max_atoms=None,
                   max_mission_size: int | str | None = None,
@@ -1413,7 +1414,9 @@ def campaign_file(mission: Path, model_path: Path | None, runs: int, *, engine: 
     kinematic simulator (``world``, else the one beside the mission, else the default
     world), the faults of ``faults`` injected; each run judged on the mission's
     properties if asked (``--properties [FILE]``); the table and the plot written if
-    asked. Every file is read and checked here, before any run."""
+    asked; a user's ``scheduler`` held to ``scheduler_timeout`` (default: the handshake's
+    and the silence's bounds of :mod:`mcl2pnml.campaign`). Every file is read and checked
+    here, before any run."""
     from mcl2pnml.core.files import check_outputs
     from mcl2pnml import campaign as campaigns
     from mcl2pnml.runtime.executor import PetriEngine
