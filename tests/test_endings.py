@@ -339,6 +339,24 @@ def test_a_signal_stops_a_bridged_vehicle_with_its_safe_stop(tmp_path):
     assert {"stop_DetectCross", "stop_GoToWayPoint"} <= set(commands), commands
 
 
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_run_ended_by_bad_input_writes_its_log_to_the_error(tmp_path):
+    # a bridge that answers the first command with a line that is not JSON: one message,
+    # exit 2, after the safe stop; the log written whole, its last line the error
+    from test_bridge_safety import GOTO, SIM_MAPPING, Peer, send_after_first_command
+    mission, log = tmp_path / "goto.mcl", tmp_path / "run.jsonl"
+    mission.write_text(GOTO)
+    peer = Peer(send_after_first_command(b"this is not json\n"))
+    out = run_cli("run", mission, "--vehicle", f"bridge:{SIM_MAPPING}", "--connect",
+                  peer.address, "--log", log, timeout=END_BOUND)
+    peer.finish()
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    lines = [json.loads(line) for line in log.read_text().splitlines()]
+    assert [e["primitive"] for e in lines if e.get("safe_stop")] == ["GoToWayPoint"]
+    assert lines[-1]["error"] == out.stderr.strip()
+    assert lines[-1]["error"].startswith("the vehicle's bridge sent a line that is not a JSON")
+
+
 # -- on ArduSub (tests/sitl.py) ----------------------------------------------------------------
 
 #: Wall seconds: a SITL test as a whole (its start, the dive, the end).
