@@ -7,6 +7,7 @@ message (file:line:col, the line, a caret); both exit 2, with no traceback or pa
 from __future__ import annotations
 
 import json
+import signal
 import sys
 from pathlib import Path
 
@@ -74,9 +75,10 @@ class Cli(click.Group):
         except Mcl2PnmlError as e:
             click.echo(str(e), err=True)
             sys.exit(2)
-        except click.Abort:
+        except click.Abort as e:
             click.echo("mcl2pnml: interrupted", err=True)
-            sys.exit(130)
+            # 128 + the signal: a run's SIGTERM that came past its end is 143, Ctrl-C 130
+            sys.exit(interrupts.exit_status(getattr(e.__cause__, "signum", signal.SIGINT)))
         except BrokenPipeError:  # e.g. `mcl2pnml ... | head`
             sys.exit(0)
         sys.exit(code if isinstance(code, int) else 0)
