@@ -60,7 +60,7 @@ import re
 from dataclasses import dataclass
 from typing import Iterator, Sequence
 
-from mcl2pnml.core.errors import Location, shown as shown_errors, source_lines
+from mcl2pnml.core.errors import Location, shown as shown_errors, source_lines, visible
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.language import ast
 from mcl2pnml.language.checker import Checked
@@ -93,7 +93,7 @@ class Warning:  # noqa: A001 (the name lark and sqlglot give it; this module's o
     fix: str
 
     def __str__(self) -> str:
-        head = f"{self.location.prefix()}: warning: {self.message} [{self.code}]"
+        head = f"{self.location.prefix()}: warning: {visible(self.message)} [{self.code}]"
         excerpt = self.location.excerpt()
         return "\n".join([head] + ([excerpt] if excerpt else []) + [f"    fix: {self.fix}"])
 
