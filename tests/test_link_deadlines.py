@@ -168,3 +168,22 @@ def test_a_tls_handshake_trickled_is_dropped_at_the_opening_deadline(server, tmp
         sock.close()
     tls = LinkOptions(**{**FAST.__dict__, "tls_ca": cert})
     assert run_bridge(address(s), tls).outcome is Outcome.OK
+
+
+@pytest.mark.timeout(60)
+def test_a_resolver_that_does_not_answer_is_within_the_opening_bound(monkeypatch):
+    answered = threading.Event()
+
+    def silent(*args, **kwargs):        # a name server that never answers (until the end)
+        answered.wait(60)
+        raise socket.gaierror("no answer")
+    monkeypatch.setattr(socket, "getaddrinfo", silent)
+    options = LinkOptions(**{**FAST.__dict__, "connect_timeout": 1.0})
+    start = time.monotonic()
+    try:
+        with pytest.raises(Mcl2PnmlError, match=r"cannot connect to the vehicle's bridge at "
+                                                 r"vehicle\.invalid:7777: no answer within 1 s"):
+            TcpTransport("vehicle.invalid:7777", options).open()
+    finally:
+        answered.set()
+    assert time.monotonic() - start < 1.0 + MARGIN

@@ -311,8 +311,7 @@ def connect(host: str, port: int, deadline: Deadline) -> socket.socket:
     addresses is tried in turn with what is left of it (:class:`TimeoutError` once it
     has passed; the last address's :class:`OSError` if none answers)."""
     error: OSError = TimeoutError(f"no connection within {deadline.seconds:g} s")
-    for family, kind, proto, _, address in socket.getaddrinfo(host, port,
-                                                              type=socket.SOCK_STREAM):
+    for family, kind, proto, _, address in _resolve(host, port, deadline):
         if deadline.passed():
             raise TimeoutError(f"no connection within {deadline.seconds:g} s")
         sock = socket.socket(family, kind, proto)
@@ -324,6 +323,28 @@ def connect(host: str, port: int, deadline: Deadline) -> socket.socket:
             sock.close()
             error = e
     raise error
+
+
+def _resolve(host: str, port: int, deadline: Deadline) -> list[tuple]:
+    """``host``'s addresses, asked of the resolver in a thread of its own, so that a
+    resolver that does not answer cannot hold the caller past ``deadline``
+    (:class:`TimeoutError`; the thread, a daemon, ends when the resolver gives up)."""
+    found: list[Any] = []
+    done = threading.Event()
+
+    def ask() -> None:
+        try:
+            found.append(socket.getaddrinfo(host, port, type=socket.SOCK_STREAM))
+        except OSError as e:
+            found.append(e)
+        finally:
+            done.set()
+    threading.Thread(target=ask, daemon=True, name=f"resolving {host[:40]}").start()
+    if not done.wait(deadline.left()):
+        raise TimeoutError(f"no address for {host} within {deadline.seconds:g} s")
+    if isinstance(found[0], OSError):
+        raise found[0]
+    return found[0]
 
 
 def tls_handshake(sock: socket.socket, context: ssl.SSLContext, deadline: Deadline, *,
