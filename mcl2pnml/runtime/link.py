@@ -130,7 +130,6 @@ class LinkOptions:
     tls_cert: Path | None = None
     tls_key: Path | None = None
 
-
     @property
     def opening(self) -> float:
         """Seconds the whole opening may take: ``connect_timeout``, or ``max_time`` if smaller."""
@@ -316,7 +315,7 @@ def connect(host: str, port: int, deadline: Deadline) -> socket.socket:
             raise TimeoutError(f"no connection within {deadline.seconds:g} s")
         sock = socket.socket(family, kind, proto)
         try:
-            sock.settimeout(deadline.left())
+            sock.settimeout(max(deadline.left(), 1e-3))    # 0 would make it non-blocking
             sock.connect(address)
             return sock
         except OSError as e:
