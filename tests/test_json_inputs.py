@@ -168,3 +168,19 @@ def test_every_command_says_exit_2_for_a_json_file_cut_short(cut, tmp_path):
         first = out.stderr.splitlines()[0] if out.stderr else ""
         assert re.match(r"\S+\.json:\d+:\d+: ", first), (command, out.stderr)
         assert out.stdout == "", (command, out.stdout)
+
+
+@pytest.mark.parametrize("load, limit, what", [
+    (World.load, "MAX_WORLD", "world file"), (ScriptedVehicle.load, "MAX_SCRIPT",
+                                              "vehicle script")])
+def test_a_json_input_over_its_bound_is_refused_before_it_is_read(tmp_path, load, limit,
+                                                                   what):
+    import importlib
+    module = importlib.import_module(load.__self__.__module__)
+    bound = getattr(module, limit)
+    path = tmp_path / "big.json"
+    with open(path, "wb") as f:      # sparse: nothing of it is written, nor read
+        f.truncate(bound + 1)
+    with pytest.raises(Mcl2PnmlError) as info:
+        load(path)
+    assert str(info.value).startswith(f"{path}: cannot read the {what}: it is ")

@@ -30,6 +30,9 @@ from mcl2pnml.core.files import json_fault, read_text
 # runtime) and re-exported here, where the vehicle's side of the layer uses them.
 from mcl2pnml.core.payloads import ActionKind, EventKind  # noqa: F401 (re-exported)
 
+#: The largest vehicle script read, in bytes: a reply is a few bytes, a run a few thousand.
+MAX_SCRIPT = 16 << 20
+
 
 @dataclass(frozen=True)
 class Action:
@@ -338,7 +341,7 @@ class ScriptedVehicle(QueuedVehicle):
 
     @classmethod
     def load(cls, path: str | Path) -> "ScriptedVehicle":
-        return cls.from_json(read_text(path, "vehicle script"), str(path))
+        return cls.from_json(read_text(path, "vehicle script", MAX_SCRIPT), str(path))
 
     def act(self, action: Action) -> None:
         name = action.primitive

@@ -41,6 +41,8 @@ PRIMITIVES: tuple[str, ...] = tuple(sorted(built_in()))
 
 #: The longest description a world file may give, in characters.
 MAX_DESCRIPTION = 4000
+#: The largest world file read, in bytes (its obstacles and plumes are lists).
+MAX_WORLD = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -119,7 +121,7 @@ class World:
 
     @classmethod
     def load(cls, path: str | Path) -> "World":
-        return cls.from_json(read_text(path, "world file"), str(path))
+        return cls.from_json(read_text(path, "world file", MAX_WORLD), str(path))
 
     # -- what the primitives ask of the world -------------------------------------
 
