@@ -85,7 +85,8 @@ INDIFFERENCE = 0.02
 
 @dataclass(frozen=True)
 class SchedulerTimeouts:
-    """The deadlines on a user's scheduler (``--scheduler-timeout HANDSHAKE[,SILENCE]``)."""
+    """The deadlines on a campaign's scheduler (``--scheduler-timeout HANDSHAKE[,SILENCE]``):
+    the handshake on a user's, the silence on any (a local cluster's too)."""
 
     #: seconds to reach the scheduler and complete Dask's handshake, all told
     handshake: float = HANDSHAKE_TIMEOUT
