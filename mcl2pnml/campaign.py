@@ -518,8 +518,10 @@ def _on_own_loop(make: Callable) -> None:
 def _stoppable(make: Callable) -> None:
     """``asyncio.run(make())``, SIGTERM and SIGHUP stopping it as asyncio's own handling
     of Ctrl-C does (in the main thread, unless the signal is ignored): the coroutine
-    cancelled, its cluster closed, then :class:`KeyboardInterrupt`, which the CLI says as
-    an interruption. The handlers there before are put back."""
+    cancelled, its cluster closed, then the run time's
+    :class:`~mcl2pnml.runtime.interrupts.Interrupted` (a KeyboardInterrupt naming the
+    signal), which the CLI says as an interruption, exit 128 + the signal. The handlers
+    there before are put back."""
     import asyncio
     caught: list[int] = []
 
@@ -542,7 +544,8 @@ def _stoppable(make: Callable) -> None:
         asyncio.run(main())
     except asyncio.CancelledError:
         if caught:
-            raise KeyboardInterrupt(signal.Signals(caught[0]).name) from None
+            from mcl2pnml.runtime.interrupts import Interrupted
+            raise Interrupted(caught[0]) from None
         raise
 
 
