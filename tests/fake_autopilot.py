@@ -26,11 +26,26 @@ clock jumps three hours ahead, and flies on from there), ``"backwards"``
 (its clock jumps 50 s back), ``"frozen"`` (its clock stands, the rest goes
 on), ``"heartbeats"`` (its heartbeats and its answers, and no telemetry),
 ``"deaf"`` (it flies on, and answers no command nor parameter), ``"close"``
-(it closes the connection). ``then`` is the behaviour it turns to once it
+(it closes the connection), ``"drift"`` (it flies north at its speed
+whatever its target: a vehicle that leaves the tank), ``"paused"`` (the
+process stopped, as by SIGSTOP: it says nothing and answers nothing for
+``pause`` wall seconds, its clock standing; then it flies on, answering
+what it was sent meanwhile), ``"crowded"`` (it flies on, and passes on
+the heartbeats of another ground station, ``station`` (system,
+component), as ArduPilot routes one heard on another of its links). ``then`` is the behaviour it turns to once it
 is armed and has had a position target away from where it is (a primitive
 the mission flies), ``after`` wall seconds later. Its heartbeats and slow
 messages are timed on the wall clock, as often as its clock would have
 them running: a clock that stands or leaps does not stop them.
+
+Other ways it can be: ``armed`` at the start (another ground station flies
+it); ``lag`` wall seconds by which, once it has accepted GUIDED (or once
+armed: ``lag_from="arming"``), everything it says and everything it is
+sent is late, in order (a link that lags: our arming reaches it late, and
+its answer comes behind the telemetry of that while). It answers TIMESYNC requests with its clock,
+as ArduPilot does. It keeps when it heard each of our heartbeats
+(:meth:`FakeAutopilot.heartbeat_gap`: the longest gap, on its clock) and the
+ground stations' heartbeats it was sent (:attr:`FakeAutopilot.stations`).
 """
 from __future__ import annotations
 
@@ -52,7 +67,7 @@ EKF_OK = 0x1F7          # attitude, velocities, positions: 0x10 (horizontal abso
 PREARM_OK = 0x10000000
 CUSTOM_MODE_ENABLED, ARMED = 0x01, 0x80
 BEHAVIOURS = ("fly", "silent", "garbage", "flood", "flood+fly", "leap", "backwards", "frozen",
-              "heartbeats", "deaf", "close")
+              "heartbeats", "deaf", "close", "drift", "paused", "crowded")
 
 
 class FakeAutopilot:
@@ -61,12 +76,17 @@ class FakeAutopilot:
     def __init__(self, behaviour: str = "fly", *, then: str | None = None, after: float = 0.0,
                  kind: int = SUBMARINE, speedup: float = 10.0, speed: float = 2.0,
                  answer_speedup: bool = True, refuse_guided: bool = False,
-                 tick: float = 0.01, flood_rate: int = 5000):
+                 tick: float = 0.01, flood_rate: int = 5000, armed: bool = False,
+                 lag: float = 0.0, lag_from: str = "GUIDED", pause: float = 0.0,
+                 station: tuple[int, int] = (255, 42)):
         assert behaviour in BEHAVIOURS and then in BEHAVIOURS + (None,)
         self.behaviour, self.then, self.after = behaviour, then, after
         self.kind, self.speedup, self.speed = kind, speedup, speed
         self.answer_speedup, self.refuse_guided = answer_speedup, refuse_guided
         self.tick, self.flood_rate = tick, flood_rate
+        assert lag_from in ("GUIDED", "arming")
+        self.lag_after, self.lag_from, self.pause = lag, lag_from, pause
+        self.station = mavlink.MAVLink(None, srcSystem=station[0], srcComponent=station[1])
         self.encoder = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
         self.parser = mavlink.MAVLink(None)
         self.parser.robust_parsing = True
@@ -81,7 +101,7 @@ class FakeAutopilot:
         self.connected = threading.Event()
         self.random = random.Random(1)
         # the vehicle
-        self.mode, self.armed = MANUAL, False
+        self.mode, self.armed = (GUIDED, True) if armed else (MANUAL, False)
         self.ned = [0.0, 0.0, 0.0]
         self.velocity = [0.0, 0.0, 0.0]
         self.yaw = 0.0
@@ -94,6 +114,20 @@ class FakeAutopilot:
         #: targets away from where it was when it got them (not a hold where it is)
         self.flown = 0
         self.heartbeats_heard = 0
+        #: our heartbeats: when the last was heard (its clock), the longest gap between two
+        self.last_beat: float | None = None
+        self.longest_gap = 0.0
+        #: the ground stations (system, component) whose heartbeats it was sent
+        self.stations: set[tuple[int, int]] = set()
+        #: the lag once it has begun (wall s; 0: none yet), and what is late: what
+        #: it says and what it was sent, each with when it is due (wall)
+        self.lag = 0.0
+        self.late_out: list[tuple[float, bytes]] = []
+        self.late_in: list[tuple[float, object]] = []
+        self.lagged = 0
+        #: while paused (wall time it resumes), what it was sent meanwhile
+        self.paused_until: float | None = None
+        self.unread: list = []
         self.armed_ever = False
         self.turned_at: float | None = None
         self.sent_messages = 0
@@ -129,6 +163,10 @@ class FakeAutopilot:
     def commanded(self, command: int) -> list[tuple[float, ...]]:
         """The parameters of every COMMAND_LONG ``command`` received, in order."""
         return [params for cmd, params in list(self.commands) if cmd == command]
+
+    def heartbeat_gap(self) -> float:
+        """The longest time between two of the heartbeats it heard, on its clock (s)."""
+        return self.longest_gap
 
     def boot(self) -> float:
         """Its clock, in seconds since it started."""
@@ -175,6 +213,15 @@ class FakeAutopilot:
         if self.behaviour == "close":
             self.conn.close()
             return True
+        if self.behaviour == "paused" and time.monotonic() >= self.paused_until:
+            with self.state:     # its clock stood while it was stopped
+                self.offset -= self.pause * self.speedup
+                self.frozen_at = None
+                self.behaviour = "fly"
+                self.last_step = time.monotonic()
+            for msg in self.unread:
+                self._answer(msg)
+            self.unread.clear()
         return False
 
     def _become(self, behaviour: str) -> None:
@@ -183,8 +230,10 @@ class FakeAutopilot:
                 self.offset += 3 * 3600.0
             elif behaviour == "backwards":
                 self.offset -= 50.0
-            elif behaviour == "frozen":
+            elif behaviour in ("frozen", "paused"):
                 self.frozen_at = self.boot()
+            if behaviour == "paused":
+                self.paused_until = time.monotonic() + self.pause
             self.behaviour = behaviour
 
     def _tick(self) -> None:
@@ -192,7 +241,10 @@ class FakeAutopilot:
         dt = (now - self.last_step) * self.speedup
         self.last_step = now
         b = self.behaviour
-        if b == "silent":
+        if self.lag:
+            self._late(now)
+        if b in ("silent", "paused"):
+            self.last_step = now
             return
         if b == "garbage":
             self._send_raw(self.random.randbytes(2048))
@@ -221,13 +273,30 @@ class FakeAutopilot:
         if now >= self.next_heartbeat:
             self.next_heartbeat = now + 1.0 / self.speedup
             messages.append(self._heartbeat_message())
+            if b == "crowded":     # packed by the other station's own encoder
+                other = self.station.heartbeat_encode(6, 8, 0, 0, 4).pack(self.station)
+                self._send(*messages)
+                with self.send_lock:
+                    self.conn.sendall(other)
+                return
         self._send(*messages)
+
+    def _late(self, now: float) -> None:
+        """What lags and is due: sent, and handled, in order."""
+        with self.send_lock:
+            due = [data for at, data in self.late_out if at <= now]
+            del self.late_out[:len(due)]
+            self.conn.sendall(b"".join(due))
+        while self.late_in and self.late_in[0][0] <= now:
+            self._answer(self.late_in.pop(0)[1])
 
     def _move(self, dt: float) -> None:
         before = list(self.ned)
         step = self.speed * dt
         if not self.armed:
             pass
+        elif self.mode == GUIDED and self.behaviour == "drift":
+            self.ned[0] += step
         elif self.mode == GUIDED and self.target is not None:
             delta = [t - p for t, p in zip(self.target, self.ned)]
             distance = math.sqrt(sum(d * d for d in delta))
@@ -258,6 +327,10 @@ class FakeAutopilot:
         with self.send_lock:
             data = b"".join(m.pack(self.encoder) for m in messages)
             self.sent_messages += len(messages)
+            if self.lag:
+                self.late_out.append((time.monotonic() + self.lag, data))
+                self.lagged += len(messages)
+                return
             self.conn.sendall(data)
 
     def _send_raw(self, data: bytes) -> None:
@@ -283,12 +356,26 @@ class FakeAutopilot:
             self.error = e
 
     def _answering(self) -> bool:
-        return self.behaviour in ("fly", "flood+fly", "leap", "backwards", "frozen", "heartbeats")
+        return self.behaviour in ("fly", "flood+fly", "leap", "backwards", "frozen", "heartbeats",
+                                  "drift", "crowded")
 
     def _handle(self, msg) -> None:
+        if self.behaviour == "paused":
+            self.unread.append(msg)      # read when it resumes, as a stopped process would
+        elif self.lag:
+            self.late_in.append((time.monotonic() + self.lag, msg))
+        else:
+            self._answer(msg)
+
+    def _answer(self, msg) -> None:
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             self.heartbeats_heard += 1
+            self.stations.add((msg.get_srcSystem(), msg.get_srcComponent()))
+            now = self.boot()
+            if self.last_beat is not None:
+                self.longest_gap = max(self.longest_gap, now - self.last_beat)
+            self.last_beat = now
         elif kind == "COMMAND_LONG":
             params = (msg.param1, msg.param2, msg.param3, msg.param4, msg.param5, msg.param6,
                       msg.param7)
@@ -299,6 +386,9 @@ class FakeAutopilot:
             if self.answer_speedup and self._answering() and msg.param_id == "SIM_SPEEDUP":
                 self._send(self.encoder.param_value_encode(b"SIM_SPEEDUP", self.speedup, 9,
                                                            1, 0))
+        elif kind == "TIMESYNC":
+            if msg.tc1 == 0 and self._answering():
+                self._send(self.encoder.timesync_encode(int(self.boot() * 1e9), msg.ts1))
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             with self.state:
                 self.target = (msg.x, msg.y, msg.z)
@@ -320,10 +410,14 @@ class FakeAutopilot:
                 self.mode = mode
             self._send(self.encoder.command_ack_encode(command, ACCEPTED),
                        self._heartbeat_message())
+            if mode == GUIDED and self.lag_from == "GUIDED":
+                self.lag = self.lag_after
         elif command == ARM_DISARM:
             with self.state:
                 self.armed = params[0] == 1
                 self.armed_ever |= self.armed
+            if self.armed and self.lag_from == "arming":
+                self.lag = self.lag_after      # its answer is late already
             self._send(self.encoder.command_ack_encode(command, ACCEPTED),
                        self._heartbeat_message())
         elif command in (SET_MESSAGE_INTERVAL, DO_SET_SERVO, DO_SET_RELAY):

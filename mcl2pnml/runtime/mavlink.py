@@ -92,12 +92,24 @@ TRACK_EVERY = 1.0
 TANK_MARGIN = 1.0
 #: The most messages read at once to bring the state up to now (a flood is cut there).
 MAX_DRAIN = 20_000
+#: The TIMESYNC requests whose answers are awaited at once (each command sends one).
+KEPT_SYNCS = 256
 #: Our MAVLink system id: a ground station's (ArduPilot obeys ``MAV_GCS_SYSID``, 255).
 SYSTEM = 255
 #: Our component ids, one per run from the user range (MAV_COMP_ID_USER1..75): ArduPilot
 #: routes a ground station's heartbeats to its other links only when that system and
 #: component has not been seen on them, so two runs with one id would not hear each other.
 COMPONENTS = range(25, 100)
+
+
+@dataclass(frozen=True)
+class _Sent:
+    """A command sent: its TIMESYNC request's token, and the autopilot's clock (as last
+    heard) and the wall clock when it went."""
+
+    token: int
+    boot: float | None
+    wall: float
 
 
 @dataclass
@@ -162,12 +174,23 @@ class MavlinkVehicle(LiveVehicle):
         self.bad_data = 0
         self.notes_dropped = 0
         self.notes = 0
-        self.acks: deque = deque(maxlen=64)       # (command, result) not yet taken
+        self.acks: deque = deque(maxlen=64)       # (command, result, number) not yet taken
+        self.ack_count = 0                        # COMMAND_ACKs received
         self.active: dict[str, _Active] = {}
         self.enablings: dict[str, int] = {}
         self.achievements: dict[str, int] = {}
         self.events: deque[Event] = deque()
-        self.pending: list[tuple[str, int, float]] = []   # actuator: (primitive, command, by)
+        self.pending: list[tuple[str, int, _Sent]] = []   # actuator: (primitive, command, sent)
+        #: the TIMESYNC requests sent with our commands, by token: the autopilot's time when
+        #: it answered (it had the command by then) and the COMMAND_ACKs received by then,
+        #: None until it has
+        self.synced: dict[int, tuple[float, int] | None] = {}
+        self.next_token = 1
+        #: the autopilot answers TIMESYNC (then a command's deadline waits for its answer)
+        self.sync_seen = False
+        #: the wall time up to which an answer is awaited whatever the liveness (the safe
+        #: state's end: a link that lags longer is still tried)
+        self.answer_by = 0.0
         self.hold: list[float] = [0.0, 0.0, 0.0]  # NED where an unset channel holds
         self.owners: tuple = (None, None, None)
         self.sent_target: tuple | None = None
@@ -227,11 +250,11 @@ class MavlinkVehicle(LiveVehicle):
             self._give_up(act, name, t, problem)
             return
         if binding.by == "servo":
-            self._command(DO_SET_SERVO, binding.channel, binding.pwm)
-            self.pending.append((name, DO_SET_SERVO, self.boot + self.mapping.ack_within))
+            self.pending.append((name, DO_SET_SERVO,
+                                 self._command(DO_SET_SERVO, binding.channel, binding.pwm)))
         elif binding.by == "relay":
-            self._command(DO_SET_RELAY, binding.relay, 1)
-            self.pending.append((name, DO_SET_RELAY, self.boot + self.mapping.ack_within))
+            self.pending.append((name, DO_SET_RELAY,
+                                 self._command(DO_SET_RELAY, binding.relay, 1)))
         self._steer()
 
     def wait_event(self, timeout: float | None, clock) -> Event | None:
@@ -457,9 +480,12 @@ class MavlinkVehicle(LiveVehicle):
             if time.monotonic() > end:
                 break    # a flood: look at the bounds, then read on
             msg = self._take()
-        if self.boot is not None and any(self.boot >= by for _, _, by in self.pending):
+        if any(self._passed(sent.boot, sent, self.mapping.ack_within)
+               for _, _, sent in self.pending):
             self._drain()     # an acknowledgement may be among what is received, unread
         self._check_pending()
+        if self._stale() is not None:
+            self._drain()     # a run loop held up (a slow log, a loaded machine) reads first
         if time.monotonic() - self.last_heartbeat > self.link.liveness:
             raise LinkLost(f"no heartbeat from the autopilot for {self.link.liveness:g} s "
                            f"(bad MAVLink data: {self.bad_data} messages)")
@@ -470,21 +496,43 @@ class MavlinkVehicle(LiveVehicle):
             raise VehicleFault(f"the autopilot's clock has not moved for {self.link.liveness:g} s"
                                f" ({at}): no telemetry, or a clock that stands")
 
-    def _until(self, done: Callable[[], Any], seconds: float) -> bool:
-        """Pump until ``done()`` or ``seconds`` of the autopilot's clock have passed. The
-        clock starts at the autopilot's time now (what was received is read first), and
-        the deadline is judged passed only once every message received by then is read:
-        a backlog read halfway has times past the deadline before the answer in it."""
+    def _until(self, done: Callable[[], Any], seconds: float, sent: _Sent | None = None) -> bool:
+        """Pump until ``done()`` or ``seconds`` of the autopilot's clock have passed (since
+        it had the command ``sent``, when one is waited for: :meth:`_passed`). The clock
+        starts at the autopilot's time now (what was received is read first), and the
+        deadline is judged passed only once every message received by then is read: a
+        backlog read halfway has times past the deadline before the answer in it."""
         self._drain()
         start = self.boot
         while not done():
-            if start is not None and self.boot is not None and self.boot - start >= seconds:
-                self._drain()
-                return bool(done())
             if start is None:
                 start = self.boot
+            elif self._passed(start, sent, seconds):
+                self._drain()
+                return bool(done())
             self._pump(POLL)
         return True
+
+    def _passed(self, start: float | None, sent: _Sent | None, seconds: float) -> bool:
+        """Whether ``seconds`` of the autopilot's clock have passed since ``start``, or,
+        for a command ``sent``, since the autopilot had it: its answer to the TIMESYNC
+        request sent right after the command gives its time then. A link that lags (a
+        backlog on the way, our command arriving late) shows times from before the
+        command reached it, which must not count. An autopilot that answers TIMESYNC is
+        waited for its answer up to the liveness (wall), or while its safe state is being
+        reached, up to the end of ``secure_within``; one that never has, is not."""
+        if sent is not None:
+            answer = self.synced.get(sent.token)
+            if answer is not None:
+                start = answer[0] if start is None else max(start, answer[0])
+            elif self._awaiting(sent):
+                return False
+        return start is not None and self.boot is not None and self.boot - start >= seconds
+
+    def _awaiting(self, sent: _Sent) -> bool:
+        """The answer to ``sent``'s TIMESYNC request is still to be waited for."""
+        return self.sync_seen and self.synced.get(sent.token) is None \
+            and time.monotonic() < max(sent.wall + self.link.liveness, self.answer_by)
 
     def _handle(self, msg) -> None:
         kind = msg.get_type()
@@ -523,8 +571,13 @@ class MavlinkVehicle(LiveVehicle):
             self._position_lost()
         elif kind == "SYS_STATUS":
             self.prearm = bool(msg.onboard_control_sensors_health & PREARM_OK)
+        elif kind == "TIMESYNC":
+            if msg.tc1 > 0 and self.synced.get(msg.ts1, ()) is None:   # an answer to ours
+                self.synced[msg.ts1] = (msg.tc1 / 1e9, self.ack_count)
+                self.sync_seen = True
         elif kind == "COMMAND_ACK":
-            self.acks.append((msg.command, msg.result))
+            self.ack_count += 1
+            self.acks.append((msg.command, msg.result, self.ack_count))
             self._acknowledged(msg.command, msg.result)
         elif kind == "STATUSTEXT":
             text = "".join(ch for ch in str(msg.text) if ch.isprintable())[:120]
@@ -705,9 +758,9 @@ class MavlinkVehicle(LiveVehicle):
     def _check_pending(self) -> None:
         if self.boot is None:
             return
-        for name, cmd, by in list(self.pending):
-            if self.boot >= by:
-                self.pending.remove((name, cmd, by))
+        for name, cmd, sent in list(self.pending):
+            if self._passed(sent.boot, sent, self.mapping.ack_within):
+                self.pending.remove((name, cmd, sent))
                 act = self.active.get(name)
                 if act is not None and act.dead is None:
                     self._give_up(act, name, self.clock(),
@@ -787,25 +840,39 @@ class MavlinkVehicle(LiveVehicle):
             except Exception as e:   # a socket error, a device gone
                 raise LinkLost(f"cannot send to the autopilot: {e}") from None
 
-    def _command(self, command: int, *params: float) -> None:
+    def _command(self, command: int, *params: float) -> _Sent:
+        """Send a command, and a TIMESYNC request right after it: the autopilot answers
+        the request once it has had the command (one link keeps the order)."""
         params = list(params) + [0.0] * (7 - len(params))
         self.last_text = ""     # what it says next may be why it refuses this one
+        token, self.next_token = self.next_token, self.next_token + 1
+        self.synced[token] = None
+        self.synced.pop(token - KEPT_SYNCS, None)
         with self._sending():
             self.conn.mav.command_long_send(*self.target, command, 0, *params)
+            self.conn.mav.timesync_send(0, token)
+        return _Sent(token, self.boot, time.monotonic())
 
     def _ask(self, command: int, *params: float) -> int | None:
         """Send a command and wait for its acknowledgement; None when none came in time."""
         self.acks.clear()
-        self._command(command, *params)
+        sent = self._command(command, *params)
         got: list[int] = []
 
         def acked():
-            for cmd, result in self.acks:
-                if cmd == command and result != 5:    # IN_PROGRESS is not the answer
-                    got.append(result)
-                    return True
-            return False
-        return got[0] if self._until(acked, self.mapping.ack_within) else None
+            if self._awaiting(sent):
+                return False    # its answer says which acknowledgement is this command's
+            answer = self.synced.get(sent.token)
+            results = [(n, result) for cmd, result, n in self.acks
+                       if cmd == command and result != 5]   # IN_PROGRESS is not the answer
+            if answer is not None and any(n <= answer[1] for n, _ in results):
+                # the last before the TIMESYNC answer: one before it answered an earlier
+                # command of ours that a lagging link brings only now
+                got.append([r for n, r in results if n <= answer[1]][-1])
+            elif results:
+                got.append(results[0][1])
+            return bool(got)
+        return got[0] if self._until(acked, self.mapping.ack_within, sent) else None
 
     def _set_mode(self, mode: int, name: str) -> None:
         self.last_text = ""
@@ -844,7 +911,7 @@ class MavlinkVehicle(LiveVehicle):
         if self.conn is None:
             return done
         self.securing = True
-        deadline = time.monotonic() + self.mapping.secure_within
+        deadline = self.answer_by = time.monotonic() + self.mapping.secure_within
 
         def step(name: str, text: str, ok: bool) -> None:
             line = f"{name}: {text}"
