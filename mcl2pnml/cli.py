@@ -170,8 +170,8 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
         mission, pipeline.RunOptions(**options, explicit=given),
         text=None if as_json else sys.stdout, log_path=log_path, net_id=net_id,
         lenient=lenient, max_mission_size=max_mission_size, note=_note)
-    # the run's end: its outcome is written whatever signal comes now (the third stops it)
-    with interrupts.guard(interrupts.Phase.ENDING):
+    # the run's end: its outcome is printed whatever signal comes now (but a third)
+    with interrupts.guard(interrupts.Phase.PRINTING):
         click.echo(json.dumps(result.as_json()) if as_json else "\n".join(result.report()))
     return result.exit_status
 

@@ -152,6 +152,43 @@ def launched(folder: Path, mission: Path, *options: str,
 SIGNALS = [signal.SIGTERM, signal.SIGHUP, signal.SIGINT]
 
 
+# -- what each signal does, one after another ------------------------------------------------
+
+def test_the_first_signal_stops_the_run_the_second_is_said_the_third_cuts_the_safe_state(
+        capfd):
+    from mcl2pnml.runtime.interrupts import Guard, Interrupted, Phase, SafeStateCut
+    g = Guard()
+    with pytest.raises(Interrupted) as stop:
+        g.handle(signal.SIGTERM)
+    assert stop.value.reason == "interrupted by SIGTERM" and g.signum == signal.SIGTERM
+    with g.securing():
+        g.handle(signal.SIGINT)                    # the second: said, nothing else
+        with pytest.raises(SafeStateCut):
+            g.handle(signal.SIGINT)                # the third
+        g.handle(signal.SIGINT)                    # and after it, said again
+    assert g.phase is Phase.ENDING
+    for _ in range(3):
+        g.handle(signal.SIGHUP)                    # the log is written whatever comes
+    err = capfd.readouterr().err.splitlines()
+    assert err[0] == "mcl2pnml: SIGINT: the safe state goes on (a third signal cuts it short)"
+    assert err[1].startswith("mcl2pnml: SIGINT again: the safe state is cut short")
+    assert err[-1] == "mcl2pnml: SIGHUP: the run is ending; its log and outcome are being written"
+    # a signal after the mission's own result: said, until the third cuts its safe state
+    g = Guard()
+    with g.securing():
+        g.handle(signal.SIGTERM)
+        g.handle(signal.SIGTERM)
+        with pytest.raises(SafeStateCut):
+            g.handle(signal.SIGTERM)
+    assert g.signum is None
+    # printing the outcome: the third since it began stops it
+    g = Guard(Phase.PRINTING)
+    g.handle(signal.SIGTERM)
+    g.handle(signal.SIGTERM)
+    with pytest.raises(Interrupted):
+        g.handle(signal.SIGTERM)
+
+
 # -- on the simulator ------------------------------------------------------------------------
 
 @pytest.mark.timeout(TEST_BOUND)

@@ -12,9 +12,11 @@ statuses and the safe stop"):
   with its safe stop and the vehicle's safe state;
 * while the run is ending (its safe stop and safe state, then its log and
   its outcome), a signal is only said on standard error: the **second**
-  changes nothing, the **third** cuts short what is left: the safe state
-  (:class:`SafeStateCut`: the run says so, and still writes its outcome and
-  log), or the writing of the outcome (:class:`Interrupted`).
+  changes nothing, the **third** cuts the safe state short
+  (:class:`SafeStateCut`: the run says so, and still writes its log and
+  outcome). Past the safe state, the log is written whatever comes; the
+  outcome is printed unless three signals come meanwhile (a standard output
+  that nobody reads must not keep the process for ever: :class:`Interrupted`).
 
 A signal that was ignored when the run started (``nohup`` ignores SIGHUP,
 a shell's background job SIGINT) stays ignored. Handlers can only be set
@@ -82,8 +84,12 @@ class Phase(enum.Enum):
     """The safe stop and the safe state run: a signal is said; the third cuts them short."""
 
     ENDING = "ending"
-    """The vehicle is left as it will be; the log and the outcome are written: a signal
-    is said, and changes nothing."""
+    """The vehicle is left as it will be; the log is written: a signal is said, and
+    changes nothing."""
+
+    PRINTING = "printing"
+    """The outcome is printed (the command line's guard): a signal is said; the third
+    since the printing began stops it."""
 
 
 class Guard:
@@ -103,18 +109,19 @@ class Guard:
         if self.phase is Phase.RUNNING and self.signum is None:
             self.signum = signum
             raise Interrupted(signum)
-        if self.count >= CUT_AT and not self.cut:
+        if self.count >= CUT_AT and not self.cut and self.phase in (Phase.SECURING,
+                                                                    Phase.PRINTING):
             self.cut = True
             if self.phase is Phase.SECURING:
                 _say(f"mcl2pnml: {name} again: the safe state is cut short; the vehicle may "
                      "not be in its safe state")
                 raise SafeStateCut(signum)
-            _say(f"mcl2pnml: {name} again: the run's end is cut short")
+            _say(f"mcl2pnml: {name} again: the outcome is not printed")
             raise Interrupted(signum)
         if self.phase is Phase.SECURING:
             _say(f"mcl2pnml: {name}: the safe state goes on (a third signal cuts it short)")
         else:
-            _say(f"mcl2pnml: {name}: the run is ending; its outcome and log are being written")
+            _say(f"mcl2pnml: {name}: the run is ending; its log and outcome are being written")
 
     @contextmanager
     def securing(self) -> Iterator[None]:
@@ -151,7 +158,7 @@ def _say(text: str) -> None:
 @contextmanager
 def guard(phase: Phase = Phase.RUNNING) -> Iterator[Guard]:
     """Handle :data:`SIGNALS` as the module says for the block, from ``phase`` on (a run's
-    guard starts RUNNING; the command line prints a run's outcome ENDING); the previous
+    guard starts RUNNING; the command line prints a run's outcome PRINTING); the previous
     handlers after. Within another guard, that one goes on.
 
     Outside the main thread it installs nothing (the guard it yields is never
