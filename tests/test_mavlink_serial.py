@@ -9,11 +9,12 @@ state, instead of failing for a missing module.
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
+# no skip for pyserial: where the mavlink extra is installed (pymavlink), it is too
 pytest.importorskip("pymavlink")
-pytest.importorskip("serial")
 
 from fake_autopilot import ARM_DISARM, GUIDED, SET_MODE  # noqa: E402
 from pty_autopilot import PtyAutopilot  # noqa: E402
@@ -38,3 +39,11 @@ def test_a_mission_flies_over_a_serial_line_to_its_outcome(tmp_path):
     assert [p[0] for p in fake.commanded(ARM_DISARM)] == [1, 0]
     assert fake.flown and not fake.armed
     assert log.exists()
+
+
+def test_the_mavlink_extra_brings_pyserial():
+    import tomllib
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"][
+        "optional-dependencies"]
+    assert any(re.match(r"pyserial\b", requirement) for requirement in extras["mavlink"])
+    import serial  # noqa: F401  (installed with it: make setup installs the extra)
