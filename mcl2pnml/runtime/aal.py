@@ -23,7 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, text_location
+from mcl2pnml.core.errors import (Location, Mcl2PnmlError, line_of, source_lines,
+                                  text_location)
 from mcl2pnml.core.files import json_fault, read_text
 # The kinds of actions and events are what a compiled net's payloads say, so
 # they are defined with the payload records in core (which may not import
@@ -327,7 +328,8 @@ class ScriptedVehicle(QueuedVehicle):
                 except ValueError as e:
                     raise fail(str(e), *at) from None
         vehicle = cls(script)
-        vehicle.where = {name: Location(filename, line, col, text.splitlines()[line - 1])
+        lines = source_lines(text)     # once, and cut at "\n" only, as the lines are counted
+        vehicle.where = {name: Location(filename, line, col, line_of(lines, line))
                          for name, (line, col) in where.items() if line}
         return vehicle
 
