@@ -22,7 +22,7 @@ from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharact
 
 from mcl2pnml.language import ast
 from mcl2pnml.core.bounds import MAX_INTEGER, natural_at_most
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, line_of, source_lines
 from mcl2pnml.core.files import decode_text, read_bytes
 from mcl2pnml.core.gcpause import without_gc
 
@@ -381,7 +381,7 @@ def _parse_tree(text: str, filename: str) -> tuple[ast.Declaration, ...]:
         if isinstance(e, UnexpectedEOF) or line < 1:
             line = max(1, len(lines))
             col = len(lines[-1]) + 1 if lines else 1
-        src = lines[line - 1] if 0 < line <= len(lines) else None
+        src = line_of(lines, line)
         expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
                                                   or getattr(e, "allowed", None) or ())})
         if isinstance(e, UnexpectedCharacters):
@@ -436,11 +436,11 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
         if isinstance(node, Token):
             fault = _token_fault(node)
             if fault is not None:
-                src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
+                src = line_of(lines, node.line)
                 raise Mcl2PnmlError(fault, Location(filename, node.line, node.column, src))
             if node.type == "NAME" and str(node) in KEYWORDS:
                 # the contextual lexer lets a keyword through as a name
-                src = lines[node.line - 1] if 0 < node.line <= len(lines) else None
+                src = line_of(lines, node.line)
                 raise Mcl2PnmlError(f"'{node}' is a keyword and cannot be used as a name",
                                     Location(filename, node.line, node.column, src))
             continue
@@ -448,7 +448,7 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
             depth += 1
             if depth > MAX_NESTING:
                 line, col = node.meta.line, node.meta.column
-                src = lines[line - 1] if 0 < line <= len(lines) else None
+                src = line_of(lines, line)
                 what = (f"more than {MAX_NESTING} levels of operators in a property; "
                         "write it more simply, or as several properties"
                         if node.data in _PROPERTY_NESTING else
