@@ -1,0 +1,135 @@
+"""The vehicle's real state on ArduSub in software-in-the-loop (tests/sitl.py).
+
+Each case a user met on the real autopilot, flown as they flew it:
+
+* a second ground station: a second ``mcl2pnml run`` on another port of an
+  armed, flying sub is refused (exit 2, nothing sent), and a ground station
+  with our system id heard on the link ends the flying run safely;
+* the tank held on the vehicle's own position: a mapping whose ``home``
+  puts the vehicle 1 km outside the tank never arms it;
+* the autopilot's process stopped (SIGSTOP) for about 10 s mid-mission and
+  resumed: the run, stalled on its silence, brings it to its safe state
+  (disarmed) once it speaks again, within the mapping's ``secure_within``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import time
+from importlib import resources
+from pathlib import Path
+
+import pytest
+
+import sitl
+from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND, assert_disarmed,  # noqa: F401
+                          ardusub, autopilot, fly, flying)
+
+#: Wall seconds the autopilot's process is stopped (SIGSTOP) mid-mission.
+STOPPED = 10.0
+#: The speed-up of the autopilot a second ground station comes to: slow enough that the
+#: mission (40 s of its clock) still flies while a second run starts (its interpreter's
+#: start on a loaded machine).
+SLOW = 5
+#: The third MAVLink port of an instance (SERIAL2), beside the mission's and the watcher's.
+THIRD = 5763
+
+
+def mapping_file(folder: Path, **settings) -> Path:
+    data = json.loads(resources.files("mcl2pnml.runtime").joinpath("ardusub.json")
+                      .read_text("utf-8"))
+    data.update(settings)
+    path = folder / "mapping.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def third_port(autopilot: sitl.Sitl) -> int:
+    return THIRD + 10 * autopilot.instance
+
+
+# -- case 3: a second ground station -----------------------------------------------------------
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_second_ground_station_is_refused_then_heard_and_the_run_ends_safely(ardusub,
+                                                                               tmp_path):
+    from pymavlink import mavutil
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=SLOW) as autopilot, \
+            flying(autopilot, tmp_path / "first") as run, sitl.second(autopilot) as ground:
+        ground.mission_time(FAULT_AT, MISSION_BOUND)
+        # a second run on another port of the flying sub: refused, nothing sent
+        autopilot.wait_listening(third_port(autopilot), MISSION_BOUND)
+        second = fly(autopilot, tmp_path / "second", "--connect",
+                     f"tcp:127.0.0.1:{third_port(autopilot)}", bound=RUN_BOUND)
+        assert second.status == 2, second.out + second.err
+        assert "is armed already (in GUIDED): another ground station may be flying it; " \
+               "nothing was sent" in second.err, second.err
+        assert "Traceback" not in second.err
+        assert [set(e) for e in second.log] == [{"t", "error"}], second.log   # nothing flown
+        assert run.process.poll() is None, "the first run ended when the second was refused"
+        # a ground station left at its default ids (255, 190) on that port: the flying run
+        # hears its heartbeats, routed by the autopilot, and ends
+        station = mavutil.mavlink_connection(f"tcp:127.0.0.1:{third_port(autopilot)}",
+                                             source_system=255, source_component=190,
+                                             retries=0)
+        try:
+            end = time.monotonic() + RUN_BOUND
+            while run.process.poll() is None and time.monotonic() < end:
+                station.mav.heartbeat_send(6, 8, 0, 0, 4)
+                station.recv_match(blocking=True, timeout=0.05)
+        finally:
+            station.close()
+        flight = run.finish()
+        assert_disarmed(ground)
+    flight.assert_clean()
+    assert flight.outcome == "STALLED", flight.out[-3000:]
+    assert flight.diagnosis()[0].startswith("another ground station (system 255, component "
+                                            "190) is on the autopilot's link with our system "
+                                            "id"), flight.diagnosis()
+    assert any(e.get("safe_stop") for e in flight.log)
+    flight.assert_left_disarmed()
+
+
+# -- case 4: the tank, on the vehicle's own position -----------------------------------------
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_home_that_puts_the_vehicle_outside_the_tank_never_arms_it(autopilot, tmp_path):
+    mapping = mapping_file(tmp_path, home=[1000, 0])
+    with flying(autopilot, tmp_path, vehicle=f"mavlink:{mapping}") as run, \
+            sitl.second(autopilot) as ground:
+        flight = run.finish()
+        assert_disarmed(ground)
+        assert ground.armed_at is None, "armed outside the tank"
+    flight.assert_clean()
+    assert flight.outcome == "STALLED", flight.out[-3000:]
+    assert flight.diagnosis()[0].startswith("the vehicle is outside the tank at (1000.0, "), \
+        flight.diagnosis()
+    assert not any("setpoint" in e for e in flight.log)
+
+
+# -- case 7: the autopilot stopped for a while ------------------------------------------------
+
+@pytest.mark.timeout(TEST_BOUND + 30)
+def test_an_autopilot_stopped_mid_mission_is_disarmed_once_it_resumes(autopilot, tmp_path):
+    with flying(autopilot, tmp_path, "--liveness", "2") as run, \
+            sitl.second(autopilot) as ground:
+        ground.mission_time(FAULT_AT, MISSION_BOUND)
+        os.kill(autopilot.process.pid, signal.SIGSTOP)
+        try:
+            time.sleep(STOPPED)
+            # the run has stalled on its silence, and is still trying its safe state
+            assert run.process.poll() is None, "the run gave up on a silent autopilot"
+        finally:
+            os.kill(autopilot.process.pid, signal.SIGCONT)
+        flight = run.finish()
+        assert_disarmed(ground)
+    flight.assert_clean()
+    assert flight.outcome == "STALLED", flight.out[-3000:]
+    assert "no heartbeat from the autopilot for 2 s" in flight.diagnosis()[0], \
+        flight.diagnosis()
+    said = [e["autopilot"] for e in flight.log if "autopilot" in e]
+    assert any(s.startswith("the autopilot is silent") and "still trying to bring it to its "
+               "safe state for" in s for s in said), said
+    assert "the autopilot is heard again: its safe state goes on" in said
+    flight.assert_left_disarmed()
