@@ -364,7 +364,8 @@ class _Driver:
         first, then the note, then what the mission waits for.
         """
         outcome = outcome or Outcome.STALLED
-        pending = self._pending() if outcome in NO_RESULT else []   # before the safe stop
+        # what was still awaited, before the safe stop disables it
+        pending = self._pending(note or []) if outcome in NO_RESULT else []
         stopped, failed = self.safe_stop(t)
         waiting: list[str] = []
         why: list[str] = []
@@ -378,8 +379,9 @@ class _Driver:
         """The run a signal stopped: INTERRUPTED, naming the signal, after the safe stop."""
         return self.end(Outcome.INTERRUPTED, t, [stop.reason], stop.signum)
 
-    def _pending(self) -> list[str]:
-        """What the mission waited for, as the run loop saw it (both engines alike)."""
+    def _pending(self, note: list[str]) -> list[str]:
+        """What the mission waited for, as the run loop saw it (both engines alike); the
+        next time-out unless ``note`` names it already."""
         out = [f"{name}: enabled at t={_time(t)} s, still enabled" for name, t
                in self.enabled.items()]
         out += [f"{name}: disabled at t={_time(t)} s, its 'off' has not come" for name, t
@@ -388,8 +390,8 @@ class _Driver:
             timer = self.engine.next_timer()
         except Exception:   # an engine stopped by a signal half-way through a step
             timer = None
-        if timer is not None:
-            out.append(f"the time-out of {timer[1]} was due at t={timer[0]:g} s")
+        if timer is not None and not any(f"the time-out of {timer[1]} " in n for n in note):
+            out.append(f"the time-out of {timer[1]}, due at t={timer[0]:g} s")
         return out
 
     def _waits(self) -> list[str]:
