@@ -18,7 +18,7 @@ from mcl2pnml.cli_options import (
     ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, QUERY_OPTIONS, CERTIFICATE_SIZE, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
     FORMAT_OPTION, MISSION_SIZE, MISSION_SIZE_OPTION, NET_OPTION, ODDS_OPTIONS, OUTPUT,
     PROPERTIES_SIZE, PROPERTY_ATOMS, RUN_OPTIONS, SHOW_OPTIONS)
-from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown
+from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, shown, visible
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.version import __version__
 from mcl2pnml.io.formats import FORMATS
@@ -67,10 +67,11 @@ class Cli(click.Group):
             sys.exit(0)
         except click.UsageError as e:
             cmd = e.ctx.command_path if e.ctx is not None else "mcl2pnml"
-            click.echo(f"{cmd}: error: {e.format_message()} (see '{cmd} --help')", err=True)
+            click.echo(f"{cmd}: error: {visible(e.format_message())} (see '{cmd} --help')",
+                       err=True)
             sys.exit(2)
         except click.ClickException as e:
-            click.echo(f"mcl2pnml: error: {e.format_message()}", err=True)
+            click.echo(f"mcl2pnml: error: {visible(e.format_message())}", err=True)
             sys.exit(2)
         except Mcl2PnmlError as e:
             click.echo(str(e), err=True)
@@ -106,7 +107,7 @@ def check(mission: Path, properties: str | None, max_props_size: str = PROPERTIE
     """
     checked = pipeline.check_file(mission, max_mission_size)
     pipeline.warned(mission, checked, strict, _note)
-    click.echo(f"{mission}: ok ({checked.summary()})")
+    click.echo(f"{visible(str(mission))}: ok ({checked.summary()})")
     if properties is not None:
         _, compiled = pipeline.properties_of(
             mission, extra=pipeline.properties_file(mission, properties),
@@ -195,10 +196,10 @@ def validate(file: Path, grammar: Path | None, net_id: str | None) -> int:
         for line in shown(verdict.errors):
             click.echo(line, err=True)
         n = len(verdict.errors)
-        click.echo(f"{file}: invalid PNML ({n} problem{'s' * (n != 1)}; {verdict.judges()})",
+        click.echo(f"{visible(str(file))}: invalid PNML ({n} problem{'s' * (n != 1)}; {verdict.judges()})",
                    err=True)
         return 2
-    click.echo(f"{file}: valid PNML P/T net ({verdict.judges()}): "
+    click.echo(f"{visible(str(file))}: valid PNML P/T net ({verdict.judges()}): "
                f"{len(net.places)} places, {len(net.transitions)} transitions, "
                f"{len(net.arcs)} arcs")
     return 0
@@ -230,7 +231,7 @@ def template(name: str | None, list_: bool, output: Path | None, fmt: str) -> in
     output = output or Path(name + FORMATS[fmt].suffixes[0])
     pipeline.save_net(net, output, fmt, clusters=pipeline.template_clusters(name), expand=None,
                       note=_note)
-    click.echo(f"wrote {output}: {net.summary()}", err=True)
+    click.echo(f"wrote {visible(str(output))}: {net.summary()}", err=True)
     return 0
 
 
@@ -270,7 +271,7 @@ def show(what: str, output: Path | None, run_log: Path | None, graph_json: Path 
                   [("the run log (--run)", run_log),
                    ("the net or mission", what if Path(what).is_file() else None)])
     pipeline.save_show_page(output, shown, run_log)
-    click.echo(f"wrote {output}: {shown.nets[0][0].summary()}", err=True)
+    click.echo(f"wrote {visible(str(output))}: {shown.nets[0][0].summary()}", err=True)
     if graph_json is not None:
         graph = pipeline.save_reachability_json(shown.nets[0][0], graph_json)
         click.echo(f"wrote {graph_json}: " + (f"{len(graph['markings']):,} markings, "
