@@ -196,8 +196,8 @@ def validate(file: Path, grammar: Path | None, net_id: str | None) -> int:
         for line in shown(verdict.errors):
             click.echo(line, err=True)
         n = len(verdict.errors)
-        click.echo(f"{visible(str(file))}: invalid PNML ({n} problem{'s' * (n != 1)}; {verdict.judges()})",
-                   err=True)
+        click.echo(f"{visible(str(file))}: invalid PNML ({n} problem{'s' * (n != 1)}; "
+                   f"{verdict.judges()})", err=True)
         return 2
     click.echo(f"{visible(str(file))}: valid PNML P/T net ({verdict.judges()}): "
                f"{len(net.places)} places, {len(net.transitions)} transitions, "
