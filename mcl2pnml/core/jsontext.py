@@ -27,8 +27,6 @@ _BLANK = " \t\r\n"
 _DECODER = json.JSONDecoder()
 
 Path = tuple  # keys (str) and indices (int) from the root
-
-
 #: A UTF-8 byte order mark, as a decoded text starts with it.
 BOM = "\ufeff"
 
@@ -87,9 +85,8 @@ def locator(text: str, filename: str) -> Callable[[Iterable], Location]:
         at = starts.get(path)
         if at is None:
             return Location(filename)
-        line = text.count("\n", 0, at)
-        column = at - (text.rfind("\n", 0, at) + 1) + 1
-        return Location(filename, line + 1, column, lines[line][:column + EXCERPT_WIDTH])
+        line, column = _line_column(text, at)
+        return Location(filename, line, column, lines[line - 1][:column + EXCERPT_WIDTH])
     return where
 
 
@@ -122,7 +119,7 @@ def load_json(text: str, filename: str, what: str) -> Any:
     """The value of a JSON input (see the module's documentation); a text that is not
     JSON, holds NaN or Infinity or a key twice is one message at its line and column
     saying it is not ``what`` (``"an autopilot mapping"``)."""
-    text = text[len(BOM):] if text.startswith(BOM) else text
+    text = _without_bom(text)
     if not text.strip():
         raise Mcl2PnmlError(f"not {what}: the file is empty" if not text else
                             f"not {what}: the file holds only blanks", Location(filename, 1, 1))
@@ -160,7 +157,11 @@ def _line_column(text: str, at: int) -> tuple[int, int]:
 def parse_located(text: str, filename: str, what: str) -> tuple[Any, Callable[[Iterable], Location]]:
     """A configuration file's JSON (:func:`load_json`) and its locator (:func:`locator`)."""
     data = load_json(text, filename, what)
-    return data, locator(text[len(BOM):] if text.startswith(BOM) else text, filename)
+    return data, locator(_without_bom(text), filename)
+
+
+def _without_bom(text: str) -> str:
+    return text[len(BOM):] if text.startswith(BOM) else text
 
 
 def first_constant(value: Any) -> tuple[tuple, str] | None:
