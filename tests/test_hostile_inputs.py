@@ -554,3 +554,13 @@ def test_a_string_with_escapes_keeps_its_other_characters():
                     '\\x1b")) timeout 5;\nmission { S(); }\n')
     (string,) = program.declarations[1].primitives[0].args
     assert string.value == "caf\u00e9\n\u00e9 \u202e\x1b"
+
+
+@pytest.mark.timeout(60)
+def test_an_excerpt_of_a_line_of_megabytes_escapes_only_its_window():
+    from mcl2pnml.core.errors import EXCERPT_WIDTH, Location
+    line = "\x1b" * 8_000_000 + "X" + "\x07" * 8_000_000     # escaped whole: 100 MB of text
+    excerpt = Location("f", 1, 8_000_001, line).excerpt()
+    text, caret = (part[4:] for part in excerpt.split("\n"))
+    assert text.startswith("...") and text.endswith("...") and text.isprintable()
+    assert len(text) <= EXCERPT_WIDTH + 6 and text[caret.index("^")] == "X"

@@ -104,18 +104,22 @@ class Location:
         """
         if self.source_line is None or self.line is None:
             return ""
-        text = self.source_line.rstrip("\r\n").replace("\t", " ")
+        line = self.source_line.rstrip("\r\n")
         col = max(1, self.column or 1)
+        # the characters around the fault first (each shows as one or more), so that a
+        # line of megabytes is not escaped whole
+        low, high = max(0, col - 1 - EXCERPT_WIDTH), col - 1 + EXCERPT_WIDTH
+        text, col = line[low:high].replace("\t", " "), col - low
         if not text.isprintable():
             shown = [visible(c) for c in text]
             col = len("".join(shown[:col - 1])) + 1 + max(0, col - 1 - len(shown))
             text = "".join(shown)
-        if len(text) > EXCERPT_WIDTH:  # a window around the fault, marked as cut
-            start = max(0, min(col - 1 - EXCERPT_WIDTH // 2, len(text) - EXCERPT_WIDTH))
-            left = "..." if start else ""
-            right = "..." if start + EXCERPT_WIDTH < len(text) else ""
-            text = left + text[start:start + EXCERPT_WIDTH] + right
-            col = col - start + len(left)
+        # a window around the fault, marked as cut
+        start = max(0, min(col - 1 - EXCERPT_WIDTH // 2, len(text) - EXCERPT_WIDTH))
+        left = "..." if start or low else ""
+        right = "..." if start + EXCERPT_WIDTH < len(text) or high < len(line) else ""
+        text = left + text[start:start + EXCERPT_WIDTH] + right
+        col = col - start + len(left)
         return f"    {text}\n    {' ' * (col - 1)}^"
 
 
