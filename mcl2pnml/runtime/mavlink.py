@@ -441,7 +441,7 @@ class MavlinkVehicle(LiveVehicle):
             except Exception as e:   # the link is gone: the loop hears it as lost
                 self.send_fault = f"cannot send to the autopilot: {e}"
                 return
-            due = max(due + period, time.monotonic() - period)
+            due = max(due + period, time.monotonic())
             if self.stopping.wait(max(0.0, due - time.monotonic())):
                 return
 
@@ -614,7 +614,8 @@ class MavlinkVehicle(LiveVehicle):
                                "it can command the vehicle as we do, and two stations flying "
                                "one vehicle is not safe")
         self._log_note(f"WARNING: another ground station (system {system}, component "
-                       f"{component}) is on the link: it can command the vehicle too")
+                       f"{component}) is on the link: it can command the vehicle too",
+                       always=True)
 
     def _heartbeat(self, msg) -> None:
         if msg.type != MAV_TYPE_SUBMARINE:
@@ -887,8 +888,10 @@ class MavlinkVehicle(LiveVehicle):
     def _said(self) -> str:
         return f": \"{self.last_text}\"" if self.last_text else ""
 
-    def _log_note(self, text: str) -> None:
-        if self.notes >= KEPT_NOTES:
+    def _log_note(self, text: str, always: bool = False) -> None:
+        """Log what the autopilot said or did; past :data:`KEPT_NOTES` only what must be
+        read (``always``: a warning, the safe state's waits) is kept."""
+        if self.notes >= KEPT_NOTES and not always:
             self.notes_dropped += 1
             return
         self.notes += 1
@@ -965,8 +968,10 @@ class MavlinkVehicle(LiveVehicle):
         why = self._stale()
         if why is None:
             return
-        self._log_note(f"the autopilot is silent ({why}): still trying to bring it to its "
-                       f"safe state for {max(0.0, deadline - time.monotonic()):.0f} s")
+        left = deadline - time.monotonic()
+        if left > 0:
+            self._log_note(f"the autopilot is silent ({why}): still trying to bring it to its "
+                           f"safe state for {round(left, 1):g} s", always=True)
         while (why := self._stale()) is not None:
             if time.monotonic() >= deadline:
                 raise LinkLost(f"{why}; its safe state was tried for "
@@ -977,7 +982,7 @@ class MavlinkVehicle(LiveVehicle):
                 gone = self._gone()
                 if gone is not None:
                     raise LinkLost(gone) from None
-        self._log_note("the autopilot is heard again: its safe state goes on")
+        self._log_note("the autopilot is heard again: its safe state goes on", always=True)
 
     def _secure_step(self, name: str, step: Callable[[str, str, bool], None]) -> None:
         """One step of the safe state, said by ``step``."""
