@@ -26,8 +26,10 @@ from unittest import mock
 import fake_autopilot
 from fake_autopilot import FakeAutopilot
 
-#: The longest a write to the terminal may wait for the reader to take bytes (s).
-WRITE_WITHIN = 10.0
+#: The longest a write to the terminal may wait for the reader to take bytes (s): until
+#: the run has opened the device, the fake's first messages fill the terminal's buffer
+#: (a loaded machine may take seconds to start the command).
+WRITE_WITHIN = 60.0
 
 
 class PtyConnection:
