@@ -121,6 +121,20 @@ def test_a_json_input_cut_after_a_newline_is_located_on_its_last_line(kind):
     assert (location.file, location.line) == (NAME, text[:offset].count("\n")), str(info.value)
 
 
+@pytest.mark.parametrize("kind", SHARED)
+def test_a_key_given_twice_is_refused_where_it_is_given_again(kind):
+    text = good(kind).rstrip()
+    key, value = next(iter(json.loads(text).items()))
+    again = f",\n {json.dumps(key)}: {json.dumps(value)}}}"   # the first key, last
+    with pytest.raises(Mcl2PnmlError) as info:
+        KINDS[kind][1](text[:-1] + again, NAME)
+    location = info.value.location
+    # said as the shared reader says it, or as a script says it ("'P' is scripted twice")
+    assert re.search(rf"(the key {json.dumps(key)} is given|'{key}' is scripted) twice",
+                     info.value.message), info.value.message
+    assert (location.line, location.column) == (text.count("\n") + 2, 2), str(info.value)
+
+
 # -- through the command line: exit status 2 for every command ---------------------------------
 
 @pytest.fixture(scope="module")
