@@ -8,7 +8,8 @@ on random offsets here, on every offset under the ``slow`` marker). Through
 the command line, each command that reads one gives exit status 2 for it,
 also ``run``, where 1 would mean FAIL, and ``certify --check``, where 1
 would mean "does not hold"; a file cut after a newline (the error past the
-last line) among them.
+last line) among them. A key given twice is refused where it is given
+again, and a file over its size bound before it is read.
 """
 from __future__ import annotations
 
