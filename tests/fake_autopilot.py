@@ -26,26 +26,28 @@ clock jumps three hours ahead, and flies on from there), ``"backwards"``
 (its clock jumps 50 s back), ``"frozen"`` (its clock stands, the rest goes
 on), ``"heartbeats"`` (its heartbeats and its answers, and no telemetry),
 ``"deaf"`` (it flies on, and answers no command nor parameter), ``"close"``
-(it closes the connection), ``"drift"`` (it flies north at its speed
-whatever its target: a vehicle that leaves the tank), ``"paused"`` (the
-process stopped, as by SIGSTOP: it says nothing and answers nothing for
-``pause`` wall seconds, its clock standing; then it flies on, answering
-what it was sent meanwhile), ``"crowded"`` (it flies on, and passes on
-the heartbeats of another ground station, ``station`` (system,
-component), as ArduPilot routes one heard on another of its links). ``then`` is the behaviour it turns to once it
-is armed and has had a position target away from where it is (a primitive
-the mission flies), ``after`` wall seconds later. Its heartbeats and slow
-messages are timed on the wall clock, as often as its clock would have
-them running: a clock that stands or leaps does not stop them.
+(it closes the connection), ``"drift"`` (in GUIDED it flies north at its
+speed whatever its target: a vehicle that leaves the tank), ``"paused"``
+(the process stopped, as by SIGSTOP: it says nothing and answers nothing
+for ``pause`` wall seconds, its clock standing; then it flies on,
+answering what it was sent meanwhile), ``"crowded"`` (it flies on, and
+passes on the heartbeats of another ground station, ``station`` (system,
+component), as ArduPilot routes one heard on another of its links).
+``then`` is the behaviour it turns to once it is armed and has had a
+position target away from where it is (a primitive the mission flies),
+``after`` wall seconds later. Its heartbeats and slow messages are timed
+on the wall clock, as often as its clock would have them running: a clock
+that stands or leaps does not stop them.
 
 Other ways it can be: ``armed`` at the start (another ground station flies
 it); ``lag`` wall seconds by which, once it has accepted GUIDED (or once
 armed: ``lag_from="arming"``), everything it says and everything it is
 sent is late, in order (a link that lags: our arming reaches it late, and
-its answer comes behind the telemetry of that while). It answers TIMESYNC requests with its clock,
-as ArduPilot does. It keeps when it heard each of our heartbeats
-(:meth:`FakeAutopilot.heartbeat_gap`: the longest gap, on its clock) and the
-ground stations' heartbeats it was sent (:attr:`FakeAutopilot.stations`).
+its answer comes behind the telemetry of that while). It answers TIMESYNC
+requests with its clock, as ArduPilot does. It keeps when it heard each of
+our heartbeats (:meth:`FakeAutopilot.heartbeat_gap`: the longest gap, on
+its clock) and the ground stations' heartbeats it was sent
+(:attr:`FakeAutopilot.stations`).
 """
 from __future__ import annotations
 

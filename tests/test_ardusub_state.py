@@ -23,8 +23,8 @@ from pathlib import Path
 import pytest
 
 import sitl
-from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND, assert_disarmed,  # noqa: F401
-                          ardusub, autopilot, fly, flying)
+from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND,  # noqa: F401
+                          ardusub, assert_disarmed, autopilot, fly, flying)  # (fixtures too)
 
 #: Wall seconds the autopilot's process is stopped (SIGSTOP) mid-mission.
 STOPPED = 10.0

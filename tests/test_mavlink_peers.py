@@ -59,15 +59,16 @@ def mapping_file(folder: Path, **settings) -> Path:
     return path
 
 
+#: The mapping every run here uses unless told otherwise (written by :func:`_mapping`).
+MAPPING: Path | None = None
+
+
 @pytest.fixture(autouse=True, scope="module")
 def _mapping(tmp_path_factory):
     """Every run here uses the package's mapping with a short ``secure_within``."""
     global MAPPING
     MAPPING = mapping_file(tmp_path_factory.mktemp("mapping"), secure_within=SECURE_WITHIN)
     yield
-
-
-MAPPING: Path
 
 
 def fly(fake: FakeAutopilot, *, max_time: float = 600.0, log=None, mapping: Path | None = None,

@@ -27,7 +27,7 @@ import pytest
 pytest.importorskip("pymavlink")
 
 from mcl2pnml.runtime.engine import Outcome  # noqa: E402
-from mcl2pnml.runtime.mavlink import TANK_MARGIN  # noqa: E402
+from mcl2pnml.runtime.mavlink import COMPONENTS, SYSTEM, TANK_MARGIN  # noqa: E402
 from mcl2pnml.runtime.simulator import World  # noqa: E402
 
 from fake_autopilot import ARM_DISARM, FakeAutopilot  # noqa: E402
@@ -113,6 +113,9 @@ def test_our_heartbeats_keep_their_rate_while_the_run_loop_is_busy():
     # BUSY wall seconds are 10 s of the fake's clock: without heartbeats of their own,
     # ArduSub's failsafe would have disarmed it twice over
     assert 0 < fake.heartbeat_gap() < GCS_FAILSAFE, fake.heartbeat_gap()
+    # from one ground station: our system id, a component of the run's own
+    [(system, component)] = fake.stations
+    assert system == SYSTEM and component in COMPONENTS
     assert result.outcome is Outcome.OK, result.report()
     assert_left_disarmed(result, fake)
 
