@@ -4,7 +4,10 @@ The package's own mapping loads and binds only primitives the simulator
 gives a meaning to. Every invalid mapping is one message at the file,
 line and column of the bad value (each golden file of
 ``tests/data/autopilot/invalid`` holds its input's message), whatever the
-file is: not JSON, a NaN, too large, nested too deep. The command line
+file is: not JSON, cut short, a NaN, a key given twice, not UTF-8, too
+large, nested too deep; a sensor or actuator bound to be flown by the
+autopilot, an empty safe state (``"none"`` says it on purpose). A UTF-8
+byte order mark is ignored. The command line
 checks the mapping before it connects to anything. Positions come from
 :mod:`mcl2pnml.core.jsontext`, tested here against positions counted by
 hand.
