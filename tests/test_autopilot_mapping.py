@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import socket
+from importlib import resources
 
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -352,3 +353,22 @@ def test_every_value_starts_where_the_locator_says(value, indent, separators, as
         where = locator(text, "h.json")(path)
         assert text.split("\n")[where.line - 1][where.column - 1:] == \
             text[starts[path]:].split("\n")[0]
+
+
+@pytest.mark.timeout(120)
+def test_a_safe_state_of_no_step_leaves_the_autopilot_as_it_is(tmp_path):
+    pytest.importorskip("pymavlink")
+    from fake_autopilot import ARM_DISARM, FakeAutopilot
+    mapping = json.loads(resources.files("mcl2pnml.runtime").joinpath("ardusub.json")
+                         .read_text("utf-8"))
+    path = tmp_path / "none.json"
+    path.write_text(json.dumps({**mapping, "safe_state": "none"}))
+    with FakeAutopilot() as fake:
+        out = run_cli("run", SAUCE, "--vehicle", f"mavlink:{path}", "--connect", fake.address,
+                      "--liveness", "5", "--json", timeout=90)
+        fake.check()
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["outcome"] == "OK" and not result.get("safe_state")
+    assert [p[0] for p in fake.commanded(ARM_DISARM)] == [1]     # armed, never disarmed
+    assert fake.armed
