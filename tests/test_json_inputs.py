@@ -123,6 +123,15 @@ def test_a_json_input_cut_after_a_newline_is_located_on_its_last_line(kind):
 
 
 @pytest.mark.parametrize("kind", SHARED)
+def test_a_utf8_byte_order_mark_is_ignored(kind):
+    read = KINDS[kind][1]
+    with_mark, without = read("\ufeff" + good(kind), NAME), read(good(kind), NAME)
+    # read as without it (a script compared by its replies and where they are)
+    assert (vars(with_mark) if kind == "script" else with_mark) == \
+        (vars(without) if kind == "script" else without)
+
+
+@pytest.mark.parametrize("kind", SHARED)
 def test_a_key_given_twice_is_refused_where_it_is_given_again(kind):
     text = good(kind).rstrip()
     key, value = next(iter(json.loads(text).items()))

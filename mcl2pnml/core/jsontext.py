@@ -119,7 +119,7 @@ def load_json(text: str, filename: str, what: str) -> Any:
     """The value of a JSON input (see the module's documentation); a text that is not
     JSON, holds NaN or Infinity or a key twice is one message at its line and column
     saying it is not ``what`` (``"an autopilot mapping"``)."""
-    text = _without_bom(text)
+    text = without_bom(text)
     if not text.strip():
         raise Mcl2PnmlError(f"not {what}: the file is empty" if not text else
                             f"not {what}: the file holds only blanks", Location(filename, 1, 1))
@@ -157,10 +157,11 @@ def _line_column(text: str, at: int) -> tuple[int, int]:
 def parse_located(text: str, filename: str, what: str) -> tuple[Any, Callable[[Iterable], Location]]:
     """A configuration file's JSON (:func:`load_json`) and its locator (:func:`locator`)."""
     data = load_json(text, filename, what)
-    return data, locator(_without_bom(text), filename)
+    return data, locator(without_bom(text), filename)
 
 
-def _without_bom(text: str) -> str:
+def without_bom(text: str) -> str:
+    """``text`` without the UTF-8 byte order mark it may start with (the readers ignore it)."""
     return text[len(BOM):] if text.startswith(BOM) else text
 
 

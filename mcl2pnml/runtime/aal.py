@@ -26,6 +26,7 @@ from typing import Any, Callable, Iterable, Mapping
 from mcl2pnml.core.errors import (Location, Mcl2PnmlError, line_of, source_lines,
                                   text_location)
 from mcl2pnml.core.files import json_fault, read_text
+from mcl2pnml.core.jsontext import without_bom
 # The kinds of actions and events are what a compiled net's payloads say, so
 # they are defined with the payload records in core (which may not import
 # runtime) and re-exported here, where the vehicle's side of the layer uses them.
@@ -298,6 +299,8 @@ class ScriptedVehicle(QueuedVehicle):
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<script>") -> "ScriptedVehicle":
+        text = without_bom(text)     # as every JSON input (mcl2pnml.core.jsontext)
+
         def fail(message: str, line: int | None = None, column: int | None = None):
             return VehicleInputError(message, text_location(filename, text, line, column)
                                      if line else Location(filename))
