@@ -79,6 +79,23 @@ def test_a_bridge_trickling_its_hello_ends_the_run_within_the_opening_bound(tmp_
     assert elapsed < CONNECT_TIMEOUT + MARGIN, elapsed
 
 
+@pytest.mark.timeout(90)
+def test_the_commands_time_limit_bounds_the_opening_too(tmp_path):
+    mission = tmp_path / "goto.mcl"
+    mission.write_text(GOTO)
+    stop = threading.Event()
+    peer = Peer(lambda conn, p: trickle(conn, HELLO, 0.5, stop))
+    start = time.monotonic()
+    try:
+        out = run_cli("run", mission, "--vehicle", f"bridge:{SIM_MAPPING}", "--connect",
+                      peer.address, "--max-time", "2", timeout=CONNECT_TIMEOUT + 60)
+    finally:
+        stop.set()
+    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    assert "within 2 s (the bound on opening the link)" in out.stderr, out.stderr
+    assert time.monotonic() - start < 2.0 + MARGIN
+
+
 @pytest.mark.timeout(60)
 def test_the_opening_never_waits_past_the_runs_time_limit():
     stop = threading.Event()

@@ -111,7 +111,8 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
     if options.faults and (options.journal or options.resume):
         raise OptionError("--faults", "a journal does not record injected faults: a run "
                                       "with --faults is replayed by its seed, not resumed")
-    link = LinkOptions(**{name: getattr(options, name) for name in _LINK})
+    # the opening of the link counts against the run's time limit too (wall seconds for a bridge)
+    link = LinkOptions(**{name: getattr(options, name) for name in _LINK}, max_time=options.max_time)
     vehicle = kind.build(options.vehicle, options.connect, options.world, link)
     if options.sim_primitives:
         from mcl2pnml.runtime.simprims import load_file
