@@ -43,7 +43,7 @@ from typing import Any
 from mcl2pnml.certify import form
 from mcl2pnml.certify.checker import results, root_ends, said_signature
 from mcl2pnml.certify.templates import current, untrusted_reduced
-from mcl2pnml.core.errors import Location, Mcl2PnmlError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError, line_of, source_lines
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language.compiler import STRUCTURE_TEMPLATE
@@ -129,9 +129,10 @@ def _where(checked, name: str) -> Location:
         for inst in instances(expr, root, scope):
             if inst.name == name:
                 pos = inst.node.pos
-                lines = checked.program.source.splitlines()
+                # the lines as the parser counts them (cut at "\n" only)
+                lines = source_lines(checked.program.source)
                 return Location(checked.program.file, pos.line, pos.column,
-                                lines[pos.line - 1] if 0 < pos.line <= len(lines) else None)
+                                line_of(lines, pos.line))
     return Location(checked.program.file)
 
 
