@@ -244,8 +244,10 @@ class MavlinkVehicle(LiveVehicle):
                                           self.enablings[name], self.achievements.get(name, 0))
         self.events.append(Event(t, EventKind.ON, name))
         problem = act.prim.check(self._context(act))
-        if problem is None and binding.by == "autopilot" and not self._flying():
-            problem = self._why_not_flying()
+        if problem is None and binding.by == "autopilot":
+            self._drain()      # its mode and arming as it says them now, not as last read
+            if not self._flying():
+                problem = self._why_not_flying()
         if problem is not None:
             self._give_up(act, name, t, problem)
             return
