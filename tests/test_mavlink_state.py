@@ -3,10 +3,11 @@
 What the run believes of the vehicle must be what the vehicle is, however
 late the autopilot's words come and however busy the run is:
 
-* a backlog of telemetry that holds back the answer to the arming is read
-  before the acknowledgement's deadline is judged (no false "refused to
-  arm"); a vehicle whose "armed" was still in the backlog when the link
-  fell silent is disarmed by the safe state once it speaks again;
+* a link that lags (our arming reaches the autopilot late, its answer comes
+  behind the telemetry of that while) makes no false "refused to arm": the
+  deadline counts from when the autopilot had the command (its answer to
+  our TIMESYNC request); a vehicle whose "armed" was still on the way when
+  the link fell silent is disarmed by the safe state once it speaks again;
 * our heartbeats keep their rate while the run loop's thread is busy;
 * a vehicle armed already is refused, and sent nothing;
 * another ground station on the link: the run ends (our system id) or
@@ -32,8 +33,8 @@ from mcl2pnml.runtime.simulator import World  # noqa: E402
 
 from fake_autopilot import ARM_DISARM, FakeAutopilot  # noqa: E402
 from helpers import one_error, run_cli  # noqa: E402
-from test_mavlink_peers import SAUCE, fly, mapping_file  # noqa: E402,F401 (its fixture too)
-from test_mavlink_peers import _mapping  # noqa: E402,F401
+from test_mavlink_peers import SAUCE, fly, mapping_file  # noqa: E402
+from test_mavlink_peers import _mapping  # noqa: E402,F401 (its fixture: the runs' mapping)
 
 #: ArduSub's GCS failsafe (FS_GCS_TIMEOUT): seconds of its clock without our heartbeat.
 GCS_FAILSAFE = 5.0
