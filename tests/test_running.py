@@ -302,8 +302,11 @@ def test_mapping_files_say_what_is_wrong(tmp_path):
          '"disable": {"command": "s"}}}}', r"'\$x' is not an argument"),
         ('{"vehicle": "v"}', 'with "primitives"'),
     ]:
-        with pytest.raises(Mcl2PnmlError, match=message):
+        with pytest.raises(Mcl2PnmlError, match=message) as info:
             VehicleMapping.from_json(text, "m.json")
+        # each fault at its line and column: the value it is about, in the file's one line
+        assert info.value.location.line == 1 and info.value.location.column is not None, \
+            str(info.value)
 
 
 def test_the_mapping_turns_actions_into_commands_and_messages_into_events():

@@ -34,7 +34,6 @@ where ``$1`` has three items is refused then, not blamed on the vehicle later.
 """
 from __future__ import annotations
 
-import json
 import queue
 import re
 import socket
@@ -46,8 +45,9 @@ from typing import Any, Iterable, Mapping
 
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
                                   VehicleInputError, _strings)
-from mcl2pnml.core.errors import LISTED, Location, Mcl2PnmlError
-from mcl2pnml.core.files import json_fault, read_text
+from mcl2pnml.core.errors import LISTED, Location, Mcl2PnmlError, visible
+from mcl2pnml.core.files import read_text
+from mcl2pnml.core.jsontext import parse_located, without_bom
 from mcl2pnml.runtime.link import (BadLine, Deadline, Link, LinkBroken, LinkOptions, Side,
                                    client_tls, connect, parse_address, quote_line, read_secret,
                                    tls_handshake)
@@ -82,6 +82,10 @@ class Binding:
     placeholders: Mapping[str, tuple[int, int]] | None = None
 
 
+#: A mapping file may have at most this many bytes (checked before it is read).
+MAX_MAPPING = 1 << 20
+
+
 class VehicleMapping:
     """A loaded mapping file (see the module's documentation)."""
 
@@ -90,48 +94,57 @@ class VehicleMapping:
 
     @classmethod
     def from_json(cls, text: str, filename: str = "<mapping>") -> "VehicleMapping":
-        def fail(message: str, line: int | None = None, column: int | None = None):
-            return Mcl2PnmlError(message, Location(filename, line, column))
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise fail(f"not a mapping file: {e.msg}", e.lineno, e.colno) from None
-        except (ValueError, RecursionError) as e:   # a number of 5,000 digits, deep nesting
-            raise fail(f"not a mapping file: {json_fault(e)}") from None
+        # the one JSON reader of configuration files: a key given twice, NaN, a file cut
+        # short are refused at their line and column; each fault below is at its value
+        data, where = parse_located(text, filename, "a mapping file")
+
+        def fail(message: str, *path) -> Mcl2PnmlError:
+            return Mcl2PnmlError(message, where(path))
         if not isinstance(data, dict) or not isinstance(data.get("primitives"), dict):
             raise fail('a mapping file is a JSON object with "primitives": '
-                       '{"NAME": {"enable": ..., "disable": ..., "events": ...}}')
+                       '{"NAME": {"enable": ..., "disable": ..., "events": ...}}',
+                       *(("primitives",) if isinstance(data, dict) and "primitives" in data
+                         else ()))
         bindings = {}
         kinds = {k.value: k for k in EventKind}
         for name, spec in data["primitives"].items():
-            where = f"primitive '{name}'"
+            where_ = f"primitive '{visible(name)}'"
+            at = ("primitives", name)
             if not isinstance(spec, dict):
-                raise fail(f"{where}: an object with enable, disable and events")
+                raise fail(f"{where_}: an object with enable, disable and events", *at)
             unknown = sorted(set(spec) - {"enable", "disable", "events"})
             if unknown:
-                raise fail(f"{where}: unknown key '{unknown[0]}'; valid: enable, disable, events")
+                raise fail(f"{where_}: unknown key '{visible(unknown[0])}'; valid: enable, "
+                           "disable, events", *at, unknown[0])
             for key in ("enable", "disable"):
                 if not isinstance(spec.get(key), dict) or "command" not in spec[key]:
-                    raise fail(f'{where}: "{key}" must be an object with a "command"')
+                    raise fail(f'{where_}: "{key}" must be an object with a "command"',
+                               *at, *((key,) if key in spec else ()))
+            events = spec.get("events") or {}
+            if not isinstance(events, dict):
+                raise fail(f'{where_}: "events" is an object of event: the fields a message '
+                           "must have", *at, "events")
             rules, acknowledged = [], {EventKind.ON, EventKind.OFF}
-            for event, rule in (spec.get("events") or {}).items():
+            for event, rule in events.items():
                 if event not in kinds:
-                    raise fail(f"{where}: unknown event '{event}'; valid: "
-                               + ", ".join(kinds))
+                    raise fail(f"{where_}: unknown event '{visible(event)}'; valid: "
+                               + ", ".join(kinds), *at, "events", event)
                 if not isinstance(rule, dict) or not rule:
-                    raise fail(f"{where}, event '{event}': the fields a message must have, "
-                               'as {"message": "goto_status", "status": "reached"}')
+                    raise fail(f"{where_}, event '{event}': the fields a message must have, "
+                               'as {"message": "goto_status", "status": "reached"}',
+                               *at, "events", event)
                 rules.append(Rule(kinds[event], dict(rule)))
                 acknowledged.discard(kinds[event])
             for key in ("enable", "disable"):
-                _check_placeholders(spec[key], fail, f"{where}, {key}")
+                _check_placeholders(spec[key], fail, f"{where_}, {key}", (*at, key))
             bindings[name] = Binding(name, spec["enable"], spec["disable"], tuple(rules),
-                                     frozenset(acknowledged), _placed(text, name))
+                                     frozenset(acknowledged), _placed(without_bom(text), name))
         return cls(str(data.get("vehicle", "vehicle")), bindings, filename)
 
     @classmethod
     def load(cls, path: str | Path) -> "VehicleMapping":
-        return cls.from_json(read_text(path, "mapping file"), str(path))
+        """The mapping file at ``path`` (at most :data:`MAX_MAPPING` bytes, UTF-8)."""
+        return cls.from_json(read_text(path, "mapping file", MAX_MAPPING), str(path))
 
     def command(self, action: Action) -> dict[str, Any]:
         """The command of ``action``; a placeholder its arguments do not have is an error.
@@ -163,15 +176,18 @@ class VehicleMapping:
         return None
 
 
-def _check_placeholders(spec: Any, fail, where: str) -> None:
-    if isinstance(spec, str) and spec.startswith("$") and not _ARG.match(spec):
-        raise fail(f"{where}: '{spec}' is not an argument; write $1, $1[0], $2 ...")
-    if isinstance(spec, dict):
-        for v in spec.values():
-            _check_placeholders(v, fail, where)
-    if isinstance(spec, list):
-        for v in spec:
-            _check_placeholders(v, fail, where)
+def _check_placeholders(spec: Any, fail, where: str, path: tuple = ()) -> None:
+    """Every ``$...`` string in ``spec`` is an argument (``$1``, ``$1[0]``); ``fail(message,
+    *path)`` is raised at the first that is not, ``path`` being where ``spec`` stands."""
+    stack = [(path, spec)]      # a loop, not recursion: a hostile file may nest deep
+    while stack:
+        at, value = stack.pop()
+        if isinstance(value, str) and value.startswith("$") and not _ARG.match(value):
+            raise fail(f"{where}: '{visible(value)}' is not an argument; write $1, $1[0], "
+                       "$2 ...", *at)
+        items = value.items() if isinstance(value, dict) else \
+            enumerate(value) if isinstance(value, list) else ()
+        stack.extend(reversed([((*at, k), v) for k, v in items]))
 
 
 def _placed(text: str, primitive: str) -> dict[str, tuple[int, int]]:
