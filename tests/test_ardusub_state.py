@@ -7,6 +7,9 @@ Each case a user met on the real autopilot, flown as they flew it:
   with our system id heard on the link ends the flying run safely;
 * the tank held on the vehicle's own position: a mapping whose ``home``
   puts the vehicle 1 km outside the tank never arms it;
+* a link that lags (each way, more than an acknowledgement may take on the
+  autopilot's clock): GUIDED and the arming are not taken for refused, the
+  mission flies, and the vehicle is left disarmed;
 * the autopilot's process stopped (SIGSTOP) for about 10 s mid-mission and
   resumed: the run, stalled on its silence, brings it to its safe state
   (disarmed) once it speaks again, within the mapping's ``secure_within``.
@@ -16,15 +19,20 @@ from __future__ import annotations
 import json
 import os
 import signal
+import socket
+import threading
 import time
+from contextlib import contextmanager
 from importlib import resources
 from pathlib import Path
+from typing import Iterator
 
 import pytest
 
 import sitl
 from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND,  # noqa: F401
-                          ardusub, assert_disarmed, autopilot, fly, flying)  # (fixtures too)
+                          ardusub, assert_autopilot_disarmed, assert_disarmed, autopilot, fly,
+                          flying)  # (fixtures too)
 
 #: Wall seconds the autopilot's process is stopped (SIGSTOP) mid-mission.
 STOPPED = 10.0
@@ -32,6 +40,9 @@ STOPPED = 10.0
 #: mission (40 s of its clock) still flies while a second run starts (its interpreter's
 #: start on a loaded machine).
 SLOW = 5
+#: Wall seconds a lagging link holds each way, and the autopilot's speed-up then: 5 s of
+#: its clock, more than the 3 s an acknowledgement may take.
+LAG, LAGGED_SPEEDUP = 0.25, 20
 #: The third MAVLink port of an instance (SERIAL2), beside the mission's and the watcher's.
 THIRD = 5763
 
@@ -47,6 +58,75 @@ def mapping_file(folder: Path, **settings) -> Path:
 
 def third_port(autopilot: sitl.Sitl) -> int:
     return THIRD + 10 * autopilot.instance
+
+
+@contextmanager
+def lagging(address: tuple[str, int], lag: float) -> Iterator[str]:
+    """A TCP proxy on loopback to ``address`` whose every byte, each way, is ``lag`` wall
+    seconds late, in order; its ``tcp:`` address. Closed, its threads ended, at the end."""
+    listener = socket.create_server(("127.0.0.1", 0))
+    listener.settimeout(sitl.CONNECT_BOUND)
+    stop, threads, sockets = threading.Event(), [], [listener]
+
+    def carry(source: socket.socket, target: socket.socket) -> None:
+        queue: list[tuple[float, bytes]] = []
+        source.settimeout(0.01)
+        while not stop.is_set():
+            try:
+                data = source.recv(65536)
+                if not data:
+                    break
+                queue.append((time.monotonic() + lag, data))
+            except socket.timeout:
+                pass
+            except OSError:
+                break
+            due = [data for at, data in queue if at <= time.monotonic()]
+            del queue[:len(due)]
+            try:
+                target.sendall(b"".join(due))
+            except OSError:
+                break
+
+    def serve() -> None:
+        try:
+            client, _ = listener.accept()
+            upstream = socket.create_connection(address, timeout=sitl.CONNECT_BOUND)
+        except OSError:
+            return
+        sockets.extend((client, upstream))
+        for source, target in ((client, upstream), (upstream, client)):
+            threads.append(threading.Thread(target=carry, args=(source, target), daemon=True))
+            threads[-1].start()
+
+    threads.append(threading.Thread(target=serve, daemon=True))
+    threads[0].start()
+    try:
+        yield f"tcp:127.0.0.1:{listener.getsockname()[1]}"
+    finally:
+        stop.set()
+        for s in sockets:
+            s.close()
+        for t in list(threads):
+            t.join(sitl.STOP_BOUND)
+
+
+# -- case 5: a link that lags -----------------------------------------------------------------
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_link_that_lags_takes_no_acknowledgement_for_refused(ardusub, tmp_path):
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=LAGGED_SPEEDUP) as autopilot, \
+            lagging(("127.0.0.1", autopilot.port), LAG) as address:
+        flight = fly(autopilot, tmp_path / "run", "--connect", address)
+        assert_autopilot_disarmed(autopilot)
+    flight.assert_clean()
+    said = [e["autopilot"] for e in flight.log if "autopilot" in e]
+    assert "armed in GUIDED: the mission's clock starts" in said, flight.out[-3000:]
+    assert not any("refused" in line for line in flight.diagnosis()), flight.diagnosis()
+    # flown to an end of the mission's own (the lag may cost it a time-out: OK or FAIL)
+    assert flight.outcome in ("OK", "FAIL"), flight.out[-3000:]
+    assert flight.reports("achieved", "GoToWayPoint")
+    flight.assert_left_disarmed()
 
 
 # -- case 3: a second ground station -----------------------------------------------------------

@@ -92,6 +92,10 @@ TRACK_EVERY = 1.0
 TANK_MARGIN = 1.0
 #: The most messages read at once to bring the state up to now (a flood is cut there).
 MAX_DRAIN = 20_000
+#: Wall seconds a parameter's value is awaited once the autopilot has had the request
+#: (its answer to the TIMESYNC request sent after it has come): ArduPilot answers
+#: parameters from a queue of its own, a little after.
+PARAMETER_WAIT = 1.0
 #: The TIMESYNC requests whose answers are awaited at once (each command sends one).
 KEPT_SYNCS = 256
 #: Our MAVLink system id: a ground station's (ArduPilot obeys ``MAV_GCS_SYSID``, 255).
@@ -410,12 +414,19 @@ class MavlinkVehicle(LiveVehicle):
                        f"{self.link.liveness:g} s")
 
     def _read_speedup(self) -> None:
-        """A simulated autopilot's speed-up (its failsafes run on its clock); 1 where none."""
-        with self.lock:
+        """A simulated autopilot's speed-up (its failsafes run on its clock); 1 where none.
+        Its answer is awaited :data:`PARAMETER_WAIT` past the autopilot's answer to a
+        TIMESYNC request sent after the parameter's (a link that lags delays both alike),
+        and at most the liveness (an autopilot that answers neither: a real one, whose
+        parameters have no SIM_SPEEDUP, and no TIMESYNC)."""
+        with self._sending():
             self.conn.mav.param_request_read_send(*self.target, b"SIM_SPEEDUP", -1)
-        end = time.monotonic() + 1.0
+            token = self._request_sync()
+        limit = end = time.monotonic() + self.link.liveness
         while time.monotonic() < end:
             msg = self._recv(POLL)
+            if self.synced.get(token) is not None and end == limit:
+                end = min(limit, time.monotonic() + PARAMETER_WAIT)
             if msg is not None and msg.get_type() == "PARAM_VALUE" \
                     and msg.param_id == "SIM_SPEEDUP":
                 value = float(msg.param_value)
@@ -848,13 +859,18 @@ class MavlinkVehicle(LiveVehicle):
         the request once it has had the command (one link keeps the order)."""
         params = list(params) + [0.0] * (7 - len(params))
         self.last_text = ""     # what it says next may be why it refuses this one
+        with self._sending():
+            self.conn.mav.command_long_send(*self.target, command, 0, *params)
+            token = self._request_sync()
+        return _Sent(token, self.boot, time.monotonic())
+
+    def _request_sync(self) -> int:
+        """Send a TIMESYNC request (under the lock); its token, in :attr:`synced`."""
         token, self.next_token = self.next_token, self.next_token + 1
         self.synced[token] = None
         self.synced.pop(token - KEPT_SYNCS, None)
-        with self._sending():
-            self.conn.mav.command_long_send(*self.target, command, 0, *params)
-            self.conn.mav.timesync_send(0, token)
-        return _Sent(token, self.boot, time.monotonic())
+        self.conn.mav.timesync_send(0, token)
+        return token
 
     def _ask(self, command: int, *params: float) -> int | None:
         """Send a command and wait for its acknowledgement; None when none came in time."""
