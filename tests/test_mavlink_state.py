@@ -8,7 +8,8 @@ late the autopilot's words come and however busy the run is:
   deadline counts from when the autopilot had the command (its answer to
   our TIMESYNC request); a vehicle whose "armed" was still on the way when
   the link fell silent is disarmed by the safe state once it speaks again;
-* our heartbeats keep their rate while the run loop's thread is busy;
+* our heartbeats keep their rate while the run loop's thread is busy, and
+  follow the autopilot's clock as measured when its speed-up is not read;
 * a vehicle armed already is refused, and sent nothing;
 * another ground station on the link: the run ends (our system id) or
   warns (another);
@@ -117,6 +118,18 @@ def test_our_heartbeats_keep_their_rate_while_the_run_loop_is_busy():
     # from one ground station: our system id, a component of the run's own
     [(system, component)] = fake.stations
     assert system == SYSTEM and component in COMPONENTS
+    assert result.outcome is Outcome.OK, result.report()
+    assert_left_disarmed(result, fake)
+
+
+@pytest.mark.timeout(30)
+def test_our_heartbeats_follow_the_autopilots_clock_when_its_speed_up_is_not_read():
+    # a simulator at a speed-up of 30 whose SIM_SPEEDUP is not answered (on a loaded
+    # machine, not in time): one heartbeat a wall second would be 30 s of its clock
+    with FakeAutopilot(answer_speedup=False, speedup=30) as fake:
+        result, _, text = fly(fake, liveness=3.0, max_time=120)
+    assert "speed-up 1" in text
+    assert 0 < fake.heartbeat_gap() < GCS_FAILSAFE, fake.heartbeat_gap()
     assert result.outcome is Outcome.OK, result.report()
     assert_left_disarmed(result, fake)
 

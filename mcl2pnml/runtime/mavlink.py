@@ -92,6 +92,10 @@ TRACK_EVERY = 1.0
 TANK_MARGIN = 1.0
 #: The most messages read at once to bring the state up to now (a flood is cut there).
 MAX_DRAIN = 20_000
+#: Wall seconds over which the autopilot's clock's speed is measured; the largest speed
+#: taken (its SIM_SPEEDUP's bound); our heartbeats' shortest period (wall s), and how
+#: often their thread looks at it again (wall s).
+RATE_WINDOW, MAX_RATE, MIN_BEAT, BEAT_CHECK = 0.2, 10_000.0, 0.002, 0.05
 #: Wall seconds a parameter's value is awaited once the autopilot has had the request
 #: (its answer to the TIMESYNC request sent after it has come): ArduPilot answers
 #: parameters from a queue of its own, a little after.
@@ -158,6 +162,10 @@ class MavlinkVehicle(LiveVehicle):
         self.beat: threading.Thread | None = None
         self.send_fault: str | None = None
         self.speedup = 1.0
+        #: the autopilot's clock's speed as measured (its seconds per wall second, over
+        #: :data:`RATE_WINDOW`), and where the measure started (wall, its clock)
+        self.rate = 0.0
+        self.rate_from: tuple[float, float] | None = None
         self.target = (1, 1)
         self.boot: float | None = None     # the autopilot's clock, s
         self.t0 = 0.0                      # its reading when the mission's clock started
@@ -440,22 +448,26 @@ class MavlinkVehicle(LiveVehicle):
         """Our heartbeat, ``heartbeat`` seconds of the autopilot's clock apart, the first at
         once (one wall second later would be 100 of a simulator's at a speed-up of 100).
         A thread of its own, so that a run loop busy with a flood, a slow log or a loaded
-        machine does not starve the autopilot's GCS failsafe; each beat is due at a time
-        fixed in advance, so a late one does not push the next ones back."""
+        machine does not starve the autopilot's GCS failsafe. The autopilot's clock runs
+        at its ``SIM_SPEEDUP``, or faster as measured (:attr:`rate`: a speed-up not read
+        in time, on a loaded machine, must not slow them to one a wall second); the
+        period is looked at again every :data:`BEAT_CHECK` wall seconds."""
         mavlink = _mavutil().mavlink
-        period = self.link.heartbeat / max(1.0, self.speedup)
-        due = time.monotonic()
+        last = -math.inf
         while True:
-            try:
-                with self.lock:
-                    self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS,
-                                                 mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
-                                                 mavlink.MAV_STATE_ACTIVE)
-            except Exception as e:   # the link is gone: the loop hears it as lost
-                self.send_fault = f"cannot send to the autopilot: {e}"
-                return
-            due = max(due + period, time.monotonic())
-            if self.stopping.wait(max(0.0, due - time.monotonic())):
+            period = max(MIN_BEAT, self.link.heartbeat / max(1.0, self.speedup, self.rate))
+            now = time.monotonic()
+            if now - last >= period:
+                try:
+                    with self.lock:
+                        self.conn.mav.heartbeat_send(mavlink.MAV_TYPE_GCS,
+                                                     mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                                                     mavlink.MAV_STATE_ACTIVE)
+                except Exception as e:   # the link is gone: the loop hears it as lost
+                    self.send_fault = f"cannot send to the autopilot: {e}"
+                    return
+                last = now
+            if self.stopping.wait(min(BEAT_CHECK, max(0.0, last + period - now))):
                 return
 
     # -- receiving --------------------------------------------------------------------------
@@ -612,6 +624,13 @@ class MavlinkVehicle(LiveVehicle):
         if self.boot is None or seconds > self.boot:
             self.clock_moved = self.clock_moved and time.monotonic()
         self.boot = seconds if self.boot is None else max(self.boot, seconds)
+        now = time.monotonic()
+        if self.rate_from is None:
+            self.rate_from = (now, self.boot)
+        elif now - self.rate_from[0] >= RATE_WINDOW:
+            wall, boot = self.rate_from
+            self.rate = min(MAX_RATE, (self.boot - boot) / (now - wall))
+            self.rate_from = (now, self.boot)
 
     def _station(self, system: int, component: int) -> None:
         """Another ground station's heartbeat, routed to us by the autopilot. One with our
