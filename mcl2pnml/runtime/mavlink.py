@@ -19,17 +19,20 @@ UDP or a serial line, through ``pymavlink``, the ``mavlink`` extra):
   and relay commands acknowledged by ``COMMAND_ACK``, simulated sensors on
   the autopilot's position. Each achieved or failed says where it came
   from (:class:`Reported`).
-* **Liveness**: heartbeats sent at the speed-up's rate from a thread of
-  their own (the autopilot's GCS failsafe counts them on its clock: a busy
-  run loop must not starve them); every write to the link goes under one
-  lock, whole. The autopilot's own heartbeat awaited: none within the
+* **Liveness**: heartbeats sent at the speed-up's rate (or at its clock's
+  as measured, when faster) from a thread of their own (the autopilot's GCS
+  failsafe counts them on its clock: a busy run loop must not starve them);
+  every write to the link goes under one lock, whole. The autopilot's own heartbeat awaited: none within the
   liveness, the link is lost, and the run stops with its safe stop. A
   heartbeat of another kind of vehicle, a clock that runs back, leaps or
   stands, a peer that sends only garbage: the same.
 * **Fresh data**: every message already received is read before a decision
-  (an acknowledgement's deadline passed, the armed flag, the time an event
-  is awaited until): a deadline on the autopilot's clock is judged on its
-  messages up to now, not on a backlog read halfway.
+  (an acknowledgement's deadline passed, the armed flag, the liveness, the
+  time an event is awaited until): a deadline on the autopilot's clock is
+  judged on its messages up to now, not on a backlog read halfway. Each
+  command is followed by a TIMESYNC request: the autopilot's answer says
+  when it had the command, from which its deadline counts (a link that lags
+  shows older times first), and which acknowledgement is the command's.
 * **The vehicle's real state**: a vehicle armed already when we connect is
   refused (another ground station flies it); another ground station heard
   on the link while we fly ends the run when it has our system id (the one
