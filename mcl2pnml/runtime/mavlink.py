@@ -22,10 +22,11 @@ UDP or a serial line, through ``pymavlink``, the ``mavlink`` extra):
 * **Liveness**: heartbeats sent at the speed-up's rate (or at its clock's
   as measured, when faster) from a thread of their own (the autopilot's GCS
   failsafe counts them on its clock: a busy run loop must not starve them);
-  every write to the link goes under one lock, whole. The autopilot's own heartbeat awaited: none within the
-  liveness, the link is lost, and the run stops with its safe stop. A
-  heartbeat of another kind of vehicle, a clock that runs back, leaps or
-  stands, a peer that sends only garbage: the same.
+  every write to the link goes under one lock, whole. The autopilot's own
+  heartbeat awaited: none within the liveness, the link is lost, and the
+  run stops with its safe stop. A heartbeat of another kind of vehicle, a
+  clock that runs back, leaps or stands, a peer that sends only garbage:
+  the same.
 * **Fresh data**: every message already received is read before a decision
   (an acknowledgement's deadline passed, the armed flag, the liveness, the
   time an event is awaited until): a deadline on the autopilot's clock is
@@ -640,9 +641,10 @@ class MavlinkVehicle(LiveVehicle):
         system id is one the autopilot obeys as it obeys us (another run, a ground station
         left at its default): two of them command one vehicle, and the run ends. Another
         may only watch: it is said once, loudly, in the log."""
-        if (system, component) == (SYSTEM, self.component) or (system, component) in self.stations:
+        station = (system, component)
+        if station == (SYSTEM, self.component) or station in self.stations:
             return
-        self.stations.add((system, component))
+        self.stations.add(station)
         if system == SYSTEM and not self.securing:
             raise VehicleFault(f"another ground station (system {system}, component "
                                f"{component}) is on the autopilot's link with our system id: "
