@@ -36,10 +36,13 @@ from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND,  # noq
 
 #: Wall seconds the autopilot's process is stopped (SIGSTOP) mid-mission.
 STOPPED = 10.0
-#: The speed-up of the autopilot a second ground station comes to: slow enough that the
-#: mission (40 s of its clock) still flies while a second run starts (its interpreter's
-#: start on a loaded machine).
-SLOW = 5
+#: A mission that holds a depth for 2000 s of the autopilot's clock (20 s of wall clock at
+#: its speed-up of 100): still flying while a second run starts, on a loaded machine too.
+HOLD = """
+primitive KeepDepth(depth);
+task Hold(d) = KeepGoal(KeepDepth(d)) timeout 2000;
+mission { Hold(2.0); }
+"""
 #: Wall seconds a lagging link holds each way, and the autopilot's speed-up then: 5 s of
 #: its clock, more than the 3 s an acknowledgement may take.
 LAG, LAGGED_SPEEDUP = 0.25, 20
@@ -132,11 +135,13 @@ def test_a_link_that_lags_takes_no_acknowledgement_for_refused(ardusub, tmp_path
 # -- case 3: a second ground station -----------------------------------------------------------
 
 @pytest.mark.timeout(TEST_BOUND)
-def test_a_second_ground_station_is_refused_then_heard_and_the_run_ends_safely(ardusub,
+def test_a_second_ground_station_is_refused_then_heard_and_the_run_ends_safely(autopilot,
                                                                                tmp_path):
     from pymavlink import mavutil
-    with sitl.running(ardusub, tmp_path / "sitl", speedup=SLOW) as autopilot, \
-            flying(autopilot, tmp_path / "first") as run, sitl.second(autopilot) as ground:
+    hold = tmp_path / "hold.mcl"
+    hold.write_text(HOLD)
+    with flying(autopilot, tmp_path / "first", mission=hold) as run, \
+            sitl.second(autopilot) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
         # a second run on another port of the flying sub: refused, nothing sent
         autopilot.wait_listening(third_port(autopilot), MISSION_BOUND)
