@@ -6,7 +6,9 @@ Each case a user met on the real autopilot, flown as they flew it:
   armed, flying sub is refused (exit 2, nothing sent), and a ground station
   with our system id heard on the link ends the flying run safely;
 * the tank held on the vehicle's own position: a mapping whose ``home``
-  puts the vehicle 1 km outside the tank never arms it;
+  puts the vehicle 1 km outside the tank never arms it; a vehicle that a
+  watching station sends away (a target of its own) is stopped and
+  disarmed as it crosses the tank's wall;
 * a link that lags (each way, more than an acknowledgement may take on the
   autopilot's clock): GUIDED and the arming are not taken for refused, the
   mission flies, and the vehicle is left disarmed;
@@ -18,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import socket
 import threading
@@ -30,6 +33,8 @@ from typing import Iterator
 import pytest
 
 import sitl
+from mcl2pnml.runtime.mavlink import POSITION, TANK_MARGIN
+from mcl2pnml.runtime.simulator import World
 from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND,  # noqa: F401
                           ardusub, assert_autopilot_disarmed, assert_disarmed, autopilot, fly,
                           flying)  # (fixtures too)
@@ -191,6 +196,28 @@ def test_a_home_that_puts_the_vehicle_outside_the_tank_never_arms_it(autopilot, 
     assert flight.diagnosis()[0].startswith("the vehicle is outside the tank at (1000.0, "), \
         flight.diagnosis()
     assert not any("setpoint" in e for e in flight.log)
+
+
+@pytest.mark.timeout(TEST_BOUND)
+def test_a_vehicle_sent_out_of_the_tank_is_stopped_at_its_wall(autopilot, tmp_path):
+    world = World()
+    with flying(autopilot, tmp_path) as run, sitl.second(autopilot) as ground:
+        ground.mission_time(FAULT_AT, MISSION_BOUND)
+        # the watching station (no heartbeat: not heard as one) sends the sub 30 m south
+        # of the tank's wall, in the autopilot's frame (its origin: the world's start)
+        north, east = 10.0 - world.start[0], -30.0 - world.start[1]
+        ground.conn.mav.set_position_target_local_ned_send(
+            0, *sitl.VEHICLE, 1, POSITION, north, east, 2.0, 0, 0, 0, 0, 0, 0, 0, 0)
+        flight = run.finish()
+        assert_disarmed(ground)
+    flight.assert_clean()
+    assert flight.outcome == "STALLED", flight.out[-3000:]
+    left = re.match(r"the vehicle left the tank at \(([-\d.]+), ([-\d.]+)\)",
+                    flight.diagnosis()[0])
+    assert left, flight.diagnosis()
+    # caught as it crossed the wall's margin, not far beyond
+    assert -TANK_MARGIN - 2.0 < float(left.group(2)) < -TANK_MARGIN, left.group(0)
+    flight.assert_left_disarmed()
 
 
 # -- case 7: the autopilot stopped for a while ------------------------------------------------
