@@ -338,20 +338,30 @@ def test_a_third_signal_cuts_the_safe_state_short_and_says_so(tmp_path, fake_aut
     # an autopilot that turns deaf once flying: each step of the safe state waits its
     # acknowledgement for seconds, which the third signal does not
     fake = fake_autopilot(speedup=1.0, then="deaf")
-    with flying(tmp_path / "run", fake) as run:
+    # a deaf autopilot is waited for up to secure_within: a few seconds here
+    mapping = tmp_path / "mapping.json"
+    settings = json.loads((ROOT / "mcl2pnml" / "runtime" / "ardusub.json").read_text())
+    mapping.write_text(json.dumps({**settings, "secure_within": 4}))
+    with launched(tmp_path / "run", SAUCE, "--vehicle", f"mavlink:{mapping}", "--connect",
+                  fake.address, "--liveness", "5") as run:
         run.wait_for(lambda: fake.armed and fake.flown and fake.behaviour == "deaf",
                      "the sub flying, deaf")
-        for _ in range(3):
+        for _ in range(2):
             run.signal(signal.SIGTERM)
             time.sleep(0.2)
+        # the third once a step is done (hold, unacknowledged): it is kept, the rest cut
+        run.wait_for(lambda: run.said("hold: "), "the safe state's first step")
+        run.signal(signal.SIGTERM)
         ended = run.finish()
     ended.assert_interrupted_by(signal.SIGTERM)
     assert "mcl2pnml: SIGTERM again: the safe state is cut short" in ended.err
     cut = ("the safe state was cut short by SIGTERM, the run's third signal: the vehicle "
            "may not be in its safe state")
     assert cut in ended.diagnosis() and cut in ended.last["diagnosis"]
-    # cut before the disarm's step
+    # cut before the disarm's step; the steps done before it kept in the outcome
     assert ("disarm", True) not in safe_state(ended)
+    assert [step for step, _ in safe_state(ended)][:1] == ["hold"]
+    assert ended.out.count("safe state: hold: ") == 1, ended.out[-2000:]
 
 
 @pytest.mark.timeout(TEST_BOUND)

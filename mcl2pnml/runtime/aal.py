@@ -223,9 +223,14 @@ class LiveVehicle(ABC):
     #: is then its seconds, not the wall clock's (None: the wall clock).
     clock: Callable[[], float] | None = None
 
+    #: The steps of :meth:`secure` said so far, as it says them: what a safe state cut
+    #: short (the run's third signal) had done.
+    secured_steps: list[str] = []
+
     def secure(self, t: float) -> list[str]:
         """After the safe stop's disables: bring the vehicle to a safe state (hold,
-        surface, disarm...), each step in words, acknowledged or not (default: none)."""
+        surface, disarm...), each step in words, acknowledged or not (default: none);
+        each also in :attr:`secured_steps` as it is done."""
         return []
 
 

@@ -422,7 +422,8 @@ class _Driver:
                     except Exception as e:   # an adapter's own failure: say it, the run ends
                         self.secured = [f"could not be reached: {type(e).__name__}: {e}"]
         except SafeStateCut as e:
-            # the steps done before are in the vehicle's own log lines (an autopilot's)
+            # the steps done before the cut, as the vehicle said them
+            self.secured = list(getattr(self.vehicle, "secured_steps", ()))
             failed += [f"safe stop: not sent to {name} (cut short)" for name in self.enabled]
             failed.append(f"the safe state was cut short by {interrupts.name_of(e.signum)}, "
                           "the run's third signal: the vehicle may not be in its safe state")

@@ -952,7 +952,9 @@ class MavlinkVehicle(LiveVehicle):
         within the liveness, or a clock that stands: frozen, its link down for a while)
         is tried again once it is heard, for up to the mapping's ``secure_within`` wall
         seconds; a link that is broken, or a peer never heard, is not waited for."""
+        # kept on the vehicle as they are done: a safe state cut short keeps its steps
         done: list[str] = []
+        self.secured_steps = done
         if self.conn is None:
             return done
         self.securing = True
