@@ -191,3 +191,19 @@ def test_bad_nets_through_the_cli(name, message):
     with pytest.raises(Mcl2PnmlError, match=message):
         parse_pnml(path.read_bytes(), name)
     assert_one_cli_error(path, message, ("analyze",))  # test_cli.py validates them all
+
+
+@pytest.mark.parametrize("written", ["&quot;q&#x22;&#34;&#x0022;", "a&#9;b", "a&#x20;b"])
+def test_an_id_written_with_references_is_located_where_it_is_written(written):
+    # a fault found once the file is read is located by searching the file for its id:
+    # the id as the file writes it, with character references and predefined entities
+    data = ('<pnml xmlns="http://www.pnml.org/version-2009/grammar/pnml">\n'
+            '  <net id="n" type="http://www.pnml.org/version-2009/grammar/ptnet"><page id="g">\n'
+            f'    <place id="{written}"/>\n'
+            f'    <transition id="{written}"/>\n'
+            '  </page></net>\n</pnml>').encode()
+    with pytest.raises(Mcl2PnmlError) as info:
+        parse_pnml(data, "f.pnml")
+    errors = getattr(info.value, "errors", None) or [info.value]
+    assert all(e.location.line in (3, 4) and e.location.column == 5 for e in errors), \
+        str(info.value)

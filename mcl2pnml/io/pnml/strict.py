@@ -1012,21 +1012,16 @@ class _StrictReader:
         return None if at is None else self.lines.line_of(at[0])
 
     def find_id(self, xml_id: str, nth: int = 1):
-        """Where the ``nth`` element with this id starts in the file: (offset, column)."""
+        """Where the ``nth`` element with this id starts in the file: (offset, column).
+        The id as the file may write it (:func:`_written_id`): a fault is located only once
+        found, so this slower search runs only where there is one."""
         buffer = self.lines.buffer
-        needles = [f'id="{xml_id}"'.encode(), f"id='{xml_id}'".encode()]
-        start = 0
+        pattern, at = _written_id(xml_id), -1
         for _ in range(nth):
-            found = [i for i in (buffer.find(n, start) for n in needles) if i >= 0]
-            if not found and " " in xml_id:   # written with a tab, a line break, a reference
-                spaced = rb"(?:\s|&#x?[0-9a-fA-F]+;)".join(
-                    re.escape(part.encode()) for part in xml_id.split(" "))
-                match = re.compile(rb"""\bid=["']""" + spaced + rb"""["']""").search(buffer, start)
-                found = [match.start()] if match else []
-            if not found:
+            match = pattern.search(buffer, at + 1)
+            if match is None:
                 return None
-            at = min(found)
-            start = at + 1
+            at = match.start()
         tag = buffer.rfind(b"<", 0, at)
         return (tag if tag >= 0 else at), None
 
@@ -1100,6 +1095,27 @@ def _timing_value(el) -> Timing | None:
     except (ValueError, Mcl2PnmlError):
         return None
     return timing if max(timing.earliest, timing.latest or 0.0) <= MAX_SECONDS else None
+
+
+#: The entities XML predefines, by the character each stands for.
+_NAMED = {"&": b"amp", "<": b"lt", ">": b"gt", '"': b"quot", "'": b"apos"}
+
+
+def _written_id(xml_id: str) -> "re.Pattern[bytes]":
+    """``id="..."`` as it may be written for ``xml_id``: each character as itself, as a
+    character reference (decimal or hexadecimal), as a predefined entity, or, for a
+    space, as the white space an XML parser folds into one."""
+    parts = []
+    for c in xml_id:
+        hexa = "".join(f"[{d}{d.upper()}]" if d.isalpha() else d for d in f"{ord(c):x}")
+        options = [re.escape(c.encode()), b"&#0*" + str(ord(c)).encode() + b";",
+                   b"&#x0*" + hexa.encode() + b";"]
+        if c in _NAMED:
+            options.append(b"&" + _NAMED[c] + b";")
+        if c == " ":
+            options.append(rb"[\t\n\r]")
+        parts.append(b"(?:" + b"|".join(options) + b")")
+    return re.compile(rb"""\bid=(?:"|')""" + b"".join(parts) + rb"""(?:"|')""")
 
 
 def _id_fault(xml_id: str) -> str:
