@@ -121,6 +121,7 @@ def lagging(address: tuple[str, int], lag: float) -> Iterator[str]:
 
 # -- case 5: a link that lags -----------------------------------------------------------------
 
+@pytest.mark.slow      # the fake autopilot's lag (test_mavlink_state.py) runs in every suite
 @pytest.mark.timeout(TEST_BOUND)
 def test_a_link_that_lags_takes_no_acknowledgement_for_refused(ardusub, tmp_path):
     with sitl.running(ardusub, tmp_path / "sitl", speedup=LAGGED_SPEEDUP) as autopilot, \
