@@ -124,9 +124,10 @@ def test_our_heartbeats_keep_their_rate_while_the_run_loop_is_busy():
 
 @pytest.mark.timeout(30)
 def test_our_heartbeats_follow_the_autopilots_clock_when_its_speed_up_is_not_read():
-    # a simulator at a speed-up of 30 whose SIM_SPEEDUP is not answered (on a loaded
-    # machine, not in time): one heartbeat a wall second would be 30 s of its clock
-    with FakeAutopilot(answer_speedup=False, speedup=30) as fake:
+    # a simulator at a speed-up of 10 whose SIM_SPEEDUP is not answered (on a loaded
+    # machine, not in time): one heartbeat a wall second would be 10 s of its clock, twice
+    # its failsafe; a loaded machine's pause of a few tenths of a second would not be
+    with FakeAutopilot(answer_speedup=False, speedup=10) as fake:
         result, _, text = fly(fake, liveness=3.0, max_time=120)
     assert "speed-up 1" in text
     assert 0 < fake.heartbeat_gap() < GCS_FAILSAFE, fake.heartbeat_gap()
