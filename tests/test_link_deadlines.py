@@ -59,21 +59,27 @@ def hung_up(sock: socket.socket, within: float) -> bool:
     return False
 
 
-@pytest.mark.timeout(90)
-def test_a_bridge_trickling_its_hello_ends_the_run_within_the_opening_bound(tmp_path):
+def run_against_a_trickling_bridge(tmp_path, every: float, *options):
+    """``mcl2pnml run`` against a bridge that sends its hello a byte every ``every`` s:
+    its result, the bridge's address, and the wall seconds it took."""
     mission = tmp_path / "goto.mcl"
     mission.write_text(GOTO)
     stop = threading.Event()
-    peer = Peer(lambda conn, p: trickle(conn, HELLO, 3.0, stop))
+    peer = Peer(lambda conn, p: trickle(conn, HELLO, every, stop))
     start = time.monotonic()
     try:
         out = run_cli("run", mission, "--vehicle", f"bridge:{SIM_MAPPING}", "--connect",
-                      peer.address, timeout=CONNECT_TIMEOUT + 60)
+                      peer.address, *options, timeout=CONNECT_TIMEOUT + 60)
     finally:
         stop.set()
-    elapsed = time.monotonic() - start
     assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
-    assert (f"cannot connect to the vehicle's bridge at {peer.address}: no hello from the "
+    return out, peer.address, time.monotonic() - start
+
+
+@pytest.mark.timeout(90)
+def test_a_bridge_trickling_its_hello_ends_the_run_within_the_opening_bound(tmp_path):
+    out, at, elapsed = run_against_a_trickling_bridge(tmp_path, 3.0)
+    assert (f"cannot connect to the vehicle's bridge at {at}: no hello from the "
             f"vehicle's bridge within {CONNECT_TIMEOUT:g} s (the bound on opening the link)"
             in out.stderr), out.stderr
     assert elapsed < CONNECT_TIMEOUT + MARGIN, elapsed
@@ -81,19 +87,9 @@ def test_a_bridge_trickling_its_hello_ends_the_run_within_the_opening_bound(tmp_
 
 @pytest.mark.timeout(90)
 def test_the_commands_time_limit_bounds_the_opening_too(tmp_path):
-    mission = tmp_path / "goto.mcl"
-    mission.write_text(GOTO)
-    stop = threading.Event()
-    peer = Peer(lambda conn, p: trickle(conn, HELLO, 0.5, stop))
-    start = time.monotonic()
-    try:
-        out = run_cli("run", mission, "--vehicle", f"bridge:{SIM_MAPPING}", "--connect",
-                      peer.address, "--max-time", "2", timeout=CONNECT_TIMEOUT + 60)
-    finally:
-        stop.set()
-    assert out.returncode == 2 and "Traceback" not in out.stderr, out.stderr
+    out, _, elapsed = run_against_a_trickling_bridge(tmp_path, 0.5, "--max-time", "2")
     assert "within 2 s (the bound on opening the link)" in out.stderr, out.stderr
-    assert time.monotonic() - start < 2.0 + MARGIN
+    assert elapsed < 2.0 + MARGIN, elapsed
 
 
 @pytest.mark.timeout(60)
