@@ -259,26 +259,25 @@ def _ours_or_skip(path: Path):
 
 @pytest.mark.parametrize("source", [_param(s) for s in ALL])
 def test_pm4py_reads_the_net_we_read(source, file_of):
-    path = file_of(source)
-    ours = _ours_or_skip(path)
-    theirs = pnml_peer.pm4py_net(path)
-    if isinstance(theirs, pnml_peer.Refused):
-        pytest.skip("pm4py reads no net from the file")
-    found = pnml_peer.differences(ours, theirs, peer="pm4py")
-    assert not found, f"pm4py reads {path.name} otherwise than we do:\n  " + "\n  ".join(found)
+    _assert_read_alike(file_of(source), pnml_peer.pm4py_net, "pm4py", "pm4py")
 
 
 @pytest.mark.parametrize("source", [_param(s, FAULTS) for s in ALL])
 def test_lola_reads_the_net_we_read(source, file_of):
     """LoLA reads only the 2009 P/T net type: a file of the core model's type (pm4py's,
     WoPeD's) is no net to it, and is skipped."""
-    path = file_of(source)
+    _assert_read_alike(file_of(source), pnml_peer.lola_net, "lola", "LoLA")
+
+
+def _assert_read_alike(path: Path, read, peer: str, name: str) -> None:
+    """The peer (``read``, ``peer`` as :func:`pnml_peer.differences` names it) reads the net
+    we read from ``path``; skipped where either of us reads none."""
     ours = _ours_or_skip(path)
-    theirs = pnml_peer.lola_net(path)
+    theirs = read(path)
     if isinstance(theirs, pnml_peer.Refused):
-        pytest.skip("LoLA reads no net from the file")
-    found = pnml_peer.differences(ours, theirs, peer="lola")
-    assert not found, f"LoLA reads {path.name} otherwise than we do:\n  " + "\n  ".join(found)
+        pytest.skip(f"{name} reads no net from the file")
+    found = pnml_peer.differences(ours, theirs, peer=peer)
+    assert not found, f"{name} reads {path.name} otherwise than we do:\n  " + "\n  ".join(found)
 
 
 def _outcome(path: Path):
