@@ -39,8 +39,8 @@ from mcl2pnml.core.bounds import MAX_SECONDS, MAX_TOKENS, MAX_TOKENS_TEXT, natur
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml.tapaal import is_tapaal, parse_tapaal
-from mcl2pnml.io.pnml.source import (HIGH_LEVEL, Source, local as _local, parse_xml,
-                                     payload_value, read_file)
+from mcl2pnml.io.pnml.source import (HIGH_LEVEL, Source, coordinates, local as _local,
+                                     parse_xml, payload_value, read_file)
 from mcl2pnml.io.pnml.writer import TOOL
 
 P_T_TYPES = {
@@ -155,11 +155,8 @@ class _Reader:
         pos = _child(g, "position") if g is not None else None
         if pos is None:
             return None
-        try:
-            x, y = float(pos.get("x", "")), float(pos.get("y", ""))
-        except ValueError:
-            return None  # a drawing hint only: a bad one is dropped, not fatal
-        return (x, y) if math.isfinite(x) and math.isfinite(y) else None
+        xy = coordinates(pos)
+        return xy if xy and math.isfinite(xy[0]) and math.isfinite(xy[1]) else None
 
     def _ours(self, el):
         return [ts for ts in _children(el, "toolspecific") if ts.get("tool") == TOOL]

@@ -131,6 +131,15 @@ def read_file(path: str | Path) -> bytes:
         raise PnmlError(e.message, e.location) from None
 
 
+def coordinates(position) -> tuple[float, float] | None:
+    """A ``<position>``'s x and y as numbers; None where either is not one (a drawing hint
+    only: a bad one is dropped, not fatal). Each reader says which numbers it keeps."""
+    try:
+        return float(position.get("x", "")), float(position.get("y", ""))
+    except ValueError:
+        return None
+
+
 def payload_value(text: str | None):
     """Our toolspecific payload, its JSON text as frozen data: ``(value, None)``, or
     ``(None, fault)`` with what is wrong, for the reader to say where it is."""

@@ -51,7 +51,8 @@ from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.files import open_regular
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition
 from mcl2pnml.io import ids
-from mcl2pnml.io.pnml.source import HIGH_LEVEL, Source, XmlError, payload_value, read_file
+from mcl2pnml.io.pnml.source import (HIGH_LEVEL, Source, XmlError, coordinates, payload_value,
+                                     read_file)
 
 PNML = "http://www.pnml.org/version-2009/grammar/pnml"
 TAPAAL = "http://www.informatik.hu-berlin.de/top/pnml/ptNetb"
@@ -467,11 +468,8 @@ class _StrictReader:
                 return _NO
         for child in graphics:
             if child.tag == self.T_POSITION:
-                try:
-                    x, y = float(child.get("x", "")), float(child.get("y", ""))
-                except ValueError:
-                    return None   # a drawing hint only: a bad one is dropped
-                return (x, y) if abs(x) < 1e300 and abs(y) < 1e300 else None
+                xy = coordinates(child)
+                return xy if xy and abs(xy[0]) < 1e300 and abs(xy[1]) < 1e300 else None
         return None
 
     # -- nodes -----------------------------------------------------------------------------
