@@ -559,6 +559,7 @@ async def _probe(address: str) -> None:
     peer is judged before anything is read by it. The caller holds the deadline."""
     import asyncio
     from distributed.protocol.core import loads
+    from distributed.protocol.utils import unpack_frames
     parts = urlsplit(address)
     reader, writer = await asyncio.open_connection(parts.hostname, parts.port)
     try:
@@ -570,13 +571,12 @@ async def _probe(address: str) -> None:
         (count,) = struct.unpack_from("Q", body)
         if not 0 < count <= HANDSHAKE_MAX_FRAMES or word * (1 + count) > size:
             raise _NotDask("its opening message is not Dask's framing")
-        lengths = struct.unpack_from(f"{count}Q", body, word)
-        if word * (1 + count) + sum(lengths) != size:
+        try:    # Dask's own unpacking, once the count of frames is bounded
+            frames = unpack_frames(body)
+        except AssertionError:          # frames longer than the message
+            frames = None
+        if frames is None or word * (1 + count) + sum(len(f) for f in frames) != size:
             raise _NotDask("its opening message is not Dask's framing")
-        frames, at = [], word * (1 + count)
-        for length in lengths:
-            frames.append(body[at:at + length])
-            at += length
         try:
             said = loads(frames, deserialize=False)
         except Exception:           # noqa: BLE001 (whatever the decoder makes of noise)
