@@ -52,6 +52,8 @@ RUN_BOUND, MISSION_BOUND, TEST_BOUND = 30.0, 15.0, 60
 #: Seconds of the autopilot's clock after arming when a fault is made to happen:
 #: the vehicle is then on its way to the first waypoint.
 FAULT_AT = 5.0
+#: The speed-up of the autopilot whose GPS a second station turns off mid-survey.
+GPS_LOST_SPEEDUP = 20
 #: A ground station's system id that nobody on the link has (we are 255, the
 #: second station 254): made the autopilot's own, its heartbeats stop for it.
 NOBODY = 200
@@ -295,10 +297,15 @@ def test_a_flight_is_replayed_on_the_page_and_drawn_as_fig_5(autopilot, tmp_path
 # -- faults ------------------------------------------------------------------------------------
 
 @pytest.mark.timeout(TEST_BOUND)
-def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(autopilot, tmp_path):
+def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(ardusub, tmp_path):
     # without the cross nothing but the waypoints can end the survey
     world = world_without_the_cross(tmp_path)
-    with flying(autopilot, tmp_path, "--world", str(world)) as run, \
+    # the GPS must be off well before the survey's last waypoint (about 20 s of the
+    # autopilot's clock after the fault's time): at a speed-up of 100 that is 0.2 s of
+    # wall clock for the second station to see the time and set the parameter, which two
+    # suites side by side on 2 cores have exceeded; at GPS_LOST_SPEEDUP, 1 s
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=GPS_LOST_SPEEDUP) as autopilot, \
+            flying(autopilot, tmp_path, "--world", str(world)) as run, \
             sitl.second(autopilot) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
         assert ground.set_param("SIM_GPS1_ENABLE", 0) == 0
