@@ -679,8 +679,10 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
                 e = await future.exception()
                 raise Mcl2PnmlError(f"the runs from seed {first} failed on a worker: "
                                     f"{type(e).__name__}: {e}")
-            if future.status != "finished":     # cancelled: the scheduler is gone
+            if future.status == "cancelled":    # the scheduler is gone
                 raise lost()
+            # finished, or its result lost with the worker that held it (killed after the
+            # batch was done): Dask runs it again, and this waits for it
             arrived[first] = await future
             while nxt < len(order) and order[nxt] in arrived and not campaign.done:
                 for flown in arrived.pop(order[nxt]):

@@ -99,9 +99,12 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
     done, result = [], {}
 
     def fly():
-        result["campaign"] = pipeline.campaign_file(
-            SAUCE, MODEL, runs, seed=5, scheduler=address,
-            progress=lambda n, total: done.append(n))
+        try:
+            result["campaign"] = pipeline.campaign_file(
+                SAUCE, MODEL, runs, seed=5, scheduler=address,
+                progress=lambda n, total: done.append(n))
+        except BaseException as e:     # noqa: BLE001 (said by the test, below)
+            result["error"] = e
     thread = threading.Thread(target=fly)
     thread.start()
     deadline = time.monotonic() + 60
@@ -110,6 +113,7 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
     os.killpg(procs[0].pid, signal.SIGKILL)       # one worker gone mid-campaign
     thread.join(240)
     assert not thread.is_alive()
+    assert "error" not in result, repr(result.get("error"))
     flown = result["campaign"]
     assert [r.seed for r in flown.runs] == list(range(5, 5 + runs))
     # the same runs as flown here, batch by batch, without Dask
