@@ -14,7 +14,7 @@ OUT    := out
 # token game page of `mcl2pnml show` in the browser tests. Both from Debian's
 # packages where missing (machines here run as root). GLPK lets TAPAAL's verifypn, one of
 # the peer tools the external-corpus tests compare us with, start.
-# A C compiler builds the safe-net explorer's loops (analysis/_native.c) at install;
+# A C compiler builds the safe-net explorer's loops (analysis/statespace/loops/_native.c) at install;
 # without one mcl2pnml installs all the same and explores with numba's. Java 17 runs
 # the PNML readers of the editors WoPeD and PIPE, which the tests hold our files to.
 APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium) \
@@ -30,7 +30,7 @@ system-deps:
 	  || echo "warning: could not install$(APT_PACKAGES); the tests that need them will say so"; \
 	fi
 
-$(STAMP): pyproject.toml analysis/_native.c
+$(STAMP): pyproject.toml analysis/statespace/loops/_native.c
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test,mavlink]'

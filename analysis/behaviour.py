@@ -35,7 +35,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import Structure
 
-from analysis.statespace import StateSpace, explore
+from mcl2pnml.analysis.statespace.explore import StateSpace, explore
 
 
 def input_places(s: Structure) -> frozenset[int]:

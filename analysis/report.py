@@ -5,7 +5,7 @@ The JSON object holds what docs/interop.md lists (``places``,
 ``terminal_markings``, ``reusable``, ``deadlock_free``, ``states``) and more:
 ``initial_marking``, ``t_invariants``, the minimal semi-positive invariants,
 ``traps``, each siphon's control (Iordache and Antsaklis 2006), and the
-termination facts of :mod:`analysis.behaviour`.
+termination facts of :mod:`mcl2pnml.analysis.behaviour`.
 
 Results that could not be computed within their limits (a state space past
 ``--max-states`` or its memory budget, ``--max-memory``; minimal siphons,
@@ -30,12 +30,12 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
 
-from analysis.behaviour import behaviour
-from analysis.invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
+from mcl2pnml.analysis.behaviour import behaviour
+from mcl2pnml.analysis.structure.invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
                          minimal_semipositive_t_invariants, p_invariant_basis,
                          t_invariant_basis)
-from analysis.siphons import minimal_siphons, minimal_traps, siphon_control
-from analysis.statespace import ExplorationLimit, MemoryLimit, Progress, explore
+from mcl2pnml.analysis.structure.siphons import minimal_siphons, minimal_traps, siphon_control
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, MemoryLimit, Progress, explore
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
@@ -102,7 +102,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
             explore_states: bool = True) -> dict[str, Any]:
     """Everything we know how to prove about ``net``, as JSON-ready data.
 
-    ``explorer`` is one of :data:`analysis.statespace.BACKENDS`; ``max_memory``
+    ``explorer`` is one of :data:`mcl2pnml.analysis.statespace.explore.BACKENDS`; ``max_memory``
     is the exploration's budget in bytes (default: half the memory available).
     The structural results come first, so that an exploration stopped by its
     budget still ends in a partial answer: ``"partial"`` says how many

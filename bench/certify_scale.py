@@ -5,7 +5,7 @@ Run:  .venv/bin/python -m bench.certify_scale [--quick]
 * the dam inspection (``examples/dam_inspection.mcl``), from ``mission.B``
   and with an abort pending (``mission.A`` marked too): certifying
   (:func:`mcl2pnml.certify.certificate.certify`) and checking the
-  certificate against the compiled net (:func:`mcl2pnml.certify.checker.check`,
+  certificate against the compiled net (:func:`mcl2pnml.certify.recheck.check`,
   which re-reads the stored proofs and re-derives the library's own
   digests), each in this process, the median of :data:`RUNS`; beside them,
   exploring the same net and deciding its behaviour (1-safe, an end always
@@ -44,7 +44,7 @@ def _median(call) -> float:
 
 def certify_and_check(checked, net, abort_pending: bool = False) -> dict:
     from mcl2pnml.certify.certificate import certify
-    from mcl2pnml.certify.checker import check
+    from mcl2pnml.certify.recheck import check
     cert = json.loads(json.dumps(certify(checked, abort_pending=abort_pending)))
     assert check(net, cert) == [], "the certificate holds"
     return {"certify": _median(lambda: certify(checked, abort_pending=abort_pending)),
@@ -53,8 +53,8 @@ def certify_and_check(checked, net, abort_pending: bool = False) -> dict:
 
 def dam(log=lambda text: None) -> list[dict]:
     """The dam inspection, from B and with an abort pending: certify, check, explore."""
-    from analysis.behaviour import behaviour
-    from analysis.statespace import explore
+    from mcl2pnml.analysis.behaviour import behaviour
+    from mcl2pnml.analysis.statespace.explore import explore
     from mcl2pnml import pipeline
     checked = pipeline.check_file(ROOT / "examples" / "dam_inspection.mcl")
     net = pipeline.compile_checked(checked)

@@ -29,7 +29,7 @@ def peak_mb():
         if line.startswith("VmHWM:"):
             return int(line.split()[1]) / 1024
 from mcl2pnml.language.parser import parse_file
-from mcl2pnml.language.checker import check
+from mcl2pnml.language.semantics import check
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.pipeline import save_pnml
 source, target = sys.argv[1], sys.argv[2]

@@ -1,4 +1,4 @@
-"""How the net core scales: build, fuse, write and read PNML of ring nets (:func:`analysis.zoo.cycle`).
+"""How the net core scales: build, fuse, write and read PNML of ring nets (:func:`mcl2pnml.analysis.zoo.cycle`).
 
 Run:  .venv/bin/python -m bench.core_scale [SIZES...]
 
@@ -13,7 +13,7 @@ import statistics
 import sys
 import time
 
-from analysis.zoo import cycle
+from mcl2pnml.analysis.zoo import cycle
 from mcl2pnml import compose, parse_pnml, to_pnml_bytes
 
 

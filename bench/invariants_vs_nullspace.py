@@ -8,7 +8,7 @@ per transition), each task's OK fused with the next one's B, and one mutex
 MTX for the whole chain. The default sizes are 100, 300, 1,000 and 5,000
 places.
 
-* ours: ``analysis.invariants.p_invariant_basis`` (sparse ``DomainMatrix``
+* ours: ``mcl2pnml.analysis.structure.invariants.p_invariant_basis`` (sparse ``DomainMatrix``
   over QQ), the median of three runs;
 * plain: ``sympy.Matrix(dense C).T.nullspace()``, one run (building the
   dense matrix not counted), in a child process stopped after 60 s; once it
@@ -33,7 +33,7 @@ import time
 import flint
 import sympy
 
-from analysis.invariants import p_invariant_basis
+from mcl2pnml.analysis.structure.invariants import p_invariant_basis
 from mcl2pnml.core.compose import fuse, union
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import Structure, structure

@@ -33,7 +33,7 @@ def peak_mb():
     for line in open("/proc/self/status"):
         if line.startswith("VmHWM:"):
             return int(line.split()[1]) / 1024
-from mcl2pnml.language.checker import check
+from mcl2pnml.language.semantics import check
 from mcl2pnml.language.lint import lint
 from mcl2pnml.language.parser import parse_file
 base = peak_mb()   # the interpreter with the package imported, before the mission

@@ -1,5 +1,5 @@
 """Scalable compiled missions for the state-space benchmarks, beside the textbook
-nets of :mod:`analysis.zoo` (which builds nets from the core alone, not from MCL).
+nets of :mod:`mcl2pnml.analysis.zoo` (which builds nets from the core alone, not from MCL).
 
 * ``mission(width)``: a compiled MCL mission, ``width`` tasks in parallel,
   each on its own primitive (``examples``-style, from the compiler);

@@ -17,7 +17,7 @@ seconds, the whole process's peak resident memory in MiB):
   space's facts, every property checked on the fly, the JSON printed;
   ``--untimed``: the runs of the net, the semantics the peers check), the
   median of :data:`RUNS` when a run takes under 5 s; and, in this process,
-  the inner loop alone: :func:`analysis.properties.check_all` on the
+  the inner loop alone: :func:`mcl2pnml.analysis.checking.on_graph.check_all` on the
   compiled net and properties (:func:`mcl2pnml.pipeline.properties_of`, not
   timed), on the fly (the default) and with the reference method (every
   marking first, then each product: ``method="full"``), each the median of
@@ -96,7 +96,7 @@ def _median_of_runs(once, seconds=lambda r: r) -> list:
 def ours(mission: Path, props: Path) -> dict | None:
     """Our whole command (median of a few runs when fast), and the inner loop in-process;
     None if the command failed or timed out."""
-    from analysis.properties import Status, check_all
+    from mcl2pnml.analysis.checking.on_graph import Status, check_all
     from mcl2pnml import pipeline
     command = [str(Path(sys.executable).with_name("mcl2pnml")), "analyze", str(mission),
                "--untimed", "--state-space", "--no-progress", "--properties", str(props),

@@ -4,7 +4,7 @@ Run:  .venv/bin/python -m bench.statespace_peers
 
 Every exploration runs in a fresh interpreter (so that peak memory is its
 own) on a PNML file written by us. Ours explores the reachable markings
-(:func:`analysis.statespace.explore`) with the native explorer (the loops
+(:func:`mcl2pnml.analysis.statespace.explore.explore`) with the native explorer (the loops
 in C; numba's where they were not built), and then,
 timed apart, finds what ``mcl2pnml analyze FILE --state-space`` adds to
 them (terminal markings, deadlock freedom, reusability); "numpy" is our
@@ -33,7 +33,7 @@ from pathlib import Path
 
 from mcl2pnml.io.pnml import save_pnml
 
-from analysis import zoo
+from mcl2pnml.analysis import zoo
 from bench import nets, real_models
 
 TIMEOUT = 60.0
@@ -52,10 +52,10 @@ def rss():
 extra = {}
 if engine in ("ours", "numpy"):
     from mcl2pnml.io.pnml import load_pnml
-    from analysis import compiledspace
-    from analysis.behaviour import behaviour
+    from mcl2pnml.analysis.statespace import compiled as compiledspace
+    from mcl2pnml.analysis.behaviour import behaviour
     from mcl2pnml.core.structure import structure
-    from analysis.statespace import explore
+    from mcl2pnml.analysis.statespace.explore import explore
     s = structure(load_pnml(path))
     # ours: the loops in C where they were built (what `analyze` takes), else numba's;
     # loading them is timed apart

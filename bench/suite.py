@@ -44,7 +44,7 @@ import numpy
 
 from mcl2pnml.core.files import atomic_write_text
 
-from analysis import zoo
+from mcl2pnml.analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
 from bench import campaign_scale, certify_scale, properties_peers, real_models
 from bench import statespace_peers as peers
@@ -263,7 +263,7 @@ def certify_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, 
 
 
 def invariants_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
-    from analysis.invariants import p_invariant_basis
+    from mcl2pnml.analysis.structure.invariants import p_invariant_basis
     from mcl2pnml.core.structure import structure
     from mcl2pnml.pipeline import compile_source
 

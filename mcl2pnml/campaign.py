@@ -215,7 +215,7 @@ JUDGED = ("OK", "FAIL", "ABORTED", "STALLED")
 def fly_batch(mission: str, fleet: Fleet, engine: str, seeds: list[int], max_time: float,
               properties: tuple = (), tracks_below: int = -1) -> list[Flown]:
     """Fly the runs of ``seeds`` (a task of a worker)."""
-    from analysis.observers import Watcher
+    from mcl2pnml.analysis.checking.observers import Watcher
     from mcl2pnml.runtime.engine import run
     make, build = _prepared(mission, fleet, engine)
     out = []
@@ -250,7 +250,7 @@ def _prepared(mission: str, fleet: Fleet, engine: str) -> tuple[Callable, Callab
     """The engine's maker and the vehicle's builder (by seed) of a campaign."""
     import os
 
-    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.semantics import check
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.parser import parse_file
     from mcl2pnml.runtime.executor import PetriEngine

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import click
 
-from analysis.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
+from mcl2pnml.analysis.statespace.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml import pipeline
 from mcl2pnml.campaign import SchedulerTimeouts, scheduler_address
 from mcl2pnml.core.bounds import (MAX_MISSION_SIZE, MAX_PROPERTIES_SIZE,

@@ -1,13 +1,13 @@
 """A property's counterexample in the mission's terms, the vehicle script that replays it, and the replay.
 
-:func:`analysis.properties.check` answers a failing property with a firing
+:func:`mcl2pnml.analysis.checking.on_graph.check` answers a failing property with a firing
 sequence of the compiled net. A mission engineer reads a run of the mission:
 which calls started and ended with what, which primitives the mission
 enabled with which arguments (section 2.1's actions), what the vehicle
 reported (its events) and which time-outs expired. This module turns the one
 into the other (:func:`explain`), using what the compiler left in the net's
 payloads (:mod:`mcl2pnml.core.payloads`) and the places the property atoms
-read (:mod:`mcl2pnml.language.properties`).
+read (:mod:`mcl2pnml.language.declared_properties`).
 
 **Time.** A firing sequence has no clock; the engines have one
 (:mod:`mcl2pnml.runtime.engine`: one stimulus at a time, in time order; a
@@ -28,7 +28,7 @@ primitive reports twice in one enabling (it loses its goal and regains it:
 
 **The replay** (:func:`replay`) runs the script on both engines: the
 Petri-net executor's firings must show the property violated, read by the
-same observer as the checker's (:func:`analysis.properties.judge`), and the
+same observer as the checker's (:func:`mcl2pnml.analysis.checking.on_graph.judge`), and the
 reference engine must send the same actions and see the same events. A
 prefix's violation is reached when the observer can no longer be satisfied;
 a finite run's when the run ends with an obligation open; a lasso's (an
@@ -51,7 +51,7 @@ from typing import Any, Iterable, Sequence
 
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MISSION, ActionKind, EventKind, read_transition
-from mcl2pnml.core.properties import Predicate, Property, holds, places_of
+from mcl2pnml.core.patterns import Predicate, Property, holds, places_of
 from mcl2pnml.runtime.aal import Action, Event, Reply, ScriptedVehicle, _time
 
 
@@ -175,9 +175,9 @@ def _value(v: Any) -> str:
 
 def atoms(primitives: Iterable[str], callables: Iterable[str]) -> list[tuple[str, Predicate]]:
     """Every property atom on these names, as written, with its predicate on the net
-    (:mod:`mcl2pnml.language.properties`' table), in the order a reader wants them."""
+    (:mod:`mcl2pnml.language.declared_properties`' table), in the order a reader wants them."""
     from mcl2pnml.language import ast
-    from mcl2pnml.language.properties import RESULTS, predicate
+    from mcl2pnml.language.declared_properties import RESULTS, predicate
     found = []
     for p in primitives:
         found += [ast.PropAtom(k, (p,)) for k in ("enabled", "achieved", "failed")]
@@ -195,7 +195,7 @@ _HEARD = {EventKind.ON: "{} is on", EventKind.OFF: "{} is off",
 def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
             loop: int | None, primitives: Iterable[str],
             callables: Iterable[str], gap: Fraction | None = None) -> Counterexample:
-    """The counterexample ``transitions`` (a failing verdict's, :class:`analysis.properties.
+    """The counterexample ``transitions`` (a failing verdict's, :class:`mcl2pnml.analysis.checking.on_graph.
     Verdict`) in the mission's terms, timed, with the vehicle script that replays it.
 
     ``primitives`` and ``callables`` (tasks and functions) are the mission's names, whose
@@ -442,9 +442,9 @@ def vehicle(script: dict[str, list[str]]) -> ScriptedVehicle:
 def replay(cex: Counterexample, net: Net, checked, silent: Sequence[str] = ()) -> Replay:
     """Run ``cex``'s script on the Petri-net executor (of ``net``) and on the reference
     engine (of ``checked``), up to the counterexample's last stimulus, and judge the runs
-    (``silent``: the transitions a run may end with enabled, :func:`analysis.properties.
+    (``silent``: the transitions a run may end with enabled, :func:`mcl2pnml.analysis.checking.on_graph.
     judge`)."""
-    from analysis.properties import judge
+    from mcl2pnml.analysis.checking.on_graph import judge
     from mcl2pnml.runtime.engine import canonical_trace, run
     from mcl2pnml.runtime.executor import PetriEngine
     from mcl2pnml.runtime.reference import ReferenceEngine
@@ -495,7 +495,7 @@ def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str
 
     import networkx as nx
 
-    from analysis.observers import BAD, initial, pending, step, truths
+    from mcl2pnml.analysis.checking.observers import BAD, initial, pending, step, truths
     from mcl2pnml.runtime.executor import PetriEngine
 
     root = PetriEngine(net)
@@ -657,7 +657,7 @@ def witness(net: Net, checked, prop: Property, transitions: Sequence[str], *, sh
     vehicle's reports are left (the vehicle silent for ever; with ``fair``, only its
     reports after the first of an enabling).
     """
-    from analysis.properties import judge
+    from mcl2pnml.analysis.checking.on_graph import judge
     names = dict(primitives=list(checked.primitives),
                  callables=[*checked.tasks, *checked.functions])
     gap, silent = None, ()

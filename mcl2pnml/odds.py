@@ -9,11 +9,11 @@ drawn. A state of the chain is a settled *instant*: the executor's state
 (marking and running time-outs) and what the vehicle will still do, both
 relative to now; a step takes every stimulus of the next instant, and lasts
 until it. The result is a discrete-time Markov chain with one step per
-instant, solved by :mod:`analysis.markov` (probabilities of OK, FAIL, ABORTED
+instant, solved by :mod:`mcl2pnml.analysis.markov` (probabilities of OK, FAIL, ABORTED
 and of never ending; the expected end time, its spread and distribution).
 
 Properties (docs/properties.md) are judged on the same runs: each firing's
-marking is read by the property's observer (:mod:`analysis.observers`, the
+marking is read by the property's observer (:mod:`mcl2pnml.analysis.checking.observers`, the
 one the model checkers' verdicts use), whose state joins the chain's, so
 that the chain is the product of the mission, its vehicle and the
 observers. A run ends in an absorbing state (a finite run, judged on its
@@ -33,10 +33,10 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Callable, Iterable, Sequence
 
-from analysis.observers import Watcher
+from mcl2pnml.analysis.checking.observers import Watcher
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.properties import Property
+from mcl2pnml.core.patterns import Property
 from mcl2pnml.runtime.aal import causal_order
 from mcl2pnml.runtime.engine import Outcome
 from mcl2pnml.runtime.executor import PetriEngine
@@ -146,11 +146,11 @@ class MarkovChain:
         return len(self.label)
 
     def as_analysis(self):
-        """The chain as :class:`analysis.markov.Chain` (floats, CSR)."""
+        """The chain as :class:`mcl2pnml.analysis.markov.Chain` (floats, CSR)."""
         import numpy as np
         from scipy import sparse
 
-        from analysis.markov import Chain
+        from mcl2pnml.analysis.markov import Chain
         rows, cols, data = [], [], []
         for s, succ in enumerate(self.successors):
             if not succ:                        # absorbing: a self-loop
@@ -274,7 +274,7 @@ EXACT_STATES = 1_000
 def exact_outcomes(chain: MarkovChain) -> dict[str, Fraction] | None:
     """The probability of each ending as an exact fraction (None: a chain of more than
     :data:`EXACT_STATES` transient states)."""
-    from analysis.markov import CYCLES, closed_classes
+    from mcl2pnml.analysis.markov import CYCLES, closed_classes
     label = list(chain.label)
     for s in closed_classes(chain.as_analysis()):
         label[s] = CYCLES
@@ -317,7 +317,7 @@ def fate_labels(chain: MarkovChain) -> list[str]:
     ending in it fails: "v" and one digit per property (1: fails), "" elsewhere. An
     absorbing state is a component of its own (a finite run, judged on its last
     observer states); a larger one, a loop, fails what every one of its states owes."""
-    from analysis.markov import bottom_components
+    from mcl2pnml.analysis.markov import bottom_components
     label = [""] * chain.size
     for component in bottom_components(chain.as_analysis()):
         fails = (all(chain.pending[s][k] for s in component)
@@ -330,7 +330,7 @@ def fate_labels(chain: MarkovChain) -> list[str]:
 
 def property_odds(chain: MarkovChain) -> list[PropertyOdds]:
     """The probability that each property the chain watched holds."""
-    from analysis.markov import reaching
+    from mcl2pnml.analysis.markov import reaching
     if not chain.properties:
         return []
     label = fate_labels(chain)
@@ -353,7 +353,7 @@ def _endings(by_label: dict[str, Fraction]) -> dict[str, Fraction]:
 
 
 def odds_of(chain: MarkovChain) -> Odds:
-    from analysis.markov import CYCLES, solve
+    from mcl2pnml.analysis.markov import CYCLES, solve
     a = solve(chain.as_analysis(), ENDS)
     outcomes = {e: a.probability.get(e, 0.0) for e in ENDS}
     outcomes["never"] = a.probability.get(WAITS, 0.0) + a.probability.get(CYCLES, 0.0)

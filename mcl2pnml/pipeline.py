@@ -24,7 +24,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.io.formats import FORMATS, SaveOptions, reader_of
 
 if TYPE_CHECKING:
-    from mcl2pnml.core.properties import Property
+    from mcl2pnml.core.patterns import Property
     from mcl2pnml.core.timing import Assumptions
     from mcl2pnml.language.functional import Instance
     from mcl2pnml.campaign import SchedulerTimeouts
@@ -57,7 +57,7 @@ def check_file(path: str | Path, max_size: int | str | None = None):
     A file over ``max_size`` bytes (or as ``--max-mission-size`` takes it; default
     :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`) is refused before it is read: every
     command and call that reads a mission reads it here."""
-    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.semantics import check
     from mcl2pnml.language.parser import parse_file
     return check(parse_file(path, None, mission_limit(max_size), "--max-mission-size"))
 
@@ -73,7 +73,7 @@ def mission_limit(max_size: int | str | None = None) -> int:
 
 def check_source(text: str, filename: str = "<mcl>"):
     """Parse and check MCL text; errors name ``filename``."""
-    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.semantics import check
     from mcl2pnml.language.parser import parse
     return check(parse(text, filename))
 
@@ -112,7 +112,7 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
                   max_mission_size: int | str | None = None
                   ) -> tuple[Net, tuple["Property", ...]]:
     """The compiled net of ``mission`` and its properties compiled to predicates on its
-    places (:mod:`mcl2pnml.language.properties`): those the mission declares, then those
+    places (:mod:`mcl2pnml.language.declared_properties`): those the mission declares, then those
     of ``extra`` (a side file of ``property`` declarations), each with its location.
     ``reduced``: on the reduced model (Fig. 3), where an atom on a primitive is an error.
 
@@ -123,7 +123,7 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
     again; else it is read within ``max_mission_size`` (:func:`check_file`)."""
     from mcl2pnml.core.bounds import MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS
     from mcl2pnml.language.parser import parse_file
-    from mcl2pnml.language.properties import check_atoms, check_side_file, compile_properties
+    from mcl2pnml.language.declared_properties import check_atoms, check_side_file, compile_properties
     if isinstance(max_size, str):
         max_size = parse_size(max_size, "--max-properties-size")
     checked = check_file(mission, max_mission_size) if checked is None else checked
@@ -386,7 +386,7 @@ def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE
 def check_certificate(net: Net, cert: dict[str, Any], *, shaped: bool = False) -> list[str]:
     """What the independent checker finds wrong with ``cert`` for ``net`` (nothing: it
     holds); ``shaped``: :func:`load_certificate` held it to its schema already."""
-    from mcl2pnml.certify.checker import check
+    from mcl2pnml.certify.recheck import check
     return check(net, cert, shaped=shaped)
 
 
@@ -420,9 +420,9 @@ def save_certificate(cert: dict[str, Any], path: str | Path) -> Path:
 # -- analysis ------------------------------------------------------------------------------
 
 def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> dict[str, Any]:
-    """Invariants, siphons and reachable markings (:func:`analysis.report.analyze`);
+    """Invariants, siphons and reachable markings (:func:`mcl2pnml.analysis.report.analyze`);
     ``max_memory`` may be written as ``--max-memory`` takes it (:func:`parse_size`)."""
-    from analysis.report import analyze as run
+    from mcl2pnml.analysis.report import analyze as run
     if isinstance(options.get("max_memory"), str):
         options["max_memory"] = parse_size(options["max_memory"])
     return run(net, initial, **options)
@@ -430,12 +430,12 @@ def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> 
 
 def check_properties(net: Net, properties, max_states: int = 1_000_000,
                      stubborn: bool = False, safe: bool = False) -> list:
-    """Each property's :class:`analysis.properties.Verdict` on ``net``'s runs, in order:
+    """Each property's :class:`mcl2pnml.analysis.checking.on_graph.Verdict` on ``net``'s runs, in order:
     holds, fails with a shortest counterexample, or unknown past ``max_states``; each
-    searched on the fly (:mod:`analysis.onthefly`), stopping at its first violation.
+    searched on the fly (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at its first violation.
     ``stubborn``: with partial-order reduction, on a net ``safe`` says is proven 1-safe
-    (else a P-invariant must prove it: :class:`~analysis.onthefly.NotProvenSafe`)."""
-    from analysis.properties import check_all
+    (else a P-invariant must prove it: :class:`~mcl2pnml.analysis.checking.on_the_fly.NotProvenSafe`)."""
+    from mcl2pnml.analysis.checking.on_graph import check_all
     return check_all(net, properties, max_states, stubborn=stubborn, safe=safe)
 
 
@@ -452,7 +452,7 @@ def _certified(checked, net: Net, abort_pending: bool = False
     """The certificate of the checked mission, and what the independent checker finds
     wrong with it for ``net`` (nothing: it holds)."""
     from mcl2pnml.certify.certificate import certify
-    from mcl2pnml.certify.checker import check
+    from mcl2pnml.certify.recheck import check
     from mcl2pnml.certify.templates import current
     proofs = current()      # read once, for the certificate and its check
     cert = certify(checked, net_name=net.name, abort_pending=abort_pending, proofs=proofs)
@@ -632,7 +632,7 @@ def parse_marking(text: str, net: Net, where: str = "") -> dict[str, int]:
 
 
 def analysis_text(result: dict[str, Any]) -> str:
-    from analysis.report import render_text
+    from mcl2pnml.analysis.report import render_text
     return render_text(result)
 
 
@@ -659,7 +659,7 @@ def warned(mission: Path, checked, strict: bool = False,
 def properties_lines(compiled) -> list[str]:
     """``check --properties``: each property compiled to place formulas, its pattern's
     (P, S, the bound) then its scope's (Q, R)."""
-    from mcl2pnml.core.properties import describe
+    from mcl2pnml.core.patterns import describe
     out = []
     for prop in compiled:
         scope = prop.scope
@@ -941,7 +941,7 @@ def _untimed_verdicts(file: Path, net: Net, props, start, max_states: int,
     """The properties' verdicts on the net's runs; with ``stubborn`` the reduction, once
     the mission's certificate proves the net 1-safe (from its own start only: another
     start needs a P-invariant to), or refused saying why."""
-    from analysis.onthefly import NotProvenSafe
+    from mcl2pnml.analysis.checking.on_the_fly import NotProvenSafe
     safe = stubborn and start is None and proven_safe_by_certificate(file, net,
                                                                      max_mission_size)
     try:
@@ -1248,7 +1248,7 @@ def timed_ends(net: Net, assumptions: "Assumptions | None" = None,
 
 def check_properties_timed(net: Net, properties, assumptions: "Assumptions | None" = None,
                            max_states: int = 1_000_000) -> list:
-    """Each property's :class:`analysis.properties.Verdict` on the mission's time-divergent
+    """Each property's :class:`mcl2pnml.analysis.checking.on_graph.Verdict` on the mission's time-divergent
     runs (docs/time.md), on one zone graph."""
     from mcl2pnml import timed
     from mcl2pnml.core.timing import Assumptions
@@ -1284,8 +1284,8 @@ def query_file(net_path: Path, formulas: Sequence[Path], examinations: Sequence[
                lenient: bool = False, max_mission_size: int | str | None = None
                ) -> QueryOutcome:
     """``mcl2pnml query``: the Model Checking Contest's formula files (and generic
-    examinations) answered on any net we read (:mod:`analysis.mcc`)."""
-    from analysis import mcc
+    examinations) answered on any net we read (:mod:`mcl2pnml.analysis.contest.answers`)."""
+    from mcl2pnml.analysis.contest import answers as mcc
     from mcl2pnml.io.mccquery import read_queries
     if not formulas and not examinations:
         raise OptionError("FORMULAS", "give a formula file of the contest, or --examination")

@@ -1,6 +1,6 @@
 """A mission's timed verdicts in its own terms: does it always end, when, and its properties.
 
-:mod:`analysis.timed` answers on any :class:`~mcl2pnml.core.timing.TimedNet`;
+:mod:`mcl2pnml.analysis.timed.zones` answers on any :class:`~mcl2pnml.core.timing.TimedNet`;
 this module asks it about a compiled mission (docs/time.md): the mission's
 semantics under the vehicle's :class:`~mcl2pnml.core.timing.Assumptions`
 (:func:`~mcl2pnml.core.timing.mission_timing`), "an end is always reached"
@@ -8,7 +8,7 @@ semantics under the vehicle's :class:`~mcl2pnml.core.timing.Assumptions`
 time-divergent run), the earliest and latest end times, and, when a run
 never ends, what it waits for, in words: "FindCross waits for DetectCross's
 report, and has no time-out". The property verdicts are handed back as
-:class:`analysis.properties.Verdict`, so that the counterexample machinery of
+:class:`mcl2pnml.analysis.checking.on_graph.Verdict`, so that the counterexample machinery of
 :mod:`mcl2pnml.counterexample` reads them as it reads the untimed ones.
 
 Sits beside :mod:`mcl2pnml.counterexample`, between the facade and the layers
@@ -21,12 +21,12 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Sequence
 
-from analysis import timed as engine
-from analysis.properties import Shape, Status, Verdict
+from mcl2pnml.analysis.timed import zones as engine
+from mcl2pnml.analysis.checking.on_graph import Shape, Status, Verdict
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MissionPlace, read_transition
-from mcl2pnml.core.properties import Pattern, Property, Scope, ScopeKind, Tokens
+from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind, Tokens
 from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
 
 #: The mission's result places: a run has ended once one is marked.
@@ -186,7 +186,7 @@ def _uses(net: Net, task: str, prim: str) -> bool:
 
 
 def as_verdict(graph: engine.ZoneGraph, v: engine.TimedVerdict) -> Verdict:
-    """A timed verdict in the untimed checker's type (:class:`analysis.properties.Verdict`)."""
+    """A timed verdict in the untimed checker's type (:class:`mcl2pnml.analysis.checking.on_graph.Verdict`)."""
     status = {"holds": Status.HOLDS, "fails": Status.FAILS, "unknown": Status.UNKNOWN}[v.status]
     if status is not Status.FAILS:
         return Verdict(v.property, status, states=v.states, reason=v.reason)

@@ -20,11 +20,11 @@ from typing import Any
 
 import sympy
 
-from analysis.behaviour import final_markings_agree
-from analysis.invariants import (format_invariant,
+from mcl2pnml.analysis.behaviour import final_markings_agree
+from mcl2pnml.analysis.structure.invariants import (format_invariant,
                                  minimal_semipositive_p_invariants, p_invariant_basis)
-from analysis.siphons import minimal_siphons, siphon_control
-from analysis.statespace import explore
+from mcl2pnml.analysis.structure.siphons import minimal_siphons, siphon_control
+from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.core.structure import Structure, structure
 from mcl2pnml.language.library import Library
 from mcl2pnml.language.template_parser import CONTROL

@@ -179,7 +179,7 @@ def explored(net: Net) -> Explored | None:
 
 
 def _explore(net: Net) -> Explored | None:
-    from analysis.statespace import ExplorationLimit, explore
+    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
     m0 = frozenset(p for p, n in net.initial.items() if n)
     try:        # the explorer the analysis chooses: a net that is not safe is handed over
         space = explore(net, max_states=MAX_MARKINGS)

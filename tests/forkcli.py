@@ -43,8 +43,8 @@ def _preload() -> None:
     import importlib
     import pkgutil
 
-    import analysis
     import mcl2pnml
+    import mcl2pnml.analysis as analysis   # installed under mcl2pnml from its own folder
     for package in (mcl2pnml, analysis):
         for info in pkgutil.walk_packages(package.__path__, package.__name__ + "."):
             if not info.name.endswith("__main__"):

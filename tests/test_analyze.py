@@ -175,7 +175,7 @@ def test_a_wide_net_ends_with_what_fits_in_its_limits(tmp_path):
     """Enumerations whose items span every place are bounded by their width too,
     and the exploration by the memory budget: a partial answer, not a run that never ends."""
     from mcl2pnml import save_pnml
-    from analysis import zoo
+    from mcl2pnml.analysis import zoo
     path = save_pnml(zoo.cycles(2500), tmp_path / "wide.pnml", "none")   # 10,000 places
     out = run("analyze", path, "--json", "--max-memory", "256M")   # a few hundred markings
     r = json.loads(out.stdout)

@@ -5,7 +5,7 @@ import pytest
 
 from helpers import DATA, run_cli as run
 
-from analysis.report import _change
+from mcl2pnml.analysis.report import _change
 
 
 @pytest.fixture(scope="module")

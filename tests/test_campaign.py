@@ -143,7 +143,7 @@ def test_a_campaign_on_the_simulator_with_faults(shared, tmp_path):
     (4/5)^k for its k calls of AchieveDepth. Every property the untimed net proves
     holds on every run (a run of an engine is a run of the net); the first runs'
     tracks are kept for the map; and any run flies again alone, by its seed."""
-    from analysis.observers import Status
+    from mcl2pnml.analysis.checking.observers import Status
     world = tmp_path / "noisy.world.json"
     world.write_text('{"noise": 0.05}')
     faults = tmp_path / "depth.faults.json"

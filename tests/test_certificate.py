@@ -10,11 +10,11 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 
-from analysis.behaviour import behaviour
-from analysis.statespace import ExplorationLimit
+from mcl2pnml.analysis.behaviour import behaviour
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit
 from mcl2pnml import pipeline
 from mcl2pnml.certify.certificate import certify
-from mcl2pnml.certify.checker import check
+from mcl2pnml.certify.recheck import check
 from mcl2pnml.core.net import Net
 
 from helpers import ROOT
@@ -182,8 +182,8 @@ def _explored(net: Net, max_states: int = 20_000):
     result is marked, and every end one result, ABORTED exactly when A was marked and is
     consumed, and reachable then (the abort honoured); ``ends`` the mission places marked
     in the dead markings. None when the net has more markings than ``max_states``."""
-    from analysis.explorers import EXPLORERS
-    from analysis.packedmarkings import NotSafe
+    from mcl2pnml.analysis.statespace.explorers import EXPLORERS
+    from mcl2pnml.analysis.statespace.packedmarkings import NotSafe
     from mcl2pnml.core.structure import structure
     # a safe-net explorer, which stops at the first place holding two tokens: that alone
     # is a fault of the claims (1-safe), and a mutant's net may pile tokens up for ever
@@ -413,7 +413,7 @@ def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
     exploration does not hold or ends otherwise."""
     from mcl2pnml.certify.certificate import NotCertified
     from mcl2pnml.certify.templates import BrokenTemplate, current
-    from mcl2pnml.language.checker import check as check_mcl
+    from mcl2pnml.language.semantics import check as check_mcl
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.parser import parse
     lib = _with_mutant(name, net)

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from analysis.behaviour import behaviour
-from analysis.statespace import explore
+from mcl2pnml.analysis.behaviour import behaviour
+from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.pipeline import check_file, compile_file
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.functional import format_node, function_expression, mission_expression
@@ -213,7 +213,7 @@ def test_every_task_reduced_ends_the_mission_alike(mission: Path):
     by its reduced model (Fig. 3), the mission's own places end the same ways, from
     mission.B and with an abort pending (dam inspection, whose full state space takes
     minutes with an abort pending, under the slow marker)."""
-    from analysis.behaviour import final_markings_agree
+    from mcl2pnml.analysis.behaviour import final_markings_agree
     from mcl2pnml.language.compiler import compile_checked as compile_
 
     checked = check_file(mission)

@@ -1,11 +1,11 @@
-"""The interface contract of tasks and structures (analysis/contract.py): every template of
+"""The interface contract of tasks and structures (analysis/checking/contract.py): every template of
 the library keeps it, with its children reduced (Fig. 3), and each clause is broken, and
 said so with the run that shows it, by a net made to break it."""
 from __future__ import annotations
 
 import pytest
 
-from analysis.contract import Clause, NoInterface, check, restricted, roles
+from mcl2pnml.analysis.checking.contract import Clause, NoInterface, check, restricted, roles
 from mcl2pnml.core.net import Net, NetBuilder
 from mcl2pnml.language.library import default_library
 from mcl2pnml.language.template_parser import TemplateKind
@@ -140,7 +140,7 @@ def test_a_component_that_ignores_aborts_breaks_abortable():
                                                             ("OK", "FAIL"))
                                            for s in (False, True) if r or s])
 def test_the_restricted_reduced_model_has_exactly_its_signature(results, stuck):
-    """The reduced task cut down to a signature (analysis.contract.restricted) gives those
+    """The reduced task cut down to a signature (mcl2pnml.analysis.checking.contract.restricted) gives those
     results, may run for ever exactly when asked to, and keeps the rest of the contract:
     what the certificate's results tables rest on."""
     from mcl2pnml.certify.templates import classify

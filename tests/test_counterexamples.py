@@ -4,7 +4,7 @@ the vehicle script that replays a violation on both engines, and the page that s
 mcl2pnml/counterexample.py turns the checker's firing sequence into calls, actions, vehicle
 events and time-outs on a clock, and writes the vehicle script of cli.md that gives it. The
 replay is judged as the checker judges: the Petri-net executor's firings, read by the same
-observer (``analysis.properties.judge``), must show the property violated, and the reference
+observer (``mcl2pnml.analysis.checking.on_graph.judge``), must show the property violated, and the reference
 engine must send the same actions and see the same events. Here the replays are run again
 through the command line, each engine in its own process, as a user runs them.
 """
@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from analysis.properties import Shape, Status, check_all, judge
+from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_all, judge
 from mcl2pnml import pipeline
 from mcl2pnml.counterexample import (CYCLE_REPEATS, StepKind, engine_run, explain, replay,
                                      schedule, witness)
@@ -241,7 +241,7 @@ def test_a_thousand_generated_witnesses_replay(case):
 
 
 def _witnesses_replay(case) -> None:
-    from analysis.statespace import ExplorationLimit, explore
+    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
     text, seed = case
     with tempfile.TemporaryDirectory() as folder:
         mission = Path(folder) / "m.mcl"

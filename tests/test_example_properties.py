@@ -33,7 +33,7 @@ from pathlib import Path
 
 import pytest
 
-from analysis.properties import Status
+from mcl2pnml.analysis.checking.on_graph import Status
 from mcl2pnml import pipeline
 
 from helpers import DATA, ROOT, assert_golden, untimed_only
@@ -130,7 +130,7 @@ def test_every_property_of_the_false_file_fails_as_printed(name):
 
 
 def test_every_pattern_and_every_scope_holds_in_some_example():
-    from mcl2pnml.core.properties import Pattern, ScopeKind
+    from mcl2pnml.core.patterns import Pattern, ScopeKind
     stated = []
     for mission in sorted(EXAMPLES.glob("*.mcl")):
         stated += pipeline.properties_of(mission, extra=mission.with_suffix(".props"))[1]

@@ -36,7 +36,7 @@ import peers
 from helpers import DATA, ROOT
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.pipeline import load_net
-from analysis.statespace import explore
+from mcl2pnml.analysis.statespace.explore import explore
 
 TABLE_DIR = DATA / "external"
 ROWS = json.loads((TABLE_DIR / "corpus.json").read_text())

@@ -15,7 +15,7 @@ import pytest
 
 from mcl2pnml.campaign import wilson
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.language.checker import check
+from mcl2pnml.language.semantics import check
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.parser import parse_file
 from mcl2pnml.pipeline import check_source

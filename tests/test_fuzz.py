@@ -28,7 +28,7 @@ from lxml import etree
 from mcl2pnml.pipeline import compile_source
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.core.errors import ErrorList, Mcl2PnmlError
-from mcl2pnml.language.checker import check
+from mcl2pnml.language.semantics import check
 from mcl2pnml.language.parser import decode, parse
 from mcl2pnml.io.pnml.reader import parse_pnml
 from mcl2pnml.pipeline import to_pnml_bytes

@@ -23,8 +23,8 @@ from collections import Counter
 import pytest
 from hypothesis import HealthCheck, assume, given, seed, settings, strategies as st
 
-from analysis.behaviour import behaviour
-from analysis.statespace import ExplorationLimit, explore
+from mcl2pnml.analysis.behaviour import behaviour
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.pipeline import check_source
 from mcl2pnml.core.structure import structure
 from mcl2pnml.language import ast

@@ -1,6 +1,6 @@
 """The reachability graph's searches that answer the contest's questions
-(:mod:`analysis.mcc`), in C (``analysis/_native.c``) and in Python
-(``analysis/_graph_loops.py``, where C was not built), one suite for both, each held to
+(:mod:`mcl2pnml.analysis.contest.answers`), in C (``analysis/statespace/loops/_native.c``) and in Python
+(``analysis/statespace/loops/python_graphs.py``, where C was not built), one suite for both, each held to
 networkx on random graphs: Tarjan's components on a subset of the nodes, the backward
 search of ``E(a U b)``, and Couvreur's on-the-fly emptiness check of a graph's product
 with a generalised Büchi automaton, against the product built whole and its components
@@ -11,16 +11,16 @@ import networkx as nx
 import numpy as np
 import pytest
 
-from analysis.mcc import _csr
+from mcl2pnml.analysis.contest.answers import _csr
 
 
 @pytest.fixture(params=["c", "python"])
 def native(request):
     """One backend of the searches."""
     if request.param == "python":
-        from analysis import _graph_loops
+        from mcl2pnml.analysis.statespace.loops import python_graphs as _graph_loops
         return _graph_loops
-    return pytest.importorskip("analysis._native", reason="the loops in C are not built")
+    return pytest.importorskip("mcl2pnml.analysis.statespace.loops._native", reason="the loops in C are not built")
 
 
 def _graph(rng, n: int, m: int):
@@ -136,7 +136,7 @@ def test_the_product_search_stops_at_its_limit(native):
 
 
 def _packed_spaces():
-    from analysis.statespace import explore
+    from mcl2pnml.analysis.statespace.explore import explore
     from mcl2pnml import pipeline
     from helpers import ROOT
     nets = [pipeline.compile_file(ROOT / "examples" / "sauce.mcl")]
@@ -150,7 +150,7 @@ def _packed_spaces():
 def test_the_edges_of_packed_markings_listed_in_c_are_numpys():
     """The edges of a safe net's packed markings, listed by the loop in C, are those the
     numpy path finds, in the same order (node, then transition) and types."""
-    from analysis.packedmarkings import PackedStateSpace
+    from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
     spaces = [s for s in _packed_spaces() if isinstance(s, PackedStateSpace)]
     assert spaces, "no safe net explored with packed markings"
     for space in spaces:

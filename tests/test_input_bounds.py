@@ -366,7 +366,7 @@ def work(text: str) -> tuple[int, int]:
     import sys
     import tracemalloc
 
-    from mcl2pnml.language.checker import check
+    from mcl2pnml.language.semantics import check
     from mcl2pnml.language.lint import lint
     from mcl2pnml.language.parser import parse
     parse("mission { }", "warm.mcl")             # the parser is built once, not counted

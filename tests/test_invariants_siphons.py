@@ -4,12 +4,12 @@ from itertools import combinations, product
 import sympy
 from hypothesis import given, settings
 
-from analysis.invariants import (format_invariant, minimal_semipositive_p_invariants,
+from mcl2pnml.analysis.structure.invariants import (format_invariant, minimal_semipositive_p_invariants,
                                  minimal_semipositive_t_invariants, p_invariant_basis,
                                  t_invariant_basis)
-from analysis.siphons import (is_siphon, is_trap, max_siphon_within, minimal_siphons,
+from mcl2pnml.analysis.structure.siphons import (is_siphon, is_trap, max_siphon_within, minimal_siphons,
                               minimal_traps, siphon_control)
-from analysis.zoo import philosophers
+from mcl2pnml.analysis.zoo import philosophers
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import structure
 

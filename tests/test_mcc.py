@@ -21,8 +21,8 @@ from pathlib import Path
 
 import pytest
 
-from analysis import mcc
-from analysis.observers import Status
+from mcl2pnml.analysis.contest import answers as mcc
+from mcl2pnml.analysis.checking.observers import Status
 from helpers import DATA, ROOT, assert_error_golden, one_error, run_cli
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
@@ -202,6 +202,6 @@ def test_without_the_loops_in_c_the_answers_are_the_same(model, monkeypatch):
     """The searches in Python (a machine where C was not built) give the contest's
     answers too, on three models."""
     _corpus()
-    from analysis import _graph_loops
+    from mcl2pnml.analysis.statespace.loops import python_graphs as _graph_loops
     monkeypatch.setattr(mcc, "_loops", _graph_loops)
     _agrees(model)

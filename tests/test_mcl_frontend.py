@@ -5,7 +5,7 @@ from hypothesis import given, settings, strategies as st
 from mcl2pnml.language import ast
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.language.functional import format_node, mission_expression
-from mcl2pnml.language.checker import check
+from mcl2pnml.language.semantics import check
 from mcl2pnml.language.parser import decode, parse, parse_file
 
 from helpers import DATA, ROOT, assert_error_golden, run_cli as run

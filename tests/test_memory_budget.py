@@ -19,10 +19,10 @@ import sys
 import pytest
 
 from bignets import write_lola, write_pnml
-from analysis import report
-from analysis.invariants import AnalysisLimit
-from analysis.siphons import minimal_siphons
-from analysis.zoo import cycle
+from mcl2pnml.analysis import report
+from mcl2pnml.analysis.structure.invariants import AnalysisLimit
+from mcl2pnml.analysis.structure.siphons import minimal_siphons
+from mcl2pnml.analysis.zoo import cycle
 from mcl2pnml.core.memory import (Budget, BudgetExceeded, check_load, guard, load_estimate,
                                   resident)
 from mcl2pnml.core.structure import structure

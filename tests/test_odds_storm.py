@@ -2,7 +2,7 @@
 
 ``mcl2pnml odds`` builds a discrete-time Markov chain of a mission and its
 vehicle model (:func:`mcl2pnml.odds.chain_of`), solves it with our own
-sparse solver (:func:`~mcl2pnml.odds.odds_of`, :mod:`analysis.markov`),
+sparse solver (:func:`~mcl2pnml.odds.odds_of`, :mod:`mcl2pnml.analysis.markov`),
 and can export it in PRISM's language (:func:`~mcl2pnml.odds.to_prism`).
 Storm is an independent model checker: it reads that export and solves the
 chain in exact rational arithmetic. Agreement therefore checks two things of
@@ -37,7 +37,7 @@ stormpy = pytest.importorskip(
 
 from hypothesis import HealthCheck, assume, given, seed, settings, strategies as st  # noqa: E402
 
-from analysis.markov import CYCLES, solve  # noqa: E402
+from mcl2pnml.analysis.markov import CYCLES, solve  # noqa: E402
 from mcl2pnml import pipeline  # noqa: E402
 from mcl2pnml.runtime.executor import PetriEngine  # noqa: E402
 from mcl2pnml.odds import (ENDS, WAITS, TooManyStates, chain_of, odds_of, owes_labels,  # noqa: E402

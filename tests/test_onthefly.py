@@ -1,4 +1,4 @@
-"""The on-the-fly checker (analysis.onthefly) against the reference method.
+"""The on-the-fly checker (mcl2pnml.analysis.checking.on_the_fly) against the reference method.
 
 Both read the same observers; the on-the-fly one searches the product in C
 and stops at the first violation. Their verdicts must be the same, their
@@ -12,12 +12,12 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
-from analysis import onthefly
-from analysis.properties import Status, check_all, judge
+from mcl2pnml.analysis.checking import on_the_fly as onthefly
+from mcl2pnml.analysis.checking.on_graph import Status, check_all, judge
 from helpers import ROOT
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import NetBuilder
-from mcl2pnml.core.properties import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens
+from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens
 from mcl2pnml.core.structure import structure
 from test_properties_check import props, small_nets
 

@@ -20,7 +20,7 @@ some running for ever, some dying). A mission always has a dead marking, its pro
 (a result place marked, nothing enabled), so its verdict is TRUE; the
 generated nets give both verdicts, and the tests check that both come up.
 
-Our side: every explorer of ``analysis.explorers.CHOICES`` that applies to
+Our side: every explorer of ``mcl2pnml.analysis.statespace.explorers.CHOICES`` that applies to
 the net (``auto``; the safe-net ones on a safe net with unit weights; the
 counter one on a bounded net; the general one), which must first agree with
 each other. The counter and general explorers start by computing the
@@ -54,8 +54,8 @@ import peers
 from helpers import ROOT
 from missions import missions
 from strategies import ids, nets
-from analysis.explorers import CHOICES, EXPLORERS
-from analysis.statespace import ExplorationLimit
+from mcl2pnml.analysis.statespace.explorers import CHOICES, EXPLORERS
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import ArcKind, Net, NetBuilder
 

@@ -1,4 +1,4 @@
-"""analysis.properties.check against a reference that does not use its observers.
+"""mcl2pnml.analysis.checking.on_graph.check against a reference that does not use its observers.
 
 The reference enumerates runs of a small net directly (finite maximal paths
 and lassos up to a length) and evaluates each pattern in each scope
@@ -13,9 +13,9 @@ import itertools
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from analysis.properties import Shape, Status, check
+from mcl2pnml.analysis.checking.on_graph import Shape, Status, check
 from mcl2pnml.core.net import NetBuilder
-from mcl2pnml.core.properties import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens, holds
+from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens, holds
 
 KINDS = list(ScopeKind)
 PATTERNS = list(Pattern)

@@ -9,13 +9,13 @@ from pathlib import Path
 import pytest
 
 from mcl2pnml import pipeline
-from mcl2pnml.core import properties as typed
+from mcl2pnml.core import patterns as typed
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.language import ast
-from mcl2pnml.language.checker import check
+from mcl2pnml.language.semantics import check
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.parser import parse, parse_file
-from mcl2pnml.language.properties import ATOMS, compile_properties, text_of
+from mcl2pnml.language.declared_properties import ATOMS, compile_properties, text_of
 
 from helpers import ROOT, run_cli as run
 

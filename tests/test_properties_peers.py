@@ -4,7 +4,7 @@
 Contest's categories (LTLCardinality for every property, CTLCardinality and
 ReachabilityCardinality where they apply; mcl2pnml/io/mccquery.py,
 mcl2pnml/core/temporal.py). Here TAPAAL's verifypn and LoLA answer them, and
-each answer must be our checker's verdict (analysis/properties.py): on random
+each answer must be our checker's verdict (analysis/checking/on_graph.py): on random
 small nets with every pattern in every scope, on every example mission with
 its properties (``NAME.props``, which hold, and ``NAME.false.props``, which
 do not), and on generated missions with generated properties (a few in
@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 
-from analysis.properties import Status, check
+from mcl2pnml.analysis.checking.on_graph import Status, check
 from mcl2pnml import pipeline
 from mcl2pnml.io.mccquery import property_queries, to_xml
 
@@ -116,7 +116,7 @@ def test_lola_answers_an_until_of_equal_sides_wrongly(tmp_path):
     held to its answers except there, where verifypn must answer as we do. The day
     LoLA answers this right, this test fails, and the allowance goes."""
     from mcl2pnml.core.net import NetBuilder
-    from mcl2pnml.core.properties import Not, Tokens
+    from mcl2pnml.core.patterns import Not, Tokens
     from mcl2pnml.core.temporal import AllPaths, Disj, Globally, State, Until
     from mcl2pnml.io.mccquery import Property as Query, formula_element
     b = NetBuilder("n")
@@ -143,7 +143,7 @@ def test_lola_reduces_away_a_deadlock_and_answers_an_eventually_wrongly(tmp_path
     from ours is taken for this fault where LoLA without its reduction answers as we
     do (and verifypn too). The day LoLA answers this right, this test fails."""
     from mcl2pnml.core.net import NetBuilder
-    from mcl2pnml.core.properties import Not, Tokens
+    from mcl2pnml.core.patterns import Not, Tokens
     from mcl2pnml.core.temporal import AllPaths, Finally, State
     from mcl2pnml.io.mccquery import Property as Query, formula_element
     b = NetBuilder("n")
@@ -234,7 +234,7 @@ def test_peers_agree_on_every_example(props_file, tmp_path):
 def _generated(batch, folder: Path) -> int:
     """Our verdicts and the peers' on each (mission, seed) of ``batch``; how many were
     compared (a mission over GENERATED_STATES markings is left out)."""
-    from analysis.statespace import ExplorationLimit, explore
+    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
     cases = []
     for k, (mission, seed) in enumerate(batch):
         path = folder / f"m{k}.mcl"

@@ -12,8 +12,8 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from analysis.properties import Status, check
-from mcl2pnml.core.properties import Pattern, Property, Scope, ScopeKind
+from mcl2pnml.analysis.checking.on_graph import Status, check
+from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind
 from mcl2pnml.core.temporal import ctl, evaluate, ltl, reachability, show
 from test_properties_check import _graph, chain, at, props, runs, small_nets
 

@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, assume, given, seed, settings
 
-from analysis.statespace import ExplorationLimit
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import Net
 from mcl2pnml.io import ids

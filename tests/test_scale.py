@@ -5,7 +5,7 @@ the benchmarks in bench/, never by timed assertions.
 """
 import pytest
 
-from analysis.zoo import cycle
+from mcl2pnml.analysis.zoo import cycle
 from mcl2pnml import compose, parse_pnml, to_pnml_bytes
 
 

@@ -16,7 +16,7 @@ import pytest
 from helpers import ROOT, run_cli as run
 from test_show import SHOTS, marking, page_of, two_tasks_run  # noqa: F401 (fixtures)
 
-from analysis.statespace import explore
+from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml import pipeline
 from mcl2pnml.view.reachability import reachability_graph
 
@@ -225,7 +225,7 @@ def test_the_reachability_graph(page_of, mission):
 
 
 def test_no_graph_of_a_large_or_unbounded_net():
-    from analysis.zoo import kanban
+    from mcl2pnml.analysis.zoo import kanban
     from mcl2pnml.core.net import NetBuilder
     graph = reachability_graph(kanban(2))                        # 4,600 markings
     assert graph.reason is not None and "more than 2,000" in graph.reason

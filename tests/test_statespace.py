@@ -13,11 +13,15 @@ import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
 
-from analysis import compiledspace, counterspace, generalspace, packedspace, statespace
-from analysis.explorers import EXPLORERS
-from analysis.behaviour import behaviour, final_markings_agree
-from analysis.statespace import OMEGA, ExplorationLimit, MemoryLimit, explore
-from analysis.zoo import cycles, kanban
+from mcl2pnml.analysis.statespace import compiled as compiledspace
+from mcl2pnml.analysis.statespace import counters as counterspace
+from mcl2pnml.analysis.statespace import general as generalspace
+from mcl2pnml.analysis.statespace import packed as packedspace
+from mcl2pnml.analysis.statespace import explore as statespace
+from mcl2pnml.analysis.statespace.explorers import EXPLORERS
+from mcl2pnml.analysis.behaviour import behaviour, final_markings_agree
+from mcl2pnml.analysis.statespace.explore import OMEGA, ExplorationLimit, MemoryLimit, explore
+from mcl2pnml.analysis.zoo import cycles, kanban
 from mcl2pnml.core.net import ArcKind, NetBuilder
 from mcl2pnml.core.structure import structure
 
@@ -61,10 +65,10 @@ def test_independent_cycles_have_4_to_the_k_markings(backend):
 
 
 def test_a_place_s_tokens_in_every_node_are_its_column_of_the_markings(backend):
-    """``tokens(p)``, what a property reads (analysis/properties.py), is the p-th count of
+    """``tokens(p)``, what a property reads (analysis/checking/on_graph.py), is the p-th count of
     each node's marking, in node order, on every explorer: on a safe net and on nets of
     counters (Kanban's, up to one and up to two tokens a place)."""
-    from analysis.zoo import kanban
+    from mcl2pnml.analysis.zoo import kanban
     for net in (cycles(2), kanban(1), kanban(2)):
         space = explore(net, backend=backend)
         markings = list(space.markings)      # decoded once
@@ -289,7 +293,7 @@ def test_markings_that_differ_in_the_top_bits_of_two_words_have_two_keys():
     bit 62 of the first word and bits 33, 34, 62 and 63 of the second: a multiply and one
     shift a word gave them one key; the avalanche step gives every such pair two, as it
     does every pair of markings one or two bits apart in each word."""
-    from analysis.packedmarkings import keys_of
+    from mcl2pnml.analysis.statespace.packedmarkings import keys_of
     pair = np.array([[0x0809120090049292, 0x8000000E02020202],
                      [0x4809120090049292, 0x4000000802020202]], dtype=np.uint64)
     assert keys_of(pair)[0] != keys_of(pair)[1]
@@ -496,7 +500,7 @@ def test_dead_markings_met_before_the_budget_are_counted(backend):
 
 def _kernel_modules() -> list:
     """The compiled loops that answer for a packed state space, each where it can run."""
-    names = [("native", "analysis._native_loops"), ("compiled", "analysis._compiled_loops")]
+    names = [("native", "mcl2pnml.analysis.statespace.loops.native_safe"), ("compiled", "mcl2pnml.analysis.statespace.loops.numba_safe")]
     return [pytest.param(module, id=name,
                          marks=pytest.mark.skipif(not EXPLORERS[name].can_run(),
                                                   reason=f"the {name} loops cannot run here"))
@@ -554,8 +558,8 @@ def test_with_its_c_code_a_net_is_analysed_without_loading_numba():
     """Loading numba costs half a second and some 120 MB: a safe net needs none of it, nor
     a bounded one (Kanban, counters)."""
     runnable("native")
-    code = ("import sys; from analysis.zoo import cycles, kanban; "
-            "from analysis.report import analyze; "
+    code = ("import sys; from mcl2pnml.analysis.zoo import cycles, kanban; "
+            "from mcl2pnml.analysis.report import analyze; "
             "print(analyze(cycles(8))['states'], analyze(kanban(2))['states'], "
             "'numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

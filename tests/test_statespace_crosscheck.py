@@ -8,8 +8,8 @@ import warnings
 
 import pytest
 
-from analysis.statespace import explore
-from analysis.zoo import cycles
+from mcl2pnml.analysis.statespace.explore import explore
+from mcl2pnml.analysis.zoo import cycles
 from mcl2pnml.io import ids
 from mcl2pnml.io.pnml import save_pnml
 from mcl2pnml.language.library import default_library

@@ -18,14 +18,14 @@ import sympy
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from analysis.invariants import (AnalysisLimit, format_invariant, invariant_value,
+from mcl2pnml.analysis.structure.invariants import (AnalysisLimit, format_invariant, invariant_value,
                                  is_p_invariant, minimal_semipositive_p_invariants,
                                  minimal_semipositive_t_invariants, p_invariant_basis,
                                  t_invariant_basis)
-from analysis.siphons import (SiphonReport, control_by_lp, is_siphon, is_trap,
+from mcl2pnml.analysis.structure.siphons import (SiphonReport, control_by_lp, is_siphon, is_trap,
                               max_siphon_within, max_trap_within, minimal_siphons,
                               minimal_traps, siphon_control)
-from analysis.zoo import cycle, philosophers
+from mcl2pnml.analysis.zoo import cycle, philosophers
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import ArcKind, Marking, Net, NetBuilder
 from mcl2pnml.core.structure import structure

@@ -30,7 +30,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import ArcKind, NetBuilder, Timing
 from mcl2pnml.core.payloads import RESULT_PLACES, EventKind, read_transition
-from mcl2pnml.core.properties import Not, Pattern, Property, Scope, ScopeKind, Tokens
+from mcl2pnml.core.patterns import Not, Pattern, Property, Scope, ScopeKind, Tokens
 from mcl2pnml.core.timing import Assumptions, mission_timing
 from mcl2pnml.io import tapn
 
@@ -309,7 +309,7 @@ def our_ends(net, assumptions: Assumptions, max_states: int = 1_000_000):
     """Our checker's ``timed_ends`` within ``max_states`` zones; where its end times pass
     the limit (their clock of the whole run is never extrapolated), the "always ends"
     verdict it computes first, alone (its end times then None, as for an unknown verdict)."""
-    from analysis.timed import TimedLimit
+    from mcl2pnml.analysis.timed.zones import TimedLimit
     from mcl2pnml.timed import TimedEnds, ends_property
     try:
         return pipeline.timed_ends(net, assumptions, max_states)

@@ -30,7 +30,7 @@ def test_the_stored_proofs_are_the_templates_proven_now():
 
 
 def test_the_results_tables_say_what_each_structure_gives_with_its_children_s_results():
-    """Each structure proven with each child reduced to what it may do (analysis.contract.
+    """Each structure proven with each child reduced to what it may do (mcl2pnml.analysis.checking.contract.
     restricted): end only OK, only FAIL, or either, and perhaps run for ever instead; the
     rows are mcl.md's semantics, computed: a loop whose condition never fails never ends."""
     table = {name: {k: (tuple(v["ends"]), v["stuck"]) if "ends" in v else v["breach"]

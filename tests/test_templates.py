@@ -9,8 +9,8 @@ exactly one of OK, FAIL, ABORTED, with no abort token left inside.
 
 import pytest
 
-from analysis.behaviour import behaviour
-from analysis.statespace import explore
+from mcl2pnml.analysis.behaviour import behaviour
+from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
 from mcl2pnml.language.library import Library, default_library, source_places

@@ -1,4 +1,4 @@
-"""Timed verdicts (docs/time.md): the zone graph of :mod:`analysis.timed` held to an
+"""Timed verdicts (docs/time.md): the zone graph of :mod:`mcl2pnml.analysis.timed.zones` held to an
 independent discrete-time reading of the same semantics, to the engines' own runs, and on
 the examples.
 

@@ -1,7 +1,7 @@
 """A second, independent reading of docs/time.md's semantics: discrete time, one state per
 unit, every clock's value kept (capped where it no longer matters). Exact for our closed
 intervals (digitization), slow with large constants: the tests hold the zone graph of
-:mod:`analysis.timed` to it on small nets and short time-outs."""
+:mod:`mcl2pnml.analysis.timed.zones` to it on small nets and short time-outs."""
 from __future__ import annotations
 
 from collections import deque

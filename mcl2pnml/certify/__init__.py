@@ -1,7 +1,7 @@
 """Missions proven from their parts, without exploring their state space (sections 2.3-2.5).
 
 The paper's argument is compositional: a task pattern or a control
-structure that keeps the interface contract (:mod:`analysis.contract`),
+structure that keeps the interface contract (:mod:`mcl2pnml.analysis.checking.contract`),
 joined with children that keep it, keeps it. This package owns that
 argument as code: the proofs of the library's templates, each checked once
 against the contract with its children reduced (Fig. 3) and stored with a

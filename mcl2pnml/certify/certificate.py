@@ -2,7 +2,7 @@
 
 The argument, rule by rule, each resting on a proof of
 :mod:`mcl2pnml.certify.templates` (a component checked once against the
-interface contract of :mod:`analysis.contract`, its children reduced):
+interface contract of :mod:`mcl2pnml.analysis.checking.contract`, its children reduced):
 
 * **task**: a task's net is its pattern fused with its primitives (with its
   time-out, or without one); the pattern's proof covers it, used by one call
@@ -33,7 +33,7 @@ interface contract of :mod:`analysis.contract`, its children reduced):
 
 :func:`certify` writes the tree of the mission (and of each function) with
 the rule and the proof used at each node, the side conditions, and the
-conclusion. :mod:`mcl2pnml.certify.checker` re-checks it against the PNML
+conclusion. :mod:`mcl2pnml.certify.recheck` re-checks it against the PNML
 alone. No state space is explored: the cost is linear in the mission.
 """
 from __future__ import annotations
@@ -41,7 +41,7 @@ from __future__ import annotations
 from typing import Any
 
 from mcl2pnml.certify import form
-from mcl2pnml.certify.checker import results, root_ends, said_signature
+from mcl2pnml.certify.recheck import results, root_ends, said_signature
 from mcl2pnml.certify.templates import current, untrusted_reduced
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, line_of, source_lines
 from mcl2pnml.core.gcpause import without_gc
@@ -55,7 +55,7 @@ from mcl2pnml.language.library import Library, default_library
 def certify(checked, lib: Library | None = None, net_name: str | None = None,
             abort_pending: bool = False, proofs: dict[str, dict] | None = None
             ) -> dict[str, Any]:
-    """The certificate of a checked mission (:class:`mcl2pnml.language.checker.Checked`),
+    """The certificate of a checked mission (:class:`mcl2pnml.language.semantics.Checked`),
     started by ``mission.B`` (and, ``abort_pending``, with ``mission.A`` marked too: the
     abort racing every step, as the analysis proves that an aborted mission ends).
     ``proofs``: the library's (:func:`mcl2pnml.certify.templates.current`), if already

@@ -1,6 +1,6 @@
 """The certificate's JSON form: its schema, the parts every certificate says alike, and its
 conclusion, written once for :mod:`mcl2pnml.certify.certificate`, which writes them, and
-:mod:`mcl2pnml.certify.checker`, which holds a file to them.
+:mod:`mcl2pnml.certify.recheck`, which holds a file to them.
 
 The shape is ``certificate.schema.json`` (JSON Schema, draft 7) beside this module: a
 valid certificate passes it in one compiled function (``fastjsonschema``, a fifth of a

@@ -36,8 +36,8 @@ from dataclasses import dataclass
 from itertools import product
 from pathlib import Path
 
-from analysis.contract import VERSION as CONTRACT_VERSION
-from analysis.contract import Clause, Own, check, restricted
+from mcl2pnml.analysis.checking.contract import VERSION as CONTRACT_VERSION
+from mcl2pnml.analysis.checking.contract import Clause, Own, check, restricted
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import Net
@@ -115,7 +115,7 @@ def local_digest(lib: Library, subject: str) -> str:
 
 #: What a child may be known to do, from B with no abort asked: the results it can give,
 #: and whether it may also run for ever (until aborted); the reduced model restricted to
-#: that (:func:`analysis.contract.restricted`) stands for it. A child that gives no result
+#: that (:func:`mcl2pnml.analysis.checking.contract.restricted`) stands for it. A child that gives no result
 #: runs for ever (a loop whose condition never fails).
 SIGNATURES = tuple((frozenset(r), stuck) for r, stuck in (
     ((), True), (("OK",), False), (("OK",), True), (("FAIL",), False), (("FAIL",), True),
@@ -352,7 +352,7 @@ def prove(name: str, kind: str, make, children: int, source: str,
         more = len(verdict.breaches) - 3
         raise BrokenTemplate(
             f"template '{name}' breaks the interface contract (docs/ARCHITECTURE.md, "
-            f"analysis.contract) with its children reduced: {breaches}"
+            f"mcl2pnml.analysis.checking.contract) with its children reduced: {breaches}"
             + (f"; and {more} more" if more > 0 else ""), Location(source))
     markings, table = verdict.markings, {results_key((FULL,) * children): classify(verdict)}
     for row in product(SIGNATURES, repeat=children) if eager else ():

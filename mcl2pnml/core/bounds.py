@@ -7,7 +7,7 @@ more than 4,300 digits into text or back, and an unbounded one would pass
 through the analysis's 64-bit counters):
 
 * markings and arc weights (PNML, TINA, LoLA): at most :data:`MAX_TOKENS`,
-  2^63 - 1, what the analysis's counters hold (``analysis.counterspace``
+  2^63 - 1, what the analysis's counters hold (``mcl2pnml.analysis.statespace.counters``
   counts tokens in signed 64-bit integers);
 * time-outs (MCL) and time bounds (TINA): finite, at most
   :data:`MAX_SECONDS` seconds of virtual time (about 31.7 years), far

@@ -6,11 +6,11 @@ CTL and LTL formulas over *cardinality* atoms (token counts compared) or
 *fireability* atoms (is this transition enabled), and the upper bound of
 sets of places. Its property language (an XML, the one
 :mod:`mcl2pnml.io.mccquery` writes and reads) is this module's syntax tree,
-and nothing else: :mod:`analysis.mcc` answers it on a net's state space.
+and nothing else: :mod:`mcl2pnml.analysis.contest.answers` answers it on a net's state space.
 
 A formula is evaluated at the initial marking, over the net's maximal firing
 sequences; how a dead marking ends one (CTL and LTL read it differently) is
-:mod:`analysis.mcc`'s to say.
+:mod:`mcl2pnml.analysis.contest.answers`'s to say.
 """
 from __future__ import annotations
 

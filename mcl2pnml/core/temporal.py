@@ -1,7 +1,7 @@
 """Temporal formulas over place predicates: a property's LTL and CTL forms.
 
-A property (:mod:`mcl2pnml.core.properties`) is checked here by an observer
-of the marking sequence (:mod:`analysis.properties`); other model checkers
+A property (:mod:`mcl2pnml.core.patterns`) is checked here by an observer
+of the marking sequence (:mod:`mcl2pnml.analysis.checking.on_graph`); other model checkers
 are given it as a temporal formula, in the Model Checking Contest's
 language (:mod:`mcl2pnml.io.mccquery`). This module is the formula: a small
 typed syntax (state predicates, the path operators next-free LTL needs,
@@ -37,12 +37,12 @@ response (P leads to S)   ``(P -> (!R U (S & !R))) W R``
 ========================  ===============================================
 
 Two departures from the catalogue's text, both to mean what
-:class:`~mcl2pnml.core.properties.ScopeKind` says: *after Q* is anchored
+:class:`~mcl2pnml.core.patterns.ScopeKind` says: *after Q* is anchored
 at the first Q (the catalogue's ``<>(Q & ...)`` for bounded existence
 would let a later Q choose a shorter suffix), and a weak until stands where
 the catalogue writes a strong one under ``<>R`` (the same there).
 
-The formulas read runs as :mod:`mcl2pnml.core.properties` does; the
+The formulas read runs as :mod:`mcl2pnml.core.patterns` does; the
 contest's tools extend a finite run by repeating its dead marking forever,
 and for these formulas, which have no next operator, that is the same
 reading (a finite run satisfies one exactly when its stuttered extension
@@ -53,7 +53,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mcl2pnml.core.properties import (And, Const, Not, Or, Pattern, Predicate, Property,
+from mcl2pnml.core.patterns import (And, Const, Not, Or, Pattern, Predicate, Property,
                                       ScopeKind)
 
 
@@ -263,7 +263,7 @@ def ctl(prop: Property) -> Formula | None:
 
 def show(f: Formula) -> str:
     """The formula in the usual notation: ``A [](m.OK >= 1 -> <>(...))``."""
-    from mcl2pnml.core.properties import describe
+    from mcl2pnml.core.patterns import describe
     if isinstance(f, State):
         text = describe(f.predicate)
         return text if isinstance(f.predicate, Const) or " " not in text else f"({text})"
@@ -288,7 +288,7 @@ def evaluate(f: Formula, word, loop: int | None = None) -> bool:
     path formula ``f`` at its start (path quantifiers are read on this run alone): a
     finite run repeats its last marking forever, a lasso returns to ``word[loop]``
     after its last marking. For tests: the LTL formula against the observer."""
-    from mcl2pnml.core.properties import holds
+    from mcl2pnml.core.patterns import holds
     n = len(word)
     back = n - 1 if loop is None else loop   # where the run goes after word[n - 1]
 

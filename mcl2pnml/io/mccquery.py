@@ -24,7 +24,7 @@ contest's, 2021) crashes on a ``<deadlock/>`` inside any formula, and given
 answers both forms alike, but its query reduction spends 30 s on the long
 one, where it answers the short one in a tenth of a second.
 
-*end* is a proper end of the mission (:mod:`analysis.behaviour`; mcl.md:
+*end* is a proper end of the mission (:mod:`mcl2pnml.analysis.behaviour`; mcl.md:
 "every net returns to its initial marking plus exactly one result place"):
 one token in ``mission.OK``, ``mission.FAIL`` and ``mission.ABORTED``
 together, and every other place but the inputs ``mission.B`` and
@@ -214,8 +214,8 @@ CATEGORIES = ("ReachabilityCardinality", "CTLCardinality", "LTLCardinality")
 
 
 def _predicate(p) -> Element:
-    """A predicate on places (:mod:`mcl2pnml.core.properties`) as the contest's state formula."""
-    from mcl2pnml.core.properties import And, Const, Not, Tokens
+    """A predicate on places (:mod:`mcl2pnml.core.patterns`) as the contest's state formula."""
+    from mcl2pnml.core.patterns import And, Const, Not, Tokens
     if isinstance(p, Tokens):
         if not p.places:   # an empty sum is 0
             return _constant(p.at_least <= 0)

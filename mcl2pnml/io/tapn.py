@@ -81,7 +81,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import RESULT_PLACES
-from mcl2pnml.core.properties import (And, Const, Not, Or, Pattern, Predicate, Property,
+from mcl2pnml.core.patterns import (And, Const, Not, Or, Pattern, Predicate, Property,
                                       ScopeKind, Tokens)
 from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
 from mcl2pnml.core.version import __version__

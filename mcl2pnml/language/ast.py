@@ -166,7 +166,7 @@ class PropAtom:
     """``KIND(ARG[, ARG])``: ``enabled(KeepDepth)``, ``ended(Survey, ABORTED)``.
 
     The kind and its arguments are names here; the checker judges them
-    (:func:`mcl2pnml.language.properties.property_errors`), so that a
+    (:func:`mcl2pnml.language.declared_properties.property_errors`), so that a
     misspelt kind is one message with the known ones, not a syntax error.
     """
 

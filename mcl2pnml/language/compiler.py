@@ -55,7 +55,7 @@ from mcl2pnml.core.payloads import (ENTER, MISSION, ActionKind, ActionSpec, Arg,
 from mcl2pnml.language.functional import (FCall, FNode, NULL_KIND, function_expression,
                                           instances, mission_expression)
 from mcl2pnml.core.gcpause import without_gc
-from mcl2pnml.language.checker import Checked
+from mcl2pnml.language.semantics import Checked
 from mcl2pnml.core.net import Marking, Net, NetBuilder, Place, Timing, Transition, freeze
 from mcl2pnml.language.library import Library, at_rest, default_library
 from mcl2pnml.language.template_parser import CONTROL, slot_places

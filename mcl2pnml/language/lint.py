@@ -1,6 +1,6 @@
 """Warnings: valid MCL that does not do what it seems to say.
 
-A pass over a checked program (:class:`~mcl2pnml.language.checker.Checked`),
+A pass over a checked program (:class:`~mcl2pnml.language.semantics.Checked`),
 like lark's and sqlglot's: each trap found is a :class:`Warning`, a typed
 value with a code, a message saying what really happens, a location (file,
 line, column and the source line, rendered with a caret as errors are) and
@@ -63,7 +63,7 @@ from typing import Iterator, Sequence
 from mcl2pnml.core.errors import Location, shown as shown_errors, source_lines, visible
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.language import ast
-from mcl2pnml.language.checker import Checked
+from mcl2pnml.language.semantics import Checked
 from mcl2pnml.language.functional import format_node, to_functional
 
 #: Each code and what it is about (docs/warnings.md says more).

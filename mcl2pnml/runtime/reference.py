@@ -39,7 +39,7 @@ from mcl2pnml.language import ast
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
 from mcl2pnml.runtime.engine import Engine, Outcome
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.language.checker import Checked
+from mcl2pnml.language.semantics import Checked
 
 # a statement ends in one of the outcomes of a whole mission (mcl.md, "Results")
 OK, FAIL, ABORTED = Outcome.OK, Outcome.FAIL, Outcome.ABORTED

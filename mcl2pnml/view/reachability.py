@@ -3,7 +3,7 @@
 A node is a reachable marking, an edge a firing (section 2.3 of the paper
 reads a net's behaviour off this graph: its dead markings, whether the
 proper end is always reached). The graph is computed here, by the explorer
-``analyze`` chooses (:func:`analysis.statespace.explore`), not in the page,
+``analyze`` chooses (:func:`mcl2pnml.analysis.statespace.explore.explore`), not in the page,
 so that the page shows the markings the analysis counts; above
 :data:`GRAPH_LIMIT` markings a drawing would be a heap nobody can read, and
 the page says so instead.
@@ -67,7 +67,7 @@ class Graph:
 
 def reachability_graph(net: Net, limit: int = GRAPH_LIMIT) -> Graph:
     """The reachability graph of ``net`` from its M0, if it has at most ``limit`` markings."""
-    from analysis.statespace import ExplorationLimit, explore
+    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 
     try:
         # the explorer analyze chooses (for a safe net, the native one: milliseconds where

@@ -242,7 +242,7 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
     primitive of Fig. 2's task, T1 and T2 of Fig. 4); None, each instance
     of a compiled mission in its box.
     """
-    from analysis.invariants import p_invariant_basis
+    from mcl2pnml.analysis.structure.invariants import p_invariant_basis
     from mcl2pnml.core.structure import structure
 
     nodes = len(net.places) + len(net.transitions)

@@ -1,5 +1,5 @@
-"""The graph searches of :mod:`analysis.mcc` in Python: the backend where the loops in C
-(``analysis/_native.c``: ``scc``, ``back_reach``, ``ltl_product``) were not built.
+"""The graph searches of :mod:`mcl2pnml.analysis.contest.answers` in Python: the backend where the loops in C
+(``analysis/statespace/loops/_native.c``: ``scc``, ``back_reach``, ``ltl_product``) were not built.
 
 The same functions, the same arguments and results, so that one test suite runs both
 (tests/test_graph_kernels.py); these are the same algorithms written plainly, for a
@@ -80,7 +80,7 @@ def back_reach(indptr: np.ndarray, indices: np.ndarray, through: np.ndarray,
 def ltl_product(indptr, indices, a_ptr, a_succ, label, acc, all_sets: int, initial, num,
                 max_states: int) -> tuple[int, int]:
     """Couvreur's on-the-fly emptiness check of the graph's product with a generalised
-    Büchi automaton (analysis/_native.c's ``ltl_product``, its arguments and result):
+    Büchi automaton (analysis/statespace/loops/_native.c's ``ltl_product``, its arguments and result):
     ``(1, states)`` an accepting cycle, ``(0, states)`` none, ``(-1, states)`` past
     ``max_states``."""
     n, k = len(indptr) - 1, len(a_ptr) - 1

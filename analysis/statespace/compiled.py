@@ -1,9 +1,9 @@
 """The reachability graph of a safe net, explored one marking at a time in compiled code.
 
-One of the two safe-net explorers behind :func:`analysis.statespace.explore`,
-for the same nets as :mod:`analysis.packedspace` (1-safe, unit weights):
+One of the two safe-net explorers behind :func:`mcl2pnml.analysis.statespace.explore.explore`,
+for the same nets as :mod:`mcl2pnml.analysis.statespace.packed` (1-safe, unit weights):
 markings are rows of bits packed into 64-bit words
-(:mod:`analysis.packedmarkings`), and firing a transition is three bit
+(:mod:`mcl2pnml.analysis.statespace.packedmarkings`), and firing a transition is three bit
 operations (``need`` covered, ``keep`` the rest, ``give`` the outputs). Here
 the loop is the textbook one, a queue of markings and a hash set, compiled
 to machine code by numba, so each (marking, transition) pair costs a few
@@ -20,7 +20,7 @@ after another) gain most.
 * The compiled loop runs in slices of :data:`SLICE` expansions, handing
   back to Python in between: the caller's progress report is called, and
   Ctrl-C is honoured, at least every few tenths of a second.
-* The result is a :class:`~analysis.packedmarkings.PackedStateSpace`, the same
+* The result is a :class:`~mcl2pnml.analysis.statespace.packedmarkings.PackedStateSpace`, the same
   value the numpy explorer returns, so terminal markings, reachability by
   unfiring and the edge list come from the same code whichever explorer ran.
 
@@ -38,12 +38,12 @@ import numpy as np
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import Structure, structure
 
-from analysis.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace,
+from mcl2pnml.analysis.statespace.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace,
                                      key_index, marking_row, masks, place_weights, touched,
                                      word_count)
 # bound under this module's own name, so that the keys of this explorer alone
 # can be replaced (the key-collision tests do)
-from analysis.packedmarkings import keys_of as _keys
+from mcl2pnml.analysis.statespace.packedmarkings import keys_of as _keys
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 19
@@ -93,7 +93,7 @@ def warm_up() -> None:
 def native_available() -> bool:
     """Whether the loops in C were built when mcl2pnml was installed (they need a C compiler)."""
     try:
-        from analysis import _native_loops   # noqa: F401
+        from mcl2pnml.analysis.statespace.loops import native_safe as _native_loops  # noqa: F401
     except ImportError:
         return False
     return True
@@ -101,8 +101,8 @@ def native_available() -> bool:
 
 def explore_native(s: Structure, m0: Sequence[int], max_states: int, limit_error,
                    progress=None) -> PackedStateSpace:
-    """:func:`explore_compiled` with the loops in C (:mod:`analysis._native_loops`)."""
-    from analysis import _native_loops as kernels
+    """:func:`explore_compiled` with the loops in C (:mod:`mcl2pnml.analysis.statespace.loops.native_safe`)."""
+    from mcl2pnml.analysis.statespace.loops import native_safe as kernels
     return _explore(kernels, s, m0, max_states, limit_error, progress)
 
 
@@ -110,7 +110,7 @@ def explore_compiled(s: Structure, m0: Sequence[int], max_states: int, limit_err
                      progress=None) -> PackedStateSpace:
     """Breadth-first from ``m0``; raises :class:`NotSafe` at a second token in a place."""
     global _ran
-    from analysis import _compiled_loops as kernels   # imports numba: 0.3 s, so only now
+    from mcl2pnml.analysis.statespace.loops import numba_safe as kernels  # imports numba: 0.3 s, so only now
     space = _explore(kernels, s, m0, max_states, limit_error, progress)
     _ran = True
     return space

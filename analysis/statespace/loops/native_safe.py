@@ -1,5 +1,5 @@
-"""The loops of :mod:`analysis.compiledspace` in C (``analysis/_native.c``), with the
-signatures of :mod:`analysis._compiled_loops`, so that either runs the same explorer.
+"""The loops of :mod:`mcl2pnml.analysis.statespace.compiled` in C (``analysis/statespace/loops/_native.c``), with the
+signatures of :mod:`mcl2pnml.analysis.statespace.loops.numba_safe`, so that either runs the same explorer.
 
 The C module is built when mcl2pnml is installed (an optional extension: a
 machine without a C compiler installs without it, and :func:`available`
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from analysis import _native as c
+from mcl2pnml.analysis.statespace.loops import _native as c
 
 GOING, NOT_SAFE, LIMIT = c.GOING, c.NOT_SAFE, c.LIMIT
 
@@ -72,7 +72,7 @@ def _grown_table(queue: np.ndarray, count: int, room: int, bits: int,
 
 def step_one_word(need, keep, give, key_ptr, key_t, free_t, queue, count, head, table, bits,
                   zero_seen, max_states, budget):
-    """:func:`analysis._compiled_loops.step_one_word`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_safe.step_one_word`, in C."""
     masks = _contiguous(need, keep, give, key_ptr, key_t, free_t)
     room = len(need)
     while True:
@@ -88,7 +88,7 @@ def step_one_word(need, keep, give, key_ptr, key_t, free_t, queue, count, head, 
 
 def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key_ptr, key_t,
                free_t, queue, count, head, table, bits, max_states, budget):
-    """:func:`analysis._compiled_loops.step_words`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_safe.step_words`, in C."""
     masks = _contiguous(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key_ptr,
                         key_t, free_t)
     room = len(need)
@@ -104,7 +104,7 @@ def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key
 
 
 def out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.ndarray:
-    """:func:`analysis._compiled_loops.out_degree`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_safe.out_degree`, in C."""
     degree = np.zeros(len(packed), dtype=np.int32)
     c.out_degree(*_contiguous(packed, need, need_ptr, need_word, key_ptr, key_t, free_t), degree,
                  False)
@@ -112,7 +112,7 @@ def out_degree(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.
 
 
 def live(packed, need, need_ptr, need_word, key_ptr, key_t, free_t) -> np.ndarray:
-    """:func:`analysis._compiled_loops.live`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_safe.live`, in C."""
     alive = np.zeros(len(packed), dtype=np.int32)
     c.out_degree(*_contiguous(packed, need, need_ptr, need_word, key_ptr, key_t, free_t), alive,
                  True)
@@ -156,7 +156,7 @@ def paired_index(queue: np.ndarray, count: int, by_value: bool = True
 
 def backward(packed, pairs, bits, need, take, give, touch_ptr, touch_word, key_ptr, key_t, free_t,
              seen, frontier) -> np.ndarray:
-    """:func:`analysis._compiled_loops.backward`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_safe.backward`, in C."""
     frontier = np.ascontiguousarray(frontier, dtype=np.int64)
     if packed.ndim == 2 and packed.shape[1] == 1:
         # a table of the markings themselves (:func:`paired_index`): its slots are the nodes

@@ -6,17 +6,17 @@ the command line can list the explorers without paying for them. Every
 explorer takes the same arguments (the net's
 :class:`~mcl2pnml.core.structure.Structure`, the initial marking as counts,
 the state limit, the error to raise at it, the progress callback) and
-returns a :class:`~analysis.generalspace.StateSpace`; one that explores
-safe nets only raises :class:`~analysis.packedmarkings.NotSafe` at the
+returns a :class:`~mcl2pnml.analysis.statespace.general.StateSpace`; one that explores
+safe nets only raises :class:`~mcl2pnml.analysis.statespace.packedmarkings.NotSafe` at the
 first second token, and the counter explorer (or, without numba, the
 general one) takes over; the counter explorer raises
-:class:`~analysis.counterspace.NotBounded` when the net may be unbounded,
+:class:`~mcl2pnml.analysis.statespace.counters.NotBounded` when the net may be unbounded,
 and the general one (Karp-Miller) takes over. Each also says what a
 marking costs it in bytes (``footprint``), so that a memory budget becomes
 a number of markings; at its limit an explorer sets ``explored`` (markings
 found) and ``deadlocks`` (dead markings among those expanded, or None) on
 the error it raises.
-:func:`analysis.statespace.explore` chooses among them.
+:func:`mcl2pnml.analysis.statespace.explore.explore` chooses among them.
 
 Adding an explorer is one module with such a function and one entry in
 :data:`EXPLORERS`; the chooser, ``analyze --explorer`` and the shared test
@@ -65,19 +65,19 @@ class Explorer:
 
 EXPLORERS: dict[str, Explorer] = {e.name: e for e in (
     Explorer("native", "C code for safe nets, built at install (fastest; loads at once)",
-             "analysis.compiledspace", "explore_native", safe_only=True,
+             "mcl2pnml.analysis.statespace.compiled", "explore_native", safe_only=True,
              available="native_available"),
     Explorer("compiled", "compiled code for safe nets (fastest; most of a second to load)",
-             "analysis.compiledspace", "explore_compiled", safe_only=True,
+             "mcl2pnml.analysis.statespace.compiled", "explore_compiled", safe_only=True,
              available="available"),
     Explorer("packed", "numpy for safe nets, a breadth-first frontier at a time",
-             "analysis.packedspace", "explore_packed", safe_only=True),
+             "mcl2pnml.analysis.statespace.packed", "explore_packed", safe_only=True),
     Explorer("counters", "compiled code for bounded nets: counters packed into words",
-             "analysis.counterspace", "explore_counters", available="available"),
+             "mcl2pnml.analysis.statespace.counters", "explore_counters", available="available"),
     Explorer("general", "any net: the reachability or Karp-Miller coverability graph",
-             "analysis.generalspace", "explore_general"),
+             "mcl2pnml.analysis.statespace.general", "explore_general"),
 )}
 
-#: What ``backend=`` accepts: ``auto`` (the policy of :func:`analysis.statespace.explore`)
+#: What ``backend=`` accepts: ``auto`` (the policy of :func:`mcl2pnml.analysis.statespace.explore.explore`)
 #: or an explorer of the table.
 CHOICES: tuple[str, ...] = ("auto", *EXPLORERS)

@@ -1,4 +1,4 @@
-"""The loops of :mod:`analysis.counterspace`, compiled by numba (imported only when used).
+"""The loops of :mod:`mcl2pnml.analysis.statespace.counters`, compiled by numba (imported only when used).
 
 Markings are rows of 64-bit words holding one unsigned counter a place,
 each counter a field of ``bits`` bits that never straddles two words. A
@@ -6,7 +6,7 @@ transition is two lists of fields (compressed rows: ``*_ptr[t]`` to
 ``*_ptr[t + 1]``): what it needs (word, shift, mask, tokens) and what it
 changes (word, shift, mask, signed change, place). The queue of markings
 and the open-addressing hash set of positions in it are those of
-:mod:`analysis._compiled_loops` (its probe and re-hash, ``find`` and ``rehash``): the
+:mod:`mcl2pnml.analysis.statespace.loops.numba_safe` (its probe and re-hash, ``find`` and ``rehash``): the
 queue is the array of markings in the order found, so node ``n`` of the
 state space is row ``n`` and node 0 the initial marking.
 
@@ -22,7 +22,7 @@ Miller 1969).
 import numba
 import numpy as np
 
-from analysis._compiled_loops import find as _find, rehash, sparse_index  # noqa: F401
+from mcl2pnml.analysis.statespace.loops.numba_safe import find as _find, rehash, sparse_index  # noqa: F401
 
 GOING, LIMIT, OVERFLOW, GROWING = 0, 1, 2, 3
 
@@ -134,7 +134,7 @@ def backward(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
     Unfiring: the only marking t can come from is the one after minus t's
     change; it is a predecessor when it is reachable and enables t.
     """
-    # first in, first out, as :func:`analysis._compiled_loops.backward` does
+    # first in, first out, as :func:`mcl2pnml.analysis.statespace.loops.numba_safe.backward` does
     todo = np.empty(count, dtype=np.int64)
     top = 0
     for n in frontier:

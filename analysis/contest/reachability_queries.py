@@ -1,10 +1,10 @@
 """The contest's reachability questions without the reachability graph
-(:func:`analysis.mcc.answer` asks here when the graph is past its limits, or with
+(:func:`mcl2pnml.analysis.contest.answers.answer` asks here when the graph is past its limits, or with
 ``--stubborn``).
 
 * On the fly: on a 1-safe net, ``A G φ`` is the universality of φ and ``E F φ`` the
   failure of the universality of not φ, for the property checker's engine
-  (:mod:`analysis.onthefly`), which searches breadth first in C and stops at the first
+  (:mod:`mcl2pnml.analysis.checking.on_the_fly`), which searches breadth first in C and stops at the first
   marking that decides; under stubborn sets when asked, on a net proven safe.
 * Without a marking beyond the initial one: ``E F φ`` where φ holds initially, ``A G φ``
   where it does not; and what the bounds of the semi-positive P-invariants settle
@@ -18,7 +18,7 @@ from typing import Sequence
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.net import Net
 
-from analysis.observers import Status
+from mcl2pnml.analysis.checking.observers import Status
 
 #: A question settled here: its value (True/False, a bound) and what decided it, as the
 #: contest's TECHNIQUES words.
@@ -74,8 +74,8 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
 
 def _invariant_bounds(s):
     """A function bounding a sum of places by the P-invariants (None: not bounded)."""
-    from analysis.counterspace import INVARIANT_PLACES, INVARIANT_ROWS
-    from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants
+    from mcl2pnml.analysis.statespace.counters import INVARIANT_PLACES, INVARIANT_ROWS
+    from mcl2pnml.analysis.structure.invariants import AnalysisLimit, minimal_semipositive_p_invariants
     invariants = []
     if len(s.places) <= INVARIANT_PLACES:
         try:
@@ -178,7 +178,7 @@ def safe_predicate(phi, s) -> object | None:
     """A state formula as the property checker's predicate on a 1-safe net (its sums are
     counts of marked places); None where it has none (a deadlock, a place named twice in
     a sum, a name the net does not have)."""
-    from mcl2pnml.core import properties as pr
+    from mcl2pnml.core import patterns as pr
 
     def sum_of(e):
         if isinstance(e, q.IntConst):
@@ -229,15 +229,15 @@ def safe_predicate(phi, s) -> object | None:
 def reach_on_the_fly(net: Net, queries: Sequence[q.Query], max_states: int,
                      max_memory: int | None, stubborn: bool = False,
                      safe: bool = False) -> dict[str, Settled]:
-    """The reachability questions the on-the-fly checker (:mod:`analysis.onthefly`) settles,
+    """The reachability questions the on-the-fly checker (:mod:`mcl2pnml.analysis.checking.on_the_fly`) settles,
     by id: on a net it takes (1-safe as given), each ``A G φ`` is the universality of φ
     and each ``E F φ`` the failure of the universality of not φ, searched breadth first
     in C and stopped at the first marking that decides it. With ``stubborn``, stubborn
     sets keep only the interleavings the atoms can see (a safety property keeps its
-    verdict: :mod:`analysis.onthefly`), on a net proven 1-safe (``safe``, or a P-invariant
+    verdict: :mod:`mcl2pnml.analysis.checking.on_the_fly`), on a net proven 1-safe (``safe``, or a P-invariant
     found here). A question past the limits is left to the graph."""
-    from analysis import onthefly
-    from mcl2pnml.core import properties as pr
+    from mcl2pnml.analysis.checking import on_the_fly as onthefly
+    from mcl2pnml.core import patterns as pr
     from mcl2pnml.core.structure import structure
     shaped = [(x, reachability(x.asks)) for x in queries]
     shaped = [(x, r) for x, r in shaped if r is not None]

@@ -1,6 +1,6 @@
-/* The loops of the safe-net explorer in C: analysis/_native_loops.py's machine code.
+/* The loops of the safe-net explorer in C: analysis/statespace/loops/native_safe.py's machine code.
  *
- * The same loops as analysis/_compiled_loops.py (read its docstrings for the
+ * The same loops as analysis/statespace/loops/numba_safe.py (read its docstrings for the
  * algorithms: a breadth-first queue of markings packed into 64-bit words, an
  * open-addressing hash set with linear probing, each transition keyed on one
  * place it needs), built once when mcl2pnml is installed instead of compiled
@@ -369,7 +369,7 @@ fail:
 
 /* -- a property's product, explored on the fly ----------------------------------------- */
 
-/* The product of the net with a property's observer (analysis/onthefly.py): a row is the
+/* The product of the net with a property's observer (analysis/checking/on_the_fly.py): a row is the
  * marking's words and one more word, the observer's state. The observer reads each new
  * marking through its atoms (a set of places and a least number of tokens among them:
  * popcount, the net being safe): code_of[atom bits] is the marking's letter (P S Q R as
@@ -439,7 +439,7 @@ static inline int fire_into(const uint64_t *row, uint64_t *nx, const Masks *m, i
     return 0;
 }
 
-/* The net's structure for stubborn sets (analysis/onthefly.py, Valmari's method on a safe
+/* The net's structure for stubborn sets (analysis/checking/on_the_fly.py, Valmari's method on a safe
  * net): the places each transition consumes and needs (consumes or reads), the
  * transitions that consume, need and mark each place, and which transitions are visible
  * (change a place the observer reads). */
@@ -523,7 +523,7 @@ static int64_t stubborn_set(const uint64_t *row, const Masks *m, const Stubborn 
  * met before at this depth or less, which then fires everything (the cycle proviso in
  * breadth-first form: a cycle has an arc that does not go deeper, so a row of each cycle
  * fires everything); C0-C3 of partial-order reduction, which keep the verdict of a
- * stutter-invariant observer (analysis/onthefly.py checks it is one). */
+ * stutter-invariant observer (analysis/checking/on_the_fly.py checks it is one). */
 static PyObject *py_product_step(PyObject *self, PyObject *args) {
     PyObject *o[31];
     long long bad, count, head, max_states, budget, found_in;
@@ -1127,7 +1127,7 @@ fail:
     return NULL;
 }
 
-/* -- bounded nets: counters packed into words (analysis/_counter_loops.py's loops) ------- */
+/* -- bounded nets: counters packed into words (analysis/statespace/loops/numba_counters.py's loops) ------- */
 
 /* A transition's fields as compressed rows: its needs (value: tokens, unsigned) or its
  * changes (value: signed). */
@@ -1367,7 +1367,7 @@ static PyObject *py_slot_of_word(PyObject *self, PyObject *args) {
     return PyLong_FromLongLong(slot_one((uint64_t)m, bits));
 }
 
-/* -- the reachability graph, asked by the contest's questions (analysis/mcc.py) -------- */
+/* -- the reachability graph, asked by the contest's questions (analysis/contest/answers.py) -------- */
 
 /* A growable int64 stack, scratch of one call (freed before it returns). */
 typedef struct { int64_t *at; int64_t size, cap; } Stack;
@@ -1619,8 +1619,8 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "analysis._native",
-    "The safe-net explorer's loops in C (see analysis/_native_loops.py).", -1, methods,
+    PyModuleDef_HEAD_INIT, "mcl2pnml.analysis.statespace.loops._native",
+    "The safe-net explorer's loops in C (see analysis/statespace/loops/native_safe.py).", -1, methods,
 };
 
 PyMODINIT_FUNC PyInit__native(void) {

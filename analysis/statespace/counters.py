@@ -3,19 +3,19 @@
 The explorer for nets that are not safe (weights, places with several
 tokens) but bounded: a marking is a row of 64-bit words holding one
 counter a place, each as wide as the place needs, and the loop is the
-textbook queue and hash set of :mod:`analysis.compiledspace`, in C where
-it was built at install (:mod:`analysis._native_counter_loops`), else
-compiled by numba (:mod:`analysis._counter_loops`).
+textbook queue and hash set of :mod:`mcl2pnml.analysis.statespace.compiled`, in C where
+it was built at install (:mod:`mcl2pnml.analysis.statespace.loops.native_counters`), else
+compiled by numba (:mod:`mcl2pnml.analysis.statespace.loops.numba_counters`).
 
 * **Widths.** A place covered by a semi-positive P-invariant y is bounded
   by y.M0 / y(p) (Murata 1989, section VII; the invariants are the minimal
-  ones of Martinez and Silva 1982, :mod:`analysis.invariants`), and gets
+  ones of Martinez and Silva 1982, :mod:`mcl2pnml.analysis.structure.invariants`), and gets
   just the bits that bound needs: such a counter never overflows. Any other
   place starts with room for twice its initial tokens; when a firing would
   overflow it, the place is widened, every marking found is re-packed and
   the exploration goes on from where it stopped.
 * **Unbounded nets** are handed over (:class:`NotBounded`, which
-  :func:`analysis.statespace.explore` answers with the Karp-Miller explorer)
+  :func:`mcl2pnml.analysis.statespace.explore.explore` answers with the Karp-Miller explorer)
   as soon as a transition that only adds tokens is enabled, or when a
   counter overflows in a marking that strictly covers one of its ancestors
   (either proves the net unbounded: Karp and Miller 1969), or outgrows
@@ -23,7 +23,7 @@ compiled by numba (:mod:`analysis._counter_loops`).
 * The result is a :class:`CounterStateSpace`: node n is the n-th marking
   found (node 0 the initial one); edges are not stored but fired again when
   asked for, and reachability of a set is computed backwards by unfiring, as
-  :class:`~analysis.packedmarkings.PackedStateSpace` does for safe nets.
+  :class:`~mcl2pnml.analysis.statespace.packedmarkings.PackedStateSpace` does for safe nets.
 
 Memory: 8 bytes a word a marking in the queue (twice that while it grows by
 doubling) and 11 to 23 bytes a marking in the table (:func:`footprint`).
@@ -37,8 +37,8 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.generalspace import DecodedMarkings, EdgesOnDemand, StateSpace
-from analysis.packedmarkings import distinct
+from mcl2pnml.analysis.statespace.general import DecodedMarkings, EdgesOnDemand, StateSpace
+from mcl2pnml.analysis.statespace.packedmarkings import distinct
 
 #: How many markings one call of the compiled loop expands before it hands back to Python.
 SLICE = 1 << 18
@@ -57,14 +57,14 @@ class NotBounded(Exception):
 
 
 def available() -> bool:
-    from analysis.compiledspace import available as numba_installed
+    from mcl2pnml.analysis.statespace.compiled import available as numba_installed
     return native_loops() is not None or numba_installed()
 
 
 def native_loops():
-    """The loops in C where they were built (:mod:`analysis._native_counter_loops`), else None."""
+    """The loops in C where they were built (:mod:`mcl2pnml.analysis.statespace.loops.native_counters`), else None."""
     try:
-        from analysis import _native_counter_loops
+        from mcl2pnml.analysis.statespace.loops import native_counters as _native_counter_loops
     except ImportError:
         return None
     return _native_counter_loops
@@ -75,7 +75,7 @@ def kernels():
     native = native_loops()
     if native is not None:
         return native
-    from analysis import _counter_loops
+    from mcl2pnml.analysis.statespace.loops import numba_counters as _counter_loops
     return _counter_loops
 
 
@@ -90,7 +90,7 @@ def _words_estimate(s: Structure) -> int:
 
 def invariant_bounds(s: Structure, m0: Sequence[int]) -> list[int | None]:
     """Per place, the bound a semi-positive P-invariant proves (None: none does)."""
-    from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants  # sympy
+    from mcl2pnml.analysis.structure.invariants import AnalysisLimit, minimal_semipositive_p_invariants  # sympy
     bounds: list[int | None] = [None] * len(s.places)
     if len(s.places) > INVARIANT_PLACES:
         return bounds

@@ -4,7 +4,7 @@ A property is one of Dwyer, Avrunin and Corbett's specification patterns in
 one of their scopes ("Patterns in property specifications for finite-state
 verification", ICSE 1999), written over the mission's own names; its typed
 form, and what its patterns and scopes mean on a net's runs, is
-:mod:`mcl2pnml.core.properties`. Here each atom becomes a predicate on the
+:mod:`mcl2pnml.core.patterns`. Here each atom becomes a predicate on the
 places of the net :mod:`mcl2pnml.language.compiler` builds (the paper's
 section 2.4: one shared net per primitive, per task and per function, the
 mission's fusion places of section 2.5), so that any Petri-net checker can
@@ -39,7 +39,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping, Sequence
 
-from mcl2pnml.core import properties as typed
+from mcl2pnml.core import patterns as typed
 from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS, MAX_TOKENS, MAX_TOKENS_TEXT
 from mcl2pnml.core.errors import (SHOWN_ERRORS, Location, Mcl2PnmlError, did_you_mean, raise_all,
                                   source_lines)

@@ -1,24 +1,24 @@
 """Which explorer builds the state space: :func:`explore` and its ``backend``.
 
 Five explorers (:data:`BACKENDS`) share one interface, the
-:class:`~analysis.generalspace.StateSpace` they return, and one test suite:
+:class:`~mcl2pnml.analysis.statespace.general.StateSpace` they return, and one test suite:
 
-* ``"native"``, :mod:`analysis.compiledspace` with the loops in C
-  (``analysis/_native.c``, built when mcl2pnml is installed), for safe
+* ``"native"``, :mod:`mcl2pnml.analysis.statespace.compiled` with the loops in C
+  (``analysis/statespace/loops/_native.c``, built when mcl2pnml is installed), for safe
   nets: the compiled explorer's algorithm, loaded in a millisecond where
   numba's runtime takes half a second and some 120 MB of memory;
-* ``"compiled"``, :mod:`analysis.compiledspace`, for safe nets: markings as
+* ``"compiled"``, :mod:`mcl2pnml.analysis.statespace.compiled`, for safe nets: markings as
   packed bits, the textbook queue-and-hash-set loop compiled by numba (a
   few nanoseconds a firing: over a million markings a second);
-* ``"packed"``, :mod:`analysis.packedspace`, for safe nets: the same packed
+* ``"packed"``, :mod:`mcl2pnml.analysis.statespace.packed`, for safe nets: the same packed
   markings, a whole breadth-first frontier fired at once in numpy. Both
-  give the same :class:`~analysis.packedmarkings.PackedStateSpace`, whose
+  give the same :class:`~mcl2pnml.analysis.statespace.packedmarkings.PackedStateSpace`, whose
   edges are recomputed when needed rather than stored;
-* ``"counters"``, :mod:`analysis.counterspace`, for bounded nets: counters
+* ``"counters"``, :mod:`mcl2pnml.analysis.statespace.counters`, for bounded nets: counters
   packed into words, as wide as the P-invariants prove, the same compiled
-  loop; it raises :class:`~analysis.counterspace.NotBounded` on a net that
+  loop; it raises :class:`~mcl2pnml.analysis.statespace.counters.NotBounded` on a net that
   may be unbounded;
-* ``"general"``, :mod:`analysis.generalspace`, for every net: the
+* ``"general"``, :mod:`mcl2pnml.analysis.statespace.general`, for every net: the
   reachability graph, or the Karp-Miller coverability graph (Murata 1989,
   section V-A) when the net is unbounded, with markings as tuples of counts.
 
@@ -36,7 +36,7 @@ their first 50,000 in 0.11 to 0.40 s; the compiled explorer then takes 2 s
 for a million markings where numpy took 2.7 s for the first 500,000. The
 state space is asked again (terminal markings, reachability backwards) in
 compiled code from the same size on
-(:data:`analysis.packedmarkings.COMPILED_FROM`), or whenever it is loaded.
+(:data:`mcl2pnml.analysis.statespace.packedmarkings.COMPILED_FROM`), or whenever it is loaded.
 A net that is not safe (or
 a safe-net explorer's first second token) gets the counter explorer, after
 the general one alone up to :data:`GENERAL_HANDOVER` markings while compiled
@@ -60,11 +60,11 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, resident, size_text
 from mcl2pnml.core.structure import Structure, structure as make_structure
 
-from analysis import compiledspace
-from analysis.explorers import CHOICES, EXPLORERS
-from analysis.generalspace import OMEGA, Progress, StateSpace, explore_general
-from analysis.counterspace import NotBounded, native_loops as counter_loops_in_c
-from analysis.packedmarkings import COMPILED_FROM, KeyCollision, NotSafe
+from mcl2pnml.analysis.statespace import compiled as compiledspace
+from mcl2pnml.analysis.statespace.explorers import CHOICES, EXPLORERS
+from mcl2pnml.analysis.statespace.general import OMEGA, Progress, StateSpace, explore_general
+from mcl2pnml.analysis.statespace.counters import NotBounded, native_loops as counter_loops_in_c
+from mcl2pnml.analysis.statespace.packedmarkings import COMPILED_FROM, KeyCollision, NotSafe
 
 __all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "MemoryLimit", "Progress",
            "StateSpace", "default_memory", "explore", "resident"]
@@ -87,7 +87,7 @@ class MemoryLimit(ExplorationLimit):
 
 BACKENDS = CHOICES
 """The explorers :func:`explore` can be asked for: ``auto`` or a name of
-:data:`analysis.explorers.EXPLORERS`."""
+:data:`mcl2pnml.analysis.statespace.explorers.EXPLORERS`."""
 
 HANDOVER = COMPILED_FROM
 """Markings after which ``"auto"`` leaves the numpy explorer for the compiled one

@@ -12,7 +12,7 @@ after Q until R).
 This module is the typed form every stage shares, and nothing else: the
 language compiles a mission's ``property`` declarations to it (its atoms,
 "KeepDepth is enabled", "the call Survey-1 ended ABORTED", become
-predicates on the places of the compiled net), :mod:`analysis.properties`
+predicates on the places of the compiled net), :mod:`mcl2pnml.analysis.checking.on_graph`
 checks it on the state space, and :mod:`mcl2pnml.io.mccquery` writes it in
 the Model Checking Contest's property language. So a predicate here is
 over a net's places only (token counts compared with constants), the one

@@ -1,6 +1,6 @@
 """Checking a property of a net's runs on its state space, with a shortest counterexample.
 
-A property (:mod:`mcl2pnml.core.properties`) is one of Dwyer, Avrunin and
+A property (:mod:`mcl2pnml.core.patterns`) is one of Dwyer, Avrunin and
 Corbett's specification patterns in one of their scopes ("Patterns in
 property specifications for finite-state verification", ICSE 1999), read
 over the runs of the net: maximal firing sequences from M0 seen as marking
@@ -61,11 +61,11 @@ from typing import Iterable
 import numpy as np
 
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.properties import And, Not, Or, Predicate, Property, Tokens, holds, places_of
+from mcl2pnml.core.patterns import And, Not, Or, Predicate, Property, Tokens, holds, places_of
 
 # (the observers and verdicts, imported from here by the callers too)
-from analysis.observers import BAD, Marked, Shape, Status, Verdict, pending, step  # noqa: F401
-from analysis.observers import initial as _initial, truths as _truths
+from mcl2pnml.analysis.checking.observers import BAD, Marked, Shape, Status, Verdict, pending, step  # noqa: F401
+from mcl2pnml.analysis.checking.observers import initial as _initial, truths as _truths
 
 
 def check(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
@@ -83,7 +83,7 @@ def check_all(net: Net, properties: Iterable[Property],
               safe: bool = False) -> list[Verdict]:
     """Each property's verdict, in order.
 
-    ``auto``: on the fly (:mod:`analysis.onthefly`: the product in C, stopping at
+    ``auto``: on the fly (:mod:`mcl2pnml.analysis.checking.on_the_fly`: the product in C, stopping at
     the first violation) where the net is safe and the loops in C are built;
     otherwise, or with ``full``, the reference method: one exploration of the
     state space, then each property's product with its observer.
@@ -97,7 +97,7 @@ def check_all(net: Net, properties: Iterable[Property],
     if stubborn and method == "full":
         raise ValueError("the reduction is the on-the-fly checker's: not with method 'full'")
     if method != "full":
-        from analysis import onthefly
+        from mcl2pnml.analysis.checking import on_the_fly as onthefly
         verdicts = onthefly.check_all(net, properties, max_states, stubborn=stubborn,
                                       safe=safe)
         if verdicts is not None:
@@ -110,7 +110,7 @@ def check_all(net: Net, properties: Iterable[Property],
 
 def _check_all_full(net: Net, properties: list[Property], max_states: int) -> list[Verdict]:
     """The reference method: every reachable marking, then each property's product."""
-    from analysis.statespace import ExplorationLimit, explore
+    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 
     try:
         space = explore(net, max_states=max_states)

@@ -11,8 +11,8 @@ From a net's initial marking, :func:`explore_general` builds
 
 Markings are tuples of counts and edges flat integer arrays (source,
 transition, target); the acceleration follows the first-discovery path. It
-takes every net, where the safe-net explorers (:mod:`analysis.packedspace`,
-:mod:`analysis.compiledspace`) take only 1-safe nets with unit weights.
+takes every net, where the safe-net explorers (:mod:`mcl2pnml.analysis.statespace.packed`,
+:mod:`mcl2pnml.analysis.statespace.compiled`) take only 1-safe nets with unit weights.
 
 Transitions are explored untimed: a timed transition (the task's time-out
 ``t03``) may fire in any order with the others, which is what equations.md
@@ -308,7 +308,7 @@ def _uncovered(s: Structure) -> "list[int] | None":
     constant on every firing path (the invariant), so a marking that
     strictly covers an ancestor exceeds it on uncovered places only.
     """
-    from analysis.invariants import AnalysisLimit, minimal_semipositive_p_invariants
+    from mcl2pnml.analysis.structure.invariants import AnalysisLimit, minimal_semipositive_p_invariants
     if len(s.places) > INVARIANT_PLACES:
         return list(range(len(s.places)))
     try:

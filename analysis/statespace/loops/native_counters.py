@@ -1,7 +1,7 @@
-"""The loops of :mod:`analysis.counterspace` in C (``analysis/_native.c``), with the
-signatures of :mod:`analysis._counter_loops`, so that either runs the same explorer.
+"""The loops of :mod:`mcl2pnml.analysis.statespace.counters` in C (``analysis/statespace/loops/_native.c``), with the
+signatures of :mod:`mcl2pnml.analysis.statespace.loops.numba_counters`, so that either runs the same explorer.
 
-Built with the safe-net loops (:mod:`analysis._native_loops`, whose table of
+Built with the safe-net loops (:mod:`mcl2pnml.analysis.statespace.loops.native_safe`, whose table of
 fingerprints and positions it shares); like them, the C functions never
 allocate the arrays: a step that finds the queue or the table too small for
 the next marking's successors stops before that marking, and the functions
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from analysis import _native as c
-from analysis._native_loops import _grown_queue
+from mcl2pnml.analysis.statespace.loops import _native as c
+from mcl2pnml.analysis.statespace.loops.native_safe import _grown_queue
 
 GOING, LIMIT, OVERFLOW, GROWING = c.GOING, c.LIMIT, c.OVERFLOW, c.GROWING
 
@@ -34,7 +34,7 @@ def sparse_index(rows: np.ndarray, count: int) -> tuple[np.ndarray, int]:
 
 def step(n_ptr, n_word, n_shift, n_mask, n_val, d_ptr, d_word, d_shift, d_mask, d_val,
          d_place, growing, queue, parent, count, head, table, bits, dead, max_states, budget):
-    """:func:`analysis._counter_loops.step`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_counters.step`, in C."""
     fields = [np.ascontiguousarray(a) for a in (n_ptr, n_word, n_shift, n_mask, n_val, d_ptr,
                                                  d_word, d_shift, d_mask, d_val, d_place)]
     growing = np.ascontiguousarray(growing, dtype=np.bool_)
@@ -57,7 +57,7 @@ def step(n_ptr, n_word, n_shift, n_mask, n_val, d_ptr, d_word, d_shift, d_mask, 
 
 
 def out_degree(queue, count, n_ptr, n_word, n_shift, n_mask, n_val) -> np.ndarray:
-    """:func:`analysis._counter_loops.out_degree`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_counters.out_degree`, in C."""
     degree = np.zeros(count, dtype=np.int32)
     c.counter_out_degree(np.ascontiguousarray(queue[:count]), n_ptr, n_word, n_shift, n_mask,
                          n_val, degree)
@@ -69,7 +69,7 @@ _NONE = np.zeros(0, dtype=np.int32)
 
 def edges(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
           d_ptr, d_word, d_shift, d_mask, d_val, total):
-    """:func:`analysis._counter_loops.edges`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_counters.edges`, in C."""
     src, trans, dst = (np.empty(total, dtype=np.int32) for _ in range(3))
     c.counter_walk(np.ascontiguousarray(queue[:count]), table, bits, n_ptr, n_word, n_shift,
                    n_mask, n_val, d_ptr, d_word, d_shift, d_mask, d_val, 1,
@@ -79,7 +79,7 @@ def edges(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
 
 def backward(queue, count, table, bits, n_ptr, n_word, n_shift, n_mask, n_val,
              d_ptr, d_word, d_shift, d_mask, d_val, seen, frontier):
-    """:func:`analysis._counter_loops.backward`, in C."""
+    """:func:`mcl2pnml.analysis.statespace.loops.numba_counters.backward`, in C."""
     c.counter_walk(np.ascontiguousarray(queue[:count]), table, bits, n_ptr, n_word, n_shift,
                    n_mask, n_val, d_ptr, d_word, d_shift, d_mask, d_val, -1, seen,
                    np.ascontiguousarray(frontier, dtype=np.int64), _NONE, _NONE, _NONE)

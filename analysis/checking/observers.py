@@ -1,10 +1,10 @@
 """The observers of the property patterns: what a marking sequence owes, read one
 marking at a time, and the verdicts of a check.
 
-Shared by the two ways a property is checked: :mod:`analysis.properties` (the
+Shared by the two ways a property is checked: :mod:`mcl2pnml.analysis.checking.on_graph` (the
 reference: every reachable marking first, then the product in Python) and
-:mod:`analysis.onthefly` (the product searched on the fly in C). The observer
-and its states are explained in :mod:`analysis.properties`' docstring.
+:mod:`mcl2pnml.analysis.checking.on_the_fly` (the product searched on the fly in C). The observer
+and its states are explained in :mod:`mcl2pnml.analysis.checking.on_graph`' docstring.
 :class:`Watcher` reads them along one run, for the runs of a mission with a
 vehicle (the exact odds' chain and the campaigns' runs, in :mod:`mcl2pnml`).
 """
@@ -14,7 +14,7 @@ import enum
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
-from mcl2pnml.core.properties import Const, Pattern, Predicate, Property, ScopeKind, evaluate
+from mcl2pnml.core.patterns import Const, Pattern, Predicate, Property, ScopeKind, evaluate
 
 
 class Status(enum.Enum):

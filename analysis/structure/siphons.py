@@ -29,7 +29,7 @@ from typing import Iterable, Mapping, Sequence
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.invariants import AnalysisLimit, integer_multiple
+from mcl2pnml.analysis.structure.invariants import AnalysisLimit, integer_multiple
 
 Sets = Sequence[frozenset[int]]
 
@@ -224,7 +224,7 @@ def minimal_siphons(s: Structure, limit: int | None = None,
     Exact enumeration by partitioning the search space (Cordone, Ferrarini
     and Piroddi 2005), each siphon found once; sorted by size, then by place
     order. There can be exponentially many: past ``limit`` subproblems it
-    raises :class:`~analysis.invariants.AnalysisLimit`, and past ``work``
+    raises :class:`~mcl2pnml.analysis.structure.invariants.AnalysisLimit`, and past ``work``
     places looked at (see :func:`_minimal_sets`).
     """
     return _minimal_sets(_siphon_sides(s), len(s.places), limit, "siphons", work)
@@ -323,7 +323,7 @@ def siphon_control(s: Structure, siphons: Sequence[frozenset[int]],
     Controlled is meant as Iordache and Antsaklis (2006): a P-invariant y
     has every positively weighted place in the siphon and y . M0 > 0.
     ``semipositive_invariants`` (the minimal ones, from
-    :func:`~analysis.invariants.minimal_semipositive_p_invariants`) are tried
+    :func:`~mcl2pnml.analysis.structure.invariants.minimal_semipositive_p_invariants`) are tried
     first, in order: for them the condition is that the support is inside
     the siphon. When none fits, an exact LP looks for any invariant that does
     (:func:`control_by_lp`), on nets of up to :data:`LP_PLACES` places.

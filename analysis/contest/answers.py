@@ -1,10 +1,10 @@
 """The Model Checking Contest's questions answered on a net's reachability graph.
 
 Any bounded P/T net, any formula of :mod:`mcl2pnml.core.queries`: its
-reachable markings explored (:func:`analysis.statespace.explore`), its edges
+reachable markings explored (:func:`mcl2pnml.analysis.statespace.explore.explore`), its edges
 held as compressed rows, then each question decided on the graph, exactly,
-by searches in C (``analysis/_native.c``; the same in Python,
-``analysis/_graph_loops.py``, where C was not built):
+by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
+``analysis/statespace/loops/python_graphs.py``, where C was not built):
 
 * state atoms, for every marking at once (numpy columns of token counts);
 * CTL by the classic labelling (Clarke, Emerson and Sistla, 1986): ``EX``
@@ -25,7 +25,7 @@ by searches in C (``analysis/_native.c``; the same in Python,
 
 Where the graph cannot be built (past the limits, or an unbounded net), the
 reachability questions of a 1-safe net are searched on the fly by the
-property checker's engine (:mod:`analysis.onthefly`), stopping at the first
+property checker's engine (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at the first
 witness, and what the initial marking and the P-invariants' bounds settle is
 answered. With ``stubborn``, those questions go to that engine first, under
 stubborn sets.
@@ -56,9 +56,9 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 
 try:                      # the graph searches in C, else the same in Python
-    from analysis import _native as _loops
+    from mcl2pnml.analysis.statespace.loops import _native as _loops
 except ImportError:       # pragma: no cover - a machine without a C compiler at install
-    from analysis import _graph_loops as _loops
+    from mcl2pnml.analysis.statespace.loops import python_graphs as _loops
 
 
 @dataclass(frozen=True)
@@ -392,7 +392,7 @@ def _csr(src: np.ndarray, dst: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarr
 
 
 def _space(net: Net, max_states: int, max_memory: int | None):
-    from analysis.statespace import ExplorationLimit, explore
+    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
     try:
         space = explore(net, max_states=max_states, max_memory=max_memory)
     except ExplorationLimit as e:
@@ -412,21 +412,21 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = 5_000_000,
     every other question is answered on the reachability graph. Past the graph's limits,
     the reachability questions are searched on the fly, each stopping at its first
     witness, and what the P-invariants and the initial marking settle is answered
-    (:func:`analysis.mccreach.settled_without_exploring`); the rest is unanswered, with
+    (:func:`mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`); the rest is unanswered, with
     the reason."""
     def answers(settled: dict) -> dict[str, Answer]:
         return {k: Answer(k, value, technique) for k, (value, technique) in settled.items()}
 
     found: dict[str, Answer] = {}
     if stubborn:          # (the module, and the observers it reads, loaded only if asked)
-        from analysis.mccreach import reach_on_the_fly
+        from mcl2pnml.analysis.contest.reachability_queries import reach_on_the_fly
         found = answers(reach_on_the_fly(net, queries, max_states, max_memory, True, safe))
     rest = [x for x in queries if x.id not in found]
     if not rest:
         return [found[x.id] for x in queries]
     space, why = _space(net, max_states, max_memory)
     if space is None:
-        from analysis.mccreach import reach_on_the_fly, settled_without_exploring
+        from mcl2pnml.analysis.contest.reachability_queries import reach_on_the_fly, settled_without_exploring
         if not stubborn:
             found.update(answers(reach_on_the_fly(net, rest, max_states, max_memory)))
         found.update(answers(settled_without_exploring(
@@ -502,7 +502,7 @@ def _stable_place(space) -> bool:
     """Whether some place holds the same number of tokens in every reachable marking: on
     markings packed one bit per place, a bit the same in the OR and the AND of them all;
     else a place at a time (its column not kept: a large net has many)."""
-    from analysis.packedmarkings import PackedStateSpace
+    from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
     places = len(space.structure.places)
     if isinstance(space, PackedStateSpace) and space.states:
         ones = np.bitwise_or.reduce(space.packed, axis=0)

@@ -1,12 +1,12 @@
 """A property checked on the fly: the product of a safe net and the property's observer,
 explored in C breadth first, stopping at the first violation.
 
-:mod:`analysis.observers` defines the observers (Dwyer et al.'s patterns and
+:mod:`mcl2pnml.analysis.checking.observers` defines the observers (Dwyer et al.'s patterns and
 scopes as deterministic automata reading the marking sequence) and the
 verdicts. Its reference method explores every reachable marking first and
 then each property's product in Python; model checkers search the product
 on the fly and stop at a counterexample. This module does the same, in the
-C loops of the safe-net explorer (``analysis/_native.c``):
+C loops of the safe-net explorer (``analysis/statespace/loops/_native.c``):
 
 * a row of the product is a marking's words and one more, the observer's
   state; the observer's moves are a table worked out before the search (its
@@ -50,10 +50,10 @@ from typing import Iterable
 import numpy as np
 
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.properties import Property, Tokens, atoms_of, evaluate
+from mcl2pnml.core.patterns import Property, Tokens, atoms_of, evaluate
 from mcl2pnml.core.structure import Structure, structure
 
-from analysis.observers import BAD, Shape, Status, Verdict, initial, pending, step, truths
+from mcl2pnml.analysis.checking.observers import BAD, Shape, Status, Verdict, initial, pending, step, truths
 
 #: A property whose predicates compare more than this many token sums is left to the
 #: reference method: the table of the observer's letters has 2**ATOMS entries.
@@ -69,7 +69,7 @@ class _Refused(Exception):
 def available() -> bool:
     """Whether the loops in C were built (they hold the product's search)."""
     try:
-        from analysis import _native
+        from mcl2pnml.analysis.statespace.loops import _native
     except ImportError:
         return False
     return hasattr(_native, "product_step")
@@ -114,7 +114,7 @@ class NotProvenSafe(ValueError):
 def proven_safe(s: Structure) -> bool:
     """Whether semi-positive P-invariants bound every place by 1 (Murata 1989, section
     VII): then no reachable marking has a second token, whatever the reduction skips."""
-    from analysis.counterspace import invariant_bounds
+    from mcl2pnml.analysis.statespace.counters import invariant_bounds
     bounds = invariant_bounds(s, s.initial_vector())
     return all(b is not None and b <= 1 for b in bounds)
 
@@ -175,7 +175,7 @@ class _Search:
     """The net's masks, worked out once for all its properties."""
 
     def __init__(self, s: Structure, stubborn: bool = False):
-        from analysis.packedmarkings import (key_index, marking_row, masks, place_weights,
+        from mcl2pnml.analysis.statespace.packedmarkings import (key_index, marking_row, masks, place_weights,
                                              touched, word_count)
         self.s = s
         self.words = word_count(s)
@@ -199,7 +199,7 @@ class _Search:
                          for pre, post in zip(self.s.pre, self.s.post)], dtype=np.uint8)
 
     def _atom_arrays(self, atoms: list[Tokens]) -> tuple[np.ndarray, np.ndarray]:
-        from analysis.packedmarkings import masks_of
+        from mcl2pnml.analysis.statespace.packedmarkings import masks_of
         sets = [[self.index[p] for p in a.places if p in self.index] for a in atoms]
         masks = masks_of(sets, self.words) if sets else np.zeros((0, self.words), np.uint64)
         return (np.ascontiguousarray(masks),
@@ -211,7 +211,7 @@ class _Search:
         return 2 * (8 * (self.words + 1) + 24) + 24
 
     def check(self, prop: Property, max_states: int, budget: int) -> Verdict:
-        from analysis import _native as c
+        from mcl2pnml.analysis.statespace.loops import _native as c
         from mcl2pnml.core.memory import size_text
         fits = max(1, budget // self.footprint())
         limit = min(max_states, fits)
@@ -287,7 +287,7 @@ class _Search:
         connected components; the entries are tried in breadth-first order, each with
         its shortest cycle within its component, until no later entry can be shorter.
         """
-        from analysis import _native as c
+        from mcl2pnml.analysis.statespace.loops import _native as c
         from scipy.sparse import csr_matrix
         from scipy.sparse.csgraph import breadth_first_order, connected_components
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
@@ -385,7 +385,7 @@ def _csr(rows) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _stubborn_arrays(s: Structure) -> list[np.ndarray]:
-    """What the stubborn sets are grown from (``analysis/_native.c``): the places each
+    """What the stubborn sets are grown from (``analysis/statespace/loops/_native.c``): the places each
     transition consumes and needs, the transitions consuming, needing and marking each
     place."""
     take = [set() for _ in s.places]

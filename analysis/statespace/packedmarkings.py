@@ -4,8 +4,8 @@ For a 1-safe net with unit weights (every net this project compiles), a
 marking is a row of bits, one per place, packed into 64-bit words, and
 firing a transition is three bit operations (``need`` covered, ``keep`` the
 rest, ``give`` the outputs). This module owns what the two safe-net
-explorers share, :mod:`analysis.packedspace` (numpy, a frontier at a time)
-and :mod:`analysis.compiledspace` (numba, a marking at a time): the masks of
+explorers share, :mod:`mcl2pnml.analysis.statespace.packed` (numpy, a frontier at a time)
+and :mod:`mcl2pnml.analysis.statespace.compiled` (numba, a marking at a time): the masks of
 the transitions, built from the core's pre-sets, •t and post-sets
 (:class:`~mcl2pnml.core.structure.Structure`); the 64-bit key of a marking
 (the marking itself up to 64 places, a hash of its words beyond); and
@@ -20,7 +20,7 @@ transition on the frontier (for a safe net the marking before a firing is
 determined by the one after) and keeping the results that are reachable
 markings and really fire into it: in numpy a frontier at a time, or, once
 the state space is large enough for numba's loading to pay
-(:data:`COMPILED_FROM`), in compiled code (:mod:`analysis._compiled_loops`)
+(:data:`COMPILED_FROM`), in compiled code (:mod:`mcl2pnml.analysis.statespace.loops.numba_safe`)
 a marking at a time, each predecessor found in a hash table of the
 markings. The explicit edge list (``src``,
 ``trans``, ``dst``) is built only if someone asks for it. Transitions are
@@ -38,7 +38,7 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.generalspace import DecodedMarkings, EdgesOnDemand, StateSpace
+from mcl2pnml.analysis.statespace.general import DecodedMarkings, EdgesOnDemand, StateSpace
 
 
 def masks(s: Structure, words: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -70,7 +70,7 @@ def key_index(test: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndar
     ``test`` is ``(transitions, words)``: what must be marked for the
     transition to be worth trying (its needed places when firing, its
     outputs when unfiring). A marking then tries only the transitions keyed
-    on its marked places (:func:`analysis._compiled_loops.candidates`), so
+    on its marked places (:func:`mcl2pnml.analysis.statespace.loops.numba_safe.candidates`), so
     the key is the place of the mask least often marked: ``weight`` says how
     often each place is (:func:`place_weights`), the lowest-numbered place
     winning a tie. Returns ``(ptr, transitions, free)``: place p's
@@ -323,13 +323,13 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         """The loops in C when they were built; else numba's when they pay
         (:data:`COMPILED_FROM`) or are loaded; else None (numpy)."""
         try:
-            from analysis import _native_loops
+            from mcl2pnml.analysis.statespace.loops import native_safe as _native_loops
             return _native_loops
         except ImportError:
             pass
-        if "analysis._compiled_loops" in sys.modules or (
+        if "mcl2pnml.analysis.statespace.loops.numba_safe" in sys.modules or (
                 self.states >= COMPILED_FROM and importlib.util.find_spec("numba")):
-            from analysis import _compiled_loops   # imports numba
+            from mcl2pnml.analysis.statespace.loops import numba_safe as _compiled_loops  # imports numba
             return _compiled_loops
         return None
 

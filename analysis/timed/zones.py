@@ -20,7 +20,7 @@ zone is extrapolated by the largest constant each clock is compared with
 (Extra_M, Behrmann, Bouyer, Larsen and Pelanek 2006), which keeps the graph
 finite and exact for every guard. The graph is built once by breadth-first
 search; every property is then read on its product with the observer of
-:mod:`analysis.properties` (the same observer the untimed checker uses).
+:mod:`mcl2pnml.analysis.checking.on_graph` (the same observer the untimed checker uses).
 
 **Runs that end, and runs that do not.** A run is time-divergent: a state
 where time may pass for ever with nothing forced (no urgent transition, no
@@ -53,7 +53,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.core.properties import Property, places_of
+from mcl2pnml.core.patterns import Property, places_of
 from mcl2pnml.core.structure import structure
 from mcl2pnml.core.timing import TimedNet
 
@@ -479,9 +479,9 @@ class TimedVerdict:
 
 def check(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     """``prop`` on every time-divergent run of ``graph`` (see the module's documentation)."""
-    from analysis.properties import _Observers, _path, _truths
+    from mcl2pnml.analysis.checking.on_graph import _Observers, _path, _truths
 
-    from mcl2pnml.core.properties import holds
+    from mcl2pnml.core.patterns import holds
     obs = _Observers(prop)
     preds = _truths(prop)
     index = {p: k for k, p in enumerate(graph.places)}

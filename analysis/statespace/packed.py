@@ -1,13 +1,13 @@
 """The reachability graph of a safe net, explored a whole frontier at a time (numpy).
 
-One of the two safe-net explorers behind :func:`analysis.statespace.explore`
-(markings packed into bits, :mod:`analysis.packedmarkings`). Instead of one
+One of the two safe-net explorers behind :func:`mcl2pnml.analysis.statespace.explore.explore`
+(markings packed into bits, :mod:`mcl2pnml.analysis.statespace.packedmarkings`). Instead of one
 marking at a time, this explorer applies each transition to the whole
 breadth-first frontier at once, in numpy, and keeps only the markings,
 sorted by their 64-bit keys; with several words a key is a hash, and two
 markings that share one are noticed (:class:`KeyCollision`: the exact
 explorer takes over). It returns a
-:class:`~analysis.packedmarkings.PackedStateSpace`.
+:class:`~mcl2pnml.analysis.statespace.packedmarkings.PackedStateSpace`.
 
 So a million markings take a couple of seconds and about 60 bytes each at
 the peak, where markings as tuples and edges as integer triples take ten
@@ -21,11 +21,11 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from analysis.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace, chunks,
+from mcl2pnml.analysis.statespace.packedmarkings import (Firing, KeyCollision, NotSafe, PackedStateSpace, chunks,
                                      distinct, marking_row, masks, same, search, word_count)
 # bound under this module's own name, so that the keys of this explorer alone
 # can be replaced (the key-collision tests do)
-from analysis.packedmarkings import keys_of as _keys
+from mcl2pnml.analysis.statespace.packedmarkings import keys_of as _keys
 
 
 def footprint(s: Structure) -> int:

@@ -1,4 +1,4 @@
-"""The loops of :mod:`analysis.compiledspace`, compiled by numba (imported only when used).
+"""The loops of :mod:`mcl2pnml.analysis.statespace.compiled`, compiled by numba (imported only when used).
 
 Plain Python on numpy arrays of 64-bit words, which numba compiles once
 into its cache on disk (beside this file, or in the user's cache directory
@@ -38,7 +38,7 @@ def candidates(row, key_ptr, key_t, free_t, out):
     """The transitions worth testing on marking ``row``, into ``out``; how many.
 
     Each transition is keyed on one place it cannot do without (see
-    :func:`analysis.packedmarkings.key_index`): only those keyed on a marked
+    :func:`mcl2pnml.analysis.statespace.packedmarkings.key_index`): only those keyed on a marked
     place can be enabled, so a marking of forty tokens tests some forty
     transitions, not every one of the net's hundreds. Transitions that test
     nothing (``free_t``) are always candidates.
@@ -251,7 +251,7 @@ def step_words(need, keep, give, need_ptr, need_word, touch_ptr, touch_word, key
     A probe compares the words themselves, so two markings are never merged.
     A transition is tested on the words it needs only
     (``need_word[need_ptr[t]:need_ptr[t + 1]]``) and fired on those it
-    touches (``touch_*``, :func:`analysis.packedmarkings.touched`): on a net
+    touches (``touch_*``, :func:`mcl2pnml.analysis.statespace.packedmarkings.touched`): on a net
     of a thousand places, one to four words of sixteen.
     """
     words = need.shape[1]

@@ -18,7 +18,7 @@ from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.errors import (SHOWN_ERRORS, Location, Mcl2PnmlError, did_you_mean, raise_all,
                                   source_lines)
 from mcl2pnml.language.library import Library, default_library
-from mcl2pnml.language.properties import property_errors
+from mcl2pnml.language.declared_properties import property_errors
 from mcl2pnml.language.template_parser import Template, TemplateKind
 
 KIND = {ast.Const: "const", ast.Primitive: "primitive", ast.Task: "task",

@@ -75,7 +75,7 @@ from typing import NamedTuple
 
 from mcl2pnml.core.net import Net
 
-from analysis.statespace import ExplorationLimit, explore
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 
 #: The version of the contract: stored proofs of another version are proven again
 #: (2: the ``interface``, ``asleep``, ``result final`` and ``caller`` clauses).

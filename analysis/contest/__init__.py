@@ -1,0 +1,1 @@
+"""The Model Checking Contest's questions, answered on a net's reachability graph or without it."""

@@ -1,0 +1,1 @@
+"""Structural analysis: place and transition invariants, siphons and traps."""

@@ -1,0 +1,1 @@
+"""Time: the zone graph of a time Petri net and the verdicts it proves."""
