@@ -115,3 +115,19 @@ def test_serialising_never_lays_out(tmp_path: Path):
     assert "mcl2pnml.io.pnml.writer" in imported
     assert not [m for m in imported if m.split(".")[0] == "graphviz" or m == "mcl2pnml.io.dot"]
     assert "<graphics>" not in (tmp_path / "s.pnml").read_text()
+
+
+def layer_modules() -> list[str]:
+    """The modules the layers contract names, each layer's alternatives apart."""
+    import tomllib
+    contracts = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]
+    layers = next(c for c in contracts["contracts"] if c["type"] == "layers")["layers"]
+    return [name.strip() for layer in layers for name in layer.split("|")]
+
+
+def test_every_module_is_in_a_layer(import_graph: nx.DiGraph):
+    """A module in no layer is held by no layer rule: any import into or out of it passes."""
+    named = layer_modules()
+    ours = [m for m in import_graph if m.startswith("mcl2pnml.") and m != "mcl2pnml.__main__"]
+    outside = [m for m in ours if not any(m == n or m.startswith(n + ".") for n in named)]
+    assert not outside, f"modules in no layer of pyproject.toml's layers contract: {outside}"
