@@ -5,7 +5,7 @@ Run:  .venv/bin/python -m bench.certify_scale [--quick]
 * the dam inspection (``examples/dam_inspection.mcl``), from ``mission.B``
   and with an abort pending (``mission.A`` marked too): certifying
   (:func:`mcl2pnml.certify.certificate.certify`) and checking the
-  certificate against the compiled net (:func:`mcl2pnml.certify.recheck.check`,
+  certificate against the compiled net (:func:`mcl2pnml.certify.recheck.check_certificate`,
   which re-reads the stored proofs and re-derives the library's own
   digests), each in this process, the median of :data:`RUNS`; beside them,
   exploring the same net and deciding its behaviour (1-safe, an end always
@@ -44,11 +44,11 @@ def _median(call) -> float:
 
 def certify_and_check(checked, net, abort_pending: bool = False) -> dict:
     from mcl2pnml.certify.certificate import certify
-    from mcl2pnml.certify.recheck import check
+    from mcl2pnml.certify.recheck import check_certificate
     cert = json.loads(json.dumps(certify(checked, abort_pending=abort_pending)))
-    assert check(net, cert) == [], "the certificate holds"
+    assert check_certificate(net, cert) == [], "the certificate holds"
     return {"certify": _median(lambda: certify(checked, abort_pending=abort_pending)),
-            "check": _median(lambda: check(net, cert)), "ends": cert["conclusion"]["ends"]}
+            "check": _median(lambda: check_certificate(net, cert)), "ends": cert["conclusion"]["ends"]}
 
 
 def dam(log=lambda text: None) -> list[dict]:

@@ -29,12 +29,12 @@ def peak_mb():
         if line.startswith("VmHWM:"):
             return int(line.split()[1]) / 1024
 from mcl2pnml.language.parser import parse_file
-from mcl2pnml.language.semantics import check
+from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.pipeline import save_pnml
 source, target = sys.argv[1], sys.argv[2]
 t0 = time.perf_counter(); program = parse_file(source)
-t1 = time.perf_counter(); checked = check(program)
+t1 = time.perf_counter(); checked = check_program(program)
 t2 = time.perf_counter(); net = compile_checked(checked)
 t3 = time.perf_counter(); save_pnml(net, target)
 t4 = time.perf_counter()

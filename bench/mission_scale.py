@@ -33,12 +33,12 @@ def peak_mb():
     for line in open("/proc/self/status"):
         if line.startswith("VmHWM:"):
             return int(line.split()[1]) / 1024
-from mcl2pnml.language.semantics import check
+from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.lint import lint
 from mcl2pnml.language.parser import parse_file
 base = peak_mb()   # the interpreter with the package imported, before the mission
 t0 = time.process_time(); program = parse_file(sys.argv[1])
-t1 = time.process_time(); checked = check(program)
+t1 = time.process_time(); checked = check_program(program)
 t2 = time.process_time(); warnings = lint(checked)
 t3 = time.process_time()
 print(json.dumps({"parse": t1 - t0, "check": t2 - t1, "warnings": t3 - t2, "total": t3 - t0,

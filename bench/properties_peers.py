@@ -17,7 +17,7 @@ seconds, the whole process's peak resident memory in MiB):
   space's facts, every property checked on the fly, the JSON printed;
   ``--untimed``: the runs of the net, the semantics the peers check), the
   median of :data:`RUNS` when a run takes under 5 s; and, in this process,
-  the inner loop alone: :func:`mcl2pnml.analysis.checking.on_graph.check_all` on the
+  the inner loop alone: :func:`mcl2pnml.analysis.checking.on_graph.check_properties` on the
   compiled net and properties (:func:`mcl2pnml.pipeline.properties_of`, not
   timed), on the fly (the default) and with the reference method (every
   marking first, then each product: ``method="full"``), each the median of
@@ -96,7 +96,7 @@ def _median_of_runs(once, seconds=lambda r: r) -> list:
 def ours(mission: Path, props: Path) -> dict | None:
     """Our whole command (median of a few runs when fast), and the inner loop in-process;
     None if the command failed or timed out."""
-    from mcl2pnml.analysis.checking.on_graph import Status, check_all
+    from mcl2pnml.analysis.checking.on_graph import Status, check_properties
     from mcl2pnml import pipeline
     command = [str(Path(sys.executable).with_name("mcl2pnml")), "analyze", str(mission),
                "--untimed", "--state-space", "--no-progress", "--properties", str(props),
@@ -111,7 +111,7 @@ def ours(mission: Path, props: Path) -> dict | None:
 
     def once(method: str, into: list) -> float:
         t0 = time.perf_counter()
-        verdicts[:] = check_all(net, properties, method=method)
+        verdicts[:] = check_properties(net, properties, method=method)
         into.append(time.perf_counter() - t0)
         return into[-1]
     _median_of_runs(lambda: once("full", full))
@@ -294,7 +294,7 @@ def section(quick: bool = False, log=lambda text: None
              "`mcl2pnml analyze MISSION --untimed --state-space --properties FILE --json`, "
              "the command a user runs (start-up, compiling, the state space's facts, every "
              "property checked on the fly), a fresh process, the median of 3 runs when under "
-             "5 s; the inner loop (`check_all`: each property's product with its observer "
+             "5 s; the inner loop (`check_properties`: each property's product with its observer "
              "searched on the fly in C, stopping at a counterexample; compiling excluded) "
              "timed apart, in-process, and beside it the reference method (every marking "
              "first, then each product in Python). The peers: the "

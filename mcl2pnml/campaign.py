@@ -250,7 +250,7 @@ def _prepared(mission: str, fleet: Fleet, engine: str) -> tuple[Callable, Callab
     """The engine's maker and the vehicle's builder (by seed) of a campaign."""
     import os
 
-    from mcl2pnml.language.semantics import check
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.parser import parse_file
     from mcl2pnml.runtime.executor import PetriEngine
@@ -260,7 +260,7 @@ def _prepared(mission: str, fleet: Fleet, engine: str) -> tuple[Callable, Callab
     found = _PREPARED.get(key)
     if found is None:
         # not bounded again: the facade read it within --max-mission-size before any batch
-        checked = check(parse_file(mission))
+        checked = check_program(parse_file(mission))
         if engine == "petri":
             make = PetriEngine(compile_checked(checked)).clone
         else:

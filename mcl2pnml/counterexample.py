@@ -1,6 +1,6 @@
 """A property's counterexample in the mission's terms, the vehicle script that replays it, and the replay.
 
-:func:`mcl2pnml.analysis.checking.on_graph.check` answers a failing property with a firing
+:func:`mcl2pnml.analysis.checking.on_graph.check_property` answers a failing property with a firing
 sequence of the compiled net. A mission engineer reads a run of the mission:
 which calls started and ended with what, which primitives the mission
 enabled with which arguments (section 2.1's actions), what the vehicle

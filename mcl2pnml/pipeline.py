@@ -57,9 +57,9 @@ def check_file(path: str | Path, max_size: int | str | None = None):
     A file over ``max_size`` bytes (or as ``--max-mission-size`` takes it; default
     :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`) is refused before it is read: every
     command and call that reads a mission reads it here."""
-    from mcl2pnml.language.semantics import check
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse_file
-    return check(parse_file(path, None, mission_limit(max_size), "--max-mission-size"))
+    return check_program(parse_file(path, None, mission_limit(max_size), "--max-mission-size"))
 
 
 def mission_limit(max_size: int | str | None = None) -> int:
@@ -73,9 +73,9 @@ def mission_limit(max_size: int | str | None = None) -> int:
 
 def check_source(text: str, filename: str = "<mcl>"):
     """Parse and check MCL text; errors name ``filename``."""
-    from mcl2pnml.language.semantics import check
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse
-    return check(parse(text, filename))
+    return check_program(parse(text, filename))
 
 
 def warnings_of(checked) -> list:
@@ -386,8 +386,8 @@ def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE
 def check_certificate(net: Net, cert: dict[str, Any], *, shaped: bool = False) -> list[str]:
     """What the independent checker finds wrong with ``cert`` for ``net`` (nothing: it
     holds); ``shaped``: :func:`load_certificate` held it to its schema already."""
-    from mcl2pnml.certify.recheck import check
-    return check(net, cert, shaped=shaped)
+    from mcl2pnml.certify.recheck import check_certificate
+    return check_certificate(net, cert, shaped=shaped)
 
 
 def certificate_beside(file: Path) -> Path:
@@ -435,8 +435,8 @@ def check_properties(net: Net, properties, max_states: int = 1_000_000,
     searched on the fly (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at its first violation.
     ``stubborn``: with partial-order reduction, on a net ``safe`` says is proven 1-safe
     (else a P-invariant must prove it: :class:`~mcl2pnml.analysis.checking.on_the_fly.NotProvenSafe`)."""
-    from mcl2pnml.analysis.checking.on_graph import check_all
-    return check_all(net, properties, max_states, stubborn=stubborn, safe=safe)
+    from mcl2pnml.analysis.checking.on_graph import check_properties
+    return check_properties(net, properties, max_states, stubborn=stubborn, safe=safe)
 
 
 def proven_safe_by_certificate(mission: Path, net: Net,
@@ -452,12 +452,12 @@ def _certified(checked, net: Net, abort_pending: bool = False
     """The certificate of the checked mission, and what the independent checker finds
     wrong with it for ``net`` (nothing: it holds)."""
     from mcl2pnml.certify.certificate import certify
-    from mcl2pnml.certify.recheck import check
+    from mcl2pnml.certify.recheck import check_certificate
     from mcl2pnml.certify.templates import current
     proofs = current()      # read once, for the certificate and its check
     cert = certify(checked, net_name=net.name, abort_pending=abort_pending, proofs=proofs)
     # checked as it will be read back: plain JSON
-    return cert, check(net, json.loads(json.dumps(cert)), proofs)
+    return cert, check_certificate(net, json.loads(json.dumps(cert)), proofs)
 
 
 #: How many failing properties ``analyze`` explains, unless told (``--max-counterexamples``):

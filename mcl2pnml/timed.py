@@ -122,7 +122,7 @@ def ends(net: Net, assumptions: Assumptions = Assumptions(),
          max_states: int = 1_000_000) -> TimedEnds:
     """Whether every run of the mission ends, when, and what one that does not waits for."""
     tn = semantics(net, assumptions)
-    graph, (verdict,) = engine.check_all(tn, [ends_property()], max_states)
+    graph, (verdict,) = engine.check_timed_properties(tn, [ends_property()], max_states)
     if graph is None:
         return TimedEnds(assumptions, None, False, None, None, (), None, verdict.states,
                          verdict.reason)
@@ -199,7 +199,7 @@ def check(net: Net, properties: Sequence[Property], assumptions: Assumptions = A
           max_states: int = 1_000_000) -> list[Verdict]:
     """Each property's verdict on the mission's time-divergent runs (docs/time.md)."""
     tn = semantics(net, assumptions)
-    graph, verdicts = engine.check_all(tn, properties, max_states)
+    graph, verdicts = engine.check_timed_properties(tn, properties, max_states)
     if graph is None:
         return [Verdict(v.property, Status.UNKNOWN, states=v.states, reason=v.reason)
                 for v in verdicts]

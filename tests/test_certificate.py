@@ -14,7 +14,7 @@ from mcl2pnml.analysis.behaviour import behaviour
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit
 from mcl2pnml import pipeline
 from mcl2pnml.certify.certificate import certify
-from mcl2pnml.certify.recheck import check
+from mcl2pnml.certify.recheck import check_certificate
 from mcl2pnml.core.net import Net
 
 from helpers import ROOT
@@ -33,7 +33,7 @@ def _certified(path: Path):
 @pytest.mark.parametrize("mission", EXAMPLES, ids=lambda p: p.stem)
 def test_every_example_is_certified_and_the_certificate_checks(mission):
     net, cert = _certified(mission)
-    assert check(net, cert) == []
+    assert check_certificate(net, cert) == []
     assert cert["conclusion"]["safe"] and cert["conclusion"]["reusable"]
 
 
@@ -52,9 +52,9 @@ def test_proofs_read_back_from_json_check_as_the_library_s_do():
     from mcl2pnml.certify.templates import current
     net, cert = _certified(ROOT / "examples" / "multi_leg.mcl")
     proofs = json.loads(json.dumps(current()))
-    assert check(net, cert, proofs) == []
+    assert check_certificate(net, cert, proofs) == []
     proofs["sequence"]["local"] = "0" * 64       # a digest no part of the library has
-    problems = check(net, cert, proofs)
+    problems = check_certificate(net, cert, proofs)
     assert problems and all("is a sequence, which no stored proof covers" in p
                             or "its own digest is not sequence's" in p
                             for p in problems if "sequence" in p)
@@ -70,7 +70,7 @@ def test_a_net_one_arc_away_from_its_certificate_is_refused_naming_the_instance(
     for arc in net.arcs[::stride]:
         mutant = Net(net.name, net.places, net.transitions,
                      tuple(a for a in net.arcs if a != arc), net.initial)
-        problems = check(mutant, cert, proofs)
+        problems = check_certificate(mutant, cert, proofs)
         assert problems, arc
         owner = arc.target if arc.target in net.transition_index else arc.source
         assert any(f"'{owner.rsplit('.', 1)[0]}" in p for p in problems) or \
@@ -132,14 +132,14 @@ def test_a_net_changed_in_any_one_way_is_refused_saying_what_differs(mission, ho
     """Changed at many places, nodes and arcs in turn (every ``step``-th one), the net is
     refused each time, and the checker says so without a crash; the net as compiled holds."""
     net, cert = _certified(ROOT / "examples" / f"{mission}.mcl")
-    assert check(net, cert) == []
+    assert check_certificate(net, cert) == []
     changed = 0
     for k in range(0, 600, step):
         other = _changed(net, how, k)
         if other is None:
             continue
         changed += 1
-        problems = check(other, cert)
+        problems = check_certificate(other, cert)
         assert problems, (how, k)
         assert all(isinstance(p, str) and p for p in problems)
     assert changed >= 10, f"only {changed} nets changed by {how}"
@@ -148,7 +148,7 @@ def test_a_net_changed_in_any_one_way_is_refused_saying_what_differs(mission, ho
 def test_a_certificate_of_another_mission_is_refused():
     net, _ = _certified(ROOT / "examples" / "sauce.mcl")
     _, other = _certified(ROOT / "examples" / "docking.mcl")
-    problems = check(net, other)
+    problems = check_certificate(net, other)
     assert any("has no node in the net" in p for p in problems)
     assert any("belongs to no instance" in p for p in problems)
 
@@ -158,14 +158,14 @@ def test_the_functions_order_is_computed_and_a_call_cycle_is_refused():
     function made to call one that calls it is a cycle, refused whatever the list says."""
     net, cert = _certified(ROOT / "examples" / "multi_leg.mcl")
     cert["functions"] = list(reversed(cert["functions"]))
-    assert check(net, cert) == []
+    assert check_certificate(net, cert) == []
     calls = {f: [n for n in cert["trees"][f] if n["rule"] == "call"
                  and n["callee"] in cert["functions"]] for f in cert["functions"]}
     caller = next(f for f in calls if calls[f])
     callee = calls[caller][0]["callee"]
     site = next(n for n in cert["trees"][callee] if n["rule"] == "call")
     site["callee"] = caller
-    assert any("call each other in a cycle" in p for p in check(net, cert))
+    assert any("call each other in a cycle" in p for p in check_certificate(net, cert))
 
 
 @functools.cache
@@ -248,7 +248,7 @@ def _agrees(text: str, pending=(False, True), max_states: int = 20_000) -> bool 
         if cert is None:
             verdicts.append(not holds)
             continue
-        assert check(start, cert, _proofs()) == []
+        assert check_certificate(start, cert, _proofs()) == []
         verdicts.append(holds and ends == _ends_said(cert, pending))
     return all(verdicts)
 
@@ -413,7 +413,7 @@ def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
     exploration does not hold or ends otherwise."""
     from mcl2pnml.certify.certificate import NotCertified
     from mcl2pnml.certify.templates import BrokenTemplate, current
-    from mcl2pnml.language.semantics import check as check_mcl
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.parser import parse
     lib = _with_mutant(name, net)
@@ -423,7 +423,7 @@ def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
         proofs = None
     certified, fine, wrong = proofs is not None, True, []
     for k, text in enumerate(PROBES):
-        checked = check_mcl(parse(text, f"probe{k}.mcl"), lib)
+        checked = check_program(parse(text, f"probe{k}.mcl"), lib)
         compiled = compile_checked(checked, lib)
         for pending in (False, True):
             start = compiled.with_initial({**compiled.initial, "mission.A": 1}) \
@@ -438,7 +438,7 @@ def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
             except NotCertified:
                 certified = False
                 continue
-            if check(start, cert, proofs):
+            if check_certificate(start, cert, proofs):
                 certified = False
             elif not holds or ends != _ends_said(cert, pending):
                 wrong.append(f"probe{k}{' with an abort pending' if pending else ''}")
@@ -494,14 +494,14 @@ def test_a_loop_that_never_ends_is_not_certified_and_the_message_points_at_it(tm
     # the same certificate, read as a proof of the mission with no abort pending, is refused
     net = pipeline.compile_checked(pipeline.check_file(mission))
     cert["start"] = ["mission.B"]
-    assert any("may run for ever (from 'while-1')" in p for p in check(net, cert))
+    assert any("may run for ever (from 'while-1')" in p for p in check_certificate(net, cert))
 
 
 def test_a_certificate_claiming_other_ends_is_refused():
     net, cert = _certified(ROOT / "examples" / "docking.mcl")
     cert["conclusion"]["ends"] = ["mission.OK"]
     assert any("the conclusion is not the one derived from the parts" in p
-               for p in check(net, cert))
+               for p in check_certificate(net, cert))
 
 
 def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
@@ -515,7 +515,7 @@ def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
     assert cert["start"] == ["mission.B", "mission.A"] and "abort" in cert["conclusion"]
     # the net without the abort is not the one it proves
     net, _ = _certified(mission)
-    assert any("does not mark mission.A" in p for p in check(net, cert))
+    assert any("does not mark mission.A" in p for p in check_certificate(net, cert))
 
 
 @pytest.mark.parametrize("spoil,message", [
@@ -548,8 +548,8 @@ def test_a_certificate_not_of_its_shape_is_one_message_at_its_json_path(spoil, m
     assert out.returncode == 2 and out.stdout == "", out.stderr
     assert out.stderr.startswith(f"{tmp_path / 'c.json'}: the certificate is ")
     assert message in out.stderr and out.stderr.count("\n") == 1, out.stderr
-    assert check(net, cert) and all(p.startswith("the certificate is malformed")
-                                    for p in check(net, cert))
+    assert check_certificate(net, cert) and all(p.startswith("the certificate is malformed")
+                                    for p in check_certificate(net, cert))
 
 
 def test_a_parent_out_of_range_is_a_certificate_that_does_not_hold(tmp_path):
@@ -639,7 +639,7 @@ def test_a_primitive_no_task_uses_is_covered_by_no_proof():
     task using it (its net added to match) is refused, not taken as idle."""
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     cert["primitives"]["Spare"] = dict(cert["primitives"]["DetectCross"])
-    assert any("primitive 'Spare' is used by no task" in p for p in check(net, cert))
+    assert any("primitive 'Spare' is used by no task" in p for p in check_certificate(net, cert))
 
 
 def test_hostile_certificates_are_refused_at_once_with_one_message(tmp_path):
@@ -697,7 +697,7 @@ def test_numbers_in_a_certificate_are_read_as_json_means_them(spoil, said):
     and never fails on a number of another type or size."""
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     spoil(cert)
-    problems = check(net, cert)
+    problems = check_certificate(net, cert)
     assert (problems == []) if said is None else any(said in p for p in problems), problems
 
 

@@ -418,7 +418,7 @@ def _user_templates(tmp_path, monkeypatch, kind: str, candidates: int, used: int
                     seed: int) -> tuple[int, int, cm.Tally]:
     """``candidates`` generated templates of ``kind``, those that keep the contract kept,
     ``used`` of them put in missions as a user's template: (kept, certified, tally)."""
-    from mcl2pnml.analysis.checking.contract import check as contract
+    from mcl2pnml.analysis.checking.contract import check_contract as contract
     from mcl2pnml.language.library import Library, default_library
     make, named, children, probes = _USER[kind]
     rng = random.Random(seed)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from mcl2pnml.analysis.checking.contract import Clause, NoInterface, check, restricted, roles
+from mcl2pnml.analysis.checking.contract import Clause, NoInterface, check_contract, restricted, roles
 from mcl2pnml.core.net import Net, NetBuilder
 from mcl2pnml.language.library import default_library
 from mcl2pnml.language.template_parser import TemplateKind
@@ -16,7 +16,7 @@ COMPONENTS = [t.name for t in LIBRARY.unique() if t.kind is not TemplateKind.PRI
 
 @pytest.mark.parametrize("name", COMPONENTS)
 def test_every_template_keeps_the_contract_with_its_children_reduced(name):
-    verdict = check(LIBRARY.composed(name))
+    verdict = check_contract(LIBRARY.composed(name))
     assert verdict.kept, [str(b) for b in verdict.breaches]
     assert verdict.markings >= 4    # rest, rest + A, and two starts, each explored
 
@@ -55,7 +55,7 @@ def reduced(*drop: str, extra=(), places=(), transitions=()) -> Net:
     (lambda: reduced("B:t5"), Clause.IDLE, "rest + A", "t5 can fire"),
 ])
 def test_each_clause_broken_is_said_with_its_run(net, clause, start, why):
-    verdict = check(net())
+    verdict = check_contract(net())
     assert not verdict.kept
     found = [b for b in verdict.breaches if b.clause is clause and b.start == start]
     assert found, [str(b) for b in verdict.breaches]
@@ -65,7 +65,7 @@ def test_each_clause_broken_is_said_with_its_run(net, clause, start, why):
 def test_a_component_that_can_run_for_ever_breaks_always_ends():
     """The reduced task with a way into a loop it never leaves (EXE -> trap -> LOOP, and
     spin: LOOP -> LOOP): no dead marking there, and no end either."""
-    verdict = check(reduced(extra=[("EXE", "trap"), ("trap", "LOOP"), ("LOOP", "spin"),
+    verdict = check_contract(reduced(extra=[("EXE", "trap"), ("trap", "LOOP"), ("LOOP", "spin"),
                                    ("spin", "LOOP")], places=["LOOP"],
                             transitions=["trap", "spin"]))
     [breach] = [br for br in verdict.breaches if br.start == "rest + B"]
@@ -83,7 +83,7 @@ def test_a_net_without_the_control_interface_is_refused_naming_what_lacks():
 def test_a_result_given_before_the_rest_is_restored_breaks_result_last():
     """t2 marks OK, and only a later step gives MTX back: a caller taking OK at once could
     start the component while it still holds its mutex (the dead markings are all fine)."""
-    verdict = check(reduced("t2:MTX", extra=[("t2", "HOLD"), ("HOLD", "t2b"), ("t2b", "MTX")],
+    verdict = check_contract(reduced("t2:MTX", extra=[("t2", "HOLD"), ("HOLD", "t2b"), ("t2b", "MTX")],
                             places=["HOLD"], transitions=["t2b"]))
     [breach] = [br for br in verdict.breaches if br.start == "rest + B"
                 and br.clause is Clause.RESULT_LAST]
@@ -96,7 +96,7 @@ def test_a_result_taken_back_breaks_result_final():
     every dead marking is a proper end, the rest is at rest whenever a result is marked,
     and its ends are only FAIL; but a caller takes the OK first, so "only FAIL" would be a
     lie to it. Version 2 of the contract refuses it, with the run to the OK."""
-    verdict = check(reduced(extra=[("OK", "regret"), ("regret", "FAIL")],
+    verdict = check_contract(reduced(extra=[("OK", "regret"), ("regret", "FAIL")],
                             transitions=["regret"]))
     clauses = {b.clause for b in verdict.breaches}
     assert clauses == {Clause.INTERFACE, Clause.ASLEEP, Clause.RESULT_FINAL}, [
@@ -116,7 +116,7 @@ def test_removing_an_arc_of_a_template_breaks_the_contract_but_for_five_guards()
         for a in t.net.arcs:
             mutant = Net(net.name, net.places, net.transitions,
                          tuple(x for x in net.arcs if x != a), net.initial)
-            if check(mutant).kept:
+            if check_contract(mutant).kept:
                 kept.append(f"{t.name}: {a.source} -> {a.target}")
     assert kept == ["AchieveGoal: OFF -> t01", "KeepGoal: OFF -> t01",
                     "KeepTwoGoals: P_OFF -> t01", "KeepTwoGoals: Q_OFF -> t01",
@@ -130,7 +130,7 @@ def test_a_component_that_ignores_aborts_breaks_abortable():
     net = Net("deaf", net.places, tuple(t for t in net.transitions if t.id not in ("t4", "t5")),
               tuple(a for a in net.arcs if "t4" not in (a.source, a.target)
                     and "t5" not in (a.source, a.target)), net.initial)
-    verdict = check(net)
+    verdict = check_contract(net)
     assert [b.clause for b in verdict.breaches] == [Clause.ABORTABLE]
     assert "with an abort pending it ends OK or FAIL, without one OK or FAIL" in \
         verdict.breaches[0].why
@@ -144,7 +144,7 @@ def test_the_restricted_reduced_model_has_exactly_its_signature(results, stuck):
     results, may run for ever exactly when asked to, and keeps the rest of the contract:
     what the certificate's results tables rest on."""
     from mcl2pnml.certify.templates import classify
-    verdict = check(restricted(LIBRARY.reduced.net, frozenset(results), stuck))
+    verdict = check_contract(restricted(LIBRARY.reduced.net, frozenset(results), stuck))
     assert classify(verdict) == {"ends": list(results), "stuck": stuck}
     assert verdict.results_aborted == {*results, "ABORTED"}
 
@@ -158,19 +158,19 @@ def test_a_structure_that_starts_a_running_child_again_breaks_caller():
     net = Net(net.name, net.places, (*net.transitions, Transition("again")),
               (*net.arcs, Arc("T1_EXE", "again"), Arc("again", "T1_EXE"),
                Arc("again", "T1_B")), net.initial)
-    verdict = check(net, children=("T1_", "T2_"))
+    verdict = check_contract(net, children=("T1_", "T2_"))
     [breach] = [b for b in verdict.breaches if b.clause is Clause.CALLER
                 and b.start == "rest + B"]
     assert breach.path == ("t1", "T1_t1", "again")
     assert "T1_B is marked while the child is running" in breach.why
-    assert check(LIBRARY.composed("sequence"), children=("T1_", "T2_")).kept
+    assert check_contract(LIBRARY.composed("sequence"), children=("T1_", "T2_")).kept
 
 
 def test_a_component_that_marks_its_own_abort_breaks_interface():
     """t2 ends OK and marks A too: every clause read on the markings holds (A is the
     caller's place, left for it to drain), but the next start would be aborted with no
     abort asked; the interface clause refuses the arc itself."""
-    verdict = check(reduced(extra=[("t2", "A")]))
+    verdict = check_contract(reduced(extra=[("t2", "A")]))
     assert [str(b) for b in verdict.breaches if b.clause is Clause.INTERFACE] == [
         "interface: from the net, after (no firing): t2 marks A, the caller's to mark "
         "(marked: nothing)"]
@@ -184,7 +184,7 @@ def test_a_structure_that_reads_its_child_s_mutex_breaks_caller():
     net = LIBRARY.composed("sequence")
     net = Net(net.name, net.places, net.transitions,
               (*net.arcs, Arc("T1_MTX", "t1", kind=ArcKind.READ)), net.initial)
-    said = [b.why for b in check(net, children=("T1_", "T2_")).breaches
+    said = [b.why for b in check_contract(net, children=("T1_", "T2_")).breaches
             if b.clause is Clause.CALLER]
     assert said == ["t1 takes T1_MTX (read): a parent only marks a child's B and A, and "
                     "takes its results and a left A"]

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_all, judge
+from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_properties, judge
 from mcl2pnml import pipeline
 from mcl2pnml.counterexample import (CYCLE_REPEATS, StepKind, engine_run, explain, replay,
                                      schedule, witness)
@@ -255,7 +255,7 @@ def _witnesses_replay(case) -> None:
         side.write_text(generated_properties(net, seed))
         net, props = pipeline.properties_of(mission, extra=side)
         checked = pipeline.check_file(mission)
-        for v in check_all(net, props):
+        for v in check_properties(net, props):
             if v.status is Status.HOLDS:
                 assert engine_run(net, v.property) is None, v.property.text
                 continue

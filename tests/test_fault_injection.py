@@ -15,7 +15,7 @@ import pytest
 
 from mcl2pnml.campaign import wilson
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.language.semantics import check
+from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.parser import parse_file
 from mcl2pnml.pipeline import check_source
@@ -86,7 +86,7 @@ def test_faults_of_a_primitive_the_mission_does_not_use_are_refused():
 
 @pytest.fixture(scope="module")
 def sauce():
-    return PetriEngine(compile_checked(check(parse_file(str(ROOT / "examples" / "sauce.mcl")))))
+    return PetriEngine(compile_checked(check_program(parse_file(str(ROOT / "examples" / "sauce.mcl")))))
 
 
 def fly(sauce, spec: dict | None, seed: int = 0, world: World = World()):

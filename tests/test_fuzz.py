@@ -28,7 +28,7 @@ from lxml import etree
 from mcl2pnml.pipeline import compile_source
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.core.errors import ErrorList, Mcl2PnmlError
-from mcl2pnml.language.semantics import check
+from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.parser import decode, parse
 from mcl2pnml.io.pnml.reader import parse_pnml
 from mcl2pnml.pipeline import to_pnml_bytes
@@ -223,7 +223,7 @@ def assert_located(error: Mcl2PnmlError, filename: str, data: bytes) -> None:
 
 def mcl_front_end(data: bytes) -> None:
     try:
-        checked = check(parse(decode(data, MCL_NAME), MCL_NAME))
+        checked = check_program(parse(decode(data, MCL_NAME), MCL_NAME))
         compile_checked(checked)
     except Mcl2PnmlError as e:
         assert_located(e, MCL_NAME, data)

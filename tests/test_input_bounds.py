@@ -366,7 +366,7 @@ def work(text: str) -> tuple[int, int]:
     import sys
     import tracemalloc
 
-    from mcl2pnml.language.semantics import check
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.lint import lint
     from mcl2pnml.language.parser import parse
     parse("mission { }", "warm.mcl")             # the parser is built once, not counted
@@ -378,7 +378,7 @@ def work(text: str) -> tuple[int, int]:
     tracemalloc.start()
     sys.setprofile(count)
     try:
-        lint(check(parse(text, "m.mcl")))
+        lint(check_program(parse(text, "m.mcl")))
     except Mcl2PnmlError as e:
         str(e)
     finally:

@@ -5,7 +5,7 @@ from hypothesis import given, settings, strategies as st
 from mcl2pnml.language import ast
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.language.functional import format_node, mission_expression
-from mcl2pnml.language.semantics import check
+from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.parser import decode, parse, parse_file
 
 from helpers import DATA, ROOT, assert_error_golden, run_cli as run
@@ -17,7 +17,7 @@ ALGORITHM_2 = ("sequence(if-then-else(monitor(Survey(), FindCross()), sequence("
 
 
 def test_the_papers_algorithm_1_gives_its_algorithm_2():
-    checked = check(parse_file(ROOT / "examples" / "sauce.mcl"))
+    checked = check_program(parse_file(ROOT / "examples" / "sauce.mcl"))
     assert format_node(mission_expression(checked.mission)) == ALGORITHM_2
 
 
@@ -44,7 +44,7 @@ def test_the_ast_keeps_positions_and_is_immutable():
 ])
 def test_functional_form(source, expected):
     program = parse("primitive P();\ntask T() = AchieveGoal(P());\n" + source)
-    assert format_node(mission_expression(check(program).mission)) == expected
+    assert format_node(mission_expression(check_program(program).mission)) == expected
 
 
 def test_literals_and_comments():
@@ -58,7 +58,7 @@ def test_literals_and_comments():
         task T(x) = KeepGoal(P(x)) timeout 2.5;
         mission { T(Point); T(+3); }
     ''')
-    checked = check(program)
+    checked = check_program(program)
     assert checked.consts == {"Name": 'dock "A"', "Neg": -150.0, "Point": (1, -2.0, 'dock "A"')}
     assert checked.tasks["T"].timeout.value == 2.5
 
@@ -66,13 +66,13 @@ def test_literals_and_comments():
 @pytest.mark.parametrize("path", INVALID, ids=lambda p: p.name)
 def test_invalid_files_give_the_expected_messages(path):
     with pytest.raises(Mcl2PnmlError) as info:
-        check(parse(decode(path.read_bytes(), path.name), path.name))
+        check_program(parse(decode(path.read_bytes(), path.name), path.name))
     assert_error_golden(path, info.value)
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
 def test_every_example_checks(path):
-    check(parse_file(path))
+    check_program(parse_file(path))
 
 
 def test_cli_check_and_functional():
@@ -87,7 +87,7 @@ def test_cli_check_and_functional():
 @given(st.binary(max_size=200) | st.text(max_size=200).map(str.encode))
 def test_garbage_gives_our_error_and_nothing_else(data):
     try:
-        check(parse(decode(data, "fuzz.mcl"), "fuzz.mcl"))
+        check_program(parse(decode(data, "fuzz.mcl"), "fuzz.mcl"))
     except Mcl2PnmlError as e:
         assert e.location is not None and e.location.file == "fuzz.mcl"
 

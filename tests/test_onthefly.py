@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
-from mcl2pnml.analysis.checking.on_graph import Status, check_all, judge
+from mcl2pnml.analysis.checking.on_graph import Status, check_properties, judge
 from helpers import ROOT
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import NetBuilder
@@ -26,8 +26,8 @@ pytestmark = pytest.mark.skipif(not onthefly.available(),
 
 
 def assert_same(net, properties, max_states=1_000_000):
-    fly = check_all(net, properties, max_states, method="on-the-fly")
-    full = check_all(net, properties, max_states, method="full")
+    fly = check_properties(net, properties, max_states, method="on-the-fly")
+    full = check_properties(net, properties, max_states, method="full")
     for a, b in zip(fly, full):
         assert a.status is b.status, (a, b)
         assert len(a.transitions) == len(b.transitions), (a, b)
@@ -41,7 +41,7 @@ def assert_same(net, properties, max_states=1_000_000):
 
 
 def _safe(net) -> bool:
-    return onthefly.check_all(net, []) is not None
+    return onthefly.check_properties_on_the_fly(net, []) is not None
 
 
 @settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -89,10 +89,10 @@ def test_a_net_that_is_not_safe_goes_to_the_reference():
     b.arc("t", "b")
     net = b.build()
     prop = Property("p", Pattern.ABSENCE, Tokens(("b",), 2))
-    assert onthefly.check_all(net, [prop]) is None
-    assert check_all(net, [prop])[0].status is Status.FAILS     # auto: the reference
+    assert onthefly.check_properties_on_the_fly(net, [prop]) is None
+    assert check_properties(net, [prop])[0].status is Status.FAILS     # auto: the reference
     with pytest.raises(ValueError, match="not for the on-the-fly checker"):
-        check_all(net, [prop], method="on-the-fly")
+        check_properties(net, [prop], method="on-the-fly")
 
 
 def test_past_the_limit_the_verdict_is_unknown():
@@ -103,22 +103,22 @@ def test_past_the_limit_the_verdict_is_unknown():
         b.transition(f"t{k}")
         b.arc(f"m{k}", f"t{k}")
         b.arc(f"t{k}", f"m{k + 1}")
-    v = check_all(b.build(), [Property("a", Pattern.ABSENCE, Const(False))], max_states=3,
+    v = check_properties(b.build(), [Property("a", Pattern.ABSENCE, Const(False))], max_states=3,
                   method="on-the-fly")[0]
     assert v.status is Status.UNKNOWN and "product states" in v.reason
 
 
 def test_a_method_is_one_of_three():
     with pytest.raises(ValueError, match="one of auto, full, on-the-fly"):
-        check_all(NetBuilder("n").build(), [], method="fast")
+        check_properties(NetBuilder("n").build(), [], method="fast")
 
 
 def test_past_the_memory_budget_the_verdict_is_unknown_and_says_so():
     mission = ROOT / "examples" / "lawnmower.mcl"
     net, properties = pipeline.properties_of(mission, extra=ROOT / "examples" / "lawnmower.props")
-    holds = [v for v in check_all(net, properties) if v.status is Status.HOLDS]
+    holds = [v for v in check_properties(net, properties) if v.status is Status.HOLDS]
     assert holds
-    v = onthefly.check_all(net, [holds[0].property], max_memory=64 * 1024)[0]
+    v = onthefly.check_properties_on_the_fly(net, [holds[0].property], max_memory=64 * 1024)[0]
     assert v.status is Status.UNKNOWN and "memory budget" in v.reason, v
 
 
@@ -170,8 +170,8 @@ def safe_props(draw):
 
 
 def assert_reduced_same(net, properties, safe=False):
-    reduced = check_all(net, properties, stubborn=True, safe=safe)
-    full = check_all(net, properties, method="full")
+    reduced = check_properties(net, properties, stubborn=True, safe=safe)
+    full = check_properties(net, properties, method="full")
     for a, b in zip(reduced, full):
         assert a.status is b.status, (a, b)
         if a.status is Status.FAILS:     # a real run that shows it, if not a shortest one
@@ -230,7 +230,7 @@ def test_the_reduction_explores_one_order_of_independent_steps(pattern):
     prop = Property("p", pattern, end if pattern is not Pattern.RESPONSE else start,
                     s=end if pattern is Pattern.RESPONSE else None)
     reduced, full = assert_reduced_same(net, [prop])
-    plain = check_all(net, [prop])[0]
+    plain = check_properties(net, [prop])[0]
     if plain.status is Status.HOLDS:    # every order explored without the reduction
         assert reduced[0].states * 10 < plain.states, (reduced[0].states, plain.states)
     else:                               # a violation found either way, the first one
@@ -247,7 +247,7 @@ def test_the_reduction_needs_a_net_proven_safe():
         b.arc(t, "c")       # both may mark c: not 1-safe, and nothing proves otherwise
     prop = Property("p", Pattern.ABSENCE, Tokens(("c",), 1))
     with pytest.raises(onthefly.NotProvenSafe, match="not proven 1-safe"):
-        check_all(b.build(), [prop], stubborn=True)
+        check_properties(b.build(), [prop], stubborn=True)
 
 
 def test_analyze_stubborn_gives_the_same_verdicts_on_the_certified_mission():
@@ -281,5 +281,5 @@ def test_a_violation_found_before_the_limit_is_kept():
         b.arc(f"t{k}", f"b{k}")
     net = b.build()
     prop = Property("p", Pattern.ABSENCE, Tokens(("b0",), 1))
-    v = check_all(net, [prop], max_states=2, method="on-the-fly")[0]
+    v = check_properties(net, [prop], max_states=2, method="on-the-fly")[0]
     assert v.status is Status.FAILS and judge(net, prop, v.transitions) is not None

@@ -13,7 +13,7 @@ import itertools
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from mcl2pnml.analysis.checking.on_graph import Shape, Status, check
+from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_property
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens, holds
 
@@ -143,7 +143,7 @@ def reference_violates(prop, marks, states, loop):
 
 def assert_agrees(net, prop, length=9):
     marks, edges = _graph(net)
-    verdict = check(net, prop)
+    verdict = check_property(net, prop)
     bad = [(s, t, l) for s, t, l in runs(edges, length) if reference_violates(prop, marks, s, l)]
     if verdict.status is Status.HOLDS:
         assert not bad, (prop, bad[0])
@@ -289,7 +289,7 @@ def test_every_pattern_in_every_scope_holds_and_fails():
 def test_a_liveness_failure_is_a_lasso():
     # m0 -> m1 -> m2 -> m1 ...: m3 is never reached
     net = chain(0, 1, 2, loop_to=1)
-    v = check(net, Property("e", Pattern.EXISTENCE, at(3)))
+    v = check_property(net, Property("e", Pattern.EXISTENCE, at(3)))
     assert v.status is Status.FAILS and v.shape is Shape.LASSO
     assert v.transitions == ("t0", "t1", "t2") and v.loop == 1
     assert_agrees(net, Property("e", Pattern.EXISTENCE, at(3)))
@@ -308,13 +308,13 @@ def test_a_safety_failure_is_the_shortest_prefix():
         b.transition(t)
         b.arc(x, t)
         b.arc(t, y)
-    v = check(b.build(), Property("a", Pattern.ABSENCE, at(3)))
+    v = check_property(b.build(), Property("a", Pattern.ABSENCE, at(3)))
     assert v.status is Status.FAILS and v.shape is Shape.PREFIX and v.transitions == ("short",)
 
 
 def test_the_state_limit_gives_unknown():
     net = chain(*range(6))
-    v = check(net, Property("a", Pattern.ABSENCE, Const(False)), max_states=3)
+    v = check_property(net, Property("a", Pattern.ABSENCE, Const(False)), max_states=3)
     assert v.status is Status.UNKNOWN and v.states
 
 

@@ -12,7 +12,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core import patterns as typed
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.language import ast
-from mcl2pnml.language.semantics import check
+from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.parser import parse, parse_file
 from mcl2pnml.language.declared_properties import ATOMS, compile_properties, text_of
@@ -41,7 +41,7 @@ def _mission(props: str) -> str:
 @pytest.mark.parametrize("pattern, scope", list(itertools.product(PATTERNS, SCOPES)))
 def test_every_pattern_in_every_scope_parses_and_compiles(pattern, scope):
     written = f"{pattern} {scope}".replace("A", f"({A})").replace("B", f"({B})").strip()
-    checked = check(parse(_mission(f"property P: {written};"), "m.mcl"))
+    checked = check_program(parse(_mission(f"property P: {written};"), "m.mcl"))
     (decl,) = checked.program.of(ast.Property)
     net = compile_checked(checked)
     (prop,) = compile_properties(net, [checked.program])
@@ -73,7 +73,7 @@ def test_property_words_stay_names_elsewhere():
 
 
 def _compiled(program, reduced=False):
-    checked = check(program)
+    checked = check_program(program)
     net = compile_checked(checked, reduced=reduced)
     return net, compile_properties(net, [checked.program], reduced=reduced)
 
@@ -106,7 +106,7 @@ def _every_atom(checked) -> str:
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)
 def test_every_atom_of_every_example_names_places_of_its_net(path):
-    checked = check(parse_file(path))
+    checked = check_program(parse_file(path))
     source = path.read_text() + f"\nproperty Every: eventually {_every_atom(checked)};\n"
     net, (prop,) = _compiled(parse(source, path.name))
     assert typed.places_of(prop.p) <= set(net.place_index)   # compile_properties checks too

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 
-from mcl2pnml.analysis.checking.on_graph import Status, check
+from mcl2pnml.analysis.checking.on_graph import Status, check_property
 from mcl2pnml import pipeline
 from mcl2pnml.io.mccquery import property_queries, to_xml
 
@@ -69,7 +69,7 @@ def assert_peers_agree(cases, folder: Path, max_states: int = 1_000_000,
     given, settles a disagreement: the property's truth computed without our checker."""
     ours, jobs = [], []
     for k, (net, properties) in enumerate(cases):
-        verdicts = {p.name: check(net, p, max_states) for p in properties}
+        verdicts = {p.name: check_property(net, p, max_states) for p in properties}
         if any(v.status is Status.UNKNOWN for v in verdicts.values()):
             ours.append(None)
             continue

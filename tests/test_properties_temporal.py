@@ -12,7 +12,7 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mcl2pnml.analysis.checking.on_graph import Status, check
+from mcl2pnml.analysis.checking.on_graph import Status, check_property
 from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind
 from mcl2pnml.core.temporal import ctl, evaluate, ltl, reachability, show
 from test_properties_check import _graph, chain, at, props, runs, small_nets
@@ -32,7 +32,7 @@ def _runs_satisfy(net, formula, length=7):
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
 def test_the_ltl_form_means_what_the_observer_checks(net, prop):
-    verdict = check(net, prop)
+    verdict = check_property(net, prop)
     formula = ltl(prop)
     assert _runs_satisfy(net, formula) is (verdict.status is Status.HOLDS), show(formula)
     for other in (ctl(prop), reachability(prop)):

@@ -199,7 +199,7 @@ class Own(NamedTuple):
     foreign: frozenset[str]
 
 
-def check(net: Net, max_states: int = 100_000, children: tuple[str, ...] = (),
+def check_contract(net: Net, max_states: int = 100_000, children: tuple[str, ...] = (),
           own: Own | None = None) -> Verdict:
     """Every clause of the contract on ``net`` (a component with the control interface);
     ``children``: the prefixes of the places of its reduced children (``T1_``, ``T.``),

@@ -68,17 +68,17 @@ from mcl2pnml.analysis.checking.observers import BAD, Marked, Shape, Status, Ver
 from mcl2pnml.analysis.checking.observers import initial as _initial, truths as _truths
 
 
-def check(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
+def check_property(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
     """Whether ``prop`` holds on every run of ``net``, with a shortest counterexample if not."""
-    return check_all(net, [prop], max_states)[0]
+    return check_properties(net, [prop], max_states)[0]
 
 
-#: How :func:`check_all` decides: on the fly where it applies, else the reference; the
+#: How :func:`check_properties` decides: on the fly where it applies, else the reference; the
 #: reference alone (every marking first, then each property's product); on the fly alone.
 METHODS = ("auto", "full", "on-the-fly")
 
 
-def check_all(net: Net, properties: Iterable[Property],
+def check_properties(net: Net, properties: Iterable[Property],
               max_states: int = 1_000_000, method: str = "auto", stubborn: bool = False,
               safe: bool = False) -> list[Verdict]:
     """Each property's verdict, in order.
@@ -98,7 +98,7 @@ def check_all(net: Net, properties: Iterable[Property],
         raise ValueError("the reduction is the on-the-fly checker's: not with method 'full'")
     if method != "full":
         from mcl2pnml.analysis.checking import on_the_fly as onthefly
-        verdicts = onthefly.check_all(net, properties, max_states, stubborn=stubborn,
+        verdicts = onthefly.check_properties_on_the_fly(net, properties, max_states, stubborn=stubborn,
                                       safe=safe)
         if verdicts is not None:
             return verdicts
@@ -338,7 +338,7 @@ def judge(net: Net, prop: Property, transitions: Iterable[str],
           silent: Iterable[str] = ()) -> Shown | None:
     """Whether the run that fires ``transitions`` from M0 shows ``prop`` violated, and how.
 
-    The same observer as :func:`check` reads the run's markings. It shows a
+    The same observer as :func:`check_property` reads the run's markings. It shows a
     violation when the observer reaches ``BAD``; when the run ends in a dead
     marking (no transition of the net enabled) with an obligation open; or
     when it comes back to a state of the product (marking, observer) with an

@@ -40,7 +40,7 @@ shortest one.
 So a failing safety property costs the markings up to its counterexample,
 and a holding one one pass of the product at C speed, where the reference
 method pays the whole state space and a Python loop per property.
-:func:`check_all` answers ``None`` for a net it does not take (not safe,
+:func:`check_properties_on_the_fly` answers ``None`` for a net it does not take (not safe,
 or the loops in C not built); the caller then uses the reference method.
 """
 from __future__ import annotations
@@ -75,7 +75,7 @@ def available() -> bool:
     return hasattr(_native, "product_step")
 
 
-def check_all(net: Net, properties: Iterable[Property], max_states: int = 1_000_000,
+def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_states: int = 1_000_000,
               max_memory: int | None = None, stubborn: bool = False,
               safe: bool = False) -> list[Verdict] | None:
     """Each property's verdict, on the fly; None if the net is not for this checker (not

@@ -254,9 +254,9 @@ def reach_on_the_fly(net: Net, queries: Sequence[q.Query], max_states: int,
     if not props:
         return {}
     try:
-        verdicts = onthefly.check_all(net, props, max_states, max_memory, stubborn, safe)
+        verdicts = onthefly.check_properties_on_the_fly(net, props, max_states, max_memory, stubborn, safe)
     except onthefly.NotProvenSafe:
-        verdicts = onthefly.check_all(net, props, max_states, max_memory)
+        verdicts = onthefly.check_properties_on_the_fly(net, props, max_states, max_memory)
         stubborn = False
     if verdicts is None:
         return {}

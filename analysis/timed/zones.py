@@ -477,7 +477,7 @@ class TimedVerdict:
     """The zone-graph states the run passes through (M0's first)."""
 
 
-def check(graph: ZoneGraph, prop: Property) -> TimedVerdict:
+def check_timed_property(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     """``prop`` on every time-divergent run of ``graph`` (see the module's documentation)."""
     from mcl2pnml.analysis.checking.on_graph import _Observers, _path, _truths
 
@@ -646,7 +646,7 @@ def _covering_cycle(dg, comp, entry, graph, groups, fired):
     return cycle
 
 
-def check_all(tn: TimedNet, properties: Sequence[Property], max_states: int = 1_000_000
+def check_timed_properties(tn: TimedNet, properties: Sequence[Property], max_states: int = 1_000_000
               ) -> tuple[ZoneGraph | None, list[TimedVerdict]]:
     """Each property's timed verdict, on one zone graph."""
     try:
@@ -654,7 +654,7 @@ def check_all(tn: TimedNet, properties: Sequence[Property], max_states: int = 1_
     except TimedLimit as e:
         return None, [TimedVerdict(p, "unknown", states=e.states, reason=str(e))
                       for p in properties]
-    return graph, [check(graph, p) for p in properties]
+    return graph, [check_timed_property(graph, p) for p in properties]
 
 
 @dataclass(frozen=True)

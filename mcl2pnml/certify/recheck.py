@@ -74,7 +74,7 @@ PRIMITIVE_ROLES = ("ON", "OFF", "E", "D", "S1", "S2")
 
 
 @without_gc      # a million arcs: nothing cyclic to collect while they are read
-def check(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
+def check_certificate(net: Net, cert: Any, proofs: dict[str, dict] | None = None, *,
           shaped: bool = False) -> list[str]:
     """Every way ``net`` departs from ``cert`` (none: the certificate holds for it), at most
     :data:`form.MAX_FAULTS` of each kind.

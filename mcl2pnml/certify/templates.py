@@ -37,7 +37,7 @@ from itertools import product
 from pathlib import Path
 
 from mcl2pnml.analysis.checking.contract import VERSION as CONTRACT_VERSION
-from mcl2pnml.analysis.checking.contract import Clause, Own, check, restricted
+from mcl2pnml.analysis.checking.contract import Clause, Own, check_contract, restricted
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import Net
@@ -304,7 +304,7 @@ def _checked(make, net: Net):
                    frozenset(p.id for p in net.places if p.id not in places))
     else:
         mine = None
-    return check(net, children=getattr(make, "children", ()), own=mine)
+    return check_contract(net, children=getattr(make, "children", ()), own=mine)
 
 
 class Rows(dict):

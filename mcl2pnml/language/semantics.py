@@ -341,7 +341,7 @@ class _Checker:
         return tuple(order)
 
 
-def check(program: ast.Program, library: Library | None = None) -> Checked:
+def check_program(program: ast.Program, library: Library | None = None) -> Checked:
     """Check a parsed program; raise every error found, or return it resolved."""
     c = _Checker(program, library or default_library())
     c.declare()
