@@ -30,7 +30,8 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import ArcKind, NetBuilder, Timing
 from mcl2pnml.core.payloads import RESULT_PLACES, EventKind, read_transition
-from mcl2pnml.core.patterns import Not, Pattern, Property, Scope, ScopeKind, Tokens
+from mcl2pnml.core.patterns import (And, Const, Not, Or, Pattern, Property, Scope, ScopeKind,
+                                    Tokens, describe)
 from mcl2pnml.core.timing import Assumptions, mission_timing
 from mcl2pnml.io import tapn
 
@@ -184,6 +185,19 @@ def test_properties_that_one_state_formula_says():
     assert tapn.property_query(after, tnet) is None
     with pytest.raises(Mcl2PnmlError, match="no node 'Nowhere.ON'"):
         tapn.property_query(Property("Y", Pattern.ABSENCE, Tokens(("Nowhere.ON",), 1)), tnet)
+
+
+def test_one_printer_of_predicates_in_the_reports_and_in_verifydtapn_syntax():
+    """The reports and verifydtapn's queries print a predicate with one walker: the reports
+    bracket each compound operand, verifydtapn every connective whole, with its names."""
+    tnet = tapn.timed_arc_net(one_task(), AT_ONCE)
+    p = And((Tokens(("Go.ON",), 1), Or((Not(Tokens(("Go.OFF",), 2)), Const(False))),
+             Tokens((), 1)))
+    assert describe(p) == "Go.ON >= 1 and ((not (Go.OFF >= 2)) or false) and 0 >= 1"
+    assert tapn.predicate_text(p, tnet) == "(Go_ON >= 1 and (not (Go_OFF >= 2) or false) and false)"
+    assert describe(And(())) == tapn.predicate_text(And(()), tnet) == "true"
+    with pytest.raises(TypeError, match="not a predicate"):
+        describe("Go.ON")
 
 
 @pytest.mark.parametrize("assumptions, message", [

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
+from typing import Callable
 
 from mcl2pnml.core.errors import Location
 
@@ -183,17 +184,60 @@ class Property:
 
 # -- reading them ---------------------------------------------------------------------------
 
-def describe(predicate: Predicate) -> str:
-    """A predicate as a place formula: ``KeepDepth.ON >= 1 and not (mission.OK >= 1)``."""
+class Grouping(enum.Enum):
+    """Where a printed conjunction or disjunction puts its parentheses."""
+
+    OPERANDS = "operands"
+    """Around each compound operand, never around the whole: ``a >= 1 and (b >= 1 or
+    c >= 1)``; no reader has to know which of ``and`` and ``or`` binds tighter."""
+    WHOLE = "whole"
+    """Around the whole, never around an operand: ``(a >= 1 and (b >= 1 or c >= 1))``,
+    as verifydtapn's query grammar wants every boolean connective bracketed."""
+
+
+@dataclass(frozen=True)
+class PredicateSyntax:
+    """What differs between the texts a predicate is printed in (:func:`describe`).
+
+    The default is the reports' syntax, with the net's own place ids;
+    :mod:`mcl2pnml.io.tapn` prints verifydtapn's, with the names its file
+    gives the places.
+    """
+
+    #: a place's name in the text, from its id
+    name: Callable[[str], str] = str
+    #: where a conjunction or disjunction has its parentheses
+    grouping: Grouping = Grouping.OPERANDS
+    #: an empty sum (0 >= k) written as its truth (``true``/``false``) rather than as ``0``
+    empty_sum_as_truth: bool = False
+
+
+#: The reports' syntax: place ids as the net has them, compound operands parenthesised.
+REPORTS = PredicateSyntax()
+
+
+def describe(predicate: Predicate, syntax: PredicateSyntax = REPORTS) -> str:
+    """A predicate as a place formula: ``KeepDepth.ON >= 1 and not (mission.OK >= 1)``,
+    in the reports' syntax, or in the one ``syntax`` says (verifydtapn's)."""
     if isinstance(predicate, Tokens):
-        return f"{' + '.join(predicate.places) or '0'} >= {predicate.at_least}"
+        if syntax.empty_sum_as_truth and not predicate.places:
+            return _truth(predicate.at_least <= 0)
+        total = " + ".join(syntax.name(p) for p in predicate.places) or "0"
+        return f"{total} >= {predicate.at_least}"
     if isinstance(predicate, Not):
-        return f"not ({describe(predicate.arg)})"
+        return f"not ({describe(predicate.arg, syntax)})"
     if isinstance(predicate, (And, Or)):
         if not predicate.args:
-            return "true" if isinstance(predicate, And) else "false"
+            return _truth(isinstance(predicate, And))
         word = " and " if isinstance(predicate, And) else " or "
-        # parentheses around every compound operand: no reader has to know precedence
-        return word.join(describe(a) if isinstance(a, (Tokens, Const)) else f"({describe(a)})"
-                         for a in predicate.args)
-    return "true" if predicate.value else "false"
+        if syntax.grouping is Grouping.WHOLE:
+            return "(" + word.join(describe(a, syntax) for a in predicate.args) + ")"
+        return word.join(describe(a, syntax) if isinstance(a, (Tokens, Const))
+                         else f"({describe(a, syntax)})" for a in predicate.args)
+    if isinstance(predicate, Const):
+        return _truth(predicate.value)
+    raise TypeError(f"not a predicate: {predicate!r}")
+
+
+def _truth(value: bool) -> str:
+    return "true" if value else "false"

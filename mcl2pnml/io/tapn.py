@@ -81,8 +81,8 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import RESULT_PLACES
-from mcl2pnml.core.patterns import (And, Const, Not, Or, Pattern, Predicate, Property,
-                                      ScopeKind, Tokens)
+from mcl2pnml.core.patterns import (Grouping, Pattern, Predicate, PredicateSyntax, Property,
+                                      ScopeKind, describe)
 from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
 from mcl2pnml.core.version import __version__
 
@@ -481,22 +481,10 @@ class Query:
 
 
 def predicate_text(predicate: Predicate, tnet: TimedArcNet) -> str:
-    """A predicate on places in verifydtapn's words, with the net's names."""
-    if isinstance(predicate, Tokens):
-        if not predicate.places:
-            return "true" if predicate.at_least <= 0 else "false"
-        total = " + ".join(tnet.name_of(p) for p in predicate.places)
-        return f"{total} >= {predicate.at_least}"
-    if isinstance(predicate, Not):
-        return f"not ({predicate_text(predicate.arg, tnet)})"
-    if isinstance(predicate, (And, Or)):
-        if not predicate.args:
-            return "true" if isinstance(predicate, And) else "false"
-        word = " and " if isinstance(predicate, And) else " or "
-        return "(" + word.join(predicate_text(a, tnet) for a in predicate.args) + ")"
-    if isinstance(predicate, Const):
-        return "true" if predicate.value else "false"
-    raise TypeError(f"not a predicate: {predicate!r}")
+    """A predicate on places in verifydtapn's words, with the net's names: the one printer
+    of predicates (:func:`mcl2pnml.core.patterns.describe`) in verifydtapn's syntax."""
+    return describe(predicate, PredicateSyntax(name=tnet.name_of, grouping=Grouping.WHOLE,
+                                               empty_sum_as_truth=True))
 
 
 def _results(tnet: TimedArcNet) -> list[str]:
