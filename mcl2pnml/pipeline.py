@@ -233,10 +233,10 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     if form is None:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     drawn = _drawn(net, layout) if "positions" in form.options else None
+    drawing = _drawing(net, title, clusters, expand) if "drawing" in form.options else None
     said = form.save(net, path, SaveOptions(positions=drawn and drawn.positions,
-                                            bends=drawn and drawn.bends, title=title,
-                                            urgent=mission, clusters=clusters, expand=expand,
-                                            timing=timing))
+                                            bends=drawn and drawn.bends, drawing=drawing,
+                                            urgent=mission, timing=timing))
     for line in said:
         note(f"{Path(path).name} ({form.title}): {line}")
     return Path(path)
@@ -291,6 +291,13 @@ def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
     from mcl2pnml.io.pnml.writer import to_pnml_bytes as write
     drawn = _drawn(net, layout_engine)
     return write(net, drawn and drawn.positions, drawn and drawn.bends)
+
+
+def _drawing(net: Net, title: str | None, clusters: Mapping[str, Sequence[str]] | None,
+             expand: Sequence[str] | None) -> str:
+    """The DOT text of ``net``'s drawing (:func:`mcl2pnml.view.drawing.drawing`)."""
+    from mcl2pnml.view.drawing import drawing   # graphviz, 0.03 s: only for a drawing
+    return drawing(net, title, clusters=clusters, expand=expand).source
 
 
 def _drawn(net: Net, layout: str):
@@ -709,7 +716,7 @@ def compile_mission(mission: Path, output: Path | None = None, fmt: str = "pnml"
     output = output or mission.with_suffix(FORMATS[fmt].suffixes[0])
     if queries is not None and queries.resolve() == output.resolve():
         raise OptionError("--queries", "the queries go in a file of their own, not the net's")
-    if expand and "expand" not in FORMATS[fmt].options:
+    if expand and "drawing" not in FORMATS[fmt].options:
         raise OptionError("--expand", f"only a drawing has boxes to open, not {fmt}: "
                                       "--format svg, png or dot")
     timing = compile_timing(fmt, ack_within, report_gap)

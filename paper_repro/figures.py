@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mcl2pnml.io.dot import drawing, render
+from mcl2pnml.io.dot import write_image
 from mcl2pnml.language.library import Library
+from mcl2pnml.view.drawing import drawing
 
 FIGURES = {
     1: ("primitive", "Fig. 1. Vehicle primitive Petri net model (M0 = {OFF, C})"),
@@ -32,6 +33,6 @@ def draw_all(lib: Library, out: Path) -> list[Path]:
         graph = figure(lib, number)
         for fmt in ("svg", "png"):
             path = out / f"fig{number}.{fmt}"
-            render(graph, str(path), fmt)
+            write_image(graph.source, path, fmt)
             written.append(path)
     return written

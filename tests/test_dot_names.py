@@ -16,7 +16,8 @@ import subprocess
 import pytest
 
 from mcl2pnml.core.net import NetBuilder
-from mcl2pnml.io.dot import node_id, node_name, to_dot
+from mcl2pnml.io.dot import node_id, node_name
+from mcl2pnml.view.drawing import dot_graph
 
 HOSTILE = ["a:b", "<img src=/etc/passwd>", "x\\N", 'q"uote', "p%41", "node", "edge:1", "<b>"]
 
@@ -45,7 +46,7 @@ def test_dot_draws_every_node_once_with_its_label_as_text():
     if shutil.which("dot") is None:
         pytest.skip("graphviz's dot is not installed (make setup installs it with apt-get)")
     net = hostile_net()
-    source = to_dot(net, legend=False).source
+    source = dot_graph(net, legend=False).source
     out = subprocess.run(["dot", "-Tjson0"], input=source.encode(), capture_output=True,
                          timeout=60, check=True)
     graph = json.loads(out.stdout)

@@ -21,7 +21,7 @@ from lxml import etree
 from drawcheck import fitted_text, layout_json, problems
 from helpers import ROOT, run_cli
 from mcl2pnml import pipeline
-from mcl2pnml.io.dot import box_node, drawing, instance_clusters, to_dot
+from mcl2pnml.view.drawing import box_node, dot_graph, drawing, instance_clusters
 from mcl2pnml.language.library import default_library
 from paper_repro.figures import FIGURES, figure
 
@@ -156,7 +156,7 @@ def test_every_text_is_readable_on_a_slide(which):
 
 
 def _marks(graph: dict) -> set[str]:
-    """The marks dot drew (its JSON): the keys of :data:`mcl2pnml.io.dot.LEGEND`."""
+    """The marks dot drew (its JSON): the keys of :data:`mcl2pnml.view.drawing.LEGEND`."""
     found = {"place"}
     for o in graph["objects"]:
         if o.get("class") == "copy":
@@ -179,7 +179,7 @@ def _marks(graph: dict) -> set[str]:
 
 @pytest.mark.parametrize("which", list(_slide_drawings()))
 def test_every_mark_drawn_has_a_legend_entry(which):
-    from mcl2pnml.io.dot import LEGEND
+    from mcl2pnml.view.drawing import LEGEND
     graph = layout_json(_drawing(which).source)
     label = graph["label"]
     for mark in _marks(graph):
@@ -305,7 +305,7 @@ def test_a_templates_bend_points_lie_on_the_arcs_of_its_drawing(tmp_path):
     assert pipeline.load_net(path) == net          # the reader takes bend points in its stride
     bends = _arcs(path)
     assert sum(1 for pts in bends.values() if pts) >= 40
-    graph = layout_json(to_dot(net, legend=False, expand=None).source)
+    graph = layout_json(dot_graph(net, legend=False, expand=None).source)
     x0, _, _, y1 = map(float, graph["bb"].split(","))
     names = {o["_gvid"]: o["name"] for o in graph["objects"] if "pos" in o}
     for e in graph["edges"]:
@@ -344,7 +344,7 @@ def test_a_missions_positions_group_each_call_in_its_box(tmp_path, name):
     # not one tall column: the whole mission within a few screens, neither side 10 x the other
     assert width * height < 8000 * 8000 and max(width, height) < 10 * min(width, height)
     # the nodes of two calls never share ground: each call is a compact block of its own
-    from mcl2pnml.io.dot import border_out
+    from mcl2pnml.view.drawing import border_out
     boxes = border_out(net, instance_clusters(net))
     extent = {b: (min(pos[n][0] for n in m), min(pos[n][1] for n in m),
                   max(pos[n][0] for n in m), max(pos[n][1] for n in m)) for b, m in boxes.items()}

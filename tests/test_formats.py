@@ -186,7 +186,7 @@ def test_an_unknown_suffix_lists_the_known_formats(tmp_path):
 
 def net_from_dot(text: str) -> tuple[dict, dict]:
     """The net a DOT drawing of ours shows, in the readers' shape, and its clusters."""
-    from mcl2pnml.io.dot import TOKEN
+    from mcl2pnml.view.drawing import TOKEN
 
     dot = read_dot(text)
     kinds = {n: a.get("class") for n, a in dot["nodes"].items()}
@@ -217,10 +217,10 @@ def net_from_dot(text: str) -> tuple[dict, dict]:
 @pytest.mark.parametrize("name, net", missions() + templates(), ids=lambda x: x
                          if isinstance(x, str) else "")
 def test_dot_shows_the_net_and_its_instances(name, net):
-    from mcl2pnml.io.dot import instance_clusters, to_dot
+    from mcl2pnml.view.drawing import dot_graph, instance_clusters
 
     boxes = instance_clusters(net)
-    source = to_dot(net, clusters=boxes).source
+    source = dot_graph(net, clusters=boxes).source
     seen, clusters = net_from_dot(source)
     # the transition a copy of a place is drawn beside: the one it marks or is read by
     beside = {**{b: a for a, b, _ in read_dot(source)["edges"]},
@@ -248,10 +248,10 @@ def test_dot_shows_the_net_and_its_instances(name, net):
 
 
 def test_fusion_places_sit_between_the_boxes_they_join():
-    from mcl2pnml.io.dot import instance_clusters, to_dot
+    from mcl2pnml.view.drawing import dot_graph, instance_clusters
 
     net = compile_file(ROOT / "examples" / "sauce.mcl")
-    _, clusters = net_from_dot(to_dot(net, clusters=instance_clusters(net)).source)
+    _, clusters = net_from_dot(dot_graph(net, clusters=instance_clusters(net)).source)
     inside = {m for members in clusters.values() for m in members}
     box_of = {m: b for b, members in clusters.items() for m in members}
     for p in net.places:

@@ -113,7 +113,8 @@ def test_serialising_never_lays_out(tmp_path: Path):
     imported = [line.rsplit("|", 1)[-1].strip() for line in out.stderr.splitlines()
                 if line.startswith("import time:")]
     assert "mcl2pnml.io.pnml.writer" in imported
-    assert not [m for m in imported if m.split(".")[0] == "graphviz" or m == "mcl2pnml.io.dot"]
+    assert not [m for m in imported if m.split(".")[0] == "graphviz"
+                or m in ("mcl2pnml.io.dot", "mcl2pnml.view.drawing")]
     assert "<graphics>" not in (tmp_path / "s.pnml").read_text()
 
 

@@ -3,7 +3,8 @@
 * PNML (ISO/IEC 15909-2), the standard, in :mod:`mcl2pnml.io.pnml`;
 * TINA's ``.net`` (time Petri nets, LAAS-CNRS), :mod:`mcl2pnml.io.tina`;
 * LoLA's net format (P/T nets, Rostock), :mod:`mcl2pnml.io.lola`;
-* graphviz's DOT, and the SVG and PNG it renders, :mod:`mcl2pnml.io.dot`;
+* graphviz's DOT, and the SVG and PNG it renders, :mod:`mcl2pnml.io.dot`: a
+  drawing written, which the view draws (:mod:`mcl2pnml.view.drawing`);
 * TAPAAL's timed-arc nets (write only: a compiled mission under its timed
   semantics, for verifydtapn), :mod:`mcl2pnml.io.tapn`.
 
@@ -32,16 +33,13 @@ class SaveOptions:
 
     #: node id -> (x, y), PNML's ``<graphics>`` (a layout, computed by the caller)
     positions: Mapping[str, tuple[float, float]] | None = None
-    #: a drawing's title
-    title: str | None = None
     #: a compiled mission: what the vehicle does not fire fires at once (TINA's [0,0])
     urgent: bool = False
     #: (source, target) of an arc -> its bend points, PNML's arc ``<graphics>``
     bends: Mapping[tuple[str, str], Sequence[tuple[float, float]]] | None = None
-    #: a drawing's boxes: name -> node ids (None: one box per instance of a compiled mission)
-    clusters: Mapping[str, Sequence[str]] | None = None
-    #: the boxes a drawing shows open, the others shut, one node each (None: all open)
-    expand: Sequence[str] | None = ()
+    #: a drawing's DOT text, drawn by the caller (:mod:`mcl2pnml.view.drawing`), as the
+    #: positions are laid out by it: io writes a drawing, never makes one
+    drawing: str | None = None
     #: a compiled mission's timed semantics: what the vehicle is assumed to do (None: the
     #: writer's own default; a timed-arc net's is acknowledgements at once, reports 1 s apart)
     timing: Assumptions | None = None
@@ -116,11 +114,11 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            "(time-outs, acknowledgements, report gaps in token ages), queries beside it",
            "mcl2pnml.io.tapn", None, "save_tapn", ("timing",)),
     Format("dot", "DOT", (".dot",), "graphviz's DOT source of the drawing",
-           "mcl2pnml.io.dot", None, "save_dot", ("title", "clusters", "expand")),
-    Format("svg", "SVG", (".svg",), "the drawing as SVG", "mcl2pnml.io.dot", None, "save_svg",
-           ("title", "clusters", "expand")),
-    Format("png", "PNG", (".png",), "the drawing as PNG", "mcl2pnml.io.dot", None, "save_png",
-           ("title", "clusters", "expand")),
+           "mcl2pnml.io.dot", None, "write_dot", ("drawing",)),
+    Format("svg", "SVG", (".svg",), "the drawing as SVG", "mcl2pnml.io.dot", None, "write_svg",
+           ("drawing",)),
+    Format("png", "PNG", (".png",), "the drawing as PNG", "mcl2pnml.io.dot", None, "write_png",
+           ("drawing",)),
 )}
 
 #: Suffix -> the format that reads it.

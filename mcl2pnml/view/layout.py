@@ -1,7 +1,7 @@
 """Positions for drawing a net, so that PNML opens as a picture, not a heap.
 
 PIPE, TAPAAL, WoPeD and TINA's nd draw a net where its ``<graphics>`` say.
-Small nets are laid out by graphviz ``dot`` as :mod:`mcl2pnml.io.dot` draws
+Small nets are laid out by graphviz ``dot`` as :mod:`mcl2pnml.view.drawing` draws
 them, top down in the direction tokens flow, and each arc gets the points
 of dot's curve as its bend points (PNML's arc ``<graphics>``), so that an
 editor draws the arcs around the nodes as the SVG does. A compiled mission
@@ -62,7 +62,7 @@ class Drawn:
 
     ``copies`` are the small dashed copies of a place that the drawing puts
     beside each transition reading it or giving a token back to it (a
-    primitive's ON and OFF, a task's MTX: :mod:`mcl2pnml.io.dot`), by their
+    primitive's ON and OFF, a task's MTX: :mod:`mcl2pnml.view.drawing`), by their
     DOT name: the place they stand for and where. An arc drawn to a copy
     has its bends under the copy's name instead of the place's, a key that
     is no arc of the net, so that the PNML writer, which looks bends up by
@@ -101,7 +101,7 @@ def drawn_layout(net: Net, engine: str = "auto",
     """Positions for every node and, laid out by dot, bend points for the arcs.
 
     A net of instances (a compiled mission) is laid out in two levels, as its
-    overview drawing shows it (:func:`mcl2pnml.io.dot.to_dot` with every box
+    overview drawing shows it (:func:`mcl2pnml.view.drawing.dot_graph` with every box
     shut): each instance's nodes compactly in its box, the boxes and the
     places between them ranked by the calls. Another net (a template) is
     laid out as its drawing, with ``clusters`` as its boxes (the primitive of
@@ -143,14 +143,15 @@ def _run_dot(source: str) -> dict | None:
 
 
 def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) -> Drawn | None:
-    from mcl2pnml.io.dot import (border_out, dot_missing, instance_clusters,  # graphviz:
-                                 to_dot)                                      # only now
+    # graphviz (0.03 s) comes with these: only when dot lays out, never on the CLI's start
+    from mcl2pnml.io.dot import dot_missing
+    from mcl2pnml.view.drawing import border_out, dot_graph, instance_clusters
     if not dot_available():
         raise dot_missing("--layout", "the layouts layers and none work without it, and auto "
                                       "lays out in layers when it is missing")
     boxes = border_out(net, instance_clusters(net)) if clusters is None else {}
     if not boxes:
-        graph = _run_dot(to_dot(net, clusters=clusters, legend=False, expand=None).source)
+        graph = _run_dot(dot_graph(net, clusters=clusters, legend=False, expand=None).source)
         if graph is None:
             return None
         frame = _Frame(graph)
@@ -160,7 +161,7 @@ def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) ->
                       {c: (place, frame(*nodes[c])) for c, place in copies.items()},
                       {name: _framed(frame, *bb) for name, bb in _cluster_boxes(graph).items()})
     else:
-        drawn = _two_levels(net, boxes, to_dot)
+        drawn = _two_levels(net, boxes)
     return drawn and _of(net, drawn)
 
 
@@ -192,23 +193,23 @@ def _of(net: Net, drawn: Drawn) -> Drawn:
                  copies, drawn.boxes)
 
 
-def _two_levels(net: Net, boxes: dict[str, list[str]], to_dot) -> Drawn | None:
+def _two_levels(net: Net, boxes: dict[str, list[str]]) -> Drawn | None:
     """A net of boxes laid out as its overview: each box's inside laid out on its own
     (one dot run, every box a component), then the overview with each shut box as
     large as its inside (a second run); each node placed in its box."""
-    from mcl2pnml.io.dot import box_node
+    from mcl2pnml.view.drawing import box_node, dot_graph   # graphviz: as _dot_drawn says
     box = {n: name for name, members in boxes.items() for n in members}
     inside = Net(net.name, tuple(p for p in net.places if p.id in box),
                  tuple(t for t in net.transitions if t.id in box),
                  tuple(a for a in net.arcs if a.source in box and box[a.source] == box.get(a.target)),
                  Marking({p: k for p, k in net.initial.items() if p in box}))
-    inner = _run_dot(to_dot(inside, clusters=boxes, legend=False, expand=None).source)
+    inner = _run_dot(dot_graph(inside, clusters=boxes, legend=False, expand=None).source)
     if inner is None:
         return None
     extent = {o["name"][len("cluster_"):]: [float(v) for v in o["bb"].split(",")]
               for o in inner.get("objects", []) if o.get("name", "").startswith("cluster_")}
     sizes = {name: (x1 - x0, y1 - y0) for name, (x0, y0, x1, y1) in extent.items()}
-    overview = to_dot(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes)
+    overview = dot_graph(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes)
     outer = _run_dot(overview.source)
     if outer is None:
         return None

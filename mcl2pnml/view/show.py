@@ -1,13 +1,13 @@
 """``mcl2pnml show``: a net as one self-contained HTML page, to play the token game.
 
 The page is for teaching Petri-net supervisors: it draws the net as its
-static drawing does (:mod:`mcl2pnml.io.dot`, laid out by
+static drawing does (:mod:`mcl2pnml.view.drawing`, laid out by
 :func:`~mcl2pnml.view.layout.drawn_layout`): each arc along dot's route
 around the nodes (its bend points), a place that many transitions read or
 give back to (a primitive's ON and OFF, a task's MTX) as a small dashed
 copy beside each of them, the boxes of the drawing (the primitive of
 Fig. 2's task, T1 and T2 of Fig. 4's structures, each instance of a
-mission: :func:`~mcl2pnml.io.dot.instance_clusters`), and it highlights the
+mission: :func:`~mcl2pnml.view.drawing.instance_clusters`), and it highlights the
 fusion places where they meet; a student clicks an
 enabled transition to fire it, steps back, resets, and sees the marking and
 every P-invariant's value at each step (each must keep its value at M0: a
@@ -133,9 +133,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Protocol, Sequence
 
-from mcl2pnml.io.dot import border_out, instance_clusters
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_text
+from mcl2pnml.view.drawing import border_out, instance_clusters
 from mcl2pnml.view.layout import Drawn, drawn_layout
 from mcl2pnml.core.net import Net, thaw
 from mcl2pnml.core.payloads import MissionPlace, TransitionPayload, doc_of, read_transition
@@ -186,7 +186,7 @@ def tree_parts(net: Net, tree: Sequence[dict[str, Any]]) -> list[dict[str, Any]]
     children before parents, so a fused control place keeps the child's id
     (``Goto-1.OK``, not its parent's slot ``mission.T1_OK``): the node
     ``mission.sequence-1.t2`` is the instance ``mission.sequence-1``'s, as
-    :func:`~mcl2pnml.io.dot.instance_clusters` groups them. The page tells a
+    :func:`~mcl2pnml.view.drawing.instance_clusters` groups them. The page tells a
     node's state from these alone, so it is right in the full model and in
     the reduced one (Fig. 3), whose tasks differ but whose instances do not.
     """
