@@ -1,6 +1,6 @@
 """The reachability graph's searches that answer the contest's questions
 (:mod:`mcl2pnml.analysis.contest.answers`), in C (``analysis/statespace/loops/_native.c``) and in Python
-(``analysis/statespace/loops/python_graphs.py``, where C was not built), one suite for both, each held to
+(``analysis/statespace/loops/python.py``, where C was not built), one suite for both, each held to
 networkx on random graphs: Tarjan's components on a subset of the nodes, the backward
 search of ``E(a U b)``, and Couvreur's on-the-fly emptiness check of a graph's product
 with a generalised Büchi automaton, against the product built whole and its components
@@ -12,15 +12,16 @@ import numpy as np
 import pytest
 
 from mcl2pnml.analysis.contest.answers import _csr
+from mcl2pnml.analysis.statespace.loops import backends
 
 
 @pytest.fixture(params=["c", "python"])
 def native(request):
     """One backend of the searches."""
-    if request.param == "python":
-        from mcl2pnml.analysis.statespace.loops import python_graphs as _graph_loops
-        return _graph_loops
-    return pytest.importorskip("mcl2pnml.analysis.statespace.loops._native", reason="the loops in C are not built")
+    loops = backends.named(request.param)
+    if loops is None:
+        pytest.skip("the loops in C are not built (mcl2pnml installed without a C compiler)")
+    return loops
 
 
 def _graph(rng, n: int, m: int):

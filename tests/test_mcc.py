@@ -202,6 +202,6 @@ def test_without_the_loops_in_c_the_answers_are_the_same(model, monkeypatch):
     """The searches in Python (a machine where C was not built) give the contest's
     answers too, on three models."""
     _corpus()
-    from mcl2pnml.analysis.statespace.loops import python_graphs as _graph_loops
+    from mcl2pnml.analysis.statespace.loops import python as _graph_loops
     monkeypatch.setattr(mcc, "_loops", _graph_loops)
     _agrees(model)

@@ -1,7 +1,8 @@
 """The on-the-fly checker (mcl2pnml.analysis.checking.on_the_fly) against the reference method.
 
 Both read the same observers; the on-the-fly one searches the product in C
-and stops at the first violation. Their verdicts must be the same, their
+(and, on small nets, in the loops' plain-Python reference: the ``loops``
+parameter) and stops at the first violation. Their verdicts must be the same, their
 counterexamples as short (a shortest one of all: prefix, dead end or lasso),
 and each counterexample must show the violation when judged on its own
 (``judge`` fires it on the net). The peers' verdicts are compared in
@@ -9,11 +10,14 @@ and each counterexample must show the violation when judged on its own
 """
 from __future__ import annotations
 
+import contextlib
+
 import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.on_graph import Status, check_properties, judge
+from mcl2pnml.analysis.statespace.loops import backends
 from helpers import ROOT
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import NetBuilder
@@ -21,8 +25,23 @@ from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKi
 from mcl2pnml.core.structure import structure
 from test_properties_check import props, small_nets
 
-pytestmark = pytest.mark.skipif(not onthefly.available(),
-                                reason="the loops in C were not built (no C compiler at install)")
+C_BUILT = onthefly.available()
+NOT_BUILT = "the loops in C were not built (no C compiler at install)"
+
+#: The loops' backends, the C one skipped where it was not built.
+LOOPS = [pytest.param("c", marks=pytest.mark.skipif(not C_BUILT, reason=NOT_BUILT)), "python"]
+
+
+@contextlib.contextmanager
+def searching_with(loops: str):
+    """The on-the-fly checker on the loops named (``c`` or ``python``) meanwhile."""
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.setattr(onthefly, "c_loops", lambda: backends.named(loops))
+        yield
+
+
+#: For the tests in C alone (the examples' missions: too large for the Python loops).
+in_c = pytest.mark.skipif(not C_BUILT, reason=NOT_BUILT)
 
 
 def assert_same(net, properties, max_states=1_000_000):
@@ -44,9 +63,15 @@ def _safe(net) -> bool:
     return onthefly.check_properties_on_the_fly(net, []) is not None
 
 
+@pytest.mark.parametrize("loops", LOOPS)
 @settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
-def test_on_the_fly_agrees_with_the_full_exploration(net, prop):
+def test_on_the_fly_agrees_with_the_full_exploration(loops, net, prop):
+    with searching_with(loops):
+        _agrees_with_the_full_exploration(net, prop)
+
+
+def _agrees_with_the_full_exploration(net, prop):
     assume(_safe(net))
     try:
         assert_same(net, [prop])
@@ -59,7 +84,7 @@ def test_on_the_fly_agrees_with_the_full_exploration(net, prop):
 @settings(max_examples=3000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
 def test_on_the_fly_agrees_with_the_full_exploration_long(net, prop):
-    test_on_the_fly_agrees_with_the_full_exploration.hypothesis.inner_test(net, prop)
+    _agrees_with_the_full_exploration(net, prop)
 
 
 #: Every example's property files; the dam inspection's holding ones behind ``slow`` (the
@@ -69,6 +94,7 @@ PROPERTY_FILES = [pytest.param(p.name, marks=pytest.mark.slow)
                   for p in sorted((ROOT / "examples").glob("*.props"))]
 
 
+@in_c
 @pytest.mark.parametrize("file", PROPERTY_FILES)
 def test_every_example_property_file_gets_the_same_verdicts(file):
     mission = ROOT / "examples" / (file.split(".")[0] + ".mcl")
@@ -80,7 +106,13 @@ def test_every_example_property_file_gets_the_same_verdicts(file):
         assert fly[0].states * 100 < full[0].states, (fly[0].states, full[0].states)
 
 
-def test_a_net_that_is_not_safe_goes_to_the_reference():
+@pytest.mark.parametrize("loops", LOOPS)
+def test_a_net_that_is_not_safe_goes_to_the_reference(loops):
+    with searching_with(loops):
+        _not_safe_goes_to_the_reference()
+
+
+def _not_safe_goes_to_the_reference():
     b = NetBuilder("two")
     b.place("a", 2)
     b.place("b")
@@ -95,7 +127,8 @@ def test_a_net_that_is_not_safe_goes_to_the_reference():
         check_properties(net, [prop], method="on-the-fly")
 
 
-def test_past_the_limit_the_verdict_is_unknown():
+@pytest.mark.parametrize("loops", LOOPS)
+def test_past_the_limit_the_verdict_is_unknown(loops):
     b = NetBuilder("chain")
     for k in range(6):
         b.place(f"m{k}", 1 if k == 0 else 0)
@@ -103,8 +136,9 @@ def test_past_the_limit_the_verdict_is_unknown():
         b.transition(f"t{k}")
         b.arc(f"m{k}", f"t{k}")
         b.arc(f"t{k}", f"m{k + 1}")
-    v = check_properties(b.build(), [Property("a", Pattern.ABSENCE, Const(False))], max_states=3,
-                  method="on-the-fly")[0]
+    with searching_with(loops):
+        v = check_properties(b.build(), [Property("a", Pattern.ABSENCE, Const(False))],
+                             max_states=3, method="on-the-fly")[0]
     assert v.status is Status.UNKNOWN and "product states" in v.reason
 
 
@@ -113,6 +147,7 @@ def test_a_method_is_one_of_three():
         check_properties(NetBuilder("n").build(), [], method="fast")
 
 
+@in_c
 def test_past_the_memory_budget_the_verdict_is_unknown_and_says_so():
     mission = ROOT / "examples" / "lawnmower.mcl"
     net, properties = pipeline.properties_of(mission, extra=ROOT / "examples" / "lawnmower.props")
@@ -181,11 +216,13 @@ def assert_reduced_same(net, properties, safe=False):
     return reduced, full
 
 
+@pytest.mark.parametrize("loops", LOOPS)
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(two_machines(), safe_props())
-def test_the_reduction_keeps_every_verdict(net, prop):
+def test_the_reduction_keeps_every_verdict(loops, net, prop):
     assert onthefly.proven_safe(structure(net))
-    assert_reduced_same(net, [prop])
+    with searching_with(loops):
+        assert_reduced_same(net, [prop])
 
 
 @pytest.mark.slow
@@ -195,6 +232,7 @@ def test_the_reduction_keeps_every_verdict_long(net, prop):
     assert_reduced_same(net, [prop])
 
 
+@in_c
 @pytest.mark.parametrize("file", [pytest.param(p.name, marks=pytest.mark.slow)
                                   if p.name.startswith("dam_inspection") else p.name
                                   for p in sorted((ROOT / "examples").glob("*.props"))])
@@ -221,11 +259,17 @@ def chains(n: int, length: int):
     return b.build()
 
 
+@pytest.mark.parametrize("loops", LOOPS)
 @pytest.mark.parametrize("pattern", [Pattern.ABSENCE, Pattern.EXISTENCE, Pattern.RESPONSE])
-def test_the_reduction_explores_one_order_of_independent_steps(pattern):
-    """Six chains of three steps: 4**6 markings; a property of one chain's end sees one
-    order of the others' steps, with the same verdict (absence fails, the others hold)."""
-    net = chains(6, 3)
+def test_the_reduction_explores_one_order_of_independent_steps(pattern, loops):
+    """Six chains of three steps (four in C): 4**6 markings; a property of one chain's
+    end sees one order of the others' steps, with the same verdict (absence fails, the
+    others hold)."""
+    with searching_with(loops):
+        _explores_one_order(chains(6, 3), pattern)
+
+
+def _explores_one_order(net, pattern):
     end, start = Tokens(("c0.3",), 1), Tokens(("c0.0",), 1)
     prop = Property("p", pattern, end if pattern is not Pattern.RESPONSE else start,
                     s=end if pattern is Pattern.RESPONSE else None)
@@ -237,6 +281,7 @@ def test_the_reduction_explores_one_order_of_independent_steps(pattern):
         assert reduced[0].states <= plain.states
 
 
+@in_c
 def test_the_reduction_needs_a_net_proven_safe():
     b = NetBuilder("maybe")
     for p, k in (("a", 1), ("b", 1), ("c", 0)):
@@ -250,6 +295,7 @@ def test_the_reduction_needs_a_net_proven_safe():
         check_properties(b.build(), [prop], stubborn=True)
 
 
+@in_c
 def test_analyze_stubborn_gives_the_same_verdicts_on_the_certified_mission():
     import json
     from helpers import run_cli
@@ -262,6 +308,7 @@ def test_analyze_stubborn_gives_the_same_verdicts_on_the_certified_mission():
     assert [p["status"] for p in a["properties"]] == [p["status"] for p in b["properties"]]
 
 
+@in_c
 def test_analyze_stubborn_is_refused_where_it_does_not_apply():
     from helpers import run_cli
     out = run_cli("analyze", ROOT / "examples" / "sauce.mcl", "--properties",
@@ -269,7 +316,8 @@ def test_analyze_stubborn_is_refused_where_it_does_not_apply():
     assert out.returncode == 2 and "--stubborn" in out.stderr and "Traceback" not in out.stderr
 
 
-def test_a_violation_found_before_the_limit_is_kept():
+@pytest.mark.parametrize("loops", LOOPS)
+def test_a_violation_found_before_the_limit_is_kept(loops):
     """The limit met while the violation's level is being finished: the violation found
     is a real run, and the verdict says fails, not unknown."""
     b = NetBuilder("fan")
@@ -281,5 +329,6 @@ def test_a_violation_found_before_the_limit_is_kept():
         b.arc(f"t{k}", f"b{k}")
     net = b.build()
     prop = Property("p", Pattern.ABSENCE, Tokens(("b0",), 1))
-    v = check_properties(net, [prop], max_states=2, method="on-the-fly")[0]
+    with searching_with(loops):
+        v = check_properties(net, [prop], max_states=2, method="on-the-fly")[0]
     assert v.status is Status.FAILS and judge(net, prop, v.transitions) is not None

@@ -1,14 +1,12 @@
 """Reachability and coverability graphs, on nets whose answers are known by hand.
 
 One suite for every explorer: the tests take the ``backend`` fixture, so
-each runs against the native (C), the compiled (numba), the numpy, the
-counter and the general explorer (the
-safe-net ones hand over to the general one on nets that are not safe,
-which these tests cover too).
+each runs against the native (C), the numpy, the counter and the general
+explorer (the safe-net ones hand over to the general one on nets that are
+not safe, which these tests cover too); the explorers built on the loops
+(native, counters) run twice, on the loops in C and on their plain-Python
+reference (``native-python``, ``counters-python``).
 """
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
@@ -17,10 +15,12 @@ from mcl2pnml.analysis.statespace import compiled as compiledspace
 from mcl2pnml.analysis.statespace import counters as counterspace
 from mcl2pnml.analysis.statespace import general as generalspace
 from mcl2pnml.analysis.statespace import packed as packedspace
+from mcl2pnml.analysis.statespace import packedmarkings
 from mcl2pnml.analysis.statespace import explore as statespace
 from mcl2pnml.analysis.statespace.explorers import EXPLORERS
 from mcl2pnml.analysis.behaviour import behaviour, final_markings_agree
 from mcl2pnml.analysis.statespace.explore import OMEGA, ExplorationLimit, MemoryLimit, explore
+from mcl2pnml.analysis.statespace.loops import backends, python as python_loops
 from mcl2pnml.analysis.zoo import cycles, kanban
 from mcl2pnml.core.net import ArcKind, NetBuilder
 from mcl2pnml.core.structure import structure
@@ -28,32 +28,50 @@ from mcl2pnml.core.structure import structure
 from strategies import nets
 
 
-SAFE_BACKENDS = ("native", "compiled", "packed")
+#: The safe-net explorers; ``native-python``: the native one on the Python loops.
+SAFE_BACKENDS = ("native", "native-python", "packed")
+
+#: The loops' backends (tests/test_graph_kernels.py and test_onthefly.py run them too).
+LOOPS = [pytest.param("c", marks=pytest.mark.skipif(
+             backends.c_loops() is None,
+             reason="the loops in C were not built (mcl2pnml installed without a C compiler)")),
+         "python"]
+
+
+def use_loops(monkeypatch, loops) -> None:
+    """Every explorer built on the loops, and the state spaces they answer for, on ``loops``."""
+    for module in (compiledspace, packedmarkings):
+        monkeypatch.setattr(module, "c_loops", lambda: loops)
+    monkeypatch.setattr(counterspace, "chosen", lambda: loops)
 
 
 def runnable(name: str) -> str:
     """``name``, or a skip saying why that explorer cannot run on this machine."""
     if name != "auto" and not EXPLORERS[name].can_run():
         pytest.skip(f"the {name} explorer cannot run here: {EXPLORERS[name].doc}; "
-                    + ("mcl2pnml was installed without a C compiler" if name == "native"
-                       else "numba is not installed"))
+                    "mcl2pnml was installed without a C compiler")
     return name
 
 
-@pytest.fixture(params=[b for b in statespace.BACKENDS if b != "auto"] + ["counters-numba"])
+def explorer(request_param: str, monkeypatch) -> str:
+    """The explorer a parameter names; with ``-python``, on the Python loops."""
+    name, _, loops = request_param.partition("-")
+    if loops == "python":
+        use_loops(monkeypatch, python_loops)
+    return runnable(name)
+
+
+@pytest.fixture(params=[b for b in statespace.BACKENDS if b != "auto"]
+                + ["native-python", "counters-python"])
 def backend(request, monkeypatch):
-    """Every explorer; the counter one twice, its loops in C and numba's."""
-    if request.param == "counters-numba":
-        if not compiledspace.available():
-            pytest.skip("numba is not installed")
-        monkeypatch.setattr(counterspace, "native_loops", lambda: None)
-        return "counters"
-    return runnable(request.param)
+    """Every explorer; those on the loops twice, in C and in Python."""
+    return explorer(request.param, monkeypatch)
 
 
 #: The safe-net explorers as parameters, each skipped with its reason where it cannot run.
-SAFE = [pytest.param(b, marks=pytest.mark.skipif(not EXPLORERS[b].can_run(),
-                                                 reason=f"the {b} explorer cannot run here"))
+SAFE = [pytest.param(b, marks=pytest.mark.skipif(
+            b == "native" and backends.c_loops() is None,
+            reason="the native explorer cannot run here: the loops in C were not built"))
         for b in SAFE_BACKENDS]
 
 
@@ -169,6 +187,11 @@ def test_graph_and_paths(backend):
 @settings(max_examples=80, deadline=None)
 @given(nets(max_places=5, max_transitions=4))
 def test_the_bitset_explorers_agree_with_the_general_one(backend, net):
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _the_bitset_explorer_agrees_with_the_general_one(explorer(backend, monkeypatch), net)
+
+
+def _the_bitset_explorer_agrees_with_the_general_one(backend, net):
     try:
         fast = explore(net, max_states=2000, backend=backend)
         slow = statespace._explore_general(fast.structure, tuple(fast.markings[0]), 2000, None)
@@ -252,6 +275,11 @@ def _same_space(fast, slow):
 @settings(max_examples=120, deadline=None)
 @given(spread_safe_nets())
 def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _the_bitset_explorer_on_markings_of_several_words(explorer(backend, monkeypatch), net)
+
+
+def _the_bitset_explorer_on_markings_of_several_words(backend, net):
     try:
         fast = explore(net, max_states=5000, backend=backend)
     except ExplorationLimit:
@@ -269,6 +297,7 @@ def test_markings_that_share_a_key_fall_back_to_exact_exploration(backend, monke
     A key made of the first word only collides whenever two markings differ
     in the second word alone; the explorer has to notice and answer right.
     """
+    backend = explorer(backend, monkeypatch)
     b = NetBuilder("two words")
     for i in range(130):
         b.place(f"p{i}", 1 if i in (0, 100) else 0)
@@ -306,7 +335,8 @@ def test_markings_that_differ_in_the_top_bits_of_two_words_have_two_keys():
 
 
 @pytest.mark.parametrize("backend", SAFE)
-def test_a_second_token_hands_over_to_the_general_explorer(backend):
+def test_a_second_token_hands_over_to_the_general_explorer(backend, monkeypatch):
+    backend = explorer(backend, monkeypatch)
     b = NetBuilder("two tokens later")
     b.place("p", 1)
     b.place("q")
@@ -318,20 +348,14 @@ def test_a_second_token_hands_over_to_the_general_explorer(backend):
     assert type(space) is statespace.StateSpace and not space.bounded
 
 
-def test_the_compiled_explorer_reports_progress_between_slices(monkeypatch):
+@pytest.mark.parametrize("name", ["native", "native-python"])
+def test_the_native_explorer_reports_progress_between_slices(name, monkeypatch):
+    backend = explorer(name, monkeypatch)
     monkeypatch.setattr(compiledspace, "SLICE", 4)
     calls = []
-    space = explore(cycles(3), backend="compiled", progress=lambda n, f: calls.append((n, f)))
-    assert space.states == 64 and len(calls) >= 64 // 4
-    assert [n for n, _ in calls] == sorted(n for n, _ in calls) and calls[-1] == (64, 0)
-
-
-def test_the_native_explorer_reports_progress_between_slices(monkeypatch):
-    runnable("native")
-    monkeypatch.setattr(compiledspace, "SLICE", 4)
-    calls = []
-    space = explore(cycles(3), backend="native", progress=lambda n, f: calls.append((n, f)))
+    space = explore(cycles(3), backend=backend, progress=lambda n, f: calls.append((n, f)))
     assert space.states == 64 and len(calls) >= 64 // 4 and calls[-1] == (64, 0)
+    assert [n for n, _ in calls] == sorted(n for n, _ in calls)
 
 
 def test_auto_takes_the_native_explorer_where_it_was_built(monkeypatch):
@@ -343,27 +367,20 @@ def test_auto_takes_the_native_explorer_where_it_was_built(monkeypatch):
 
 
 def test_without_its_c_code_the_native_explorer_says_what_it_needs(monkeypatch):
-    monkeypatch.setattr(compiledspace, "native_available", lambda: False)
+    monkeypatch.setenv(backends.SWITCH, "python")   # as on a machine without a C compiler
     with pytest.raises(statespace.Mcl2PnmlError, match="the native explorer needs its C code, "
                        "built when mcl2pnml is installed on a machine with a C compiler"):
         explore(cycles(1), backend="native")
-    assert explore(cycles(2)).states == 16   # auto goes on without it
-
-
-def test_auto_leaves_the_numpy_explorer_for_the_compiled_one_past_the_handover(monkeypatch):
-    monkeypatch.setattr(compiledspace, "native_available", lambda: False)
-    monkeypatch.setattr(compiledspace, "_ran", False)   # as in a fresh process
-    monkeypatch.setattr(statespace, "HANDOVER", 10)
-    used = []
-    monkeypatch.setattr(compiledspace, "explore_compiled",
-                        lambda *a, _real=compiledspace.explore_compiled: used.append(1) or _real(*a))
-    assert explore(cycles(1)).states == 4 and not used             # small: numpy alone
-    assert explore(cycles(2)).states == 16 and used == [1]           # past 10: compiled
+    # auto goes on without it: numpy for a safe net, the general explorer for the others
+    assert type(explore(cycles(2))) is packedspace.PackedStateSpace
+    assert type(explore(kanban(2))) is statespace.StateSpace
+    # the counter explorer, asked for, runs on the Python loops
+    assert type(explore(kanban(1), backend="counters")).__name__ == "CounterStateSpace"
 
 
 def test_an_unknown_explorer_is_named_with_the_known_ones():
     with pytest.raises(statespace.Mcl2PnmlError, match="unknown explorer 'fast'; known: auto, "
-                       "native, compiled, packed, counters, general"):
+                       "native, packed, counters, general"):
         explore(cycles(1), backend="fast")
 
 
@@ -498,45 +515,38 @@ def test_dead_markings_met_before_the_budget_are_counted(backend):
         assert stopped.value.deadlocks == 1
 
 
-def _kernel_modules() -> list:
-    """The compiled loops that answer for a packed state space, each where it can run."""
-    names = [("native", "mcl2pnml.analysis.statespace.loops.native_safe"), ("compiled", "mcl2pnml.analysis.statespace.loops.numba_safe")]
-    return [pytest.param(module, id=name,
-                         marks=pytest.mark.skipif(not EXPLORERS[name].can_run(),
-                                                  reason=f"the {name} loops cannot run here"))
-            for name, module in names]
-
-
-@pytest.mark.parametrize("module", _kernel_modules())
+@pytest.mark.parametrize("loops", LOOPS)
 @settings(max_examples=80, deadline=None)
 @given(st.one_of(spread_safe_nets(), nets(max_places=6, max_transitions=5)),
        st.data())
-def test_compiled_and_numpy_answers_of_a_packed_state_space_agree(module, net, data):
-    """Terminal markings and backward reachability: the loops in C, numba's and numpy alike."""
-    import importlib
+def test_the_loops_and_numpy_answer_alike_for_a_packed_state_space(loops, net, data):
+    """Terminal markings and backward reachability: the loops in C, in Python and numpy alike."""
     space = explore(net, max_states=5000, backend="packed")
     if type(space).__name__ != "PackedStateSpace":
         return   # not safe: another explorer's space
     goal = data.draw(st.lists(st.integers(0, space.states - 1), max_size=3))
     numpy_reach = space._can_reach_numpy(goal)
-    kernels = importlib.import_module(module)
+    kernels = backends.named(loops)
     space._kernels = lambda: kernels
     space.__dict__.pop("out_degree", None)
     space.__dict__.pop("terminal", None)
     dead = space.terminal   # the kernels' first-enabled test, before any degree is counted
     assert space.can_reach(goal) == numpy_reach
     assert space.always_can_reach(goal) == all(numpy_reach)
-    compiled_degree = list(space.out_degree)
-    # the edge list is numpy's own firing
+    loops_degree = list(space.out_degree)
+    loops_edges = [a.tolist() for a in space._edges]
+    # numpy's own firing
+    space._kernels = lambda: None
+    space.__dict__.pop("_edges", None)
+    assert loops_edges == [a.tolist() for a in space._edges]
     numpy_degree = np.bincount(space.src, minlength=space.states).tolist()
-    assert compiled_degree == numpy_degree
+    assert loops_degree == numpy_degree
     assert dead == [n for n, d in enumerate(numpy_degree) if d == 0]
 
 
-@pytest.mark.parametrize("module", _kernel_modules())
-def test_the_empty_marking_is_reached_backwards_too(module):
+@pytest.mark.parametrize("loops", LOOPS)
+def test_the_empty_marking_is_reached_backwards_too(loops):
     """A table of markings by value has no slot for the empty one: it is kept apart."""
-    import importlib
     b = NetBuilder("drain")
     b.place("a", 1)
     b.place("b")
@@ -546,22 +556,9 @@ def test_the_empty_marking_is_reached_backwards_too(module):
     b.arc("t", "b")
     b.arc("b", "u")   # u empties the net
     space = explore(b.build(), backend="packed")
-    kernels = importlib.import_module(module)
+    kernels = backends.named(loops)
     space._kernels = lambda: kernels
     empty = next(n for n in range(space.states) if not space.marking(n))
     assert space.states == 3 and space.terminal == [empty]
     assert space.can_reach([empty]) == [True, True, True]
     assert space.can_reach([0]) == [n == 0 for n in range(3)]
-
-
-def test_with_its_c_code_a_net_is_analysed_without_loading_numba():
-    """Loading numba costs half a second and some 120 MB: a safe net needs none of it, nor
-    a bounded one (Kanban, counters)."""
-    runnable("native")
-    code = ("import sys; from mcl2pnml.analysis.zoo import cycles, kanban; "
-            "from mcl2pnml.analysis.report import analyze; "
-            "print(analyze(cycles(8))['states'], analyze(kanban(2))['states'], "
-            "'numba' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120, check=True)
-    assert out.stdout.split() == [str(4 ** 8), "4600", "False"]

@@ -6,7 +6,9 @@ scopes as deterministic automata reading the marking sequence) and the
 verdicts. Its reference method explores every reachable marking first and
 then each property's product in Python; model checkers search the product
 on the fly and stop at a counterexample. This module does the same, in the
-C loops of the safe-net explorer (``analysis/statespace/loops/_native.c``):
+loops of the safe-net explorer (:class:`~mcl2pnml.analysis.statespace.loops.interface.Loops`:
+in C, ``analysis/statespace/loops/_native.c``; the plain-Python reference
+runs the same search in the tests):
 
 * a row of the product is a marking's words and one more, the observer's
   state; the observer's moves are a table worked out before the search (its
@@ -18,7 +20,7 @@ C loops of the safe-net explorer (``analysis/statespace/loops/_native.c``):
   obligation open (a finite run). The search stops there;
 * only when the whole product has neither, an infinite run that keeps an
   obligation open for ever (existence, response) is looked for: the arcs
-  between the pending rows are listed in C, their strongly connected
+  between the pending rows are listed by the loops, their strongly connected
   components found by scipy, and the lasso entering a cycle earliest,
   around its shortest cycle, is the counterexample.
 
@@ -41,7 +43,8 @@ So a failing safety property costs the markings up to its counterexample,
 and a holding one one pass of the product at C speed, where the reference
 method pays the whole state space and a Python loop per property.
 :func:`check_properties_on_the_fly` answers ``None`` for a net it does not take (not safe,
-or the loops in C not built); the caller then uses the reference method.
+or the loops in C not built: the plain-Python loops would be slower than the
+reference method); the caller then uses the reference method.
 """
 from __future__ import annotations
 
@@ -54,11 +57,16 @@ from mcl2pnml.core.patterns import Property, Tokens, atoms_of, evaluate
 from mcl2pnml.core.structure import Structure, structure
 
 from mcl2pnml.analysis.checking.observers import BAD, Shape, Status, Verdict, initial, pending, step, truths
+from mcl2pnml.analysis.statespace.loops.backends import c_loops
+from mcl2pnml.analysis.statespace.loops.interface import (Code, Loops, Observer, ProductSearch,
+                                                          Rows, Stubborn)
+from mcl2pnml.analysis.statespace.packedmarkings import (marking_row, masks, masks_of,
+                                                         place_weights, safe_net, word_count)
 
 #: A property whose predicates compare more than this many token sums is left to the
 #: reference method: the table of the observer's letters has 2**ATOMS entries.
 ATOMS = 16
-#: Expansions per call of the C loop, between which Python grows the arrays.
+#: Expansions per step of the loops, between which they hand back to Python.
 SLICE = 1 << 20
 
 
@@ -68,16 +76,12 @@ class _Refused(Exception):
 
 def available() -> bool:
     """Whether the loops in C were built (they hold the product's search)."""
-    try:
-        from mcl2pnml.analysis.statespace.loops import _native
-    except ImportError:
-        return False
-    return hasattr(_native, "product_step")
+    return c_loops() is not None
 
 
 def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_states: int = 1_000_000,
               max_memory: int | None = None, stubborn: bool = False,
-              safe: bool = False) -> list[Verdict] | None:
+              safe: bool = False, loops: Loops | None = None) -> list[Verdict] | None:
     """Each property's verdict, on the fly; None if the net is not for this checker (not
     1-safe as given, or the loops in C not built), or a property reads too many sums.
 
@@ -85,8 +89,10 @@ def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_st
     each search as ``max_states`` does: past either, the verdict is unknown.
     ``stubborn``: with partial-order reduction, on a net ``safe`` says is proven 1-safe
     (a certificate) or that a P-invariant proves so here; else :class:`NotProvenSafe`.
+    ``loops``: the backend that searches (default: the loops in C).
     """
-    if not available():
+    loops = loops or c_loops()
+    if loops is None:
         return None
     from mcl2pnml.core.memory import default_memory
     s = structure(net)
@@ -96,7 +102,7 @@ def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_st
     if stubborn and not safe and not proven_safe(s):
         raise NotProvenSafe(f"the net '{net.name}' is not proven 1-safe, which the reduction "
                             "needs (a certificate, or a P-invariant)")
-    search = _Search(s, stubborn)
+    search = _Search(s, loops, stubborn)
     budget = default_memory() if max_memory is None else max_memory
     verdicts = []
     for prop in properties:
@@ -174,23 +180,17 @@ class _Automaton:
 class _Search:
     """The net's masks, worked out once for all its properties."""
 
-    def __init__(self, s: Structure, stubborn: bool = False):
-        from mcl2pnml.analysis.statespace.packedmarkings import (key_index, marking_row, masks, place_weights,
-                                             touched, word_count)
-        self.s = s
+    def __init__(self, s: Structure, loops: Loops, stubborn: bool = False):
+        self.s, self.loops = s, loops
         self.words = word_count(s)
         need, take, give = masks(s, self.words)
         m0 = marking_row(s.initial_vector(), self.words)
         self.m0 = m0[0]
-        keep = ~take
-        self.masks = [np.ascontiguousarray(a) for a in (
-            need, keep, give, *touched(need), *touched(need, take, give),
-            *key_index(need, place_weights(m0)))]
+        self.net = safe_net(need, take, give, place_weights(m0))
         self.index = {p: k for k, p in enumerate(s.places)}
         self.stubborn = stubborn
         # (the loop reads them only when it reduces: empty ones otherwise)
-        self.structure = (_stubborn_arrays(s) if stubborn
-                          else [np.zeros(1, dtype=np.int64)] * 10)
+        self.structure = _stubborn_rows(s) if stubborn else [_csr([[]])] * 5
 
     def _visible(self, atoms: list[Tokens]) -> np.ndarray:
         """Per transition, 1 if it changes a place the atoms read (pre and post differ)."""
@@ -199,7 +199,6 @@ class _Search:
                          for pre, post in zip(self.s.pre, self.s.post)], dtype=np.uint8)
 
     def _atom_arrays(self, atoms: list[Tokens]) -> tuple[np.ndarray, np.ndarray]:
-        from mcl2pnml.analysis.statespace.packedmarkings import masks_of
         sets = [[self.index[p] for p in a.places if p in self.index] for a in atoms]
         masks = masks_of(sets, self.words) if sets else np.zeros((0, self.words), np.uint64)
         return (np.ascontiguousarray(masks),
@@ -211,7 +210,8 @@ class _Search:
         return 2 * (8 * (self.words + 1) + 24) + 24
 
     def check(self, prop: Property, max_states: int, budget: int) -> Verdict:
-        from mcl2pnml.analysis.statespace.loops import _native as c
+        """The property's verdict: the product searched breadth first to its first
+        violation, then, where the observer can stay pending, a lasso looked for."""
         from mcl2pnml.core.memory import size_text
         fits = max(1, budget // self.footprint())
         limit = min(max_states, fits)
@@ -221,9 +221,10 @@ class _Search:
         auto = _Automaton(prop)
         letters = _letters(prop, atoms)
         atom_masks, least = self._atom_arrays(atoms)
-        observer = [atom_masks, least, letters, auto.move, auto.pending]
+        observer = Observer(atom_masks, least, letters, auto.move, auto.pending, auto.bad)
         reduce = self.stubborn and stutter_invariant(auto.move)
         visible = self._visible(atoms) if reduce else np.zeros(1, dtype=np.uint8)
+        stubborn = Stubborn(*self.structure, visible, reduce)
         width = self.words + 1
         start = np.zeros(width, dtype=np.uint64)
         start[:-1] = self.m0
@@ -233,70 +234,48 @@ class _Search:
         start[-1] = state0
         if state0 == auto.bad:
             return self._verdict(prop, Shape.PREFIX, [start], [], 1)
-        room = len(self.masks[0]) + 1
-        capacity = min(limit, 1 << 12) + room
-        queue = np.empty((capacity, width), dtype=np.uint64)
-        queue[0] = start
-        parent, via, depth = (np.empty(capacity, dtype=np.int64) for _ in range(3))
-        parent[0], via[0], depth[0] = -1, -1, 0
-        bits = 12
-        table = np.zeros(1 << bits, dtype=np.uint64)
-        c.rehash(queue, 1, table, bits, False)
-        count, head, found = 1, 0, -1
+        search = self.loops.product_search(start, min(limit, 1 << 12) + self.net.transitions + 1)
         while True:
-            count, head, code, found = c.product_step(
-                *self.masks, *observer, auto.bad, queue, count, head, table, bits, parent, via,
-                depth, found, limit, SLICE, *self.structure, visible, reduce)
-            if code == c.QUEUE_FULL:
-                size = 2 * len(queue)
-                queue, parent, via, depth = (_grown(a, count, size)
-                                             for a in (queue, parent, via, depth))
-            elif code == c.TABLE_FULL:
-                while 10 * (count + room) > 7 << bits:
-                    bits += 1
-                table = np.zeros(1 << bits, dtype=np.uint64)
-                c.rehash(queue, count, table, bits, False)
-            elif code == c.NOT_SAFE:
+            search = self.loops.product_step(self.net, observer, stubborn, search, limit, SLICE)
+            if search.code == Code.NOT_SAFE:
                 raise _Refused
-            elif code == c.LIMIT:
+            if search.code == Code.LIMIT:
                 reason = (f"more than {max_states:,} product states" if limit == max_states
                           else f"the memory budget ({size_text(budget)}) holds "
                                f"{limit:,} product states")
-                return Verdict(prop, Status.UNKNOWN, states=count, reason=reason)
-            elif code in (c.FOUND_BAD, c.FOUND_DEAD) or head == count:
+                return Verdict(prop, Status.UNKNOWN, states=search.count, reason=reason)
+            if search.code != Code.GOING or search.head == search.count:
                 break
-        found_shape = {c.FOUND_BAD: Shape.PREFIX, c.FOUND_DEAD: Shape.FINITE}.get(code)
-        bound = None if found_shape is None else int(depth[found])
+        found_shape = {Code.FOUND_BAD: Shape.PREFIX, Code.FOUND_DEAD: Shape.FINITE}.get(search.code)
+        bound = None if found_shape is None else int(search.depth[search.found])
         lasso = None
         if auto.pending.any():
             # a lasso shorter than the violation found: its rows are all explored
-            lasso = self._lasso(observer, queue, count, table, bits, parent, via, depth, bound)
+            lasso = self._lasso(observer, search, bound)
         if lasso is not None:
             rows, trans, loop = lasso
-            return self._verdict(prop, Shape.LASSO, rows, trans, count, loop)
+            return self._verdict(prop, Shape.LASSO, rows, trans, search.count, loop)
         if found_shape is not None:
-            rows, trans = _way_back(queue, parent, via, found)
-            return self._verdict(prop, found_shape, rows, trans, count)
-        return Verdict(prop, Status.HOLDS, states=count)
+            rows, trans = _way_back(search, search.found)
+            return self._verdict(prop, found_shape, rows, trans, search.count)
+        return Verdict(prop, Status.HOLDS, states=search.count)
 
-    def _lasso(self, observer, queue, count, table, bits, parent, via, depth, bound):
+    def _lasso(self, observer: Observer, search: ProductSearch, bound: int | None):
         """The rows, transitions and loop of the shortest lasso (shorter than ``bound``
         firings, if given) whose cycle keeps an obligation open; None if there is none.
 
-        The arcs between pending rows are listed in C; scipy finds their strongly
+        The arcs between pending rows are listed by the loops; scipy finds their strongly
         connected components; the entries are tried in breadth-first order, each with
         its shortest cycle within its component, until no later entry can be shorter.
         """
-        from mcl2pnml.analysis.statespace.loops import _native as c
         from scipy.sparse import csr_matrix
         from scipy.sparse.csgraph import breadth_first_order, connected_components
+        queue, count, depth = search.queue, search.count, search.depth
         parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-        first, room = 0, max(1 << 16, 4 * len(self.masks[0]))
+        first, room = 0, max(1 << 16, 4 * self.net.transitions)
         while first < count:
-            src, dst, trans = (np.empty(room, dtype=np.int64) for _ in range(3))
-            first, n = c.product_edges(*self.masks, *observer, queue, count, table, bits,
-                                       first, src, dst, trans)
-            parts.append((src[:n], dst[:n], trans[:n]))
+            first, *part = self.loops.product_edges(self.net, observer, search, first, room)
+            parts.append(tuple(part))
         src, dst, trans = (np.concatenate(x) for x in zip(*parts))
         if not len(src):
             return None
@@ -341,7 +320,7 @@ class _Search:
         if best is None:
             return None
         _, entry, cycle = best
-        rows, path = _way_back(queue, parent, via, entry)
+        rows, path = _way_back(search, entry)
         loop = len(rows) - 1
         for a, b in zip(cycle, cycle[1:] + [entry]):
             rows.append(queue[b])
@@ -375,19 +354,19 @@ class _Search:
                        states=states)
 
 
-def _csr(rows) -> tuple[np.ndarray, np.ndarray]:
-    """Sets of integers as compressed rows (ptr, items)."""
+def _csr(rows) -> Rows:
+    """Sets of integers as compressed rows."""
     rows = [sorted(r) for r in rows]
     ptr = np.zeros(len(rows) + 1, dtype=np.int64)
     np.cumsum([len(r) for r in rows], out=ptr[1:])
     items = np.array([x for r in rows for x in r], dtype=np.int64)
-    return ptr, items
+    return Rows(ptr, items)
 
 
-def _stubborn_arrays(s: Structure) -> list[np.ndarray]:
-    """What the stubborn sets are grown from (``analysis/statespace/loops/_native.c``): the places each
-    transition consumes and needs, the transitions consuming, needing and marking each
-    place."""
+def _stubborn_rows(s: Structure) -> list[Rows]:
+    """What the stubborn sets are grown from (:class:`~mcl2pnml.analysis.statespace.loops.interface.Stubborn`):
+    the places each transition consumes and needs, the transitions consuming, needing
+    and marking each place."""
     take = [set() for _ in s.places]
     need = [set() for _ in s.places]
     make = [set() for _ in s.places]
@@ -398,17 +377,12 @@ def _stubborn_arrays(s: Structure) -> list[np.ndarray]:
             need[p].add(j)
         for p in post:
             make[p].add(j)
-    return [*_csr(s.pre), *_csr(s.transition_inputs), *_csr(take), *_csr(need), *_csr(make)]
+    return [_csr(s.pre), _csr(s.transition_inputs), _csr(take), _csr(need), _csr(make)]
 
 
-def _grown(a: np.ndarray, count: int, size: int) -> np.ndarray:
-    grown = np.empty((size, *a.shape[1:]), dtype=a.dtype)
-    grown[:count] = a[:count]
-    return grown
-
-
-def _way_back(queue, parent, via, row: int) -> tuple[list, list[int]]:
+def _way_back(search: ProductSearch, row: int) -> tuple[list, list[int]]:
     """The rows from the start to ``row`` and the transitions between them."""
+    queue, parent, via = search.queue, search.parent, search.via
     rows, trans = [queue[row]], []
     while parent[row] >= 0:
         trans.append(int(via[row]))

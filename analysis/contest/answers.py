@@ -4,7 +4,7 @@ Any bounded P/T net, any formula of :mod:`mcl2pnml.core.queries`: its
 reachable markings explored (:func:`mcl2pnml.analysis.statespace.explore.explore`), its edges
 held as compressed rows, then each question decided on the graph, exactly,
 by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
-``analysis/statespace/loops/python_graphs.py``, where C was not built):
+``analysis/statespace/loops/python.py``, where C was not built):
 
 * state atoms, for every marking at once (numpy columns of token counts);
 * CTL by the classic labelling (Clarke, Emerson and Sistla, 1986): ``EX``
@@ -55,10 +55,9 @@ from mcl2pnml.core import queries as q
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 
-try:                      # the graph searches in C, else the same in Python
-    from mcl2pnml.analysis.statespace.loops import _native as _loops
-except ImportError:       # pragma: no cover - a machine without a C compiler at install
-    from mcl2pnml.analysis.statespace.loops import python_graphs as _loops
+from mcl2pnml.analysis.statespace.loops.backends import chosen
+
+_loops = chosen()         # the graph searches in C, else the same in Python
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,10 @@
 The explorer for nets that are not safe (weights, places with several
 tokens) but bounded: a marking is a row of 64-bit words holding one
 counter a place, each as wide as the place needs, and the loop is the
-textbook queue and hash set of :mod:`mcl2pnml.analysis.statespace.compiled`, in C where
-it was built at install (:mod:`mcl2pnml.analysis.statespace.loops.native_counters`), else
-compiled by numba (:mod:`mcl2pnml.analysis.statespace.loops.numba_counters`).
+textbook queue and hash set of :mod:`mcl2pnml.analysis.statespace.compiled`, run by a
+backend of :class:`~mcl2pnml.analysis.statespace.loops.interface.Loops`: in C where
+it was built at install, else the plain-Python reference
+(:func:`mcl2pnml.analysis.statespace.loops.backends.chosen`).
 
 * **Widths.** A place covered by a semi-positive P-invariant y is bounded
   by y.M0 / y(p) (Murata 1989, section VII; the invariants are the minimal
@@ -27,6 +28,9 @@ compiled by numba (:mod:`mcl2pnml.analysis.statespace.loops.numba_counters`).
 
 Memory: 8 bytes a word a marking in the queue (twice that while it grows by
 doubling) and 11 to 23 bytes a marking in the table (:func:`footprint`).
+A transition is two lists of fields (:class:`~mcl2pnml.analysis.statespace.loops.interface.CounterNet`):
+what it needs (word, shift, mask, tokens) and what it changes (word, shift,
+mask, signed change, place); each field lies within one word.
 """
 from __future__ import annotations
 
@@ -38,9 +42,11 @@ import numpy as np
 from mcl2pnml.core.structure import Structure
 
 from mcl2pnml.analysis.statespace.general import DecodedMarkings, EdgesOnDemand, StateSpace
+from mcl2pnml.analysis.statespace.loops.backends import chosen
+from mcl2pnml.analysis.statespace.loops.interface import Code, CounterNet, Fields, Index, Loops
 from mcl2pnml.analysis.statespace.packedmarkings import distinct
 
-#: How many markings one call of the compiled loop expands before it hands back to Python.
+#: How many markings one step of the loops expands before it hands back to Python.
 SLICE = 1 << 18
 
 #: The widest counter: a place past 2^32 tokens is taken for unbounded.
@@ -54,29 +60,6 @@ INVARIANT_ROWS = 20_000
 
 class NotBounded(Exception):
     """The net may be unbounded: the caller explores with Karp-Miller coverability."""
-
-
-def available() -> bool:
-    from mcl2pnml.analysis.statespace.compiled import available as numba_installed
-    return native_loops() is not None or numba_installed()
-
-
-def native_loops():
-    """The loops in C where they were built (:mod:`mcl2pnml.analysis.statespace.loops.native_counters`), else None."""
-    try:
-        from mcl2pnml.analysis.statespace.loops import native_counters as _native_counter_loops
-    except ImportError:
-        return None
-    return _native_counter_loops
-
-
-def kernels():
-    """The loops: in C where they were built, else numba's (imported only now: 0.5 s)."""
-    native = native_loops()
-    if native is not None:
-        return native
-    from mcl2pnml.analysis.statespace.loops import numba_counters as _counter_loops
-    return _counter_loops
 
 
 def footprint(s: Structure) -> int:
@@ -141,8 +124,8 @@ class Layout:
         return counts
 
 
-def _tables(s: Structure, layout: Layout) -> tuple:
-    """The transitions' needs and changes as compressed rows of fields (see the kernels)."""
+def _tables(s: Structure, layout: Layout) -> CounterNet:
+    """The transitions' needs and changes as compressed rows of fields, for the loops."""
     need, change = [], []
     for pre, read, col in zip(s.pre, s.read, s.incidence):
         needs = dict(read)
@@ -156,15 +139,13 @@ def _tables(s: Structure, layout: Layout) -> tuple:
         ptr[1:] = np.cumsum([len(x) for x in per_t])
         flat = [pw for x in per_t for pw in x]
         places = np.array([p for p, _ in flat], dtype=np.int64)
-        return (ptr, np.array([layout.word[p] for p in places], dtype=np.int64),
-                np.array([layout.shift[p] for p in places], dtype=np.uint64),
-                np.array([layout.mask(p) for p in places], dtype=np.uint64),
-                np.array([w for _, w in flat], dtype=value_type), places)
+        return Fields(ptr, np.array([layout.word[p] for p in places], dtype=np.int64),
+                      np.array([layout.shift[p] for p in places], dtype=np.uint64),
+                      np.array([layout.mask(p) for p in places], dtype=np.uint64),
+                      np.array([w for _, w in flat], dtype=value_type), places)
 
-    n = rows(need, np.uint64)[:5]
-    d = rows(change, np.int64)
     growing = np.array([bool(c) and all(w > 0 for _, w in c) for c in change], dtype=np.bool_)
-    return n, d, growing
+    return CounterNet(rows(need, np.uint64), rows(change, np.int64), growing)
 
 
 def _initial_widths(s: Structure, m0: Sequence[int]) -> list[int]:
@@ -177,41 +158,38 @@ def _initial_widths(s: Structure, m0: Sequence[int]) -> list[int]:
 
 
 def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_error,
-                     progress=None) -> "CounterStateSpace":
-    """Breadth-first from ``m0``; raises :class:`NotBounded` when the net may be unbounded."""
-    k = kernels()
+                     progress=None, loops: Loops | None = None) -> "CounterStateSpace":
+    """Breadth-first from ``m0`` by ``loops`` (default: C where built, else the Python
+    reference); raises :class:`NotBounded` when the net may be unbounded."""
+    loops = loops or chosen()
     layout = Layout(_initial_widths(s, m0))
     queue = layout.pack(np.array([m0], dtype=np.int64))
-    parent = np.full(queue.shape[0], -1, dtype=np.int64)
-    bits = 12
-    count, head, dead = 1, 0, 0
-    table = k.rehash(queue, 1, bits)
+    search = loops.counter_search(queue, np.full(1, -1, dtype=np.int64), 1, 0)
     while True:
-        n, d, growing = _tables(s, layout)
+        net = _tables(s, layout)
         while True:
-            queue, parent, count, head, table, bits, dead, code, info = k.step(
-                *n, *d[:5], d[5], growing, queue, parent, count, head, table, bits, dead,
-                max_states, SLICE)
-            if progress and code == k.GOING:
-                progress(count, count - head)
-            if code != k.GOING or head == count:
+            search = loops.counter_step(net, search, max_states, SLICE)
+            if progress and search.code == Code.GOING:
+                progress(search.count, search.count - search.head)
+            if search.code != Code.GOING or search.head == search.count:
                 break
-        if code == k.GOING:
-            return CounterStateSpace(s, queue[:count], table, bits, layout, k)
-        if code == k.LIMIT:
-            limit_error.explored, limit_error.deadlocks = count, dead
+        queue, count, info = search.queue, search.count, search.info
+        if search.code == Code.GOING:
+            return CounterStateSpace(s, queue[:count], search.index, layout, loops)
+        if search.code == Code.LIMIT:
+            limit_error.explored, limit_error.deadlocks = count, search.dead
             raise limit_error
-        if (code == k.GROWING or layout.widths[info] >= MAX_BITS
-                or _covers_an_ancestor(s, layout, queue, parent, head)):
+        if (search.code == Code.GROWING or layout.widths[info] >= MAX_BITS
+                or _covers_an_ancestor(s, layout, queue, search.parent, search.head)):
             raise NotBounded
         # widen the place that overflowed, re-pack what was found, go on
         counts = layout.unpack(queue[:count])
         widths = list(layout.widths)
         widths[info] = min(MAX_BITS, 2 * widths[info])
         layout = Layout(widths)
-        queue = layout.pack(counts)
+        search = loops.counter_search(layout.pack(counts), search.parent, count, search.head,
+                                      search.dead)
         del counts
-        table = k.rehash(queue, count, bits)
 
 
 def _covers_an_ancestor(s: Structure, layout: Layout, queue: np.ndarray, parent: np.ndarray,
@@ -248,14 +226,14 @@ class CounterMarkings(DecodedMarkings):
 class CounterStateSpace(EdgesOnDemand, StateSpace):
     """A reachability graph kept as its packed markings in the order found (see the module)."""
 
-    def __init__(self, structure: Structure, rows: np.ndarray, table: np.ndarray, bits: int,
-                 layout: Layout, loops=None):
+    def __init__(self, structure: Structure, rows: np.ndarray, index: Index, layout: Layout,
+                 loops: Loops):
         self.structure = structure
-        self.rows, self.table, self.bits, self.layout = rows, table, bits, layout
-        # the loops that built the table ask it again: its slots are theirs
-        self.loops = loops or kernels()
+        self.rows, self.index, self.layout = rows, index, layout
+        # the loops that built the index ask it again: its slots are theirs
+        self.loops = loops
         self.coverability = False
-        self._need, self._change, _ = _tables(structure, layout)
+        self._net = _tables(structure, layout)
 
     @property
     def states(self) -> int:
@@ -283,7 +261,7 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
 
     @cached_property
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
-        return self.loops.out_degree(self.rows, self.states, *self._need)
+        return self.loops.counter_out_degree(self.rows, self._net)
 
     @cached_property
     def terminal(self) -> list[int]:  # type: ignore[override]
@@ -291,15 +269,12 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
 
     @cached_property
     def _edges(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self.loops.edges(self.rows, self.states, self.table, self.bits, *self._need,
-                       *self._change[:5], int(self.out_degree.sum()))
+        return self.loops.counter_edges(self.rows, self.index, self._net,
+                                        int(self.out_degree.sum()))
 
     def can_reach(self, targets: Sequence[int]) -> list[bool]:
         """For every node, whether one of ``targets`` is reachable from it (by unfiring)."""
-        k = self.loops
         frontier = distinct(np.sort(np.asarray(list(targets), dtype=np.int64)))
         seen = np.zeros(self.states, dtype=np.bool_)
         seen[frontier] = True
-        table, bits = k.sparse_index(self.rows, self.states)
-        return k.backward(self.rows, self.states, table, bits, *self._need,
-                          *self._change[:5], seen, frontier).tolist()
+        return self.loops.counter_backward(self.rows, self._net, seen, frontier).tolist()

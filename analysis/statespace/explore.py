@@ -1,48 +1,32 @@
 """Which explorer builds the state space: :func:`explore` and its ``backend``.
 
-Five explorers (:data:`BACKENDS`) share one interface, the
+Four explorers (:data:`BACKENDS`) share one interface, the
 :class:`~mcl2pnml.analysis.statespace.general.StateSpace` they return, and one test suite:
 
 * ``"native"``, :mod:`mcl2pnml.analysis.statespace.compiled` with the loops in C
   (``analysis/statespace/loops/_native.c``, built when mcl2pnml is installed), for safe
-  nets: the compiled explorer's algorithm, loaded in a millisecond where
-  numba's runtime takes half a second and some 120 MB of memory;
-* ``"compiled"``, :mod:`mcl2pnml.analysis.statespace.compiled`, for safe nets: markings as
-  packed bits, the textbook queue-and-hash-set loop compiled by numba (a
-  few nanoseconds a firing: over a million markings a second);
+  nets: markings as packed bits, the textbook queue-and-hash-set loop (a few
+  nanoseconds a firing: over a million markings a second), loaded in a
+  millisecond;
 * ``"packed"``, :mod:`mcl2pnml.analysis.statespace.packed`, for safe nets: the same packed
   markings, a whole breadth-first frontier fired at once in numpy. Both
   give the same :class:`~mcl2pnml.analysis.statespace.packedmarkings.PackedStateSpace`, whose
   edges are recomputed when needed rather than stored;
 * ``"counters"``, :mod:`mcl2pnml.analysis.statespace.counters`, for bounded nets: counters
-  packed into words, as wide as the P-invariants prove, the same compiled
-  loop; it raises :class:`~mcl2pnml.analysis.statespace.counters.NotBounded` on a net that
-  may be unbounded;
+  packed into words, as wide as the P-invariants prove, the same loop (in C
+  where it was built, else the plain-Python reference of the loops'
+  interface, :mod:`mcl2pnml.analysis.statespace.loops.backends`); it raises
+  :class:`~mcl2pnml.analysis.statespace.counters.NotBounded` on a net that may be unbounded;
 * ``"general"``, :mod:`mcl2pnml.analysis.statespace.general`, for every net: the
   reachability graph, or the Karp-Miller coverability graph (Murata 1989,
   section V-A) when the net is unbounded, with markings as tuples of counts.
 
-``"auto"`` (the default) chooses by the net's kind and size. A safe net
-(every weight 1, M0 0/1) gets the native explorer where it was built (and
-the state space is then asked again in C too); otherwise the compiled explorer when its machine code
-is loaded in this process, and otherwise the numpy one, which hands over to
-the compiled one past :data:`HANDOVER` (20,000) markings, starting again:
-loading compiled code takes 0.4 to 0.6 s in a fresh process (importing
-numba, reading its cache), more than numpy takes on a small state space,
-and numpy's markings are thrown away at the hand-over, so it must come
-early. Measured on Contest models: numpy explores their first 20,000
-markings in 0.05 s (RwMutex-PT-r0020w0010) to 0.17 s (NeoElection-PT-3),
-their first 50,000 in 0.11 to 0.40 s; the compiled explorer then takes 2 s
-for a million markings where numpy took 2.7 s for the first 500,000. The
-state space is asked again (terminal markings, reachability backwards) in
-compiled code from the same size on
-(:data:`mcl2pnml.analysis.statespace.packedmarkings.COMPILED_FROM`), or whenever it is loaded.
-A net that is not safe (or
-a safe-net explorer's first second token) gets the counter explorer, after
-the general one alone up to :data:`GENERAL_HANDOVER` markings while compiled
-code is not loaded; a net the counter explorer finds possibly unbounded
-gets the general one, Karp-Miller. Without numba, the general one takes
-every net that is not safe.
+``"auto"`` (the default) chooses by the net's kind. A safe net (every weight
+1, M0 0/1) gets the native explorer where it was built (and the state space
+is then asked again in C too), else the numpy one. A net that is not safe
+(or a safe-net explorer's first second token) gets the counter explorer
+where the loops in C were built, else the general one; a net the counter
+explorer finds possibly unbounded gets the general one, Karp-Miller.
 
 Every exploration has a memory budget in bytes (``max_memory``, default
 :func:`default_memory`): each explorer's bytes per marking turn it into a
@@ -60,13 +44,13 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, resident, size_text
 from mcl2pnml.core.structure import Structure, structure as make_structure
 
-from mcl2pnml.analysis.statespace import compiled as compiledspace
 from mcl2pnml.analysis.statespace.explorers import CHOICES, EXPLORERS
 from mcl2pnml.analysis.statespace.general import OMEGA, Progress, StateSpace, explore_general
-from mcl2pnml.analysis.statespace.counters import NotBounded, native_loops as counter_loops_in_c
-from mcl2pnml.analysis.statespace.packedmarkings import COMPILED_FROM, KeyCollision, NotSafe
+from mcl2pnml.analysis.statespace.counters import NotBounded
+from mcl2pnml.analysis.statespace.loops.backends import c_loops
+from mcl2pnml.analysis.statespace.packedmarkings import KeyCollision, NotSafe
 
-__all__ = ["BACKENDS", "HANDOVER", "OMEGA", "ExplorationLimit", "MemoryLimit", "Progress",
+__all__ = ["BACKENDS", "OMEGA", "ExplorationLimit", "MemoryLimit", "Progress",
            "StateSpace", "default_memory", "explore", "resident"]
 
 
@@ -89,19 +73,6 @@ BACKENDS = CHOICES
 """The explorers :func:`explore` can be asked for: ``auto`` or a name of
 :data:`mcl2pnml.analysis.statespace.explorers.EXPLORERS`."""
 
-HANDOVER = COMPILED_FROM
-"""Markings after which ``"auto"`` leaves the numpy explorer for the compiled one
-(where loading numba costs less than numpy's going on: see the module's documentation)."""
-
-GENERAL_HANDOVER = 5_000
-"""Markings after which ``"auto"`` leaves the general explorer for the counter one on
-a net that is not safe (when numba is installed but not loaded yet)."""
-
-
-class _HandOver(Exception):
-    """The explorer passed its hand-over count: a compiled one starts again."""
-
-
 def explore(net_or_structure, initial: dict[str, int] | None = None, *,
             max_states: int = 5_000_000, progress: Progress | None = None,
             backend: str = "auto", max_memory: int | None = None,
@@ -109,9 +80,8 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
     """Explore the markings reachable from ``initial`` (default: the net's M0).
 
     ``backend`` is one of :data:`BACKENDS`; a safe-net explorer asked for a
-    net that is not safe hands over to ``"counters"`` (to ``"general"``
-    without numba), which hands over to ``"general"`` on a net that may be
-    unbounded, as ``"auto"`` does. ``max_memory`` is a budget in bytes
+    net that is not safe hands over to ``"counters"``, which hands over to
+    ``"general"`` on a net that may be unbounded, as ``"auto"`` does. ``max_memory`` is a budget in bytes
     (default :func:`default_memory`): each explorer's bytes per marking turn
     it into a number of markings, and past it :class:`MemoryLimit` is raised
     (past ``max_states``, :class:`ExplorationLimit`). ``held``: bytes of the
@@ -135,9 +105,11 @@ def explore(net_or_structure, initial: dict[str, int] | None = None, *,
                 return _explore_safe(s, m0, backend, budget, progress)
             except (NotSafe, KeyCollision):
                 pass   # not safe after all, or (once in 2^64) two markings share a key
-        if backend != "general" and EXPLORERS["counters"].can_run() and not wide:
+        if backend != "general" and not wide and (backend != "auto" or c_loops()):
+            # auto leaves a net that is not safe to the general explorer where the
+            # loops in C were not built: Python's counters would be no faster
             try:
-                return _explore_counters(s, m0, backend, budget, progress)
+                return budget.run(EXPLORERS["counters"], s, m0, progress)
             except NotBounded:
                 pass   # perhaps unbounded: Karp-Miller decides
         return budget.run(EXPLORERS["general"], s, m0, progress)
@@ -170,12 +142,9 @@ class _Budget:
         self.free = max_memory - held
         self.states = max_states
 
-    def run(self, explorer, s: Structure, m0, progress, cap: int | None = None,
-            error: Exception | None = None):
+    def run(self, explorer, s: Structure, m0, progress):
         per = explorer.bytes_per_marking(s)
         self.states = min(self.max_states, max(1, self.free // per))
-        if cap is not None and cap < self.states:
-            return explorer.explore(s, m0, cap, error, progress)
         return explorer.explore(s, m0, self.states, self._error(per), progress)
 
     def _error(self, per: int) -> ExplorationLimit:
@@ -190,56 +159,18 @@ class _Budget:
 def _explore_safe(s: Structure, m0, backend: str, budget: _Budget, progress) -> StateSpace:
     """A safe-net explorer (raises NotSafe at a second token in a place)."""
     if backend == "auto":
-        backend = _auto(s, m0, budget, progress)
-        if isinstance(backend, StateSpace):
-            return backend
+        # the loops in C where they were built; else numpy, faster than Python's loops
+        backend = "native" if EXPLORERS["native"].can_run() else "packed"
     chosen = EXPLORERS[backend]
     if not chosen.can_run():
-        need = ("its C code, built when mcl2pnml is installed on a machine with a C "
-                "compiler" if backend == "native" else "numba, which is not installed")
-        raise Mcl2PnmlError(f"the {backend} explorer needs {need}; known explorers: "
+        raise Mcl2PnmlError(f"the {backend} explorer needs its C code, built when mcl2pnml "
+                            "is installed on a machine with a C compiler; known explorers: "
                             + ", ".join(BACKENDS))
     if not chosen.safe_only:
         raise NotSafe   # the counter or general explorer, asked for by name
     return budget.run(chosen, s, m0, progress)
 
 
-def _explore_counters(s: Structure, m0, backend: str, budget: _Budget,
-                      progress) -> StateSpace:
-    """The counter explorer; ``auto`` tries the general one first on small state spaces.
-
-    Loading numba's compiled code costs most of a second in a fresh
-    process, more than a small state space takes to explore without it; the
-    loops in C, where they were built, load at once and go first.
-    """
-    if backend == "auto" and not compiledspace.loaded() and not counter_loops_in_c():
-        try:
-            return budget.run(EXPLORERS["general"], s, m0, progress, GENERAL_HANDOVER,
-                              _HandOver())
-        except _HandOver:
-            pass
-    space = budget.run(EXPLORERS["counters"], s, m0, progress)
-    compiledspace.mark_loaded()
-    return space
-
-
-def _auto(s: Structure, m0, budget: _Budget, progress) -> "str | StateSpace":
-    """The explorer ``auto`` picks for a safe net, or the state space it already built.
-
-    The loops in C when they were built at install; else the compiled
-    explorer when its code is loaded; otherwise numpy, which hands over to
-    the compiled one past :data:`HANDOVER` markings.
-    """
-    if compiledspace.native_available():
-        return "native"   # loads at once: nothing to hand over
-    if compiledspace.loaded():
-        return "compiled"
-    if compiledspace.available() and budget.max_states > HANDOVER:
-        try:
-            return budget.run(EXPLORERS["packed"], s, m0, progress, HANDOVER, _HandOver())
-        except _HandOver:
-            return "compiled"
-    return "packed"
 
 
 def _limit(max_states: int) -> ExplorationLimit:

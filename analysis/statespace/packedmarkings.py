@@ -5,7 +5,7 @@ marking is a row of bits, one per place, packed into 64-bit words, and
 firing a transition is three bit operations (``need`` covered, ``keep`` the
 rest, ``give`` the outputs). This module owns what the two safe-net
 explorers share, :mod:`mcl2pnml.analysis.statespace.packed` (numpy, a frontier at a time)
-and :mod:`mcl2pnml.analysis.statespace.compiled` (numba, a marking at a time): the masks of
+and :mod:`mcl2pnml.analysis.statespace.compiled` (the loops, a marking at a time): the masks of
 the transitions, built from the core's pre-sets, •t and post-sets
 (:class:`~mcl2pnml.core.structure.Structure`); the 64-bit key of a marking
 (the marking itself up to 64 places, a hash of its words beyond); and
@@ -18,19 +18,16 @@ a time: a marking is terminal when no transition is enabled in it; the
 markings that can reach a set are found backwards, by *unfiring* each
 transition on the frontier (for a safe net the marking before a firing is
 determined by the one after) and keeping the results that are reachable
-markings and really fire into it: in numpy a frontier at a time, or, once
-the state space is large enough for numba's loading to pay
-(:data:`COMPILED_FROM`), in compiled code (:mod:`mcl2pnml.analysis.statespace.loops.numba_safe`)
-a marking at a time, each predecessor found in a hash table of the
-markings. The explicit edge list (``src``,
+markings and really fire into it: in the loops in C where they were built
+(:func:`mcl2pnml.analysis.statespace.loops.backends.c_loops`) a marking at a
+time, each predecessor found in a hash table of the markings, else in numpy
+a frontier at a time. The explicit edge list (``src``,
 ``trans``, ``dst``) is built only if someone asks for it. Transitions are
 grouped by the words their places lie in, so that testing them costs a few
 operations per group, not per transition.
 """
 from __future__ import annotations
 
-import importlib.util
-import sys
 from functools import cached_property
 from typing import NamedTuple, Sequence
 
@@ -39,6 +36,8 @@ import numpy as np
 from mcl2pnml.core.structure import Structure
 
 from mcl2pnml.analysis.statespace.general import DecodedMarkings, EdgesOnDemand, StateSpace
+from mcl2pnml.analysis.statespace.loops.backends import c_loops
+from mcl2pnml.analysis.statespace.loops.interface import KeyIndex, Loops, Rows, SafeNet
 
 
 def masks(s: Structure, words: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -53,29 +52,28 @@ def masks_of(place_sets, words: int) -> np.ndarray:
                      for b in bits], dtype=np.uint64).reshape(len(bits), words)
 
 
-def touched(*masks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The words each transition's masks have bits in, as compressed rows (ptr, word).
+def touched(*masks: np.ndarray) -> Rows:
+    """The words each transition's masks have bits in, as compressed rows.
 
-    So that compiled loops test and fire a transition on those words only.
+    So that the loops test and fire a transition on those words only.
     """
     rows, words = np.nonzero(np.bitwise_or.reduce(masks) != 0)
     ptr = np.zeros(len(masks[0]) + 1, dtype=np.int64)
     np.cumsum(np.bincount(rows, minlength=len(masks[0])), out=ptr[1:])
-    return ptr, words.astype(np.int64)
+    return Rows(ptr, words.astype(np.int64))
 
 
-def key_index(test: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def key_index(test: np.ndarray, weight: np.ndarray) -> KeyIndex:
     """Each transition keyed on one place of its ``test`` mask, as compressed rows by place.
 
     ``test`` is ``(transitions, words)``: what must be marked for the
     transition to be worth trying (its needed places when firing, its
     outputs when unfiring). A marking then tries only the transitions keyed
-    on its marked places (:func:`mcl2pnml.analysis.statespace.loops.numba_safe.candidates`), so
+    on its marked places (:class:`~mcl2pnml.analysis.statespace.loops.interface.KeyIndex`), so
     the key is the place of the mask least often marked: ``weight`` says how
     often each place is (:func:`place_weights`), the lowest-numbered place
-    winning a tie. Returns ``(ptr, transitions, free)``: place p's
-    transitions are ``transitions[ptr[p]:ptr[p + 1]]``; ``free`` are those
-    that test nothing.
+    winning a tie. Place p's transitions are ``by_place.of(p)``; ``free`` are
+    those that test nothing.
     """
     words = len(weight) // 64
     test = np.ascontiguousarray(test.reshape(len(test), words))
@@ -90,7 +88,17 @@ def key_index(test: np.ndarray, weight: np.ndarray) -> tuple[np.ndarray, np.ndar
     order = keyed[np.argsort(place[keyed], kind="stable")]
     ptr = np.zeros(words * 64 + 1, dtype=np.int64)
     np.cumsum(np.bincount(place[keyed], minlength=words * 64), out=ptr[1:])
-    return ptr, order.astype(np.int64), np.nonzero(place < 0)[0].astype(np.int64)
+    return KeyIndex(Rows(ptr, order.astype(np.int64)),
+                    np.nonzero(place < 0)[0].astype(np.int64))
+
+
+def safe_net(need: np.ndarray, take: np.ndarray, give: np.ndarray,
+             weight: np.ndarray) -> SafeNet:
+    """The loops' tables of a safe net's masks (:func:`masks`), each transition keyed on
+    its needed place least often marked by ``weight`` (:func:`place_weights`)."""
+    need, take, give = (np.ascontiguousarray(a) for a in (need, take, give))
+    return SafeNet(need, np.ascontiguousarray(~take), give, touched(need),
+                   touched(need, take, give), key_index(need, weight))
 
 
 def place_weights(rows: np.ndarray, sample: int = 1 << 12) -> np.ndarray:
@@ -234,12 +242,6 @@ class NotSafe(Exception):
     """A firing would put a second token in a place: the caller explores another way."""
 
 
-#: From how many markings a state space is asked again (terminal markings,
-#: reachability) in compiled code rather than numpy, when numba is installed:
-#: below it, loading the compiled loops (about 0.6 s in a fresh process)
-#: costs more than numpy takes. Once loaded, they always run.
-COMPILED_FROM = 20_000
-
 #: How many (marking, transition) pairs one vectorized step handles at most:
 #: frontiers are cut in chunks so that memory stays bounded.
 PAIRS = 1 << 21
@@ -319,25 +321,16 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
             r, j = np.nonzero(self.firing.tested(self.packed[part]))
             yield r + part.start, j
 
-    def _kernels(self):
-        """The loops in C when they were built; else numba's when they pay
-        (:data:`COMPILED_FROM`) or are loaded; else None (numpy)."""
-        try:
-            from mcl2pnml.analysis.statespace.loops import native_safe as _native_loops
-            return _native_loops
-        except ImportError:
-            pass
-        if "mcl2pnml.analysis.statespace.loops.numba_safe" in sys.modules or (
-                self.states >= COMPILED_FROM and importlib.util.find_spec("numba")):
-            from mcl2pnml.analysis.statespace.loops import numba_safe as _compiled_loops  # imports numba
-            return _compiled_loops
-        return None
+    def _kernels(self) -> Loops | None:
+        """The loops in C when they were built, else None: numpy's whole arrays, faster
+        than the plain-Python loops (which the tests put here to hold them to numpy)."""
+        return c_loops()
 
     @cached_property
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
         kernels = self._kernels()
         if kernels is not None:
-            degree = kernels.out_degree(self.packed, self.firing.need, *self._firing_index)
+            degree = kernels.out_degree(self.packed, self._net)
         else:
             degree = np.zeros(self.states, dtype=np.int32)
             for r, _ in self._enabled():
@@ -350,7 +343,7 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
             kernels = self._kernels()
             if kernels is not None:
                 # whether each marking enables anything: the first enabled transition says
-                alive = kernels.live(self.packed, self.firing.need, *self._firing_index)
+                alive = kernels.live(self.packed, self._net)
                 return sorted(self.node_of(np.nonzero(alive == 0)[0]).tolist())
         return sorted(np.nonzero(self.out_degree == 0)[0].tolist())
 
@@ -359,10 +352,10 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
         """The explicit edge list, in node order, built only when asked for."""
         f = self.firing
         kernels = self._kernels()
-        if kernels is not None and hasattr(kernels, "edges"):
-            # in C, already in node order (position and node_of are one permutation)
-            return kernels.edges(self.packed, f.need, f.keep, f.give, f.ids,
-                                 self.position(np.arange(self.states)), *self._firing_index)
+        if kernels is not None:
+            # already in node order (position and node_of are one permutation)
+            return kernels.edges(self.packed, self._net, f.ids,
+                                 self.position(np.arange(self.states)))
         src, trans, dst = [], [], []
         for r, j in self._enabled():
             after = self._lookup((self.packed[r] & f.keep[j]) | f.give[j])
@@ -381,9 +374,9 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
     def can_reach(self, targets: Sequence[int]) -> list[bool]:
         """For every node, whether one of ``targets`` is reachable from it.
 
-        In compiled code (a breadth-first search, unfiring one marking at a
-        time, each predecessor found in a hash table of the markings) when its
-        loops pay or are loaded; otherwise in numpy, a frontier at a time
+        In the loops (a breadth-first search, unfiring one marking at a
+        time, each predecessor found in a hash table of the markings) where
+        they were built in C; otherwise in numpy, a frontier at a time
         (:meth:`_can_reach_numpy`). Both give the same answer.
         """
         kernels = self._kernels()
@@ -397,36 +390,26 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
             return all(self._can_reach_numpy(targets))
         return bool(self._reaching(kernels, targets).all())
 
-    def _reaching(self, kernels, targets: Sequence[int]) -> np.ndarray:
-        """By sorted position, whether the marking reaches one of ``targets`` (compiled)."""
+    def _reaching(self, kernels: Loops, targets: Sequence[int]) -> np.ndarray:
+        """By sorted position, whether the marking reaches one of ``targets`` (the loops)."""
         seen = np.zeros(self.states, dtype=np.bool_)
         # distinct(sort), not np.unique, which imports numpy.ma (7 ms of start-up)
         frontier = distinct(np.sort(self.position(np.asarray(list(targets), dtype=np.int64))))
         seen[frontier] = True
-        f = self.firing
-        # a hash table of positions: a probe or two a predecessor, where a
-        # binary search on the keys costs some twenty cache misses (4.5 s, not 1.7)
-        table, bits = kernels.paired_index(self.packed, self.states)
-        return kernels.backward(self.packed, table, bits, f.need, f.take, f.give,
-                                *self._touched, *key_index(f.give, self._weights),
-                                seen, frontier)
+        # unfiring tries the transitions keyed on a place they mark
+        unfire = key_index(self.firing.give, self._weights)
+        return kernels.backward(self.packed, self._net, unfire, seen, frontier)
 
     @cached_property
-    def _firing_index(self) -> tuple[np.ndarray, ...]:
-        """The words each transition needs and its key place (:func:`touched`,
-        :func:`key_index`), built once for the loops that test enabling."""
-        need = self.firing.need
-        return (*touched(need), *key_index(need, self._weights))
+    def _net(self) -> SafeNet:
+        """The loops' tables of the firing's masks, built once for every question."""
+        f = self.firing
+        return safe_net(f.need, f.take, f.give, self._weights)
 
     @cached_property
     def _weights(self) -> np.ndarray:
         """How often each place is marked here, on a sample (:func:`place_weights`)."""
         return place_weights(self.packed)
-
-    @cached_property
-    def _touched(self) -> tuple[np.ndarray, np.ndarray]:
-        f = self.firing
-        return touched(f.need, f.take, f.give)
 
     def _can_reach_numpy(self, targets: Sequence[int]) -> list[bool]:
         """:meth:`can_reach` in numpy: a breadth-first frontier unfired at once."""
