@@ -14,8 +14,8 @@ OUT    := out
 # token game page of `mcl2pnml show` in the browser tests. Both from Debian's
 # packages where missing (machines here run as root). GLPK lets TAPAAL's verifypn, one of
 # the peer tools the external-corpus tests compare us with, start.
-# A C compiler builds the safe-net explorer's loops (analysis/statespace/loops/_native.c) at install;
-# without one mcl2pnml installs all the same and explores with numba's. Java 17 runs
+# A C compiler builds the exploration loops (analysis/statespace/loops/_native.c) at install;
+# without one mcl2pnml installs all the same and explores with numpy and Python. Java 17 runs
 # the PNML readers of the editors WoPeD and PIPE, which the tests hold our files to.
 APT_PACKAGES := $(if $(shell command -v dot),,graphviz) $(if $(shell command -v chromium),,chromium) \
                 $(if $(shell /sbin/ldconfig -p 2>/dev/null | grep libglpk.so.40),,libglpk40) \
@@ -82,7 +82,7 @@ demo: setup
 	@echo "  paper_repro/out/fig5.png         Fig. 5: the mission on the simulated AUV, with and without the cross"
 
 # the tests are spread over two workers more than the cores (up to four: each worker
-# loads numba and a browser), since a third of their time is spent waiting on peer
+# loads a browser), since a third of their time is spent waiting on peer
 # tools, the browser and the autopilot (on 2 cores: 5:35 with 4 workers, 5:57 with 3;
 # 5:22 with 6, where tests that time a wait fail under the load);
 # a single file runs in one process with `$(PY) -m pytest tests/FILE.py`

@@ -1,12 +1,13 @@
-/* The loops of the safe-net explorer in C: analysis/statespace/loops/native_safe.py's machine code.
+/* The exploration loops in C: the C backend of analysis/statespace/loops/interface.py.
  *
- * The same loops as analysis/statespace/loops/numba_safe.py (read its docstrings for the
- * algorithms: a breadth-first queue of markings packed into 64-bit words, an
- * open-addressing hash set with linear probing, each transition keyed on one
- * place it needs), built once when mcl2pnml is installed instead of compiled
- * by numba in every new process: loading them costs a millisecond and a few
- * hundred kilobytes, where numba's runtime costs half a second and some
- * 120 MB. The shared test suite runs both on the same nets.
+ * The same loops as analysis/statespace/loops/python.py, their plain-Python
+ * reference (read it for the algorithms: a breadth-first queue of markings
+ * packed into 64-bit words, an open-addressing hash set with linear probing,
+ * each transition keyed on one place it needs), built once when mcl2pnml is
+ * installed: loading them costs a millisecond and a few hundred kilobytes.
+ * analysis/statespace/loops/c.py is the one caller of these functions and
+ * the one place that knows their positional signatures. The shared test
+ * suite runs both backends on the same nets.
  *
  * The functions take numpy arrays through the buffer protocol and never
  * allocate them: when the queue or the table is full, a step returns
@@ -1127,7 +1128,7 @@ fail:
     return NULL;
 }
 
-/* -- bounded nets: counters packed into words (analysis/statespace/loops/numba_counters.py's loops) ------- */
+/* -- bounded nets: counters packed into words (analysis/statespace/counters.py) ----------- */
 
 /* A transition's fields as compressed rows: its needs (value: tokens, unsigned) or its
  * changes (value: signed). */
@@ -1620,7 +1621,7 @@ static PyMethodDef methods[] = {
 
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "mcl2pnml.analysis.statespace.loops._native",
-    "The safe-net explorer's loops in C (see analysis/statespace/loops/native_safe.py).", -1, methods,
+    "The exploration loops in C (see analysis/statespace/loops/c.py).", -1, methods,
 };
 
 PyMODINIT_FUNC PyInit__native(void) {
