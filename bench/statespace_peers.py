@@ -5,13 +5,12 @@ Run:  .venv/bin/python -m bench.statespace_peers
 Every exploration runs in a fresh interpreter (so that peak memory is its
 own) on a PNML file written by us. Ours explores the reachable markings
 (:func:`mcl2pnml.analysis.statespace.explore.explore`) with the native explorer (the loops
-in C; numba's where they were not built), and then,
+in C; the numpy one where they were not built), and then,
 timed apart, finds what ``mcl2pnml analyze FILE --state-space`` adds to
 them (terminal markings, deadlock freedom, reusability); "numpy" is our
 numpy explorer on the same file; SNAKES builds its ``StateGraph``; pm4py
-its reachability graph. Loading the file and the code is not timed (for
-the compiled explorer, loading its machine code from numba's cache, which
-is timed apart as ``load_seconds``); the exploration is. (The peers also store the edges; ours derives them when
+its reachability graph. Loading the file and the code is not timed (loading
+the explorer's code is timed apart as ``load_seconds``); the exploration is. (The peers also store the edges; ours derives them when
 asked, which the second, analysis time includes where it needs them.) A run that does
 not finish within :data:`TIMEOUT` seconds is reported as such. Each figure
 is the median of :data:`RUNS` runs when a run takes under 5 s, else one run.
@@ -57,13 +56,11 @@ if engine in ("ours", "numpy"):
     from mcl2pnml.core.structure import structure
     from mcl2pnml.analysis.statespace.explore import explore
     s = structure(load_pnml(path))
-    # ours: the loops in C where they were built (what `analyze` takes), else numba's;
+    # ours: the loops in C where they were built (what `analyze` takes), else numpy;
     # loading them is timed apart
     t0 = time.perf_counter()
-    backend = ("native" if compiledspace.native_available() else "compiled"
+    backend = ("native" if compiledspace.native_available() else "packed"
                ) if engine == "ours" else "packed"
-    if backend == "compiled":
-        compiledspace.warm_up()   # numba's code, from its cache
     extra["load_seconds"] = time.perf_counter() - t0
     extra["backend"] = backend
     before = rss(); t0 = time.perf_counter()

@@ -7,6 +7,8 @@ Measures, on this machine, in one run (about fifteen minutes on 2 cores):
 * state spaces: ours against SNAKES and pm4py on the same PNML files
   (:mod:`bench.statespace_peers`): states per second, peak memory, bytes
   per state, and our speed as a ratio to each peer;
+* the exploration loops: C against their plain-Python reference on the same
+  nets (:mod:`bench.explorer_loops`);
 * Model Checking Contest models: ``analyze --state-space`` against TAPAAL's
   verifypn and LoLA, time and peak memory (:mod:`bench.real_models`);
 * mission properties: ``analyze --properties`` on every example's property
@@ -47,7 +49,7 @@ from mcl2pnml.core.files import atomic_write_text
 from mcl2pnml.analysis import zoo
 from bench import compile_scale, executor_latency, invariants_vs_nullspace as inv, nets
 from bench import campaign_scale, certify_scale, properties_peers, real_models
-from bench import statespace_peers as peers
+from bench import explorer_loops, statespace_peers as peers
 from bench.core_scale import slope
 from bench.missions import survey
 
@@ -83,8 +85,8 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
              "a fresh interpreter; seconds, states per second, bytes per state (peak resident "
              "memory during the exploration, over the number of states); our speed as a "
              "ratio to each peer. Ours is the native explorer, the loops in C that "
-             "`analyze` takes for a safe net where they were built at install (numba's "
-             "loops where not: the \"backend\" below says which ran); \"numpy\" is our "
+             "`analyze` takes for a safe net where they were built at install (numpy "
+             "where not: the \"backend\" below says which ran); \"numpy\" is our "
              "numpy explorer. \"+ analysis\": the "
              "further time ours takes to find the terminal markings and decide deadlock "
              "freedom and reusability (what `analyze --state-space` adds; the peers do not "
@@ -114,10 +116,9 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
                 cells.append("-")
         lines.append("| " + " | ".join(cells) + " |")
     load = statistics.median(r["ours"]["load_seconds"] for r in rows)
-    backends = sorted({r["ours"].get("backend", "compiled") for r in rows})
+    backends = sorted({r["ours"]["backend"] for r in rows})
     lines += ["", f"Our explorer: {', '.join(backends)}. Loading its code in a fresh process "
-              f"(not counted above): {load:.3f} s, the median over these runs (numba's loops "
-              "take 0.4 to 0.6 s to load: importing numba and reading its cache)."]
+              f"(not counted above): {load:.3f} s, the median over these runs."]
     slow = [(r, peer) for r in rows for peer in ("snakes", "pm4py")
             if r.get(peer) and r[peer]["seconds"] / r["ours"]["seconds"] < 100]
     if slow:
@@ -145,6 +146,13 @@ def statespace_section(quick: bool, log) -> tuple[list[str], list[tuple[str, boo
                     ("state space: under 64 bytes per state on cycles 10", per < 64,
                      f"{per:.0f} B/state")]
     return lines, targets
+
+
+def loops_section(quick: bool, log) -> tuple[list[str], list[tuple[str, bool, str]]]:
+    """The loops in C against their plain-Python reference (no targets: the reference
+    is held to answer alike, not to be fast)."""
+    return explorer_loops.section(explorer_loops.run(explorer_loops.CASES[:1] if quick
+                                                     else explorer_loops.CASES, log=log)), []
 
 
 def command_table(rows: list[dict]) -> tuple[list[str], list[tuple[str, bool, str]]]:
@@ -386,6 +394,7 @@ def main(argv: list[str]) -> int:
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731
     sections, targets = [], []
     for name, section in (("state spaces", statespace_section),
+                          ("exploration loops", loops_section),
                           ("MCC models", real_models_section),
                           ("mission properties", properties_section),
                           ("certificates", certify_section),

@@ -88,7 +88,8 @@ def _explore(loops: Loops, s: Structure, m0: Sequence[int], max_states: int, lim
             raise KeyCollision   # distinct markings, one key: the exact explorer takes over
         packed = loops.permute_rows(rows, order)   # in place where it can: no second copy
         del rows, order
-    return PackedStateSpace(s, packed, keys, _keys(start)[0], Firing.by(need, need, take, give))
+    return PackedStateSpace(s, packed, keys, _keys(start)[0], Firing.by(need, need, take, give),
+                            loops)
 
 
 def _owned(rows: np.ndarray) -> np.ndarray:

@@ -270,8 +270,9 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
     """
 
     def __init__(self, structure: Structure, packed: np.ndarray, keys: np.ndarray, start_key,
-                 firing: Firing):
+                 firing: Firing, loops: Loops | None = None):
         self.structure = structure
+        self.loops = loops            # the loops that explored it, which answer for it too
         self.packed = packed          # (markings, words) uint64, in the order of their keys
         self.keys = keys              # sorted, distinct; the same memory when one word is enough
         self.firing = firing
@@ -322,9 +323,9 @@ class PackedStateSpace(EdgesOnDemand, StateSpace):
             yield r + part.start, j
 
     def _kernels(self) -> Loops | None:
-        """The loops in C when they were built, else None: numpy's whole arrays, faster
-        than the plain-Python loops (which the tests put here to hold them to numpy)."""
-        return c_loops()
+        """The loops that explored it; else the loops in C when they were built; else None:
+        numpy's whole arrays, faster than the plain-Python loops."""
+        return self.loops or c_loops()
 
     @cached_property
     def out_degree(self) -> np.ndarray:  # type: ignore[override]
