@@ -253,11 +253,11 @@ def _agrees(text: str, pending=(False, True), max_states: int = 20_000) -> bool 
     return all(verdicts)
 
 
-@settings(max_examples=80, deadline=None,
+@settings(max_examples=30, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(shaped_missions(depth=2))
 def test_the_certificate_s_verdict_is_what_exploring_finds(text):
-    """Eighty small missions (ten thousand, deeper, behind ``slow``) on callees of every shape (ending OK or FAIL, only FAIL,
+    """Thirty small missions (ten thousand, deeper, behind ``slow``) on callees of every shape (ending OK or FAIL, only FAIL,
     only OK), loops on any structure: certified with the ends exploring finds, or refused
     where exploring finds a run that never ends (one too large to explore here is drawn
     again)."""
