@@ -464,8 +464,9 @@ def test_generated_user_templates_that_keep_the_contract_are_certified_only_as_e
     """Random patterns of one primitive slot, and random sequences (a user's file in the
     package's place), those whose net keeps the contract kept, each a user's template
     (``$MCL2PNML_TEMPLATE_PATH``) in missions that use it: a certificate the checker
-    accepts is what exploring finds."""
-    kept, certified_, tally = _user_templates(tmp_path, monkeypatch, kind, 60, 2, SEED)
+    accepts is what exploring finds (one of them in the missions here, each one kept of
+    thousands behind ``slow``)."""
+    kept, certified_, tally = _user_templates(tmp_path, monkeypatch, kind, 60, 1, SEED)
     assert kept >= 3, f"only {kept} of 60 generated {kind}s keep the contract"
     assert certified_ > 0, f"no mission on {kept} generated {kind}s was certified"
     assert not tally.broken and not tally.crashes, tally.report()
