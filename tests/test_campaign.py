@@ -95,7 +95,9 @@ def cluster(tmp_path):
 
 def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_worker(cluster):
     address, procs = cluster
-    runs = 12 * BATCH
+    # four batches: when the first is in, the others are being flown or wait, on both
+    # workers; one of them killed then leaves batches to fly again on the other
+    runs = 4 * BATCH
     done, result = [], {}
 
     def fly():
@@ -105,14 +107,18 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
                 progress=lambda n, total: done.append(n))
         except BaseException as e:     # noqa: BLE001 (said by the test, below)
             result["error"] = e
-    thread = threading.Thread(target=fly)
+    # a daemon: a campaign that never ends fails this test, not the session's exit
+    thread = threading.Thread(target=fly, daemon=True)
     thread.start()
     deadline = time.monotonic() + 60
-    while not done and time.monotonic() < deadline:
+    while not done and time.monotonic() < deadline and thread.is_alive():
         time.sleep(0.05)
+    assert done, f"no batch came back within 60 s: {result.get('error')!r}"
     os.killpg(procs[0].pid, signal.SIGKILL)       # one worker gone mid-campaign
     thread.join(240)
-    assert not thread.is_alive()
+    # the runs taken by then tell a stuck campaign from a slow one
+    assert not thread.is_alive(), f"the campaign had not ended 240 s after the kill, " \
+                                  f"{done[-1]:,} of {runs:,} runs taken"
     assert "error" not in result, repr(result.get("error"))
     flown = result["campaign"]
     assert [r.seed for r in flown.runs] == list(range(5, 5 + runs))
