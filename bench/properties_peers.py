@@ -182,7 +182,7 @@ def peer(tool: str, extra: list[str], pnml: Path, files: dict[str, Path],
 def run(quick: bool = False, log=lambda text: None) -> list[dict]:
     """One row per (example, property file): ours, and each peer in each configuration."""
     from mcl2pnml import pipeline
-    from mcl2pnml.io.mccquery import property_queries, to_xml
+    from mcl2pnml.io.mccquery import property_queries, to_queries
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for label, mission, props in cases(quick):
@@ -193,7 +193,7 @@ def run(quick: bool = False, log=lambda text: None) -> list[dict]:
             files = {}
             for category, queries in property_queries(properties).items():
                 files[category] = folder / f"net.{category}.xml"
-                files[category].write_text(to_xml(queries))
+                files[category].write_text(to_queries(queries))
             row = {"case": label, "properties": len(properties), "ours": ours(mission, props)}
             for tool, configs in CONFIGS.items():
                 for name, extra in configs:

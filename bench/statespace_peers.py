@@ -30,7 +30,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from mcl2pnml.io.pnml import save_pnml
+from mcl2pnml.io.pnml import write_pnml
 
 from mcl2pnml.analysis import zoo
 from bench import nets, real_models
@@ -50,12 +50,12 @@ def rss():
             return int(line.split()[1]) * 1024
 extra = {}
 if engine in ("ours", "numpy"):
-    from mcl2pnml.io.pnml import load_pnml
+    from mcl2pnml.io.pnml import read_pnml
     from mcl2pnml.analysis.statespace import compiled as compiledspace
     from mcl2pnml.analysis.behaviour import behaviour
     from mcl2pnml.core.structure import structure
     from mcl2pnml.analysis.statespace.explore import explore
-    s = structure(load_pnml(path))
+    s = structure(read_pnml(path))
     # ours: the loops in C where they were built (what `analyze` takes), else numpy;
     # loading them is timed apart
     t0 = time.perf_counter()
@@ -157,7 +157,7 @@ def run(cases=CASES, peers=("snakes", "pm4py"), log=print,
     last: dict[tuple[str, str], float | None] = {}   # (family, peer) -> seconds a marking
     with tempfile.TemporaryDirectory() as tmp:
         for family, size, make in cases:
-            path = save_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"))
+            path = write_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"))
             row = {"family": family, "size": size, "ours": measure("ours", path),
                    "numpy": measure("numpy", path)}
             for peer in peers:

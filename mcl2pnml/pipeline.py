@@ -202,7 +202,7 @@ def load_net(path: str | Path, net_id: str | None = None,
         # the strict PNML reading streams: its need is the net's, not a tree's
         check_load(path, Budget(max_memory),
                    streamed=not lenient and reader_of(path).name == "pnml")
-        net = reader_of(path).load(path, net_id, lenient)
+        net = reader_of(path).read(path, net_id, lenient)
         release()   # the parsed file is freed: what the analysis may use is back
         return net
     if net_id is not None:
@@ -234,7 +234,7 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     drawn = _drawn(net, layout) if "positions" in form.options else None
     drawing = _drawing(net, title, clusters, expand) if "drawing" in form.options else None
-    said = form.save(net, path, SaveOptions(positions=drawn and drawn.positions,
+    said = form.write(net, path, SaveOptions(positions=drawn and drawn.positions,
                                             bends=drawn and drawn.bends, drawing=drawing,
                                             urgent=mission, timing=timing))
     for line in said:
@@ -248,7 +248,7 @@ def save_timed_queries(net: Net, net_path: str | Path, timing: "Assumptions | No
     against, written beside it (an end always reached, a dead state that is not an end, the
     safety its clocks rest on, the properties a state formula says; :mod:`mcl2pnml.io.tapn`);
     returns each file, its query and the k-bound to give verifydtapn."""
-    from mcl2pnml.io.tapn import save_queries as save
+    from mcl2pnml.io.tapn import write_queries as save
     return save(net, net_path, timing, properties)
 
 
@@ -263,7 +263,7 @@ def save_deadline(net: Net, path: str | Path, seconds, timing: "Assumptions | No
     """A mission's timed-arc net with an observer of time ``seconds`` at ``path``, and
     beside it the query "some run has no result at that time" (:mod:`mcl2pnml.io.tapn`);
     returns the net's file, the query's, and the k-bound to give verifydtapn."""
-    from mcl2pnml.io.tapn import save_deadline as save
+    from mcl2pnml.io.tapn import write_deadline as save
     return save(net, path, seconds, timing)
 
 
@@ -275,20 +275,20 @@ def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
 def save_queries(net: Net, path: str | Path, tool: str = "verifypn"):
     """The compiled mission's properties for ``tool`` (verifypn or lola) in the Model Checking
     Contest's XML (:mod:`mcl2pnml.io.mccquery`), with the ids of its PNML; returns them."""
-    from mcl2pnml.io.mccquery import save_queries as save
+    from mcl2pnml.io.mccquery import write_queries as save
     return save(net, path, tool)
 
 
 def save_property_queries(properties, stem: str | Path):
     """A mission's properties in the Model Checking Contest's categories, one file each,
     ``STEM.LTLCardinality.xml`` and so on (:mod:`mcl2pnml.io.mccquery`); the files written."""
-    from mcl2pnml.io.mccquery import save_property_queries as save
+    from mcl2pnml.io.mccquery import write_property_queries as save
     return save(properties, stem)
 
 
 def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
     """``net`` as a PNML document, laid out by ``layout_engine``."""
-    from mcl2pnml.io.pnml.writer import to_pnml_bytes as write
+    from mcl2pnml.io.pnml.writer import to_pnml as write
     drawn = _drawn(net, layout_engine)
     return write(net, drawn and drawn.positions, drawn and drawn.bends)
 
@@ -316,10 +316,10 @@ def validate_pnml(path: str | Path, grammar: str | Path | None = None,
     reader's rules; and the net when it is valid."""
     from mcl2pnml.core.memory import Budget, check_load
     from mcl2pnml.io.pnml.grammar import validate
-    from mcl2pnml.io.pnml.reader import load_pnml
+    from mcl2pnml.io.pnml.reader import read_pnml
     check_load(path, Budget())   # the schemas read the file whole too
     verdict = validate(path, grammar, net_id)
-    return verdict, (load_pnml(path, net_id) if verdict.valid else None)
+    return verdict, (read_pnml(path, net_id) if verdict.valid else None)
 
 
 # -- the paper's nets ----------------------------------------------------------------------
@@ -1104,9 +1104,9 @@ def _engine_for(mission: Path, net_id: str | None, lenient: bool = False,
             raise OptionError("--engine", "the reference engine reads MCL, not a net; give "
                                           "the .mcl file")
         from mcl2pnml.core.memory import Budget, check_load
-        from mcl2pnml.io.pnml.reader import load_pnml
+        from mcl2pnml.io.pnml.reader import read_pnml
         check_load(mission, Budget())
-        return PetriEngine(load_pnml(mission, net_id, lenient))
+        return PetriEngine(read_pnml(mission, net_id, lenient))
     if lenient and mission.suffix == ".mcl":
         raise OptionError("--lenient", "a mission is compiled, not read as PNML; leave out "
                                        "--lenient")

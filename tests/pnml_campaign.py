@@ -190,10 +190,10 @@ def confirm(path: Path, net, cert: dict) -> tuple[str, str]:
     """verifypn's verdicts on the file ``path`` for the claims of ``cert`` (accepted for
     ``net``, our reading of it): ("confirmed" | "BROKEN" | "vp-unanswered", detail)."""
     import peers
-    from mcl2pnml.io.mccquery import to_xml
+    from mcl2pnml.io.mccquery import to_queries
     props = _claims(net)
     queries = path.with_suffix(".xml")
-    queries.write_text(to_xml(tuple(props)))
+    queries.write_text(to_queries(tuple(props)))
     try:
         said = peers.verifypn_queries(path, queries, len(props))
     except Exception as e:      # noqa: BLE001 - its time limit, mostly

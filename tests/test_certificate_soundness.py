@@ -95,7 +95,7 @@ def _verifypn_confirms(tmp_path, pool, pairs: int, sample: int, seed: int) -> in
     among its ends. The number confirmed."""
     import peers
     from mcl2pnml.io import ids
-    from mcl2pnml.io.mccquery import Element, Property, mission_properties, to_xml
+    from mcl2pnml.io.mccquery import Element, Property, mission_properties, to_queries
     peers.need(peers.VERIFYPN)
     tally = cm.campaign(pool, None, pairs, seed)
     chosen, seen = [], set()
@@ -129,7 +129,7 @@ def _verifypn_confirms(tmp_path, pool, pairs: int, sample: int, seed: int) -> in
                                                    at_least_one(end)))))
                    for end in ends))
         queries = tmp_path / f"q{k}.xml"
-        queries.write_text(to_xml(props))
+        queries.write_text(to_queries(props))
         said = peers.verifypn_queries(pnml, queries, len(props))
         assert said.get("safe") is True, (said, cert.get("conclusion"))
         assert [v for key, v in said.items() if key.endswith("end-always-reachable")] == \

@@ -5,7 +5,7 @@ import shutil
 
 import pytest
 
-from mcl2pnml.io.pnml import load_pnml
+from mcl2pnml.io.pnml import read_pnml
 
 from helpers import DATA, ROOT, run_cli as run
 
@@ -18,7 +18,7 @@ def test_compile_writes_a_valid_pnml_of_the_mission(tmp_path, assert_valid):
     assert out.stderr.startswith(f"wrote {tmp_path / 'sauce.pnml'}: sauce: 203 places")
     data = (tmp_path / "sauce.pnml").read_bytes()
     assert_valid(data)
-    net = load_pnml(tmp_path / "sauce.pnml")
+    net = read_pnml(tmp_path / "sauce.pnml")
     # cli.md: the mission's own interface places, mission.B and mission.MTX marked
     for p in ("B", "A", "MTX", "OK", "FAIL", "ABORTED"):
         assert f"mission.{p}" in net.place_index

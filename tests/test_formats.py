@@ -11,7 +11,7 @@ from hypothesis import given, settings
 
 from mcl2pnml.pipeline import compile_file
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.io.formats import load_net
+from mcl2pnml.io.formats import read_net
 from mcl2pnml.io.lola import parse_lola, to_lola
 from mcl2pnml.io.tina import parse_tina, to_tina
 from mcl2pnml.core.net import ArcKind, NetBuilder, Timing
@@ -131,7 +131,7 @@ def test_delays_that_are_not_whole_seconds_take_a_finer_unit():
 
 def test_a_net_written_by_hand_for_tina():
     """What TINA's users write: K and M counts, labels, notes, place-side arcs, [0,w[."""
-    net = load_net(DATA / "formats" / "foreign" / "buffer.net")
+    net = read_net(DATA / "formats" / "foreign" / "buffer.net")
     assert net.name == "buffer"
     assert net.initial == {"idle": 2, "slots": 2000, "power": 1}
     assert net.place_index["idle"].name == "waiting"                # from 'lb'
@@ -147,7 +147,7 @@ def test_a_net_written_by_hand_for_tina():
 
 
 def test_a_net_written_by_hand_for_lola():
-    net = load_net(DATA / "formats" / "foreign" / "mutex.lola")
+    net = read_net(DATA / "formats" / "foreign" / "mutex.lola")
     assert net.initial == {"idle1": 1, "idle2": 1, "free": 1}
     assert len(net.transitions) == 4 and len(net.arcs) == 12
 
@@ -156,7 +156,7 @@ def test_a_net_written_by_hand_for_lola():
 def test_bad_files_give_the_expected_message(path):
     """Golden messages: file:line:col, the line, a caret."""
     with pytest.raises(Mcl2PnmlError) as info:
-        load_net(path.relative_to(ROOT))
+        read_net(path.relative_to(ROOT))
     assert_error_golden(path, info.value)
 
 
@@ -270,5 +270,24 @@ def test_templates_in_every_format(tmp_path):
     seen = read_tina((tmp_path / "seq.net").read_text())
     assert set(seen["transitions"].values()) == {None}
     assert (tmp_path / "seq.png").read_bytes().startswith(b"\x89PNG")
-    assert load_net(tmp_path / "seq.lola").initial == default_library().composed(
+    assert read_net(tmp_path / "seq.lola").initial == default_library().composed(
         "sequence").initial
+
+
+def test_every_format_is_read_and_written_by_functions_of_one_pattern():
+    """Each module of io reads a file with read_X, text or bytes with parse_X, writes a file
+    with write_X and makes its text with to_X; the format table names them so."""
+    import importlib
+    import inspect
+
+    from mcl2pnml.io.formats import FORMATS
+    for form in FORMATS.values():
+        module = importlib.import_module(form.module)
+        assert form.writer.startswith("write_") and callable(getattr(module, form.writer))
+        if form.reader is not None:
+            assert form.reader.startswith("read_") and callable(getattr(module, form.reader))
+    for name in ("pnml", "tina", "lola", "pipe", "tapn", "mccquery", "text", "dot"):
+        module = importlib.import_module(f"mcl2pnml.io.{name}")
+        public = [n for n, f in vars(module).items() if inspect.isfunction(f)
+                  and f.__module__.startswith("mcl2pnml.io") and not n.startswith("_")]
+        assert not [n for n in public if n.startswith(("load_", "save_"))], name

@@ -278,8 +278,8 @@ def test_a_killed_write_leaves_a_temporary_the_next_write_removes(tmp_path):
     assert out.returncode == 0, out.stderr
     assert not left[0].exists()
     assert all(p.exists() for p in strangers)
-    from mcl2pnml.io.pnml.reader import load_pnml
-    assert len(load_pnml(target).places) > 0
+    from mcl2pnml.io.pnml.reader import read_pnml
+    assert len(read_pnml(target).places) > 0
 
 
 # -- 7. world files ---------------------------------------------------------------------------

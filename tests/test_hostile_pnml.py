@@ -42,8 +42,8 @@ BILLION_LAUGHS = (b'<?xml version="1.0"?>\n<!DOCTYPE pnml [\n <!ENTITY l0 "ha">\
 def load_measured(path: Path) -> tuple[str, int]:
     """What loading ``path`` in a fresh interpreter gives, and its peak memory in kB."""
     script = ("import sys\nfrom mcl2pnml.core.errors import Mcl2PnmlError\n"
-              "from mcl2pnml.io.pnml.reader import load_pnml\n"
-              "try:\n    net = load_pnml(sys.argv[1])\n"
+              "from mcl2pnml.io.pnml.reader import read_pnml\n"
+              "try:\n    net = read_pnml(sys.argv[1])\n"
               "    print(f'loaded {len(net.places)} places')\n"
               "except Mcl2PnmlError as e:\n    print(e)\n"
               "hwm = [l for l in open('/proc/self/status') if l.startswith('VmHWM')]\n"

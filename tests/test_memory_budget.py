@@ -26,7 +26,7 @@ from mcl2pnml.analysis.zoo import cycle
 from mcl2pnml.core.memory import (Budget, BudgetExceeded, check_load, guard, load_estimate,
                                   resident)
 from mcl2pnml.core.structure import structure
-from mcl2pnml.io.pnml.reader import load_pnml
+from mcl2pnml.io.pnml.reader import read_pnml
 
 MB = 1 << 20
 #: What a child interpreter may hold beyond its budget: none is allowed where the
@@ -81,7 +81,7 @@ def test_the_read_estimate_counts_the_elements_of_the_file(tmp_path):
     assert 9 * need < need_big < 11 * need   # linear in the net
     # what reading takes is under the estimate (the reader's own peak, measured here)
     before = resident()
-    net = load_pnml(big)
+    net = read_pnml(big)
     assert len(net.places) == 10_000 and resident() - before < need_big
     words, what = load_estimate(write_lola(tmp_path / "n.lola", "ring", 1_000))
     assert "words" in what and 0 < words < need

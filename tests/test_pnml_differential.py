@@ -36,7 +36,7 @@ import pnml_peer
 from helpers import DATA, ROOT, everything
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.io.pnml.reader import load_pnml
+from mcl2pnml.io.pnml.reader import read_pnml
 from test_external import ROWS, _corpus_dirs, corpus_file
 
 HOSTILE_DIR = DATA / "pnml" / "hostile"
@@ -213,7 +213,7 @@ def read_as_verifypn(path: Path) -> Mcl2PnmlError | None:
     asserting that we read verifypn's net."""
     theirs = pnml_peer.verifypn_net(path)
     try:
-        ours = load_pnml(path)
+        ours = read_pnml(path)
     except Mcl2PnmlError as e:
         assert_located(e, path)
         return e
@@ -252,7 +252,7 @@ def test_the_hostile_table_names_every_file():
 
 def _ours_or_skip(path: Path):
     try:
-        return pnml_peer.read_net(load_pnml(path))
+        return pnml_peer.read_net(read_pnml(path))
     except Mcl2PnmlError:
         pytest.skip("we refuse the file: no net of ours to compare")
 
@@ -283,7 +283,7 @@ def _assert_read_alike(path: Path, read, peer: str, name: str) -> None:
 def _outcome(path: Path):
     """The strict reading of ``path``: the net, or every message of its refusal."""
     try:
-        return load_pnml(path)
+        return read_pnml(path)
     except Mcl2PnmlError as e:
         return [str(x) for x in getattr(e, "errors", [e])]
 

@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, Phase, given, settings, strategies as st
 
 from mcl2pnml.analysis.checking.on_graph import Status, check_property
 from mcl2pnml import pipeline
-from mcl2pnml.io.mccquery import property_queries, to_xml
+from mcl2pnml.io.mccquery import property_queries, to_queries
 
 import peers
 from helpers import ROOT
@@ -49,7 +49,7 @@ def _jobs(net, properties, folder: Path):
     jobs = []
     for category, queries in property_queries(properties).items():
         path = folder / f"net.{category}.xml"
-        path.write_text(to_xml(queries))
+        path.write_text(to_queries(queries))
         ltl = category.startswith("LTL")
         jobs.append(("verifypn", category, queries,
                      lambda path=path, n=len(queries), ltl=ltl:
@@ -128,7 +128,7 @@ def test_lola_answers_an_until_of_equal_sides_wrongly(tmp_path):
     c, not_c = State(Tokens(("c",), 1)), State(Not(Tokens(("c",), 1)))
     formula = AllPaths(Globally(Disj((c, Until(not_c, not_c)))))
     path = tmp_path / "q.xml"
-    path.write_text(to_xml((Query("x", "", formula_element(formula)),)))
+    path.write_text(to_queries((Query("x", "", formula_element(formula)),)))
     assert peers.verifypn_category(pnml, path, 1, ltl=True) == {"x": True}
     assert peers.lola_queries(pnml, path) == {"x": False}
 
@@ -159,7 +159,7 @@ def test_lola_reduces_away_a_deadlock_and_answers_an_eventually_wrongly(tmp_path
     pipeline.save_pnml(b.build(), pnml, "none")
     path = tmp_path / "q.xml"
     formula = AllPaths(Finally(State(Not(Tokens(("g",), 1)))))
-    path.write_text(to_xml((Query("x", "", formula_element(formula)),)))
+    path.write_text(to_queries((Query("x", "", formula_element(formula)),)))
     assert peers.verifypn_category(pnml, path, 1, ltl=False) == {"x": False}
     assert peers.lola_queries(pnml, path, reductions=False) == {"x": False}
     assert peers.lola_queries(pnml, path) == {"x": True}

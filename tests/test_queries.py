@@ -26,7 +26,7 @@ from mcl2pnml.analysis.statespace.explore import ExplorationLimit
 from mcl2pnml import pipeline
 from mcl2pnml.core.net import Net
 from mcl2pnml.io import ids
-from mcl2pnml.io.mccquery import TOOLS, mission_properties, to_xml
+from mcl2pnml.io.mccquery import TOOLS, mission_properties, to_queries
 
 import peers
 from helpers import ROOT, run_cli
@@ -130,7 +130,7 @@ def _key(net: Net, property_id: str) -> str:
 
 
 def _formulas(net: Net, tool: str) -> dict[str, ET.Element]:
-    root = ET.fromstring(to_xml(mission_properties(net, tool)))
+    root = ET.fromstring(to_queries(mission_properties(net, tool)))
     return {_key(net, p.find(f"{NS}id").text): p.find(f"{NS}formula")[0]
             for p in root.findall(f"{NS}property")}
 

@@ -178,7 +178,7 @@ def test_a_write_that_fails_half_way_leaves_no_file(tmp_path, monkeypatch):
     def half(net, out, *drawing):
         out.write(b"<?xml version='1.0'?>\n<pnml")
         raise OSError(28, "No space left on device")
-    monkeypatch.setattr(writer, "write_pnml", half)
+    monkeypatch.setattr(writer, "stream_pnml", half)
     target = tmp_path / "sauce.pnml"
     out = _cli_in_process(["compile", SAUCE, "--layout", "none", "-o", target])
     assert out.exit_code == 2 and "cannot write: No space left on device" in out.output

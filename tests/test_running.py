@@ -11,7 +11,7 @@ from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.runtime.engine import Outcome, run
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.runtime.executor import PetriEngine
-from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
+from mcl2pnml.io.pnml import parse_pnml, to_pnml
 from mcl2pnml.runtime.simulator import AUVSimulator, World
 
 from helpers import ENGINES, ROOT, engines, run_cli as cli
@@ -36,7 +36,7 @@ def test_the_pnml_alone_runs_the_mission():
     """Bindings, actions, events and time-outs all travel in the PNML."""
     c = check_file(SAUCE)
     net = compile_checked(c)
-    from_pnml = parse_pnml(to_pnml_bytes(net))
+    from_pnml = parse_pnml(to_pnml(net))
     a = run(PetriEngine(net), scripted(FOUND)).as_json()
     b = run(PetriEngine(from_pnml), scripted(FOUND)).as_json()
     assert a == b and a["outcome"] == "OK"

@@ -80,7 +80,7 @@ def read_back(path: Path) -> dict:
 def test_every_node_and_arc_is_written_as_intended(tmp_path):
     net = one_task()
     out = tmp_path / "one.tapn"
-    tapn.save_tapn(net, out, timing=AT_ONCE)
+    tapn.write_tapn(net, out, timing=AT_ONCE)
     got = read_back(out)
     tnet = tapn.timed_arc_net(net, AT_ONCE)
     names = tnet.names
@@ -136,7 +136,7 @@ def test_every_node_and_arc_is_written_as_intended(tmp_path):
 
 def test_acknowledgements_within_a_bound_get_clocks_in_a_finer_unit(tmp_path):
     out = tmp_path / "one.tapn"
-    tapn.save_tapn(one_task(), out, timing=Assumptions(ack_within=Fraction(1, 2),
+    tapn.write_tapn(one_task(), out, timing=Assumptions(ack_within=Fraction(1, 2),
                                                        priority=False))
     text = out.read_text()
     assert "time unit: 0.1 s" in text
@@ -165,7 +165,7 @@ def test_names_are_distinct_and_never_words_of_the_queries():
 
 def test_queries_name_the_result_places(tmp_path):
     written = {q.name: (path, q.text) for path, q, _ in
-               tapn.save_queries(one_task(), tmp_path / "one.tapn", AT_ONCE)}
+               tapn.write_queries(one_task(), tmp_path / "one.tapn", AT_ONCE)}
     assert written["ends"] == (tmp_path / "one.ends.q",
                                "AF (mission_OK = 1 or mission_FAIL = 1 or mission_ABORTED = 1)\n")
     assert written["deadlock"][1] == ("EF (deadlock and mission_OK = 0 and mission_FAIL = 0 and "
@@ -206,7 +206,7 @@ def test_one_printer_of_predicates_in_the_reports_and_in_verifydtapn_syntax():
 ])
 def test_what_a_timed_arc_net_cannot_say_is_refused(assumptions, message, tmp_path):
     with pytest.raises(Mcl2PnmlError, match=message):
-        tapn.save_tapn(one_task(), tmp_path / "x.tapn", timing=assumptions)
+        tapn.write_tapn(one_task(), tmp_path / "x.tapn", timing=assumptions)
     assert not (tmp_path / "x.tapn").exists()
 
 
@@ -218,7 +218,7 @@ def test_a_shared_clock_is_one_place_started_by_each_member_and_stopped_when_non
     one_s = Assumptions(ack_within=Fraction(1), priority=False)
     net = one_task()
     out = tmp_path / "one.tapn"
-    tapn.save_tapn(net, out, timing=one_s)
+    tapn.write_tapn(net, out, timing=one_s)
     got = read_back(out)
     tnet = tapn.timed_arc_net(net, one_s)
     assert mission_timing(net, one_s).shared == (frozenset({"Go.off_C", "Go.off_S1",
@@ -270,9 +270,9 @@ def test_a_net_without_results_has_no_end_queries():
 
 def test_a_deadline_finer_than_the_unit_is_refused(tmp_path):
     with pytest.raises(Mcl2PnmlError, match="not a whole number"):
-        tapn.save_deadline(one_task(), tmp_path / "late.tapn", Fraction(1, 2), AT_ONCE)
-    net_path, query_path, _ = tapn.save_deadline(one_task(), tmp_path / "late.tapn", 12,
-                                                 AT_ONCE)
+        tapn.write_deadline(one_task(), tmp_path / "late.tapn", Fraction(1, 2), AT_ONCE)
+    net_path, query_path, _ = tapn.write_deadline(one_task(), tmp_path / "late.tapn", 12,
+                                                  AT_ONCE)
     got = read_back(net_path)
     assert query_path.read_text() == "EF LATE = 1\n"
     assert got["places"]["CLOCK"] == (1, "< inf")
@@ -311,9 +311,9 @@ def verdicts(net, tmp_path: Path, assumptions: Assumptions, which=("ends", "dead
              timeout: float = 60.0) -> dict[str, bool | None]:
     """verifydtapn's verdict on each query ``which`` of the mission's timed-arc net."""
     path = tmp_path / f"{net.name}.tapn"
-    tapn.save_tapn(net, path, timing=assumptions)
+    tapn.write_tapn(net, path, timing=assumptions)
     out = {}
-    for qpath, q, bound in tapn.save_queries(net, path, assumptions):
+    for qpath, q, bound in tapn.write_queries(net, path, assumptions):
         if q.name in which:
             out[q.name], _ = verifydtapn(path, qpath, bound, timeout)
     return out
@@ -379,8 +379,8 @@ def test_the_observer_of_a_deadline(tmp_path):
     net = one_task()
     late = {}
     for w in (10, 11):
-        net_path, query_path, bound = tapn.save_deadline(net, tmp_path / f"late{w}.tapn", w,
-                                                         AT_ONCE)
+        net_path, query_path, bound = tapn.write_deadline(net, tmp_path / f"late{w}.tapn", w,
+                                                          AT_ONCE)
         late[w], _ = verifydtapn(net_path, query_path, bound, 60)
     assert late == {10: True, 11: False}
     timed_ends = getattr(pipeline, "timed_ends", None)
@@ -396,8 +396,8 @@ def late_at(net, tmp_path: Path, assumptions: Assumptions, *seconds: int,
     """verifydtapn's answer to "some run has no result at W" for each W of ``seconds``."""
     late = {}
     for w in seconds:
-        net_path, query_path, bound = tapn.save_deadline(net, tmp_path / f"late{w}.tapn", w,
-                                                         assumptions)
+        net_path, query_path, bound = tapn.write_deadline(net, tmp_path / f"late{w}.tapn", w,
+                                                          assumptions)
         late[w], _ = verifydtapn(net_path, query_path, bound, timeout)
     return late
 
@@ -481,7 +481,7 @@ def test_verifydtapn_on_every_example(tmp_path, mission):
 def test_the_papers_mission_is_still_running_at_730_seconds(tmp_path):
     need(VERIFYDTAPN)
     net = pipeline.compile_file(ROOT / "examples" / "sauce.mcl")
-    net_path, query_path, bound = tapn.save_deadline(net, tmp_path / "late.tapn", 730, AT_ONCE)
+    net_path, query_path, bound = tapn.write_deadline(net, tmp_path / "late.tapn", 730, AT_ONCE)
     late, _ = verifydtapn(net_path, query_path, bound, 300, ptrie=True)
     assert late in (True, None)
 

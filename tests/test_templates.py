@@ -12,7 +12,7 @@ import pytest
 from mcl2pnml.analysis.behaviour import behaviour
 from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.io.pnml import parse_pnml, to_pnml_bytes
+from mcl2pnml.io.pnml import parse_pnml, to_pnml
 from mcl2pnml.language.library import Library, default_library, source_places
 from mcl2pnml.language.template_parser import CONTROL, TemplateKind, parse_template
 
@@ -87,7 +87,7 @@ def test_template_pnml_starts_from_the_papers_m0(assert_valid):
                 "task-reduced": {"B", "A", "MTX"},
                 "sequence": {"B", "A", "MTX", "T1_MTX", "T2_MTX"}}
     for name, m0 in expected.items():
-        data = to_pnml_bytes(LIB.composed(name))
+        data = to_pnml(LIB.composed(name))
         assert_valid(data, name)
         net = parse_pnml(data)
         assert set(net.initial) == m0 and set(net.initial.values()) == {1}

@@ -8,7 +8,10 @@
 * TAPAAL's timed-arc nets (write only: a compiled mission under its timed
   semantics, for verifydtapn), :mod:`mcl2pnml.io.tapn`.
 
-Each :class:`Format` names the module and functions that implement it,
+Each :class:`Format` names the module and functions that implement it, named
+after one pattern in every module of :mod:`mcl2pnml.io`: ``read_X(path)``,
+``parse_X(text or bytes)``, ``write_X(net, path, **options)`` and ``to_X(net)``
+(text or bytes; a drawing's ``to_svg``/``to_png`` take the drawing's DOT text),
 imported only when the format is used (graphviz, lark and lxml are not
 loaded for a format that does not need them). Adding a format is one new
 module of ``mcl2pnml.io`` and one entry in :data:`FORMATS`: ``compile
@@ -59,10 +62,10 @@ class Format:
     says: str
     #: the module implementing it
     module: str
-    #: its reader, ``(path) -> Net`` (None: write-only)
-    loader: str | None = None
-    #: its writer, ``(net, path, **options)``
-    saver: str | None = None
+    #: its reader, ``read_X(path) -> Net`` (None: write-only)
+    reader: str | None = None
+    #: its writer, ``write_X(net, path, **options)``
+    writer: str | None = None
     #: the :class:`SaveOptions` fields its writer takes
     options: tuple[str, ...] = ()
     #: a file may hold several nets, one chosen by its id (``--net``)
@@ -73,7 +76,7 @@ class Format:
     def _function(self, name: str) -> Callable:
         return getattr(importlib.import_module(self.module), name)
 
-    def load(self, path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
+    def read(self, path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
         """The net of ``path``; ``net_id`` chooses one where a file holds several;
         ``lenient``: the reader's forgiving reading (docs/pnml.md), never a proof's."""
         given = {}
@@ -83,36 +86,36 @@ class Format:
                                                "out --lenient")
             given["lenient"] = True
         if net_id is None:
-            return self._function(self.loader)(path, **given)
+            return self._function(self.reader)(path, **given)
         if not self.several:
             raise OptionError("--net", f"a {self.title} file holds one net; leave out --net")
-        return self._function(self.loader)(path, net_id, **given)
+        return self._function(self.reader)(path, net_id, **given)
 
-    def save(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> list[str]:
+    def write(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> list[str]:
         """Write ``net`` to ``path``, whole or not at all; returns what the format could
         not say of it, in words (a writer that says nothing of it returns nothing)."""
         given = {f.name: getattr(options, f.name) for f in fields(options)}
-        said = self._function(self.saver)(net, path, **{k: given[k] for k in self.options})
+        said = self._function(self.writer)(net, path, **{k: given[k] for k in self.options})
         return said if isinstance(said, list) else []
 
 
 FORMATS: dict[str, Format] = {f.name: f for f in (
     Format("pnml", "PNML", (".pnml", ".xml"),
            "PNML (ISO/IEC 15909-2), with time-outs and bindings as toolspecific data",
-           "mcl2pnml.io.pnml", "load_pnml", "save_pnml", ("positions", "bends"), several=True,
+           "mcl2pnml.io.pnml", "read_pnml", "write_pnml", ("positions", "bends"), several=True,
            lenient=True),
     Format("tina", "TINA", (".net",), "TINA's .net: a time Petri net, time-outs as intervals",
-           "mcl2pnml.io.tina", "load_tina", "save_tina", ("urgent",)),
+           "mcl2pnml.io.tina", "read_tina", "write_tina", ("urgent",)),
     Format("lola", "LoLA", (".lola", ".llnet"), "LoLA's net format (untimed)",
-           "mcl2pnml.io.lola", "load_lola", "save_lola"),
+           "mcl2pnml.io.lola", "read_lola", "write_lola"),
     Format("pipe", "PIPE", (".xml",),
            "PIPE's own dialect of PNML, with the layout (untimed: the time-outs' delays "
-           "in a note on the canvas)", "mcl2pnml.io.pipe", None, "save_pipe",
+           "in a note on the canvas)", "mcl2pnml.io.pipe", None, "write_pipe",
            ("positions", "bends")),
     Format("tapn", "TAPAAL timed-arc", (".tapn",),
            "TAPAAL's timed-arc PNML for verifydtapn: a mission under its timed semantics "
            "(time-outs, acknowledgements, report gaps in token ages), queries beside it",
-           "mcl2pnml.io.tapn", None, "save_tapn", ("timing",)),
+           "mcl2pnml.io.tapn", None, "write_tapn", ("timing",)),
     Format("dot", "DOT", (".dot",), "graphviz's DOT source of the drawing",
            "mcl2pnml.io.dot", None, "write_dot", ("drawing",)),
     Format("svg", "SVG", (".svg",), "the drawing as SVG", "mcl2pnml.io.dot", None, "write_svg",
@@ -122,7 +125,7 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
 )}
 
 #: Suffix -> the format that reads it.
-READERS: dict[str, Format] = {s: f for f in FORMATS.values() if f.loader for s in f.suffixes}
+READERS: dict[str, Format] = {s: f for f in FORMATS.values() if f.reader for s in f.suffixes}
 #: Suffix -> what the file holds, for the messages that list them.
 SUFFIXES: dict[str, str] = {s: f.title for s, f in READERS.items()}
 
@@ -138,6 +141,6 @@ def reader_of(path: str | Path) -> Format:
     return fmt
 
 
-def load_net(path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
+def read_net(path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
     """A net from a file of any format that has a reader, chosen by its suffix."""
-    return reader_of(path).load(path, net_id, lenient)
+    return reader_of(path).read(path, net_id, lenient)

@@ -108,7 +108,7 @@ def _safe(text: str) -> str:
     return text.translate(_UNSAFE)
 
 
-def save_lola(net: Net, path: str | Path) -> Path:
+def write_lola(net: Net, path: str | Path) -> Path:
     """Write ``net`` to ``path`` as LoLA text, whole or not at all."""
     atomic_write_text(path, to_lola(net))
     return Path(path)
@@ -212,6 +212,6 @@ def parse_lola(text: str, filename: str = "<lola>") -> Net:
     return net.with_initial({p: n for p, n in marking.items() if n})
 
 
-def load_lola(path: str | Path) -> Net:
+def read_lola(path: str | Path) -> Net:
     """A net from a LoLA file."""
     return parse_lola(decode_text(read_bytes(path), str(path), "a LoLA"), str(path))

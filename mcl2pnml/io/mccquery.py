@@ -189,7 +189,7 @@ def mission_properties(net: Net, tool: str = "verifypn") -> tuple[Property, ...]
     )
 
 
-def to_xml(properties: tuple[Property, ...]) -> str:
+def to_queries(properties: tuple[Property, ...]) -> str:
     """The property set as the contest writes it: one ``<property>`` each."""
     lines = ['<?xml version="1.0" encoding="utf-8"?>', f'<property-set xmlns="{NAMESPACE}">']
     for p in properties:
@@ -199,10 +199,10 @@ def to_xml(properties: tuple[Property, ...]) -> str:
     return "\n".join(lines + ["</property-set>", ""])
 
 
-def save_queries(net: Net, path: str | Path, tool: str = "verifypn") -> tuple[Property, ...]:
+def write_queries(net: Net, path: str | Path, tool: str = "verifypn") -> tuple[Property, ...]:
     """Write the mission's properties for ``tool`` to ``path``, whole or not at all."""
     properties = mission_properties(net, tool)
-    atomic_write_text(path, to_xml(properties))
+    atomic_write_text(path, to_queries(properties))
     return properties
 
 
@@ -284,14 +284,14 @@ def property_query_files(stem: str | Path) -> dict[str, Path]:
     return {category: stem.with_name(f"{stem.name}.{category}.xml") for category in CATEGORIES}
 
 
-def save_property_queries(props, stem: str | Path) -> list[tuple[Path, tuple[Property, ...]]]:
+def write_property_queries(props, stem: str | Path) -> list[tuple[Path, tuple[Property, ...]]]:
     """Write each category's queries to ``STEM.CATEGORY.xml``, whole or not at all; the
     files written, with their queries."""
     files = property_query_files(stem)
     written = []
     for category, queries in property_queries(props).items():
         path = files[category]
-        atomic_write_text(path, to_xml(queries))
+        atomic_write_text(path, to_queries(queries))
         written.append((path, queries))
     return written
 

@@ -137,8 +137,8 @@ def to_pipe(net: Net, positions: Positions | None = None,
                           pretty_print=True), said
 
 
-def save_pipe(net: Net, path: str | Path, positions: Positions | None = None,
-              bends: Bends | None = None) -> list[str]:
+def write_pipe(net: Net, path: str | Path, positions: Positions | None = None,
+               bends: Bends | None = None) -> list[str]:
     """Write ``net`` to ``path`` in PIPE's dialect, whole or not at all; returns what PIPE
     cannot say of it (:func:`to_pipe`)."""
     data, said = to_pipe(net, positions, bends)

@@ -421,7 +421,7 @@ def _comment(text: str) -> str:
     return "<!-- " + text.replace("--", "-\\u002d") + " -->"
 
 
-def to_text(tnet: TimedArcNet) -> str:
+def timed_arc_text(tnet: TimedArcNet) -> str:
     """The timed-arc net as TAPAAL's PNML (the dialect verifydtapn reads)."""
     original = {v: k for k, v in tnet.names.items() if k != v}
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', f'<pnml xmlns="{NAMESPACE}">']
@@ -463,9 +463,14 @@ def to_text(tnet: TimedArcNet) -> str:
     return "\n".join(lines) + "\n"
 
 
-def save_tapn(net: Net, path: str | Path, *, timing: Assumptions | None = None) -> Path:
+def to_tapn(net: Net, *, timing: Assumptions | None = None) -> str:
+    """``net`` as TAPAAL's timed-arc PNML under ``timing`` (None: :data:`TAPAAL_ASSUMPTIONS`)."""
+    return timed_arc_text(timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS))
+
+
+def write_tapn(net: Net, path: str | Path, *, timing: Assumptions | None = None) -> Path:
     """Write ``net`` to ``path`` as a timed-arc net under ``timing``, whole or not at all."""
-    atomic_write_text(path, to_text(timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)))
+    atomic_write_text(path, to_tapn(net, timing=timing))
     return Path(path)
 
 
@@ -560,13 +565,13 @@ def query_path(net_path: str | Path, query: Query) -> Path:
 
 def query_paths(net: Net, net_path: str | Path, timing: Assumptions | None = None,
                 properties: Iterable[Property] = ()) -> list[Path]:
-    """The files :func:`save_queries` would write (for checking outputs beforehand)."""
+    """The files :func:`write_queries` would write (for checking outputs beforehand)."""
     tnet = timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)
     return [query_path(net_path, q) for q in mission_queries(tnet, properties)]
 
 
-def save_queries(net: Net, net_path: str | Path, timing: Assumptions | None = None,
-                 properties: Iterable[Property] = ()) -> list[tuple[Path, Query, int]]:
+def write_queries(net: Net, net_path: str | Path, timing: Assumptions | None = None,
+                  properties: Iterable[Property] = ()) -> list[tuple[Path, Query, int]]:
     """Write the mission's queries beside its timed-arc net at ``net_path``; returns each
     file, its query, and the k-bound to give verifydtapn (``-k``)."""
     tnet = timed_arc_net(net, timing or TAPAAL_ASSUMPTIONS)
@@ -610,12 +615,12 @@ def deadline_net(net: Net, seconds: Fraction | int | float,
                            f"EF {done} = 1\n")
 
 
-def save_deadline(net: Net, path: str | Path, seconds: Fraction | int | float,
-                  timing: Assumptions | None = None) -> tuple[Path, Path, int]:
+def write_deadline(net: Net, path: str | Path, seconds: Fraction | int | float,
+                   timing: Assumptions | None = None) -> tuple[Path, Path, int]:
     """Write the observer net of :func:`deadline_net` to ``path`` and its query beside it;
     returns the net's file, the query's, and the k-bound to give verifydtapn."""
     observer, query = deadline_net(net, seconds, timing)
-    atomic_write_text(path, to_text(observer))
+    atomic_write_text(path, timed_arc_text(observer))
     qpath = query_path(path, query)
     atomic_write_text(qpath, query.text)
     return Path(path), qpath, observer.bound

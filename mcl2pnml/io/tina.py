@@ -139,7 +139,7 @@ def to_tina(net: Net, *, urgent: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
-def save_tina(net: Net, path: str | Path, *, urgent: bool = False) -> Path:
+def write_tina(net: Net, path: str | Path, *, urgent: bool = False) -> Path:
     """Write ``net`` to ``path`` as TINA ``.net``, whole or not at all."""
     atomic_write_text(path, to_tina(net, urgent=urgent))
     return Path(path)
@@ -387,6 +387,6 @@ def parse_tina(text: str, filename: str = "<tina>") -> Net:
         raise Mcl2PnmlError(e.message, Location(filename)) from None
 
 
-def load_tina(path: str | Path) -> Net:
+def read_tina(path: str | Path) -> Net:
     """A net from a TINA ``.net`` file."""
     return parse_tina(decode_text(read_bytes(path), str(path), "a TINA"), str(path))

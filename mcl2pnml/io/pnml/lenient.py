@@ -482,6 +482,6 @@ def _plain_digits(text: str) -> bool:
     return text.isdigit() and text.isascii()
 
 
-def load_lenient(path: str | Path, net_id: str | None = None) -> Net:
+def read_lenient(path: str | Path, net_id: str | None = None) -> Net:
     """Read one P/T net from a PNML file, the forgiving way."""
     return parse_lenient(read_file(path), str(path), net_id)

@@ -12,7 +12,7 @@ from pathlib import Path
 from mcl2pnml.core.net import Net
 from mcl2pnml.io.pnml.source import XmlError, read_file
 
-__all__ = ["XmlError", "load_pnml", "parse_pnml", "read_file"]
+__all__ = ["XmlError", "load_pnml", "parse_pnml", "read_file", "read_pnml"]
 
 
 def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None,
@@ -26,11 +26,15 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
     return parse_strict(data, filename, net_id)
 
 
-def load_pnml(path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
+def read_pnml(path: str | Path, net_id: str | None = None, lenient: bool = False) -> Net:
     """Read one P/T net from a PNML file: strictly, as a stream (the proofs' reading), or
     with ``lenient`` the forgiving way."""
     if lenient:
-        from mcl2pnml.io.pnml.lenient import load_lenient
-        return load_lenient(path, net_id)
-    from mcl2pnml.io.pnml.strict import load_strict
-    return load_strict(path, net_id)
+        from mcl2pnml.io.pnml.lenient import read_lenient
+        return read_lenient(path, net_id)
+    from mcl2pnml.io.pnml.strict import read_strict
+    return read_strict(path, net_id)
+
+
+#: The library's documented name of :func:`read_pnml` (``from mcl2pnml import load_pnml``).
+load_pnml = read_pnml

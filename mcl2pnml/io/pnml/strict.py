@@ -1349,7 +1349,7 @@ def parse_strict(data: bytes, filename: str = "<input>", net_id: str | None = No
 
 
 @without_gc
-def load_strict(path: str | Path, net_id: str | None = None) -> Net:
+def read_strict(path: str | Path, net_id: str | None = None) -> Net:
     """Read one P/T net from a PNML file, strictly, as a stream (never whole in memory)."""
     try:
         fd = open_regular(path)

@@ -42,17 +42,13 @@ from functools import lru_cache
 from itertools import compress, repeat
 from operator import attrgetter, is_
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, BinaryIO, Callable, Iterator, Mapping, Sequence
+from typing import Any, BinaryIO, Callable, Iterator, Mapping, Sequence
 
 from mcl2pnml.core.version import __version__
 from mcl2pnml.core.files import atomic_writer
 from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import ArcKind, FrozenDict, Net, Place, Timing, Transition
 from mcl2pnml.io import ids
-
-if TYPE_CHECKING:
-    from mcl2pnml.io.formats import SaveOptions
-
 NS = "http://www.pnml.org/version-2009/grammar/pnml"
 PTNET = "http://www.pnml.org/version-2009/grammar/ptnet"
 TOOL = "mcl2pnml"
@@ -337,8 +333,8 @@ def _into_read_places(sources, targets, weights, kinds) -> dict[tuple[str, str],
 
 
 @without_gc
-def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None,
-               bends: Bends | None = None) -> None:
+def stream_pnml(net: Net, out: BinaryIO, positions: Positions | None = None,
+                bends: Bends | None = None) -> None:
     """Stream ``net`` as a PNML document into a binary file object.
 
     ``positions`` (node id -> x, y) go into ``<graphics>``; None: the nodes'
@@ -365,21 +361,16 @@ def write_pnml(net: Net, out: BinaryIO, positions: Positions | None = None,
                "</net>\n</pnml>\n").encode())
 
 
-def to_pnml_bytes(net: Net, positions: Positions | None = None,
-                  bends: Bends | None = None) -> bytes:
+def to_pnml(net: Net, positions: Positions | None = None,
+            bends: Bends | None = None) -> bytes:
     buf = io.BytesIO()
-    write_pnml(net, buf, positions, bends)
+    stream_pnml(net, buf, positions, bends)
     return buf.getvalue()
 
 
-def save_pnml(net: Net, path: str | Path, positions: Positions | None = None,
-              bends: Bends | None = None) -> Path:
+def write_pnml(net: Net, path: str | Path, positions: Positions | None = None,
+               bends: Bends | None = None) -> Path:
     """Write ``net`` to ``path`` atomically; returns the path."""
     with atomic_writer(path) as out:
-        write_pnml(net, out, positions, bends)
+        stream_pnml(net, out, positions, bends)
     return Path(path)
-
-
-def save(net: Net, path: str | Path, options: "SaveOptions") -> None:
-    """The format table's entry point (:mod:`mcl2pnml.io.formats`)."""
-    save_pnml(net, path, options.positions, options.bends)
