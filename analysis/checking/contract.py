@@ -73,7 +73,7 @@ import enum
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from mcl2pnml.core.net import Net
+from mcl2pnml.core.net import Arc, Net, Place, Transition
 
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 
@@ -250,7 +250,6 @@ def restricted(net: Net, results, stuck: bool = False) -> Net:
     aborted: its transitions into the other results' places removed, with their arcs;
     ``stuck``: besides, a running model may stray into a place it never leaves (``STUCK``,
     looping on itself) until it is aborted: a child that may run for ever."""
-    from mcl2pnml.core.net import Arc, Place, Transition
     role = roles(net)
     gone = {a.source for a in net.arcs
             if a.target in {role[r] for r in RESULTS[:2] if r not in results}}

@@ -138,6 +138,55 @@ def truths(prop: Property) -> tuple[Predicate, Predicate, Predicate, Predicate]:
     return (prop.p, prop.s or f, prop.scope.q or f, prop.scope.r or f)
 
 
+# -- the observer's states numbered, for a product -----------------------------------------
+
+class ObserverTable:
+    """The observer's states met, numbered, and its moves, each worked out once: the
+    product's states are then pairs of integers (a marking, an observer state), and a
+    move one table lookup, whatever the pattern. The product of a state space (the
+    reference checker's) or of a zone graph (the timed one) with the observer of ``prop``."""
+
+    def __init__(self, prop: Property):
+        self.prop = prop
+        self.states: list = []
+        self.number: dict = {}
+        self.moves: dict[int, int] = {}
+        self.pending: list[bool] = []
+        self.bad = self.intern(BAD)
+        self.start = self.intern(initial(prop.scope.kind))
+
+    def intern(self, obs) -> int:
+        """The number of observer state ``obs``, given one if new."""
+        k = self.number.get(obs)
+        if k is None:
+            k = self.number[obs] = len(self.states)
+            self.states.append(obs)
+            self.pending.append(pending(self.prop, obs))
+        return k
+
+    def after(self, k: int, code: int) -> int:
+        """The state after reading a marking whose truths are ``code`` (P S Q R as bits)."""
+        key = k * 16 + code
+        got = self.moves.get(key)
+        if got is None:
+            got = self.moves[key] = self.intern(step(
+                self.prop, self.states[k], bool(code & 8), bool(code & 4), bool(code & 2),
+                bool(code & 1)))
+        return got
+
+
+def path_to(parent: dict, node) -> tuple[list, list]:
+    """The nodes from the root to ``node`` and the transitions between them, read back
+    from a breadth-first search's ``parent`` map (node to ``(parent, transition)``, the
+    root to None)."""
+    nodes, trans = [node], []
+    while parent[node] is not None:
+        node, t = parent[node]
+        nodes.append(node)
+        trans.append(t)
+    return nodes[::-1], trans[::-1]
+
+
 # -- observers along one run ---------------------------------------------------------------
 
 class Watcher:

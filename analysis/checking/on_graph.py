@@ -58,14 +58,18 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Iterable
 
+import networkx as nx
 import numpy as np
 
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import And, Not, Or, Predicate, Property, Tokens, holds, places_of
+from mcl2pnml.core.structure import structure
 
 # (the observers and verdicts, imported from here by the callers too)
 from mcl2pnml.analysis.checking.observers import BAD, Marked, Shape, Status, Verdict, pending, step  # noqa: F401
-from mcl2pnml.analysis.checking.observers import initial as _initial, truths as _truths
+from mcl2pnml.analysis.checking.observers import ObserverTable, initial, path_to, truths as _truths
+from mcl2pnml.analysis.checking import on_the_fly as onthefly
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 
 
 def check_property(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
@@ -79,8 +83,8 @@ METHODS = ("auto", "full", "on-the-fly")
 
 
 def check_properties(net: Net, properties: Iterable[Property],
-              max_states: int = 1_000_000, method: str = "auto", stubborn: bool = False,
-              safe: bool = False) -> list[Verdict]:
+                     max_states: int = 1_000_000, method: str = "auto", stubborn: bool = False,
+                     safe: bool = False) -> list[Verdict]:
     """Each property's verdict, in order.
 
     ``auto``: on the fly (:mod:`mcl2pnml.analysis.checking.on_the_fly`: the product in C, stopping at
@@ -97,9 +101,8 @@ def check_properties(net: Net, properties: Iterable[Property],
     if stubborn and method == "full":
         raise ValueError("the reduction is the on-the-fly checker's: not with method 'full'")
     if method != "full":
-        from mcl2pnml.analysis.checking import on_the_fly as onthefly
-        verdicts = onthefly.check_properties_on_the_fly(net, properties, max_states, stubborn=stubborn,
-                                      safe=safe)
+        verdicts = onthefly.check_properties_on_the_fly(net, properties, max_states,
+                                                        stubborn=stubborn, safe=safe)
         if verdicts is not None:
             return verdicts
         if method == "on-the-fly":
@@ -110,8 +113,6 @@ def check_properties(net: Net, properties: Iterable[Property],
 
 def _check_all_full(net: Net, properties: list[Property], max_states: int) -> list[Verdict]:
     """The reference method: every reachable marking, then each property's product."""
-    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
-
     try:
         space = explore(net, max_states=max_states)
     except ExplorationLimit as e:
@@ -159,41 +160,8 @@ def _holds_everywhere(predicate: Predicate, columns, n: int) -> np.ndarray:
     return np.full(n, bool(predicate.value))
 
 
-class _Observers:
-    """The observer's states met, numbered, and its moves, each worked out once: the
-    product's states are then pairs of integers (a marking, an observer state), and a
-    move one table lookup, whatever the pattern."""
-
-    def __init__(self, prop: Property):
-        self.prop = prop
-        self.states: list = []
-        self.number: dict = {}
-        self.moves: dict[int, int] = {}
-        self.pending: list[bool] = []
-        self.bad = self.intern(BAD)
-        self.start = self.intern(_initial(prop.scope.kind))
-
-    def intern(self, obs) -> int:
-        k = self.number.get(obs)
-        if k is None:
-            k = self.number[obs] = len(self.states)
-            self.states.append(obs)
-            self.pending.append(pending(self.prop, obs))
-        return k
-
-    def after(self, k: int, code: int) -> int:
-        """The state after reading a marking whose truths are ``code`` (P S Q R as bits)."""
-        key = k * 16 + code
-        got = self.moves.get(key)
-        if got is None:
-            got = self.moves[key] = self.intern(step(
-                self.prop, self.states[k], bool(code & 8), bool(code & 4), bool(code & 2),
-                bool(code & 1)))
-        return got
-
-
 def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
-    obs = _Observers(prop)
+    obs = ObserverTable(prop)
     move, bad, pend = obs.after, obs.bad, obs.pending
     start = (0, move(obs.start, codes[0]))
     parent: dict = {start: None}
@@ -231,7 +199,7 @@ def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
                             best[0] if best else None)
     if lasso is not None and (best is None or lasso[0] < best[0]):
         length, node, cycle = lasso
-        path = _path(parent, node)
+        path = path_to(parent, node)
         trans = path[1] + cycle[1]
         ms = [m for m, _ in path[0] + cycle[0]]
         loop = len(path[0]) - 1
@@ -245,26 +213,15 @@ def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
                        tuple(marked(m) for m in ms), Shape.LASSO, loop=loop, states=len(parent))
     if best is None:
         return Verdict(prop, Status.HOLDS, states=len(parent))
-    nodes, trans = _path(parent, best[2])
+    nodes, trans = path_to(parent, best[2])
     return Verdict(prop, Status.FAILS, tuple(tids[t] for t in trans),
                    tuple(marked(m) for m, _ in nodes), best[1], states=len(parent))
-
-
-def _path(parent, node):
-    nodes, trans = [node], []
-    while parent[node] is not None:
-        node, t = parent[node]
-        nodes.append(node)
-        trans.append(t)
-    return nodes[::-1], trans[::-1]
 
 
 def _shortest_lasso(open_, order, succ, dist, bound):
     """(prefix + cycle length, entry state, (cycle states after entry, transitions)) of
     the shortest lasso whose cycle stays in states with an obligation open (``open_`` of
     the observer's state), or None."""
-    import networkx as nx
-
     g = nx.DiGraph()
     for node in order:
         if open_(node[1]):
@@ -349,8 +306,6 @@ def judge(net: Net, prop: Property, transitions: Iterable[str],
     unfired for ever (under a timed semantics, a vehicle's reports: a run may
     end where only they are enabled, the vehicle silent).
     """
-    from mcl2pnml.core.structure import structure
-
     s = structure(net)
     index = s.transition_index
     m = list(s.initial_vector())
@@ -360,7 +315,7 @@ def judge(net: Net, prop: Property, transitions: Iterable[str],
         marking = {s.places[k]: n for k, n in enumerate(m) if n}
         return tuple(holds(x, marking) for x in preds)
 
-    obs = step(prop, _initial(prop.scope.kind), *read())
+    obs = step(prop, initial(prop.scope.kind), *read())
     seen = {(tuple(m), obs): 0}
     open_since = 0 if pending(prop, obs) else None   # obligations open from this step on
     k = 0

@@ -15,10 +15,15 @@ from __future__ import annotations
 from collections import Counter
 from typing import Sequence
 
+from mcl2pnml.core import patterns as pr
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.structure import structure
 
+from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.observers import Status
+from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
+                                                    minimal_semipositive_p_invariants)
 
 #: A question settled here: its value (True/False, a bound) and what decided it, as the
 #: contest's TECHNIQUES words.
@@ -37,7 +42,6 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
       bounds allow decides both ``E F`` and ``A G`` of it; an upper bound the initial
       marking already reaches is the bound.
     """
-    from mcl2pnml.core.structure import structure
     s = structure(net)
     m0 = s.initial_vector()
     found: dict[str, Settled] = {}
@@ -74,8 +78,6 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
 
 def _invariant_bounds(s):
     """A function bounding a sum of places by the P-invariants (None: not bounded)."""
-    from mcl2pnml.analysis.statespace.counters import INVARIANT_PLACES, INVARIANT_ROWS
-    from mcl2pnml.analysis.structure.invariants import AnalysisLimit, minimal_semipositive_p_invariants
     invariants = []
     if len(s.places) <= INVARIANT_PLACES:
         try:
@@ -178,8 +180,6 @@ def safe_predicate(phi, s) -> object | None:
     """A state formula as the property checker's predicate on a 1-safe net (its sums are
     counts of marked places); None where it has none (a deadlock, a place named twice in
     a sum, a name the net does not have)."""
-    from mcl2pnml.core import patterns as pr
-
     def sum_of(e):
         if isinstance(e, q.IntConst):
             return e.value
@@ -236,9 +236,6 @@ def reach_on_the_fly(net: Net, queries: Sequence[q.Query], max_states: int,
     sets keep only the interleavings the atoms can see (a safety property keeps its
     verdict: :mod:`mcl2pnml.analysis.checking.on_the_fly`), on a net proven 1-safe (``safe``, or a P-invariant
     found here). A question past the limits is left to the graph."""
-    from mcl2pnml.analysis.checking import on_the_fly as onthefly
-    from mcl2pnml.core import patterns as pr
-    from mcl2pnml.core.structure import structure
     shaped = [(x, reachability(x.asks)) for x in queries]
     shaped = [(x, r) for x, r in shaped if r is not None]
     if not shaped or not onthefly.available():
@@ -254,7 +251,8 @@ def reach_on_the_fly(net: Net, queries: Sequence[q.Query], max_states: int,
     if not props:
         return {}
     try:
-        verdicts = onthefly.check_properties_on_the_fly(net, props, max_states, max_memory, stubborn, safe)
+        verdicts = onthefly.check_properties_on_the_fly(net, props, max_states, max_memory,
+                                                        stubborn, safe)
     except onthefly.NotProvenSafe:
         verdicts = onthefly.check_properties_on_the_fly(net, props, max_states, max_memory)
         stubborn = False

@@ -35,6 +35,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from mcl2pnml.core.structure import Structure
+from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
+                                                    minimal_semipositive_p_invariants)
 
 if TYPE_CHECKING:
     import networkx as nx
@@ -296,9 +298,6 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
     return StateSpace(s, markings, src, trans, dst, coverability=accelerated)
 
 
-#: Nets up to this many places have their semi-positive P-invariants computed to
-#: filter the Karp-Miller walks (:func:`_uncovered`); larger ones use every place.
-INVARIANT_PLACES = 2_000
 
 
 def _uncovered(s: Structure) -> "list[int] | None":
@@ -308,11 +307,10 @@ def _uncovered(s: Structure) -> "list[int] | None":
     constant on every firing path (the invariant), so a marking that
     strictly covers an ancestor exceeds it on uncovered places only.
     """
-    from mcl2pnml.analysis.structure.invariants import AnalysisLimit, minimal_semipositive_p_invariants
     if len(s.places) > INVARIANT_PLACES:
         return list(range(len(s.places)))
     try:
-        invariants = minimal_semipositive_p_invariants(s, 20_000)
+        invariants = minimal_semipositive_p_invariants(s, INVARIANT_ROWS)
     except AnalysisLimit:
         return list(range(len(s.places)))
     covered = {s.place_index[p] for y in invariants for p in y}

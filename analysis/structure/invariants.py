@@ -34,6 +34,15 @@ class AnalysisLimit(Mcl2PnmlError):
     """An exponential analysis reached its bound before it finished."""
 
 
+#: The largest net (in places) whose semi-positive P-invariants a search looks for to
+#: bound it (the explorers' widths and walks, the contest's questions); past it, it does
+#: without: Farkas can need exponentially many rows.
+INVARIANT_PLACES = 2_000
+#: The intermediate rows Farkas may hold when a search looks for those bounds (its
+#: ``limit``); past it, the search does without them.
+INVARIANT_ROWS = 20_000
+
+
 def integer_multiple(vec: Mapping[int, object]) -> dict[int, int]:
     """The positive multiple of a rational vector with coprime integer entries.
 
@@ -165,6 +174,92 @@ def format_invariant(y: Mapping[str, int], value: int | None = None) -> str:
 # Farkas, with Martinez and Silva's minimal-support pruning
 
 
+class _FarkasRows:
+    """The working rows of :func:`_farkas` and, per column, the rows nonzero there and
+    their signs, so that the cheapest column is found from a heap, not by a scan.
+
+    A row is (A part, y, the support of y as a bit mask, so that a subset test is two
+    integer operations)."""
+
+    def __init__(self, ncols: int, limit: int | None, what: str):
+        self.rows: dict[int, tuple[dict[int, int], dict[int, int], int]] = {}
+        self.users: list[set[int]] = [set() for _ in range(ncols)]  # column -> rows nonzero
+        self.positive, self.negative = [0] * ncols, [0] * ncols
+        self.remaining = set(range(ncols))
+        self.heap = [(0, j) for j in range(ncols)]  # (positive x negative, column), lazily
+        self.next_id = 0
+        self.limit, self.what = limit, what
+
+    def index(self, rid: int, a: Mapping[int, int], step: int) -> None:
+        for k, v in a.items():
+            if v > 0:
+                self.positive[k] += step
+            else:
+                self.negative[k] += step
+            (self.users[k].add if step > 0 else self.users[k].discard)(rid)
+            if k in self.remaining:
+                heapq.heappush(self.heap, (self.positive[k] * self.negative[k], k))
+
+    def add(self, a: dict[int, int], y: dict[int, int], mask: int) -> None:
+        self.rows[self.next_id] = (a, y, mask)
+        self.index(self.next_id, a, 1)
+        self.next_id += 1
+
+    def remove(self, rid: int) -> tuple[dict[int, int], dict[int, int], int]:
+        row = self.rows.pop(rid)
+        self.index(rid, row[0], -1)
+        return row
+
+    def over_limit(self, size: int) -> None:
+        if self.limit is not None and size > self.limit:
+            raise AnalysisLimit(f"more than {self.limit:,} intermediate rows computing the "
+                                f"minimal semi-positive {self.what} (Farkas algorithm)")
+
+    def cheapest(self) -> int | None:
+        """The column to eliminate next (fewest new rows), taken out of those remaining;
+        None when every column is done."""
+        while self.remaining:
+            cost, j = heapq.heappop(self.heap)
+            if j not in self.remaining or cost != self.positive[j] * self.negative[j]:
+                continue  # a stale entry: the column's counts changed since
+            self.remaining.discard(j)
+            return j
+        return None
+
+    def eliminate(self, j: int) -> None:
+        """Column ``j`` cancelled: every positive row combined with every negative one,
+        the new rows that are not minimal (Martinez and Silva's rule) dropped."""
+        rows = self.rows
+        pos = [self.remove(r) for r in sorted(self.users[j]) if rows[r][0][j] > 0]
+        neg = [self.remove(r) for r in sorted(self.users[j])]  # what is left is negative
+        # only the rows that stay with a support inside the places of pos and
+        # neg can be inside a new row's support; small first: they rule out most
+        zone = 0
+        for _, _, m in (*pos, *neg):
+            zone |= m
+        supports = sorted((m for _, _, m in rows.values() if m | zone == zone),
+                          key=int.bit_count)
+        new: list[tuple[int, dict[int, int], dict[int, int]]] = []
+        for a1, y1, m1 in pos:
+            for a2, y2, m2 in neg:
+                union = m1 | m2
+                if any(m & union == m for m in supports):
+                    continue  # contains a row that stays: not minimal
+                f1, f2 = -a2[j], a1[j]
+                a = {k: f1 * a1.get(k, 0) + f2 * a2.get(k, 0) for k in a1.keys() | a2.keys()}
+                a = {k: v for k, v in a.items() if v}
+                y = {k: f1 * y1.get(k, 0) + f2 * y2.get(k, 0) for k in y1.keys() | y2.keys()}
+                g = gcd(*a.values(), *y.values())
+                new.append((union, {k: v // g for k, v in a.items()},
+                            {k: v // g for k, v in y.items()}))
+                self.over_limit(len(rows) + len(new))
+        new.sort(key=lambda r: r[0].bit_count())  # stable: the pair order breaks ties
+        for union, a, y in new:
+            if not any(m & union == m for m in supports):
+                self.add(a, y, union)
+                supports.append(union)
+
+
 def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
             what: str) -> list[dict[int, int]]:
     """The minimal-support semi-positive solutions y >= 0 of y^T A = 0.
@@ -188,84 +283,17 @@ def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
     positive and a negative row, the usual heuristic to keep the rows few;
     ``limit`` bounds the rows held at any time, new ones included.
     """
-    # a row: (A part, y, the support of y as a bit mask, so that a subset
-    # test is two integer operations)
-    rows: dict[int, tuple[dict[int, int], dict[int, int], int]] = {}
-    users: list[set[int]] = [set() for _ in range(ncols)]  # column -> rows nonzero there
-    positive, negative = [0] * ncols, [0] * ncols
-    remaining = set(range(ncols))
-    heap = [(0, j) for j in range(ncols)]     # (positive x negative, column), lazily updated
-    next_id = 0
-
-    def index(rid: int, a: Mapping[int, int], step: int) -> None:
-        for k, v in a.items():
-            if v > 0:
-                positive[k] += step
-            else:
-                negative[k] += step
-            (users[k].add if step > 0 else users[k].discard)(rid)
-            if k in remaining:
-                heapq.heappush(heap, (positive[k] * negative[k], k))
-
-    def add(a: dict[int, int], y: dict[int, int], mask: int) -> None:
-        nonlocal next_id
-        rows[next_id] = (a, y, mask)
-        index(next_id, a, 1)
-        next_id += 1
-
-    def remove(rid: int) -> tuple[dict[int, int], dict[int, int], int]:
-        row = rows.pop(rid)
-        index(rid, row[0], -1)
-        return row
-
-    def over_limit(size: int) -> None:
-        if limit is not None and size > limit:
-            raise AnalysisLimit(f"more than {limit:,} intermediate rows computing the minimal "
-                                f"semi-positive {what} (Farkas algorithm)")
-
+    work = _FarkasRows(ncols, limit, what)
     # before the rows are built: row i's support mask is i bits wide, so a
     # million rows would take 60 GB before the limit could say no
-    over_limit(len(a_rows))
+    work.over_limit(len(a_rows))
     for i, a_row in enumerate(a_rows):
-        add({k: v for k, v in a_row.items() if v}, {i: 1}, 1 << i)
-
-    while remaining:
-        # cheapest column first: it makes the fewest new rows
-        cost, j = heapq.heappop(heap)
-        if j not in remaining or cost != positive[j] * negative[j]:
-            continue  # a stale entry: the column's counts changed since
-        remaining.discard(j)
-        pos = [remove(r) for r in sorted(users[j]) if rows[r][0][j] > 0]
-        neg = [remove(r) for r in sorted(users[j])]  # what is left there is negative
-        # only the rows that stay with a support inside the places of pos and
-        # neg can be inside a new row's support; small first: they rule out most
-        zone = 0
-        for _, _, m in (*pos, *neg):
-            zone |= m
-        supports = sorted((m for _, _, m in rows.values() if m | zone == zone),
-                          key=int.bit_count)
-        new: list[tuple[int, dict[int, int], dict[int, int]]] = []
-        for a1, y1, m1 in pos:
-            for a2, y2, m2 in neg:
-                union = m1 | m2
-                if any(m & union == m for m in supports):
-                    continue  # contains a row that stays: not minimal
-                f1, f2 = -a2[j], a1[j]
-                a = {k: f1 * a1.get(k, 0) + f2 * a2.get(k, 0) for k in a1.keys() | a2.keys()}
-                a = {k: v for k, v in a.items() if v}
-                y = {k: f1 * y1.get(k, 0) + f2 * y2.get(k, 0) for k in y1.keys() | y2.keys()}
-                g = gcd(*a.values(), *y.values())
-                new.append((union, {k: v // g for k, v in a.items()},
-                            {k: v // g for k, v in y.items()}))
-                over_limit(len(rows) + len(new))
-        new.sort(key=lambda r: r[0].bit_count())  # stable: the pair order breaks ties
-        for union, a, y in new:
-            if not any(m & union == m for m in supports):
-                add(a, y, union)
-                supports.append(union)
-
+        work.add({k: v for k, v in a_row.items() if v}, {i: 1}, 1 << i)
+    # cheapest column first: it makes the fewest new rows
+    while (j := work.cheapest()) is not None:
+        work.eliminate(j)
     # every column is eliminated: each row's A part is zero, y is an invariant
-    found = [y for _, y, _ in rows.values()]
+    found = [y for _, y, _ in work.rows.values()]
     return sorted(({k: y[k] for k in sorted(y)} for y in found),
                   key=lambda y: (len(y), list(y)))
 

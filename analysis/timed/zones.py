@@ -20,7 +20,7 @@ zone is extrapolated by the largest constant each clock is compared with
 (Extra_M, Behrmann, Bouyer, Larsen and Pelanek 2006), which keeps the graph
 finite and exact for every guard. The graph is built once by breadth-first
 search; every property is then read on its product with the observer of
-:mod:`mcl2pnml.analysis.checking.on_graph` (the same observer the untimed checker uses).
+:mod:`mcl2pnml.analysis.checking.observers` (the same observer the untimed checker uses).
 
 **Runs that end, and runs that do not.** A run is time-divergent: a state
 where time may pass for ever with nothing forced (no urgent transition, no
@@ -44,7 +44,7 @@ extrapolation of the other clocks keeps every guard's answer).
 
 Safe nets only (every marking 0 or 1, as compiled missions are): a firing
 that would put a second token in a place is refused with its reason. May
-import :mod:`mcl2pnml.core` (as the rest of :mod:`analysis`).
+import :mod:`mcl2pnml.core` and the observers of :mod:`mcl2pnml.analysis.checking`.
 """
 from __future__ import annotations
 
@@ -52,10 +52,13 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Callable, Iterable, Sequence
 
+import networkx as nx
+
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.core.patterns import Property, places_of
-from mcl2pnml.core.structure import structure
+from mcl2pnml.core.patterns import Property, holds, places_of
+from mcl2pnml.core.structure import Structure, structure
 from mcl2pnml.core.timing import TimedNet
+from mcl2pnml.analysis.checking.observers import ObserverTable, path_to, truths
 
 # -- bounds: (c, <=) is 2c+1, (c, <) is 2c, no bound is INF ----------------------------
 
@@ -164,24 +167,59 @@ class TimedLimit(Mcl2PnmlError):
         self.states, self.limit = states, limit
 
 
-def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
-               ends: Iterable[str] | None = None, earliest_only: bool = False,
-               progress: Callable[[int, int], None] | None = None) -> ZoneGraph:
-    """The zone graph of ``tn`` from its initial marking (see the module's documentation).
+@dataclass(frozen=True)
+class _Timers:
+    """The clocks of a net, fixed before the search: one per timer (a transition whose
+    interval is neither ``[0,0]`` nor ``[0,inf)``, or a group of them sharing one,
+    :attr:`TimedNet.shared`), then one per gap group, then the global clock if any."""
 
-    ``ends``: places of which any marked is an end; given, the graph stops at
-    the first end of each run and records the global time of reaching it
-    (:attr:`ZoneGraph.ends`). ``earliest_only``: a state reached no earlier
-    than an end already found is not explored further (enough for the
-    earliest end, and finite even where runs never end).
-    """
-    net = tn.net
-    s = structure(net)
-    T = len(s.transitions)
+    timer_of: tuple[int, ...]
+    """Per transition, its timer, or -1 if it has none."""
+    members: tuple[int, ...]
+    """Per timer, its transitions as a bit mask."""
+    lo: tuple[int, ...]
+    """Per timer, its lower bound."""
+    hi: tuple[int | None, ...]
+    """Per timer, its upper bound (None: unbounded)."""
+
+
+def _timers(tn: TimedNet, s: Structure, lo: list[int], hi: list[int | None]) -> _Timers:
+    """The timers of ``tn``: its groups sharing one clock first, then one per other
+    transition that needs one."""
+    timer_of = [-1] * len(s.transitions)
+    members: list[int] = []
+    t_lo: list[int] = []
+    t_hi: list[int | None] = []
+    for group in tn.shared:
+        idx = sorted(s.transition_index[t] for t in group)
+        if len({(lo[j], hi[j]) for j in idx}) > 1:
+            raise Mcl2PnmlError("transitions sharing a clock must share their interval: "
+                                + ", ".join(s.transitions[j] for j in idx))
+        if lo[idx[0]] == 0 and hi[idx[0]] in (0, None):
+            continue
+        for j in idx:
+            timer_of[j] = len(members)
+        members.append(sum(1 << j for j in idx))
+        t_lo.append(lo[idx[0]])
+        t_hi.append(hi[idx[0]])
+    for j in range(len(s.transitions)):
+        if timer_of[j] < 0 and not (lo[j] == 0 and hi[j] in (0, None)):
+            timer_of[j] = len(members)
+            members.append(1 << j)
+            t_lo.append(lo[j])
+            t_hi.append(hi[j])
+    return _Timers(tuple(timer_of), tuple(members), tuple(t_lo), tuple(t_hi))
+
+
+def _safe_arcs(s: Structure) -> tuple[list[int], list[int], list[int]]:
+    """Per transition, the places it takes a token from, those it needs marked (its
+    inputs and read arcs) and those it marks, as bit masks; a net that is not safe by
+    its initial marking or its weights refused with the reason."""
     for p, n in enumerate(s.initial_vector()):
         if n > 1:
             raise Mcl2PnmlError(f"timed analysis needs a safe net: '{s.places[p]}' holds "
                                 f"{n} tokens initially")
+    T = len(s.transitions)
     pre_mask, need_mask, post_mask = [0] * T, [0] * T, [0] * T
     for j in range(T):
         for p, w in s.pre[j].items():
@@ -197,260 +235,351 @@ def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
                 raise Mcl2PnmlError(f"timed analysis needs a safe net: the arc from "
                                     f"'{s.transitions[j]}' to '{s.places[p]}' has weight {w}")
             post_mask[j] |= 1 << p
-    lo, hi = [0] * T, [None] * T
-    for j, tid in enumerate(s.transitions):
-        a, b = tn.intervals.get(tid, (0, None))
-        lo[j], hi[j] = a, b
-    prio = eager = 0
-    for j, tid in enumerate(s.transitions):
-        if tid in tn.priority:
-            prio |= 1 << j
-        if tid in tn.eager:
-            eager |= 1 << j
-    urgent_mask = 0       # [0,0]: time does not pass while one is enabled
-    deadline_mask = 0     # a finite upper bound: time passes only up to it
-    for j in range(T):
-        if hi[j] == 0:
-            urgent_mask |= 1 << j
-        if hi[j] is not None:
-            deadline_mask |= 1 << j
-    # the timers: one clock per transition whose interval is neither [0,0] nor [0,inf),
-    # or per group of them sharing one (TimedNet.shared)
-    timer_of = [-1] * T
-    members: list[int] = []       # per timer, its transitions as a bit mask
-    t_lo: list[int] = []
-    t_hi: list[int | None] = []
-    for group in tn.shared:
-        idx = sorted(s.transition_index[t] for t in group)
-        if len({(lo[j], hi[j]) for j in idx}) > 1:
-            raise Mcl2PnmlError("transitions sharing a clock must share their interval: "
-                                + ", ".join(s.transitions[j] for j in idx))
-        if lo[idx[0]] == 0 and hi[idx[0]] in (0, None):
-            continue
-        for j in idx:
-            timer_of[j] = len(members)
-        members.append(sum(1 << j for j in idx))
-        t_lo.append(lo[idx[0]])
-        t_hi.append(hi[idx[0]])
-    for j in range(T):
-        if timer_of[j] < 0 and not (lo[j] == 0 and hi[j] in (0, None)):
-            timer_of[j] = len(members)
-            members.append(1 << j)
-            t_lo.append(lo[j])
-            t_hi.append(hi[j])
-    K = len(members)
-    G = len(tn.gaps)
-    group_of = [-1] * T
-    gap = [g for _, g in tn.gaps]
-    for g, (group, _) in enumerate(tn.gaps):
-        for tid in group:
-            group_of[s.transition_index[tid]] = g
-    glob = K + G if ends is not None else None
-    # the largest constant each clock is compared with (its extrapolation bound)
-    ceiling = {k: max(t_lo[k], t_hi[k] or 0) for k in range(K)}
-    ceiling.update({K + g: gap[g] for g in range(G)})
-    progress_mask = 0
-    for j in range(T):
-        if lo[j] >= 1 or (group_of[j] >= 0 and gap[group_of[j]] >= 1):
-            progress_mask |= 1 << j
-    end_mask = 0
-    if ends is not None:
-        for pid in ends:
-            if pid in s.place_index:
-                end_mask |= 1 << s.place_index[pid]
+    return pre_mask, need_mask, post_mask
 
-    g = ZoneGraph(tn, list(s.places), list(s.transitions), progress=progress_mask)
 
-    def enabled_set(m: int) -> int:
+def _mask_of(indices: Iterable[int]) -> int:
+    out = 0
+    for j in indices:
+        out |= 1 << j
+    return out
+
+
+@dataclass(frozen=True)
+class _TimedStructure:
+    """A safe time Petri net as bit masks, with its clocks: what the search reads of it.
+    Clocks are numbered: timers ``0..K-1``, gap groups ``K..K+G-1``, the global clock
+    ``K+G`` (``glob``, only when end times are asked for)."""
+
+    places: tuple[str, ...]
+    transitions: tuple[str, ...]
+    pre: tuple[int, ...]
+    need: tuple[int, ...]
+    post: tuple[int, ...]
+    lo: tuple[int, ...]
+    """Per transition, the lower bound of its static interval."""
+    priority: int
+    eager: int
+    urgent: int
+    """The transitions of interval ``[0,0]``: time does not pass while one is enabled."""
+    deadline: int
+    """The transitions with a finite upper bound: time passes only up to it."""
+    timers: _Timers
+    group_of: tuple[int, ...]
+    """Per transition, its gap group, or -1."""
+    gap: tuple[int, ...]
+    """Per gap group, its gap in units."""
+    glob: int | None
+    ceiling: tuple[int, ...]
+    """Per clock but the global one, the largest constant it is compared with (its
+    extrapolation bound, Extra_M)."""
+    progress: int
+    """The progress transitions (a lower bound of a unit or more, or a gap of one)."""
+    end: int
+    """The end places, as a bit mask (0 without ends)."""
+    m0: int
+    """The initial marking, as a bit mask."""
+
+    @property
+    def K(self) -> int:
+        """The number of timers (the first clock of a gap group)."""
+        return len(self.timers.members)
+
+    def enabled(self, m: int) -> int:
+        """The transitions marking ``m`` enables, as a bit mask."""
         e = 0
-        for j in range(T):
-            nm = need_mask[j]
+        for j, nm in enumerate(self.need):
             if m & nm == nm:
                 e |= 1 << j
         return e
 
-    def bits(x: int):
-        while x:
-            low = x & -x
-            yield low.bit_length() - 1
-            x ^= low
 
-    def finish(m: int, en: int, clocks: tuple, d: list[list[int]]):
-        """Let time pass (where it may), bound it by the deadlines, extrapolate, drop the
-        clocks that no longer matter; the state's key, or None if time-locked."""
-        urgent = bool(en & urgent_mask) or bool(en & prio)
-        if not urgent:
-            for i in range(1, len(d)):
-                d[i][0] = INF
-            for i, c in enumerate(clocks, 1):
-                if c < K and t_hi[c] is not None:
-                    if not _constrain(d, i, 0, _le(t_hi[c])):
-                        return None
-        # extrapolation (Extra_M), then closure
-        n = len(d)
-        changed = False
-        for i in range(1, n):
-            ci = clocks[i - 1]
-            if ci == glob:
-                continue
-            mi = ceiling[ci]
-            row = d[i]
-            for jj in range(n):
-                if jj != i and row[jj] < INF and row[jj] > _le(mi):
-                    row[jj] = INF
-                    changed = True
-        for jj in range(1, n):
-            cj = clocks[jj - 1]
-            if cj == glob:
-                continue
-            mj = ceiling[cj]
-            bound = _lt(-mj)
-            for i in range(n):
-                if i != jj and d[i][jj] < bound:
-                    d[i][jj] = bound
-                    changed = True
-        if changed:
-            _canonical(d)
-        # a gap clock past its gap, or a clock of an interval [a, inf) past a, no longer
-        # changes any guard: dropped (absent means "long enough")
-        keep = [0]
-        for i in range(1, n):
-            c = clocks[i - 1]
-            if c != glob and ((c >= K) or t_hi[c] is None) and d[0][i] <= _le(-ceiling[c]):
-                continue
-            keep.append(i)
-        if len(keep) < n:
-            clocks = tuple(clocks[i - 1] for i in keep[1:])
-            d = [[d[i][jj] for jj in keep] for i in keep]
-        key = (m, clocks, tuple(v for row in d for v in row))
-        return key, urgent
+def _timed_structure(tn: TimedNet, ends: Iterable[str] | None) -> _TimedStructure:
+    """``tn`` read once into :class:`_TimedStructure` (its refusals, in the order a
+    reader meets them: the initial marking, the weights, the shared clocks)."""
+    s = structure(tn.net)
+    T = len(s.transitions)
+    pre, need, post = _safe_arcs(s)
+    lo: list[int] = [0] * T
+    hi: list[int | None] = [None] * T
+    for j, tid in enumerate(s.transitions):
+        lo[j], hi[j] = tn.intervals.get(tid, (0, None))
+    timers = _timers(tn, s, lo, hi)
+    K, G = len(timers.members), len(tn.gaps)
+    group_of = [-1] * T
+    gap = tuple(g for _, g in tn.gaps)
+    for g, (group, _) in enumerate(tn.gaps):
+        for tid in group:
+            group_of[s.transition_index[tid]] = g
+    ceiling = tuple([max(timers.lo[k], timers.hi[k] or 0) for k in range(K)] + list(gap))
+    progress = _mask_of(j for j in range(T)
+                        if lo[j] >= 1 or (group_of[j] >= 0 and gap[group_of[j]] >= 1))
+    end = 0 if ends is None else _mask_of(s.place_index[p] for p in ends if p in s.place_index)
+    return _TimedStructure(
+        tuple(s.places), tuple(s.transitions), tuple(pre), tuple(need), tuple(post), tuple(lo),
+        priority=_mask_of(j for j, t in enumerate(s.transitions) if t in tn.priority),
+        eager=_mask_of(j for j, t in enumerate(s.transitions) if t in tn.eager),
+        urgent=_mask_of(j for j in range(T) if hi[j] == 0),
+        deadline=_mask_of(j for j in range(T) if hi[j] is not None),
+        timers=timers, group_of=tuple(group_of), gap=gap,
+        glob=K + G if ends is not None else None, ceiling=ceiling, progress=progress, end=end,
+        m0=_mask_of(p for p, n in enumerate(s.initial_vector()) if n))
 
-    def add_clock(clocks: list, d: list[list[int]], c: int) -> None:
-        """A new clock at 0 (kept canonical: a copy of the constant's row and column)."""
-        clocks.append(c)
-        for i, row in enumerate(d):
-            row.append(row[0])
-        d.append(list(d[0]))
-        d[-1][-1] = LE0
 
-    def reset(d: list[list[int]], i: int) -> None:
-        n = len(d)
+def _bits(x: int):
+    """The indices of the bits set in ``x``, lowest first."""
+    while x:
+        low = x & -x
+        yield low.bit_length() - 1
+        x ^= low
+
+
+def _add_clock(clocks: list, d: list[list[int]], c: int) -> None:
+    """A new clock at 0 (kept canonical: a copy of the constant's row and column)."""
+    clocks.append(c)
+    for row in d:
+        row.append(row[0])
+    d.append(list(d[0]))
+    d[-1][-1] = LE0
+
+
+def _reset(d: list[list[int]], i: int) -> None:
+    """Clock ``i`` back to 0 (a copy of the constant's row and column)."""
+    n = len(d)
+    for jj in range(n):
+        d[i][jj] = d[0][jj]
+        d[jj][i] = d[jj][0]
+    d[i][i] = LE0
+
+
+def _let_time_pass(ts: _TimedStructure, en: int, clocks: tuple, d: list[list[int]]
+                   ) -> bool | None:
+    """Let time pass in ``d`` where it may, up to every enabled deadline; whether the
+    state is urgent (time may not pass), or None if the zone becomes empty."""
+    urgent = bool(en & ts.urgent) or bool(en & ts.priority)
+    if not urgent:
+        for i in range(1, len(d)):
+            d[i][0] = INF
+        K, t_hi = ts.K, ts.timers.hi
+        for i, c in enumerate(clocks, 1):
+            if c < K and t_hi[c] is not None:
+                if not _constrain(d, i, 0, _le(t_hi[c])):
+                    return None
+    return urgent
+
+
+def _extrapolate(ts: _TimedStructure, clocks: tuple, d: list[list[int]]) -> None:
+    """Extra_M (Behrmann, Bouyer, Larsen and Pelanek 2006) in place, then the closure:
+    every bound past a clock's largest constant forgotten (the global clock kept)."""
+    n = len(d)
+    changed = False
+    for i in range(1, n):
+        ci = clocks[i - 1]
+        if ci == ts.glob:
+            continue
+        mi = ts.ceiling[ci]
+        row = d[i]
         for jj in range(n):
-            d[i][jj] = d[0][jj]
-            d[jj][i] = d[jj][0]
-        d[i][i] = LE0
+            if jj != i and row[jj] < INF and row[jj] > _le(mi):
+                row[jj] = INF
+                changed = True
+    for jj in range(1, n):
+        cj = clocks[jj - 1]
+        if cj == ts.glob:
+            continue
+        bound = _lt(-ts.ceiling[cj])
+        for i in range(n):
+            if i != jj and d[i][jj] < bound:
+                d[i][jj] = bound
+                changed = True
+    if changed:
+        _canonical(d)
 
-    index: dict = {}
-    m0 = 0
-    for p, n in enumerate(s.initial_vector()):
-        if n:
-            m0 |= 1 << p
-    en0 = enabled_set(m0)
-    clocks0: list = []
-    d0 = [[LE0]]
-    for k in range(K):
-        if en0 & members[k]:
-            add_clock(clocks0, d0, k)
-    if glob is not None:
-        add_clock(clocks0, d0, glob)
-    got = finish(m0, en0, tuple(clocks0), d0)
-    if got is None:
-        raise Mcl2PnmlError("the initial state is time-locked")
-    queue = deque()
 
-    def intern(key, urgent, en, parent):
-        k = index.get(key)
+def _drop_inactive(ts: _TimedStructure, clocks: tuple, d: list[list[int]]
+                   ) -> tuple[tuple, list[list[int]]]:
+    """The clocks and DBM without the clocks that no longer change a guard (active clock
+    reduction, Daws and Yovine 1996): a gap clock past its gap, or a clock of an interval
+    ``[a, inf)`` past ``a`` (absent means "long enough")."""
+    n = len(d)
+    keep = [0]
+    for i in range(1, n):
+        c = clocks[i - 1]
+        if c != ts.glob and (c >= ts.K or ts.timers.hi[c] is None) \
+                and d[0][i] <= _le(-ts.ceiling[c]):
+            continue
+        keep.append(i)
+    if len(keep) < n:
+        clocks = tuple(clocks[i - 1] for i in keep[1:])
+        d = [[d[i][jj] for jj in keep] for i in keep]
+    return clocks, d
+
+
+def _finish(ts: _TimedStructure, m: int, en: int, clocks: tuple, d: list[list[int]]):
+    """Let time pass (where it may), bound it by the deadlines, extrapolate, drop the
+    clocks that no longer matter; the state's key and whether it is urgent, or None if
+    time-locked."""
+    urgent = _let_time_pass(ts, en, clocks, d)
+    if urgent is None:
+        return None
+    _extrapolate(ts, clocks, d)
+    clocks, d = _drop_inactive(ts, clocks, d)
+    return (m, clocks, tuple(v for row in d for v in row)), urgent
+
+
+class _Search:
+    """The breadth-first search that builds a :class:`ZoneGraph` (see :func:`zone_graph`)."""
+
+    def __init__(self, tn: TimedNet, ts: _TimedStructure, max_states: int, earliest_only: bool,
+                 progress: Callable[[int, int], None] | None):
+        self.ts, self.max_states = ts, max_states
+        self.earliest_only, self.progress = earliest_only, progress
+        self.graph = ZoneGraph(tn, list(ts.places), list(ts.transitions), progress=ts.progress)
+        self.index: dict = {}
+        self.queue: deque[int] = deque()
+        self.best = INF          # the earliest end found so far
+
+    def intern(self, key, urgent: bool, en: int, parent) -> int:
+        """The state of ``key``, added (and queued) if new."""
+        k = self.index.get(key)
         if k is not None:
-            return k, False
-        k = index[key] = len(g.markings)
-        if k >= max_states:
-            raise TimedLimit(k, max_states)
+            return k
+        g = self.graph
+        k = self.index[key] = len(g.markings)
+        if k >= self.max_states:
+            raise TimedLimit(k, self.max_states)
         g.markings.append(key[0])
         g.zones.append(key[1:])
         g.succ.append([])
         g.parent.append(parent)
         g.urgent.append(urgent)
         g.enabled.append(en)
-        waits = not urgent and not (en & deadline_mask)
-        g.waits.append(waits)
-        queue.append(k)
-        if progress is not None and k % 20000 == 0 and k:
-            progress(k, len(queue))
-        return k, True
+        g.waits.append(not urgent and not (en & self.ts.deadline))
+        self.queue.append(k)
+        if self.progress is not None and k % 20000 == 0 and k:
+            self.progress(k, len(self.queue))
+        return k
 
-    key0, urg0 = got
-    intern(key0, urg0, en0, None)
-    best = [INF]
-    while queue:
-        k = queue.popleft()
-        m = g.markings[k]
-        if end_mask and m & end_mask:
-            continue       # the run has ended: its time was recorded when it got here
+    def start(self) -> None:
+        """The initial state: every enabled timer at 0, and the global clock."""
+        ts = self.ts
+        en0 = ts.enabled(ts.m0)
+        clocks0: list = []
+        d0 = [[LE0]]
+        for k in range(ts.K):
+            if en0 & ts.timers.members[k]:
+                _add_clock(clocks0, d0, k)
+        if ts.glob is not None:
+            _add_clock(clocks0, d0, ts.glob)
+        got = _finish(ts, ts.m0, en0, tuple(clocks0), d0)
+        if got is None:
+            raise Mcl2PnmlError("the initial state is time-locked")
+        key0, urg0 = got
+        self.intern(key0, urg0, en0, None)
+
+    def run(self) -> ZoneGraph:
+        """Every state reached, each expanded once, in breadth-first order."""
+        self.start()
+        g = self.graph
+        while self.queue:
+            k = self.queue.popleft()
+            if self.ts.end & g.markings[k]:
+                continue       # the run has ended: its time was recorded when it got here
+            clocks, flat = g.zones[k]
+            if self.earliest_only and g.ends:
+                gi = clocks.index(self.ts.glob) + 1
+                if -(flat[gi] >> 1) >= self.best:
+                    continue
+            en = g.enabled[k]
+            cand = en & self.ts.priority or en & self.ts.eager or en
+            fired_any = False
+            for j in _bits(cand):
+                fired_any |= self.fire(k, j)
+            if not fired_any and not g.waits[k]:
+                g.stuck.append(k)   # time cannot pass for ever, and nothing can fire
+        return g
+
+    def fire(self, k: int, j: int) -> bool:
+        """Transition ``j`` fired from state ``k`` where its guard allows, its successor
+        added; whether the guard allowed it."""
+        ts, g = self.ts, self.graph
         clocks, flat = g.zones[k]
         n = len(clocks) + 1
-        if earliest_only and g.ends:
-            gi = clocks.index(glob) + 1
-            if -(flat[gi] >> 1) >= best[0]:
-                continue
-        en = g.enabled[k]
-        cand = en & prio or en & eager or en
-        fired_any = False
-        for j in bits(cand):
-            d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
-            # the guard: its own clock at its lower bound, its group's gap passed
-            tj = timer_of[j]
-            if tj >= 0 and lo[j] > 0 and tj in clocks:
-                if not _constrain(d, 0, clocks.index(tj) + 1, _le(-lo[j])):
-                    continue
-            gj = group_of[j]
-            if gj >= 0 and (K + gj) in clocks:
-                if not _constrain(d, 0, clocks.index(K + gj) + 1, _le(-gap[gj])):
-                    continue
-            fired_any = True
-            rest = m & ~pre_mask[j]
-            if rest & post_mask[j]:
-                raise Mcl2PnmlError(
-                    f"timed analysis needs a safe net: firing '{s.transitions[j]}' puts a "
-                    f"second token in '{s.places[(rest & post_mask[j]).bit_length() - 1]}'")
-            m2 = rest | post_mask[j]
-            en2 = enabled_set(m2)
-            # a timer starts when its transitions become enabled, or again when one of
-            # them fires and one stays enabled; it stops when none is
-            restart = [k for k in range(K) if en2 & members[k] and
-                       (not en & members[k] or members[k] >> j & 1)]
-            keep_idx = [0]
-            new_clocks = []
-            for i, c in enumerate(clocks, 1):
-                if c >= K or (en2 & members[c] and c not in restart):
-                    keep_idx.append(i)
-                    new_clocks.append(c)
-            d2 = [[d[a][b] for b in keep_idx] for a in keep_idx]
-            for k2 in restart:
-                add_clock(new_clocks, d2, k2)
-            if gj >= 0 and gap[gj] > 0:
-                c = K + gj
-                if c in new_clocks:
-                    reset(d2, new_clocks.index(c) + 1)
-                else:
-                    add_clock(new_clocks, d2, c)
-            if glob is not None and end_mask and m2 & end_mask:
-                gi = new_clocks.index(glob) + 1
-                earliest = -(d2[0][gi] >> 1)
-                latest = None if d2[gi][0] >= INF else d2[gi][0] >> 1
-            got = finish(m2, en2, tuple(new_clocks), d2)
-            if got is None:
-                continue
-            key, urg = got
-            child, new = intern(key, urg, en2, (k, j))
-            g.succ[k].append((child, j))
-            if glob is not None and end_mask and m2 & end_mask:
-                # every way in counts: past the end time passes, so the end states of
-                # different times may share one zone
-                g.ends.append((k, j, earliest, latest))
-                best[0] = min(best[0], earliest)
-        if not fired_any and not g.waits[k]:
-            g.stuck.append(k)   # time cannot pass for ever, and nothing can fire
-    return g
+        d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
+        # the guard: its own clock at its lower bound, its group's gap passed
+        tj, gj, K = ts.timers.timer_of[j], ts.group_of[j], ts.K
+        if tj >= 0 and ts.lo[j] > 0 and tj in clocks:
+            if not _constrain(d, 0, clocks.index(tj) + 1, _le(-ts.lo[j])):
+                return False
+        if gj >= 0 and (K + gj) in clocks:
+            if not _constrain(d, 0, clocks.index(K + gj) + 1, _le(-ts.gap[gj])):
+                return False
+        m = g.markings[k]
+        rest = m & ~ts.pre[j]
+        if rest & ts.post[j]:
+            raise Mcl2PnmlError(
+                f"timed analysis needs a safe net: firing '{ts.transitions[j]}' puts a "
+                f"second token in '{ts.places[(rest & ts.post[j]).bit_length() - 1]}'")
+        m2 = rest | ts.post[j]
+        en2 = ts.enabled(m2)
+        new_clocks, d2 = self._clocks_after(g.enabled[k], en2, j, clocks, d)
+        ends = ts.glob is not None and ts.end and m2 & ts.end
+        if ends:
+            gi = new_clocks.index(ts.glob) + 1
+            earliest = -(d2[0][gi] >> 1)
+            latest = None if d2[gi][0] >= INF else d2[gi][0] >> 1
+        got = _finish(ts, m2, en2, tuple(new_clocks), d2)
+        if got is None:
+            return True
+        key, urg = got
+        g.succ[k].append((self.intern(key, urg, en2, (k, j)), j))
+        if ends:
+            # every way in counts: past the end time passes, so the end states of
+            # different times may share one zone
+            g.ends.append((k, j, earliest, latest))
+            self.best = min(self.best, earliest)
+        return True
+
+    def _clocks_after(self, en: int, en2: int, j: int, clocks: tuple, d: list[list[int]]
+                      ) -> tuple[list, list[list[int]]]:
+        """The clocks and DBM after ``j`` fires: a timer starts when its transitions become
+        enabled, or again when one of them fires and one stays enabled; it stops when none
+        is; ``j``'s gap group starts its clock again."""
+        ts = self.ts
+        K, members = ts.K, ts.timers.members
+        restart = [c for c in range(K) if en2 & members[c] and
+                   (not en & members[c] or members[c] >> j & 1)]
+        keep_idx = [0]
+        new_clocks = []
+        for i, c in enumerate(clocks, 1):
+            if c >= K or (en2 & members[c] and c not in restart):
+                keep_idx.append(i)
+                new_clocks.append(c)
+        d2 = [[d[a][b] for b in keep_idx] for a in keep_idx]
+        for c in restart:
+            _add_clock(new_clocks, d2, c)
+        gj = ts.group_of[j]
+        if gj >= 0 and ts.gap[gj] > 0:
+            c = K + gj
+            if c in new_clocks:
+                _reset(d2, new_clocks.index(c) + 1)
+            else:
+                _add_clock(new_clocks, d2, c)
+        return new_clocks, d2
+
+
+def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
+               ends: Iterable[str] | None = None, earliest_only: bool = False,
+               progress: Callable[[int, int], None] | None = None) -> ZoneGraph:
+    """The zone graph of ``tn`` from its initial marking (see the module's documentation).
+
+    ``ends``: places of which any marked is an end; given, the graph stops at
+    the first end of each run and records the global time of reaching it
+    (:attr:`ZoneGraph.ends`). ``earliest_only``: a state reached no earlier
+    than an end already found is not explored further (enough for the
+    earliest end, and finite even where runs never end).
+    """
+    return _Search(tn, _timed_structure(tn, ends), max_states, earliest_only, progress).run()
 
 
 # -- verdicts ------------------------------------------------------------------------------
@@ -479,11 +608,8 @@ class TimedVerdict:
 
 def check_timed_property(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     """``prop`` on every time-divergent run of ``graph`` (see the module's documentation)."""
-    from mcl2pnml.analysis.checking.on_graph import _Observers, _path, _truths
-
-    from mcl2pnml.core.patterns import holds
-    obs = _Observers(prop)
-    preds = _truths(prop)
+    obs = ObserverTable(prop)
+    preds = truths(prop)
     index = {p: k for k, p in enumerate(graph.places)}
     cache: dict[int, int] = {}
 
@@ -522,7 +648,7 @@ def check_timed_property(graph: ZoneGraph, prop: Property) -> TimedVerdict:
         succ[node] = nxt
     if best is not None:
         shape, node = best
-        path, trans = _path(parent, node)
+        path, trans = path_to(parent, node)
         return TimedVerdict(prop, "fails", tuple(graph.transitions[t] for t in trans), shape,
                             states=len(parent), path=tuple(z for z, _ in path))
     lasso = _lasso(graph, order, succ, lambda o: o != obs.bad and obs.pending[o])
@@ -531,7 +657,7 @@ def check_timed_property(graph: ZoneGraph, prop: Property) -> TimedVerdict:
     if lasso is None:
         return TimedVerdict(prop, "holds", states=len(parent))
     entry, cycle = lasso
-    path, trans = _path(parent, entry)
+    path, trans = path_to(parent, entry)
     loop = len(trans)
     nodes = [z for z, _ in path]
     for child, t in cycle:
@@ -569,8 +695,6 @@ def _mask(graph: ZoneGraph, group) -> int:
 def _lasso(graph: ZoneGraph, order, succ, open_):
     """A fair, time-divergent cycle of open product states, as (entry, [(state, t), ...]),
     None if there is none, or the reason it is undecided."""
-    import networkx as nx
-
     dg = nx.DiGraph()
     for node in order:
         if open_(node[1]):
@@ -614,8 +738,6 @@ def _lasso(graph: ZoneGraph, order, succ, open_):
 def _covering_cycle(dg, comp, entry, graph, groups, fired):
     """A cycle from ``entry`` inside ``comp`` through a progress transition and, for each
     fairness group, a state where it is disabled or an edge that fires it."""
-    import networkx as nx
-
     sub = dg.subgraph(comp)
     targets = []   # edges (a, b, t) the cycle must take
     prog = [(a, b, d["t"]) for a, b, d in sub.edges(data=True) if graph.progress >> d["t"] & 1]
@@ -646,8 +768,9 @@ def _covering_cycle(dg, comp, entry, graph, groups, fired):
     return cycle
 
 
-def check_timed_properties(tn: TimedNet, properties: Sequence[Property], max_states: int = 1_000_000
-              ) -> tuple[ZoneGraph | None, list[TimedVerdict]]:
+def check_timed_properties(tn: TimedNet, properties: Sequence[Property],
+                           max_states: int = 1_000_000
+                           ) -> tuple[ZoneGraph | None, list[TimedVerdict]]:
     """Each property's timed verdict, on one zone graph."""
     try:
         graph = zone_graph(tn, max_states=max_states)
