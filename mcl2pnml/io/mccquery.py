@@ -54,12 +54,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 from html import escape as _escape
 from pathlib import Path
+from typing import TYPE_CHECKING, Callable
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
-from mcl2pnml.core.files import atomic_write_text
+from mcl2pnml.core.files import atomic_write_text, read_bytes
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES, MissionPlace
 from mcl2pnml.io import ids
+
+if TYPE_CHECKING:
+    from mcl2pnml.core.queries import Query
+
+#: (The properties' types, core.patterns, core.temporal and core.queries, are imported where
+#: a property is written or read: 12-45 ms, measured with ``python -X importtime``, which
+#: the CLI would pay at every start, as cli_options reads :data:`TOOLS` from here.)
 
 
 def escape(text: str) -> str:
@@ -215,7 +223,7 @@ CATEGORIES = ("ReachabilityCardinality", "CTLCardinality", "LTLCardinality")
 
 def _predicate(p) -> Element:
     """A predicate on places (:mod:`mcl2pnml.core.patterns`) as the contest's state formula."""
-    from mcl2pnml.core.patterns import And, Const, Not, Tokens
+    from mcl2pnml.core.patterns import And, Const, Not, Tokens   # 12-45 ms: see the top
     if isinstance(p, Tokens):
         if not p.places:   # an empty sum is 0
             return _constant(p.at_least <= 0)
@@ -238,19 +246,19 @@ def _constant(value: bool) -> Element:
 
 def formula_element(f) -> Element:
     """A temporal formula (:mod:`mcl2pnml.core.temporal`) as the contest's XML."""
-    from mcl2pnml.core import temporal as t
-    if isinstance(f, t.State):
+    from mcl2pnml.core import temporal   # 12-45 ms: see the top
+    if isinstance(f, temporal.State):
         return _predicate(f.predicate)
-    if isinstance(f, t.Neg):
+    if isinstance(f, temporal.Neg):
         return _e("negation", formula_element(f.arg))
-    if isinstance(f, (t.Conj, t.Disj)):
-        return _e("conjunction" if isinstance(f, t.Conj) else "disjunction",
+    if isinstance(f, (temporal.Conj, temporal.Disj)):
+        return _e("conjunction" if isinstance(f, temporal.Conj) else "disjunction",
                   *(formula_element(a) for a in f.args))
-    if isinstance(f, t.Until):
+    if isinstance(f, temporal.Until):
         return _e("until", _e("before", formula_element(f.before)),
                   _e("reach", formula_element(f.reach)))
-    tag = {t.Globally: "globally", t.Finally: "finally", t.AllPaths: "all-paths",
-           t.ExistsPath: "exists-path"}[type(f)]
+    tag = {temporal.Globally: "globally", temporal.Finally: "finally",
+           temporal.AllPaths: "all-paths", temporal.ExistsPath: "exists-path"}[type(f)]
     return _e(tag, formula_element(f.arg))
 
 
@@ -259,7 +267,7 @@ def property_queries(props) -> dict[str, tuple[Property, ...]]:
     every property in LTL; in CTL where a CTL formula means the same; in reachability
     where it is an invariant (:mod:`mcl2pnml.core.temporal`). The query's id is the
     property's name, the same in every category, and its description says what it is."""
-    from mcl2pnml.core import temporal
+    from mcl2pnml.core import temporal   # 12-45 ms: see the top
     forms = {"ReachabilityCardinality": temporal.reachability, "CTLCardinality": temporal.ctl,
              "LTLCardinality": temporal.ltl}
     out: dict[str, tuple[Property, ...]] = {}
@@ -308,117 +316,135 @@ class QueryError(Mcl2PnmlError):
     """A property file that is not the contest's language, or asks what we cannot say."""
 
 
-def read_queries(path: str | Path) -> tuple["Query", ...]:
+def read_queries(path: str | Path) -> tuple[Query, ...]:
     """The queries of a contest property file (``<property-set>``), each with its location.
 
     Every element the contest's 2021 files use is read with its meaning; any
     other is refused, at its line and column, never guessed."""
-    from mcl2pnml.core.files import read_bytes
     data = read_bytes(path, "property file", MAX_QUERIES)
     return parse_queries(data, str(path))
 
 
-def parse_queries(data: bytes, filename: str = "<queries>") -> tuple["Query", ...]:
-    from mcl2pnml.core import queries as q
-    from mcl2pnml.io.pnml.source import Source as _Source, local as _local, parse_xml as _parse_xml
-    src = _Source(filename, data)
-    root = _parse_xml(data, src).getroot()
+def parse_queries(data: bytes, filename: str = "<queries>") -> tuple[Query, ...]:
+    """The queries of a contest property file's bytes (:func:`read_queries`)."""
+    # the queries' types (12-45 ms: see the top) and lxml with the PNML reader's source
+    # (15 ms): only when a property file is read
+    from mcl2pnml.core import queries
+    from mcl2pnml.io.pnml.source import Source, local, parse_xml
+    src = Source(filename, data)
+    return _QueryReader(src, local, queries).property_set(parse_xml(data, src).getroot())
 
-    def fail(message: str, el) -> QueryError:
-        return QueryError(message, src.locate(el))
 
+class _QueryReader:
+    """The contest's property language read from one file's elements, each fault at its
+    line and column (:meth:`fail`)."""
+
+    def __init__(self, src, local: Callable[[object], str], queries) -> None:
+        # (``local``: an element's name without its namespace, the PNML reader's, which
+        # comes with lxml; ``queries``: :mod:`mcl2pnml.core.queries`, imported by the caller)
+        self.src, self.local, self.q = src, local, queries
+        #: the contest's unary connectives and operators, by their elements
+        self.unary = {"negation": queries.Neg, "next": queries.Next,
+                      "globally": queries.Globally, "finally": queries.Finally,
+                      "all-paths": queries.AllPaths, "exists-path": queries.ExistsPath}
+
+    def fail(self, message: str, el) -> QueryError:
+        return QueryError(message, self.src.locate(el))
+
+    @staticmethod
     def children(el) -> list:
         return [c for c in el if isinstance(c.tag, str)]
 
-    def text(el) -> str:
+    def text(self, el) -> str:
         value = (el.text or "").strip()
-        if not value or children(el):
-            raise fail(f"<{_local(el)}> holds a name or a number, and nothing else", el)
+        if not value or self.children(el):
+            raise self.fail(f"<{self.local(el)}> holds a name or a number, and nothing else", el)
         return value
 
-    def names(el, tag: str) -> tuple[str, ...]:
+    def names(self, el, tag: str) -> tuple[str, ...]:
         found = []
-        for c in children(el):
-            if _local(c) != tag:
-                raise fail(f"<{_local(el)}> holds <{tag}> elements, not <{_local(c)}>", c)
-            found.append(text(c))
+        for c in self.children(el):
+            if self.local(c) != tag:
+                raise self.fail(f"<{self.local(el)}> holds <{tag}> elements, not "
+                                f"<{self.local(c)}>", c)
+            found.append(self.text(c))
         if not found:
-            raise fail(f"<{_local(el)}> names no {tag}", el)
+            raise self.fail(f"<{self.local(el)}> names no {tag}", el)
         return tuple(found)
 
-    def integer(el):
-        tag = _local(el)
+    def integer(self, el):
+        tag = self.local(el)
         if tag == "integer-constant":
-            value = text(el)
+            value = self.text(el)
             if not value.isdigit() or len(value) > 18:
-                raise fail(f"'{value[:40]}' is not a natural number", el)
-            return q.IntConst(int(value))
+                raise self.fail(f"'{value[:40]}' is not a natural number", el)
+            return self.q.IntConst(int(value))
         if tag == "tokens-count":
-            return q.TokensCount(names(el, "place"))
-        raise fail(f"<{tag}> is not an integer expression; one of <integer-constant>, "
-                   "<tokens-count>", el)
+            return self.q.TokensCount(self.names(el, "place"))
+        raise self.fail(f"<{tag}> is not an integer expression; one of <integer-constant>, "
+                        "<tokens-count>", el)
 
-    def one(el):
-        kids = children(el)
+    def one(self, el):
+        kids = self.children(el)
         if len(kids) != 1:
-            raise fail(f"<{_local(el)}> holds one formula, not {len(kids)}", el)
+            raise self.fail(f"<{self.local(el)}> holds one formula, not {len(kids)}", el)
         return kids[0]
 
-    unary = {"negation": q.Neg, "next": q.Next, "globally": q.Globally, "finally": q.Finally,
-             "all-paths": q.AllPaths, "exists-path": q.ExistsPath}
-
-    def formula(el, depth: int = 0):
+    def formula(self, el, depth: int = 0):
         if depth > MAX_DEPTH:
-            raise fail(f"a formula nested more than {MAX_DEPTH} deep", el)
-        tag = _local(el)
-        if tag in unary:
-            return unary[tag](formula(one(el), depth + 1))
+            raise self.fail(f"a formula nested more than {MAX_DEPTH} deep", el)
+        tag = self.local(el)
+        if tag in self.unary:
+            return self.unary[tag](self.formula(self.one(el), depth + 1))
         if tag in ("conjunction", "disjunction"):
-            args = tuple(formula(c, depth + 1) for c in children(el))
+            args = tuple(self.formula(c, depth + 1) for c in self.children(el))
             if not args:
-                raise fail(f"<{tag}> of nothing", el)
-            return (q.Conj if tag == "conjunction" else q.Disj)(args)
+                raise self.fail(f"<{tag}> of nothing", el)
+            return (self.q.Conj if tag == "conjunction" else self.q.Disj)(args)
         if tag == "until":
-            parts = {_local(c): c for c in children(el)}
-            if set(parts) != {"before", "reach"} or len(children(el)) != 2:
-                raise fail("<until> holds <before> and <reach>", el)
-            return q.Until(formula(one(parts["before"]), depth + 1),
-                           formula(one(parts["reach"]), depth + 1))
+            parts = {self.local(c): c for c in self.children(el)}
+            if set(parts) != {"before", "reach"} or len(self.children(el)) != 2:
+                raise self.fail("<until> holds <before> and <reach>", el)
+            return self.q.Until(self.formula(self.one(parts["before"]), depth + 1),
+                           self.formula(self.one(parts["reach"]), depth + 1))
         if tag == "integer-le":
-            kids = children(el)
+            kids = self.children(el)
             if len(kids) != 2:
-                raise fail(f"<integer-le> compares two integers, not {len(kids)}", el)
-            return q.IntLe(integer(kids[0]), integer(kids[1]))
+                raise self.fail(f"<integer-le> compares two integers, not {len(kids)}", el)
+            return self.q.IntLe(self.integer(kids[0]), self.integer(kids[1]))
         if tag == "is-fireable":
-            return q.Fireable(names(el, "transition"))
+            return self.q.Fireable(self.names(el, "transition"))
         if tag == "deadlock":
-            return q.Deadlock()
+            return self.q.Deadlock()
         if tag in ("true", "false"):
-            return q.BoolConst(tag == "true")
-        raise fail(f"<{tag}> is not an element of the contest's property language we read",
-                   el)
+            return self.q.BoolConst(tag == "true")
+        raise self.fail(f"<{tag}> is not an element of the contest's property language we "
+                        "read", el)
 
-    if _local(root) != "property-set":
-        raise fail(f"the root element is <{_local(root)}>, not <property-set>", root)
-    out, seen = [], set()
-    for prop in children(root):
-        if _local(prop) != "property":
-            raise fail(f"<property-set> holds <property> elements, not <{_local(prop)}>", prop)
-        parts = {}
-        for c in children(prop):
-            if _local(c) in parts:
-                raise fail(f"a second <{_local(c)}> in one property", c)
-            parts[_local(c)] = c
-        if "id" not in parts or "formula" not in parts:
-            raise fail("a <property> has an <id> and a <formula>", prop)
-        pid = text(parts["id"])
-        if pid in seen:
-            raise fail(f"a second property '{pid}'", parts["id"])
-        seen.add(pid)
-        body = one(parts["formula"])
-        if _local(body) == "place-bound":
-            asks = q.PlaceBound(names(body, "place"))
-        else:
-            asks = formula(body)
-        out.append(q.Query(pid, asks, src.locate(prop)))
-    return tuple(out)
+    def property_set(self, root) -> tuple[Query, ...]:
+        if self.local(root) != "property-set":
+            raise self.fail(f"the root element is <{self.local(root)}>, not <property-set>",
+                            root)
+        out, seen = [], set()
+        for prop in self.children(root):
+            if self.local(prop) != "property":
+                raise self.fail(f"<property-set> holds <property> elements, not "
+                                f"<{self.local(prop)}>", prop)
+            parts = {}
+            for c in self.children(prop):
+                if self.local(c) in parts:
+                    raise self.fail(f"a second <{self.local(c)}> in one property", c)
+                parts[self.local(c)] = c
+            if "id" not in parts or "formula" not in parts:
+                raise self.fail("a <property> has an <id> and a <formula>", prop)
+            pid = self.text(parts["id"])
+            if pid in seen:
+                raise self.fail(f"a second property '{pid}'", parts["id"])
+            seen.add(pid)
+            body = self.one(parts["formula"])
+            if self.local(body) == "place-bound":
+                asks = self.q.PlaceBound(self.names(body, "place"))
+            else:
+                asks = self.formula(body)
+            out.append(self.q.Query(pid, asks, self.src.locate(prop)))
+        return tuple(out)
