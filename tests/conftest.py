@@ -1,14 +1,20 @@
 """Shared fixtures: the official PNML grammar where it is, a validator every PNML test uses,
-graphviz, headless Chromium, and the engine under test; what tests import lives in helpers.py."""
+graphviz, headless Chromium, the engine under test, and the examples compiled once; what
+tests import lives in helpers.py."""
 from __future__ import annotations
 
+import functools
 import sys
+from pathlib import Path
 
 import pytest
 
 pytest.register_assert_rewrite("helpers")  # its assertions explain their failures, as a test's do
 
 from helpers import ENGINES, ROOT, Engine  # noqa: E402  (after the rewrite hook)
+
+from mcl2pnml import pipeline  # noqa: E402
+from mcl2pnml.core.net import Net  # noqa: E402
 
 sys.path.insert(0, str(ROOT))  # examples/ and paper_repro/ are not installed
 
@@ -77,6 +83,48 @@ def browser():
         b = p.chromium.launch(executable_path=executable, headless=True, args=CHROMIUM_FLAGS)
         yield b
         b.close()
+
+
+class CompiledExamples:
+    """``examples/NAME.mcl`` checked, compiled and written as PNML at most once per test
+    process, for the tests that need an example's net rather than the compiling itself.
+
+    Nets and checked programs are immutable, so every test may share them; the PNML
+    files are the ones ``mcl2pnml compile NAME.mcl -o NAME.pnml`` writes (laid out by
+    dot), in a folder of the session's, and are only to be read.
+    """
+
+    def __init__(self, folder: Path):
+        self.folder = folder
+
+    @staticmethod
+    def mission(name: str) -> Path:
+        """The example's source, by its stem (``sauce``) or file name."""
+        path = ROOT / "examples" / Path(name).with_suffix(".mcl").name
+        assert path.is_file(), f"no example {path}"
+        return path
+
+    # cached on the instance, which lives as long as the session: the point of the class
+    @functools.cache   # noqa: B019
+    def checked(self, name: str):
+        """The example as ``pipeline.check_file`` returns it."""
+        return pipeline.check_file(self.mission(name))
+
+    @functools.cache   # noqa: B019
+    def net(self, name: str) -> Net:
+        """The example's net, as ``pipeline.compile_file`` returns it."""
+        return pipeline.compile_file(self.mission(name), checked=self.checked(name))
+
+    @functools.cache   # noqa: B019
+    def pnml(self, name: str) -> Path:
+        """The example's net as ``mcl2pnml compile`` writes it (not to be written to)."""
+        return pipeline.save_pnml(self.net(name), self.folder / f"{self.mission(name).stem}.pnml")
+
+
+@pytest.fixture(scope="session")
+def examples(tmp_path_factory) -> CompiledExamples:
+    """Every example compiled once per test process (each xdist worker has its own)."""
+    return CompiledExamples(tmp_path_factory.mktemp("examples"))
 
 
 @pytest.fixture(params=[Engine(name) for name in ENGINES], ids=ENGINES)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import json
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -24,10 +25,17 @@ EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 
 
 def _certified(path: Path):
+    """The mission's net and certificate, the certificate a copy of its own to spoil."""
+    net, text = _certificate_text(path)
+    return net, json.loads(text)
+
+
+@functools.cache
+def _certificate_text(path: Path):
     checked = pipeline.check_file(path)
     net = pipeline.compile_checked(checked)
     # the certificate travels as JSON: the checker reads it as a file gives it
-    return net, json.loads(json.dumps(certify(checked)))
+    return net, json.dumps(certify(checked))
 
 
 @pytest.mark.parametrize("mission", EXAMPLES, ids=lambda p: p.stem)
@@ -279,7 +287,7 @@ def test_ten_thousand_certificates_are_what_exploring_finds(text):
 
 # -- the command line ----------------------------------------------------------------------
 
-def test_certify_writes_the_certificate_and_check_re_reads_it(tmp_path):
+def test_certify_writes_the_certificate_and_check_re_reads_it(tmp_path, examples):
     from helpers import run_cli
     mission = tmp_path / "sauce.mcl"
     mission.write_text((ROOT / "examples" / "sauce.mcl").read_text())
@@ -291,9 +299,7 @@ def test_certify_writes_the_certificate_and_check_re_reads_it(tmp_path):
     assert run_cli("compile", mission, "-o", tmp_path / "sauce.pnml").returncode == 0
     again = run_cli("certify", cert, "--check", tmp_path / "sauce.pnml")
     assert again.returncode == 0 and "certified from its parts" in again.stdout
-    other = tmp_path / "docking.pnml"
-    assert run_cli("compile", ROOT / "examples" / "docking.mcl", "-o", other).returncode == 0
-    wrong = run_cli("certify", cert, "--check", other)
+    wrong = run_cli("certify", cert, "--check", examples.pnml("docking"))
     assert wrong.returncode == 1 and "the certificate does not hold" in wrong.stdout
 
 
@@ -303,12 +309,11 @@ def test_certify_writes_the_certificate_and_check_re_reads_it(tmp_path):
     (["{mission}", "--net", "x"], "only --check reads a net file"),
     (["{tmp}/other.json"], "is not a mission (.mcl)"),
 ])
-def test_certify_errors_are_one_message(args, message, tmp_path):
+def test_certify_errors_are_one_message(args, message, tmp_path, examples):
     from helpers import run_cli
     (tmp_path / "bad.json").write_text("{\n  oops\n")
     (tmp_path / "other.json").write_text('{"format": 7}')
-    pnml = tmp_path / "s.pnml"
-    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o", pnml).returncode == 0
+    pnml = examples.pnml("sauce")
     args = [a.format(tmp=tmp_path, pnml=pnml, mission=ROOT / "examples" / "sauce.mcl")
             for a in args]
     out = run_cli("certify", *args)
@@ -535,16 +540,14 @@ def test_certify_with_an_abort_pending_ends_aborted_too(tmp_path):
 ], ids=["tree not a list", "no conclusion", "no tasks", "subject a list",
         "node without a name", "parent a string", "safe false", "no start"])
 def test_a_certificate_not_of_its_shape_is_one_message_at_its_json_path(spoil, message,
-                                                                       tmp_path):
+                                                                       tmp_path, examples):
     """A certificate is input like any other: spoilt by hand, it is refused with one line
     naming the file and the JSON path of the fault, exit 2, never a crash."""
     from helpers import run_cli
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     spoil(cert)
     (tmp_path / "c.json").write_text(json.dumps(cert))
-    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
-                   tmp_path / "s.pnml").returncode == 0
-    out = run_cli("certify", tmp_path / "c.json", "--check", tmp_path / "s.pnml")
+    out = run_cli("certify", tmp_path / "c.json", "--check", examples.pnml("sauce"))
     assert out.returncode == 2 and out.stdout == "", out.stderr
     assert out.stderr.startswith(f"{tmp_path / 'c.json'}: the certificate is ")
     assert message in out.stderr and out.stderr.count("\n") == 1, out.stderr
@@ -552,14 +555,12 @@ def test_a_certificate_not_of_its_shape_is_one_message_at_its_json_path(spoil, m
                                     for p in check_certificate(net, cert))
 
 
-def test_a_parent_out_of_range_is_a_certificate_that_does_not_hold(tmp_path):
+def test_a_parent_out_of_range_is_a_certificate_that_does_not_hold(tmp_path, examples):
     from helpers import run_cli
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     cert["trees"]["mission"][1]["parent"] = 10_000
     (tmp_path / "c.json").write_text(json.dumps(cert))
-    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
-                   tmp_path / "s.pnml").returncode == 0
-    out = run_cli("certify", tmp_path / "c.json", "--check", tmp_path / "s.pnml")
+    out = run_cli("certify", tmp_path / "c.json", "--check", examples.pnml("sauce"))
     assert out.returncode == 1 and "Traceback" not in out.stderr + out.stdout
     assert "parent 10000 is no other node of the tree" in out.stdout
 
@@ -610,7 +611,7 @@ def test_verifypn_and_lola_find_what_the_certificate_says(name, pending, tmp_pat
         assert ends_well == certified, (tool, said, certified)
 
 
-def test_a_user_s_reduced_model_is_no_ground_for_a_certificate(tmp_path):
+def test_a_user_s_reduced_model_is_no_ground_for_a_certificate(tmp_path, examples):
     """The proofs stand each child by the package's reduced model (Fig. 3): one a user puts
     in its place (here one that can only be aborted before it starts, which once crashed
     certifying with an abort pending) is refused by certify and by the checker, one
@@ -624,10 +625,8 @@ def test_a_user_s_reduced_model_is_no_ground_for_a_certificate(tmp_path):
     env = {**__import__("os").environ, "MCL2PNML_TEMPLATE_PATH": str(folder)}
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
     (tmp_path / "s.cert.json").write_text(json.dumps(cert))
-    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o",
-                   tmp_path / "s.pnml").returncode == 0
     for args in ([ROOT / "examples" / "sauce.mcl", "-o", tmp_path / "x.json", "--abort-pending"],
-                 [tmp_path / "s.cert.json", "--check", tmp_path / "s.pnml"]):
+                 [tmp_path / "s.cert.json", "--check", examples.pnml("sauce")]):
         out = run_cli("certify", *args, env=env)
         assert out.returncode in (1, 2) and "Traceback" not in out.stderr + out.stdout
         assert "the reduced task 'task-reduced' is not the package's" in out.stderr + out.stdout
@@ -642,7 +641,7 @@ def test_a_primitive_no_task_uses_is_covered_by_no_proof():
     assert any("primitive 'Spare' is used by no task" in p for p in check_certificate(net, cert))
 
 
-def test_hostile_certificates_are_refused_at_once_with_one_message(tmp_path):
+def test_hostile_certificates_are_refused_at_once_with_one_message(tmp_path, examples):
     """Bounds before work: a file over the size limit is refused before it is read (here a
     sparse file of 17 MiB), and the limit can be raised; a certificate naming more
     instances than the net has nodes is refused before its trees are read; one with a
@@ -650,8 +649,8 @@ def test_hostile_certificates_are_refused_at_once_with_one_message(tmp_path):
     malformed certificate beside a net, says so at its JSON path and stops."""
     from helpers import run_cli
     net, cert = _certified(ROOT / "examples" / "sauce.mcl")
-    pnml = tmp_path / "s.pnml"
-    assert run_cli("compile", ROOT / "examples" / "sauce.mcl", "-o", pnml).returncode == 0
+    pnml = tmp_path / "s.pnml"      # a copy: analyze reads the certificate written beside it
+    shutil.copyfile(examples.pnml("sauce"), pnml)
     big = tmp_path / "big.json"
     with open(big, "wb") as f:
         f.truncate(17 * 2**20)
