@@ -200,18 +200,11 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
     ``timed``: the timed semantics to write, when the caller has one already
     (default: :func:`~mcl2pnml.core.timing.mission_timing` of ``net``).
     """
-    if assumptions.priority:
-        raise TapnError("TAPAAL's urgent transitions are not first at their instant: a "
-                        "timed-arc net is written with the supervisor's steps urgent only "
-                        "(assumptions without priority)")
-    if assumptions.fair:
-        raise TapnError("a timed-arc net cannot say that a primitive reports eventually "
-                        "(fairness) without a bound; it is written without it")
+    _refuse_unsaid(assumptions)
     try:
         timed = timed or mission_timing(net, assumptions)
     except Mcl2PnmlError as e:
         raise TapnError(f"net '{net.name}': {e.message}") from None
-    pre, post = net.pre, net.post
     names = _Names()
     name = {p.id: names.take(p.id) for p in net.places}
     name.update({t.id: names.take(t.id) for t in net.transitions})
@@ -223,22 +216,7 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
         return n
 
     places = [TPlace(name[p.id], net.initial[p.id]) for p in net.places]
-    # per original transition: its arcs here, then what the clocks and gaps add
-    inputs: dict[str, list[TArc]] = {}
-    urgent: set[str] = set()
-    for t in net.transitions:
-        lo, hi = timed.intervals.get(t.id, (0, None))
-        n = name[t.id]
-        arcs = []
-        for a in pre[t.id]:
-            if a.kind is ArcKind.READ:
-                arcs.append(TArc("transport", name[a.source], name[a.source], weight=a.weight,
-                                 via=n))
-            else:
-                arcs.append(TArc("input", name[a.source], n, weight=a.weight))
-        inputs[t.id] = arcs
-        if (lo, hi) == (0, 0):
-            urgent.add(t.id)
+    inputs, urgent = _inputs(net, timed, name)
     extra_t: list[TTransition] = []
     extra_a: list[TArc] = []
     watched: dict[str, None] = {}
@@ -248,6 +226,54 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
     for members, (lo, hi) in _timers(net, timed):
         _clock(net, members, (lo, hi), name, new, places, inputs, extra_t, extra_a, guards,
                watched)
+    _one_token_each(net, watched)
+    gap_of = _report_gaps(timed, new, places)
+    transitions, arcs, copies = _variants(net, name, new, inputs, urgent, guards, gap_of)
+    notes = [f"{net.name or 'net'}: written by mcl2pnml {__version__} for TAPAAL's "
+             "verifydtapn (discrete time)",
+             f"time unit: {_seconds(timed.unit)} s (every age bound below counts this unit)",
+             f"assumptions: {assumptions.words()}"]
+    return TimedArcNet(net.name or "net", tuple(places), tuple(transitions + extra_t),
+                       tuple(arcs + extra_a), name, copies, timed.unit, assumptions,
+                       tuple(name[p] for p in watched), tuple(notes), added)
+
+
+def _refuse_unsaid(assumptions: Assumptions) -> None:
+    """Refuse the assumptions a timed-arc net cannot say."""
+    if assumptions.priority:
+        raise TapnError("TAPAAL's urgent transitions are not first at their instant: a "
+                        "timed-arc net is written with the supervisor's steps urgent only "
+                        "(assumptions without priority)")
+    if assumptions.fair:
+        raise TapnError("a timed-arc net cannot say that a primitive reports eventually "
+                        "(fairness) without a bound; it is written without it")
+
+
+def _inputs(net: Net, timed: TimedNet, name: Mapping[str, str]
+            ) -> tuple[dict[str, list[TArc]], set[str]]:
+    """Per original transition, its input arcs here (a read arc a transport arc back into
+    its place), to which the clocks and gaps add; and the transitions that are urgent."""
+    inputs: dict[str, list[TArc]] = {}
+    urgent: set[str] = set()
+    for t in net.transitions:
+        lo, hi = timed.intervals.get(t.id, (0, None))
+        n = name[t.id]
+        arcs = []
+        for a in net.pre[t.id]:
+            if a.kind is ArcKind.READ:
+                arcs.append(TArc("transport", name[a.source], name[a.source], weight=a.weight,
+                                 via=n))
+            else:
+                arcs.append(TArc("input", name[a.source], n, weight=a.weight))
+        inputs[t.id] = arcs
+        if (lo, hi) == (0, 0):
+            urgent.add(t.id)
+    return inputs, urgent
+
+
+def _one_token_each(net: Net, watched: Mapping[str, None]) -> None:
+    """Refuse a place a clock watches that may hold two tokens: the clocks are written for
+    places of one token."""
     for p in watched:
         if net.initial[p] > 1:
             raise TapnError(f"place '{p}' starts with {net.initial[p]} tokens: the clocks of "
@@ -257,7 +283,12 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
                 raise TapnError(f"place '{p}' has an arc of weight {a.weight} "
                                 f"({a.source} -> {a.target}): the clocks of the transitions "
                                 "it enables are written for places of one token")
-    # the reports' gaps: each report twice, the first of the run and one after a gap
+
+
+def _report_gaps(timed: TimedNet, new, places: list[TPlace]) -> dict[str, tuple[str, str, int]]:
+    """The reports' gaps: per primitive, a place of no report yet and one whose token's age
+    is the time since the last report (added to ``places``); per report transition, those
+    two places and its gap."""
     gap_of: dict[str, tuple[str, str, int]] = {}
     for members, gap in timed.gaps:
         if gap <= 0:
@@ -268,6 +299,15 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
         places += [TPlace(first, 1), TPlace(last, 0)]
         for t_id in members:
             gap_of[t_id] = (first, last, gap)
+    return gap_of
+
+
+def _variants(net: Net, name: Mapping[str, str], new, inputs: Mapping[str, list[TArc]],
+              urgent: set[str], guards: Mapping[str, list], gap_of: Mapping[str, tuple]
+              ) -> tuple[list[TTransition], list[TArc], dict[str, tuple[str, ...]]]:
+    """Each original transition as its copies here, with their arcs: a report twice (the
+    first of the run, and one after a gap), each copy once per way of firing a clock it
+    must not restart by mistake; and the copies of each."""
     transitions: list[TTransition] = []
     arcs: list[TArc] = []
     copies: dict[str, tuple[str, ...]] = {}
@@ -288,17 +328,11 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
             transitions.append(TTransition(v, urgent=t.id in urgent))
             for a in inputs[t.id] + own:
                 arcs.append(replace(a, via=v) if a.kind == "transport" else replace(a, target=v))
-            for a in post[t.id]:
+            for a in net.post[t.id]:
                 arcs.append(TArc("output", v, name[a.target], weight=a.weight))
             if t.id in gap_of:
                 arcs.append(TArc("output", v, gap_of[t.id][1]))
-    notes = [f"{net.name or 'net'}: written by mcl2pnml {__version__} for TAPAAL's "
-             "verifydtapn (discrete time)",
-             f"time unit: {_seconds(timed.unit)} s (every age bound below counts this unit)",
-             f"assumptions: {assumptions.words()}"]
-    return TimedArcNet(net.name or "net", tuple(places), tuple(transitions + extra_t),
-                       tuple(arcs + extra_a), name, copies, timed.unit, assumptions,
-                       tuple(name[p] for p in watched), tuple(notes), added)
+    return transitions, arcs, copies
 
 
 def _timers(net: Net, timed: TimedNet) -> list[tuple[list[str], tuple[int, int | None]]]:
