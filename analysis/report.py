@@ -22,8 +22,10 @@ answer is partial (exit status 3) rather than the process killed.
 """
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Mapping
 
+from mcl2pnml.core.bounds import MAX_STATES
 from mcl2pnml.core.memory import (NEGLIGIBLE, Budget, BudgetExceeded, guard, margin, release,
                                   resident, size_text)
 from mcl2pnml.core.net import Net
@@ -96,11 +98,134 @@ def output_estimate(vectors) -> int:
     return sum(len(v) * OUTPUT_ENTRY + sum(map(len, v)) * 2 for v in vectors)
 
 
+@dataclass(frozen=True)
+class StateSpaceFacts:
+    """What the state space says of a net (all of ``--state-space``): None where it was not
+    explored; the termination facts are :mod:`mcl2pnml.analysis.behaviour`'s."""
+
+    net: str
+    places: int
+    transitions: int
+    arcs: int
+    #: the initial marking as the answer writes markings: ``P``, ``P*2``
+    initial_marking: list[str]
+    states: int | None
+    bounded: bool | None
+    safe: bool | None
+    terminal_markings: list[list[str]] | None
+    #: "mission": the paper's interface (fusion places or result places); "none": any other
+    interface: str
+    deadlock_free: bool | None
+    deadlock_free_textbook: bool | None
+    deadlocks: list[list[str]] | None
+    ends_properly: bool | None
+    final_always_reachable: bool | None
+    home_marking: bool | None
+    reusable: bool | None
+
+
+@dataclass(frozen=True)
+class Structural:
+    """Invariants, siphons and traps (:func:`_structural`); each None past its limit or left
+    out by the budget, the reason in :attr:`Analysis.limits`."""
+
+    p_invariants: list[dict[str, int]] | None
+    t_invariants: list[dict[str, int]] | None
+    semipositive_p_invariants: list[dict[str, int]] | None
+    semipositive_t_invariants: list[dict[str, int]] | None
+    siphons: list[list[str]] | None
+    #: each siphon's control (Iordache and Antsaklis 2006): siphon, marked, source,
+    #: controlled, controlled_by
+    siphon_control: list[dict[str, Any]] | None
+    siphons_controlled: bool | None
+    traps: list[list[str]] | None
+
+
+@dataclass(frozen=True)
+class Partial:
+    """Why the answer is partial: the exploration stopped (``stopped``: the markings it
+    explored, None when they are lost, and whether a dead one was met), or the budget
+    left stages out (``left_out``: each stage and why)."""
+
+    stopped: bool = False
+    markings_explored: int | None = None
+    deadlock_found: bool | None = None
+    left_out: Mapping[str, str] = field(default_factory=dict)
+
+    def as_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        if self.stopped:
+            out.update(markings_explored=self.markings_explored,
+                       deadlock_found=self.deadlock_found)
+        if self.left_out:
+            out["left_out"] = dict(self.left_out)
+        return out
+
+
+@dataclass(frozen=True)
+class CertifiedFacts:
+    """A certificate beside the net that holds for it (:mod:`mcl2pnml.certify`): the
+    behaviour it proves, without exploring; ``ends`` those the checker derived."""
+
+    file: str
+    ends: list[str]
+
+    def as_json(self) -> dict[str, Any]:
+        return {"file": self.file, "holds": True, "ends": self.ends}
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """One analysis of a net: what :func:`analyze` found, as ``analyze --json`` prints it
+    (:meth:`as_json`) and as the report for people (:meth:`text`).
+
+    ``structural``: None under ``--state-space`` (the answer then has no such keys);
+    ``limits``: each result not computed, and why; ``certificate``: the certificate whose
+    facts replace the exploration's; ``stubborn``: verdicts found under partial-order
+    reduction.
+    """
+
+    facts: StateSpaceFacts
+    structural: Structural | None = None
+    partial: Partial | None = None
+    limits: Mapping[str, str] = field(default_factory=dict)
+    certificate: CertifiedFacts | None = None
+    stubborn: bool = False
+
+    def certified(self, certificate: CertifiedFacts) -> "Analysis":
+        """This analysis with the facts a holding certificate proves (sections 2.3-2.5):
+        bounded, 1-safe, free of deadlocks, ends properly, an end always reachable,
+        reusable."""
+        proven = replace(self.facts, bounded=True, safe=True, deadlock_free=True,
+                         ends_properly=True, final_always_reachable=True, reusable=True)
+        return replace(self, facts=proven, certificate=certificate)
+
+    def as_json(self) -> dict[str, Any]:
+        """The object ``analyze --json`` prints, its keys in the order it prints them."""
+        out = {f.name: getattr(self.facts, f.name) for f in fields(StateSpaceFacts)}
+        if self.structural is not None:
+            out.update((f.name, getattr(self.structural, f.name))
+                       for f in fields(Structural))
+        if self.partial is not None:
+            out["partial"] = self.partial.as_json()
+        if self.limits:
+            out["limits"] = dict(self.limits)
+        if self.certificate is not None:
+            out["certificate"] = self.certificate.as_json()
+        if self.stubborn:
+            out["stubborn"] = True
+        return out
+
+    def text(self) -> str:
+        """The report of short tables, for people (:func:`render_text`)."""
+        return render_text(self.as_json())
+
+
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
-            max_states: int = 5_000_000, progress: Progress | None = None,
+            max_states: int = MAX_STATES, progress: Progress | None = None,
             explorer: str = "auto", max_memory: int | None = None,
-            explore_states: bool = True) -> dict[str, Any]:
-    """Everything we know how to prove about ``net``, as JSON-ready data.
+            explore_states: bool = True) -> Analysis:
+    """Everything we know how to prove about ``net``, as typed data (:class:`Analysis`).
 
     ``explorer`` is one of :data:`mcl2pnml.analysis.statespace.explore.BACKENDS`; ``max_memory``
     is the exploration's budget in bytes (default: half the memory available).
@@ -127,9 +252,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         result = _state_space_facts(net, s, None)
         result.update(structural)
         _fit_output(result, limits, left_out, budget)
-        if limits:
-            result["limits"] = limits
-        return result
+        return _typed(result, state_space_only, None, limits)
     try:
         with guard(_floored(budget), "the exploration"):
             space = explore(s, max_states=max_states, progress=progress, backend=explorer,
@@ -140,26 +263,30 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         # an explorer's estimate of its markings fell short (or what follows the
         # exploration did not fit): the markings found are lost with it
         limits["states"] = e.message
-        partial = {"markings_explored": None, "deadlock_found": None}
+        partial = Partial(stopped=True)
         facts = _state_space_facts(net, s, None)
     except ExplorationLimit as e:
         if state_space_only and not isinstance(e, MemoryLimit):
             raise
         limits["states"] = e.message
-        partial = {"markings_explored": e.explored,
-                   "deadlock_found": None if e.deadlocks is None else e.deadlocks > 0}
+        partial = Partial(True, e.explored, None if e.deadlocks is None else e.deadlocks > 0)
         facts = _state_space_facts(net, s, None)
     result = facts
     result.update(structural)
     _fit_output(result, limits, left_out, budget)
     if left_out:
-        partial = partial or {}
-        partial["left_out"] = left_out
-    if partial is not None:
-        result["partial"] = partial
-    if limits:
-        result["limits"] = limits
-    return result
+        partial = replace(partial or Partial(), left_out=left_out)
+    return _typed(result, state_space_only, partial, limits)
+
+
+def _typed(result: dict[str, Any], state_space_only: bool, partial: Partial | None,
+           limits: dict[str, str]) -> Analysis:
+    """The answer built as a dictionary (the budget leaves its lists out by key) as an
+    :class:`Analysis`."""
+    facts = StateSpaceFacts(**{f.name: result[f.name] for f in fields(StateSpaceFacts)})
+    structural = None if state_space_only else Structural(
+        **{f.name: result[f.name] for f in fields(Structural)})
+    return Analysis(facts, structural, partial, limits)
 
 
 def _floored(budget: Budget) -> Budget:

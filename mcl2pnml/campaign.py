@@ -44,10 +44,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from importlib import import_module
 from pathlib import Path
-from typing import Callable, Iterable, Iterator
+from typing import Callable, Iterator
 from urllib.parse import urlsplit
 
-from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
+from mcl2pnml.core.bounds import MAX_RUN_TIME
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.settings import SettingError
 
 #: Runs per task sent to a worker.
 BATCH = 500
@@ -81,6 +83,8 @@ STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 DASK_LOGGERS = ("distributed", "tornado", "asyncio", "bokeh")
 #: The indifference region of the sequential test, either side of its target.
 INDIFFERENCE = 0.02
+#: The confidence of the intervals and the sequential test, unless told (``--confidence``).
+CONFIDENCE = 0.99
 
 
 @dataclass(frozen=True)
@@ -145,24 +149,24 @@ def scheduler_address(text: str) -> str:
 def check_outputs(table: Path | None, plot: Path | None) -> None:
     """Refuse, before any run, a table or a plot that could not be written once the runs
     are done: a suffix that says no format we write, a folder that does not exist, a
-    Parquet table without pyarrow (one :class:`OptionError`)."""
-    for option, path, suffixes in (("--table", table, TABLE_SUFFIXES),
-                                   ("--plot", plot, PLOT_SUFFIXES)):
+    Parquet table without pyarrow (one :class:`~mcl2pnml.core.settings.SettingError`)."""
+    for setting, path, suffixes in (("table", table, TABLE_SUFFIXES),
+                                    ("plot", plot, PLOT_SUFFIXES)):
         if path is None:
             continue
         if path.suffix.lower() not in suffixes:
-            raise OptionError(option, f"'{path}' has no suffix of a format it is written "
-                                      f"in: {', '.join(suffixes)}")
+            raise SettingError(setting, f"'{path}' has no suffix of a format it is written "
+                                        f"in: {', '.join(suffixes)}")
         folder = path.parent if str(path.parent) else Path(".")
         if not folder.is_dir():
-            raise OptionError(option, f"the folder of '{path}' does not exist")
+            raise SettingError(setting, f"the folder of '{path}' does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
-            raise OptionError(option, f"the folder of '{path}' cannot be written to")
+            raise SettingError(setting, f"the folder of '{path}' cannot be written to")
     if table is not None and table.suffix.lower() == ".parquet":
         from importlib.util import find_spec
         if find_spec("pyarrow") is None:
-            raise OptionError("--table", "a Parquet table needs pyarrow (pip install "
-                                         "pyarrow); or write .csv")
+            raise SettingError("table", "a Parquet table needs pyarrow (pip install "
+                                        "pyarrow); or write .csv")
 
 
 @dataclass(frozen=True)
@@ -346,7 +350,7 @@ class Sprt:
 class Campaign:
     """A campaign's runs so far, in seed order, and its figures."""
 
-    confidence: float = 0.99
+    confidence: float = CONFIDENCE
     runs: list[Flown] = field(default_factory=list)
     sprt: Sprt | None = None
     #: the names of the properties judged on each run, in the order of ``Flown.fails``
@@ -413,9 +417,10 @@ def _z(confidence: float) -> float:
 
 
 def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = "petri", seed: int = 0,
-        confidence: float = 0.99, target: float | None = None, workers: int | None = None,
-        scheduler: str | None = None, timeouts: SchedulerTimeouts = SchedulerTimeouts(),
-        max_time: float = 24 * 3600.0, properties: tuple = (),
+        confidence: float = CONFIDENCE, target: float | None = None,
+        workers: int | None = None, scheduler: str | None = None,
+        timeouts: SchedulerTimeouts = SchedulerTimeouts(), max_time: float = MAX_RUN_TIME,
+        properties: tuple = (),
         progress: Callable[[int, int], None] | None = None) -> Campaign:
     """Fly the campaign (the module's documentation) and return its runs in seed order,
     each judged on ``properties`` (compiled on the mission's net: the Petri-net engine's
@@ -428,7 +433,7 @@ def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = "petri", seed: 
         try:
             scheduler = scheduler_address(scheduler)
         except ValueError as e:
-            raise OptionError("--scheduler", str(e)) from None
+            raise SettingError("scheduler", str(e)) from None
     campaign = Campaign(confidence, sprt=Sprt(target, confidence) if target else None,
                         properties=tuple(p.name for p in properties), fleet=fleet)
     flight = _Flight(campaign, runs, (str(mission.resolve()), fleet, engine), seed,
@@ -831,42 +836,3 @@ def _map(ax, fleet: Fleet, runs: list[Flown]) -> None:
     ax.set_ylabel("y (m)")
     ax.set_title(f"the tracks of the first {len(runs)} runs")
     ax.legend(fontsize=7, loc="upper right")
-
-
-def lines(campaign: Campaign, mission: str) -> Iterable[str]:
-    data = campaign.as_json()
-    fleet = campaign.fleet
-    vehicle = (f"the vehicle model {Path(fleet.model).name}" if fleet.model else
-               f"the simulator in {Path(fleet.world).name}" if fleet.world else
-               "the simulator in its default world")
-    if fleet.faults:
-        vehicle += f", with the faults of {Path(fleet.faults).name}"
-    yield (f"{mission}: {data['runs']:,} simulated runs with {vehicle} "
-           f"({campaign.confidence:.0%} Wilson intervals):")
-    for o, d in data["outcomes"].items():
-        low, high = d["interval"]
-        yield f"  {o:<9} {d['runs']:>7,}  {d['frequency']:.4f}  [{low:.4f}, {high:.4f}]"
-    t = data["end_time"]
-    if t:
-        yield (f"  end time: mean {t['mean']:.2f} s (± {t['mean_interval_halfwidth']:.2f}), "
-               f"standard deviation {t['std']:.2f} s; 5% by {t['p5']:g} s, half by "
-               f"{t['p50']:g} s, 95% by {t['p95']:g} s")
-    if "properties" in data:
-        yield "  the properties (how often each held, on the runs that ended or stalled):"
-        width = max(len(p["property"]) for p in data["properties"])
-        for p in data["properties"]:
-            if p["holds"] is None:
-                yield f"    {p['property']:<{width}}  not judged (every run hit the time limit)"
-                continue
-            low, high = p["interval"]
-            first = p["first_failing_seed"]
-            yield (f"    {p['property']:<{width}}  {p['holds']:.4f}  [{low:.4f}, {high:.4f}]"
-                   + (f"  first fails on seed {first}" if first is not None else ""))
-    if campaign.again is not None:
-        seed, outcome, command = campaign.again
-        yield f"  the first run not OK, {outcome}, flies again alone: {command}"
-    if "test" in data:
-        test = data["test"]
-        yield (f"  {test['hypothesis']}: " + (f"decided {test['decided']} after "
-                                              f"{test['after_runs']:,} runs"
-                                              if test["decided"] else "not decided"))

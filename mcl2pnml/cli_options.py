@@ -2,7 +2,8 @@
 
 Declarations only, no logic: :mod:`mcl2pnml.cli` applies them to its commands, which
 parse and print. Each long option stack is one composed decorator (``RUN_OPTIONS``...),
-its options in the order ``--help`` lists them.
+its options in the order ``--help`` lists them. Each default is the command's options
+dataclass's (:mod:`mcl2pnml.commands`), or a shared bound's, never written here.
 """
 from __future__ import annotations
 
@@ -11,13 +12,19 @@ from pathlib import Path
 import click
 
 from mcl2pnml.analysis.statespace.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
-from mcl2pnml import pipeline
 from mcl2pnml.campaign import SchedulerTimeouts, scheduler_address
-from mcl2pnml.core.bounds import (MAX_MISSION_SIZE, MAX_PROPERTIES_SIZE,
-                                  MAX_PROPERTY_ATOMS as PROPERTY_ATOMS)
+from mcl2pnml.commands.analyze import AnalyzeOptions
+from mcl2pnml.commands.campaign import CampaignOptions
+from mcl2pnml.commands.certify import CertifyOptions
+from mcl2pnml.commands.common import FORMAT, MISSION_SIZE, PROPERTIES_SIZE
+from mcl2pnml.commands.compile import CompileOptions
+from mcl2pnml.commands.odds import OddsOptions
+from mcl2pnml.commands.query import EXAMINATIONS, QueryOptions
+from mcl2pnml.commands.show import ShowOptions
+from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
-from mcl2pnml.runtime.limits import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
+from mcl2pnml.runtime.options import RunOptions
 from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
@@ -32,12 +39,10 @@ LENIENT_OPTION = click.option(
          "markings, TAPAAL's own format, WoPeD's subprocesses, several nets) that the strict "
          "reading refuses (docs/pnml.md). A proof never rests on it: a certificate beside "
          "the file is not taken, and certify --check always reads strictly.")
-MISSION_SIZE = f"{MAX_MISSION_SIZE >> 20}M"
 MISSION_SIZE_OPTION = click.option(
     "--max-mission-size", "max_mission_size", metavar="SIZE", default=MISSION_SIZE,
     show_default=True, help="Refuse a mission (an .mcl file) larger than this, before "
     "reading it.")
-PROPERTIES_SIZE = f"{MAX_PROPERTIES_SIZE >> 20}M"
 PROPERTIES_SIZE_OPTION = click.option(
     "--max-properties-size", "max_props_size", metavar="SIZE", default=PROPERTIES_SIZE,
     show_default=True,
@@ -46,12 +51,9 @@ ATOMS_OPTION = click.option(
     "--max-atoms", metavar="N", type=click.IntRange(min=1), default=PROPERTY_ATOMS,
     show_default=True, help="With --properties: refuse properties of more than N atoms in "
     "all (the mission's and the file's), before checking them.")
-CERTIFICATE_SIZE = f"{pipeline.MAX_CERTIFICATE >> 20}M"
-
-
 def _certificate_size_option(said: str):
     return click.option("--max-certificate-size", "max_cert", metavar="SIZE",
-                        default=CERTIFICATE_SIZE, show_default=True, help=said)
+                        default=CertifyOptions.max_cert, show_default=True, help=said)
 
 
 STRICT_OPTION = click.option(
@@ -60,7 +62,7 @@ STRICT_OPTION = click.option(
     "that is meant is acknowledged in the mission: // mcl: allow W001 because ...")
 
 
-FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default="pnml",
+FORMAT_OPTION = click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=FORMAT,
                              show_default=True,
                              help="; ".join(f"{f.name}: {f.says}" for f in FORMATS.values()))
 
@@ -93,20 +95,47 @@ CHECK_OPTIONS = _composed(  # check MISSION
 )
 
 
+FUNCTIONAL_OPTIONS = _composed(  # functional MISSION
+    click.option("--functions", "functions", is_flag=True,
+                 help="Also print each function's body in functional form."),
+    MISSION_SIZE_OPTION,
+)
+
+
+VALIDATE_OPTIONS = _composed(  # validate FILE
+    click.option("--grammar", type=click.Path(exists=True, file_okay=False, path_type=Path),
+                 help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...), "
+                      "applied as well as mcl2pnml's own schema. Default: "
+                      "$MCL2PNML_PNML_GRAMMAR, else a shared/pnml-grammar beside or above, "
+                      "else none."),
+    NET_OPTION,
+)
+
+
+TEMPLATE_OPTIONS = _composed(  # template [NAME]
+    click.option("--list", "list_", is_flag=True, help="List the template nets and exit."),
+    click.option("-o", "--output", type=OUTPUT,
+                 help="Write here (default: PNML to standard output)."),
+    FORMAT_OPTION,
+)
+
+
 COMPILE_OPTIONS = _composed(  # compile MISSION
     click.option("-o", "--output", type=OUTPUT, help="Write here (default: MISSION.suffix)."),
     FORMAT_OPTION,
-    click.option("--layout", "layout_engine", type=click.Choice(ENGINES), default="auto",
+    click.option("--layout", "layout_engine", type=click.Choice(ENGINES),
+                 default=CompileOptions.layout_engine,
                  show_default=True,
                  help="Node positions in the PNML: graphviz dot, BFS layers, or none "
                       f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,})."),
-    click.option("--expand", metavar="NAME[,NAME...]|all", default="",
+    click.option("--expand", metavar="NAME[,NAME...]|all", default=CompileOptions.expand,
                  help="For a drawing (svg, png, dot): the calls drawn open, by the names on "
                       "their boxes, or all; the others are drawn shut, one box each."),
     click.option("--queries", type=OUTPUT, metavar="FILE.xml",
                  help="Also write the mission's properties (deadlock, an end always reachable) "
                       "in the Model Checking Contest's XML, for the tools that read the PNML."),
-    click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)), default="verifypn",
+    click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)),
+                 default=CompileOptions.tool,
                  show_default=True, help="How --queries writes a deadlock inside a formula: "
                  + "; ".join(f"{name}: {form}" for name, form in QUERY_TOOLS.items())),
     click.option("--properties", "properties", is_flag=False, flag_value="", default=None,
@@ -130,10 +159,11 @@ COMPILE_OPTIONS = _composed(  # compile MISSION
 
 
 RUN_OPTIONS = _composed(  # run MISSION
-    click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
+    click.option("--engine", type=click.Choice(["petri", "reference"]),
+                 default=RunOptions.engine,
                  show_default=True, help="petri: the executor plays the compiled net; "
                  "reference: MCL interpreted directly. Both must give the same result."),
-    click.option("--vehicle", default="sim", show_default=True,
+    click.option("--vehicle", default=RunOptions.vehicle, show_default=True,
                  metavar="|".join(kind.name for kind in VEHICLES),
                  help="The AUV simulator (it offers " + ", ".join(sorted(simulated()))
                  + ", and those of --sim-primitives and installed packages; docs/simulator.md; "
@@ -155,17 +185,19 @@ RUN_OPTIONS = _composed(  # run MISSION
     click.option("--tls-cert", type=FILE, help="With --tls-ca: this end's certificate (PEM), for "
                  "a bridge that requires one."),
     click.option("--tls-key", type=FILE, help="The private key of --tls-cert (PEM)."),
-    click.option("--heartbeat", type=click.FloatRange(min=0, min_open=True), default=HEARTBEAT,
-                 show_default=True, help="Seconds between the heartbeats sent to the bridge (to an "
+    click.option("--heartbeat", type=click.FloatRange(min=0, min_open=True),
+                 default=RunOptions.heartbeat, show_default=True, help="Seconds between the heartbeats sent to the bridge (to an "
                  "autopilot: of its clock, so faster on a simulator sped up)."),
-    click.option("--liveness", type=click.FloatRange(min=0, min_open=True), default=LIVENESS,
-                 show_default=True, help="Seconds without a line from the bridge (its heartbeats "
+    click.option("--liveness", type=click.FloatRange(min=0, min_open=True),
+                 default=RunOptions.liveness, show_default=True, help="Seconds without a line from the bridge (its heartbeats "
                  "included; an autopilot's heartbeat) after which the link is lost: the run "
                  "stops, with its safe stop."),
     click.option("--send-timeout", type=click.FloatRange(min=0, min_open=True),
-                 default=SEND_TIMEOUT, show_default=True, help="Seconds a line to the bridge may "
+                 default=RunOptions.send_timeout, show_default=True,
+                 help="Seconds a line to the bridge may "
                  "take to send before the link is lost (a bridge that does not read)."),
-    click.option("--max-line", type=click.IntRange(min=256), default=MAX_LINE, show_default=True,
+    click.option("--max-line", type=click.IntRange(min=256), default=RunOptions.max_line,
+                 show_default=True,
                  help="The longest line (bytes) the bridge may send; a longer one loses the link."),
     click.option("--json", "as_json", is_flag=True, help="Print only {outcome, time, trace} "
                  "(and safe_stop, safe_state, problems where there are: docs/running.md)."),
@@ -182,7 +214,7 @@ RUN_OPTIONS = _composed(  # run MISSION
                       "a script; docs/faults.md), drawn with the seed of sim@SEED or "
                       "model:MODEL.json@SEED (else 0): a campaign's run flown again alone."),
     click.option("--transitions", is_flag=True, help="Show fired transitions in the live log."),
-    click.option("--max-time", type=click.FloatRange(min=0), default=24 * 3600.0,
+    click.option("--max-time", type=click.FloatRange(min=0), default=RunOptions.max_time,
                  show_default=True, help="Stop a mission still running at this time (virtual, or "
                  "the wall clock's for a real vehicle, the autopilot's own for --vehicle "
                  "mavlink): outcome TIMELIMIT, with the safe stop."),
@@ -207,9 +239,11 @@ SHOW_OPTIONS = _composed(  # show WHAT
                  help="Serve the page on loopback (127.0.0.1, a random token in its URL) and "
                       "follow the run of this log as it is written (`run --log`); stops on "
                       "Ctrl-C or after the run's outcome has been shown (--linger)."),
-    click.option("--port", type=click.IntRange(0, 65535), default=0, show_default=True,
+    click.option("--port", type=click.IntRange(0, 65535), default=ShowOptions.port,
+                 show_default=True,
                  help="With --live: the port (0: one the system picks)."),
-    click.option("--linger", type=click.FloatRange(min=0), default=10.0, show_default=True,
+    click.option("--linger", type=click.FloatRange(min=0), default=ShowOptions.linger,
+                 show_default=True,
                  metavar="SECONDS", help="With --live: stop this long after the page was handed "
                                          "the run's outcome."),
     NET_OPTION,
@@ -240,11 +274,13 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
                  help="Start from this marking instead of the file's (P*2 for two tokens)."),
     click.option("--state-space", is_flag=True,
                  help="The reachable markings only (no invariants)."),
-    click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
+    click.option("--max-states", type=click.IntRange(min=1),
+                 default=AnalyzeOptions.max_states,
                  show_default=True, help="Stop exploring past this many markings."),
     click.option("--progress/--no-progress", default=None,
                  help="Show the progress of long explorations (default: on a terminal)."),
-    click.option("--explorer", type=click.Choice(EXPLORERS), default="auto", show_default=True,
+    click.option("--explorer", type=click.Choice(EXPLORERS), default=AnalyzeOptions.explorer,
+                 show_default=True,
                  help="; ".join(f"{e.name}: {e.doc}" for e in EXPLORER_TABLE.values())
                  + ". auto: the fastest for the net's kind and size."),
     click.option("--max-memory", metavar="SIZE",
@@ -271,7 +307,7 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
                       "that does (printed, and in --json). Without it (or --counterexamples), "
                       "a counterexample is its firing sequence only, which costs nothing more."),
     click.option("--max-counterexamples", metavar="N", type=click.IntRange(min=0),
-                 default=pipeline.MAX_COUNTEREXAMPLES, show_default=True,
+                 default=AnalyzeOptions.max_counterexamples, show_default=True,
                  help="With --explain or --counterexamples: explain (print, and write) the "
                       "counterexamples of the first N failing properties only; the others are "
                       "given their verdict and firing sequence, and their number is said."),
@@ -286,9 +322,11 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
                       "time-divergent runs, under the vehicle's assumptions below. The default "
                       "for a mission's --properties; --untimed: on every run of the net, as "
                       "other Petri-net tools read it."),
-    click.option("--ack-within", metavar="SECONDS", default="0", show_default=True,
+    click.option("--ack-within", metavar="SECONDS", default=AnalyzeOptions.ack_within,
+                 show_default=True,
                  help="With --timed: the vehicle acknowledges enable and disable within this."),
-    click.option("--report-gap", metavar="SECONDS", default="1", show_default=True,
+    click.option("--report-gap", metavar="SECONDS", default=AnalyzeOptions.report_gap,
+                 show_default=True,
                  help="With --timed: a primitive's reports are at least this far apart."),
     click.option("--fair-reports", is_flag=True,
                  help="With --timed: a primitive that is on reports eventually (without it, a "
@@ -306,11 +344,10 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
 
 QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
     click.option("--examination", "examinations", multiple=True,
-                 type=click.Choice(["ReachabilityDeadlock", "OneSafe", "StableMarking",
-                                    "QuasiLiveness", "Liveness"]),
+                 type=click.Choice(list(EXAMINATIONS)),
                  help="Also a generic examination of the contest (may be repeated)."),
     click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
-    click.option("--max-states", type=click.IntRange(min=1), default=5_000_000,
+    click.option("--max-states", type=click.IntRange(min=1), default=QueryOptions.max_states,
                  show_default=True,
                  help="Build no reachability graph past this many markings: then the "
                       "reachability questions are searched on the fly (up to as many), and "
@@ -340,7 +377,7 @@ ODDS_OPTIONS = _composed(  # odds MISSION
     click.option("--prism", type=OUTPUT, metavar="FILE.pm",
                  help="Write the chain in PRISM's language (PRISM and Storm read it)."),
     _properties_options("Also the probability that each property holds"),
-    click.option("--max-states", type=click.IntRange(min=1), default=200_000,
+    click.option("--max-states", type=click.IntRange(min=1), default=OddsOptions.max_states,
                  show_default=True, help="Refuse a chain of more states than this."),
     MISSION_SIZE_OPTION,
 )
@@ -384,14 +421,18 @@ CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
                  help="Inject these faults into every run (docs/faults.md): reports lost, "
                       "repeated, late, goals failed."),
     _properties_options("Judge each run on the properties, how often each holds"),
-    click.option("--runs", type=click.IntRange(min=1, max=10_000_000), default=1000,
+    click.option("--runs", type=click.IntRange(min=1, max=10_000_000),
+                 default=CampaignOptions.runs,
                  show_default=True, help="How many runs (fewer if --target decides first)."),
-    click.option("--engine", type=click.Choice(["petri", "reference"]), default="petri",
+    click.option("--engine", type=click.Choice(["petri", "reference"]),
+                 default=CampaignOptions.engine,
                  show_default=True, help="The engine that runs the mission."),
-    click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+    click.option("--seed", type=click.IntRange(min=0), default=CampaignOptions.seed,
+                 show_default=True,
                  help="Run k draws with seed SEED+k (run --vehicle model:MODEL.json@SEED, "
                       "or sim@SEED, flies it again alone)."),
-    click.option("--confidence", type=click.FloatRange(0.5, 0.999999), default=0.99,
+    click.option("--confidence", type=click.FloatRange(0.5, 0.999999),
+                 default=CampaignOptions.confidence,
                  show_default=True, help="Of the intervals and the sequential test."),
     click.option("--target", type=click.FloatRange(0.0, 1.0, min_open=True, max_open=True),
                  help="Stop as soon as P(OK) >= TARGET is decided, either way (Wald's "
@@ -401,7 +442,7 @@ CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
     click.option("--scheduler", type=SchedulerAddress(), metavar="tcp://HOST:8786",
                  help="Send the runs to this Dask scheduler instead of a local cluster."),
     click.option("--scheduler-timeout", type=SchedulerTimeoutsType(),
-                 metavar="HANDSHAKE[,SILENCE]", default=str(SchedulerTimeouts()),
+                 metavar="HANDSHAKE[,SILENCE]", default=str(CampaignOptions.scheduler_timeout),
                  show_default=True,
                  help="Seconds a scheduler may take to complete Dask's handshake; and "
                       "seconds mid-run with no batch done and no answer from the scheduler "

@@ -37,13 +37,12 @@ from mcl2pnml.analysis.checking.observers import Watcher
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import Property
+from mcl2pnml.core.bounds import MAX_CHAIN_STATES
 from mcl2pnml.runtime.aal import causal_order
 from mcl2pnml.runtime.engine import Outcome
 from mcl2pnml.runtime.executor import PetriEngine
 from mcl2pnml.runtime.vehicle_model import Choice, ModelVehicle, Replay, VehicleModel
 
-#: The most instants explored before the odds are refused as too large.
-MAX_STATES = 200_000
 #: The labels of the chain's absorbing states: the mission's results, and a mission
 #: that waits for ever (nothing pending: a primitive that never reports, no time-out).
 ENDS = (Outcome.OK.value, Outcome.FAIL.value, Outcome.ABORTED.value)
@@ -161,7 +160,7 @@ class MarkovChain:
         return Chain(P, np.array(self.duration, dtype=float), tuple(self.label))
 
 
-def chain_of(net: Net, model: VehicleModel, max_states: int = MAX_STATES,
+def chain_of(net: Net, model: VehicleModel, max_states: int = MAX_CHAIN_STATES,
              properties: Sequence[Property] = ()) -> MarkovChain:
     """The chain of ``net`` run against ``model`` (the module's documentation), in
     product with the observers of ``properties``."""
@@ -364,14 +363,14 @@ def odds_of(chain: MarkovChain) -> Odds:
                 tuple(property_odds(chain)))
 
 
-def odds(net: Net, model: VehicleModel, max_states: int = MAX_STATES) -> Odds:
+def odds(net: Net, model: VehicleModel, max_states: int = MAX_CHAIN_STATES) -> Odds:
     """The exact odds of the compiled mission ``net`` with the vehicle ``model``."""
     model.check_primitives(PetriEngine(net).primitives_used())
     return odds_of(chain_of(net, model, max_states))
 
 
 def sensitivity(net: Net, model: VehicleModel, primitives: Iterable[str],
-                max_states: int = MAX_STATES, base: float | None = None) -> list[dict]:
+                max_states: int = MAX_CHAIN_STATES, base: float | None = None) -> list[dict]:
     """For each primitive, P(OK) as modelled (``base``, when the caller has it), if it
     always achieved, and if it never did (its failures taking the place of its
     successes): which primitive's reliability moves the mission's odds most."""

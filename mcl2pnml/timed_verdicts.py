@@ -12,8 +12,9 @@ report, and has no time-out". The property verdicts are handed back as
 :mod:`mcl2pnml.counterexample` reads them as it reads the untimed ones.
 
 Sits beside :mod:`mcl2pnml.counterexample`, between the facade and the layers
-it joins: may import :mod:`mcl2pnml.core` and :mod:`analysis`; only
-:mod:`mcl2pnml.pipeline` imports it.
+it joins: may import :mod:`mcl2pnml.core` and :mod:`mcl2pnml.analysis`; the facade
+(:mod:`mcl2pnml.pipeline`) imports it. Named for what it gives, so that no module shares
+a name with :mod:`mcl2pnml.analysis.timed`.
 """
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Sequence
 
+from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.analysis.timed import zones as engine
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, Verdict
 from mcl2pnml.core.errors import Mcl2PnmlError
@@ -119,7 +121,7 @@ def _num(x: Fraction | None) -> int | float | None:
 
 
 def ends(net: Net, assumptions: Assumptions = Assumptions(),
-         max_states: int = 1_000_000) -> TimedEnds:
+         max_states: int = MAX_CHECK_STATES) -> TimedEnds:
     """Whether every run of the mission ends, when, and what one that does not waits for."""
     tn = semantics(net, assumptions)
     graph, (verdict,) = engine.check_timed_properties(tn, [ends_property()], max_states)
@@ -196,7 +198,7 @@ def as_verdict(graph: engine.ZoneGraph, v: engine.TimedVerdict) -> Verdict:
 
 
 def check(net: Net, properties: Sequence[Property], assumptions: Assumptions = Assumptions(),
-          max_states: int = 1_000_000) -> list[Verdict]:
+          max_states: int = MAX_CHECK_STATES) -> list[Verdict]:
     """Each property's verdict on the mission's time-divergent runs (docs/time.md)."""
     tn = semantics(net, assumptions)
     graph, verdicts = engine.check_timed_properties(tn, properties, max_states)

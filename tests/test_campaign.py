@@ -20,7 +20,9 @@ import pytest
 from dask_cluster import free_port, started
 from helpers import ROOT, one_error, run_cli
 from mcl2pnml import pipeline
+from mcl2pnml.commands.campaign import CampaignOptions, campaign
 from mcl2pnml.campaign import BATCH, TRACKS, Fleet, fly_batch
+from mcl2pnml.core.progress import Notes
 from mcl2pnml.odds import chain_of, odds, odds_of
 from mcl2pnml.runtime.vehicle_model import VehicleModel
 
@@ -80,7 +82,8 @@ def shared():
 
 def test_the_sequential_test_stops_as_soon_as_it_decides(exact, shared):
     target = exact.outcomes["OK"] - 0.1       # plainly true: decided early
-    flown = pipeline.campaign_file(SAUCE, MODEL, 20_000, target=target, scheduler=shared)
+    flown = campaign(SAUCE, CampaignOptions(MODEL, runs=20_000, target=target,
+                                            scheduler=shared)).flown
     data = flown.as_json()
     assert data["test"]["decided"] == f"P(OK) >= {target:g}"
     assert data["runs"] == data["test"]["after_runs"] < 20_000
@@ -102,9 +105,9 @@ def test_a_scheduler_of_the_users_gives_the_same_runs_and_survives_a_killed_work
 
     def fly():
         try:
-            result["campaign"] = pipeline.campaign_file(
-                SAUCE, MODEL, runs, seed=5, scheduler=address,
-                progress=lambda n, total: done.append(n))
+            result["campaign"] = campaign(
+                SAUCE, CampaignOptions(MODEL, runs=runs, seed=5, scheduler=address),
+                progress=lambda n, total: done.append(n)).flown
         except BaseException as e:     # noqa: BLE001 (said by the test, below)
             result["error"] = e
     # a daemon: a campaign that never ends fails this test, not the session's exit
@@ -156,8 +159,9 @@ def test_a_campaign_on_the_simulator_with_faults(shared, tmp_path):
     faults.write_text(json.dumps({"faults": {"KeepDepth": {"fail": "1/5"}}}))
     table, plot = tmp_path / "runs.csv", tmp_path / "runs.png"
     runs = 120
-    flown = pipeline.campaign_file(SAUCE, None, runs, world=world, faults=faults, seed=40,
-                                   properties="", scheduler=shared, table=table, plot=plot)
+    flown = campaign(SAUCE, CampaignOptions(runs=runs, world=world, faults=faults, seed=40,
+                                            properties="", scheduler=shared, table=table,
+                                            plot=plot)).flown
     data = flown.as_json()
     calls = sum(line.count("AchieveDepth(") for line in SAUCE.read_text().splitlines()
                 if not line.lstrip().startswith(("task", "//")))
@@ -200,9 +204,9 @@ def test_a_campaign_flies_either_a_model_or_the_simulator(tmp_path):
 
 
 def test_a_campaign_whose_runs_are_all_alike_says_so(shared):
-    said = []
-    flown = pipeline.campaign_file(SAUCE, None, 5, scheduler=shared, note=said.append)
-    assert any("every run flies alike" in line for line in said), said
+    notes = Notes()
+    flown = campaign(SAUCE, CampaignOptions(runs=5, scheduler=shared), notes=notes).flown
+    assert any("every run flies alike" in line for line in notes.said), notes.said
     assert len({(r.outcome, r.time) for r in flown.runs}) == 1
 
 
@@ -217,8 +221,8 @@ def _holds_the_exact_odds(model: Path, runs: int, scheduler: str) -> None:
     net, watched = pipeline.properties_of(mission, extra=props)
     exact = odds_of(chain_of(pipeline.compile_checked(pipeline.check_file(mission)),
                              VehicleModel.load(model), properties=watched))
-    data = pipeline.campaign_file(mission, model, runs, scheduler=scheduler,
-                                  properties=str(props)).as_json()
+    data = campaign(mission, CampaignOptions(model, runs=runs, scheduler=scheduler,
+                                             properties=str(props))).as_json()
     for outcome in ("OK", "FAIL", "ABORTED"):
         d = data["outcomes"].get(outcome)
         if d is None:   # never seen: the exact odds make that likely at this many runs

@@ -27,7 +27,7 @@ import pytest
 
 from dask_cluster import free_port, started
 from helpers import ROOT, one_error, run_cli
-from mcl2pnml import pipeline
+from mcl2pnml.commands.campaign import CampaignOptions, campaign
 from mcl2pnml.campaign import SchedulerTimeouts
 from mcl2pnml.core.errors import Mcl2PnmlError
 
@@ -168,8 +168,8 @@ def test_a_library_call_ends_at_its_deadline_and_leaves_no_thread_behind():
     with peer(_silent) as address:
         start = time.monotonic()
         with pytest.raises(Mcl2PnmlError, match="did not complete Dask's handshake"):
-            pipeline.campaign_file(SAUCE, MODEL, 10, scheduler=address,
-                                   scheduler_timeout=SchedulerTimeouts(1, 5))
+            campaign(SAUCE, CampaignOptions(MODEL, runs=10, scheduler=address,
+                                            scheduler_timeout=SchedulerTimeouts(1, 5)))
         assert time.monotonic() - start < 1 + MARGIN
     deadline = time.monotonic() + MARGIN    # the peer's own threads, ending
     while set(threading.enumerate()) - before and time.monotonic() < deadline:
@@ -185,8 +185,8 @@ def test_a_call_from_a_running_event_loop_keeps_its_deadline():
     async def notebook():
         with peer(_silent) as address:
             with pytest.raises(Mcl2PnmlError, match="within 1 s"):
-                pipeline.campaign_file(SAUCE, MODEL, 10, scheduler=address,
-                                       scheduler_timeout=SchedulerTimeouts(1, 5))
+                campaign(SAUCE, CampaignOptions(MODEL, runs=10, scheduler=address,
+                                                scheduler_timeout=SchedulerTimeouts(1, 5)))
     # on a thread of its own: the browser tests' driver keeps a loop running in the main
     # thread of the worker they ran on, where asyncio.run would refuse to start one
     failed: list[BaseException] = []

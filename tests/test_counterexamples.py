@@ -19,6 +19,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_properties, judge
 from mcl2pnml import pipeline
+from mcl2pnml.commands import analyze as analyzing, witnesses as explaining
 from mcl2pnml.counterexample import (CYCLE_REPEATS, StepKind, engine_run, explain, replay,
                                      schedule, witness)
 from mcl2pnml.core.net import NetBuilder, Timing
@@ -57,7 +58,7 @@ def _witnesses(name: str):
     _, true = pipeline.properties_of(mission, extra=EXAMPLES / f"{name}.props")
     verdicts = [v for v in pipeline.check_properties(net, props + true)
                 if v.status is Status.FAILS]
-    return net, verdicts, pipeline.witnesses(mission, net, verdicts)
+    return net, verdicts, explaining.witnesses(mission, net, verdicts)
 
 
 def _fired(log: str) -> list[str]:
@@ -162,7 +163,7 @@ def test_an_infinite_run_is_replayed_round_its_cycle(tmp_path):
     net, [prop] = pipeline.properties_of(mission, extra=side)
     [v] = pipeline.check_properties(net, [prop])
     assert v.shape is Shape.LASSO
-    [w] = pipeline.witnesses(mission, net, [v])
+    [w] = explaining.witnesses(mission, net, [v])
     assert "reports twice in one enabling" in w.why_not
     assert w.replayed.shape == "lasso" and w.replay.reached and w.replay.same_on_reference
     assert w.replayed.script == {"P": ["ok@1"] * CYCLE_REPEATS, "Q": ["ok@1"] * CYCLE_REPEATS}
@@ -329,7 +330,7 @@ def test_a_counterexample_is_not_explained_unless_asked(monkeypatch, as_json):
     else:
         assert "  counterexample (prefix):" in out.stdout
         assert "in the mission's terms (step numbers" not in out.stdout
-        assert out.stdout.splitlines()[-1] == pipeline.EXPLAIN_HINT
+        assert out.stdout.splitlines()[-1] == explaining.EXPLAIN_HINT
     assert "left out" not in out.stderr
 
 
@@ -345,7 +346,7 @@ def test_explain_tells_the_run_and_replays_it(monkeypatch, as_json):
     else:
         assert "  in the mission's terms (step numbers in brackets):" in out.stdout
         assert "both engines reach the violation" in out.stdout
-        assert pipeline.EXPLAIN_HINT not in out.stdout
+        assert explaining.EXPLAIN_HINT not in out.stdout
 
 
 def test_explain_with_no_counterexample_to_explain_limited(monkeypatch):
@@ -353,7 +354,7 @@ def test_explain_with_no_counterexample_to_explain_limited(monkeypatch):
     out, calls = _analyze_spied(monkeypatch, "--explain", "--max-counterexamples", "0")
     assert calls == {"witness": 0, "replay": 0}
     assert "counterexamples of 1 of the 1 failing properties left out" in out.stderr
-    assert pipeline.EXPLAIN_HINT not in out.stdout
+    assert explaining.EXPLAIN_HINT not in out.stdout
 
 
 def test_counterexamples_are_explained_for_their_files_without_explain(monkeypatch, tmp_path):
@@ -366,11 +367,10 @@ def test_counterexamples_are_explained_for_their_files_without_explain(monkeypat
 
 
 def test_the_facade_gives_the_outcome_the_cli_prints(tmp_path):
-    """pipeline.analyze_file decides what `analyze` does; the CLI prints its outcome."""
-    outcome = pipeline.analyze_file(EXAMPLES / "multi_leg.mcl", timed=False,
-                                    state_space=True, properties=str(
-                                        EXAMPLES / "multi_leg.false.props"),
-                                    counterexamples=tmp_path / "cx")
+    """commands.analyze decides what `analyze` does; the CLI prints its outcome."""
+    outcome = analyzing.analyze(EXAMPLES / "multi_leg.mcl", analyzing.AnalyzeOptions(
+        timed=False, state_space=True, properties=str(EXAMPLES / "multi_leg.false.props"),
+        counterexamples=tmp_path / "cx"))
     assert outcome.status == 1 and outcome.timed is None and not outcome.hint
     [v], [w] = outcome.verdicts, outcome.witnesses
     assert v.status is Status.FAILS and w.replayed is w.run
@@ -379,10 +379,10 @@ def test_the_facade_gives_the_outcome_the_cli_prints(tmp_path):
     cli = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--untimed", "--state-space",
                   "--properties", EXAMPLES / "multi_leg.false.props", "--json", "--explain")
     assert json.loads(cli.stdout) == json.loads(json.dumps(outcome.as_json()))
-    quiet = pipeline.analyze_file(EXAMPLES / "multi_leg.mcl", properties=str(
-        EXAMPLES / "multi_leg.false.props"))
+    quiet = analyzing.analyze(EXAMPLES / "multi_leg.mcl", analyzing.AnalyzeOptions(
+        properties=str(EXAMPLES / "multi_leg.false.props")))
     assert quiet.witnesses is None and quiet.hint and quiet.timed is not None
-    assert quiet.lines()[-1] == pipeline.EXPLAIN_HINT and quiet.written == ()
+    assert quiet.lines()[-1] == explaining.EXPLAIN_HINT and quiet.written == ()
 
 
 @pytest.mark.parametrize("args,message", [

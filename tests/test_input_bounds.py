@@ -16,6 +16,7 @@ import pytest
 
 from helpers import ROOT, cli, one_error, run_cli
 from mcl2pnml import pipeline
+from mcl2pnml.commands import analyze as analyzing, query as querying
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.files import read_bytes, read_text
 from mcl2pnml.core.bounds import MAX_MISSION_SIZE, MAX_PROPERTY_ATOMS
@@ -305,8 +306,9 @@ def test_the_facade_bounds_every_mission_it_reads(tmp_path):
         "certify_file": lambda **size: pipeline.certify_file(big, **size),
         "show_nets": lambda **size: pipeline.show_nets(str(big), **size),
         "run_mission": lambda **size: pipeline.run_mission(big, **size),
-        "analyze_file": lambda **size: pipeline.analyze_file(big, **size),
-        "query_file": lambda **size: pipeline.query_file(big, (), ("OneSafe",), **size),
+        "analyze": lambda **size: analyzing.analyze(big, analyzing.AnalyzeOptions(**size)),
+        "query": lambda **size: querying.query(big, (), querying.QueryOptions(("OneSafe",),
+                                                                            **size)),
     }
     for name, read in reads.items():
         with pytest.raises(Mcl2PnmlError) as refused:

@@ -183,12 +183,12 @@ def explore_all(case: Case, max_states: int | None) -> tuple[Facts | None, list[
     """Our facts (None past ``max_states``), and where our explorers disagree."""
     limit = {} if max_states is None else {"max_states": max_states}
     try:
-        auto = pipeline.analyze(case.net, state_space_only=True, **limit)
+        auto = pipeline.analyze(case.net, state_space_only=True, **limit).as_json()
     except ExplorationLimit:
         return None, []
     facts, wrong = _facts(auto), []
     for name in explorers_for(case.net, auto, case.every):
-        other = _facts(pipeline.analyze(case.net, state_space_only=True, explorer=name))
+        other = _facts(pipeline.analyze(case.net, state_space_only=True, explorer=name).as_json())
         if other != facts:
             wrong.append(f"{case.label}: explorer {name} finds {other}, auto {facts}")
     return facts, wrong
@@ -526,7 +526,7 @@ def test_no_two_arcs_between_the_same_nodes(tmp_path):
     from snakes.nets import StateGraph
     graph = StateGraph(snakes.pnml.loads(path.read_text()))
     graph.build()
-    assert len(graph) == pipeline.analyze(net, state_space_only=True)["states"]
+    assert len(graph) == pipeline.analyze(net, state_space_only=True).facts.states
 
 
 def test_a_transition_that_reads_a_place_and_fills_it(tmp_path):

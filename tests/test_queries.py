@@ -77,7 +77,7 @@ def expected(result: dict) -> dict[str, bool]:
 
 
 def analysed(net: Net, max_states: int = 5_000_000) -> dict:
-    return pipeline.analyze(net, state_space_only=True, max_states=max_states)
+    return pipeline.analyze(net, state_space_only=True, max_states=max_states).as_json()
 
 
 # -- the formulas, evaluated here --------------------------------------------------------

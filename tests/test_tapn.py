@@ -324,7 +324,7 @@ def our_ends(net, assumptions: Assumptions, max_states: int = 1_000_000):
     the limit (their clock of the whole run is never extrapolated), the "always ends"
     verdict it computes first, alone (its end times then None, as for an unknown verdict)."""
     from mcl2pnml.analysis.timed.zones import TimedLimit
-    from mcl2pnml.timed import TimedEnds, ends_property
+    from mcl2pnml.timed_verdicts import TimedEnds, ends_property
     try:
         return pipeline.timed_ends(net, assumptions, max_states)
     except TimedLimit:

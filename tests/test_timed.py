@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 
 from mcl2pnml import pipeline
 from mcl2pnml.core.timing import Assumptions, mission_timing
-from mcl2pnml.timed import ENDS
+from mcl2pnml.timed_verdicts import ENDS
 
 from helpers import ROOT, both, cli, one_error, run_cli
 from missions import missions

@@ -19,7 +19,13 @@ through the analysis's 64-bit counters):
 And the missions and properties a command reads: a mission of at most
 :data:`MAX_MISSION_SIZE` bytes and a side file of properties of at most
 :data:`MAX_PROPERTIES_SIZE`, each checked before it is read, and at most
-:data:`MAX_PROPERTY_ATOMS` atoms in all, counted once they are parsed.
+:data:`MAX_PROPERTY_ATOMS` atoms in all, counted once they are parsed; a
+certificate of at most :data:`MAX_CERTIFICATE_SIZE`.
+
+And the work a command does unless told otherwise, each bound written here once for
+every command, library call and option that shares it: the markings an exploration
+builds (:data:`MAX_STATES`), the states a check of properties or a zone graph builds
+(:data:`MAX_CHECK_STATES`), the longest run (:data:`MAX_RUN_TIME`).
 """
 from __future__ import annotations
 
@@ -46,6 +52,22 @@ MAX_PROPERTIES_SIZE = 4 << 20
 #: marking of the product the checker explores, so that the limit keeps a command's
 #: time and memory in proportion to what a person writes.
 MAX_PROPERTY_ATOMS = 10_000
+#: The largest certificate read, unless raised (``--max-certificate-size``): a 10,000-call
+#: survey's is 3.3 MB; read as JSON, a file takes about fifteen times its size in memory.
+MAX_CERTIFICATE_SIZE = 16 << 20
+
+#: The most markings an exploration builds, unless told (``analyze --max-states``, ``query
+#: --max-states``, :func:`mcl2pnml.analysis.statespace.explore.explore`).
+MAX_STATES = 5_000_000
+#: The most states a check of properties (a product of the net with an observer) or a
+#: zone graph (the timed verdicts) builds, unless told.
+MAX_CHECK_STATES = 1_000_000
+#: The most instants the exact odds explore (``odds --max-states``) before they are
+#: refused as too large (:mod:`mcl2pnml.odds`).
+MAX_CHAIN_STATES = 200_000
+#: The longest run, in seconds (virtual, or the wall clock's), unless told
+#: (``run --max-time``, and each run of a campaign): a day.
+MAX_RUN_TIME = 24 * 3600.0
 
 
 def natural_at_most(digits: str, limit: int) -> int | None:

@@ -14,7 +14,7 @@ mission (MCL or a compiled net): this layer does not.
 from __future__ import annotations
 
 import io
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import IO, Callable
 
@@ -23,46 +23,13 @@ from mcl2pnml.core.files import atomic_write_text, check_outputs
 from mcl2pnml.runtime import interrupts, journal as journals
 from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
-from mcl2pnml.runtime.link import (HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT,
-                                   LinkOptions)
+from mcl2pnml.runtime.link import LinkOptions
+from mcl2pnml.runtime.options import RunOptions
 from mcl2pnml.runtime.runlog import RunLog
 from mcl2pnml.runtime.vehicles import VehicleKind, kind_of
 
 #: The options of a run that its journal's header records, and a resume reuses.
 JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives")
-
-
-@dataclass(frozen=True)
-class RunOptions:
-    """How to run a mission: ``mcl2pnml run``'s options, as typed values."""
-
-    engine: str = "petri"
-    vehicle: str = "sim"
-    connect: str | None = None
-    world: Path | None = None
-    #: Python files of simulated primitives the simulator offers besides its own
-    #: (:mod:`mcl2pnml.runtime.simprims`)
-    sim_primitives: tuple[Path, ...] = ()
-    #: faults injected into a simulated vehicle's events (:mod:`mcl2pnml.runtime.faults`)
-    faults: Path | None = None
-    max_time: float = 24 * 3600.0
-    #: show fired transitions in the live log
-    transitions: bool = False
-    journal: Path | None = None
-    resume: Path | None = None
-    #: the live link to a real vehicle (mcl2pnml.runtime.link): its shared
-    #: secret, TLS files, heartbeat period, liveness and send time-outs (s),
-    #: and longest line (bytes)
-    secret: Path | None = None
-    tls_ca: Path | None = None
-    tls_cert: Path | None = None
-    tls_key: Path | None = None
-    heartbeat: float = HEARTBEAT
-    liveness: float = LIVENESS
-    send_timeout: float = SEND_TIMEOUT
-    max_line: int = MAX_LINE
-    #: the options the user gave (a resumed run must not contradict its journal on them)
-    explicit: frozenset[str] = field(default_factory=frozenset)
 
 
 def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:

@@ -1,0 +1,80 @@
+"""``mcl2pnml show WHAT``: the token-game page of a mission, a net or a template, written, or
+served on loopback following a run as it is logged."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mcl2pnml import pipeline
+from mcl2pnml.commands.common import MISSION_SIZE
+from mcl2pnml.core.errors import visible
+from mcl2pnml.core.files import check_outputs
+from mcl2pnml.core.progress import Notes
+
+#: Seconds the live page is served after it was handed the run's outcome, unless told.
+LINGER = 10.0
+
+
+@dataclass(frozen=True)
+class ShowOptions:
+    """``show``'s settings, by the names of its options (``--help`` says each)."""
+
+    #: where the page goes (None: NAME.html)
+    output: Path | None = None
+    #: a run to follow: a log of ``run --log``
+    run_log: Path | None = None
+    #: also the reachability graph the page draws, as JSON
+    graph_json: Path | None = None
+    #: serve the page on loopback following the run this log is being written with
+    live_log: Path | None = None
+    #: with ``live_log``: the port (0: one the system picks)
+    port: int = 0
+    linger: float = LINGER
+    net_id: str | None = None
+    lenient: bool = False
+    max_mission_size: str = MISSION_SIZE
+
+
+@dataclass(frozen=True)
+class ShowOutcome:
+    """The page written (None: served), and the reachability graph's JSON if written."""
+
+    page: Path | None
+    graph: dict[str, Any] | None = None
+
+    def lines(self) -> list[str]:
+        return []
+
+    def as_json(self) -> dict[str, Any]:
+        return {"page": None if self.page is None else str(self.page)}
+
+
+def show(what: str, options: ShowOptions = ShowOptions(), *,
+         notes: Notes | None = None) -> ShowOutcome:
+    """``mcl2pnml show`` with ``options``: the page written, or with ``live_log`` served
+    until Ctrl-C or ``linger`` seconds after the run's outcome was shown."""
+    o, notes = options, Notes() if notes is None else notes
+    if o.live_log is not None:
+        shown = pipeline.show_nets(what, with_run=True, net_id=o.net_id, lenient=o.lenient,
+                                   max_mission_size=o.max_mission_size)
+
+        def ready(url: str) -> None:
+            notes(f"serving {shown.title} on {url} , following {o.live_log} (Ctrl-C stops)")
+        pipeline.serve_show_live(shown, o.live_log, port=o.port, linger=o.linger, ready=ready)
+        return ShowOutcome(None)
+    shown = pipeline.show_nets(what, with_run=o.run_log is not None, net_id=o.net_id,
+                               lenient=o.lenient, max_mission_size=o.max_mission_size)
+    output = o.output or Path(f"{shown.title}.html")
+    check_outputs([("-o", output), ("--graph-json", o.graph_json)],
+                  [("the run log (--run)", o.run_log),
+                   ("the net or mission", what if Path(what).is_file() else None)])
+    pipeline.save_show_page(output, shown, o.run_log)
+    notes(f"wrote {visible(str(output))}: {shown.nets[0][0].summary()}")
+    graph = None
+    if o.graph_json is not None:
+        graph = pipeline.save_reachability_json(shown.nets[0][0], o.graph_json)
+        notes(f"wrote {o.graph_json}: " + (f"{len(graph['markings']):,} markings, "
+                                           f"{len(graph['edges']):,} edges"
+                                           if "markings" in graph else graph["reason"]))
+    return ShowOutcome(output, graph)
