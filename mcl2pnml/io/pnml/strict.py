@@ -1225,6 +1225,8 @@ def _prolog_faults(buffer: _Buffer, filename: str) -> None:
 
 
 def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
+    """The net of the document in ``buffer`` (read from ``source``), read strictly
+    (docs/pnml.md): its prolog and dialect first, then its elements as a stream."""
     _prolog_faults(buffer, filename)
     _dialect(buffer, filename)
     lines = _Lines(buffer)
@@ -1242,58 +1244,11 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
     # fast paths need not look; a CDATA section can hide in any <text>
     cdata = first[b"<![CDATA["] >= 0
     reader = _StrictReader(src, lines, careful=cdata or first[b"xmlns:"] >= 0, cdata=cdata)
+    root = None
     try:
-        # end tags only, of the elements read as they end: everything else is checked
-        # inside the node, page or net that holds it
-        events = etree.iterparse(
-            source, events=("end",), remove_comments=False, remove_pis=False,
-            strip_cdata=False, resolve_entities=False, load_dtd=False, no_network=True,
-            huge_tree=False, tag=("{*}net", "{*}page", "{*}place", "{*}transition", "{*}arc"))
-        root = handlers = None
-        for _, el in events:
-            if root is None:
-                root = _root(el.getroottree().getroot(), reader, src)
-                never = lambda el: False      # noqa: E731  (the careful way only)
-                on = reader.fast
-                # tag -> (its fast path, its careful one)
-                handlers = {
-                    reader.T_PLACE: (reader.fast_place if on else never, reader.place),
-                    reader.T_TRANSITION: (reader.fast_transition if on else never,
-                                          reader.transition),
-                    reader.T_ARC: (reader.fast_arc_of() if on else never, reader.arc),
-                    reader.T_PAGE: (never, reader.page)}
-                containers = reader.containers
-            handler = handlers.get(el.tag)
-            if handler is not None:
-                parent = el.getparent()
-                if parent.tag not in containers or not handler[0](el):
-                    handler[1](el)            # the careful way: it says what is wrong
-                parent.remove(el)             # read: dropped, so the stream stays small
-            elif el.tag == reader.T_NET:
-                reader.net_end(el, root)
-            elif not _inside_free(el, reader):
-                # a node's name in another namespace: said where it stands
-                parent = el.getparent()
-                reader.stray(el, f"in <{_raw_name(parent)}>" if parent is not None
-                             else "at the top")
-        if root is None:
-            root = _root(events.root, reader, src)
-        reader.mixed(root)
-        for child in root:
-            if isinstance(child.tag, str) and child.tag != reader.T_NET:
-                reader.stray(child, "in <pnml>")
+        root = _stream(source, reader, src)
     except etree.XMLSyntaxError as e:
-        line, col = getattr(e, "position", (e.lineno, None))
-        msg = str(e.msg).split(f", line {line}")[0]
-        # the first fault of this parse, where it is
-        logged = [x for x in e.error_log if x.line and x.domain == etree.ErrorDomains.PARSER]
-        if logged and (not line or logged[0].line < line):
-            line, col, msg = logged[0].line, logged[0].column, logged[0].message
-        if not line:   # no element at all: said where the file ends
-            line = max(1, len(lines))
-            col = len(lines[line - 1]) + 1 if len(lines) else 1
-        where = src.at(line, col) if len(lines) else Location(filename, 1, 1, "")
-        raise XmlError(f"not well-formed XML: {msg}", where) from None
+        raise _not_well_formed(e, src, lines, filename) from None
     except _TooMany:
         reader.refuse(stopped=True)
     except _Fatal as fatal:
@@ -1311,6 +1266,67 @@ def _parse(source, buffer, filename: str, net_id: str | None) -> Net:
         raise
     except NetError as e:   # a rule of the core, e.g. a name with a control character
         raise PnmlError(e.message, Location(filename)) from None
+
+
+def _stream(source, reader: "_StrictReader", src: Source):
+    """Read the document as a stream of its nodes, pages and nets as each ends, every other
+    element checked inside the one that holds it; the document's root."""
+    # end tags only, of the elements read as they end: everything else is checked
+    # inside the node, page or net that holds it
+    events = etree.iterparse(
+        source, events=("end",), remove_comments=False, remove_pis=False,
+        strip_cdata=False, resolve_entities=False, load_dtd=False, no_network=True,
+        huge_tree=False, tag=("{*}net", "{*}page", "{*}place", "{*}transition", "{*}arc"))
+    root = handlers = None
+    for _, el in events:
+        if root is None:
+            root = _root(el.getroottree().getroot(), reader, src)
+            never = lambda el: False      # noqa: E731  (the careful way only)
+            on = reader.fast
+            # tag -> (its fast path, its careful one)
+            handlers = {
+                reader.T_PLACE: (reader.fast_place if on else never, reader.place),
+                reader.T_TRANSITION: (reader.fast_transition if on else never,
+                                      reader.transition),
+                reader.T_ARC: (reader.fast_arc_of() if on else never, reader.arc),
+                reader.T_PAGE: (never, reader.page)}
+            containers = reader.containers
+        handler = handlers.get(el.tag)
+        if handler is not None:
+            parent = el.getparent()
+            if parent.tag not in containers or not handler[0](el):
+                handler[1](el)            # the careful way: it says what is wrong
+            parent.remove(el)             # read: dropped, so the stream stays small
+        elif el.tag == reader.T_NET:
+            reader.net_end(el, root)
+        elif not _inside_free(el, reader):
+            # a node's name in another namespace: said where it stands
+            parent = el.getparent()
+            reader.stray(el, f"in <{_raw_name(parent)}>" if parent is not None
+                         else "at the top")
+    if root is None:
+        root = _root(events.root, reader, src)
+    reader.mixed(root)
+    for child in root:
+        if isinstance(child.tag, str) and child.tag != reader.T_NET:
+            reader.stray(child, "in <pnml>")
+    return root
+
+
+def _not_well_formed(e: etree.XMLSyntaxError, src: Source, lines: "_Lines",
+                     filename: str) -> XmlError:
+    """libxml2's syntax error as one message at the first fault of this parse."""
+    line, col = getattr(e, "position", (e.lineno, None))
+    msg = str(e.msg).split(f", line {line}")[0]
+    # the first fault of this parse, where it is
+    logged = [x for x in e.error_log if x.line and x.domain == etree.ErrorDomains.PARSER]
+    if logged and (not line or logged[0].line < line):
+        line, col, msg = logged[0].line, logged[0].column, logged[0].message
+    if not line:   # no element at all: said where the file ends
+        line = max(1, len(lines))
+        col = len(lines[line - 1]) + 1 if len(lines) else 1
+    where = src.at(line, col) if len(lines) else Location(filename, 1, 1, "")
+    return XmlError(f"not well-formed XML: {msg}", where)
 
 
 def _root(root, reader, src):
