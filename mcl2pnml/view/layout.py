@@ -143,7 +143,8 @@ def _run_dot(source: str) -> dict | None:
 
 
 def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) -> Drawn | None:
-    # graphviz (0.03 s) comes with these: only when dot lays out, never on the CLI's start
+    # graphviz (0.03 s, python -X importtime) comes with these: only when dot lays out, never
+    # on the CLI's start (cli_options imports this module)
     from mcl2pnml.io.dot import dot_missing
     from mcl2pnml.view.drawing import border_out, dot_graph, instance_clusters
     if not dot_available():
@@ -209,19 +210,9 @@ def _two_levels(net: Net, boxes: dict[str, list[str]]) -> Drawn | None:
     extent = {o["name"][len("cluster_"):]: [float(v) for v in o["bb"].split(",")]
               for o in inner.get("objects", []) if o.get("name", "").startswith("cluster_")}
     sizes = {name: (x1 - x0, y1 - y0) for name, (x0, y0, x1, y1) in extent.items()}
-    overview = dot_graph(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes)
-    outer = _run_dot(overview.source)
+    outer = _overview(dot_graph(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes))
     if outer is None:
         return None
-    _, _, w, h = (float(v) for v in outer["bb"].split(","))
-    if h > TALL * w:
-        # boxes as tall as their insides, one level of calls under another: a column
-        # no screen shows; the levels side by side instead, if that is less tall
-        overview.graph_attr["rankdir"] = "LR"
-        wide = _run_dot(overview.source)
-        if wide is not None:
-            _, _, w2, h2 = (float(v) for v in wide["bb"].split(","))
-            outer = wide if max(w2, h2) < max(w, h) else outer
     frame = _Frame(outer)
     centres = {o["name"]: [float(v) for v in o["pos"].split(",")]
                for o in outer.get("objects", []) if "pos" in o}
@@ -277,6 +268,24 @@ def _two_levels(net: Net, boxes: dict[str, list[str]]) -> Drawn | None:
     return Drawn(positions, bends, copies, rects)
 
 
+def _overview(overview) -> dict | None:
+    """dot's layout of a drawing of shut boxes (its JSON), top down, or left to right where
+    that is less tall; None where dot fails."""
+    outer = _run_dot(overview.source)
+    if outer is None:
+        return None
+    _, _, w, h = (float(v) for v in outer["bb"].split(","))
+    if h > TALL * w:
+        # boxes as tall as their insides, one level of calls under another: a column
+        # no screen shows; the levels side by side instead, if that is less tall
+        overview.graph_attr["rankdir"] = "LR"
+        wide = _run_dot(overview.source)
+        if wide is not None:
+            _, _, w2, h2 = (float(v) for v in wide["bb"].split(","))
+            outer = wide if max(w2, h2) < max(w, h) else outer
+    return outer
+
+
 #: How far inside its box an arc runs along the box's border, one lane after another
 #: (dot keeps the nodes 8 points inside a box's border).
 LANES = (2.0, 4.0, 6.0)
@@ -284,7 +293,7 @@ LANES = (2.0, 4.0, 6.0)
 
 def _half_sizes(graph: dict) -> dict[str, tuple[float, float]]:
     """Each node's half width and half height in dot's layout, in points."""
-    from mcl2pnml.io.dot import node_id
+    from mcl2pnml.io.dot import node_id   # graphviz: as _dot_drawn says
     return {node_id(o["name"]) or o["name"]: (float(o["width"]) * 36, float(o["height"]) * 36)
             for o in graph.get("objects", []) if "pos" in o and "width" in o}
 
@@ -398,7 +407,7 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
     passes by (a piece's middle alone cut the corner of a long bend across a
     node).
     """
-    from mcl2pnml.io.dot import node_id
+    from mcl2pnml.io.dot import node_id   # graphviz: as _dot_drawn says
     objects = graph.get("objects", [])
     names = {o["_gvid"]: (node_id(o["name"]) or o["name"]) for o in objects if "pos" in o}
     # a copy is named after its place's DOT name and its number (``OFF~3``), and has
@@ -475,5 +484,7 @@ def _layered_layout(net: Net) -> dict[str, tuple[float, float]]:
 
 def positions(net: Net, engine: str = "auto") -> dict[str, tuple[float, float]]:
     """Where to draw each node: the nodes' own positions when all have one, else a layout."""
+    # lxml comes with io.pnml (its package loads the reader): 40 ms, measured with
+    # python -X importtime, which the CLI's start would pay (cli_options imports this module)
     from mcl2pnml.io.pnml.writer import own_positions
     return own_positions(net) or layout(net, engine)
