@@ -40,6 +40,10 @@ SAUCE = ROOT / "examples" / "sauce.mcl"
 
 #: Short bounds, so that every fault ends a run in well under a second.
 FAST = LinkOptions(heartbeat=0.05, liveness=0.5, send_timeout=0.5, connect_timeout=2.0)
+#: Wall seconds within which a run that ends on a fault it reads (not on a time limit of
+#: its own) ends on a loaded machine: far past the tenths of a second it takes on a quiet
+#: one, and short of the run's 10-s limit, by which a run that missed the fault ends.
+AT_ONCE = 8.0
 
 GOTO = """
 primitive GoToWayPoint(waypoint);
@@ -213,7 +217,7 @@ def test_a_peer_that_never_reads_cannot_freeze_the_controller():
     start = time.monotonic()
     result = run_bridge(peer.address, source=LOOP, mapping=LOOP_MAPPING, recorder=recorder)
     elapsed = time.monotonic() - start
-    assert elapsed < 5, elapsed          # the old send blocked in the kernel for ever
+    assert elapsed < AT_ONCE, elapsed    # the old send blocked in the kernel for ever
     assert result.outcome is Outcome.STALLED
     assert result.waiting[0].startswith("the link to the vehicle was lost (")
     assert result.waiting[0].endswith("could not send to the vehicle's bridge within 0.5 s "
@@ -238,7 +242,7 @@ def test_the_command_line_ends_in_time_against_a_peer_that_never_reads(tmp_path)
     start = time.monotonic()
     out = run_cli("run", mission, "--vehicle", f"bridge:{mapping}", "--connect", peer.address,
                   "--max-time", "1", "--send-timeout", "0.5", "--json", timeout=20)
-    assert time.monotonic() - start < 10
+    assert time.monotonic() - start < AT_ONCE + 5       # the command's own start besides
     assert "Traceback" not in out.stderr
     assert out.returncode == Outcome.STALLED.exit_status, out.stderr
     assert json.loads(out.stdout)["outcome"] == "STALLED"
@@ -368,7 +372,7 @@ def test_a_peer_that_closes_or_resets_ends_the_run_at_once(linger):
     recorder = Recorder()
     start = time.monotonic()
     result = run_bridge(peer.address, recorder=recorder)
-    assert time.monotonic() - start < 2
+    assert time.monotonic() - start < AT_ONCE
     assert_lost(result, "the link was reset" if linger else
                 "the vehicle's bridge closed the link", recorder)
 
@@ -393,7 +397,7 @@ def test_a_silent_peer_is_a_lost_link_at_the_liveness_time_out():
     start = time.monotonic()
     result = run_bridge(peer.address, recorder=recorder, max_time=30)
     elapsed = time.monotonic() - start
-    assert 0.5 <= elapsed < 2, elapsed
+    assert 0.5 <= elapsed < AT_ONCE, elapsed
     assert_lost(result, "no heartbeat within the liveness time-out of 0.5 s", recorder)
     assert "(waiting): no line from the vehicle's bridge for 0." in result.waiting[0]
     peer.finish()
@@ -867,7 +871,7 @@ def one_hostile_run(moves, authenticated: bool, tmp_key: Path | None) -> None:
     except VehicleInputError as e:          # a line that is not a JSON object: one message
         assert str(e).startswith("the vehicle's bridge sent a line that is not a JSON object")
     elapsed = time.monotonic() - start
-    assert elapsed < 4.0, (elapsed, moves)
+    assert elapsed < 2.5 + AT_ONCE, (elapsed, moves)    # its time limit, then the safe stop
     assert recorder.left_enabled() == set(), moves          # the safe stop, whatever happened
     peer.done.wait(5)
 
