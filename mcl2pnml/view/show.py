@@ -124,21 +124,30 @@ import base64
 import errno
 import functools
 import hashlib
+import hmac
+import io
 import json
 import math
 import os
 import re
+import secrets
 import stat
+import threading
+import time
 from importlib import resources
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Protocol, Sequence
+from urllib.parse import parse_qs, urlsplit
 
+from mcl2pnml.analysis.structure.invariants import p_invariant_basis
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_text
-from mcl2pnml.view.drawing import border_out, instance_clusters
-from mcl2pnml.view.layout import Drawn, drawn_layout
+from mcl2pnml.core.jsontext import offsets
 from mcl2pnml.core.net import Net, thaw
 from mcl2pnml.core.payloads import MissionPlace, TransitionPayload, doc_of, read_transition
+from mcl2pnml.core.structure import structure
+from mcl2pnml.view.drawing import border_out, instance_clusters
+from mcl2pnml.view.layout import Drawn, drawn_layout
 from mcl2pnml.view.reachability import reachability_graph
 
 #: Above this many nodes the page would be a heap nobody can read: refused.
@@ -242,9 +251,6 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
     primitive of Fig. 2's task, T1 and T2 of Fig. 4); None, each instance
     of a compiled mission in its box.
     """
-    from mcl2pnml.analysis.structure.invariants import p_invariant_basis
-    from mcl2pnml.core.structure import structure
-
     nodes = len(net.places) + len(net.transitions)
     if nodes > MAX_NODES:
         raise Mcl2PnmlError(f"net '{net.name}' has {nodes:,} nodes; a page draws at most "
@@ -429,6 +435,8 @@ def run_fault(entry: Any) -> tuple[tuple[Any, ...], str] | None:
 @functools.lru_cache(maxsize=1)
 def _validator() -> Any:
     """The schema's validator, made once."""
+    # jsonschema, 47 ms (python -X importtime): only when a run log is checked, not for
+    # every page this module makes
     from jsonschema import Draft202012Validator
     return Draft202012Validator(run_log_schema())
 
@@ -456,7 +464,6 @@ def run_line(line: str, path: str, n: int) -> dict[str, Any] | None:
                             Location(path, n, 1, line)) from None
     if fault is not None:
         where, message = fault
-        from mcl2pnml.core.jsontext import offsets
         column = offsets(line).get(where, 0) + 1
         raise Mcl2PnmlError(message, Location(path, n, column, line))
     return entry
@@ -590,8 +597,6 @@ class LiveLog:
     line ends the reading, and is what the page is told."""
 
     def __init__(self, net: Net, path: str | Path):
-        import threading
-
         self.net, self.path = net, Path(path)
         self.entries: list[dict[str, Any]] = []
         self.offset = 0          # bytes read, up to the end of the last complete line
@@ -718,15 +723,11 @@ class _RequestReader:
     thread longer than ``seconds``."""
 
     def __init__(self, sock: Any, seconds: float, idle: float):
-        import time
-
         self.sock, self.clock, self.idle = sock, time.monotonic, idle
         self.deadline = self.clock() + seconds
 
     def reader(self) -> Any:
         """A buffered reader (``rfile``) over this deadline."""
-        import io
-
         owner = self
 
         class Raw(io.RawIOBase):
@@ -745,8 +746,7 @@ class _RequestReader:
 def _bounded_server(handler: Any, port: int, connections: int) -> Any:
     """A threading HTTP server on 127.0.0.1:``port`` that serves at most ``connections``
     connections at once (a thread each): one more is closed at once, unanswered."""
-    import threading
-    from http.server import ThreadingHTTPServer
+    from http.server import ThreadingHTTPServer   # 47 ms: as _live_handler says
 
     places = threading.BoundedSemaphore(connections)
 
@@ -772,33 +772,15 @@ def _bounded_server(handler: Any, port: int, connections: int) -> Any:
     return Server(("127.0.0.1", port), handler)
 
 
-def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
-               ready: Any = print, max_seconds: float = LIVE_MAX_SECONDS,
-               idle: float = LIVE_IDLE, request: float = LIVE_REQUEST,
-               connections: int = LIVE_CONNECTIONS, stop: Any = None) -> None:
-    """Serve the live page ``html`` (:func:`page` with ``live``) and the new entries of
-    ``log`` on loopback (127.0.0.1) only, at ``port`` (0: one the system picks), under a
-    random token: ``ready`` is given the page's URL, which holds it; a request without it
-    (or naming another host: DNS rebinding) gets 403. Returns on Ctrl-C, ``linger``
-    seconds after the page was handed the run's outcome (or the error that stops the
-    reading), or after ``max_seconds``.
-
-    Every connection is bounded: silent for ``idle`` seconds, or its request not all there
-    ``request`` seconds after it connected, it is closed and its thread ends; an answer
-    not written within :data:`LIVE_SEND` seconds is dropped; at most ``connections`` are
-    served at once (HTTP/1.0: one request a connection). ``stop``, a
-    :class:`threading.Event`, stops the server when set (the command stops on Ctrl-C)."""
-    import hmac
-    import secrets
-    import threading
-    import time
+def _live_handler(body: bytes, token: str, log: LiveLog, idle: float, request: float,
+                  finished_at: list[float]) -> type:
+    """The request handler of :func:`serve_live`: the page ``body`` and the log's entries,
+    to a request that holds ``token`` and names the loopback host; the time the run's
+    outcome was first served appended to ``finished_at``."""
+    # http.server (47 ms, python -X importtime): only when a page is served live, not for
+    # every page or run log this module makes or checks
     from http.server import BaseHTTPRequestHandler
-    from urllib.parse import parse_qs, urlsplit
-
-    token = secrets.token_urlsafe(24)
     policy = csp(template(), live=True)
-    body = html.encode("utf-8")
-    finished_at: list[float] = []
 
     class Handler(BaseHTTPRequestHandler):
         server_version = "mcl2pnml"
@@ -830,6 +812,7 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
         def do_GET(self) -> None:
             url = urlsplit(self.path)
             host = self.headers.get("Host", "")
+            bound = self.server.server_address[1]
             _, tok, rest = (url.path.split("/", 2) + ["", ""])[:3]
             if (host not in (f"127.0.0.1:{bound}", f"localhost:{bound}")
                     or not hmac.compare_digest(tok.encode(), token.encode())):
@@ -851,7 +834,29 @@ def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
 
         do_HEAD = do_GET
 
-    server = _bounded_server(Handler, port, connections)
+    return Handler
+
+
+def serve_live(html: str, log: LiveLog, port: int = 0, linger: float = 10.0,
+               ready: Any = print, max_seconds: float = LIVE_MAX_SECONDS,
+               idle: float = LIVE_IDLE, request: float = LIVE_REQUEST,
+               connections: int = LIVE_CONNECTIONS, stop: Any = None) -> None:
+    """Serve the live page ``html`` (:func:`page` with ``live``) and the new entries of
+    ``log`` on loopback (127.0.0.1) only, at ``port`` (0: one the system picks), under a
+    random token: ``ready`` is given the page's URL, which holds it; a request without it
+    (or naming another host: DNS rebinding) gets 403. Returns on Ctrl-C, ``linger``
+    seconds after the page was handed the run's outcome (or the error that stops the
+    reading), or after ``max_seconds``.
+
+    Every connection is bounded: silent for ``idle`` seconds, or its request not all there
+    ``request`` seconds after it connected, it is closed and its thread ends; an answer
+    not written within :data:`LIVE_SEND` seconds is dropped; at most ``connections`` are
+    served at once (HTTP/1.0: one request a connection). ``stop``, a
+    :class:`threading.Event`, stops the server when set (the command stops on Ctrl-C)."""
+    token = secrets.token_urlsafe(24)
+    finished_at: list[float] = []
+    handler = _live_handler(html.encode("utf-8"), token, log, idle, request, finished_at)
+    server = _bounded_server(handler, port, connections)
     bound = server.server_address[1]
     started = time.monotonic()
     stop = stop or threading.Event()
