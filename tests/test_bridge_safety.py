@@ -559,7 +559,8 @@ def raw_client(s, hello: dict | None = None):
 
 @pytest.mark.timeout(20)
 def test_the_example_server_survives_lines_it_cannot_read(server):
-    s = server(options=LinkOptions(**{**FAST.__dict__, "liveness": 5.0}))
+    # a raw client sends no heartbeats: a liveness no loaded machine's pause reaches
+    s = server(options=LinkOptions(**{**FAST.__dict__, "liveness": 15.0}))
     sock, message = raw_client(s)
     assert message()["link"] == "hello"
     sock.sendall(b"this is not json\n")
@@ -694,7 +695,7 @@ def test_an_altered_replayed_or_unsigned_line_ends_the_run(tmp_path, attack, why
 @pytest.mark.timeout(20)
 def test_the_server_never_acts_on_an_unauthenticated_command(server, tmp_path):
     # a raw client sends no heartbeats: a liveness time-out that a loaded machine cannot trip
-    s = server(secret=b"k" * 32, options=LinkOptions(**{**FAST.__dict__, "liveness": 5.0}))
+    s = server(secret=b"k" * 32, options=LinkOptions(**{**FAST.__dict__, "liveness": 15.0}))
     sock, message = raw_client(s, {"link": "hello", "protocol": 1, "auth": "hmac-sha256",
                                    "nonce": "1" * 32, "heartbeat": 0.05})
     assert message()["auth"] == "hmac-sha256"
@@ -772,14 +773,16 @@ def test_a_mapping_that_indexes_past_an_argument_is_refused_before_any_send(tmp_
 
 # -- the command line, end to end ------------------------------------------------------------
 
-LINK_OPTIONS = ("--heartbeat", "0.1", "--liveness", "2", "--send-timeout", "1")
+#: Heartbeats every tenth of a second on both sides, and a liveness of 5 s that a loaded
+#: machine's pause between two of them does not reach (2 s could be)
+LINK_OPTIONS = ("--heartbeat", "0.1", "--liveness", "5", "--send-timeout", "1")
 
 
 @pytest.mark.timeout(40)
 def test_the_command_line_runs_a_mission_authenticated_and_reports_a_fault(server, tmp_path):
     key = secret_file(tmp_path)
     s = server(secret=key.read_bytes().strip(),
-               options=LinkOptions(heartbeat=0.1, liveness=2.0, send_timeout=1.0))
+               options=LinkOptions(heartbeat=0.1, liveness=5.0, send_timeout=1.0))
     common = ("run", SAUCE, "--vehicle", f"bridge:{SIM_MAPPING}", "--connect", address(s),
               *LINK_OPTIONS, "--json", "--max-time", "20")
     out = run_cli(*common, "--secret", key, timeout=30)
