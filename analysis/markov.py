@@ -23,6 +23,7 @@ scipy) solves the systems.
 """
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -175,8 +176,6 @@ def _distribution(chain: Chain, label: list[str], ends: tuple[str, ...], horizon
                   tolerance: float) -> tuple[np.ndarray, np.ndarray, float]:
     """The probability mass moved forward in time: P(ended by t) at each time an end
     can happen (up to ``horizon``), and the mass still moving at the end."""
-    import heapq
-
     end = np.array([x in ends for x in label])
     stop = np.array([bool(x) for x in label])
     P, duration = chain.P, chain.duration

@@ -274,6 +274,7 @@ def control_by_lp(s: Structure, siphon: frozenset[int]) -> dict[str, int] | None
     y_p = -z_p outside), the simplex's own form: sympy 1.14 mishandles an
     upper bound of 0 combined with equality constraints.
     """
+    # sympy takes most of a second to import: only for a siphon no semi-positive invariant controls
     from sympy import Matrix
     from sympy.solvers.simplex import linprog
 

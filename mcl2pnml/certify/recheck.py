@@ -51,6 +51,7 @@ certificate.
 from __future__ import annotations
 
 import functools
+from graphlib import CycleError, TopologicalSorter
 from itertools import compress, count, repeat
 from operator import is_not, itemgetter, not_
 from typing import Any, NamedTuple
@@ -65,11 +66,10 @@ from mcl2pnml.core.gcpause import without_gc
 from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language.library import default_library
-from mcl2pnml.language.template_parser import TemplateKind
+from mcl2pnml.language.template_parser import CONTROL, TemplateKind
 
 NORMAL = ArcKind.NORMAL
 
-CONTROL = ("B", "A", "MTX", "OK", "FAIL", "ABORTED")
 PRIMITIVE_ROLES = ("ON", "OFF", "E", "D", "S1", "S2")
 
 
@@ -160,65 +160,73 @@ class Model(NamedTuple):
     slots: dict[str, tuple[str, ...]]   # each template used -> its slots, in order
 
 
-def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, list[str]]:
-    """``cert`` (of the schema's shape) as a :class:`Model`, or None and every reason it
-    is not one."""
-    from graphlib import CycleError, TopologicalSorter
-    problems: list[str] = []
-    lib = getattr(proofs, "lib", None) or default_library()
-    functions = list(cert["functions"])
-    if set(cert["trees"]) != {MISSION, *functions} or MISSION in functions:
-        problems.append(f"the trees are {sorted(cert['trees'])}: they must be '{MISSION}' "
-                        f"and one for each function of 'functions' {functions}")
-    if cert["start"] not in (form.start(False), form.start(True)):
-        problems.append(f"the start {cert['start']} is not {form.start(False)} or "
-                        f"{form.start(True)}: a mission starts at mission.B, an abort "
-                        "pending or not")
-    owner: dict[str, str] = {}
+class _Reader:
+    """What :func:`read` gathers as it goes through a certificate: every problem, in the
+    order met; the names given so far; each template's slots looked up once, as the kind
+    it is used for; the tasks, the trees' nodes, their roots, calls and call counts."""
 
-    def named(name: str, what: str) -> None:
-        if name in owner:
-            problems.append(f"the name '{name}' is given to {owner[name]} and to {what}: "
-                            "every instance has its own")
+    def __init__(self, cert: dict[str, Any], proofs: dict[str, dict]):
+        self.cert, self.proofs = cert, proofs
+        self.lib = getattr(proofs, "lib", None) or default_library()
+        self.functions = list(cert["functions"])
+        self.problems: list[str] = []
+        self.owner: dict[str, str] = {}
+        self.slots_of: dict[tuple[str, TemplateKind], tuple[str, ...] | None] = {}
+        self.tasks: dict[str, tuple[str, tuple[str, ...]]] = {}
+        self.nodes: list[Node] = []
+        self.roots: dict[str, int] = {}
+        self.calls: dict[str, set[str]] = {}
+        self.uses: dict[str, int] = {}
+
+    def named(self, name: str, what: str) -> None:
+        """``name`` given to ``what``: a problem if it was given before."""
+        if name in self.owner:
+            self.problems.append(f"the name '{name}' is given to {self.owner[name]} and to "
+                                 f"{what}: every instance has its own")
         else:
-            owner[name] = what
+            self.owner[name] = what
 
-    primitives = tuple(cert["primitives"])
-    for p in primitives:
-        named(p, f"primitive '{p}'")
-    # each template looked up once, as the kind it is used for
-    slots_of: dict[tuple[str, TemplateKind], tuple[str, ...] | None] = {}
-    tasks: dict[str, tuple[str, tuple[str, ...]]] = {}
-    for name, task in cert["tasks"].items():
-        named(name, f"task '{name}'")
-        subject, pattern = task["subject"], task["pattern"]
-        entry = proofs.get(subject) or {}
-        key = (pattern, TemplateKind.PATTERN)
-        if key not in slots_of:
-            slots_of[key] = _slots(lib, *key)
-        slots = slots_of[key]
-        if entry.get("kind") != "pattern" or \
-                subject not in (pattern, f"{pattern} without a time-out") or slots is None:
-            problems.append(f"task '{name}': '{subject}' is no proven pattern")
-            continue
-        prims = tuple(task["primitives"])
-        if len(prims) != len(slots) or list(task["slots"]) != list(slots):
-            problems.append(f"task '{name}': its pattern {pattern} has the primitive slots "
-                            f"{list(slots)}, filled by {list(prims)} as {task['slots']}")
-        unknown = [p for p in prims if p not in cert["primitives"]]
-        if unknown:
-            problems.append(f"task '{name}' uses {unknown[0]}, no primitive of the certificate")
-        tasks[name] = (subject, prims)
-    # a primitive is proven idle at rest only inside the proof of a task that uses it
-    used = {p for _, prims in tasks.values() for p in prims}
-    problems += [f"primitive '{p}' is used by no task: no proof covers it alone"
-                 for p in primitives if p not in used]
-    nodes: list[Node] = []
-    roots: dict[str, int] = {}
-    calls: dict[str, set[str]] = {}
-    uses: dict[str, int] = {}
-    for tree in (t for t in cert["trees"] if t == MISSION or t in functions):
-        raw, base = cert["trees"][tree], len(nodes)
+    def header(self) -> None:
+        """The trees named as the mission and the functions, the start one of the two."""
+        cert, functions = self.cert, self.functions
+        if set(cert["trees"]) != {MISSION, *functions} or MISSION in functions:
+            self.problems.append(f"the trees are {sorted(cert['trees'])}: they must be "
+                                 f"'{MISSION}' and one for each function of 'functions' "
+                                 f"{functions}")
+        if cert["start"] not in (form.start(False), form.start(True)):
+            self.problems.append(f"the start {cert['start']} is not {form.start(False)} or "
+                                 f"{form.start(True)}: a mission starts at mission.B, an "
+                                 "abort pending or not")
+
+    def read_tasks(self) -> None:
+        """Each task a proven pattern whose slots its primitives fill, in order."""
+        cert = self.cert
+        for name, task in cert["tasks"].items():
+            self.named(name, f"task '{name}'")
+            subject, pattern = task["subject"], task["pattern"]
+            entry = self.proofs.get(subject) or {}
+            key = (pattern, TemplateKind.PATTERN)
+            if key not in self.slots_of:
+                self.slots_of[key] = _slots(self.lib, *key)
+            slots = self.slots_of[key]
+            if entry.get("kind") != "pattern" or \
+                    subject not in (pattern, f"{pattern} without a time-out") or slots is None:
+                self.problems.append(f"task '{name}': '{subject}' is no proven pattern")
+                continue
+            prims = tuple(task["primitives"])
+            if len(prims) != len(slots) or list(task["slots"]) != list(slots):
+                self.problems.append(f"task '{name}': its pattern {pattern} has the primitive "
+                                     f"slots {list(slots)}, filled by {list(prims)} as "
+                                     f"{task['slots']}")
+            unknown = [p for p in prims if p not in cert["primitives"]]
+            if unknown:
+                self.problems.append(f"task '{name}' uses {unknown[0]}, no primitive of the "
+                                     "certificate")
+            self.tasks[name] = (subject, prims)
+
+    def tree_shape(self, tree: str, raw: list) -> tuple[list[list[int]], int] | None:
+        """Each node's children and the root of ``tree``, or None (its problems said) if
+        the parents do not make one tree rooted at the node named as it."""
         children: list[list[int]] = [[] for _ in raw]
         top = []
         for k, node in enumerate(raw):
@@ -226,14 +234,14 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
             if parent == -1:
                 top.append(k)
             elif parent >= len(raw) or parent == k:
-                problems.append(f"'{node['instance']}' of tree '{tree}': parent {parent} is no "
-                                "other node of the tree")
+                self.problems.append(f"'{node['instance']}' of tree '{tree}': parent {parent} "
+                                     "is no other node of the tree")
             else:
                 children[parent].append(k)
         if len(top) != 1 or raw[top[0]]["instance"] != tree:
-            problems.append(f"tree '{tree}' must have one root, named '{tree}': it has "
-                            f"{[raw[k]['instance'] for k in top] or 'none'}")
-            continue
+            self.problems.append(f"tree '{tree}' must have one root, named '{tree}': it has "
+                                 f"{[raw[k]['instance'] for k in top] or 'none'}")
+            return None
         reached, todo = [False] * len(raw), [top[0]]
         while todo:
             k = todo.pop()
@@ -241,53 +249,87 @@ def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, l
             todo.extend(children[k])
         if not all(reached):
             stray = next(raw[k]["instance"] for k in range(len(raw)) if not reached[k])
-            problems.append(f"'{stray}' of tree '{tree}' is not reached from its root: the "
-                            "parents make a cycle")
-            continue
-        roots[tree] = base + top[0]
-        calls[tree] = set()
+            self.problems.append(f"'{stray}' of tree '{tree}' is not reached from its root: "
+                                 "the parents make a cycle")
+            return None
+        return children, top[0]
+
+    def read_tree(self, tree: str) -> None:
+        """The nodes of ``tree``: each call a task or a function, each structure a proven
+        template whose slots its children fill, in order."""
+        raw, base = self.cert["trees"][tree], len(self.nodes)
+        shaped = self.tree_shape(tree, raw)
+        if shaped is None:
+            return
+        children, root = shaped
+        self.roots[tree] = base + root
+        self.calls[tree] = set()
         for k, node in enumerate(raw):
             name = node["instance"]
-            named(name, f"a node of tree '{tree}'")
+            self.named(name, f"a node of tree '{tree}'")
             if node["rule"] == "call":
-                callee = node["callee"]
-                if children[k]:
-                    problems.append(f"call '{name}' has children: a call site has none")
-                if callee not in tasks and callee not in functions:
-                    problems.append(f"'{name}' calls '{callee}', no task or function of the "
-                                    "certificate")
-                elif callee in functions:
-                    calls[tree].add(callee)
-                uses[callee] = uses.get(callee, 0) + 1
-                nodes.append(Node(name, True, callee, (), tree))
+                self.call(tree, name, node["callee"], children[k])
                 continue
             template = node["template"]
             key = (template, TemplateKind.STRUCTURE)
-            if key not in slots_of:
-                slots_of[key] = _slots(lib, *key) \
-                    if (proofs.get(template) or {}).get("kind") == "structure" else None
-            slots = slots_of[key]
+            if key not in self.slots_of:
+                self.slots_of[key] = _slots(self.lib, *key) \
+                    if (self.proofs.get(template) or {}).get("kind") == "structure" else None
+            slots = self.slots_of[key]
             if slots is None:
-                problems.append(f"'{name}': '{template}' is no proven structure")
+                self.problems.append(f"'{name}': '{template}' is no proven structure")
             elif len(children[k]) != len(slots) or list(node["slots"]) != list(slots):
-                problems.append(
+                self.problems.append(
                     f"'{name}' ({template}) has {len(children[k])} children and the slots "
                     f"{node['slots']}; the template has the slots {list(slots)}, each filled "
                     "by one child, in order")
-            nodes.append(Node(name, False, template, tuple(base + c for c in children[k]),
-                              tree))
-    try:
-        order = tuple(TopologicalSorter(calls).static_order())
-    except CycleError as e:
-        cycle = " -> ".join(e.args[1])
-        problems.append(f"the functions call each other in a cycle ({cycle}): gates could "
-                        "be taken out of order, and the argument needs none")
-        order = ()
-    if problems:
-        return None, problems
-    return Model(primitives, tasks, tuple(nodes), roots, order, uses,
+            self.nodes.append(Node(name, False, template,
+                                   tuple(base + c for c in children[k]), tree))
+
+    def call(self, tree: str, name: str, callee: str, children: list[int]) -> None:
+        """Call site ``name`` of ``tree``: a leaf naming a task or a function, counted."""
+        if children:
+            self.problems.append(f"call '{name}' has children: a call site has none")
+        if callee not in self.tasks and callee not in self.functions:
+            self.problems.append(f"'{name}' calls '{callee}', no task or function of the "
+                                 "certificate")
+        elif callee in self.functions:
+            self.calls[tree].add(callee)
+        self.uses[callee] = self.uses.get(callee, 0) + 1
+        self.nodes.append(Node(name, True, callee, (), tree))
+
+    def call_order(self) -> tuple[str, ...]:
+        """The trees callees first; a cycle of calls a problem (and no order)."""
+        try:
+            return tuple(TopologicalSorter(self.calls).static_order())
+        except CycleError as e:
+            cycle = " -> ".join(e.args[1])
+            self.problems.append(f"the functions call each other in a cycle ({cycle}): gates "
+                                 "could be taken out of order, and the argument needs none")
+            return ()
+
+
+def read(cert: dict[str, Any], proofs: dict[str, dict]) -> tuple[Model | None, list[str]]:
+    """``cert`` (of the schema's shape) as a :class:`Model`, or None and every reason it
+    is not one."""
+    r = _Reader(cert, proofs)
+    r.header()
+    primitives = tuple(cert["primitives"])
+    for p in primitives:
+        r.named(p, f"primitive '{p}'")
+    r.read_tasks()
+    # a primitive is proven idle at rest only inside the proof of a task that uses it
+    used = {p for _, prims in r.tasks.values() for p in prims}
+    r.problems += [f"primitive '{p}' is used by no task: no proof covers it alone"
+                   for p in primitives if p not in used]
+    for tree in (t for t in cert["trees"] if t == MISSION or t in r.functions):
+        r.read_tree(tree)
+    order = r.call_order()
+    if r.problems:
+        return None, r.problems
+    return Model(primitives, r.tasks, tuple(r.nodes), r.roots, order, r.uses,
                  cert["start"] == form.start(True),
-                 {t: slots for (t, _), slots in slots_of.items() if slots is not None}), []
+                 {t: slots for (t, _), slots in r.slots_of.items() if slots is not None}), []
 
 
 def _slots(lib, name: str, kind: TemplateKind) -> tuple[str, ...] | None:
@@ -737,58 +779,84 @@ class _Layout:
         """Where the net is not the instances, said instance by instance (nodes of no
         instance, an instance with no node or whose part no proof covers, said already,
         aside). Only on a net that does not hold: its cost does not matter."""
-        left_out = uncovered | (self.plans.keys() - set(self.owner))
-        problems: list[str] = []
-        differ: dict[str, list[str]] = {}
-        ids, places, owner, size = self.ids, self.places, self.owner, self.size
+        found = _Differences(self, uncovered | (self.plans.keys() - set(self.owner)))
+        found.nodes()
+        written, unusual, marked = self._expected()
+        found.arcs(self._net_arcs, written, unusual)
+        found.marking(self._marking(), self._marked(marked))
+        return found.said_all()
 
-        def said(inst: str | None, what: str) -> None:
-            if inst is not None and inst not in left_out:
-                differ.setdefault(inst, []).append(what)
 
-        def kind(k: int) -> str:
-            return "place" if k < places else "transition"
+class _Differences:
+    """What :meth:`_Layout._differences` finds, as it goes: problems said on their own, in
+    the order met; per instance, what differs in it; each node's claimant (the instance
+    it is written for) and each instance's nodes given by the certificate."""
 
-        claimed: dict[int, str] = {}      # node -> the instance it is written for
+    def __init__(self, layout: _Layout, left_out: set[str]):
+        self.layout, self.left_out = layout, left_out
+        self.problems: list[str] = []
+        self.differ: dict[str, list[str]] = {}
+        self.claimed: dict[int, str] = {}      # node -> the instance it is written for
+        self.given: dict[str, set[str]] = {}
 
-        def claim(at: int, node: str, name: str) -> bool:
-            """``node``, number ``at``, written for ``name``: unless another has it."""
-            if at in claimed:
-                problems.append(f"'{node}' is a {kind(at)} of both '{claimed[at]}' and "
-                                f"'{name}'")
-                return False
-            claimed[at] = name
-            return True
-        given: dict[str, set[str]] = {}
-        for template, group, rows in self.batches:
+    def said(self, inst: str | None, what: str) -> None:
+        if inst is not None and inst not in self.left_out:
+            self.differ.setdefault(inst, []).append(what)
+
+    def kind(self, k: int) -> str:
+        return "place" if k < self.layout.places else "transition"
+
+    def claim(self, at: int, node: str, name: str) -> bool:
+        """``node``, number ``at``, written for ``name``: unless another has it."""
+        if at in self.claimed:
+            self.problems.append(f"'{node}' is a {self.kind(at)} of both '{self.claimed[at]}' "
+                                 f"and '{name}'")
+            return False
+        self.claimed[at] = name
+        return True
+
+    def nodes(self) -> None:
+        """Each instance's nodes where its part has them, of the part's kinds, each the
+        instance's alone; then the nodes no instance's part has."""
+        layout = self.layout
+        places = layout.places
+        for template, group, rows in layout.batches:
             for plan, row in zip(group, rows.tolist()):
                 name, fills = plan.name, plan.fills
-                given[name] = {f"{name}.{x}" for x in template.own} | set(fills.values())
+                self.given[name] = {f"{name}.{x}" for x in template.own} | set(fills.values())
                 for k, (x, at) in enumerate(zip(template.nodes, row)):
                     shared = x in template.slots
                     node = fills.get(x, "(none)") if shared else f"{name}.{x}"
                     is_place = k < len(template.own) + len(template.slots)
                     if at < 0:
-                        said(name, f"it has no {'place' if is_place else 'transition'} "
-                                   f"'{node}'")
+                        self.said(name, f"it has no {'place' if is_place else 'transition'} "
+                                        f"'{node}'")
                     elif shared:
                         if at >= places:
-                            said(name, f"it shares '{node}', which is not a place")
-                    elif claim(at, node, name) and (at < places) != is_place:
-                        said(name, f"its {kind(at)} '{node}' is a "
-                                   f"{'transition' if is_place else 'place'} of the part")
+                            self.said(name, f"it shares '{node}', which is not a place")
+                    elif self.claim(at, node, name) and (at < places) != is_place:
+                        self.said(name, f"its {self.kind(at)} '{node}' is a "
+                                        f"{'transition' if is_place else 'place'} of the part")
                 if plan.gate is not None:
-                    gate = self.number.get(plan.gate, -1)
+                    gate = layout.number.get(plan.gate, -1)
                     if gate < 0 or gate >= places:
-                        said(name, f"it has no gate '{plan.gate}'")
+                        self.said(name, f"it has no gate '{plan.gate}'")
                     else:
-                        claim(gate, plan.gate, name)
-                    given[name].add(plan.gate)
-        for k in sorted(set(range(size)) - claimed.keys()):
-            said(owner[k], f"it has a {kind(k)} '{ids[k]}' the proven part has not")
-        net_arcs, net_unusual = self._net_arcs
+                        self.claim(gate, plan.gate, name)
+                    self.given[name].add(plan.gate)
+        for k in sorted(set(range(layout.size)) - self.claimed.keys()):
+            self.said(layout.owner[k], f"it has a {self.kind(k)} '{layout.ids[k]}' the proven "
+                                       "part has not")
+
+    def arcs(self, in_the_net: tuple[np.ndarray, dict[int, tuple[int, ArcKind]]],
+             written: np.ndarray, unusual: dict[int, tuple[int, ArcKind]]) -> None:
+        """The arcs the net has (``in_the_net``: all, and those of a weight > 1 or not
+        normal) and the parts have not (``written``, ``unusual``), and the other way round;
+        those of both whose weight or kind differ."""
+        layout = self.layout
+        ids, owner, size, places = layout.ids, layout.owner, layout.size, layout.places
+        net_arcs, net_unusual = in_the_net
         in_net = set(net_arcs.tolist())
-        written, unusual, marked = self._expected()
         arcs = set(written.tolist())
 
         def ends(key: int) -> tuple[str, str, int]:
@@ -799,35 +867,44 @@ class _Layout:
             s, t, transition = ends(key)
             inst = owner[transition]
             place = t if ids[transition] == s else s
-            if inst in given and place not in given[inst]:
-                said(inst, f"it has an arc with '{place}', which the certificate does not "
-                           "give it")
+            if inst in self.given and place not in self.given[inst]:
+                self.said(inst, f"it has an arc with '{place}', which the certificate does "
+                                "not give it")
             else:
-                said(inst, f"it has an arc {s} -> {t} the proven part has not")
+                self.said(inst, f"it has an arc {s} -> {t} the proven part has not")
         for key in sorted(arcs - in_net):
             s, t, transition = ends(key)
-            said(owner[transition], f"it has no arc {s} -> {t}")
+            self.said(owner[transition], f"it has no arc {s} -> {t}")
         for key in sorted((net_unusual.keys() | unusual.keys()) & in_net & arcs):
             if net_unusual.get(key, (1, NORMAL)) != unusual.get(key, (1, NORMAL)):
                 s, t, transition = ends(key)
-                said(owner[transition], f"its arc {s} -> {t} is not of the part's weight "
-                                        "and kind")
-        marking, expected = self._marking(), self._marked(marked)
+                self.said(owner[transition], f"its arc {s} -> {t} is not of the part's weight "
+                                             "and kind")
+
+    def marking(self, marking: dict[int, int], expected: dict[int, int]) -> None:
+        """M0 (``marking``) against every part at rest, the start marked and each gate free
+        (``expected``)."""
+        layout = self.layout
         for k in sorted(marking.keys() | expected.keys()):
             n, m = marking.get(k, 0), expected.get(k, 0)
-            if n == m or k not in claimed:
+            if n == m or k not in self.claimed:
                 continue
-            place = ids[k]
-            if self.plans[claimed[k]].gate == place:
-                problems.append(f"the gate '{place}' is not free in M0")
+            place = layout.ids[k]
+            if layout.plans[self.claimed[k]].gate == place:
+                self.problems.append(f"the gate '{place}' is not free in M0")
             elif place in (f"{MISSION}.B", f"{MISSION}.A"):
-                problems.append(f"M0 {'marks' if n else 'does not mark'} {place}; the "
-                                f"certificate starts from {', '.join(sorted(self.start))}")
+                self.problems.append(
+                    f"M0 {'marks' if n else 'does not mark'} {place}; the certificate starts "
+                    f"from {', '.join(sorted(layout.start))}")
             else:
-                said(claimed[k], f"M0 puts {n} on '{place}', where the proven part at rest "
-                                 f"has {m}")
-        for inst, whats in differ.items():
+                self.said(self.claimed[k], f"M0 puts {n} on '{place}', where the proven part "
+                                           f"at rest has {m}")
+
+    def said_all(self) -> list[str]:
+        """The problems, then one line per instance that differs (its first three ways)."""
+        problems = list(self.problems)
+        for inst, whats in self.differ.items():
             more = f"; and {len(whats) - 3} more" if len(whats) > 3 else ""
-            problems.append(f"'{inst}' is not the proven {self.plans[inst].subject}: "
+            problems.append(f"'{inst}' is not the proven {self.layout.plans[inst].subject}: "
                             + "; ".join(whats[:3]) + more)
         return problems

@@ -38,11 +38,14 @@ from pathlib import Path
 
 from mcl2pnml.analysis.checking.contract import VERSION as CONTRACT_VERSION
 from mcl2pnml.analysis.checking.contract import Clause, Own, check_contract, restricted
+from mcl2pnml.core.compose import compose
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text
-from mcl2pnml.core.net import Net
-from mcl2pnml.language.library import Library, default_library, template_dirs
-from mcl2pnml.language.template_parser import TemplateKind
+from mcl2pnml.core.net import Marking, Net, NetBuilder, Place
+from mcl2pnml.core.payloads import read_transition
+from mcl2pnml.language.compiler import call_site_net
+from mcl2pnml.language.library import Library, at_rest, default_library, template_dirs
+from mcl2pnml.language.template_parser import CONTROL, TemplateKind, slot_places
 
 #: The stored proofs, beside the package's own templates.
 PROOFS = "proofs.json"
@@ -84,15 +87,12 @@ def local(lib: Library, subject: str) -> tuple[Net, frozenset[str]]:
     a structure's template at rest; a task's pattern at rest with its gate (without its
     time-out transitions for "NAME without a time-out", timing left to the checker); a
     primitive with its lock; a call site taking ``k`` locks ("call site/k")."""
-    from mcl2pnml.core.net import Marking, Place
-    from mcl2pnml.language.library import at_rest
     if subject == "primitive":
         net = at_rest(lib.primitive.net)
         net = Net("primitive", (*net.places, Place("LOCK")), net.transitions, net.arcs,
                   Marking({**net.initial, "LOCK": 1}))
         return net, frozenset()
     if subject.startswith(CALL_SITE + "/"):
-        from mcl2pnml.language.compiler import call_site_net
         k = int(subject.rsplit("/", 1)[1])
         net = call_site_net("T", [str(i) for i in range(1, k + 1)])
         slots = frozenset(p.id for p in net.places if p.id.startswith(("to.", "lock.")))
@@ -190,11 +190,6 @@ def call_net(lib: Library, sites: int, results: tuple | None = None) -> Net:
     sites are the branches of a parallel structure. Any callee that keeps the contract
     behaves toward its call sites as the reduced one does; ``results``: the callee's
     signature (:data:`SIGNATURES`)."""
-    from mcl2pnml.core.compose import compose
-    from mcl2pnml.core.net import Marking, NetBuilder, Place
-    from mcl2pnml.language.compiler import call_site_net
-    from mcl2pnml.language.library import at_rest
-    from mcl2pnml.language.template_parser import CONTROL
     reduced = at_rest(lib.reduced.net if results is None
                       else restricted(lib.reduced.net, *results))
     # its places unlabelled: fused with the call sites', the interface labels are the
@@ -222,7 +217,6 @@ def call_net(lib: Library, sites: int, results: tuple | None = None) -> Net:
 def without_timeouts(net: Net) -> Net:
     """``net`` without its time-out transitions (and their arcs), as the compiler makes a
     task declared with no ``timeout``."""
-    from mcl2pnml.core.payloads import read_transition
     gone = {t.id for t in net.transitions if read_transition(t).timeout is not None}
     return Net(net.name, net.places, tuple(t for t in net.transitions if t.id not in gone),
                tuple(a for a in net.arcs if a.source not in gone and a.target not in gone),
@@ -275,7 +269,6 @@ def _slot_ids(lib: Library, t) -> frozenset[str]:
     """The places of template ``t`` that fill its slots: its children's interface places,
     its primitives'."""
     if t.kind is TemplateKind.PATTERN:
-        from mcl2pnml.language.template_parser import slot_places
         interface = tuple(p.id for p in lib.primitive.net.places if p.interface is not None)
         return frozenset(p for slot in t.primitives for p in slot_places(slot, interface))
     return frozenset(p.id for p in t.net.places

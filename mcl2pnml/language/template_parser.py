@@ -187,20 +187,10 @@ def _doc(token) -> str | None:
     return token[1:-1] if token is not None else None
 
 
-def parse_template(text: str, filename: str = "<template>",
-                   primitive_interface: tuple[str, ...] = ()) -> Template:
-    """Parse one template file. ``primitive_interface`` lists the places a
-    ``uses primitive`` slot declares (the primitive template's interface)."""
-    lines = text.splitlines()
-
-    def loc(token) -> Location:
-        line = getattr(token, "line", None)
-        col = getattr(token, "column", None)
-        src = lines[line - 1] if line and 0 < line <= len(lines) else None
-        return Location(filename, line, col, src)
-
+def _items(text: str, filename: str, lines: list[str]) -> list:
+    """The template's items (:class:`_ToData`), or its one syntax error, located."""
     try:
-        items = _ToData().transform(_parser().parse(text if text.endswith("\n") else text + "\n"))
+        return _ToData().transform(_parser().parse(text if text.endswith("\n") else text + "\n"))
     except UnexpectedInput as e:
         expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
                                                    or getattr(e, "allowed", None) or [])})
@@ -209,95 +199,135 @@ def parse_template(text: str, filename: str = "<template>",
         raise Mcl2PnmlError(f"syntax error in template{hint}",
                             Location(filename, e.line, e.column, src)) from None
 
-    _, kind_tok, name_tok, aliases, doc = items[0]
-    kind = TemplateKind(str(kind_tok))
-    errors: list[Mcl2PnmlError] = []
-    b = NetBuilder(str(name_tok))
-    declared: dict[str, Token] = {}
-    slots_p: list[str] = []
-    slots_c: list[str] = []
 
-    def declare(name: str, token, tokens: int = 0, interface: bool = False, doc=None):
-        if name in declared:
-            errors.append(Mcl2PnmlError(f"'{name}' is declared twice (first on line "
-                                        f"{declared[name].line})", loc(token)))
+class _TemplateReader:
+    """One template's items into its net: the places declared, the slots, and every error
+    found on the way (all of them said at once, :func:`raise_all`)."""
+
+    def __init__(self, name: str, filename: str, lines: list[str],
+                 primitive_interface: tuple[str, ...]):
+        self.filename, self.lines = filename, lines
+        self.primitive_interface = primitive_interface
+        self.errors: list[Mcl2PnmlError] = []
+        self.b = NetBuilder(name)
+        self.declared: dict[str, Token] = {}
+        self.slots_p: list[str] = []
+        self.slots_c: list[str] = []
+
+    def loc(self, token) -> Location:
+        line = getattr(token, "line", None)
+        col = getattr(token, "column", None)
+        src = self.lines[line - 1] if line and 0 < line <= len(self.lines) else None
+        return Location(self.filename, line, col, src)
+
+    def declare(self, name: str, token, tokens: int = 0, interface: bool = False, doc=None):
+        if name in self.declared:
+            self.errors.append(Mcl2PnmlError(f"'{name}' is declared twice (first on line "
+                                             f"{self.declared[name].line})", self.loc(token)))
             return
-        declared[name] = token
-        b.place(name, tokens, interface=name if interface else None,
-                payload=payloads.place_payload(doc))
+        self.declared[name] = token
+        self.b.place(name, tokens, interface=name if interface else None,
+                     payload=payloads.place_payload(doc))
 
-    for item in items[1:]:
-        if item[0] == "uses":
-            _, what, names = item
-            if what == "primitive":
-                if not primitive_interface:
-                    errors.append(Mcl2PnmlError("'uses primitive' needs the primitive template",
-                                                loc(what)))
-                for slot in names or [""]:
-                    slots_p.append(str(slot))
-                    for place in slot_places(str(slot), primitive_interface):
-                        declare(place, slot or what, interface=True)
-            else:
-                if not names:
-                    errors.append(Mcl2PnmlError("'uses structure' names its slots, e.g. T1, T2",
-                                                loc(what)))
-                for slot in names:
-                    slots_c.append(str(slot))
-                    for place in slot_places(str(slot), CONTROL):
-                        declare(place, slot, interface=True)
-        elif item[0] == "place":
-            _, name, tokens, interface, pdoc = item
-            declare(str(name), name, tokens, interface, _doc(pdoc))
-    for item in items[1:]:
-        if item[0] != "transition":
-            continue
-        _, name, ins, outs, tags, tdoc = item
-        if str(name) in declared:
-            errors.append(Mcl2PnmlError(f"'{name}' names a place already", loc(name)))
-            continue
+    def places(self, items: list) -> None:
+        """The places: a slot's (``uses``) and the template's own, in the file's order."""
+        for item in items:
+            if item[0] == "uses":
+                self.uses(*item[1:])
+            elif item[0] == "place":
+                _, name, tokens, interface, pdoc = item
+                self.declare(str(name), name, tokens, interface, _doc(pdoc))
+
+    def uses(self, what, names) -> None:
+        """A ``uses primitive`` or ``uses structure`` line: its slots and their places."""
+        if what == "primitive":
+            if not self.primitive_interface:
+                self.errors.append(Mcl2PnmlError("'uses primitive' needs the primitive "
+                                                 "template", self.loc(what)))
+            for slot in names or [""]:
+                self.slots_p.append(str(slot))
+                for place in slot_places(str(slot), self.primitive_interface):
+                    self.declare(place, slot or what, interface=True)
+        else:
+            if not names:
+                self.errors.append(Mcl2PnmlError("'uses structure' names its slots, e.g. "
+                                                 "T1, T2", self.loc(what)))
+            for slot in names:
+                self.slots_c.append(str(slot))
+                for place in slot_places(str(slot), CONTROL):
+                    self.declare(place, slot, interface=True)
+
+    def transition(self, name, ins, outs, tags, tdoc) -> None:
+        """A transition, its payload from its tags, and its arcs to declared places."""
+        if str(name) in self.declared:
+            self.errors.append(Mcl2PnmlError(f"'{name}' names a place already", self.loc(name)))
+            return
         try:
             # read through the payload records: a tag they know with a bad
             # value (``event=arrived``) is an error of the template, here
             payload = payloads.tagged(_doc(tdoc), [(key, value) for key, _, value in tags])
         except PayloadError as e:
-            errors.append(Mcl2PnmlError(e.message, loc(name)))
-            continue
+            self.errors.append(Mcl2PnmlError(e.message, self.loc(name)))
+            return
         try:
-            b.transition(str(name), payload=payload.to_json())
+            self.b.transition(str(name), payload=payload.to_json())
         except Mcl2PnmlError as e:
-            errors.append(Mcl2PnmlError(e.message, loc(name)))
-            continue
+            self.errors.append(Mcl2PnmlError(e.message, self.loc(name)))
+            return
         for (read, place, weight), direction in [(a, "in") for a in ins] + [(a, "out") for a in outs]:
-            if str(place) not in declared:
-                errors.append(Mcl2PnmlError(
-                    f"undeclared place '{place}'" + did_you_mean(str(place), declared,
-                                                                "declared places"), loc(place)))
+            if str(place) not in self.declared:
+                self.errors.append(Mcl2PnmlError(
+                    f"undeclared place '{place}'" + did_you_mean(str(place), self.declared,
+                                                                "declared places"),
+                    self.loc(place)))
                 continue
             if direction == "out":
                 if read:
-                    errors.append(Mcl2PnmlError("'?' (read) is for inputs only", loc(place)))
-                b.arc(str(name), str(place), weight)
+                    self.errors.append(Mcl2PnmlError("'?' (read) is for inputs only",
+                                                     self.loc(place)))
+                self.b.arc(str(name), str(place), weight)
             else:
-                b.arc(str(place), str(name), weight, ArcKind.READ if read else ArcKind.NORMAL)
-    if kind is not TemplateKind.PRIMITIVE:
-        missing = [p for p in CONTROL if p not in declared]
-        if missing:
-            errors.append(Mcl2PnmlError(
-                f"a {kind.value} needs the control places {', '.join(CONTROL)}; missing: "
-                f"{', '.join(missing)}", loc(name_tok)))
-    if kind is not TemplateKind.PATTERN and slots_p:
-        errors.append(Mcl2PnmlError(f"only a pattern uses primitives, not a {kind.value}",
-                                    loc(name_tok)))
-    if kind is not TemplateKind.STRUCTURE and slots_c:
-        errors.append(Mcl2PnmlError(f"only a structure uses structures, not a {kind.value}",
-                                    loc(name_tok)))
-    raise_all(errors)
+                self.b.arc(str(place), str(name), weight,
+                           ArcKind.READ if read else ArcKind.NORMAL)
+
+    def of_its_kind(self, kind: TemplateKind, name_tok) -> None:
+        """What the kind asks: the control places but of a primitive, primitives used by a
+        pattern only, structures by a structure only."""
+        if kind is not TemplateKind.PRIMITIVE:
+            missing = [p for p in CONTROL if p not in self.declared]
+            if missing:
+                self.errors.append(Mcl2PnmlError(
+                    f"a {kind.value} needs the control places {', '.join(CONTROL)}; missing: "
+                    f"{', '.join(missing)}", self.loc(name_tok)))
+        if kind is not TemplateKind.PATTERN and self.slots_p:
+            self.errors.append(Mcl2PnmlError(f"only a pattern uses primitives, not a "
+                                             f"{kind.value}", self.loc(name_tok)))
+        if kind is not TemplateKind.STRUCTURE and self.slots_c:
+            self.errors.append(Mcl2PnmlError(f"only a structure uses structures, not a "
+                                             f"{kind.value}", self.loc(name_tok)))
+
+
+def parse_template(text: str, filename: str = "<template>",
+                   primitive_interface: tuple[str, ...] = ()) -> Template:
+    """Parse one template file. ``primitive_interface`` lists the places a
+    ``uses primitive`` slot declares (the primitive template's interface)."""
+    lines = text.splitlines()
+    items = _items(text, filename, lines)
+    _, kind_tok, name_tok, aliases, doc = items[0]
+    kind = TemplateKind(str(kind_tok))
+    reader = _TemplateReader(str(name_tok), filename, lines, primitive_interface)
+    reader.places(items[1:])
+    for item in items[1:]:
+        if item[0] == "transition":
+            reader.transition(*item[1:])
+    reader.of_its_kind(kind, name_tok)
+    raise_all(reader.errors)
     try:
-        net = b.build()
+        net = reader.b.build()
     except Mcl2PnmlError as e:
         raise Mcl2PnmlError(e.message, Location(filename)) from None
     return Template(kind, str(name_tok), tuple(str(a) for a in aliases), _doc(doc) or "",
-                    net, tuple(slots_p), tuple(slots_c), filename)
+                    net, tuple(reader.slots_p), tuple(reader.slots_c), filename)
 
 
 def load_template(path: str | Path, primitive_interface: tuple[str, ...] = ()) -> Template:
