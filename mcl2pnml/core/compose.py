@@ -55,27 +55,8 @@ def compose(components: Mapping[str, Net] | Iterable[tuple[str, Net]],
     own places are fused; only such components pay for merging arc weights.
     """
     items = list(components.items() if isinstance(components, Mapping) else components)
-    shapes: dict[tuple, _Shape] = {}
-    parts: list[tuple[str, Net, _Shape, list[str], int]] = []
-    order: dict[str, int] = {}          # qualified place id -> position in the union
-    doubtful = False                    # whether the result needs a full check
-    for prefix, net in items:
-        shape = _Shape.of(net, shapes)
-        if prefix:
-            stem = prefix + separator
-            doubtful = doubtful or not is_valid_id(stem + "x")
-            qualified = list(map(stem.__add__, shape.ids))
-        else:
-            qualified = shape.ids
-        first = len(order)
-        parts.append((prefix, net, shape, qualified, first))
-        order.update(zip(qualified[:shape.n_places], range(first, first + shape.n_places)))
-        if len(order) < first + shape.n_places:
-            _duplicate(chain.from_iterable(q[:s.n_places] for _, _, s, q, _ in parts), name)
-    # sorted, a stem that starts others comes right before the first of them
-    stems = sorted(prefix + separator for prefix, *_ in parts)
-    doubtful = (doubtful or not all(prefix for prefix, *_ in parts)
-                or any(b.startswith(a) for a, b in zip(stems, stems[1:])))
+    # doubtful: whether the result needs a full check
+    parts, order, doubtful = _qualified(items, separator, name)
 
     def what(p: str) -> str:  # for an error message only: not a place, but a node?
         node = any(p in qualified for _, _, _, qualified, _ in parts)
@@ -108,38 +89,83 @@ def compose(components: Mapping[str, Net] | Iterable[tuple[str, Net]],
                           if prefix else compress(net.places, kept))
         transitions.extend(map(Transition.with_id, net.transitions, qualified[n:]) if prefix
                            else net.transitions)
-        for p, count in net.initial.items():
-            i = shape.index[p]
-            r = final[i]
-            if r in tokens and tokens[r] != count:
-                raise NetError(
-                    f"cannot fuse '{marked_by[r]}' ({tokens[r]} tokens) with "
-                    f"'{qualified[i]}' ({count} tokens): fused places must start with the "
-                    "same marking")
-            tokens[r] = count
-            marked_by.setdefault(r, qualified[i])
+        _mark(net, shape, final, qualified, tokens, marked_by)
         ends = (list(map(final.__getitem__, shape.sources)),
                 list(map(final.__getitem__, shape.targets)))
         if within:
-            # the component's arcs may come to join the same ends, and then
-            # add up their weights
-            merged: dict[tuple, int] = {}
-            for s, t, w, k in zip(*ends, shape.weights, shape.kinds):
-                merged[s, t, k] = merged.get((s, t, k), 0) + w
-            doubtful = doubtful or len({(s, t) for s, t, _ in merged}) < len(merged)
-            ends = ([s for s, _, _ in merged], [t for _, t, _ in merged])
-            weights.extend(merged.values())
-            kinds.extend(k for _, _, k in merged)
+            ends, own_weights, own_kinds, clash = _merged(ends, shape)
+            doubtful = doubtful or clash
         else:
-            weights.extend(shape.weights)
-            kinds.extend(shape.kinds)
+            own_weights, own_kinds = shape.weights, shape.kinds
         sources.extend(ends[0])
         targets.extend(ends[1])
+        weights.extend(own_weights)
+        kinds.extend(own_kinds)
     columns = (tuple(sources), tuple(targets), tuple(weights), tuple(kinds))
     arcs = tuple(map(_make_arc, zip(*columns)))
     if doubtful:
         return Net(name, tuple(places), tuple(transitions), arcs, Marking(tokens))
     return Net._trusted(name, tuple(places), tuple(transitions), arcs, Marking(tokens), columns)
+
+
+def _qualified(items: list[tuple[str, Net]], separator: str, name: str
+               ) -> tuple[list[tuple[str, Net, "_Shape", list[str], int]], dict[str, int], bool]:
+    """Each component with its shape, its qualified ids and the number of its first place
+    in the union; each qualified place id's number; and whether the result needs a full
+    check (a prefix that is no id's start, none, or one that starts another's)."""
+    shapes: dict[tuple, _Shape] = {}
+    parts: list[tuple[str, Net, _Shape, list[str], int]] = []
+    order: dict[str, int] = {}          # qualified place id -> position in the union
+    doubtful = False
+    for prefix, net in items:
+        shape = _Shape.of(net, shapes)
+        if prefix:
+            stem = prefix + separator
+            doubtful = doubtful or not is_valid_id(stem + "x")
+            qualified = list(map(stem.__add__, shape.ids))
+        else:
+            qualified = shape.ids
+        first = len(order)
+        parts.append((prefix, net, shape, qualified, first))
+        order.update(zip(qualified[:shape.n_places], range(first, first + shape.n_places)))
+        if len(order) < first + shape.n_places:
+            _duplicate(chain.from_iterable(q[:s.n_places] for _, _, s, q, _ in parts), name)
+    # sorted, a stem that starts others comes right before the first of them
+    stems = sorted(prefix + separator for prefix, *_ in parts)
+    doubtful = (doubtful or not all(prefix for prefix, *_ in parts)
+                or any(b.startswith(a) for a, b in zip(stems, stems[1:])))
+    return parts, order, doubtful
+
+
+def _mark(net: Net, shape: "_Shape", final: list[str], qualified: list[str],
+          tokens: dict[str, int], marked_by: dict[str, str]) -> None:
+    """The component's initial marking added to ``tokens``, on the places it is fused
+    into (``final``); fused places must start alike (section 2.3: fusion merges places
+    of one marking)."""
+    for p, count in net.initial.items():
+        i = shape.index[p]
+        r = final[i]
+        if r in tokens and tokens[r] != count:
+            raise NetError(
+                f"cannot fuse '{marked_by[r]}' ({tokens[r]} tokens) with "
+                f"'{qualified[i]}' ({count} tokens): fused places must start with the "
+                "same marking")
+        tokens[r] = count
+        marked_by.setdefault(r, qualified[i])
+
+
+def _merged(ends: tuple[list[str], list[str]], shape: "_Shape"
+            ) -> tuple[tuple[list[str], list[str]], list[int], list[ArcKind], bool]:
+    """A component's arcs once two of its own places are fused: arcs that come to join
+    the same ends, of one kind, are one, their weights added; and whether two arcs of
+    different kinds now join the same ends (a transition that reads and consumes a place:
+    the result needs a full check)."""
+    merged: dict[tuple, int] = {}
+    for s, t, w, k in zip(*ends, shape.weights, shape.kinds):
+        merged[s, t, k] = merged.get((s, t, k), 0) + w
+    clash = len({(s, t) for s, t, _ in merged}) < len(merged)
+    return (([s for s, _, _ in merged], [t for _, t, _ in merged]), list(merged.values()),
+            [k for _, _, k in merged], clash)
 
 
 _make_arc = partial(tuple.__new__, Arc)   # Arc from a 4-tuple, called from C
