@@ -498,83 +498,113 @@ def _range_text(low: float, low_allowed: bool, high: float) -> str:
 
 def _checked_fields(data: dict[str, Any], where) -> dict[str, Any]:
     """The world's fields from a file's object, each checked (see :meth:`World.from_json`)."""
-    def bad(key: str, message: str) -> Mcl2PnmlError:
-        return Mcl2PnmlError(f'world setting "{key}" is {message}, not '
-                             f"{json.dumps(data[key])[:80]}", where(key))
+    fields = _Fields(data, where)
+    fields.tank()
+    fields.places()
+    fields.numbers_and_counts()
+    return fields.checked
 
-    def numbers(key: str, value: Any, size: int, what: str) -> tuple[float, ...]:
+
+class _Fields:
+    """A world file's fields as they are checked, each fault one message at its key."""
+
+    def __init__(self, data: dict[str, Any], where) -> None:
+        self.data, self.where = data, where
+        self.checked: dict[str, Any] = {}
+        self.world = World()     # the tank the places are checked in, once it is read
+
+    def bad(self, key: str, message: str) -> Mcl2PnmlError:
+        return Mcl2PnmlError(f'world setting "{key}" is {message}, not '
+                             f"{json.dumps(self.data[key])[:80]}", self.where(key))
+
+    def numbers(self, key: str, value: Any, size: int, what: str) -> tuple[float, ...]:
         if not isinstance(value, list) or len(value) != size or not all(map(_number, value)):
-            raise bad(key, f"{what}: a list of {size} finite numbers")
+            raise self.bad(key, f"{what}: a list of {size} finite numbers")
         return tuple(float(v) for v in value)
 
-    fields: dict[str, Any] = {}
-    if "tank" in data:
-        fields["tank"] = numbers("tank", data["tank"], 3,
-                                 "the tank's extents x, y and depth in metres")
-        if not all(0 < v <= MAX_LENGTH for v in fields["tank"]):
-            raise bad("tank", f"the tank's extents x, y and depth in metres: each above 0, "
-                      f"up to {MAX_LENGTH:,.0f}")
-    if "origin" in data:
-        fields["origin"] = numbers("origin", data["origin"], 2,
-                                   "the tank's corner of least x and y in metres")
-        if not all(abs(v) <= MAX_LENGTH for v in fields["origin"]):
-            raise bad("origin", f"the tank's corner of least x and y in metres: each from "
-                      f"{-MAX_LENGTH:,.0f} to {MAX_LENGTH:,.0f}")
-    tank = World(tank=fields.get("tank", World.tank), origin=fields.get("origin", World.origin))
-
-    def inside(key: str, point: tuple[float, ...], what: str) -> None:
+    def inside(self, key: str, point: tuple[float, ...], what: str) -> None:
+        tank = self.world
         if not tank.inside(point):
             sizes = " x ".join(f"{v:g}" for v in tank.tank[:len(point)])
             start = "0" if tank.origin == (0.0, 0.0) else \
                 "the origin ({:g}, {:g}, 0)".format(*tank.origin)
-            raise bad(key, f"{what}: inside the {sizes} m tank (each from {start} to its "
-                      "extent)")
+            raise self.bad(key, f"{what}: inside the {sizes} m tank (each from {start} to its "
+                           "extent)")
 
-    if "start" in data:
-        fields["start"] = numbers("start", data["start"], 3, "where the vehicle starts, x, y "
-                                  "and depth")
-        inside("start", fields["start"], "where the vehicle starts, x, y and depth")
-    elif not tank.inside(World.start):
-        raise Mcl2PnmlError(f"the default start {World.start} is outside this tank: give "
-                            '"start" too', where("tank" if "tank" in data else "origin"))
-    for key, size, what in (("cross", 2, "where the cross is on the floor, x and y (or null)"),
-                            ("dock", 3, "where the dock is, x, y and depth (or null)")):
-        if key in data:
-            fields[key] = None if data[key] is None else numbers(key, data[key], size, what)
-            if fields[key] is not None:
-                inside(key, fields[key], what)
-    for key, (what, size) in LISTS.items():
-        if key not in data:
-            continue
-        items = data[key]
+    def tank(self) -> None:
+        """The tank's extents and origin, which the places are then checked in."""
+        data, fields = self.data, self.checked
+        if "tank" in data:
+            fields["tank"] = self.numbers("tank", data["tank"], 3,
+                                          "the tank's extents x, y and depth in metres")
+            if not all(0 < v <= MAX_LENGTH for v in fields["tank"]):
+                raise self.bad("tank", f"the tank's extents x, y and depth in metres: each "
+                               f"above 0, up to {MAX_LENGTH:,.0f}")
+        if "origin" in data:
+            fields["origin"] = self.numbers("origin", data["origin"], 2,
+                                            "the tank's corner of least x and y in metres")
+            if not all(abs(v) <= MAX_LENGTH for v in fields["origin"]):
+                raise self.bad("origin", f"the tank's corner of least x and y in metres: each "
+                               f"from {-MAX_LENGTH:,.0f} to {MAX_LENGTH:,.0f}")
+        self.world = World(tank=fields.get("tank", World.tank),
+                           origin=fields.get("origin", World.origin))
+
+    def places(self) -> None:
+        """The start, the cross, the dock and the lists of items, each inside the tank."""
+        data, fields = self.data, self.checked
+        if "start" in data:
+            fields["start"] = self.numbers("start", data["start"], 3, "where the vehicle "
+                                           "starts, x, y and depth")
+            self.inside("start", fields["start"], "where the vehicle starts, x, y and depth")
+        elif not self.world.inside(World.start):
+            raise Mcl2PnmlError(f"the default start {World.start} is outside this tank: give "
+                                '"start" too', self.where("tank" if "tank" in data else "origin"))
+        for key, size, what in (("cross", 2, "where the cross is on the floor, x and y (or null)"),
+                                ("dock", 3, "where the dock is, x, y and depth (or null)")):
+            if key in data:
+                fields[key] = (None if data[key] is None
+                               else self.numbers(key, data[key], size, what))
+                if fields[key] is not None:
+                    self.inside(key, fields[key], what)
+        for key, (what, size) in LISTS.items():
+            if key in data:
+                fields[key] = self.items(key, data[key], what, size)
+
+    def items(self, key: str, items: Any, what: str, size: int) -> tuple[tuple[float, ...], ...]:
         if not isinstance(items, list) or len(items) > MAX_ITEMS:
-            raise bad(key, f"a list of up to {MAX_ITEMS} items, each {what}")
+            raise self.bad(key, f"a list of up to {MAX_ITEMS} items, each {what}")
         checked = []
         for item in items:
-            values = numbers(key, item, size, f"a list of items, each {what}")
-            inside(key, values[:3], f"a list of items, each {what}")
+            values = self.numbers(key, item, size, f"a list of items, each {what}")
+            self.inside(key, values[:3], f"a list of items, each {what}")
             if not all(0 < v <= MAX_LENGTH for v in values[3:]):
-                raise bad(key, f"a list of items, each {what}, the radius (and peak) above 0")
+                raise self.bad(key, f"a list of items, each {what}, the radius (and peak) "
+                               "above 0")
             checked.append(values)
-        fields[key] = tuple(checked)
-    if "seed" in data:
-        seed = data["seed"]
-        if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)
-                                 or abs(seed) >= _SEED_LIMIT):
-            raise bad("seed", "the seed of the noise: an integer below 2^63 in size, or null")
-        fields["seed"] = seed
-    for key, (what, high) in COUNTS.items():
-        if key in data:
+        return tuple(checked)
+
+    def numbers_and_counts(self) -> None:
+        """The seed, the counts and the numbers in their ranges (angles read in degrees)."""
+        data, fields = self.data, self.checked
+        if "seed" in data:
+            seed = data["seed"]
+            if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)
+                                     or abs(seed) >= _SEED_LIMIT):
+                raise self.bad("seed", "the seed of the noise: an integer below 2^63 in size, "
+                               "or null")
+            fields["seed"] = seed
+        for key, (what, high) in COUNTS.items():
+            if key in data:
+                value = data[key]
+                if not isinstance(value, int) or isinstance(value, bool) \
+                        or not 0 <= value <= high:
+                    raise self.bad(key, f"{what}: a whole number from 0 to {high:,}")
+                fields[key] = value
+        for key, (what, low, low_allowed, high) in RANGES.items():
+            if key not in data:
+                continue
             value = data[key]
-            if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= high:
-                raise bad(key, f"{what}: a whole number from 0 to {high:,}")
-            fields[key] = value
-    for key, (what, low, low_allowed, high) in RANGES.items():
-        if key not in data:
-            continue
-        value = data[key]
-        if not _number(value) or not (low <= value if low_allowed else low < value) \
-                or value > high:
-            raise bad(key, f"{what}: a number {_range_text(low, low_allowed, high)}")
-        fields[key] = math.radians(value) if key in _DEGREES else float(value)
-    return fields
+            if not _number(value) or not (low <= value if low_allowed else low < value) \
+                    or value > high:
+                raise self.bad(key, f"{what}: a number {_range_text(low, low_allowed, high)}")
+            fields[key] = math.radians(value) if key in _DEGREES else float(value)
