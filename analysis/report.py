@@ -38,6 +38,11 @@ from mcl2pnml.analysis.structure.invariants import (AnalysisLimit, format_invari
                          t_invariant_basis)
 from mcl2pnml.analysis.structure.siphons import minimal_siphons, minimal_traps, siphon_control
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, MemoryLimit, Progress, explore
+from mcl2pnml.analysis.statespace.explorers import CHOICES
+
+#: The explorer unless told: ``auto``, the fastest for the net's kind and size (the first
+#: of the choices, :func:`~mcl2pnml.analysis.statespace.explore.explore`'s policy).
+AUTO = CHOICES[0]
 
 #: Bounds on the exponential parts; past them the result says "limit reached".
 FARKAS_LIMIT = 20_000
@@ -223,7 +228,7 @@ class Analysis:
 
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
             max_states: int = MAX_STATES, progress: Progress | None = None,
-            explorer: str = "auto", max_memory: int | None = None,
+            explorer: str = AUTO, max_memory: int | None = None,
             explore_states: bool = True) -> Analysis:
     """Everything we know how to prove about ``net``, as typed data (:class:`Analysis`).
 

@@ -50,6 +50,7 @@ from urllib.parse import urlsplit
 from mcl2pnml.core.bounds import MAX_RUN_TIME
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.runtime.options import RunOptions
 
 #: Runs per task sent to a worker.
 BATCH = 500
@@ -416,7 +417,8 @@ def _z(confidence: float) -> float:
     return NormalDist().inv_cdf(0.5 + confidence / 2)
 
 
-def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = "petri", seed: int = 0,
+def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = RunOptions.engine,
+        seed: int = 0,
         confidence: float = CONFIDENCE, target: float | None = None,
         workers: int | None = None, scheduler: str | None = None,
         timeouts: SchedulerTimeouts = SchedulerTimeouts(), max_time: float = MAX_RUN_TIME,

@@ -1,11 +1,10 @@
 """The ``mcl2pnml`` command (click), as ``mcl2pnml --help`` and README's Commands table document it.
 
 It parses options and prints; what each command does is its module's in
-:mod:`mcl2pnml.commands`, which it calls with the command's options dataclass. Errors are
-handled once, in :meth:`Cli.main`: a bad argument is one line, a bad input file its located
-message (file:line:col, the line, a caret); both exit 2, with no traceback or partial file.
-A setting the commands refuse (:class:`~mcl2pnml.core.settings.SettingError`) is shown as
-the option the user typed.
+:mod:`mcl2pnml.commands`, called with the command's options dataclass. Errors are handled
+once, in :meth:`Cli.main`: a bad argument is one line, a bad input file its located message
+(file:line:col, the line, a caret); both exit 2, with no traceback or partial file; a
+setting refused (:class:`~mcl2pnml.core.settings.SettingError`) shows as the option typed.
 """
 from __future__ import annotations
 
@@ -16,39 +15,21 @@ from pathlib import Path
 import click
 
 from mcl2pnml.cli_options import (
-    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, FILE,
-    FUNCTIONAL_OPTIONS, QUERY_OPTIONS, RUN_OPTIONS, SHOW_OPTIONS, TEMPLATE_OPTIONS,
-    VALIDATE_OPTIONS, ODDS_OPTIONS)
+    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, EXAMPLES,
+    FUNCTIONAL_OPTIONS, ODDS_OPTIONS, QUERY_OPTIONS, RUN_OPTIONS, SHOW_OPTIONS, TEMPLATE_OPTIONS,
+    VALIDATE_OPTIONS)
 from mcl2pnml.commands import (analyze as analyzing, campaign as campaigning,
                                certify as certifying, check as checking,
                                compile as compiling, odds as weighing, query as querying,
                                run as running, show as showing, template as templating,
                                validate as validating)
 from mcl2pnml.commands.common import (VERSION, Mcl2PnmlError, Notes, OptionError,
-                                      ProgressMeter, visible)
-
-EXAMPLES = """\b
-Examples:
-  mcl2pnml check examples/sauce.mcl
-  mcl2pnml functional examples/sauce.mcl
-  mcl2pnml compile examples/sauce.mcl -o sauce.pnml
-  mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
-  mcl2pnml run examples/sauce.mcl --vehicle script.json --journal run.journal
-  mcl2pnml run examples/sauce.mcl --resume run.journal
-  mcl2pnml template task -o task.pnml
-  mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
-  mcl2pnml show examples/sauce.mcl --run run.jsonl
-  mcl2pnml validate task.pnml --grammar ~/pnml/grammar
-  mcl2pnml certify examples/sauce.mcl
-  mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.model.json
-  mcl2pnml campaign examples/sauce.mcl --vehicle-model examples/sauce.model.json --runs 10000
-"""
+                                      ProgressMeter, UsageProblem, visible)
 
 
 def option_of(ctx: click.Context, error: OptionError) -> str:
-    """The option (or argument) a user typed for the setting ``error`` names: the
-    command's parameter of that name, as its errors name it (``-o``, ``--net``,
-    ``MISSION``); an error that names an option already, that option."""
+    """The option (or argument) typed for the setting ``error`` names, as click's errors name
+    it (``-o``, ``--net``, ``MISSION``); an error naming an option already, that option."""
     setting = getattr(error, "setting", None)
     for param in ctx.command.params if setting is not None else ():
         if param.name == setting:
@@ -65,6 +46,8 @@ class Command(click.Command):
             return super().invoke(ctx)
         except OptionError as e:   # raised below the CLI: shown as click shows its own
             raise click.BadParameter(e.message, ctx, param_hint=option_of(ctx, e)) from None
+        except UsageProblem as e:
+            raise click.UsageError(e.message, ctx) from None
 
 
 class Cli(click.Group):
@@ -100,19 +83,16 @@ class Cli(click.Group):
         sys.exit(code if isinstance(code, int) else 0)
 
 
-def _notes() -> Notes:
-    """What a command says on the way (warnings, files written), on standard error."""
+def _notes() -> Notes:   # what a command says on the way: warnings, files written
     return Notes(sys.stderr)
 
 
-def _print(outcome, as_json: bool = False, indent: int | None = 2) -> None:
-    """The outcome on standard output: its ``--json`` object, or its lines."""
+def _print(outcome, as_json: bool = False, indent: int | None = 2) -> None:   # stdout
     click.echo(json.dumps(outcome.as_json(), indent=indent) if as_json
                else "\n".join(outcome.lines()))
 
 
-def _shown(progress: bool | None) -> bool:
-    """Whether a progress display is shown: as asked, else on a terminal."""
+def _shown(progress: bool | None) -> bool:   # a progress display: as asked, or on a tty
     return sys.stderr.isatty() if progress is None else progress
 
 
@@ -126,7 +106,6 @@ def main() -> None:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @CHECK_OPTIONS
 def check(mission: Path, **options) -> int:
     """Parse and check MISSION (MCL): names, arities, patterns, recursion, properties.
@@ -143,7 +122,6 @@ def check(mission: Path, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @FUNCTIONAL_OPTIONS
 def functional(mission: Path, **options) -> int:
     """Print the functional form of MISSION (the paper's Algorithm 2).
@@ -156,7 +134,6 @@ def functional(mission: Path, **options) -> int:
 
 
 @main.command("compile", epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @COMPILE_OPTIONS
 def compile_(mission: Path, **options) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
@@ -169,7 +146,6 @@ def compile_(mission: Path, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @RUN_OPTIONS
 @click.pass_context
 def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
@@ -199,7 +175,6 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("file", type=FILE)
 @VALIDATE_OPTIONS
 def validate(file: Path, **options) -> int:
     """Check FILE against mcl2pnml's PNML schema, the official grammar where it is
@@ -217,7 +192,6 @@ def validate(file: Path, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("name", required=False)
 @TEMPLATE_OPTIONS
 def template(name: str | None, list_: bool, **options) -> int:
     """Write the paper's net NAME, from the paper's initial marking M0.
@@ -228,8 +202,6 @@ def template(name: str | None, list_: bool, **options) -> int:
     if list_:
         _print(templating.templates())
         return 0
-    if name is None:
-        raise click.UsageError("give a template NAME, or --list")
     written = templating.template(name, templating.TemplateOptions(**options), notes=_notes())
     if written.pnml is not None:
         click.echo(written.pnml, nl=False)
@@ -237,7 +209,6 @@ def template(name: str | None, list_: bool, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE")
 @SHOW_OPTIONS
 def show(what: str, **options) -> int:
     """Write one self-contained HTML page to play the token game on a net.
@@ -250,20 +221,11 @@ def show(what: str, **options) -> int:
     fetches nothing. With --live LOG, the page is served on loopback instead
     and follows a run as `run --log LOG` writes it.
     """
-    settings = showing.ShowOptions(**options)
-    if settings.live_log is None and (settings.port, settings.linger) != \
-            (showing.ShowOptions.port, showing.ShowOptions.linger):
-        raise click.UsageError("--port and --linger go with --live")
-    if settings.live_log is not None and any(
-            path is not None for path in (settings.output, settings.run_log,
-                                          settings.graph_json)):
-        raise click.UsageError("--live serves the page: leave out -o, --run and --graph-json")
-    showing.show(what, settings, notes=_notes())
+    showing.show(what, showing.ShowOptions(**options), notes=_notes())
     return 0
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @CERTIFY_OPTIONS
 def certify(mission: Path, **options) -> int:
     """Prove MISSION from its parts, without exploring: write its certificate.
@@ -283,7 +245,6 @@ def certify(mission: Path, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("file", type=FILE)
 @ANALYZE_OPTIONS
 def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
@@ -300,8 +261,6 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("net", type=FILE)
-@click.argument("formulas", type=FILE, nargs=-1)
 @QUERY_OPTIONS
 def query(net: Path, formulas: tuple[Path, ...], as_json: bool, **options) -> int:
     """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
@@ -313,7 +272,6 @@ def query(net: Path, formulas: tuple[Path, ...], as_json: bool, **options) -> in
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @ODDS_OPTIONS
 def odds(mission: Path, model: Path, as_json: bool, **options) -> int:
     """The exact odds of MISSION with a vehicle model: how likely it ends OK, FAIL or
@@ -328,7 +286,6 @@ def odds(mission: Path, model: Path, as_json: bool, **options) -> int:
 
 
 @main.command(epilog=EXAMPLES)
-@click.argument("mission", type=FILE)
 @CAMPAIGN_OPTIONS
 def campaign(mission: Path, as_json: bool, progress: bool | None, **options) -> int:
     """Fly MISSION many times, on Dask, with a vehicle model or on the kinematic

@@ -29,6 +29,24 @@ from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
+#: The epilog of every command's --help.
+EXAMPLES = """\b
+Examples:
+  mcl2pnml check examples/sauce.mcl
+  mcl2pnml functional examples/sauce.mcl
+  mcl2pnml compile examples/sauce.mcl -o sauce.pnml
+  mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
+  mcl2pnml run examples/sauce.mcl --vehicle script.json --journal run.journal
+  mcl2pnml run examples/sauce.mcl --resume run.journal
+  mcl2pnml template task -o task.pnml
+  mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
+  mcl2pnml show examples/sauce.mcl --run run.jsonl
+  mcl2pnml validate task.pnml --grammar ~/pnml/grammar
+  mcl2pnml certify examples/sauce.mcl
+  mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.model.json
+  mcl2pnml campaign examples/sauce.mcl --vehicle-model examples/sauce.model.json --runs 10000
+"""
+
 FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
 NET_OPTION = click.option("--net", "net_id", metavar="ID",
@@ -89,6 +107,7 @@ def _properties_options(what: str):
 
 
 CHECK_OPTIONS = _composed(  # check MISSION
+    click.argument("mission", type=FILE),
     _properties_options("Also print each property compiled to place formulas"),
     STRICT_OPTION,
     MISSION_SIZE_OPTION,
@@ -96,6 +115,7 @@ CHECK_OPTIONS = _composed(  # check MISSION
 
 
 FUNCTIONAL_OPTIONS = _composed(  # functional MISSION
+    click.argument("mission", type=FILE),
     click.option("--functions", "functions", is_flag=True,
                  help="Also print each function's body in functional form."),
     MISSION_SIZE_OPTION,
@@ -103,6 +123,7 @@ FUNCTIONAL_OPTIONS = _composed(  # functional MISSION
 
 
 VALIDATE_OPTIONS = _composed(  # validate FILE
+    click.argument("file", type=FILE),
     click.option("--grammar", type=click.Path(exists=True, file_okay=False, path_type=Path),
                  help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...), "
                       "applied as well as mcl2pnml's own schema. Default: "
@@ -113,6 +134,7 @@ VALIDATE_OPTIONS = _composed(  # validate FILE
 
 
 TEMPLATE_OPTIONS = _composed(  # template [NAME]
+    click.argument("name", required=False),
     click.option("--list", "list_", is_flag=True, help="List the template nets and exit."),
     click.option("-o", "--output", type=OUTPUT,
                  help="Write here (default: PNML to standard output)."),
@@ -121,6 +143,7 @@ TEMPLATE_OPTIONS = _composed(  # template [NAME]
 
 
 COMPILE_OPTIONS = _composed(  # compile MISSION
+    click.argument("mission", type=FILE),
     click.option("-o", "--output", type=OUTPUT, help="Write here (default: MISSION.suffix)."),
     FORMAT_OPTION,
     click.option("--layout", "layout_engine", type=click.Choice(ENGINES),
@@ -159,6 +182,7 @@ COMPILE_OPTIONS = _composed(  # compile MISSION
 
 
 RUN_OPTIONS = _composed(  # run MISSION
+    click.argument("mission", type=FILE),
     click.option("--engine", type=click.Choice(["petri", "reference"]),
                  default=RunOptions.engine,
                  show_default=True, help="petri: the executor plays the compiled net; "
@@ -230,6 +254,7 @@ RUN_OPTIONS = _composed(  # run MISSION
 
 
 SHOW_OPTIONS = _composed(  # show WHAT
+    click.argument("what", metavar="MISSION.mcl|NET|TEMPLATE"),
     click.option("-o", "--output", type=OUTPUT, help="Write the page here (default: NAME.html)."),
     click.option("--run", "run_log", type=FILE, help="A run to follow: a log of `run --log`."),
     click.option("--graph-json", "graph_json", type=OUTPUT,
@@ -253,6 +278,7 @@ SHOW_OPTIONS = _composed(  # show WHAT
 
 
 CERTIFY_OPTIONS = _composed(  # certify MISSION
+    click.argument("mission", type=FILE),
     click.option("-o", "--output", type=OUTPUT, help="Write the certificate here "
                  "(default: MISSION.cert.json)."),
     click.option("--check", "net_file", type=FILE, metavar="NET.pnml",
@@ -269,6 +295,7 @@ CERTIFY_OPTIONS = _composed(  # certify MISSION
 
 
 ANALYZE_OPTIONS = _composed(  # analyze FILE
+    click.argument("file", type=FILE),
     click.option("--json", "as_json", is_flag=True, help="Print one JSON object."),
     click.option("--initial", metavar="P,Q,...",
                  help="Start from this marking instead of the file's (P*2 for two tokens)."),
@@ -343,6 +370,8 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
 
 
 QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
+    click.argument("net", type=FILE),
+    click.argument("formulas", type=FILE, nargs=-1),
     click.option("--examination", "examinations", multiple=True,
                  type=click.Choice(list(EXAMINATIONS)),
                  help="Also a generic examination of the contest (may be repeated)."),
@@ -366,6 +395,7 @@ QUERY_OPTIONS = _composed(  # query NET [FORMULAS.xml...]
 
 
 ODDS_OPTIONS = _composed(  # odds MISSION
+    click.argument("mission", type=FILE),
     click.option("--vehicle-model", "model", type=FILE, required=True, metavar="MODEL.json",
                  help="How likely each primitive is to achieve or fail, and when it answers "
                       "(docs/odds.md)."),
@@ -410,6 +440,7 @@ class SchedulerTimeoutsType(click.ParamType):
 
 
 CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
+    click.argument("mission", type=FILE),
     click.option("--vehicle-model", "model", type=FILE, metavar="MODEL.json",
                  help="The vehicle model the runs draw their answers from (docs/odds.md); "
                       "without it, the runs fly the kinematic simulator."),

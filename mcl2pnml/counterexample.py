@@ -473,7 +473,13 @@ class SearchLimit(Exception):
     """:func:`engine_run` met its bound before it could answer."""
 
 
-def engine_run(net: Net, prop: Property, max_states: int = 200_000) -> tuple[str, ...] | None:
+#: The most states of the executor :func:`engine_run` searches, unless told: each is a
+#: copy of the engine, far larger than a marking, for a search the explanation may skip.
+ENGINE_RUN_STATES = 200_000
+
+
+def engine_run(net: Net, prop: Property, max_states: int = ENGINE_RUN_STATES
+               ) -> tuple[str, ...] | None:
     """A shortest violating run that the Petri-net executor takes with some vehicle: or None
     when it takes none (:class:`SearchLimit` past ``max_states`` states of the executor).
 

@@ -1,23 +1,19 @@
-"""The facade: the thin library calls that the commands, ``paper_repro``, ``bench``, tests
-and a notebook use.
+"""The facade: the thin library calls the commands, ``paper_repro``, ``bench``, tests and a
+notebook use.
 
-Each call strings the layers together the one way they go: MCL text is
-parsed and checked, turned into its functional form (the paper's
-Algorithm 2) and compiled to one net (section 2.4); a net is laid out
-(:mod:`mcl2pnml.view`) and saved in a format of the table
-(:mod:`mcl2pnml.io.formats`), or loaded from one; analysed
-(:mod:`mcl2pnml.analysis`); run against a vehicle (:mod:`mcl2pnml.runtime`); or
-shown as a token-game page. What a command decides and prints is
-:mod:`mcl2pnml.commands`', which import this module; this module and the layers
-below import no command. A setting that does not fit is a
+Each call strings the layers together the one way they go: MCL text is parsed and
+checked, turned into its functional form (the paper's Algorithm 2) and compiled to one
+net (section 2.4); a net is laid out (:mod:`mcl2pnml.view`) and saved in a format of the
+table (:mod:`mcl2pnml.io.formats`), or loaded from one; analysed
+(:mod:`mcl2pnml.analysis`); run against a vehicle (:mod:`mcl2pnml.runtime`); or shown as
+a token-game page. What a command decides and prints is :mod:`mcl2pnml.commands`',
+which import this module, never the reverse. A setting that does not fit is a
 :class:`~mcl2pnml.core.settings.SettingError` naming the setting.
 
-Heavy modules are imported by the call that needs them, so that ``mcl2pnml
---version`` and ``mcl2pnml check`` start fast (``python -X importtime -m mcl2pnml
---version``; measured on the development machine): lark and the language, 40-55 ms;
-numpy with the analysis, 0.1-0.3 s; lxml with the PNML reader, 15 ms; the runtime,
-30 ms; graphviz with the view, 15-65 ms; the certificates' proofs, 0.2 s. Each such
-import says which.
+Heavy modules are imported by the call that needs them, each saying what it costs at
+start-up (``python -X importtime -m mcl2pnml --version``), so that ``--version`` and
+``check`` load none of numpy (0.1-0.3 s with the analysis), lark (40 ms), lxml (15 ms),
+the runtime (0.1 s), graphviz or the certificates' proofs (0.2 s).
 """
 from __future__ import annotations
 
@@ -48,15 +44,21 @@ if TYPE_CHECKING:   # for the annotations only
 
 
 __all__ = [
-    "check_file", "check_source", "warnings_of", "warning_lines", "properties_of",
+    "check_file", "check_source", "warnings_of", "properties_of",
     "compile_file", "compile_source", "compile_checked", "functional_form", "load_net",
     "save_net", "save_queries", "to_pnml_bytes", "save_pnml", "template_net",
     "template_clusters", "templates", "validate_pnml", "analyze", "parse_marking",
-    "run_mission", "RunOptions", "show_nets", "save_show_page", "serve_show_live", "Shown",
-    "save_reachability_json", "certify_file", "load_certificate", "check_certificate",
-    "save_certificate", "check_properties", "timed_ends", "check_properties_timed",
-    "parse_size",
+    "run_mission", "RunOptions", "show_nets", "save_show_page", "Shown", "certify_file",
+    "load_certificate", "check_certificate", "save_certificate", "check_properties",
+    "timed_ends", "check_properties_timed", "parse_size",
 ]
+
+
+#: How a net's nodes are placed unless told (``compile --layout``): graphviz dot up to
+#: its limit, BFS layers above (:data:`mcl2pnml.view.layout.ENGINES`).
+LAYOUT = "auto"
+#: The format a net is written in unless told (``--format``).
+FORMAT = "pnml"
 
 
 # -- the language: MCL to a net (section 2.4) ---------------------------------------------
@@ -68,7 +70,7 @@ def check_file(path: str | Path, max_size: int | str | None = None):
     :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`) is refused before it is read: every
     command and call that reads a mission reads it here."""
     from mcl2pnml.language.semantics import check_program   # lark, 40 ms: only a mission read
-    from mcl2pnml.language.parser import parse_file   # lark, 40 ms: only a mission read
+    from mcl2pnml.language.parser import parse_file
     return check_program(parse_file(path, None, mission_limit(max_size),
                                     "--max-mission-size"))
 
@@ -84,7 +86,7 @@ def mission_limit(max_size: int | str | None = None) -> int:
 def check_source(text: str, filename: str = "<mcl>"):
     """Parse and check MCL text; errors name ``filename``."""
     from mcl2pnml.language.semantics import check_program   # lark, 40 ms: only a mission read
-    from mcl2pnml.language.parser import parse   # lark, 40 ms: only a mission read
+    from mcl2pnml.language.parser import parse
     return check_program(parse(text, filename))
 
 
@@ -94,12 +96,6 @@ def warnings_of(checked) -> list:
     source acknowledges (``// mcl: allow W001 because ...``) left out."""
     from mcl2pnml.language.lint import lint   # lark, 40 ms: only a mission read
     return lint(checked)
-
-
-def warning_lines(warnings) -> list[str]:
-    """The warnings as lines to print: the first ones, then how many more."""
-    from mcl2pnml.language.lint import shown   # lark, 40 ms: only a mission read
-    return shown(warnings)
 
 
 def compile_checked(checked, *, reduced: bool = False) -> Net:
@@ -138,7 +134,6 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
     :mod:`mcl2pnml.core.bounds`). ``checked``: the mission already checked, not read
     again; else it is read within ``max_mission_size`` (:func:`check_file`)."""
     from mcl2pnml.language.parser import parse_file   # lark, 40 ms: only a mission read
-    # lark, 40 ms: only a mission read
     from mcl2pnml.language.declared_properties import check_atoms, check_side_file, compile_properties
     max_size = size_or_none(max_size, "max_props_size")
     checked = check_file(mission, max_mission_size) if checked is None else checked
@@ -223,7 +218,7 @@ def load_net(path: str | Path, net_id: str | None = None,
     return compile_file(path, max_memory=max_memory, max_mission_size=max_mission_size)
 
 
-def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "auto",
+def save_net(net: Net, path: str | Path, fmt: str = FORMAT, *, layout: str = LAYOUT,
              title: str | None = None, mission: bool = False,
              clusters: Mapping[str, Sequence[str]] | None = None,
              expand: Sequence[str] | None = (), timing: "Assumptions | None" = None,
@@ -252,37 +247,12 @@ def save_net(net: Net, path: str | Path, fmt: str = "pnml", *, layout: str = "au
     return Path(path)
 
 
-def save_timed_queries(net: Net, net_path: str | Path, timing: "Assumptions | None" = None,
-                       properties=()):
-    """The queries verifydtapn checks a mission's timed-arc net (``compile --format tapn``)
-    against, written beside it (an end always reached, a dead state that is not an end, the
-    safety its clocks rest on, the properties a state formula says; :mod:`mcl2pnml.io.tapn`);
-    returns each file, its query and the k-bound to give verifydtapn."""
-    from mcl2pnml.io.tapn import write_queries as save   # 25 ms: only a timed-arc net
-    return save(net, net_path, timing, properties)
-
-
-def timed_query_paths(net: Net, net_path: str | Path, timing: "Assumptions | None" = None,
-                      properties=()) -> list[Path]:
-    """The files :func:`save_timed_queries` would write, to check them as outputs first."""
-    from mcl2pnml.io.tapn import query_paths   # 25 ms: only a timed-arc net
-    return query_paths(net, net_path, timing, properties)
-
-
-def save_deadline(net: Net, path: str | Path, seconds, timing: "Assumptions | None" = None):
-    """A mission's timed-arc net with an observer of time ``seconds`` at ``path``, and
-    beside it the query "some run has no result at that time" (:mod:`mcl2pnml.io.tapn`);
-    returns the net's file, the query's, and the k-bound to give verifydtapn."""
-    from mcl2pnml.io.tapn import write_deadline as save   # 25 ms: only a timed-arc net
-    return save(net, path, seconds, timing)
-
-
-def save_pnml(net: Net, path: str | Path, layout_engine: str = "auto") -> Path:
+def save_pnml(net: Net, path: str | Path, layout_engine: str = LAYOUT) -> Path:
     """``net`` as PNML at ``path``, laid out by ``layout_engine`` (written whole or not at all)."""
     return save_net(net, path, "pnml", layout=layout_engine)
 
 
-def save_queries(net: Net, path: str | Path, tool: str = "verifypn"):
+def save_queries(net: Net, path: str | Path, tool: str):
     """The compiled mission's properties for ``tool`` (verifypn or lola) in the Model Checking
     Contest's XML (:mod:`mcl2pnml.io.mccquery`), with the ids of its PNML; returns them."""
     from mcl2pnml.io.mccquery import write_queries as save   # 25 ms: only the contest's queries
@@ -297,7 +267,7 @@ def save_property_queries(properties, stem: str | Path):
     return save(properties, stem)
 
 
-def to_pnml_bytes(net: Net, layout_engine: str = "auto") -> bytes:
+def to_pnml_bytes(net: Net, layout_engine: str = LAYOUT) -> bytes:
     """``net`` as a PNML document, laid out by ``layout_engine``."""
     from mcl2pnml.io.pnml.writer import to_pnml as write   # lxml, 15 ms: only a PNML file
     drawn = _drawn(net, layout_engine)
@@ -326,7 +296,7 @@ def validate_pnml(path: str | Path, grammar: str | Path | None = None,
     gives it (or it is found: :func:`mcl2pnml.io.pnml.grammar.find_grammar`) and of the
     reader's rules; and the net when it is valid."""
     from mcl2pnml.io.pnml.grammar import validate   # lxml, 15 ms: only a PNML file
-    from mcl2pnml.io.pnml.reader import read_pnml   # lxml, 15 ms: only a PNML file
+    from mcl2pnml.io.pnml.reader import read_pnml
     check_load(path, Budget())   # the schemas read the file whole too
     verdict = validate(path, grammar, net_id)
     return verdict, (read_pnml(path, net_id) if verdict.valid else None)
@@ -457,9 +427,8 @@ def _certified(checked, net: Net, abort_pending: bool = False
     wrong with it for ``net`` (nothing: it holds)."""
     # the proven templates, 0.2 s: only to certify
     from mcl2pnml.certify.certificate import certify
-    # the proven templates, 0.2 s: only to certify
     from mcl2pnml.certify.recheck import check_certificate
-    from mcl2pnml.certify.templates import current   # the proven templates, 0.2 s: only to certify
+    from mcl2pnml.certify.templates import current
     proofs = current()      # read once, for the certificate and its check
     cert = certify(checked, net_name=net.name, abort_pending=abort_pending, proofs=proofs)
     # checked as it will be read back: plain JSON
@@ -582,7 +551,7 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
         raise SettingError("run_log", "a run is of a mission: give the mission's .mcl or "
                                       "its compiled net, not a template")
     from mcl2pnml.language.library import default_library   # lark, 40 ms: only a mission read
-    from mcl2pnml.language.template_parser import TemplateKind   # lark, 40 ms: only a mission read
+    from mcl2pnml.language.template_parser import TemplateKind
     lib = default_library()
     template = lib.get(what)   # unknown: the error lists the templates
     if template.kind is TemplateKind.PATTERN:
@@ -596,46 +565,25 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
 def save_show_page(path: str | Path, shown: Shown,
                    run_log: str | Path | None = None) -> Path:
     """The token-game page of ``shown``, following the run of ``run_log`` if given."""
-    # graphviz, 65 ms: only a page
-    from mcl2pnml.view.show import check_run, read_run, save_page, tree_data, variant
+    from mcl2pnml.view.show import check_run, read_run, save_page   # graphviz, 65 ms
     entries = None
     if run_log is not None:
         entries = read_run(run_log)
         check_run(shown.nets[0][0], entries, str(run_log))
-    tree = tree_data(shown.trees)
-    if not shown.drawn:
-        shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label))
-                           for net, label in shown.nets)
+    tree = drawn(shown)
     save_page(path, shown.title, shown.drawn, entries, tree)
     return Path(path)
 
 
-def serve_show_live(shown: Shown, run_log: str | Path, *, port: int, linger: float,
-                    ready: Callable[[str], None] = print) -> None:
-    """Serve the token-game page of ``shown`` on loopback, following the run of ``run_log``
-    as it is written (:func:`mcl2pnml.view.show.serve_live`): ``ready`` is given the
-    page's URL; returns on Ctrl-C or ``linger`` seconds after the run's end was served."""
-    # graphviz, 65 ms: only a page
-    from mcl2pnml.view.show import LiveLog, page, serve_live, tree_data, variant
+def drawn(shown: Shown) -> dict[str, Any]:
+    """The page's tree of the mission; its nets drawn into ``shown.drawn`` by the first
+    page, which the pages after take as they are."""
+    from mcl2pnml.view.show import tree_data, variant   # graphviz, 65 ms: only a page
     tree = tree_data(shown.trees)
     if not shown.drawn:
         shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label))
                            for net, label in shown.nets)
-    html = page(shown.title, shown.drawn, None, tree, live=True)
-    serve_live(html, LiveLog(shown.nets[0][0], run_log), port=port, linger=linger, ready=ready)
-
-
-def save_reachability_json(net: Net, path: str | Path) -> dict[str, Any]:
-    """Write the reachability graph the page draws (:mod:`mcl2pnml.view.reachability`)
-    to ``path`` as JSON, with the place and transition ids its indices refer to, or
-    why there is none (``reason``); returns what was written."""
-    # the explorers, numpy 0.1 s: only a page's graph
-    from mcl2pnml.view.reachability import reachability_graph
-    graph = reachability_graph(net).to_json()
-    graph["places"] = [p.id for p in net.places]
-    graph["transitions"] = [t.id for t in net.transitions]
-    atomic_write_text(path, json.dumps(graph, ensure_ascii=False) + "\n")
-    return graph
+    return tree
 
 
 # -- time in the verdicts (docs/time.md) --------------------------------------------------

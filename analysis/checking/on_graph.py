@@ -61,6 +61,7 @@ from typing import Iterable
 import networkx as nx
 import numpy as np
 
+from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import And, Not, Or, Predicate, Property, Tokens, holds, places_of
 from mcl2pnml.core.structure import structure
@@ -72,7 +73,7 @@ from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 
 
-def check_property(net: Net, prop: Property, max_states: int = 1_000_000) -> Verdict:
+def check_property(net: Net, prop: Property, max_states: int = MAX_CHECK_STATES) -> Verdict:
     """Whether ``prop`` holds on every run of ``net``, with a shortest counterexample if not."""
     return check_properties(net, [prop], max_states)[0]
 
@@ -83,7 +84,7 @@ METHODS = ("auto", "full", "on-the-fly")
 
 
 def check_properties(net: Net, properties: Iterable[Property],
-                     max_states: int = 1_000_000, method: str = "auto", stubborn: bool = False,
+                     max_states: int = MAX_CHECK_STATES, method: str = "auto", stubborn: bool = False,
                      safe: bool = False) -> list[Verdict]:
     """Each property's verdict, in order.
 

@@ -52,6 +52,7 @@ from typing import Sequence
 import numpy as np
 
 from mcl2pnml.core import queries as q
+from mcl2pnml.core.bounds import MAX_STATES
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 
@@ -401,7 +402,7 @@ def _space(net: Net, max_states: int, max_memory: int | None):
     return space, ""
 
 
-def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = 5_000_000,
+def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES,
            max_memory: int | None = None, stubborn: bool = False,
            safe: bool = False) -> list[Answer]:
     """Each query's answer, in order (the module's documentation).
@@ -472,7 +473,7 @@ def _decide(graph: Graph, x: q.Query, max_memory: int | None = None) -> Answer:
 GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", "Liveness")
 
 
-def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = 5_000_000,
+def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = MAX_STATES,
             max_memory: int | None = None) -> list[Answer]:
     """The generic examinations' answers (the module's documentation)."""
     space, why = _space(net, max_states, max_memory)

@@ -40,6 +40,7 @@ The names the callers use with :func:`explore` (:class:`StateSpace`,
 """
 from __future__ import annotations
 
+from mcl2pnml.core.bounds import MAX_STATES
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, resident, size_text
 from mcl2pnml.core.structure import Structure, structure as make_structure
@@ -74,7 +75,7 @@ BACKENDS = CHOICES
 :data:`mcl2pnml.analysis.statespace.explorers.EXPLORERS`."""
 
 def explore(net_or_structure, initial: dict[str, int] | None = None, *,
-            max_states: int = 5_000_000, progress: Progress | None = None,
+            max_states: int = MAX_STATES, progress: Progress | None = None,
             backend: str = "auto", max_memory: int | None = None,
             held: int = 0) -> StateSpace:
     """Explore the markings reachable from ``initial`` (default: the net's M0).

@@ -54,6 +54,7 @@ from typing import Callable, Iterable, Sequence
 
 import networkx as nx
 
+from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.patterns import Property, holds, places_of
 from mcl2pnml.core.structure import Structure, structure
@@ -568,7 +569,7 @@ class _Search:
         return new_clocks, d2
 
 
-def zone_graph(tn: TimedNet, *, max_states: int = 1_000_000,
+def zone_graph(tn: TimedNet, *, max_states: int = MAX_CHECK_STATES,
                ends: Iterable[str] | None = None, earliest_only: bool = False,
                progress: Callable[[int, int], None] | None = None) -> ZoneGraph:
     """The zone graph of ``tn`` from its initial marking (see the module's documentation).
@@ -769,7 +770,7 @@ def _covering_cycle(dg, comp, entry, graph, groups, fired):
 
 
 def check_timed_properties(tn: TimedNet, properties: Sequence[Property],
-                           max_states: int = 1_000_000
+                           max_states: int = MAX_CHECK_STATES
                            ) -> tuple[ZoneGraph | None, list[TimedVerdict]]:
     """Each property's timed verdict, on one zone graph."""
     try:
@@ -799,7 +800,7 @@ class EndTimes:
 
 
 def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
-              max_states: int = 1_000_000) -> EndTimes:
+              max_states: int = MAX_CHECK_STATES) -> EndTimes:
     """The earliest and latest end times, given ``always`` (the verdict of "an end is
     always reached" on the same net): when it fails, the latest is unbounded."""
     ends = list(ends)

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from mcl2pnml import pipeline
+from mcl2pnml.analysis.statespace.explorers import CHOICES as EXPLORER_CHOICES
 from mcl2pnml.commands.common import CERTIFICATE_SIZE, MISSION_SIZE, PROPERTIES_SIZE, \
     properties_file
 from mcl2pnml.commands.witnesses import (save_witness, verdicts_json, witness_files,
@@ -35,8 +36,9 @@ class AnalyzeOptions:
     #: the reachable markings only (no invariants)
     state_space: bool = False
     max_states: int = MAX_STATES
-    #: a name of :data:`mcl2pnml.analysis.statespace.explorers.EXPLORERS`, or auto
-    explorer: str = "auto"
+    #: a name of :data:`mcl2pnml.analysis.statespace.explorers.EXPLORERS`, or auto (the
+    #: first of its choices: the fastest for the net's kind and size)
+    explorer: str = EXPLORER_CHOICES[0]
     #: the memory budget as written (4G, 500M); None: half the memory free
     max_memory: str | None = None
     #: ``--properties [FILE]``: None, or "" for MISSION.props, or FILE

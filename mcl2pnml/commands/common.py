@@ -9,12 +9,13 @@ from mcl2pnml.core.bounds import (MAX_CERTIFICATE_SIZE, MAX_MISSION_SIZE,
                                   MAX_PROPERTIES_SIZE)
 from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, visible
 from mcl2pnml.core.progress import Notes, ProgressMeter
-from mcl2pnml.core.settings import SettingError
+from mcl2pnml.core.settings import SettingError, UsageProblem
 from mcl2pnml.core.version import __version__ as VERSION
+from mcl2pnml.runtime.options import RunOptions
 
 #: What the command line takes of the layers below, through the commands alone: the
 #: errors it shows, how it quotes what a user typed, what a command says on its way.
-__all__ = ["Mcl2PnmlError", "OptionError", "SettingError", "Notes", "ProgressMeter",
+__all__ = ["Mcl2PnmlError", "OptionError", "SettingError", "UsageProblem", "Notes", "ProgressMeter",
            "VERSION", "visible", "MISSION_SIZE", "PROPERTIES_SIZE", "CERTIFICATE_SIZE",
            "FORMAT", "ENGINE", "size_text", "properties_file", "mission_net", "warned"]
 
@@ -28,10 +29,10 @@ def size_text(size: int) -> str:
 MISSION_SIZE = size_text(MAX_MISSION_SIZE)
 PROPERTIES_SIZE = size_text(MAX_PROPERTIES_SIZE)
 CERTIFICATE_SIZE = size_text(MAX_CERTIFICATE_SIZE)
-#: The format a net is written in unless told (``--format``).
-FORMAT = "pnml"
+#: The format a net is written in unless told (``--format``): the facade's.
+FORMAT = pipeline.FORMAT
 #: The engine a mission runs on unless told (``--engine``): the executor on its net.
-ENGINE = "petri"
+ENGINE = RunOptions.engine
 
 
 def properties_file(mission: Path, properties: str) -> Path | None:
@@ -55,8 +56,9 @@ def mission_net(mission: Path, extra: Path | None, options) -> tuple:
 def warned(mission: Path, checked, strict: bool, notes: Notes) -> list:
     """The mission's warnings (:func:`mcl2pnml.pipeline.warnings_of`), each line said; with
     ``strict``, one or more refuse the mission (exit 2), before anything is written."""
+    from mcl2pnml.language.lint import shown   # lark, 40 ms: only a mission read
     found = pipeline.warnings_of(checked)
-    for line in pipeline.warning_lines(found):
+    for line in shown(found):
         notes(line)
     if strict and found:
         n = len(found)

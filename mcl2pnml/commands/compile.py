@@ -17,6 +17,7 @@ from mcl2pnml.core.progress import Notes
 from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.timing import Assumptions, seconds_option
 from mcl2pnml.io.formats import FORMATS
+from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 
 
 @dataclass(frozen=True)
@@ -27,13 +28,14 @@ class CompileOptions:
     output: Path | None = None
     fmt: str = FORMAT
     #: node positions: auto, dot, layers or none (:data:`mcl2pnml.view.layout.ENGINES`)
-    layout_engine: str = "auto"
+    layout_engine: str = pipeline.LAYOUT
     #: a drawing's calls drawn open: names, comma-separated, or "all"
     expand: str = ""
     #: the contest's queries of the mission, in this file
     queries: Path | None = None
-    #: how the queries write a deadlock (:data:`mcl2pnml.io.mccquery.TOOLS`)
-    tool: str = "verifypn"
+    #: how the queries write a deadlock: the first of :data:`mcl2pnml.io.mccquery.TOOLS`,
+    #: the tool its writers write for unless told
+    tool: str = next(iter(QUERY_TOOLS))
     properties: str | None = None
     max_memory: str | None = None
     #: a timed-arc net's assumptions, as written (None: :class:`Assumptions`' own)
@@ -82,8 +84,9 @@ def compile_mission(mission: Path, options: CompileOptions = CompileOptions(), *
     """``mcl2pnml compile`` with ``options``: the net and what goes beside it, every output
     checked against the inputs and each other before anything is written; each line said
     to ``notes``."""
-    # the contest's query writer: 25 ms at start-up; only compile
+    # the contest's and verifydtapn's query writers: 25 ms each at start-up; only compile
     from mcl2pnml.io.mccquery import property_query_files
+    from mcl2pnml.io.tapn import query_paths
     o, notes = options, Notes() if notes is None else notes
     output = o.output or mission.with_suffix(FORMATS[o.fmt].suffixes[0])
     if o.queries is not None and o.queries.resolve() == output.resolve():
@@ -105,7 +108,7 @@ def compile_mission(mission: Path, options: CompileOptions = CompileOptions(), *
     net, props = _compiled_with_properties(mission, checked, extra, o)
     if timing is not None:   # the queries beside the net: none of them an input
         check_outputs(outputs + [("-o", path) for path in
-                                 pipeline.timed_query_paths(net, output, timing, props)],
+                                 query_paths(net, output, timing, props)],
                       inputs)
     opened = None if o.expand == "all" else tuple(n for n in o.expand.split(",") if n)
     pipeline.save_net(net, output, o.fmt, layout=o.layout_engine, title=mission.name,
@@ -133,10 +136,12 @@ def _saved_beside(net: Net, output: Path, timing, queries: Path | None, tool: st
                   stem: Path, notes: Notes) -> list[Path]:
     """What ``compile`` writes beside the net: a timed-arc net's queries, the Model
     Checking Contest's queries, the properties in its categories."""
+    # verifydtapn's query writer: 25 ms at start-up; only compile
+    from mcl2pnml.io.tapn import write_queries
     written = []
-    if timing is not None:
+    if timing is not None:   # an end always reached, a dead state that is not an end...
         notes(f"timed semantics: {timing.words()}")
-        for path, query, bound in pipeline.save_timed_queries(net, output, timing, props):
+        for path, query, bound in write_queries(net, output, timing, props):
             notes(f"wrote {path}: {query.description} (verifydtapn -k {bound} {output} "
                   f"{path})")
             written.append(Path(path))

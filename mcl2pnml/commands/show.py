@@ -2,15 +2,18 @@
 served on loopback following a run as it is logged."""
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from mcl2pnml import pipeline
 from mcl2pnml.commands.common import MISSION_SIZE
 from mcl2pnml.core.errors import visible
-from mcl2pnml.core.files import check_outputs
+from mcl2pnml.core.files import atomic_write_text, check_outputs
+from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes
+from mcl2pnml.core.settings import UsageProblem
 
 #: Seconds the live page is served after it was handed the run's outcome, unless told.
 LINGER = 10.0
@@ -55,13 +58,18 @@ def show(what: str, options: ShowOptions = ShowOptions(), *,
     """``mcl2pnml show`` with ``options``: the page written, or with ``live_log`` served
     until Ctrl-C or ``linger`` seconds after the run's outcome was shown."""
     o, notes = options, Notes() if notes is None else notes
+    if o.live_log is None and (o.port, o.linger) != (ShowOptions.port, ShowOptions.linger):
+        raise UsageProblem("--port and --linger go with --live")
+    if o.live_log is not None and any(path is not None for path in (o.output, o.run_log,
+                                                                    o.graph_json)):
+        raise UsageProblem("--live serves the page: leave out -o, --run and --graph-json")
     if o.live_log is not None:
         shown = pipeline.show_nets(what, with_run=True, net_id=o.net_id, lenient=o.lenient,
                                    max_mission_size=o.max_mission_size)
 
         def ready(url: str) -> None:
             notes(f"serving {shown.title} on {url} , following {o.live_log} (Ctrl-C stops)")
-        pipeline.serve_show_live(shown, o.live_log, port=o.port, linger=o.linger, ready=ready)
+        _serve(shown, o, ready)
         return ShowOutcome(None)
     shown = pipeline.show_nets(what, with_run=o.run_log is not None, net_id=o.net_id,
                                lenient=o.lenient, max_mission_size=o.max_mission_size)
@@ -73,8 +81,32 @@ def show(what: str, options: ShowOptions = ShowOptions(), *,
     notes(f"wrote {visible(str(output))}: {shown.nets[0][0].summary()}")
     graph = None
     if o.graph_json is not None:
-        graph = pipeline.save_reachability_json(shown.nets[0][0], o.graph_json)
+        graph = save_reachability_json(shown.nets[0][0], o.graph_json)
         notes(f"wrote {o.graph_json}: " + (f"{len(graph['markings']):,} markings, "
                                            f"{len(graph['edges']):,} edges"
                                            if "markings" in graph else graph["reason"]))
     return ShowOutcome(output, graph)
+
+
+def _serve(shown: pipeline.Shown, o: ShowOptions, ready: Callable[[str], None]) -> None:
+    """Serve the token-game page of ``shown`` on loopback, following the run of ``live_log``
+    as it is written (:func:`mcl2pnml.view.show.serve_live`): ``ready`` is given the
+    page's URL; returns on Ctrl-C or ``linger`` seconds after the run's end was served."""
+    from mcl2pnml.view.show import LiveLog, page, serve_live   # graphviz, 65 ms: only show
+    tree = pipeline.drawn(shown)
+    html = page(shown.title, shown.drawn, None, tree, live=True)
+    serve_live(html, LiveLog(shown.nets[0][0], o.live_log), port=o.port, linger=o.linger,
+               ready=ready)
+
+
+def save_reachability_json(net: Net, path: Path) -> dict[str, Any]:
+    """Write the reachability graph the page draws (:mod:`mcl2pnml.view.reachability`)
+    to ``path`` as JSON, with the place and transition ids its indices refer to, or
+    why there is none (``reason``); returns what was written."""
+    # the explorers, numpy 0.1 s: only a page's graph
+    from mcl2pnml.view.reachability import reachability_graph
+    graph = reachability_graph(net).to_json()
+    graph["places"] = [p.id for p in net.places]
+    graph["transitions"] = [t.id for t in net.transitions]
+    atomic_write_text(path, json.dumps(graph, ensure_ascii=False) + "\n")
+    return graph

@@ -11,6 +11,7 @@ from mcl2pnml.commands.common import FORMAT
 from mcl2pnml.core.errors import visible
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes
+from mcl2pnml.core.settings import UsageProblem
 from mcl2pnml.io.formats import FORMATS
 
 
@@ -58,10 +59,12 @@ def templates() -> TemplateList:
     return TemplateList(tuple(pipeline.templates()))
 
 
-def template(name: str, options: TemplateOptions = TemplateOptions(), *,
+def template(name: str | None, options: TemplateOptions = TemplateOptions(), *,
              notes: Notes | None = None) -> TemplateOutcome:
     """``mcl2pnml template NAME`` with ``options``: PNML to standard output (the outcome's
     ``pnml``) unless a file or another format is asked for."""
+    if name is None:
+        raise UsageProblem("give a template NAME, or --list")
     notes = Notes() if notes is None else notes
     net = pipeline.template_net(name)
     if options.output is None and options.fmt == "pnml":

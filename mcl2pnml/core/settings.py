@@ -23,6 +23,15 @@ class SettingError(OptionError):
         self.setting = setting
 
 
+class UsageProblem(Exception):
+    """Settings a command does not take together (``port`` without a live page), or one
+    it needs missing: shown by the CLI as it shows its own usage errors."""
+
+    def __init__(self, message: str):
+        super().__init__(message)
+        self.message = message
+
+
 def parse_size(text: str, setting: str = "max_memory") -> int:
     """A size in bytes written ``4G``, ``500M``, ``64K`` or ``1000000`` (powers of 1024);
     one that is not is a :class:`SettingError` of ``setting``."""
