@@ -74,6 +74,11 @@ SAFE = [pytest.param(b, marks=pytest.mark.skipif(
             reason="the native explorer cannot run here: the loops in C were not built"))
         for b in SAFE_BACKENDS]
 
+#: The same, but the Python loops, which the drawn nets' tests run on fewer examples
+#: (:data:`PYTHON_EXAMPLES`): their pace is the interpreter's.
+SAFE_IN_C = [b for b in SAFE if b.values[0] != "native-python"]
+PYTHON_EXAMPLES = 20
+
 
 def test_independent_cycles_have_4_to_the_k_markings(backend):
     for k in (1, 2, 3):
@@ -183,12 +188,20 @@ def test_graph_and_paths(backend):
     assert space.path_to(2) == ["c0t0", "c0t1"]
 
 
-@pytest.mark.parametrize("backend", SAFE)
+@pytest.mark.parametrize("backend", SAFE_IN_C)
 @settings(max_examples=80, deadline=None)
 @given(nets(max_places=5, max_transitions=4))
 def test_the_bitset_explorers_agree_with_the_general_one(backend, net):
     with pytest.MonkeyPatch.context() as monkeypatch:
         _the_bitset_explorer_agrees_with_the_general_one(explorer(backend, monkeypatch), net)
+
+
+@settings(max_examples=PYTHON_EXAMPLES, deadline=None)
+@given(nets(max_places=5, max_transitions=4))
+def test_the_python_loops_agree_with_the_general_one(net):
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _the_bitset_explorer_agrees_with_the_general_one(explorer("native-python", monkeypatch),
+                                                         net)
 
 
 def _the_bitset_explorer_agrees_with_the_general_one(backend, net):
@@ -271,12 +284,20 @@ def _same_space(fast, slow):
     assert dict(zip(fast.markings, fast.can_reach(goal_fast))) == reach_slow
 
 
-@pytest.mark.parametrize("backend", SAFE)
+@pytest.mark.parametrize("backend", SAFE_IN_C)
 @settings(max_examples=120, deadline=None)
 @given(spread_safe_nets())
 def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
     with pytest.MonkeyPatch.context() as monkeypatch:
         _the_bitset_explorer_on_markings_of_several_words(explorer(backend, monkeypatch), net)
+
+
+@settings(max_examples=PYTHON_EXAMPLES, deadline=None)
+@given(spread_safe_nets())
+def test_the_python_loops_on_markings_of_several_words(net):
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        _the_bitset_explorer_on_markings_of_several_words(
+            explorer("native-python", monkeypatch), net)
 
 
 def _the_bitset_explorer_on_markings_of_several_words(backend, net):
@@ -515,18 +536,29 @@ def test_dead_markings_met_before_the_budget_are_counted(backend):
         assert stopped.value.deadlocks == 1
 
 
-@pytest.mark.parametrize("loops", LOOPS)
+@pytest.mark.parametrize("loops", LOOPS[:1])
 @settings(max_examples=80, deadline=None)
 @given(st.one_of(spread_safe_nets(), nets(max_places=6, max_transitions=5)),
        st.data())
 def test_the_loops_and_numpy_answer_alike_for_a_packed_state_space(loops, net, data):
-    """Terminal markings and backward reachability: the loops in C, in Python and numpy alike."""
+    """Terminal markings, backward reachability and edges: the loops in C and numpy alike."""
+    _answer_alike(backends.named(loops), net, data)
+
+
+@settings(max_examples=PYTHON_EXAMPLES, deadline=None)
+@given(st.one_of(spread_safe_nets(), nets(max_places=6, max_transitions=5)),
+       st.data())
+def test_the_python_loops_and_numpy_answer_alike_for_a_packed_state_space(net, data):
+    """The same, the loops in Python and numpy."""
+    _answer_alike(python_loops, net, data)
+
+
+def _answer_alike(kernels, net, data):
     space = explore(net, max_states=5000, backend="packed")
     if type(space).__name__ != "PackedStateSpace":
         return   # not safe: another explorer's space
     goal = data.draw(st.lists(st.integers(0, space.states - 1), max_size=3))
     numpy_reach = space._can_reach_numpy(goal)
-    kernels = backends.named(loops)
     space._kernels = lambda: kernels
     space.__dict__.pop("out_degree", None)
     space.__dict__.pop("terminal", None)

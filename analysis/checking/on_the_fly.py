@@ -52,11 +52,13 @@ from typing import Iterable
 
 import numpy as np
 
+from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import Property, Tokens, atoms_of, evaluate
 from mcl2pnml.core.structure import Structure, structure
 
 from mcl2pnml.analysis.checking.observers import BAD, Shape, Status, Verdict, initial, pending, step, truths
+from mcl2pnml.analysis.statespace.counters import invariant_bounds
 from mcl2pnml.analysis.statespace.loops.backends import c_loops
 from mcl2pnml.analysis.statespace.loops.interface import (Code, Loops, Observer, ProductSearch,
                                                           Rows, Stubborn)
@@ -94,7 +96,6 @@ def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_st
     loops = loops or c_loops()
     if loops is None:
         return None
-    from mcl2pnml.core.memory import default_memory
     s = structure(net)
     m0 = s.initial_vector()
     if any(k > 1 for k in m0) or any(a.weight != 1 for a in net.arcs):
@@ -120,7 +121,6 @@ class NotProvenSafe(ValueError):
 def proven_safe(s: Structure) -> bool:
     """Whether semi-positive P-invariants bound every place by 1 (Murata 1989, section
     VII): then no reachable marking has a second token, whatever the reduction skips."""
-    from mcl2pnml.analysis.statespace.counters import invariant_bounds
     bounds = invariant_bounds(s, s.initial_vector())
     return all(b is not None and b <= 1 for b in bounds)
 
@@ -212,7 +212,6 @@ class _Search:
     def check(self, prop: Property, max_states: int, budget: int) -> Verdict:
         """The property's verdict: the product searched breadth first to its first
         violation, then, where the observer can stay pending, a lasso looked for."""
-        from mcl2pnml.core.memory import size_text
         fits = max(1, budget // self.footprint())
         limit = min(max_states, fits)
         atoms = _atoms(prop)
@@ -268,6 +267,7 @@ class _Search:
         connected components; the entries are tried in breadth-first order, each with
         its shortest cycle within its component, until no later entry can be shorter.
         """
+        # scipy.sparse.csgraph: 0.4 s to import, only where an obligation can stay open
         from scipy.sparse import csr_matrix
         from scipy.sparse.csgraph import breadth_first_order, connected_components
         queue, count, depth = search.queue, search.count, search.depth

@@ -1,1 +1,3 @@
-"""The explorers' inner loops: in C (``_native.c``, built at install) and their fallbacks."""
+"""The explorers' inner loops behind one typed interface (``interface.py``): in C
+(``c.py`` over ``_native.c``, built at install) and their plain-Python reference
+(``python.py``); ``backends.py`` says which runs here."""

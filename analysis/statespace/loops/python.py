@@ -43,8 +43,32 @@ def _put(queue: np.ndarray, i: int, row: Row) -> np.ndarray:
     return queue
 
 
-def _lists(a: np.ndarray) -> list:
-    return [tuple(int(x) for x in r) for r in a]
+def _lists(a: np.ndarray) -> list[Row]:
+    """Rows of an array (one word each if it is flat) as tuples of Python integers."""
+    return [tuple(r) if isinstance(r, list) else (r,) for r in a.tolist()]
+
+
+def _rows_of(rows: Rows) -> list[list[int]]:
+    """Compressed rows as one list a row."""
+    ptr, items = rows.ptr.tolist(), rows.items.tolist()
+    return [items[ptr[i]:ptr[i + 1]] for i in range(len(ptr) - 1)]
+
+
+class _Keys:
+    """A :class:`KeyIndex` as lists: which transitions a marking tries, in C's order."""
+
+    def __init__(self, key: KeyIndex):
+        self.free, self.by_place = key.free.tolist(), _rows_of(key.by_place)
+
+    def candidates(self, row: Row) -> list[int]:
+        """The free transitions, then those keyed on each marked place upwards."""
+        out = list(self.free)
+        for w, x in enumerate(row):
+            while x:
+                low = x & -x
+                out += self.by_place[w * 64 + low.bit_length() - 1]
+                x ^= low
+        return out
 
 
 class _Safe:
@@ -53,6 +77,7 @@ class _Safe:
     def __init__(self, net: SafeNet):
         self.need, self.keep, self.give = _lists(net.need), _lists(net.keep), _lists(net.give)
         self.take = _lists(net.take)
+        self.key = _Keys(net.key)
 
     def enables(self, row: Row, t: int) -> bool:
         return all(x & n == n for x, n in zip(row, self.need[t]))
@@ -73,19 +98,8 @@ class _Safe:
         return before
 
 
-def _candidates(row: Row, key: KeyIndex) -> list[int]:
-    """The transitions a marking tries, in the C loops' order (see the module)."""
-    out = [int(t) for t in key.free]
-    for w, x in enumerate(row):
-        while x:
-            low = x & -x
-            out.extend(int(t) for t in key.by_place.of(w * 64 + low.bit_length() - 1))
-            x ^= low
-    return out
-
-
 def _index(queue: np.ndarray, count: int) -> dict[Row, int]:
-    return {_row(queue, i): i for i in range(count)}
+    return {row: i for i, row in enumerate(_lists(queue[:count]))}
 
 
 # -- a safe net --------------------------------------------------------------------------------
@@ -102,7 +116,7 @@ def safe_step(net: SafeNet, search: SafeSearch, max_states: int, budget: int) ->
     stop = head + budget
     while head < count and head < stop:
         row = _row(queue, head)
-        for t in _candidates(row, net.key):
+        for t in tables.key.candidates(row):
             if not tables.enables(row, t):
                 continue
             after = tables.fire(row, t)
@@ -125,8 +139,8 @@ def permute_rows(rows: np.ndarray, order: np.ndarray) -> np.ndarray:
 
 def out_degree(rows: np.ndarray, net: SafeNet) -> np.ndarray:
     tables = _Safe(net)
-    return np.array([sum(tables.enables(row, t) for t in _candidates(row, net.key))
-                     for row in map(tuple, _lists(rows))], dtype=np.int32)
+    return np.array([sum(tables.enables(row, t) for t in tables.key.candidates(row))
+                     for row in _lists(rows)], dtype=np.int32)
 
 
 def live(rows: np.ndarray, net: SafeNet) -> np.ndarray:
@@ -137,11 +151,12 @@ def edges(rows: np.ndarray, net: SafeNet, ids: np.ndarray, order: np.ndarray
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Node i is row ``order[i]`` (``order`` its own inverse); its edges by transition."""
     tables, position = _Safe(net), _index(rows, len(rows))
+    every, node, ids = _lists(rows), order.tolist(), ids.tolist()
     out = []
-    for i, r in enumerate(order.tolist()):
-        row = _row(rows, r)
-        out += sorted((i, int(ids[t]), int(order[position[tables.fire(row, t)]]))
-                      for t in _candidates(row, net.key) if tables.enables(row, t))
+    for i, r in enumerate(node):
+        row = every[r]
+        out += sorted((i, ids[t], node[position[tables.fire(row, t)]])
+                      for t in tables.key.candidates(row) if tables.enables(row, t))
     src, trans, dst = (np.array(x, dtype=np.int32) for x in zip(*out)) if out else \
         (np.zeros(0, dtype=np.int32),) * 3
     return src, trans, dst
@@ -151,11 +166,11 @@ def backward(rows: np.ndarray, net: SafeNet, unfire: KeyIndex, seen: np.ndarray,
              frontier: np.ndarray) -> np.ndarray:
     """Mark in ``seen`` every row that reaches one of ``frontier`` (seen already), breadth
     first by unfiring: only the transitions keyed on the places marked after are tried."""
-    tables, position = _Safe(net), _index(rows, len(rows))
-    todo = [int(n) for n in frontier]
+    tables, position, keys = _Safe(net), _index(rows, len(rows)), _Keys(unfire)
+    every, todo = _lists(rows), frontier.tolist()
     for a in todo:           # the list grows as it is walked: first in, first out
-        after = _row(rows, a)
-        for t in _candidates(after, unfire):
+        after = every[a]
+        for t in keys.candidates(after):
             j = position.get(tables.unfire(after, t))
             if j is not None and not seen[j]:
                 seen[j] = True
@@ -165,26 +180,35 @@ def backward(rows: np.ndarray, net: SafeNet, unfire: KeyIndex, seen: np.ndarray,
 
 # -- a bounded net -----------------------------------------------------------------------------
 
-def _field(row: Row, f: Fields, k: int) -> int:
-    return (row[int(f.word[k])] >> int(f.shift[k])) & int(f.mask[k])
+class _Counters:
+    """A bounded net's fields as Python integers: per transition, (word, shift, mask,
+    tokens) of what it needs and (word, shift, mask, change) of what it changes."""
+
+    def __init__(self, net: CounterNet):
+        self.needs, self.changes = _fields_of(net.need), _fields_of(net.change)
+        self.places = net.change.place.tolist()
+        self.first = net.change.ptr.tolist()       # a change's index: first[t] + its rank
+        self.growing = net.growing.tolist()
+
+    def enabled(self, row: Row, t: int) -> bool:
+        return all((row[w] >> shift) & mask >= tokens for w, shift, mask, tokens in self.needs[t])
+
+    def fire(self, row: Row, t: int, sign: int) -> tuple[Row | None, int]:
+        """``row`` changed by ``sign`` times t's change, or None and the first field that
+        would leave its range (below 0 or past its mask)."""
+        out = list(row)
+        for k, (w, shift, mask, change) in enumerate(self.changes[t]):
+            value = ((out[w] >> shift) & mask) + sign * change
+            if not 0 <= value <= mask:
+                return None, self.first[t] + k
+            out[w] = (out[w] & ~(mask << shift)) | (value << shift)
+        return tuple(out), -1
 
 
-def _counter_enabled(row: Row, net: CounterNet, t: int) -> bool:
-    n = net.need
-    return all(_field(row, n, k) >= int(n.value[k]) for k in range(n.ptr[t], n.ptr[t + 1]))
-
-
-def _counter_fire(row: Row, net: CounterNet, t: int, sign: int) -> tuple[Row | None, int]:
-    """``row`` changed by ``sign`` times t's change, or None and the first field that would
-    leave its range (below 0 or past its mask)."""
-    d, out = net.change, list(row)
-    for k in range(d.ptr[t], d.ptr[t + 1]):
-        w, shift, mask = int(d.word[k]), int(d.shift[k]), int(d.mask[k])
-        value = ((out[w] >> shift) & mask) + sign * int(d.value[k])
-        if not 0 <= value <= mask:
-            return None, k
-        out[w] = (out[w] & ~(mask << shift)) | (value << shift)
-    return tuple(out), -1
+def _fields_of(f: Fields) -> list[list[tuple[int, int, int, int]]]:
+    fields = list(zip(f.word.tolist(), f.shift.tolist(), f.mask.tolist(), f.value.tolist()))
+    ptr = f.ptr.tolist()
+    return [fields[ptr[t]:ptr[t + 1]] for t in range(len(ptr) - 1)]
 
 
 def counter_search(queue: np.ndarray, parent: np.ndarray, count: int, head: int,
@@ -194,7 +218,7 @@ def counter_search(queue: np.ndarray, parent: np.ndarray, count: int, head: int,
 
 def counter_step(net: CounterNet, search: CounterSearch, max_states: int,
                  budget: int) -> CounterSearch:
-    found = search.index.table
+    found, tables = search.index.table, _Counters(net)
     queue, parent, count, head, dead = (search.queue, search.parent, search.count, search.head,
                                         search.dead)
 
@@ -205,14 +229,14 @@ def counter_step(net: CounterNet, search: CounterSearch, max_states: int,
     while head < count and head < stop:
         row, fired = _row(queue, head), False
         for t in range(net.transitions):
-            if not _counter_enabled(row, net, t):
+            if not tables.enabled(row, t):
                 continue
             fired = True
-            if net.growing[t]:
+            if tables.growing[t]:
                 return stopped(Code.GROWING, t)
-            after, k = _counter_fire(row, net, t, 1)
+            after, k = tables.fire(row, t, 1)
             if after is None:
-                return stopped(Code.OVERFLOW, int(net.change.place[k]))
+                return stopped(Code.OVERFLOW, tables.places[k])
             if after in found:
                 continue
             if count >= max_states:
@@ -229,15 +253,17 @@ def counter_step(net: CounterNet, search: CounterSearch, max_states: int,
 
 
 def counter_out_degree(rows: np.ndarray, net: CounterNet) -> np.ndarray:
-    return np.array([sum(_counter_enabled(_row(rows, q), net, t) for t in range(net.transitions))
-                     for q in range(len(rows))], dtype=np.int32)
+    tables = _Counters(net)
+    return np.array([sum(tables.enabled(row, t) for t in range(net.transitions))
+                     for row in _lists(rows)], dtype=np.int32)
 
 
 def counter_edges(rows: np.ndarray, index: Index, net: CounterNet, total: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    out = [(q, t, index.table[_counter_fire(_row(rows, q), net, t, 1)[0]])
-           for q in range(len(rows)) for t in range(net.transitions)
-           if _counter_enabled(_row(rows, q), net, t)]
+    tables = _Counters(net)
+    out = [(q, t, index.table[tables.fire(row, t, 1)[0]])
+           for q, row in enumerate(_lists(rows)) for t in range(net.transitions)
+           if tables.enabled(row, t)]
     src, trans, dst = (np.array(x, dtype=np.int32) for x in zip(*out)) if out else \
         (np.zeros(0, dtype=np.int32),) * 3
     return src, trans, dst
@@ -247,13 +273,13 @@ def counter_backward(rows: np.ndarray, net: CounterNet, seen: np.ndarray,
                      frontier: np.ndarray) -> np.ndarray:
     """Unfiring: the only marking t comes from is the one after minus t's change; it is a
     predecessor when it is a found marking and enables t."""
-    position = _index(rows, len(rows))
-    todo = [int(n) for n in frontier]
+    tables, position = _Counters(net), _index(rows, len(rows))
+    every, todo = _lists(rows), frontier.tolist()
     for a in todo:
-        after = _row(rows, a)
+        after = every[a]
         for t in range(net.transitions):
-            before, _ = _counter_fire(after, net, t, -1)
-            if before is None or not _counter_enabled(before, net, t):
+            before, _ = tables.fire(after, t, -1)
+            if before is None or not tables.enabled(before, t):
                 continue
             j = position.get(before)
             if j is not None and not seen[j]:
@@ -264,16 +290,35 @@ def counter_backward(rows: np.ndarray, net: CounterNet, seen: np.ndarray,
 
 # -- a property's product ----------------------------------------------------------------------
 
-def _observe(row: Row, observer: Observer, state: int) -> int:
-    """The observer's state after reading the marking (the row's words but the last)."""
-    letter = 0
-    for a, (mask, least) in enumerate(zip(observer.atoms.tolist(), observer.least.tolist())):
-        if sum(bin(x & m).count("1") for x, m in zip(row, mask)) >= least:
-            letter |= 1 << a
-    return int(observer.move[state * 16 + int(observer.letters[letter])])
+class _Observing:
+    """An :class:`Observer` as lists: it reads a marking through its atoms."""
+
+    def __init__(self, o: Observer):
+        self.atoms = list(zip(o.atoms.tolist(), o.least.tolist()))
+        self.letters, self.move = o.letters.tolist(), o.move.tolist()
+        self.pending, self.bad = o.pending.tolist(), o.bad
+
+    def after(self, marking: Row, state: int) -> int:
+        """The observer's state after reading ``marking`` (the net is safe: an atom's
+        tokens are the marked places of its mask)."""
+        letter = 0
+        for a, (mask, least) in enumerate(self.atoms):
+            if sum(bin(x & m).count("1") for x, m in zip(marking, mask)) >= least:
+                letter |= 1 << a
+        return self.move[state * 16 + self.letters[letter]]
 
 
-def _stubborn_set(row: Row, st: Stubborn, enabled: set[int], key: int) -> list[int] | None:
+class _Reducing:
+    """A :class:`Stubborn` as lists, one a transition or place."""
+
+    def __init__(self, st: Stubborn):
+        self.on, self.visible = st.on, st.visible.tolist()
+        self.pre, self.needs = _rows_of(st.pre), _rows_of(st.needs)
+        self.takers, self.needers, self.makers = (_rows_of(st.takers), _rows_of(st.needers),
+                                                  _rows_of(st.makers))
+
+
+def _stubborn_set(row: Row, st: _Reducing, enabled: set[int], key: int) -> list[int] | None:
     """The enabled members of the stubborn set grown from the enabled ``key`` (C's
     ``stubborn_set``: an enabled member brings the transitions that consume a place it
     needs and those that need a place it consumes; a disabled one those that mark its
@@ -285,11 +330,11 @@ def _stubborn_set(row: Row, st: Stubborn, enabled: set[int], key: int) -> list[i
             if st.visible[t]:
                 return None
             out.append(t)
-            brought = [int(u) for p in st.needs.of(t) for u in st.takers.of(int(p))]
-            brought += [int(u) for p in st.pre.of(t) for u in st.needers.of(int(p))]
+            brought = [u for p in st.needs[t] for u in st.takers[p]]
+            brought += [u for p in st.pre[t] for u in st.needers[p]]
         else:
-            empty = [int(p) for p in st.needs.of(t) if not row[int(p) // 64] >> (int(p) % 64) & 1]
-            brought = [int(u) for u in st.makers.of(empty[0])] if empty else []
+            empty = [p for p in st.needs[t] if not row[p // 64] >> (p % 64) & 1]
+            brought = st.makers[empty[0]] if empty else []
         for u in brought:
             if u not in members:
                 members.add(u)
@@ -297,10 +342,10 @@ def _stubborn_set(row: Row, st: Stubborn, enabled: set[int], key: int) -> list[i
     return out
 
 
-def _to_fire(row: Row, net: SafeNet, tables: _Safe, st: Stubborn) -> tuple[list[int], int]:
+def _to_fire(row: Row, tables: _Safe, st: _Reducing) -> tuple[list[int], int]:
     """The row's enabled transitions, a smallest stubborn set's first, and how many of them
     to fire unless the proviso asks for all (all of them without reduction)."""
-    fire = list(dict.fromkeys(t for t in _candidates(row, net.key) if tables.enables(row, t)))
+    fire = list(dict.fromkeys(t for t in tables.key.candidates(row) if tables.enables(row, t)))
     if not st.on or len(fire) < 2:
         return fire, len(fire)
     best = fire
@@ -326,7 +371,8 @@ def product_step(net: SafeNet, observer: Observer, stubborn: Stubborn, search: P
     """Breadth first to the first violation, as C's ``product_step`` (read its comment):
     a successor in the bad state is only the shortest violation once its level is done;
     a dead row with an obligation open is one at once."""
-    tables, found_rows = _Safe(net), search.index.table
+    tables, found_rows, reducing = _Safe(net), search.index.table, _Reducing(stubborn)
+    observing = _Observing(observer)
     queue, count, head, found = search.queue, search.count, search.head, search.found
     parent, via, depth = search.parent, search.via, search.depth
 
@@ -339,14 +385,14 @@ def product_step(net: SafeNet, observer: Observer, stubborn: Stubborn, search: P
             return stopped(Code.FOUND_BAD)
         row = _row(queue, head)
         marking, state = row[:-1], row[-1]
-        fire, reduced = _to_fire(marking, net, tables, stubborn)
+        fire, reduced = _to_fire(marking, tables, reducing)
         n, old, c = reduced, False, 0
         while c < n:
             t = fire[c]
             after = tables.fire(marking, t)
             if after is None:
                 return stopped(Code.NOT_SAFE)
-            after += (_observe(after, observer, state),)
+            after += (observing.after(after, state),)
             seen = found_rows.get(after)
             if seen is not None:
                 old |= bool(depth[seen] <= depth[head])   # an arc back: a cycle may close
@@ -358,13 +404,13 @@ def product_step(net: SafeNet, observer: Observer, stubborn: Stubborn, search: P
                 via = _put(via, count, (t,))
                 depth = _put(depth, count, (int(depth[head]) + 1,))
                 found_rows[after] = count
-                if after[-1] == observer.bad and found < 0:
+                if after[-1] == observing.bad and found < 0:
                     found = count
                 count += 1
             if c == n - 1 and n < len(fire) and old:
                 n = len(fire)   # the proviso: a reduced row meeting an old one fires all
             c += 1
-        if not fire and observer.pending[state]:
+        if not fire and observing.pending[state]:
             found = head
             return stopped(Code.FOUND_DEAD)
         head += 1
@@ -375,18 +421,18 @@ def product_edges(net: SafeNet, observer: Observer, search: ProductSearch, first
                   room: int) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """The arcs between pending rows from row ``first`` on (every one: ``room`` is only
     C's bound on a call)."""
-    tables, position = _Safe(net), search.index.table
+    tables, position, observing = _Safe(net), search.index.table, _Observing(observer)
     out = []
     for i in range(first, search.count):
         row = _row(search.queue, i)
-        if not observer.pending[row[-1]]:
+        if not observing.pending[row[-1]]:
             continue
-        for t in _candidates(row[:-1], net.key):
+        for t in tables.key.candidates(row[:-1]):
             after = tables.fire(row[:-1], t) if tables.enables(row[:-1], t) else None
             if after is None:
                 continue
-            after += (_observe(after, observer, row[-1]),)
-            if observer.pending[after[-1]] and after in position:
+            after += (observing.after(after, row[-1]),)
+            if observing.pending[after[-1]] and after in position:
                 out.append((i, position[after], t))
     src, dst, trans = (np.array(x, dtype=np.int64) for x in zip(*out)) if out else \
         (np.zeros(0, dtype=np.int64),) * 3
