@@ -20,7 +20,7 @@ import time
 from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis import zoo
-from mcl2pnml.analysis.statespace import compiled, counters
+from mcl2pnml.analysis.statespace.explorers import EXPLORERS
 from mcl2pnml.analysis.statespace.loops import backends
 
 RUNS = 5
@@ -35,9 +35,9 @@ _NETS = {"cycles": zoo.cycles, "philosophers": zoo.philosophers_left_first,
 
 def _once(explorer: str, s, loops) -> tuple[int, float, float]:
     """Markings, seconds exploring, seconds answering (terminal markings, reachability)."""
-    explore = compiled.explore_native if explorer == "native" else counters.explore_counters
     t0 = time.perf_counter()
-    space = explore(s, s.initial_vector(), 10_000_000, RuntimeError("limit"), None, loops=loops)
+    space = EXPLORERS[explorer].explore(s, s.initial_vector(), 10_000_000, RuntimeError("limit"),
+                                        loops=loops)
     t1 = time.perf_counter()
     space.terminal
     space.can_reach([0])
