@@ -648,6 +648,9 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
                 pass
 
 
+# Long (85 lines) because its two tasks, taking the batches and watching the scheduler,
+# share what was last heard and the workers counted, as closures over its state: each task
+# is short, and apart they would hand that state back and forth.
 async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     """Send the batches, take their runs in seed order until the campaign is done, and
     end it if the scheduler (``named`` so in the messages) says nothing (no batch done,

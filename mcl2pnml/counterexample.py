@@ -265,6 +265,9 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
 
 # -- the schedule --------------------------------------------------------------------------------
 
+# Long (88 lines) because its two halves share their many lists: one pass over the firings
+# gathers the timers set, the time-outs, the reports to space and the stimuli, as the marking
+# changes; the difference constraints they make are then solved, each tighter epsilon again.
 def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
              loop: int | None = None, gap: Fraction | None = None
              ) -> tuple[list[Fraction] | None, str | None, str | None]:
@@ -478,6 +481,10 @@ class SearchLimit(Exception):
 ENGINE_RUN_STATES = 200_000
 
 
+# Long (109 lines) because its helpers (the observer watching each firing, the vehicle's
+# acknowledgements, a fresh start) are closures over the engine being explored and the
+# observer's state, which the breadth-first search below reads after every move; apart,
+# they would hand that state back and forth on every firing.
 def engine_run(net: Net, prop: Property, max_states: int = ENGINE_RUN_STATES
                ) -> tuple[str, ...] | None:
     """A shortest violating run that the Petri-net executor takes with some vehicle: or None
