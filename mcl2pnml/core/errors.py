@@ -16,6 +16,8 @@ override would show text other than the file's.
 """
 from __future__ import annotations
 
+import bisect
+import difflib
 from dataclasses import dataclass
 from typing import Iterable, Sequence
 
@@ -204,9 +206,6 @@ def raise_all(errors: Iterable[Mcl2PnmlError]) -> None:
 
 def did_you_mean(name: str, valid: Iterable[str], what: str) -> str:
     """``"; did you mean 'Go'? declared tasks: Go, Stop"`` for error messages."""
-    import bisect
-    import difflib
-
     valid = sorted(set(valid))
     at = bisect.bisect(valid, name)
     near = valid[max(0, at - COMPARED // 2):at + COMPARED // 2]

@@ -75,7 +75,7 @@ def default_memory() -> int:
     address-space limit (``ulimit -v``, ``prlimit --as``): a process given 4 GB
     of a 24 GB machine budgets 2 GB, not 12.
     """
-    import resource
+    import resource   # Unix only: where a budget is asked, not on importing the core
     available = []
     try:
         with open("/proc/meminfo") as f:
@@ -108,7 +108,7 @@ def release() -> None:
     global _trim
     if _trim is None:
         try:
-            import ctypes
+            import ctypes   # 2 ms on the CLI's start (python -X importtime): only to trim
             _trim = ctypes.CDLL("libc.so.6").malloc_trim
         except (OSError, AttributeError):
             _trim = False

@@ -54,7 +54,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mcl2pnml.core.patterns import (And, Const, Not, Or, Pattern, Predicate, Property,
-                                      ScopeKind)
+                                      ScopeKind, describe, holds)
 
 
 # -- the syntax ------------------------------------------------------------------------------
@@ -263,7 +263,6 @@ def ctl(prop: Property) -> Formula | None:
 
 def show(f: Formula) -> str:
     """The formula in the usual notation: ``A [](m.OK >= 1 -> <>(...))``."""
-    from mcl2pnml.core.patterns import describe
     if isinstance(f, State):
         text = describe(f.predicate)
         return text if isinstance(f.predicate, Const) or " " not in text else f"({text})"
@@ -288,7 +287,6 @@ def evaluate(f: Formula, word, loop: int | None = None) -> bool:
     path formula ``f`` at its start (path quantifiers are read on this run alone): a
     finite run repeats its last marking forever, a lasso returns to ``word[loop]``
     after its last marking. For tests: the LTL formula against the observer."""
-    from mcl2pnml.core.patterns import holds
     n = len(word)
     back = n - 1 if loop is None else loop   # where the run goes after word[n - 1]
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import enum
 import signal
+import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -507,8 +508,6 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
     the vehicle is opened here (connected, made ready: an autopilot is armed), so
     that a signal or an error meanwhile brings it to its safe state too.
     """
-    import time
-
     own = getattr(vehicle, "clock", None)
     if clock is None and own is not None:
         now = own       # the vehicle's own clock (an autopilot's): its seconds are the run's

@@ -52,6 +52,7 @@ from __future__ import annotations
 import math
 import os
 import select
+import socket
 import threading
 import time
 from collections import deque
@@ -292,8 +293,6 @@ class MavlinkVehicle(LiveVehicle):
 
     def open(self) -> None:
         """Connect; then make ready (a failure there ends the run STALLED, with its reason)."""
-        import socket
-
         mavutil = _mavutil()
         previous = socket.getdefaulttimeout()
         socket.setdefaulttimeout(self.link.connect_timeout)   # pymavlink's connect has none
@@ -1094,6 +1093,8 @@ def _result(result: int | None) -> str:
 
 def _mavutil():
     try:
+        # pymavlink, 0.28 s (python -X importtime), and optional: only when an autopilot
+        # is connected
         from pymavlink import mavutil
     except ImportError:
         raise OptionError("--vehicle", "a MAVLink autopilot needs pymavlink: pip install "

@@ -14,6 +14,7 @@ mission (MCL or a compiled net): this layer does not.
 from __future__ import annotations
 
 import io
+import random
 from dataclasses import fields, replace
 from pathlib import Path
 from typing import IO, Callable
@@ -23,10 +24,12 @@ from mcl2pnml.core.files import atomic_write_text, check_outputs
 from mcl2pnml.runtime import interrupts, journal as journals
 from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
+from mcl2pnml.runtime.faults import Faults, FaultyVehicle
 from mcl2pnml.runtime.link import LinkOptions
 from mcl2pnml.runtime.options import RunOptions
 from mcl2pnml.runtime.runlog import RunLog
-from mcl2pnml.runtime.vehicles import VehicleKind, kind_of
+from mcl2pnml.runtime.simprims import load_file
+from mcl2pnml.runtime.vehicles import VehicleKind, kind_of, seed_of
 
 #: The options of a run that its journal's header records, and a resume reuses.
 JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives")
@@ -82,16 +85,11 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
     link = LinkOptions(**{name: getattr(options, name) for name in _LINK}, max_time=options.max_time)
     vehicle = kind.build(options.vehicle, options.connect, options.world, link)
     if options.sim_primitives:
-        from mcl2pnml.runtime.simprims import load_file
         table = dict(vehicle.table)
         for path in options.sim_primitives:
             table = load_file(path, table)
         vehicle.offer(table)
     if options.faults:
-        import random
-
-        from mcl2pnml.runtime.faults import Faults, FaultyVehicle
-        from mcl2pnml.runtime.vehicles import seed_of
         # the stream a campaign draws run SEED's faults from (mcl2pnml.campaign)
         seed = seed_of(options.vehicle) or 0
         vehicle = FaultyVehicle(vehicle, Faults.load(options.faults),

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import random
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from pathlib import Path
 from typing import Any, Iterable, Mapping, Sequence, TypeVar
@@ -219,7 +219,6 @@ class VehicleModel:
 
     def replaced(self, primitive: str, **changes) -> "VehicleModel":
         """The model with one primitive's settings changed (the sensitivity table's)."""
-        from dataclasses import replace
         m = self.of(primitive)
         calls = tuple((args, replace(c, **changes)) for args, c in m.calls)
         return replace(self, primitives={**self.primitives,
@@ -296,7 +295,6 @@ def _delay(spec: Mapping[str, Any], path: tuple, where) -> Delay:
 def _primitive(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
                where) -> PrimitiveModel:
     """One primitive's settings over ``base`` (the defaults)."""
-    from dataclasses import replace
     changes: dict[str, Any] = {}
     for key in ("achieve", "fail", "lose"):
         if key in spec:
@@ -319,7 +317,6 @@ def _primitive(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
 def _named(spec: Mapping[str, Any], base: PrimitiveModel, path: tuple,
            where) -> PrimitiveModel:
     """A named primitive's settings over the defaults, and its calls' over its own."""
-    from dataclasses import replace
     own = _primitive({k: v for k, v in spec.items() if k != "calls"}, base, path, where)
     calls: list[tuple[tuple, PrimitiveModel]] = []
     for k, call in enumerate(spec.get("calls", ())):

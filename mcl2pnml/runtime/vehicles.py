@@ -10,7 +10,8 @@ specification it recognises. Adding a kind of vehicle is one new module
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import random
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
@@ -44,9 +45,7 @@ def _simulator(spec: str, connect: str | None, world: Path | None,
                link: LinkOptions) -> Vehicle:
     """The simulator in ``world``; ``sim@SEED`` seeds its noise with SEED instead of the
     world's seed (a campaign's run, flown again alone)."""
-    from dataclasses import replace
-
-    from mcl2pnml.runtime.simulator import AUVSimulator, World
+    from mcl2pnml.runtime.simulator import AUVSimulator, World   # 20 ms: see VEHICLES
     seed = seed_of(spec)
     if spec != "sim" and seed is None:
         raise OptionError("--vehicle", f"'{spec[:80]}': the seed after sim@ is a whole number "
@@ -69,7 +68,7 @@ def is_simulator(spec: str) -> bool:
 def _bridge(spec: str, connect: str | None, world: Path | None,
             link: LinkOptions) -> LiveVehicle:
     """The mapped vehicle; its link is checked (address, key file, certificates), not opened."""
-    from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
+    from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping   # 33 ms
     if connect is None:
         raise OptionError("--connect", "a bridge needs --connect HOST:PORT (the bridge server "
                                        "on the vehicle)")
@@ -80,6 +79,7 @@ def _bridge(spec: str, connect: str | None, world: Path | None,
 def _mavlink(spec: str, connect: str | None, world: Path | None,
              link: LinkOptions) -> LiveVehicle:
     """An autopilot over MAVLink; its address and mapping are checked, not yet connected."""
+    # 40 ms with the autopilot's mapping and the simulator's world: see VEHICLES
     from mcl2pnml.runtime.autopilot import AutopilotMapping
     from mcl2pnml.runtime.mavlink import MavlinkVehicle
     from mcl2pnml.runtime.simulator import World
@@ -109,19 +109,20 @@ def _model_spec(spec: str) -> tuple[Path, int]:
 
 def _model(spec: str, connect: str | None, world: Path | None,
            link: LinkOptions) -> Vehicle:
-    import random
-
-    from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle, VehicleModel
+    from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle, VehicleModel   # 35 ms
     path, seed = _model_spec(spec)
     return ModelVehicle(VehicleModel.load(path), Draw(random.Random(seed)))
 
 
 def _script(spec: str, connect: str | None, world: Path | None,
             link: LinkOptions) -> Vehicle:
-    from mcl2pnml.runtime.aal import ScriptedVehicle
+    from mcl2pnml.runtime.aal import ScriptedVehicle   # 22 ms: see VEHICLES
     return ScriptedVehicle.load(spec)
 
 
+# (Each kind's module is imported when a vehicle of that kind is made, 20 to 40 ms each,
+# measured with python -X importtime: the CLI imports this table at its start, for
+# --vehicle's help.)
 #: Every kind of vehicle, the first that matches wins: the kinematic AUV
 #: simulator, a real vehicle through a mapping file and a bridge server, an
 #: autopilot over MAVLink (ArduSub, docs/ardusub.md), a vehicle model drawing its

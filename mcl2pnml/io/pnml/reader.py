@@ -10,7 +10,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from mcl2pnml.core.net import Net
+from mcl2pnml.io.pnml.lenient import parse_lenient, read_lenient
 from mcl2pnml.io.pnml.source import XmlError, read_file
+from mcl2pnml.io.pnml.strict import parse_strict, read_strict
 
 __all__ = ["XmlError", "load_pnml", "parse_pnml", "read_file", "read_pnml"]
 
@@ -20,9 +22,7 @@ def parse_pnml(data: bytes, filename: str = "<input>", net_id: str | None = None
     """Read one P/T net from PNML bytes: strictly, or with ``lenient`` the forgiving way.
     Raises :class:`~mcl2pnml.core.errors.PnmlError` (or several)."""
     if lenient:
-        from mcl2pnml.io.pnml.lenient import parse_lenient
         return parse_lenient(data, filename, net_id)
-    from mcl2pnml.io.pnml.strict import parse_strict
     return parse_strict(data, filename, net_id)
 
 
@@ -30,9 +30,7 @@ def read_pnml(path: str | Path, net_id: str | None = None, lenient: bool = False
     """Read one P/T net from a PNML file: strictly, as a stream (the proofs' reading), or
     with ``lenient`` the forgiving way."""
     if lenient:
-        from mcl2pnml.io.pnml.lenient import read_lenient
         return read_lenient(path, net_id)
-    from mcl2pnml.io.pnml.strict import read_strict
     return read_strict(path, net_id)
 
 

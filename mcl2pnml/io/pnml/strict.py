@@ -51,6 +51,7 @@ from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.files import open_regular
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Place, Timing, Transition
 from mcl2pnml.io import ids
+from mcl2pnml.io.pnml.lenient import parse_lenient
 from mcl2pnml.io.pnml.source import (HIGH_LEVEL, Source, XmlError, coordinates, payload_value,
                                      read_file)
 
@@ -1192,7 +1193,6 @@ def _dialect(buffer: _Buffer, filename: str) -> None:
         if match is None:
             continue
         if buffer.size <= DIALECT_EXPLAINED:
-            from mcl2pnml.io.pnml.lenient import parse_lenient
             try:
                 parse_lenient(buffer.read_at(0, buffer.size), filename)
             except PnmlError as e:   # what it finds, with advice the strict reading keeps
