@@ -291,3 +291,20 @@ def test_every_format_is_read_and_written_by_functions_of_one_pattern():
         public = [n for n, f in vars(module).items() if inspect.isfunction(f)
                   and f.__module__.startswith("mcl2pnml.io") and not n.startswith("_")]
         assert not [n for n in public if n.startswith(("load_", "save_"))], name
+
+
+def test_a_drawing_is_made_by_the_view_and_written_by_io(tmp_path):
+    """io writes the DOT text the view draws, byte for byte, and never draws: a writer of a
+    drawing format is handed the drawing (SaveOptions.drawing), as PNML's is the positions."""
+    from mcl2pnml.io.dot import write_dot
+    from mcl2pnml.io.formats import FORMATS
+    from mcl2pnml.pipeline import save_net
+    from mcl2pnml.view.drawing import drawing
+    net = default_library().composed("sequence")
+    slots = default_library().slots("sequence")
+    save_net(net, tmp_path / "seq.dot", "dot", title="Fig. 4", clusters=slots, expand=None)
+    drawn = drawing(net, "Fig. 4", clusters=slots, expand=None).source
+    assert (tmp_path / "seq.dot").read_text() == drawn
+    write_dot(net, tmp_path / "again.dot", drawing=drawn)
+    assert (tmp_path / "again.dot").read_text() == drawn
+    assert {f.name for f in FORMATS.values() if "drawing" in f.options} == {"dot", "svg", "png"}
