@@ -30,7 +30,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from mcl2pnml.io.pnml import stream_pnml
+from mcl2pnml.io.pnml import write_pnml
 
 from mcl2pnml.analysis import zoo
 from bench import nets, real_models
@@ -157,7 +157,7 @@ def run(cases=CASES, peers=("snakes", "pm4py"), log=print,
     last: dict[tuple[str, str], float | None] = {}   # (family, peer) -> seconds a marking
     with tempfile.TemporaryDirectory() as tmp:
         for family, size, make in cases:
-            path = stream_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"))
+            path = write_pnml(make(size), Path(tmp) / f"{family}-{size}.pnml".replace(" ", "_"))
             row = {"family": family, "size": size, "ours": measure("ours", path),
                    "numpy": measure("numpy", path)}
             for peer in peers:

@@ -21,7 +21,7 @@ from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.language.functional import format_node, function_expression, mission_expression
 from mcl2pnml.core.net import ArcKind, Timing, thaw
 from mcl2pnml.core.structure import structure
-from mcl2pnml.io.pnml import parse_pnml, stream_pnml, to_pnml
+from mcl2pnml.io.pnml import parse_pnml, write_pnml, to_pnml
 
 from bench.missions import survey
 
@@ -197,7 +197,7 @@ def test_ten_thousand_calls_compile_and_grow_exactly_linearly(tmp_path):
         net = compiled(path)
         sizes[calls] = (len(net.places), len(net.transitions), len(net.arcs))
         if calls == 10_000:
-            out = stream_pnml(net, tmp_path / "survey.pnml")
+            out = write_pnml(net, tmp_path / "survey.pnml")
             assert out.stat().st_size > 0
             assert sum(1 for tr in net.transitions if tr.id.endswith(".enter")) == calls
     per_call = [(b - a) / 100 for a, b in zip(sizes[100], sizes[200])]

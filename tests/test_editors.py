@@ -32,7 +32,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.core.compose import union
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.io.pipe import write_pipe
-from mcl2pnml.io.pnml.writer import pt_arcs, stream_pnml
+from mcl2pnml.io.pnml.writer import pt_arcs, write_pnml
 from mcl2pnml.view.layout import Drawn
 from missions import missions
 
@@ -97,7 +97,7 @@ def _both(net, folder: Path, stem: str, layout: str = "auto") -> None:
 
 def _written(net, folder: Path, stem: str, drawn) -> None:
     pnml, xml = folder / f"{stem}.pnml", folder / f"{stem}.xml"
-    stream_pnml(net, pnml, drawn and drawn.positions, drawn and drawn.bends)
+    write_pnml(net, pnml, drawn and drawn.positions, drawn and drawn.bends)
     write_pipe(net, xml, drawn and drawn.positions, drawn and drawn.bends)
     _holds("woped", pnml, net, drawn)
     _holds("pipe", xml, net, drawn)

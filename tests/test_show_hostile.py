@@ -33,7 +33,7 @@ from helpers import run_cli as run
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.io.pnml.reader import read_pnml
-from mcl2pnml.io.pnml.writer import stream_pnml
+from mcl2pnml.io.pnml.writer import write_pnml
 from mcl2pnml.view import show
 
 #: What a payload does if it ever runs: leaves a flag, speaks, asks, and calls home.
@@ -75,7 +75,7 @@ def hostile_net(port: int, name: str = "net"):
 
 def write_net(directory: Path, stem: str, port: int) -> Path:
     path = directory / f"{stem}.pnml"
-    stream_pnml(hostile_net(port), path)
+    write_pnml(hostile_net(port), path)
     back = read_pnml(path)   # the reader gives every hostile id and name back as text
     assert [p.id for p in back.places] == payloads(port)
     return path
@@ -329,7 +329,7 @@ def test_a_broken_page_says_so(tmp_path, browser):
 ])
 def test_a_run_log_with_nan_or_infinity_is_refused_where_it_stands(tmp_path, line, token):
     net = tmp_path / "net.pnml"
-    stream_pnml(hostile_net(9), net)
+    write_pnml(hostile_net(9), net)
     log = tmp_path / "run.jsonl"
     log.write_text('{"t": 0, "action": "start", "primitive": "P"}\n' + line + "\n")
     out = run("show", net, "--run", log, "-o", tmp_path / "page.html")

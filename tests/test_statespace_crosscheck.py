@@ -11,7 +11,7 @@ import pytest
 from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.analysis.zoo import cycles
 from mcl2pnml.io import ids
-from mcl2pnml.io.pnml import stream_pnml
+from mcl2pnml.io.pnml import write_pnml
 from mcl2pnml.language.library import default_library
 
 
@@ -32,7 +32,7 @@ def test_pm4py_finds_the_same_markings(net, tmp_path):
     import pm4py
     from pm4py.objects.petri_net.utils.reachability_graph import (
         construct_reachability_graph, marking_flow_petri)
-    path = stream_pnml(net, tmp_path / "net.pnml")
+    path = write_pnml(net, tmp_path / "net.pnml")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         pn, im, _ = pm4py.read_pnml(str(path))
@@ -50,7 +50,7 @@ def test_pm4py_finds_the_same_markings(net, tmp_path):
 def test_snakes_finds_the_same_markings(net, tmp_path):
     import snakes.pnml
     from snakes.nets import StateGraph
-    path = stream_pnml(net, tmp_path / "net.pnml")
+    path = write_pnml(net, tmp_path / "net.pnml")
     graph = StateGraph(snakes.pnml.loads(path.read_text()))
     graph.build()
     space, ours = _ours(net)
