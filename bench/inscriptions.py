@@ -14,7 +14,7 @@ from pathlib import Path
 
 from bench.missions import survey
 from mcl2pnml import pipeline
-from mcl2pnml.io.pnml.writer import _ONE, stream_pnml
+from mcl2pnml.io.pnml.writer import _ONE, write_pnml
 
 
 def main(argv: list[str]) -> None:
@@ -25,7 +25,7 @@ def main(argv: list[str]) -> None:
         times = []
         for _ in range(5):
             start = time.perf_counter()
-            stream_pnml(net, path)
+            write_pnml(net, path)
             times.append(time.perf_counter() - start)
         data = path.read_bytes()
     without = len(data.replace(_ONE.encode(), b""))
