@@ -24,7 +24,7 @@ from mcl2pnml.commands import (analyze as analyzing, campaign as campaigning,
                                run as running, show as showing, template as templating,
                                validate as validating)
 from mcl2pnml.commands.common import (VERSION, Mcl2PnmlError, Notes, OptionError,
-                                      ProgressMeter, UsageProblem, visible)
+                                      ProgressMeter, RunsBar, UsageProblem, visible)
 
 
 def option_of(ctx: click.Context, error: OptionError) -> str:
@@ -293,7 +293,7 @@ def campaign(mission: Path, as_json: bool, progress: bool | None, **options) -> 
     end times, how often each property holds, and optionally a sequential test
     (docs/odds.md)."""
     settings = campaigning.CampaignOptions(**options)
-    with campaigning.RunsBar(settings.runs, _shown(progress), sys.stderr) as bar:
+    with RunsBar(settings.runs, _shown(progress), sys.stderr) as bar:
         flown = campaigning.campaign(mission, settings, notes=bar.notes, progress=bar)
     _print(flown, as_json)
     return 0

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any, Callable, Iterator
+from typing import Any, Callable, Iterator
 
 from mcl2pnml import campaign as campaigns
 from mcl2pnml.campaign import CONFIDENCE, Campaign, SchedulerTimeouts
@@ -65,45 +65,6 @@ class CampaignOutcome:
         """What ``campaign`` prints: each ending's frequency with its interval, the end times,
         the properties, the first run not OK, the sequential test."""
         return list(_lines(self.flown, self.mission))
-
-
-class RunsBar:
-    """A bar of the runs done, their rate and the time left, on ``stream`` if ``shown``;
-    what the campaign says meanwhile (:attr:`notes`) printed above it, not through it.
-
-    Called as the campaign's ``progress`` (the runs done, the runs asked); a context
-    manager: the bar is closed however the campaign ends.
-    """
-
-    def __init__(self, runs: int, shown: bool, stream: IO[str]):
-        # tqdm: 90 ms at start-up; only a campaign's bar
-        from tqdm import tqdm
-        self._tqdm = tqdm
-        self.bar = tqdm(total=runs, unit=" runs", file=stream, disable=not shown,
-                        dynamic_ncols=True)
-        self.notes = Notes(_AboveBar(tqdm, stream) if shown else stream)
-
-    def __call__(self, done: int, runs: int) -> None:
-        self.bar.update(done - self.bar.n)
-
-    def __enter__(self) -> "RunsBar":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.bar.close()
-
-
-class _AboveBar:
-    """A stream whose lines tqdm writes above its bar."""
-
-    def __init__(self, tqdm, stream: IO[str]):
-        self.tqdm, self.stream = tqdm, stream
-
-    def write(self, text: str) -> None:
-        self.tqdm.write(text.removesuffix("\n"), file=self.stream)
-
-    def flush(self) -> None:
-        self.stream.flush()
 
 
 def campaign(mission: Path, options: CampaignOptions = CampaignOptions(), *,

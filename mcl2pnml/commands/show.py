@@ -5,14 +5,14 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from mcl2pnml import pipeline
 from mcl2pnml.commands.common import MISSION_SIZE
 from mcl2pnml.core.errors import visible
 from mcl2pnml.core.files import atomic_write_text, check_outputs
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.progress import Notes
+from mcl2pnml.core.progress import Announcement, Notes
 from mcl2pnml.core.settings import UsageProblem
 
 #: Seconds the live page is served after it was handed the run's outcome, unless told.
@@ -67,9 +67,8 @@ def show(what: str, options: ShowOptions = ShowOptions(), *,
         shown = pipeline.show_nets(what, with_run=True, net_id=o.net_id, lenient=o.lenient,
                                    max_mission_size=o.max_mission_size)
 
-        def ready(url: str) -> None:
-            notes(f"serving {shown.title} on {url} , following {o.live_log} (Ctrl-C stops)")
-        _serve(shown, o, ready)
+        _serve(shown, o, Announcement(notes, f"serving {shown.title} on ",
+                                      f" , following {o.live_log} (Ctrl-C stops)"))
         return ShowOutcome(None)
     shown = pipeline.show_nets(what, with_run=o.run_log is not None, net_id=o.net_id,
                                lenient=o.lenient, max_mission_size=o.max_mission_size)
@@ -88,7 +87,7 @@ def show(what: str, options: ShowOptions = ShowOptions(), *,
     return ShowOutcome(output, graph)
 
 
-def _serve(shown: pipeline.Shown, o: ShowOptions, ready: Callable[[str], None]) -> None:
+def _serve(shown: pipeline.Shown, o: ShowOptions, ready: Announcement) -> None:
     """Serve the token-game page of ``shown`` on loopback, following the run of ``live_log``
     as it is written (:func:`mcl2pnml.view.show.serve_live`): ``ready`` is given the
     page's URL; returns on Ctrl-C or ``linger`` seconds after the run's end was served."""
