@@ -32,6 +32,7 @@ as it is decided at the asked confidence (Wald, *Sequential Analysis*, 1947).
 from __future__ import annotations
 
 import logging
+import io
 import math
 import os
 import random
@@ -41,9 +42,11 @@ import threading
 import uuid
 import warnings
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import import_module
+from importlib.util import find_spec
 from pathlib import Path
+from statistics import NormalDist
 from typing import Callable, Iterator
 from urllib.parse import urlsplit
 
@@ -164,7 +167,6 @@ def check_outputs(table: Path | None, plot: Path | None) -> None:
         if not os.access(folder, os.W_OK | os.X_OK):
             raise SettingError(setting, f"the folder of '{path}' cannot be written to")
     if table is not None and table.suffix.lower() == ".parquet":
-        from importlib.util import find_spec
         if find_spec("pyarrow") is None:
             raise SettingError("table", "a Parquet table needs pyarrow (pip install "
                                         "pyarrow); or write .csv")
@@ -253,8 +255,6 @@ _PREPARED: dict[tuple, tuple] = {}
 
 def _prepared(mission: str, fleet: Fleet, engine: str) -> tuple[Callable, Callable]:
     """The engine's maker and the vehicle's builder (by seed) of a campaign."""
-    import os
-
     from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.parser import parse_file
@@ -282,7 +282,6 @@ def vehicle_builder(fleet: Fleet) -> Callable[[int], object]:
     of their own (``random.Random(f"faults-{seed}")``), so that injecting faults does
     not change what the vehicle would have drawn. ``run --vehicle model:MODEL@SEED``
     (or ``sim@SEED``) ``--faults FILE`` builds the same vehicle."""
-    from dataclasses import replace
 
     from mcl2pnml.runtime.faults import Faults, FaultyVehicle
     from mcl2pnml.runtime.simulator import AUVSimulator, World
@@ -413,7 +412,6 @@ class Campaign:
 
 
 def _z(confidence: float) -> float:
-    from statistics import NormalDist
     return NormalDist().inv_cdf(0.5 + confidence / 2)
 
 
@@ -428,7 +426,6 @@ def fly(mission: Path, fleet: Fleet, runs: int, *, engine: str = RunOptions.engi
     each judged on ``properties`` (compiled on the mission's net: the Petri-net engine's
     markings are read). ``scheduler`` is a user's (:func:`scheduler_address`), held to
     ``timeouts``; None: a local cluster of ``workers`` processes."""
-    from importlib.util import find_spec
     if find_spec("distributed") is None:
         raise Mcl2PnmlError("a campaign runs on Dask: pip install 'dask[distributed]'")
     if scheduler is not None:       # the CLI has checked it; a library caller may not
@@ -529,7 +526,7 @@ def _stoppable(make: Callable) -> None:
     :class:`~mcl2pnml.runtime.interrupts.Interrupted` (a KeyboardInterrupt naming the
     signal), which the CLI says as an interruption, exit 128 + the signal. The handlers
     there before are put back."""
-    import asyncio
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
     caught: list[int] = []
 
     async def main():
@@ -564,7 +561,8 @@ async def _probe(address: str) -> None:
     """Read the scheduler's opening message (Dask's handshake: a scheduler speaks first)
     within :data:`HANDSHAKE_MAX_BYTES`, and check that it is one: a length read from the
     peer is judged before anything is read by it. The caller holds the deadline."""
-    import asyncio
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
+    # Dask's distributed: most of a second to import; only a campaign's flight
     from distributed.protocol.core import loads
     from distributed.protocol.utils import unpack_frames
     parts = urlsplit(address)
@@ -598,8 +596,8 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
                  timeouts: SchedulerTimeouts) -> None:
     """The campaign on this loop: the cluster reached (or started), the batches sent, the
     runs taken in seed order, the scheduler watched; everything closed within a bound."""
-    import asyncio
-    from distributed import Client, LocalCluster
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
+    from distributed import Client, LocalCluster   # Dask: only a campaign's flight
     made: list = []     # the cluster and the client, as soon as each exists: to close
 
     async def local():
@@ -655,8 +653,8 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     """Send the batches, take their runs in seed order until the campaign is done, and
     end it if the scheduler (``named`` so in the messages) says nothing (no batch done,
     no answer with a worker) for ``silence`` seconds."""
-    import asyncio
-    from distributed import as_completed
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
+    from distributed import as_completed   # Dask: only a campaign's flight
     loop = asyncio.get_running_loop()
     campaign, seed, runs = flight.campaign, flight.seed, flight.runs
     batches = [list(range(seed + k, seed + min(k + BATCH, runs))) for k in range(0, runs, BATCH)]
@@ -749,8 +747,7 @@ def write_table(campaign: Campaign, path: Path) -> None:
         columns[f"fails_{name}"] = [r.fails[k] for r in campaign.runs]
     if path.suffix.lower() == ".parquet":
         try:
-            import io
-
+            # pyarrow: optional, and heavy to import; only a Parquet table
             import pyarrow as pa
             import pyarrow.parquet as pq
         except ImportError:
@@ -776,8 +773,7 @@ COLOURS = {"OK": "#54a24b", "FAIL": "#e45756", "ABORTED": "#f58518"}
 def plot(campaign: Campaign, path: Path, title: str) -> None:
     """The outcomes' frequencies with their intervals, the end times' histogram, and for
     a simulated campaign, the first runs' tracks on the world's map."""
-    import io
-
+    # matplotlib: a quarter of a second and more to import; only a plot
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

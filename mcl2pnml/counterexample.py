@@ -43,8 +43,10 @@ the scripted vehicle); only :mod:`mcl2pnml.pipeline` imports it.
 """
 from __future__ import annotations
 
+import copy
 import enum
 import json
+from collections import deque
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Iterable, Sequence
@@ -279,7 +281,7 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
     passing as the cycle repeats, it would expire. ``gap``: each primitive's reports at
     least that many seconds apart (and a lasso's cycle at least that long, when the cycle
     has a report of the primitive that reports first in it again)."""
-    import networkx as nx
+    import networkx as nx   # a tenth of a second to import: only a counterexample
 
     from mcl2pnml.core.structure import structure
     s = structure(net)
@@ -504,9 +506,7 @@ def engine_run(net: Net, prop: Property, max_states: int = ENGINE_RUN_STATES
     prefix (strongly connected components of those moves). Time is left out here:
     :func:`schedule` then finds the times, if any, that order the stimuli so.
     """
-    from collections import deque
-
-    import networkx as nx
+    import networkx as nx   # a tenth of a second to import: only a counterexample
 
     from mcl2pnml.analysis.checking.observers import BAD, initial, pending, step, truths
     from mcl2pnml.runtime.executor import PetriEngine
@@ -599,7 +599,7 @@ def engine_run(net: Net, prop: Property, max_states: int = ENGINE_RUN_STATES
 def _engine_lasso(nodes, loops) -> tuple[str, ...] | None:
     """The shortest prefix and cycle of the executor's states with an obligation open all
     along the cycle (:func:`engine_run`'s infinite runs), as one firing sequence."""
-    import networkx as nx
+    import networkx as nx   # a tenth of a second to import: only a counterexample
     best = None
     for scc in nx.strongly_connected_components(loops):
         inside = loops.subgraph(scc)
@@ -625,7 +625,6 @@ def _engine_lasso(nodes, loops) -> tuple[str, ...] | None:
 
 def _clone(engine):
     """A copy of the executor's state that runs on alone (what a firing changes is copied)."""
-    import copy
     c = copy.copy(engine)
     c.marking = list(engine.marking)
     c.env = {k: dict(v) for k, v in engine.env.items()}

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Callable, Iterable, Sequence
+from typing import Iterable, Sequence
 
 from mcl2pnml.analysis.checking.observers import Watcher
 from mcl2pnml.core.errors import Mcl2PnmlError
@@ -146,6 +146,7 @@ class MarkovChain:
 
     def as_analysis(self):
         """The chain as :class:`mcl2pnml.analysis.markov.Chain` (floats, CSR)."""
+        # numpy and scipy: a tenth of a second and more to import; only a chain solved
         import numpy as np
         from scipy import sparse
 
@@ -286,7 +287,7 @@ def _exact_reaching(chain: MarkovChain, label: list[str]) -> dict[str, Fraction]
     fractions (every run reaching a labelled state): (I - Q) X = B solved over the
     rationals (FLINT's ``fmpq_mat``) from the model's exact probabilities. None for a
     chain of more than :data:`EXACT_STATES` transient states."""
-    import flint
+    import flint   # python-flint: loaded only for the exact fractions of a small chain
     names = sorted({x for x in label if x})
     if label[0]:
         return {name: Fraction(int(label[0] == name)) for name in names}
