@@ -1,0 +1,34 @@
+"""The command line parses and prints: it imports the commands, click and its own options,
+nothing of the layers below, and each of its functions is short (the work is the
+commands')."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+CLI = Path(__file__).resolve().parent.parent / "mcl2pnml" / "cli.py"
+#: What the command line may import besides the standard library's few.
+ALLOWED = ("click", "mcl2pnml.cli_options", "mcl2pnml.commands")
+STANDARD = {"__future__", "json", "sys", "pathlib"}
+
+
+def test_the_cli_imports_only_the_commands_and_click():
+    tree = ast.parse(CLI.read_text(encoding="utf-8"))
+    imported = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            imported |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            imported.add(node.module)
+    other = sorted(m for m in imported - STANDARD
+                   if not any(m == a or m.startswith(a + ".") for a in ALLOWED))
+    assert not other, f"the CLI imports past the commands: {other}"
+
+
+def test_no_function_of_the_cli_is_long():
+    """Forty lines at most: a command's help, its call and its printing."""
+    tree = ast.parse(CLI.read_text(encoding="utf-8"))
+    long = [(n.name, n.end_lineno - n.lineno + 1) for n in ast.walk(tree)
+            if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
+            and n.end_lineno - n.lineno + 1 > 40]
+    assert not long, long
