@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mcl2pnml import pipeline
 from mcl2pnml.analysis.statespace.explorers import CHOICES as EXPLORER_CHOICES
@@ -20,6 +20,10 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes, ProgressMeter
 from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.timing import Assumptions, seconds_option
+
+if TYPE_CHECKING:   # for the annotations only: the analysis loads numpy
+    from mcl2pnml.analysis.report import Analysis
+    from mcl2pnml.timed_verdicts import TimedEnds
 
 #: How many failing properties ``analyze`` explains, unless told (``--max-counterexamples``):
 #: each costs its replay on both engines, at times a search of the engines' own runs, and
@@ -83,10 +87,10 @@ class AnalyzeOutcome:
     property unknown, or the ends undecided).
     """
 
-    result: Any
+    result: Analysis | None
     verdicts: tuple | None = None
     witnesses: tuple | None = None
-    timed: Any = None
+    timed: TimedEnds | None = None
     messages: tuple[str, ...] = ()
     written: tuple[Path, ...] = ()
     status: int = 0
@@ -237,7 +241,7 @@ def _counterexample_folder(file: Path, folder: Path, props, extra: Path | None) 
 
 
 def _explored(file: Path, net: Net, start, notes: Notes, progress: ProgressMeter | None,
-              o: AnalyzeOptions):
+              o: AnalyzeOptions) -> Analysis:
     """The untimed analysis of ``net``; a certificate beside the file, if it holds for the
     net and the run starts at M0, proves the behaviour without exploring
     (:mod:`mcl2pnml.certify`), and ``explore`` (or ``lenient``) explores anyway."""
