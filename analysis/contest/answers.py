@@ -54,9 +54,13 @@ import numpy as np
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.bounds import MAX_STATES
 from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 
+from mcl2pnml.analysis.contest.reachability_queries import reach_on_the_fly, settled_without_exploring
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
+from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
 
 _loops = chosen()         # the graph searches in C, else the same in Python
 
@@ -352,7 +356,6 @@ def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
         raise TooLarge(f"the automaton of the negation has {len(accepting)} acceptance sets "
                        "(the search holds 64)")
     n, k = graph.n, len(literals)
-    from mcl2pnml.core.memory import default_memory, size_text
     need = n * k * 5                    # the numbering (4 bytes) and the labels (1 byte)
     budget = default_memory() if max_memory is None else max_memory
     if need > budget or n * k >= 2 ** 31:
@@ -392,7 +395,6 @@ def _csr(src: np.ndarray, dst: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarr
 
 
 def _space(net: Net, max_states: int, max_memory: int | None):
-    from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
     try:
         space = explore(net, max_states=max_states, max_memory=max_memory)
     except ExplorationLimit as e:
@@ -418,15 +420,13 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES
         return {k: Answer(k, value, technique) for k, (value, technique) in settled.items()}
 
     found: dict[str, Answer] = {}
-    if stubborn:          # (the module, and the observers it reads, loaded only if asked)
-        from mcl2pnml.analysis.contest.reachability_queries import reach_on_the_fly
+    if stubborn:
         found = answers(reach_on_the_fly(net, queries, max_states, max_memory, True, safe))
     rest = [x for x in queries if x.id not in found]
     if not rest:
         return [found[x.id] for x in queries]
     space, why = _space(net, max_states, max_memory)
     if space is None:
-        from mcl2pnml.analysis.contest.reachability_queries import reach_on_the_fly, settled_without_exploring
         if not stubborn:
             found.update(answers(reach_on_the_fly(net, rest, max_states, max_memory)))
         found.update(answers(settled_without_exploring(
@@ -502,7 +502,6 @@ def _stable_place(space) -> bool:
     """Whether some place holds the same number of tokens in every reachable marking: on
     markings packed one bit per place, a bit the same in the OR and the AND of them all;
     else a place at a time (its column not kept: a large net has many)."""
-    from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
     places = len(space.structure.places)
     if isinstance(space, PackedStateSpace) and space.states:
         ones = np.bitwise_or.reduce(space.packed, axis=0)

@@ -282,8 +282,8 @@ class _TimedStructure:
     """The initial marking, as a bit mask."""
 
     @property
-    def K(self) -> int:
-        """The number of timers (the first clock of a gap group)."""
+    def timer_count(self) -> int:
+        """The number of timers ``K`` (the first clock of a gap group)."""
         return len(self.timers.members)
 
     def enabled(self, m: int) -> int:
@@ -361,7 +361,7 @@ def _let_time_pass(ts: _TimedStructure, en: int, clocks: tuple, d: list[list[int
     if not urgent:
         for i in range(1, len(d)):
             d[i][0] = INF
-        K, t_hi = ts.K, ts.timers.hi
+        K, t_hi = ts.timer_count, ts.timers.hi
         for i, c in enumerate(clocks, 1):
             if c < K and t_hi[c] is not None:
                 if not _constrain(d, i, 0, _le(t_hi[c])):
@@ -406,7 +406,7 @@ def _drop_inactive(ts: _TimedStructure, clocks: tuple, d: list[list[int]]
     keep = [0]
     for i in range(1, n):
         c = clocks[i - 1]
-        if c != ts.glob and (c >= ts.K or ts.timers.hi[c] is None) \
+        if c != ts.glob and (c >= ts.timer_count or ts.timers.hi[c] is None) \
                 and d[0][i] <= _le(-ts.ceiling[c]):
             continue
         keep.append(i)
@@ -467,7 +467,7 @@ class _Search:
         en0 = ts.enabled(ts.m0)
         clocks0: list = []
         d0 = [[LE0]]
-        for k in range(ts.K):
+        for k in range(ts.timer_count):
             if en0 & ts.timers.members[k]:
                 _add_clock(clocks0, d0, k)
         if ts.glob is not None:
@@ -508,7 +508,7 @@ class _Search:
         n = len(clocks) + 1
         d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
         # the guard: its own clock at its lower bound, its group's gap passed
-        tj, gj, K = ts.timers.timer_of[j], ts.group_of[j], ts.K
+        tj, gj, K = ts.timers.timer_of[j], ts.group_of[j], ts.timer_count
         if tj >= 0 and ts.lo[j] > 0 and tj in clocks:
             if not _constrain(d, 0, clocks.index(tj) + 1, _le(-ts.lo[j])):
                 return False
@@ -547,7 +547,7 @@ class _Search:
         enabled, or again when one of them fires and one stays enabled; it stops when none
         is; ``j``'s gap group starts its clock again."""
         ts = self.ts
-        K, members = ts.K, ts.timers.members
+        K, members = ts.timer_count, ts.timers.members
         restart = [c for c in range(K) if en2 & members[c] and
                    (not en & members[c] or members[c] >> j & 1)]
         keep_idx = [0]
