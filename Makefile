@@ -92,8 +92,9 @@ TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 2 ? 
                 --dist worksteal
 # compiled modules are kept (__pycache__, ignored by git) even where the environment
 # says not to: otherwise every worker and every Python process the tests start
-# compiles the package and rewrites the tests' assertions anew
-PYTEST := env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest
+# compiles the package and rewrites the tests' assertions anew; the fifteen slowest
+# tests are listed at the end, so that one growing slower is seen before the suite is
+PYTEST := env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest --durations=15
 
 test: setup
 	$(PYTEST) $(TEST_WORKERS)
