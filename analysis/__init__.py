@@ -3,12 +3,12 @@
 and the file formats).
 
 May import :mod:`mcl2pnml.core` and the standard and numeric libraries (numpy, scipy, sympy,
-networkx, numba), nothing else of ours. Installed as ``mcl2pnml.analysis``; its subpackages,
+networkx), nothing else of ours. Installed as ``mcl2pnml.analysis``; its subpackages,
 each over those listed before it:
 
 - :mod:`~mcl2pnml.analysis.structure` the structure alone: P- and T-invariants, siphons and traps.
 - :mod:`~mcl2pnml.analysis.statespace` the reachable markings: which explorer, the explorers,
-  and their inner loops (C, numba, Python).
+  and their inner loops (in C, and their plain-Python reference).
 - :mod:`~mcl2pnml.analysis.checking` properties of runs: the pattern observers, checked on a
   state space or on the fly, and a task's interface contract.
 - :mod:`~mcl2pnml.analysis.timed` the zone graph of a time Petri net and the verdicts it proves.
