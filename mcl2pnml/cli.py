@@ -18,11 +18,10 @@ from mcl2pnml.cli_options import (
     ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, EXAMPLES,
     FUNCTIONAL_OPTIONS, ODDS_OPTIONS, QUERY_OPTIONS, RUN_OPTIONS, SHOW_OPTIONS, TEMPLATE_OPTIONS,
     VALIDATE_OPTIONS)
-from mcl2pnml.commands import (analyze as analyzing, campaign as campaigning,
-                               certify as certifying, check as checking,
-                               compile as compiling, odds as weighing, query as querying,
-                               run as running, show as showing, template as templating,
-                               validate as validating)
+from mcl2pnml.commands import (analyze as analyzing, certify as certifying, check as checking,
+                               compile as compiling, fly as campaigning, page as showing,
+                               query as querying, run as running, template as templating,
+                               validate as validating, weigh as weighing)
 from mcl2pnml.commands.common import (VERSION, Mcl2PnmlError, Notes, OptionError,
                                       ProgressMeter, RunsBar, UsageProblem, visible)
 

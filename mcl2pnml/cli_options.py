@@ -14,13 +14,13 @@ import click
 from mcl2pnml.analysis.statespace.explorers import CHOICES as EXPLORERS, EXPLORERS as EXPLORER_TABLE
 from mcl2pnml.campaign import SchedulerTimeouts, scheduler_address
 from mcl2pnml.commands.analyze import AnalyzeOptions
-from mcl2pnml.commands.campaign import CampaignOptions
+from mcl2pnml.commands.fly import CampaignOptions
 from mcl2pnml.commands.certify import CertifyOptions
 from mcl2pnml.commands.common import FORMAT, MISSION_SIZE, PROPERTIES_SIZE
 from mcl2pnml.commands.compile import CompileOptions
-from mcl2pnml.commands.odds import OddsOptions
+from mcl2pnml.commands.weigh import OddsOptions
 from mcl2pnml.commands.query import EXAMINATIONS, QueryOptions
-from mcl2pnml.commands.show import ShowOptions
+from mcl2pnml.commands.page import ShowOptions
 from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS

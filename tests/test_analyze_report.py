@@ -17,7 +17,7 @@ import pytest
 
 from mcl2pnml import pipeline
 from mcl2pnml.analysis.report import Analysis, CertifiedFacts, Partial, analyze
-from mcl2pnml.commands import analyze as analyzing, campaign as campaigning
+from mcl2pnml.commands import analyze as analyzing, fly as campaigning
 from mcl2pnml.core.progress import Notes, ProgressMeter
 from mcl2pnml.core.settings import SettingError
 

@@ -20,7 +20,7 @@ import pytest
 from dask_cluster import free_port, started
 from helpers import ROOT, one_error, run_cli
 from mcl2pnml import pipeline
-from mcl2pnml.commands.campaign import CampaignOptions, campaign
+from mcl2pnml.commands.fly import CampaignOptions, campaign
 from mcl2pnml.campaign import BATCH, TRACKS, Fleet, fly_batch
 from mcl2pnml.core.progress import Notes
 from mcl2pnml.odds import chain_of, odds, odds_of

@@ -27,7 +27,7 @@ import pytest
 
 from dask_cluster import free_port, started
 from helpers import ROOT, one_error, run_cli
-from mcl2pnml.commands.campaign import CampaignOptions, campaign
+from mcl2pnml.commands.fly import CampaignOptions, campaign
 from mcl2pnml.campaign import SchedulerTimeouts
 from mcl2pnml.core.errors import Mcl2PnmlError
 

@@ -119,11 +119,11 @@ def test_each_option_default_is_its_options_dataclass_default(command: str):
     import dataclasses
 
     from mcl2pnml.cli import main
-    from mcl2pnml.commands import (analyze, campaign, certify, check, compile, odds, query,
-                                   run, show)
+    from mcl2pnml.commands import (analyze, certify, check, compile, fly, page, query, run,
+                                   weigh)
     options = {"analyze": analyze.AnalyzeOptions, "query": query.QueryOptions,
-               "odds": odds.OddsOptions, "campaign": campaign.CampaignOptions,
-               "run": run.RunOptions, "show": show.ShowOptions,
+               "odds": weigh.OddsOptions, "campaign": fly.CampaignOptions,
+               "run": run.RunOptions, "show": page.ShowOptions,
                "compile": compile.CompileOptions, "certify": certify.CertifyOptions,
                "check": check.CheckOptions}[command]
     fields = {f.name: f.default for f in dataclasses.fields(options)}

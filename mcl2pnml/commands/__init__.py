@@ -10,5 +10,9 @@ the exit status where the command has more than one. A setting that does not fit
 option.
 
 ``check`` and ``functional`` share :mod:`~mcl2pnml.commands.check` (both read a mission
-and print it checked); the others have a module of their own.
+and print it checked); the others have a module of their own, named for the command but
+where a library module holds that name already: ``campaign`` is :mod:`.fly` (the runs are
+:mod:`mcl2pnml.campaign`'s), ``odds`` :mod:`.weigh` (the chain is :mod:`mcl2pnml.odds`'),
+``show`` :mod:`.page` (the page is :mod:`mcl2pnml.view.show`'s); the counterexamples
+``analyze`` explains are told by :mod:`.witnesses`.
 """
