@@ -188,21 +188,31 @@ def test_compiled_pnml_is_valid_and_keeps_everything(mission, assert_valid):
     assert parse_pnml(data) == net   # payloads and timings included: the executor's input
 
 
-def test_ten_thousand_calls_compile_and_grow_exactly_linearly(tmp_path):
-    """The size of the net is affine in the number of calls (the time is in bench/)."""
+def _grows_exactly_linearly(tmp_path, most: int) -> None:
+    """The size of the net is affine in the number of calls, up to ``most`` calls (the time
+    is in bench/)."""
     sizes = {}
-    for calls in (100, 200, 10_000):
+    for calls in (100, 200, most):
         path = tmp_path / f"survey{calls}.mcl"
         path.write_text(survey(calls))
         net = compiled(path)
         sizes[calls] = (len(net.places), len(net.transitions), len(net.arcs))
-        if calls == 10_000:
+        if calls == most:
             out = write_pnml(net, tmp_path / "survey.pnml")
             assert out.stat().st_size > 0
             assert sum(1 for tr in net.transitions if tr.id.endswith(".enter")) == calls
     per_call = [(b - a) / 100 for a, b in zip(sizes[100], sizes[200])]
-    predicted = tuple(round(a + 9_900 * d) for a, d in zip(sizes[100], per_call))
-    assert sizes[10_000] == predicted
+    predicted = tuple(round(a + (most - 100) * d) for a, d in zip(sizes[100], per_call))
+    assert sizes[most] == predicted
+
+
+def test_two_thousand_calls_compile_and_grow_exactly_linearly(tmp_path):
+    _grows_exactly_linearly(tmp_path, 2_000)
+
+
+@pytest.mark.slow
+def test_ten_thousand_calls_compile_and_grow_exactly_linearly(tmp_path):
+    _grows_exactly_linearly(tmp_path, 10_000)
 
 
 @pytest.mark.parametrize("mission", [
