@@ -172,12 +172,9 @@ def _explore_safe(s: Structure, m0, backend: str, budget: _Budget, progress) -> 
     return budget.run(chosen, s, m0, progress)
 
 
-
-
 def _limit(max_states: int) -> ExplorationLimit:
     return ExplorationLimit(f"the state space has more than {max_states:,} markings; "
                             "raise the limit (--max-states) or analyse a smaller net")
-
 
 
 def _explore_general(s: Structure, m0, max_states: int,

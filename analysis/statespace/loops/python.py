@@ -21,8 +21,8 @@ import numpy as np
 
 from mcl2pnml.analysis.statespace.loops.interface import (Code, CounterNet, CounterSearch, Fields,
                                                           Index, KeyIndex, Observer,
-                                                          ProductSearch, SafeNet, SafeSearch,
-                                                          Stubborn)
+                                                          ProductSearch, Rows, SafeNet,
+                                                          SafeSearch, Stubborn)
 
 name = "python"
 
