@@ -94,11 +94,11 @@ def test_a_loop_until_failure_ends_surely_after_a_geometric_number_of_rounds():
     assert o.mean == pytest.approx(2 / float(f), rel=1e-9)    # E[rounds] = 1/f, 2 s each
 
 
-def test_the_chain_is_bounded_and_says_so():
+def test_the_chain_is_bounded_and_says_so(examples):
     model = _model({"primitives": {"GoToWayPoint": {"achieve": "1/2", "fail": "1/4",
                                                     "after": {"uniform": [1, 200]}}}})
     with pytest.raises(TooManyStates, match="more than 5 states"):
-        chain_of(pipeline.compile_checked(pipeline.check_file(SAUCE)), model, 5)
+        chain_of(examples.net("sauce"), model, 5)
 
 
 @pytest.mark.parametrize("calls, ok", [
@@ -190,11 +190,10 @@ MODELS = {
 
 
 @pytest.mark.parametrize("name", MODELS)
-def test_simulated_runs_on_both_engines_agree_with_the_exact_odds(name):
+def test_simulated_runs_on_both_engines_agree_with_the_exact_odds(name, examples):
     spec = MODELS[name]
     model = VehicleModel.load(spec) if not isinstance(spec, dict) else _model(spec)
-    checked = pipeline.check_file(SAUCE)
-    net = pipeline.compile_checked(checked)
+    checked, net = examples.checked("sauce"), examples.net("sauce")
     exact = odds(net, model)
     runs = 200
     for engine in (lambda: PetriEngine(net), lambda: ReferenceEngine(checked)):
@@ -211,9 +210,9 @@ def test_simulated_runs_on_both_engines_agree_with_the_exact_odds(name):
         assert abs(mean - exact.mean) <= 3.29 * se + 1e-9, (name, mean, se, exact.mean)
 
 
-def test_a_run_is_replayed_by_its_seed():
+def test_a_run_is_replayed_by_its_seed(examples):
     model = VehicleModel.load(MODELS["sonar"])
-    net = pipeline.compile_checked(pipeline.check_file(SAUCE))
+    net = examples.net("sauce")
     first, again = (run(PetriEngine(net), ModelVehicle(model, Draw(random.Random(7))))
                     .as_json() for _ in range(2))
     assert first == again
@@ -253,12 +252,12 @@ def test_odds_weighs_the_mission_s_properties(tmp_path):
               "bad.props:1:")
 
 
-def test_sensitivity_ranks_the_primitives_by_their_swing():
+def test_sensitivity_ranks_the_primitives_by_their_swing(examples):
     """Ranked by swing; KeepDepth, which the mission's last step needs, never achieving
     leaves no OK; and a better sonar lowers P(OK) (a cross found starts the dive and the
     release, which can fail), which a ranking by swing shows as a negative one."""
     model = VehicleModel.load(MODELS["sonar"])
-    net = pipeline.compile_checked(pipeline.check_file(SAUCE))
+    net = examples.net("sauce")
     from mcl2pnml.odds import sensitivity
     rows = {r["primitive"]: r for r in sensitivity(net, model,
                                                     PetriEngine(net).primitives_used())}
@@ -316,9 +315,9 @@ def test_a_continuous_delay_is_for_campaigns_only(tmp_path):
         odds(_net(ONE_TASK.format(timeout=10)), model)
 
 
-def test_the_chain_of_a_model_is_what_odds_of_reads():
+def test_the_chain_of_a_model_is_what_odds_of_reads(examples):
     model = VehicleModel.load(MODELS["sonar"])
-    net = pipeline.compile_checked(pipeline.check_file(SAUCE))
+    net = examples.net("sauce")
     chain = chain_of(net, model)
     for successors in chain.successors:
         assert not successors or sum(p for _, p in successors) == 1     # exactly
