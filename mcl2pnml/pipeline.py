@@ -603,4 +603,4 @@ def check_properties_timed(net: Net, properties, assumptions: "Assumptions | Non
     """Each property's :class:`mcl2pnml.analysis.checking.on_graph.Verdict` on the mission's time-divergent
     runs (docs/time.md), on one zone graph."""
     from mcl2pnml import timed_verdicts as timed   # numpy, 0.2 s: only timed
-    return timed.check(net, properties, assumptions or Assumptions(), max_states)
+    return timed.check_properties_timed(net, properties, assumptions or Assumptions(), max_states)

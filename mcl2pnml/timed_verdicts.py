@@ -197,8 +197,9 @@ def as_verdict(graph: engine.ZoneGraph, v: engine.TimedVerdict) -> Verdict:
     return Verdict(v.property, status, v.transitions, markings, shape, v.loop, v.states)
 
 
-def check(net: Net, properties: Sequence[Property], assumptions: Assumptions = Assumptions(),
-          max_states: int = MAX_CHECK_STATES) -> list[Verdict]:
+def check_properties_timed(net: Net, properties: Sequence[Property],
+                           assumptions: Assumptions = Assumptions(),
+                           max_states: int = MAX_CHECK_STATES) -> list[Verdict]:
     """Each property's verdict on the mission's time-divergent runs (docs/time.md)."""
     tn = semantics(net, assumptions)
     graph, verdicts = engine.check_timed_properties(tn, properties, max_states)
