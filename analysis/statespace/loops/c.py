@@ -23,6 +23,9 @@ from mcl2pnml.analysis.statespace.loops.interface import (Code, CounterNet, Coun
 
 name = "c"
 
+#: A new table's size, as a power of two: 4,096 slots, grown as the loops ask.
+FIRST_BITS = 12
+
 _NONE32 = np.zeros(0, dtype=np.int32)
 
 
@@ -69,7 +72,7 @@ def _grown_queue(queue: np.ndarray, count: int, room: int) -> np.ndarray:
     return _grown(queue, count, size)
 
 
-def _table_bits(count: int, bits: int = 12) -> int:
+def _table_bits(count: int, bits: int = FIRST_BITS) -> int:
     """The bits of a table that holds ``count`` rows at most 70% full."""
     while 10 * count > 7 << bits:
         bits += 1
@@ -91,10 +94,10 @@ def safe_search(net: SafeNet, m0: np.ndarray, max_states: int) -> SafeSearch:
     queue = _new_queue(words, max_states, net.transitions)
     queue[0] = m0 if words > 1 else m0[0]
     if words == 1:
-        table = np.zeros(1 << 12, dtype=np.uint64)
-        table[c.slot_of_word(int(m0[0]), 12)] = m0[0]
-        return SafeSearch(queue, 1, 0, table, 12, bool(m0[0] == 0))
-    return SafeSearch(queue, 1, 0, _rehash(queue, 1, 12, False), 12)
+        table = np.zeros(1 << FIRST_BITS, dtype=np.uint64)
+        table[c.slot_of_word(int(m0[0]), FIRST_BITS)] = m0[0]
+        return SafeSearch(queue, 1, 0, table, FIRST_BITS, bool(m0[0] == 0))
+    return SafeSearch(queue, 1, 0, _rehash(queue, 1, FIRST_BITS, False), FIRST_BITS)
 
 
 def safe_step(net: SafeNet, search: SafeSearch, max_states: int, budget: int) -> SafeSearch:
@@ -262,8 +265,8 @@ def product_search(start: np.ndarray, capacity: int) -> ProductSearch:
     queue[0] = start
     parent, via, depth = (np.empty(capacity, dtype=np.int64) for _ in range(3))
     parent[0], via[0], depth[0] = -1, -1, 0
-    return ProductSearch(queue, 1, 0, Index(_rehash(queue, 1, 12, False), 12), parent, via,
-                         depth)
+    table = _rehash(queue, 1, FIRST_BITS, False)
+    return ProductSearch(queue, 1, 0, Index(table, FIRST_BITS), parent, via, depth)
 
 
 def product_step(net: SafeNet, observer: Observer, stubborn: Stubborn, search: ProductSearch,

@@ -117,7 +117,7 @@ class SafeSearch:
     count: int
     head: int
     table: object
-    bits: int = 12
+    bits: int
     zero_seen: bool = False
     code: Code = Code.GOING
 
@@ -160,7 +160,7 @@ class Index:
     """The backend's lookup table of a set of rows (opaque to callers), and its size."""
 
     table: object
-    bits: int = 12
+    bits: int
 
 
 @dataclass(frozen=True)

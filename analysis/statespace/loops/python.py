@@ -26,6 +26,9 @@ from mcl2pnml.analysis.statespace.loops.interface import (Code, CounterNet, Coun
 
 name = "python"
 
+#: The tables here are dicts, which grow by themselves: no size in bits to carry.
+NO_BITS = 0
+
 Row = tuple[int, ...]
 
 
@@ -107,7 +110,7 @@ def _index(queue: np.ndarray, count: int) -> dict[Row, int]:
 def safe_search(net: SafeNet, m0: np.ndarray, max_states: int) -> SafeSearch:
     queue = np.empty((1024, net.words) if net.words > 1 else 1024, dtype=np.uint64)
     queue = _put(queue, 0, tuple(int(w) for w in m0))
-    return SafeSearch(queue, 1, 0, _index(queue, 1), 0)
+    return SafeSearch(queue, 1, 0, _index(queue, 1), NO_BITS)
 
 
 def safe_step(net: SafeNet, search: SafeSearch, max_states: int, budget: int) -> SafeSearch:
@@ -213,7 +216,8 @@ def _fields_of(f: Fields) -> list[list[tuple[int, int, int, int]]]:
 
 def counter_search(queue: np.ndarray, parent: np.ndarray, count: int, head: int,
                    dead: int = 0) -> CounterSearch:
-    return CounterSearch(queue, parent, count, head, Index(_index(queue, count), 0), dead)
+    return CounterSearch(queue, parent, count, head, Index(_index(queue, count), NO_BITS),
+                         dead)
 
 
 def counter_step(net: CounterNet, search: CounterSearch, max_states: int,
@@ -363,7 +367,8 @@ def product_search(start: np.ndarray, capacity: int) -> ProductSearch:
     queue[0] = start
     parent, via, depth = (np.zeros(capacity, dtype=np.int64) for _ in range(3))
     parent[0], via[0] = -1, -1
-    return ProductSearch(queue, 1, 0, Index(_index(queue, 1), 0), parent, via, depth)
+    return ProductSearch(queue, 1, 0, Index(_index(queue, 1), NO_BITS), parent, via,
+                         depth)
 
 
 def product_step(net: SafeNet, observer: Observer, stubborn: Stubborn, search: ProductSearch,
