@@ -53,7 +53,7 @@ def assert_same(net, properties, max_states=1_000_000):
         if a.status is Status.HOLDS:
             assert a.states == b.states     # the same product, explored whole
         if a.status is Status.FAILS:
-            shown = judge(net, a.property, a.transitions)
+            shown = judge(net, a.property, a.transitions, loop=a.loop)
             assert shown is not None and shown.shape is a.shape, (a, shown)
             assert a.states <= b.states
     return fly, full
@@ -210,7 +210,7 @@ def assert_reduced_same(net, properties, safe=False):
     for a, b in zip(reduced, full):
         assert a.status is b.status, (a, b)
         if a.status is Status.FAILS:     # a real run that shows it, if not a shortest one
-            shown = judge(net, a.property, a.transitions)
+            shown = judge(net, a.property, a.transitions, loop=a.loop)
             assert shown is not None and shown.shape is a.shape, (a, shown)
         assert a.states <= b.states, (a.states, b.states)
     return reduced, full
@@ -331,4 +331,4 @@ def test_a_violation_found_before_the_limit_is_kept(loops):
     prop = Property("p", Pattern.ABSENCE, Tokens(("b0",), 1))
     with searching_with(loops):
         v = check_properties(net, [prop], max_states=2, method="on-the-fly")[0]
-    assert v.status is Status.FAILS and judge(net, prop, v.transitions) is not None
+    assert v.status is Status.FAILS and judge(net, prop, v.transitions, loop=v.loop) is not None

@@ -277,6 +277,36 @@ def _cycle_states(start, trans, succ):
 
 # -- a given run ---------------------------------------------------------------------------------
 
+
+
+def _turns(net: Net, prop: Property, fired: list[str], loop: int) -> list[str]:
+    """``fired`` with its cycle (``fired[loop:]``) turned until the observer starts a turn
+    in a state it started one in before: at most one turn per observer state."""
+    s = structure(net)
+    index = s.transition_index
+    preds = _truths(prop)
+    m = list(s.initial_vector())
+
+    def after(obs, tids):
+        for tid in tids:
+            if tid not in index or not s.enabled(m, index[tid]):
+                return None     # judge says why, on the sequence as given
+            s.fire(m, index[tid])
+            marking = {s.places[k]: n for k, n in enumerate(m) if n}
+            obs = step(prop, obs, *(holds(x, marking) for x in preds))
+        return obs
+
+    marking = {s.places[k]: n for k, n in enumerate(m) if n}
+    obs = after(step(prop, initial(prop.scope.kind), *(holds(x, marking) for x in preds)),
+                fired[:loop])
+    cycle, out, starts = fired[loop:], list(fired), set()
+    while cycle and obs is not None and obs is not BAD and obs not in starts:
+        starts.add(obs)
+        obs = after(obs, cycle)
+        out += cycle
+    return out
+
+
 @dataclass(frozen=True)
 class Shown:
     """How one firing sequence shows a property violated (:func:`judge`).
@@ -293,7 +323,7 @@ class Shown:
 
 
 def judge(net: Net, prop: Property, transitions: Iterable[str],
-          silent: Iterable[str] = ()) -> Shown | None:
+          silent: Iterable[str] = (), loop: int | None = None) -> Shown | None:
     """Whether the run that fires ``transitions`` from M0 shows ``prop`` violated, and how.
 
     The same observer as :func:`check_property` reads the run's markings. It shows a
@@ -305,8 +335,14 @@ def judge(net: Net, prop: Property, transitions: Iterable[str],
     is not enabled where the run fires it is an error (ValueError): the
     sequence is no run of the net. ``silent``: transitions that may stay
     unfired for ever (under a timed semantics, a vehicle's reports: a run may
-    end where only they are enabled, the vehicle silent).
+    end where only they are enabled, the vehicle silent). ``loop``: the
+    sequence is a lasso verdict's, its firings from ``loop`` on repeated for
+    ever; they are fired again until the observer starts a turn in a state it
+    started one in before, since a verdict enters its loop where the markings
+    allow, and the observer may need more than one turn to come back.
     """
+    if loop is not None:
+        transitions = _turns(net, prop, list(transitions), loop)
     s = structure(net)
     index = s.transition_index
     m = list(s.initial_vector())
