@@ -45,18 +45,17 @@ from mcl2pnml.analysis.statespace.general import DecodedMarkings, EdgesOnDemand,
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.loops.interface import Code, CounterNet, Fields, Index, Loops
 from mcl2pnml.analysis.statespace.packedmarkings import distinct
+# invariant bounds are looked for on nets up to INVARIANT_PLACES places (Farkas can need
+# exponentially many rows; past INVARIANT_ROWS the widths are grown)
+from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS,
+                                                    AnalysisLimit,
+                                                    minimal_semipositive_p_invariants)
 
 #: How many markings one step of the loops expands before it hands back to Python.
 SLICE = 1 << 18
 
 #: The widest counter: a place past 2^32 tokens is taken for unbounded.
 MAX_BITS = 32
-
-#: Invariant bounds are looked for on nets up to this many places (Farkas
-#: can need exponentially many rows; past its limit the widths are grown).
-INVARIANT_PLACES = 2_000
-INVARIANT_ROWS = 20_000
-
 
 class NotBounded(Exception):
     """The net may be unbounded: the caller explores with Karp-Miller coverability."""
@@ -73,8 +72,6 @@ def _words_estimate(s: Structure) -> int:
 
 def invariant_bounds(s: Structure, m0: Sequence[int]) -> list[int | None]:
     """Per place, the bound a semi-positive P-invariant proves (None: none does)."""
-    # sympy: 0.05 s to import beside numpy, only for a net the counters explore
-    from mcl2pnml.analysis.structure.invariants import AnalysisLimit, minimal_semipositive_p_invariants
     bounds: list[int | None] = [None] * len(s.places)
     if len(s.places) > INVARIANT_PLACES:
         return bounds
