@@ -41,9 +41,11 @@ SAUCE = ROOT / "examples" / "sauce.mcl"
 #: Short bounds, so that every fault ends a run in well under a second.
 FAST = LinkOptions(heartbeat=0.05, liveness=0.5, send_timeout=0.5, connect_timeout=2.0)
 #: Wall seconds within which a run that ends on a fault it reads (not on a time limit of
-#: its own) ends on a loaded machine: far past the tenths of a second it takes on a quiet
-#: one, and short of the run's 10-s limit, by which a run that missed the fault ends.
-AT_ONCE = 8.0
+#: its own) ends on a loaded machine (11 s were seen with three suites on 2 cores): far
+#: past the tenths of a second it takes on a quiet one, and short of the 30-s limit
+#: (:data:`LIMIT`) such a run is given, by which a run that missed the fault would end.
+AT_ONCE = 15.0
+LIMIT = 30.0
 
 GOTO = """
 primitive GoToWayPoint(waypoint);
@@ -210,12 +212,13 @@ def flood_and_never_read(conn, peer: Peer) -> None:
         conn.sendall(line * 100)
 
 
-@pytest.mark.timeout(20)
+@pytest.mark.timeout(LIMIT + 15)
 def test_a_peer_that_never_reads_cannot_freeze_the_controller():
     peer = Peer(flood_and_never_read, rcvbuf=4096)
     recorder = Recorder()
     start = time.monotonic()
-    result = run_bridge(peer.address, source=LOOP, mapping=LOOP_MAPPING, recorder=recorder)
+    result = run_bridge(peer.address, source=LOOP, mapping=LOOP_MAPPING, recorder=recorder,
+                        max_time=LIMIT)
     elapsed = time.monotonic() - start
     assert elapsed < AT_ONCE, elapsed    # the old send blocked in the kernel for ever
     assert result.outcome is Outcome.STALLED
@@ -230,7 +233,7 @@ def test_a_peer_that_never_reads_cannot_freeze_the_controller():
     assert recorder.left_enabled() == set()
 
 
-@pytest.mark.timeout(30)
+@pytest.mark.timeout(60)
 def test_the_command_line_ends_in_time_against_a_peer_that_never_reads(tmp_path):
     mission = tmp_path / "loop.mcl"
     mission.write_text(LOOP)
@@ -241,7 +244,7 @@ def test_the_command_line_ends_in_time_against_a_peer_that_never_reads(tmp_path)
     peer = Peer(flood_and_never_read, rcvbuf=4096)
     start = time.monotonic()
     out = run_cli("run", mission, "--vehicle", f"bridge:{mapping}", "--connect", peer.address,
-                  "--max-time", "1", "--send-timeout", "0.5", "--json", timeout=20)
+                  "--max-time", "1", "--send-timeout", "0.5", "--json", timeout=40)
     assert time.monotonic() - start < AT_ONCE + 5       # the command's own start besides
     assert "Traceback" not in out.stderr
     assert out.returncode == Outcome.STALLED.exit_status, out.stderr
@@ -365,13 +368,13 @@ def test_a_line_of_bad_utf8_is_one_message_after_the_safe_stop():
     assert peer.commands() == ["start_GoToWayPoint", "stop_GoToWayPoint"]
 
 
-@pytest.mark.timeout(20)
+@pytest.mark.timeout(LIMIT + 15)
 @pytest.mark.parametrize("linger", [False, True], ids=["close", "reset"])
 def test_a_peer_that_closes_or_resets_ends_the_run_at_once(linger):
     peer = Peer(send_after_first_command(b"", then_close=True, linger=linger))
     recorder = Recorder()
     start = time.monotonic()
-    result = run_bridge(peer.address, recorder=recorder)
+    result = run_bridge(peer.address, recorder=recorder, max_time=LIMIT)
     assert time.monotonic() - start < AT_ONCE
     assert_lost(result, "the link was reset" if linger else
                 "the vehicle's bridge closed the link", recorder)
@@ -390,12 +393,12 @@ def test_a_peers_reason_reaches_our_messages_as_text_only():
     assert "busy?outcome OK" in diagnosis
 
 
-@pytest.mark.timeout(20)
+@pytest.mark.timeout(LIMIT + 15)
 def test_a_silent_peer_is_a_lost_link_at_the_liveness_time_out():
     peer = Peer(send_after_first_command(b""))       # it reads, and says nothing, for ever
     recorder = Recorder()
     start = time.monotonic()
-    result = run_bridge(peer.address, recorder=recorder, max_time=30)
+    result = run_bridge(peer.address, recorder=recorder, max_time=LIMIT)
     elapsed = time.monotonic() - start
     assert 0.5 <= elapsed < AT_ONCE, elapsed
     assert_lost(result, "no heartbeat within the liveness time-out of 0.5 s", recorder)
