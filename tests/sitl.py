@@ -53,8 +53,11 @@ HOME = "43.6,-8.8,0,0"
 INSTANCES = range(1, 61)
 #: The first MAVLink port (SERIAL0, the mission's), the second (SERIAL1), the RC input.
 MAVLINK, SECOND, RC_INPUT = 5760, 5762, 5501
-#: Wall seconds: the program's start, its stop, a connection, a parameter's answer.
-START_BOUND, STOP_BOUND, CONNECT_BOUND, ANSWER_BOUND = 10.0, 5.0, 10.0, 3.0
+#: Wall seconds: the program's start, its stop, a connection, a parameter's answer. Each is
+#: a wait that ends as soon as the thing happens, so generous bounds cost nothing: a
+#: loaded machine (two suites on 2 cores) took over 10 s to have the mission's run connect
+#: and the second port open.
+START_BOUND, STOP_BOUND, CONNECT_BOUND, ANSWER_BOUND = 30.0, 5.0, 30.0, 10.0
 #: ArduPilot's system and component ids of the vehicle (its README).
 VEHICLE = (1, 1)
 ARMED_FLAG = 0x80
