@@ -7,6 +7,8 @@ analyse and run them. The commands of ``mcl2pnml`` are :mod:`mcl2pnml.commands`'
 
 >>> from mcl2pnml import NetBuilder, save_pnml, load_pnml
 """
+from importlib import import_module
+
 from mcl2pnml.core.version import __version__
 from mcl2pnml.core.errors import Mcl2PnmlError, NetError, PnmlError
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, NetBuilder, Place, Timing, Transition
@@ -40,7 +42,6 @@ def __getattr__(name: str):
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from importlib import import_module
     return getattr(import_module(module), name)
 
 

@@ -52,7 +52,9 @@ from urllib.parse import urlsplit
 
 from mcl2pnml.core.bounds import MAX_RUN_TIME
 from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.files import atomic_write_bytes
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.runtime.interrupts import Interrupted
 from mcl2pnml.runtime.options import RunOptions
 
 #: Runs per task sent to a worker.
@@ -222,6 +224,8 @@ JUDGED = ("OK", "FAIL", "ABORTED", "STALLED")
 def fly_batch(mission: str, fleet: Fleet, engine: str, seeds: list[int], max_time: float,
               properties: tuple = (), tracks_below: int = -1) -> list[Flown]:
     """Fly the runs of ``seeds`` (a task of a worker)."""
+    # the observers and the engine: a worker's, not the command's start (the CLI reads
+    # this module's scheduler options when it starts)
     from mcl2pnml.analysis.checking.observers import Watcher
     from mcl2pnml.runtime.engine import run
     make, build = _prepared(mission, fleet, engine)
@@ -255,6 +259,7 @@ _PREPARED: dict[tuple, tuple] = {}
 
 def _prepared(mission: str, fleet: Fleet, engine: str) -> tuple[Callable, Callable]:
     """The engine's maker and the vehicle's builder (by seed) of a campaign."""
+    # lark and the compiler (40 ms), the engines: a worker's, not the command's start
     from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.compiler import compile_checked
     from mcl2pnml.language.parser import parse_file
@@ -282,7 +287,7 @@ def vehicle_builder(fleet: Fleet) -> Callable[[int], object]:
     of their own (``random.Random(f"faults-{seed}")``), so that injecting faults does
     not change what the vehicle would have drawn. ``run --vehicle model:MODEL@SEED``
     (or ``sim@SEED``) ``--faults FILE`` builds the same vehicle."""
-
+    # the vehicles: a worker's, not the command's start
     from mcl2pnml.runtime.faults import Faults, FaultyVehicle
     from mcl2pnml.runtime.simulator import AUVSimulator, World
     from mcl2pnml.runtime.vehicle_model import Draw, ModelVehicle, VehicleModel
@@ -548,7 +553,6 @@ def _stoppable(make: Callable) -> None:
         asyncio.run(main())
     except asyncio.CancelledError:
         if caught:
-            from mcl2pnml.runtime.interrupts import Interrupted
             raise Interrupted(caught[0]) from None
         raise
 
@@ -646,9 +650,9 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
                 pass
 
 
-# Long (85 lines) because its two tasks, taking the batches and watching the scheduler,
-# share what was last heard and the workers counted, as closures over its state: each task
-# is short, and apart they would hand that state back and forth.
+# Its two tasks, taking the batches and watching the scheduler, share what was last heard
+# and the workers counted, as closures over its state: each task is short, and apart they
+# would hand that state back and forth; so the one function is 85 lines long.
 async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     """Send the batches, take their runs in seed order until the campaign is done, and
     end it if the scheduler (``named`` so in the messages) says nothing (no batch done,
@@ -739,7 +743,6 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
 def write_table(campaign: Campaign, path: Path) -> None:
     """The runs as a table: Parquet (``.parquet``, with pyarrow) or CSV; a column per
     property watched, ``fails_NAME`` (true, false, or empty: not judged)."""
-    from mcl2pnml.core.files import atomic_write_bytes
     columns: dict[str, list] = {"seed": [r.seed for r in campaign.runs],
                                 "outcome": [r.outcome for r in campaign.runs],
                                 "time": [r.time for r in campaign.runs]}
@@ -776,9 +779,7 @@ def plot(campaign: Campaign, path: Path, title: str) -> None:
     # matplotlib: a quarter of a second and more to import; only a plot
     import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from mcl2pnml.core.files import atomic_write_bytes
+    import matplotlib.pyplot as plt   # once the backend is chosen: no display needed
     data = campaign.as_json()
     tracked = [r for r in campaign.runs if r.track]
     fig, axes = plt.subplots(1, 3 if tracked else 2, figsize=(15 if tracked else 10, 4.5))
@@ -808,8 +809,8 @@ def plot(campaign: Campaign, path: Path, title: str) -> None:
 def _map(ax, fleet: Fleet, runs: list[Flown]) -> None:
     """The world seen from above (the tank, the cross, the dock, the obstacles) and the
     runs' tracks, each in its outcome's colour."""
+    # matplotlib's patches and the simulator's world: only a plot of a simulated campaign
     import matplotlib.patches as patches
-
     from mcl2pnml.runtime.simulator import World
     world = World.load(fleet.world) if fleet.world else World()
     (x0, y0), (w, h, _) = world.origin, world.tank

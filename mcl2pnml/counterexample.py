@@ -51,10 +51,19 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Iterable, Sequence
 
+from mcl2pnml.analysis.checking.observers import BAD, initial, pending, step, truths
+from mcl2pnml.analysis.checking.on_graph import judge
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.payloads import MISSION, ActionKind, EventKind, read_transition
 from mcl2pnml.core.patterns import Predicate, Property, holds, places_of
+from mcl2pnml.core.payloads import MISSION, ActionKind, EventKind, read_transition
+from mcl2pnml.core.structure import structure
+from mcl2pnml.core.timing import mission_timing
+from mcl2pnml.language import ast
+from mcl2pnml.language.declared_properties import RESULTS, predicate
 from mcl2pnml.runtime.aal import Action, Event, Reply, ScriptedVehicle, _time
+from mcl2pnml.runtime.engine import canonical_trace, run
+from mcl2pnml.runtime.executor import PetriEngine
+from mcl2pnml.runtime.reference import ReferenceEngine
 
 
 class StepKind(enum.Enum):
@@ -178,8 +187,6 @@ def _value(v: Any) -> str:
 def atoms(primitives: Iterable[str], callables: Iterable[str]) -> list[tuple[str, Predicate]]:
     """Every property atom on these names, as written, with its predicate on the net
     (:mod:`mcl2pnml.language.declared_properties`' table), in the order a reader wants them."""
-    from mcl2pnml.language import ast
-    from mcl2pnml.language.declared_properties import RESULTS, predicate
     found = []
     for p in primitives:
         found += [ast.PropAtom(k, (p,)) for k in ("enabled", "achieved", "failed")]
@@ -204,7 +211,6 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
     atoms each step's changes are told in. ``gap``: a primitive's reports at least this
     many seconds apart (a timed verdict's assumption, docs/time.md), which the times meet.
     """
-    from mcl2pnml.core.structure import structure
     s = structure(net)
     known = [(text, pred) for text, pred in atoms(primitives, callables)
              if places_of(pred) <= net.place_index.keys()]
@@ -267,9 +273,9 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
 
 # -- the schedule --------------------------------------------------------------------------------
 
-# Long (88 lines) because its two halves share their many lists: one pass over the firings
-# gathers the timers set, the time-outs, the reports to space and the stimuli, as the marking
-# changes; the difference constraints they make are then solved, each tighter epsilon again.
+# Its two halves share their many lists: one pass over the firings gathers the timers set,
+# the time-outs, the reports to space and the stimuli as the marking changes, and the
+# difference constraints they make are then solved: so the one function is 88 lines long.
 def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
              loop: int | None = None, gap: Fraction | None = None
              ) -> tuple[list[Fraction] | None, str | None, str | None]:
@@ -283,7 +289,6 @@ def schedule(net: Net, transitions: Sequence[str], kinds: Sequence[StepKind],
     has a report of the primitive that reports first in it again)."""
     import networkx as nx   # a tenth of a second to import: only a counterexample
 
-    from mcl2pnml.core.structure import structure
     s = structure(net)
     m = list(s.initial_vector())
     timed = {j: Fraction(str(net.transitions[j].timing.earliest))
@@ -449,10 +454,6 @@ def replay(cex: Counterexample, net: Net, checked, silent: Sequence[str] = ()) -
     engine (of ``checked``), up to the counterexample's last stimulus, and judge the runs
     (``silent``: the transitions a run may end with enabled, :func:`mcl2pnml.analysis.checking.on_graph.
     judge`)."""
-    from mcl2pnml.analysis.checking.on_graph import judge
-    from mcl2pnml.runtime.engine import canonical_trace, run
-    from mcl2pnml.runtime.executor import PetriEngine
-    from mcl2pnml.runtime.reference import ReferenceEngine
     if cex.script is None or cex.end is None:
         raise ValueError(f"property {cex.property.name}: no script ({cex.why_not})")
     petri = PetriEngine(net)
@@ -483,10 +484,10 @@ class SearchLimit(Exception):
 ENGINE_RUN_STATES = 200_000
 
 
-# Long (109 lines) because its helpers (the observer watching each firing, the vehicle's
-# acknowledgements, a fresh start) are closures over the engine being explored and the
-# observer's state, which the breadth-first search below reads after every move; apart,
-# they would hand that state back and forth on every firing.
+# Its helpers (the observer watching each firing, the vehicle's acknowledgements, a fresh
+# start) are closures over the engine being explored and the observer's state, which the
+# breadth-first search reads after every move; apart, they would hand that state back and
+# forth on every firing: so the one function is 109 lines long.
 def engine_run(net: Net, prop: Property, max_states: int = ENGINE_RUN_STATES
                ) -> tuple[str, ...] | None:
     """A shortest violating run that the Petri-net executor takes with some vehicle: or None
@@ -508,8 +509,6 @@ def engine_run(net: Net, prop: Property, max_states: int = ENGINE_RUN_STATES
     """
     import networkx as nx   # a tenth of a second to import: only a counterexample
 
-    from mcl2pnml.analysis.checking.observers import BAD, initial, pending, step, truths
-    from mcl2pnml.runtime.executor import PetriEngine
 
     root = PetriEngine(net)
     places = root.places
@@ -669,12 +668,10 @@ def witness(net: Net, checked, prop: Property, transitions: Sequence[str], *, sh
     vehicle's reports are left (the vehicle silent for ever; with ``fair``, only its
     reports after the first of an enabling).
     """
-    from mcl2pnml.analysis.checking.on_graph import judge
     names = dict(primitives=list(checked.primitives),
                  callables=[*checked.tasks, *checked.functions])
     gap, silent = None, ()
     if timing is not None:
-        from mcl2pnml.core.timing import mission_timing
         tn = mission_timing(net, timing)
         fair = set().union(*tn.fair) if tn.fair else set()
         silent = tuple(t for members, _ in tn.gaps for t in members if t not in fair) \

@@ -33,7 +33,12 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Iterable, Sequence
 
+import numpy as np
+from scipy import sparse
+
 from mcl2pnml.analysis.checking.observers import Watcher
+from mcl2pnml.analysis.markov import (CYCLES, Chain, bottom_components, closed_classes,
+                                      reaching, solve)
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import Property
@@ -146,11 +151,6 @@ class MarkovChain:
 
     def as_analysis(self):
         """The chain as :class:`mcl2pnml.analysis.markov.Chain` (floats, CSR)."""
-        # numpy and scipy: a tenth of a second and more to import; only a chain solved
-        import numpy as np
-        from scipy import sparse
-
-        from mcl2pnml.analysis.markov import Chain
         rows, cols, data = [], [], []
         for s, succ in enumerate(self.successors):
             if not succ:                        # absorbing: a self-loop
@@ -274,7 +274,6 @@ EXACT_STATES = 1_000
 def exact_outcomes(chain: MarkovChain) -> dict[str, Fraction] | None:
     """The probability of each ending as an exact fraction (None: a chain of more than
     :data:`EXACT_STATES` transient states)."""
-    from mcl2pnml.analysis.markov import CYCLES, closed_classes
     label = list(chain.label)
     for s in closed_classes(chain.as_analysis()):
         label[s] = CYCLES
@@ -317,7 +316,6 @@ def fate_labels(chain: MarkovChain) -> list[str]:
     ending in it fails: "v" and one digit per property (1: fails), "" elsewhere. An
     absorbing state is a component of its own (a finite run, judged on its last
     observer states); a larger one, a loop, fails what every one of its states owes."""
-    from mcl2pnml.analysis.markov import bottom_components
     label = [""] * chain.size
     for component in bottom_components(chain.as_analysis()):
         fails = (all(chain.pending[s][k] for s in component)
@@ -330,7 +328,6 @@ def fate_labels(chain: MarkovChain) -> list[str]:
 
 def property_odds(chain: MarkovChain) -> list[PropertyOdds]:
     """The probability that each property the chain watched holds."""
-    from mcl2pnml.analysis.markov import reaching
     if not chain.properties:
         return []
     label = fate_labels(chain)
@@ -353,7 +350,6 @@ def _endings(by_label: dict[str, Fraction]) -> dict[str, Fraction]:
 
 
 def odds_of(chain: MarkovChain) -> Odds:
-    from mcl2pnml.analysis.markov import CYCLES, solve
     a = solve(chain.as_analysis(), ENDS)
     outcomes = {e: a.probability.get(e, 0.0) for e in ENDS}
     outcomes["never"] = a.probability.get(WAITS, 0.0) + a.probability.get(CYCLES, 0.0)

@@ -38,7 +38,7 @@ from mcl2pnml.io.formats import FORMATS, SUFFIXES, SaveOptions, reader_of
 from mcl2pnml.runtime.options import RunOptions
 
 if TYPE_CHECKING:   # for the annotations only
-    from mcl2pnml.analysis.report import Analysis, CertifiedFacts
+    from mcl2pnml.analysis.report import Analysis
     from mcl2pnml.core.patterns import Property
     from mcl2pnml.language.functional import Instance
 
@@ -69,7 +69,8 @@ def check_file(path: str | Path, max_size: int | str | None = None):
     A file over ``max_size`` bytes (or as ``--max-mission-size`` takes it; default
     :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`) is refused before it is read: every
     command and call that reads a mission reads it here."""
-    from mcl2pnml.language.semantics import check_program   # lark, 40 ms: only a mission read
+    # lark, 40 ms: only a mission read
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse_file
     return check_program(parse_file(path, None, mission_limit(max_size),
                                     "--max-mission-size"))
@@ -85,7 +86,8 @@ def mission_limit(max_size: int | str | None = None) -> int:
 
 def check_source(text: str, filename: str = "<mcl>"):
     """Parse and check MCL text; errors name ``filename``."""
-    from mcl2pnml.language.semantics import check_program   # lark, 40 ms: only a mission read
+    # lark, 40 ms: only a mission read
+    from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse
     return check_program(parse(text, filename))
 
@@ -133,7 +135,8 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
     once parsed, before they are checked (defaults: the limits of
     :mod:`mcl2pnml.core.bounds`). ``checked``: the mission already checked, not read
     again; else it is read within ``max_mission_size`` (:func:`check_file`)."""
-    from mcl2pnml.language.parser import parse_file   # lark, 40 ms: only a mission read
+    # lark, 40 ms: only a mission read
+    from mcl2pnml.language.parser import parse_file
     from mcl2pnml.language.declared_properties import check_atoms, check_side_file, compile_properties
     max_size = size_or_none(max_size, "max_props_size")
     checked = check_file(mission, max_mission_size) if checked is None else checked
@@ -295,7 +298,8 @@ def validate_pnml(path: str | Path, grammar: str | Path | None = None,
     """The verdict on a PNML file of our schema, of the official grammar when ``grammar``
     gives it (or it is found: :func:`mcl2pnml.io.pnml.grammar.find_grammar`) and of the
     reader's rules; and the net when it is valid."""
-    from mcl2pnml.io.pnml.grammar import validate   # lxml, 15 ms: only a PNML file
+    # lxml, 15 ms: only a PNML file
+    from mcl2pnml.io.pnml.grammar import validate
     from mcl2pnml.io.pnml.reader import read_pnml
     check_load(path, Budget())   # the schemas read the file whole too
     verdict = validate(path, grammar, net_id)
@@ -371,19 +375,6 @@ def check_certificate(net: Net, cert: dict[str, Any], *, shaped: bool = False) -
 def certificate_beside(file: Path) -> Path:
     """Where ``certify`` writes the certificate of ``file`` (a mission, or its net)."""
     return file.with_name(file.stem + ".cert.json")
-
-
-def certified_facts(net: Net, cert_path: Path, max_size: int | str = MAX_CERTIFICATE_SIZE
-                    ) -> tuple["CertifiedFacts | None", list[str]]:
-    """The certificate beside a net, as ``analyze`` takes it, if it holds for ``net``
-    (:meth:`mcl2pnml.analysis.report.Analysis.certified`); else None and what the checker
-    found. The ends are the checker's: the certificate must say exactly those to hold."""
-    from mcl2pnml.analysis.report import CertifiedFacts   # numpy, 0.1 s: only to analyse
-    cert = load_certificate(cert_path, max_size)
-    problems = check_certificate(net, cert, shaped=True)
-    if problems:
-        return None, problems
-    return CertifiedFacts(str(cert_path), cert["conclusion"]["ends"]), []
 
 
 def save_certificate(cert: dict[str, Any], path: str | Path) -> Path:
@@ -550,7 +541,8 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
     if with_run:
         raise SettingError("run_log", "a run is of a mission: give the mission's .mcl or "
                                       "its compiled net, not a template")
-    from mcl2pnml.language.library import default_library   # lark, 40 ms: only a mission read
+    # lark, 40 ms: only a mission read
+    from mcl2pnml.language.library import default_library
     from mcl2pnml.language.template_parser import TemplateKind
     lib = default_library()
     template = lib.get(what)   # unknown: the error lists the templates

@@ -22,7 +22,7 @@ from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.timing import Assumptions, seconds_option
 
 if TYPE_CHECKING:   # for the annotations only: the analysis loads numpy
-    from mcl2pnml.analysis.report import Analysis
+    from mcl2pnml.analysis.report import Analysis, CertifiedFacts
     from mcl2pnml.timed_verdicts import TimedEnds
 
 #: How many failing properties ``analyze`` explains, unless told (``--max-counterexamples``):
@@ -248,7 +248,7 @@ def _explored(file: Path, net: Net, start, notes: Notes, progress: ProgressMeter
     beside = pipeline.certificate_beside(file)
     certified = None
     if beside.is_file() and start is None and not (o.explore or o.lenient):
-        certified, problems = pipeline.certified_facts(net, beside, o.max_cert)
+        certified, problems = certified_facts(net, beside, o.max_cert)
         if problems:
             notes(f"{beside}: the certificate does not hold for this net ({problems[0]}"
                   + (f"; {len(problems) - 1} more" if len(problems) > 1 else "")
@@ -262,6 +262,19 @@ def _explored(file: Path, net: Net, start, notes: Notes, progress: ProgressMeter
               "proven from the mission's parts; the markings were not explored (--explore to "
               "explore them)")
     return result
+
+
+def certified_facts(net: Net, cert_path: Path, max_size: int | str
+                    ) -> tuple[CertifiedFacts | None, list[str]]:
+    """The certificate beside a net, as ``analyze`` takes it, if it holds for ``net``
+    (:meth:`mcl2pnml.analysis.report.Analysis.certified`); else None and what the checker
+    found. The ends are the checker's: the certificate must say exactly those to hold."""
+    from mcl2pnml.analysis.report import CertifiedFacts   # numpy, 0.1 s: only to analyse
+    cert = pipeline.load_certificate(cert_path, max_size)
+    problems = pipeline.check_certificate(net, cert, shaped=True)
+    if problems:
+        return None, problems
+    return CertifiedFacts(str(cert_path), cert["conclusion"]["ends"]), []
 
 
 def _say_left_out(verdicts, explained, notes: Notes) -> None:
