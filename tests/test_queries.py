@@ -136,8 +136,8 @@ def _formulas(net: Net, tool: str) -> dict[str, ET.Element]:
 
 
 @pytest.mark.parametrize("case", ["compiled", "abort pending", "no mutex", *CUT])
-def test_the_formulas_say_what_the_analysis_counts(case):
-    net = pipeline.compile_file(SAUCE)
+def test_the_formulas_say_what_the_analysis_counts(case, examples):
+    net = examples.net("sauce")
     net = without(net, case) if case in CUT else start(net, case)
     result = analysed(net)
     for tool in TOOLS:
@@ -156,8 +156,8 @@ def test_the_formulas_say_what_the_analysis_counts(case):
     assert result["terminal_markings"]
 
 
-def test_the_forms_differ_in_the_deadlock_inside_a_formula_only():
-    net = pipeline.compile_file(SAUCE)
+def test_the_forms_differ_in_the_deadlock_inside_a_formula_only(examples):
+    net = examples.net("sauce")
     verifypn, lola = _formulas(net, "verifypn"), _formulas(net, "lola")
     assert ET.tostring(verifypn["end-always-reachable"]) == ET.tostring(lola["end-always-reachable"])
     assert ET.tostring(verifypn["deadlock"]) == ET.tostring(lola["deadlock"])
@@ -257,8 +257,8 @@ def test_peers_answer_as_we_do_on_every_example_from_every_start(tmp_path):
     assert tally["compared"] >= len(EXAMPLES) * len(STARTS) - 1, tally
 
 
-def test_peers_answer_as_we_do_on_broken_missions(tmp_path):
-    net = pipeline.compile_file(SAUCE)
+def test_peers_answer_as_we_do_on_broken_missions(tmp_path, examples):
+    net = examples.net("sauce")
     cases = [start(net, "no mutex")] + [without(net, t) for t in CUT]
     seen = Counter()
     for i, case in enumerate(cases):

@@ -16,7 +16,6 @@ import pytest
 from helpers import ROOT, run_cli as run
 from test_show import SHOTS, page_of  # noqa: F401 (fixtures)
 
-from mcl2pnml import pipeline
 from mcl2pnml.core.structure import structure
 from mcl2pnml.view.reachability import CONDENSE_ABOVE, reachability_graph
 
@@ -34,8 +33,8 @@ def pages(tmp_path_factory) -> dict[str, Path]:
 
 
 @pytest.fixture(scope="module")
-def sauce_graph():
-    net = pipeline.compile_file(SAUCE)
+def sauce_graph(examples):
+    net = examples.net("sauce")
     return net, reachability_graph(net)
 
 

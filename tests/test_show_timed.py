@@ -282,8 +282,8 @@ def test_a_counterexample_shows_when_each_step_happened(tmp_path, page_of):
     assert any(s.startswith("t=901  fire Goto.t03 (time-out)") for s in shown)
 
 
-def test_the_pages_roles_are_the_executors():
-    net = pipeline.compile_file(ROOT / "examples" / "sauce.mcl")
+def test_the_pages_roles_are_the_executors(examples):
+    net = examples.net("sauce")
     engine = PetriEngine(net)
     roles = {t.id: role(read_transition(t), t.timing is not None) for t in net.transitions}
     for i, t in enumerate(engine.transitions):

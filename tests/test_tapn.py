@@ -365,9 +365,9 @@ def test_verifydtapn_on_one_task_as_checked_by_hand(tmp_path, timeout, assumptio
     compare_with_our_checker(net, assumptions, found)
 
 
-def test_verifydtapn_on_the_papers_mission_without_a_gap(tmp_path):
+def test_verifydtapn_on_the_papers_mission_without_a_gap(tmp_path, examples):
     need(VERIFYDTAPN)
-    net = pipeline.compile_file(ROOT / "examples" / "sauce.mcl")
+    net = examples.net("sauce")
     found = verdicts(net, tmp_path, NO_GAP, ("ends",))
     assert found == {"ends": False}
     compare_with_our_checker(net, NO_GAP, found)
@@ -453,11 +453,11 @@ def test_the_latest_end_of_the_papers_mission_with_short_time_outs_and_late_acks
 
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [1, 3])
-def test_verifydtapn_on_the_papers_mission_with_late_acknowledgements(tmp_path, k):
+def test_verifydtapn_on_the_papers_mission_with_late_acknowledgements(tmp_path, k, examples):
     """The paper's mission always ends with acknowledgements within 1 or 3 s: verifydtapn's
     verdict (16 s and 47 s here) and ours."""
     need(VERIFYDTAPN)
-    net, assumptions = pipeline.compile_file(ROOT / "examples" / "sauce.mcl"), acks_within(k)
+    net, assumptions = examples.net("sauce"), acks_within(k)
     found = verdicts(net, tmp_path, assumptions, ("ends",), timeout=300)
     assert found == {"ends": True}
     compare_with_our_checker(net, assumptions, found)
