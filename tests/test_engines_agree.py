@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mcl2pnml.pipeline import check_file, check_source
+from mcl2pnml.pipeline import check_source
 
 from helpers import ROOT, both
 from missions import missions, scripts
@@ -29,15 +29,15 @@ def example_scripts(checked) -> list[dict]:
 
 
 @pytest.mark.parametrize("mission", EXAMPLES, ids=lambda p: p.stem)
-def test_every_example_runs_the_same_on_both_engines(mission):
-    checked = check_file(mission)
+def test_every_example_runs_the_same_on_both_engines(mission, examples):
+    checked = examples.checked(mission.stem)
     for script in example_scripts(checked):
         petri, reference = both(checked, script)
         assert petri == reference, f"{mission.name} with {script}"
 
 
-def test_the_papers_mission_ends_as_the_paper_says():
-    checked = check_file(ROOT / "examples" / "sauce.mcl")
+def test_the_papers_mission_ends_as_the_paper_says(examples):
+    checked = examples.checked("sauce")
     # the cross is found during the survey: dive, drop the marker, surface
     found = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
              "KeepDepth": ["ok@5", "ok@6"], "ReleaseMarker": ["ok@1"]}
