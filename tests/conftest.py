@@ -134,10 +134,10 @@ def engine(request) -> Engine:
 
 
 #: Modules whose tests wait the longest on other processes (the tutorial's hundred commands
-#: and its peers, the autopilot's flights, the Dask clusters): collected first, whole, so
-#: that the workers start them first and the run does not end waiting for one of them
-#: alone; every other module, and the order within each, is kept.
-FIRST = ("test_tutorial.py", "test_ardusub.py", "test_campaign.py")
+#: and its peers, the autopilot's flights, the Dask clusters, the runs stopped by signals):
+#: collected first, whole, so that the workers start them first and the run does not end
+#: waiting for one of them alone; every other module, and the order within each, is kept.
+FIRST = ("test_tutorial.py", "test_ardusub.py", "test_campaign.py", "test_endings.py")
 
 
 def pytest_collection_modifyitems(config, items):
