@@ -534,7 +534,9 @@ def test_the_example_server_refuses_a_second_client(server):
 
 def raw_client(s, hello: dict | None = None):
     """A socket to the server, hellos exchanged; returns it and a line reader."""
-    sock = socket.create_connection(s.server_address[:2], timeout=5)
+    # a read waits for the server's answer: 15 s, which only a server that never answers
+    # reaches (a loaded machine answers within seconds)
+    sock = socket.create_connection(s.server_address[:2], timeout=15)
     sock.sendall(encode(hello or {"link": "hello", "protocol": 1, "auth": "none",
                                   "nonce": "1" * 32, "heartbeat": 0.05}))
     buffer = b""
@@ -560,7 +562,7 @@ def raw_client(s, hello: dict | None = None):
     return sock, next_message
 
 
-@pytest.mark.timeout(20)
+@pytest.mark.timeout(45)
 def test_the_example_server_survives_lines_it_cannot_read(server):
     # a raw client sends no heartbeats: a liveness no loaded machine's pause reaches
     s = server(options=LinkOptions(**{**FAST.__dict__, "liveness": 15.0}))
@@ -695,7 +697,7 @@ def test_an_altered_replayed_or_unsigned_line_ends_the_run(tmp_path, attack, why
     assert not any(isinstance(e, Event) and e.kind.value == "achieved" for e in result.entries)
 
 
-@pytest.mark.timeout(20)
+@pytest.mark.timeout(45)
 def test_the_server_never_acts_on_an_unauthenticated_command(server, tmp_path):
     # a raw client sends no heartbeats: a liveness time-out that a loaded machine cannot trip
     s = server(secret=b"k" * 32, options=LinkOptions(**{**FAST.__dict__, "liveness": 15.0}))
