@@ -21,14 +21,12 @@ SOURCES = sorted([*(ROOT / "mcl2pnml").rglob("*.py"), *(ROOT / "analysis").rglob
 PLAIN = {None, 0, 1, 0.0, 1.0, True, False, "", -1}
 #: Numeric defaults of 1,000 and more written where they are used, each the only one of its
 #: kind (a parameter of one function that no command sets: an internal limit of the
-#: analysis, not a bound a user sets); and the check of properties on the fly's bound,
-#: MAX_CHECK_STATES written out while that module is being reworked.
+#: analysis, not a bound a user sets).
 LOCAL = {
     ("analysis/markov.py", "horizon"),
     ("analysis/contest/answers.py", "max_states", 2 ** 31),
     ("analysis/checking/contract.py", "max_states"),
     ("analysis/statespace/packedmarkings.py", "sample"),
-    ("analysis/checking/on_the_fly.py", "max_states", 1_000_000),
 }
 #: Literals two modules share on purpose, each a name the readers of a format give to text
 #: read without a file, or a value the layers below use among themselves: not a setting

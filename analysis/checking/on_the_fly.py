@@ -52,6 +52,7 @@ from typing import Iterable
 
 import numpy as np
 
+from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import Property, Tokens, atoms_of, evaluate
@@ -81,7 +82,7 @@ def available() -> bool:
     return c_loops() is not None
 
 
-def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_states: int = 1_000_000,
+def check_properties_on_the_fly(net: Net, properties: Iterable[Property], max_states: int = MAX_CHECK_STATES,
               max_memory: int | None = None, stubborn: bool = False,
               safe: bool = False, loops: Loops | None = None) -> list[Verdict] | None:
     """Each property's verdict, on the fly; None if the net is not for this checker (not
