@@ -22,19 +22,18 @@ from mcl2pnml.commands import (analyze as analyzing, certify as certifying, chec
                                compile as compiling, fly as campaigning, page as showing,
                                query as querying, run as running, template as templating,
                                validate as validating, weigh as weighing)
-from mcl2pnml.commands.common import (VERSION, Mcl2PnmlError, Notes, OptionError,
-                                      ProgressMeter, RunsBar, UsageProblem, visible)
+from mcl2pnml.commands.common import (VERSION, Mcl2PnmlError, Notes, ProgressMeter, RunsBar,
+                                      SettingError, UsageProblem, visible)
 
 
-def option_of(ctx: click.Context, error: OptionError) -> str:
-    """The option (or argument) typed for the setting ``error`` names, as click's errors name
-    it (``-o``, ``--net``, ``MISSION``); an error naming an option already, that option."""
-    setting = getattr(error, "setting", None)
-    for param in ctx.command.params if setting is not None else ():
+def option_of(ctx: click.Context, setting: str) -> str:
+    """The option (or argument) typed for ``setting``, as click's errors name it (``-o``,
+    ``--net``, ``MISSION``); a setting of no parameter: ``--`` and its name, ``-`` for ``_``."""
+    for param in ctx.command.params:
         if param.name == setting:
             return param.human_readable_name if isinstance(param, click.Argument) \
                 else param.opts[0]
-    return error.option if setting is None else "--" + setting.replace("_", "-")
+    return "--" + setting.replace("_", "-")
 
 
 class Command(click.Command):
@@ -43,8 +42,9 @@ class Command(click.Command):
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
-        except OptionError as e:   # raised below the CLI: shown as click shows its own
-            raise click.BadParameter(e.message, ctx, param_hint=option_of(ctx, e)) from None
+        except SettingError as e:   # raised below the CLI: shown as click shows its own
+            raise click.BadParameter(e.worded(lambda setting: option_of(ctx, setting)), ctx,
+                                     param_hint=option_of(ctx, e.setting)) from None
         except UsageProblem as e:
             raise click.UsageError(e.message, ctx) from None
 

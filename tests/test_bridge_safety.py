@@ -23,7 +23,8 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.pipeline import check_source
 from mcl2pnml.runtime.aal import ActionKind, Event, VehicleInputError
@@ -612,9 +613,9 @@ def test_addresses_are_parsed_or_refused_with_what_is_valid():
     assert parse_address("auv.local:7777") == ("auv.local", 7777)
     assert parse_address("10.0.0.5:1") == ("10.0.0.5", 1)
     for bad in ("::1:7777", "localhost", "host:0", "host:99999", ":7777", "[::1]", "h:x"):
-        with pytest.raises(OptionError) as e:
+        with pytest.raises(SettingError) as e:
             parse_address(bad)
-        assert e.value.option == "--connect" and "[::1]:7777" in e.value.message
+        assert e.value.setting == "connect" and "[::1]:7777" in e.value.message
 
 
 # -- authentication ------------------------------------------------------------------------

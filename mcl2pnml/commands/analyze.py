@@ -19,7 +19,7 @@ from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes, ProgressMeter
 from mcl2pnml.core.settings import SettingError
-from mcl2pnml.core.timing import Assumptions, seconds_option
+from mcl2pnml.core.timing import Assumptions, seconds_setting
 
 if TYPE_CHECKING:   # for the annotations only: the analysis loads numpy
     from mcl2pnml.analysis.report import Analysis, CertifiedFacts
@@ -234,7 +234,7 @@ def _counterexample_folder(file: Path, folder: Path, props, extra: Path | None) 
     to be an input: refused before anything is written."""
     inputs = [("the mission", file), ("the properties file (--properties)", extra),
               ("the certificate beside it", pipeline.certificate_beside(file))]
-    check_outputs([("--counterexamples", path) for prop in props for path in
+    check_outputs([("counterexamples", path) for prop in props for path in
                    witness_files(folder, prop.name).values()], inputs,
                   "give another folder, or rename the property")
     make_folder(folder)
@@ -321,8 +321,8 @@ def timed_assumptions(timed: bool, o: AnalyzeOptions = AnalyzeOptions()) -> Assu
              if said]
     if given and not timed:
         raise SettingError(given[0], "an assumption of the timed verdicts: add --timed")
-    return Assumptions(seconds_option(o.ack_within, "--ack-within"),
-                       seconds_option(o.report_gap, "--report-gap"), o.fair_reports,
+    return Assumptions(seconds_setting(o.ack_within, "ack_within"),
+                       seconds_setting(o.report_gap, "report_gap"), o.fair_reports,
                        not o.urgency_only)
 
 

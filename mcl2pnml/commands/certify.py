@@ -79,7 +79,7 @@ def certify(mission: Path, options: CertifyOptions = CertifyOptions(), *,
         raise SettingError("mission", f"'{mission}' is not a mission (.mcl); to re-check a "
                                       "certificate, add --check NET.pnml")
     output = o.output or pipeline.certificate_beside(mission)
-    check_outputs([("-o", output)], [("the mission", mission)])
+    check_outputs([("output", output)], [("the mission", mission)])
     cert, net, problems = pipeline.certify_file(mission, o.abort_pending, o.max_mission_size)
     if not problems:
         pipeline.save_certificate(cert, output)

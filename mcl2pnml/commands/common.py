@@ -7,7 +7,7 @@ from pathlib import Path
 from mcl2pnml import pipeline
 from mcl2pnml.core.bounds import (MAX_CERTIFICATE_SIZE, MAX_MISSION_SIZE,
                                   MAX_PROPERTIES_SIZE)
-from mcl2pnml.core.errors import Mcl2PnmlError, OptionError, visible
+from mcl2pnml.core.errors import Mcl2PnmlError, visible
 from mcl2pnml.core.progress import Notes, ProgressMeter, RunsBar
 from mcl2pnml.core.settings import SettingError, UsageProblem
 from mcl2pnml.core.version import __version__ as VERSION
@@ -15,7 +15,7 @@ from mcl2pnml.runtime.options import RunOptions
 
 #: What the command line takes of the layers below, through the commands alone: the
 #: errors it shows, how it quotes what a user typed, what a command says on its way.
-__all__ = ["Mcl2PnmlError", "OptionError", "SettingError", "UsageProblem", "Notes",
+__all__ = ["Mcl2PnmlError", "SettingError", "UsageProblem", "Notes",
            "ProgressMeter", "RunsBar", "VERSION", "visible", "MISSION_SIZE", "PROPERTIES_SIZE", "CERTIFICATE_SIZE",
            "FORMAT", "ENGINE", "size_text", "properties_file", "mission_net", "warned"]
 

@@ -15,7 +15,7 @@ from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes
 from mcl2pnml.core.settings import SettingError
-from mcl2pnml.core.timing import Assumptions, seconds_option
+from mcl2pnml.core.timing import Assumptions, seconds_setting
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 
@@ -69,9 +69,9 @@ def compile_timing(fmt: str, ack_within: str | None, report_gap: str | None
     if fmt == "tapn":
         return Assumptions(
             ack_within=Assumptions.ack_within if ack_within is None
-            else seconds_option(ack_within, "--ack-within"),
+            else seconds_setting(ack_within, "ack_within"),
             report_gap=Assumptions.report_gap if report_gap is None
-            else seconds_option(report_gap, "--report-gap"), priority=False)
+            else seconds_setting(report_gap, "report_gap"), priority=False)
     if ack_within is not None or report_gap is not None:
         raise SettingError("ack_within" if ack_within is not None else "report_gap",
                            "only a timed-arc net (--format tapn) says what the vehicle is "
@@ -98,8 +98,8 @@ def compile_mission(mission: Path, options: CompileOptions = CompileOptions(), *
     stem = output.with_suffix("") if output.suffix else output
     extra = None if o.properties is None else properties_file(mission, o.properties)
     inputs = [("the mission", mission), ("the properties file (--properties)", extra)]
-    outputs = [("-o", output), ("--queries", o.queries)]
-    check_outputs(outputs + [("--properties", path) for path in
+    outputs = [("output", output), ("queries", o.queries)]
+    check_outputs(outputs + [("properties", path) for path in
                              (property_query_files(stem).values() if o.properties is not None
                               else ())], inputs)
     # its warnings before anything is written
@@ -107,7 +107,7 @@ def compile_mission(mission: Path, options: CompileOptions = CompileOptions(), *
     warned(mission, checked, o.strict, notes)
     net, props = _compiled_with_properties(mission, checked, extra, o)
     if timing is not None:   # the queries beside the net: none of them an input
-        check_outputs(outputs + [("-o", path) for path in
+        check_outputs(outputs + [("output", path) for path in
                                  query_paths(net, output, timing, props)],
                       inputs)
     opened = None if o.expand == "all" else tuple(n for n in o.expand.split(",") if n)

@@ -124,7 +124,7 @@ def _checked(mission: Path, o: CampaignOptions, notes: Notes) -> tuple[Path | No
         world = beside
         notes(f"world: {world}, the one beside the mission (--world to give another)")
     extra = None if o.properties is None else properties_file(mission, o.properties)
-    check_outputs([("--table", o.table), ("--plot", o.plot)],
+    check_outputs([("table", o.table), ("plot", o.plot)],
                   [("the mission", mission), ("the vehicle model", o.model),
                    ("the world (--world)", world), ("the faults (--faults)", o.faults),
                    ("the properties file (--properties)", extra)])

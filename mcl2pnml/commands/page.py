@@ -73,7 +73,7 @@ def show(what: str, options: ShowOptions = ShowOptions(), *,
     shown = pipeline.show_nets(what, with_run=o.run_log is not None, net_id=o.net_id,
                                lenient=o.lenient, max_mission_size=o.max_mission_size)
     output = o.output or Path(f"{shown.title}.html")
-    check_outputs([("-o", output), ("--graph-json", o.graph_json)],
+    check_outputs([("output", output), ("graph_json", o.graph_json)],
                   [("the run log (--run)", o.run_log),
                    ("the net or mission", what if Path(what).is_file() else None)])
     pipeline.save_show_page(output, shown, o.run_log)

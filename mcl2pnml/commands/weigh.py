@@ -104,7 +104,7 @@ def odds(mission: Path, model_path: Path, options: OddsOptions = OddsOptions(), 
         raise SettingError("mission", f"'{mission}' is not a mission (.mcl): the odds are a "
                                       "mission's, run as the engines run it")
     extra = None if o.properties is None else properties_file(mission, o.properties)
-    check_outputs([("--prism", o.prism)], [("the mission", mission),
+    check_outputs([("prism", o.prism)], [("the mission", mission),
                                             ("the vehicle model", model_path),
                                             ("the properties file (--properties)", extra)])
     model = VehicleModel.load(model_path)

@@ -215,17 +215,3 @@ def did_you_mean(name: str, valid: Iterable[str], what: str) -> str:
     if len(valid) > LISTED:
         listing += f", ... ({len(valid) - LISTED:,} more)"
     return f"{hint} {what}: {listing}" if hint else f"; {what}: {listing}"
-
-
-class OptionError(Exception):
-    """A command-line option that does not fit the others (``--world`` without the simulator).
-
-    Raised by the layers below the CLI, which knows nothing of click: the CLI
-    shows it as it shows its own bad options, in one line naming the option.
-    """
-
-    def __init__(self, option: str, message: str):
-        message = visible(message, keep="\n")    # it may quote a file's name
-        super().__init__(message)
-        self.option = option
-        self.message = message

@@ -45,7 +45,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO, Iterable, Iterator
 
-from mcl2pnml.core.errors import EXCERPT_WIDTH, Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import EXCERPT_WIDTH, Location, Mcl2PnmlError
+from mcl2pnml.core.settings import Quoted, SettingError
 
 #: The test hook: kill the process once an output is whole in its temporary file.
 KILL_BEFORE_REPLACE = "MCL2PNML_WRITE_KILL"
@@ -326,16 +327,17 @@ def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
                   instead: str = "give another file") -> None:
     """Refuse an output that is an input of the same command, or another of its outputs.
 
-    ``outputs`` are (option, path) pairs (``("-o", ...)``, ``("--log", ...)``),
-    ``inputs`` (what it is, path) pairs (``("the mission", ...)``); None is an
-    option not given. Writing an output that is also an input destroys the
+    ``outputs`` are (setting, path) pairs (``("output", ...)``, ``("log_path",
+    ...)``), ``inputs`` (what it is, path) pairs (``("the mission", ...)``); None is
+    a setting not given. Writing an output that is also an input destroys the
     input (``compile s.mcl -o s.mcl``); two outputs in one file keep the last.
-    One :class:`~mcl2pnml.core.errors.OptionError` naming the option, ending with
-    ``instead`` (what to do about it). Files are compared as :func:`same_file`
-    does, each looked up once, so that thousands of outputs (a counterexample's
-    files per property) cost a moment.
+    One :class:`~mcl2pnml.core.settings.SettingError` naming the setting, ending
+    with ``instead`` (what to do about it); the other output it clashes with is
+    :class:`~mcl2pnml.core.settings.Quoted`, for the CLI to name as its option.
+    Files are compared as :func:`same_file` does, each looked up once, so that
+    thousands of outputs (a counterexample's files per property) cost a moment.
     """
-    # each file's resolved path and inode -> (what it is or its option, an input?)
+    # each file's resolved path and inode -> (what it is or its setting, an input?)
     seen: dict[tuple[str, object], tuple[str, bool]] = {}
 
     def keys(path: Path) -> list[tuple[str, object]]:
@@ -344,7 +346,7 @@ def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
     for what, p in inputs:
         for key in keys(Path(p)) if p is not None else ():
             seen.setdefault(key, (what, True))
-    for option, p in outputs:
+    for setting, p in outputs:
         if p is None:
             continue
         path = Path(p)
@@ -352,13 +354,13 @@ def check_outputs(outputs: Iterable[tuple[str, str | Path | None]],
         clashes = [seen[key] for key in found if key in seen]
         clash = next((c for c in clashes if c[1]), clashes[0] if clashes else None)
         if clash is not None and clash[1]:
-            raise OptionError(option, f"'{path}' is {clash[0]}, which this command reads: "
-                                      f"writing there would destroy it; {instead}")
+            raise SettingError(setting, f"'{path}' is {clash[0]}, which this command reads: "
+                                        f"writing there would destroy it; {instead}")
         if clash is not None:
-            raise OptionError(option, f"'{path}' is also the file of {clash[0]}: give each "
-                                      "output a file of its own")
+            raise SettingError(setting, (f"'{path}' is also the file of ", Quoted(clash[0]),
+                                         ": give each output a file of its own"))
         for key in found:
-            seen.setdefault(key, (option, False))
+            seen.setdefault(key, (setting, False))
 
 
 def json_fault(error: ValueError | RecursionError) -> str:

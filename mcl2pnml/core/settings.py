@@ -1,26 +1,51 @@
 """A command's settings as the library names them, and the one error of a setting that does not fit.
 
 The library knows nothing of the command line: a setting that does not fit the
-others (``workers`` with a ``scheduler``) is a :class:`SettingError` naming the
-setting as the commands' options dataclasses name it; the CLI shows it as its own
-bad option, the setting mapped to the option a user typed (``--workers``).
+others (``workers`` with a ``scheduler``), at any layer (a ``connect`` address
+that is none, an ``output`` that is an input), is a :class:`SettingError` naming
+the setting as the commands' options dataclasses name it; the CLI shows it as its
+own bad option, the setting mapped to the option a user typed (``--workers``).
 """
 from __future__ import annotations
 
-from mcl2pnml.core.errors import OptionError
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+from mcl2pnml.core.errors import visible
 
 
-class SettingError(OptionError):
-    """A setting that does not fit the others, named by ``setting`` (``max_memory``).
+@dataclass(frozen=True)
+class Quoted:
+    """Another setting a :class:`SettingError`'s message names (``check_outputs``: "is
+    also the file of ``log_path``"), which the CLI names as its option (``--log``)."""
 
-    An :class:`~mcl2pnml.core.errors.OptionError` too, so that whatever catches the
-    errors of options catches it: its ``option`` is the setting's name until the CLI
-    names the option.
+    setting: str
+
+
+class SettingError(Exception):
+    """A setting that does not fit the others, named by ``setting`` (``max_memory``,
+    ``connect``, ``output``), the one error of a setting the layers below the CLI raise.
+
+    ``message`` is its text, or its pieces: text, and the :class:`Quoted` settings it
+    names. Its ``message`` reads each setting by its name, as a library user knows it;
+    :meth:`worded` reads them as the caller names them: the CLI shows it as its own
+    bad option, in one line naming the option typed (``--max-memory``, ``-o``).
     """
 
-    def __init__(self, setting: str, message: str):
-        super().__init__(setting, message)
+    def __init__(self, setting: str, message: str | Sequence[str | Quoted]):
         self.setting = setting
+        self.pieces = (message,) if isinstance(message, str) else tuple(message)
+        self.message = self.worded(lambda quoted: quoted)
+        super().__init__(self.message)
+
+    def __reduce__(self):   # pickled whole (a campaign's worker raises it), not as its text
+        return SettingError, (self.setting, self.pieces)
+
+    def worded(self, name: Callable[[str], str]) -> str:
+        """The message, each setting it quotes written ``name(setting)``; the text's
+        control characters escaped, as it may quote a file's name."""
+        return "".join(visible(piece, keep="\n") if isinstance(piece, str)
+                       else name(piece.setting) for piece in self.pieces)
 
 
 class UsageProblem(Exception):

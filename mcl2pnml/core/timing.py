@@ -44,9 +44,9 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Mapping
 
-from mcl2pnml.core.errors import OptionError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import EventKind, read_transition
+from mcl2pnml.core.settings import SettingError
 
 #: The longest acknowledgement delay and report gap an option may set, in seconds.
 MAX_ASSUMED = 1_000_000
@@ -93,16 +93,18 @@ def _num(x: Fraction) -> int | float:
     return x.numerator if x.denominator == 1 else float(x)
 
 
-def seconds_option(text: str, option: str) -> Fraction:
-    """A number of seconds as an option gives it: finite, 0 or more, at most a million."""
+def seconds_setting(text: str, setting: str) -> Fraction:
+    """A number of seconds as a setting writes it (``ack_within``): finite, 0 or more, at
+    most a million; one that is not is a :class:`~mcl2pnml.core.settings.SettingError`
+    of ``setting``."""
     try:
         value = Fraction(text)
     except (ValueError, ZeroDivisionError):
-        raise OptionError(option, f"'{text}' is not a number of seconds") from None
+        raise SettingError(setting, f"'{text}' is not a number of seconds") from None
     if value < 0 or value > MAX_ASSUMED:
-        raise OptionError(option, f"'{text}' is not between 0 and {MAX_ASSUMED:,} seconds")
+        raise SettingError(setting, f"'{text}' is not between 0 and {MAX_ASSUMED:,} seconds")
     if value.denominator > 1_000_000:
-        raise OptionError(option, f"'{text}' is finer than a microsecond")
+        raise SettingError(setting, f"'{text}' is finer than a microsecond")
     return value
 
 
@@ -135,7 +137,9 @@ def _unit(values) -> Fraction:
         q = 10 ** digits
         if all((Fraction(v) * q).denominator == 1 for v in values):
             return Fraction(1, q)
-    raise OptionError("--time", "a time bound is finer than a microsecond")
+    # no setting of its own (a bound of the mission's, or an assumption): "time", which
+    # the CLI has always printed "--time"
+    raise SettingError("time", "a time bound is finer than a microsecond")
 
 
 def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedNet:

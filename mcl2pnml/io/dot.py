@@ -14,7 +14,7 @@ from pathlib import Path
 
 import graphviz
 
-from mcl2pnml.core.errors import OptionError
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.files import atomic_write_bytes, atomic_write_text
 from mcl2pnml.core.net import Net
 
@@ -53,11 +53,11 @@ INSTALL_DOT = ("install graphviz (apt-get install graphviz, dnf install graphviz
                "brew install graphviz, or https://graphviz.org/download/)")
 
 
-def dot_missing(option: str, without: str) -> OptionError:
-    """The one message when ``option`` needs graphviz's ``dot`` program and it is not on
+def dot_missing(setting: str, without: str) -> SettingError:
+    """The one message when ``setting`` needs graphviz's ``dot`` program and it is not on
     the PATH: what is missing, how to install it, and (``without``) what works without it."""
-    return OptionError(option, f"graphviz's 'dot' program is not installed (no 'dot' on "
-                               f"the PATH): {INSTALL_DOT}; {without}")
+    return SettingError(setting, f"graphviz's 'dot' program is not installed (no 'dot' on "
+                                 f"the PATH): {INSTALL_DOT}; {without}")
 
 
 def to_image(drawing: str, fmt: str) -> bytes:
@@ -65,8 +65,8 @@ def to_image(drawing: str, fmt: str) -> bytes:
     try:
         return graphviz.pipe("dot", fmt, drawing.encode())
     except graphviz.ExecutableNotFound:
-        raise dot_missing("--format", "the formats pnml, tina, lola and dot (the source) "
-                                      "work without it") from None
+        raise dot_missing("fmt", "the formats pnml, tina, lola and dot (the source) "
+                                 "work without it") from None
 
 
 def to_svg(drawing: str) -> bytes:

@@ -25,8 +25,9 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.timing import Assumptions
 
 
@@ -82,13 +83,13 @@ class Format:
         given = {}
         if lenient:
             if not self.lenient:
-                raise OptionError("--lenient", f"a {self.title} file has one reading; leave "
-                                               "out --lenient")
+                raise SettingError("lenient", f"a {self.title} file has one reading; leave "
+                                              "out --lenient")
             given["lenient"] = True
         if net_id is None:
             return self._function(self.reader)(path, **given)
         if not self.several:
-            raise OptionError("--net", f"a {self.title} file holds one net; leave out --net")
+            raise SettingError("net_id", f"a {self.title} file holds one net; leave out --net")
         return self._function(self.reader)(path, net_id, **given)
 
     def write(self, net: Net, path: str | Path, options: SaveOptions = SaveOptions()) -> list[str]:

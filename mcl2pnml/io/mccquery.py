@@ -56,10 +56,11 @@ from html import escape as _escape
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, read_bytes
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES, MissionPlace
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.io import ids
 
 if TYPE_CHECKING:
@@ -173,8 +174,8 @@ def mission_properties(net: Net, tool: str = "verifypn") -> tuple[Property, ...]
     """The three properties of the module's docstring, for the compiled mission ``net``,
     its deadlock inside a formula written for ``tool`` (a key of :data:`TOOLS`)."""
     if tool not in TOOLS:
-        raise OptionError("--queries-for", f"no tool '{tool}'; the queries are written for "
-                                           f"{' or '.join(TOOLS)}")
+        raise SettingError("tool", f"no tool '{tool}'; the queries are written for "
+                                   f"{' or '.join(TOOLS)}")
     name = ids.encode(net.name or "net")
     end = end_formula(net)
     stuck = dead(net) if tool == "lola" else _e("deadlock")

@@ -66,8 +66,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import read_bytes
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.runtime.limits import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT  # noqa: F401
 
 PROTOCOL = 1
@@ -231,14 +232,16 @@ class _Lines:
 
 # -- keys and certificates ----------------------------------------------------------------
 
-def read_secret(path: Path, option: str = "--secret") -> bytes:
-    """The shared secret in ``path``: a file only its owner can read, of 16 bytes or more."""
+def read_secret(path: Path, setting: str = "secret") -> bytes:
+    """The shared secret in ``path``: a file only its owner can read, of 16 bytes or more
+    (a file that cannot be read: a :class:`~mcl2pnml.core.settings.SettingError` of
+    ``setting``)."""
     where = Location(str(path))
     key = read_bytes(path, "key file").strip()    # a regular file only: a FIFO would block
     try:
         mode = os.stat(path).st_mode
     except OSError as e:
-        raise OptionError(option, f"cannot read the key file {path}: {e.strerror or e}") \
+        raise SettingError(setting, f"cannot read the key file {path}: {e.strerror or e}") \
             from None
     if mode & (stat.S_IRWXG | stat.S_IRWXO):
         raise Mcl2PnmlError(f"the key file can be read by its group or others (mode "
@@ -253,16 +256,16 @@ def read_secret(path: Path, option: str = "--secret") -> bytes:
 
 def _tls_files(context: ssl.SSLContext, ca: Path | None, cert: Path | None,
                key: Path | None) -> ssl.SSLContext:
-    for option, path, load in (("--tls-ca", ca, lambda: context.load_verify_locations(ca)),
-                               ("--tls-cert", cert,
-                                lambda: context.load_cert_chain(cert, key))):
+    for setting, path, load in (("tls_ca", ca, lambda: context.load_verify_locations(ca)),
+                                ("tls_cert", cert,
+                                 lambda: context.load_cert_chain(cert, key))):
         if path is None:
             continue
         try:
             load()
         except (OSError, ssl.SSLError) as e:
-            raise OptionError(option, f"cannot use {path}: {getattr(e, 'reason', None) or e}") \
-                from None
+            raise SettingError(setting, f"cannot use {path}: "
+                                        f"{getattr(e, 'reason', None) or e}") from None
     return context
 
 
@@ -270,13 +273,13 @@ def client_tls(options: LinkOptions) -> ssl.SSLContext | None:
     """The controller's TLS: the bridge's certificate checked against ``tls_ca`` (None: no TLS)."""
     if options.tls_ca is None:
         if options.tls_cert or options.tls_key:
-            raise OptionError("--tls-cert" if options.tls_cert else "--tls-key",
-                              "TLS needs --tls-ca, the authority that signed the bridge's "
-                              "certificate (--tls-cert and --tls-key are this end's own)")
+            raise SettingError("tls_cert" if options.tls_cert else "tls_key",
+                               "TLS needs --tls-ca, the authority that signed the bridge's "
+                               "certificate (--tls-cert and --tls-key are this end's own)")
         return None
     if (options.tls_cert is None) != (options.tls_key is None):
-        raise OptionError("--tls-key" if options.tls_cert else "--tls-cert",
-                          "a certificate goes with its key: give both --tls-cert and --tls-key")
+        raise SettingError("tls_key" if options.tls_cert else "tls_cert",
+                           "a certificate goes with its key: give both --tls-cert and --tls-key")
     context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)      # checks certificate and host name
     context.minimum_version = ssl.TLSVersion.TLSv1_2
     return _tls_files(context, options.tls_ca, options.tls_cert, options.tls_key)
@@ -298,10 +301,10 @@ def parse_address(text: str) -> tuple[str, int]:
     if host.startswith("[") and host.endswith("]"):
         host = host[1:-1]
     elif ":" in host:
-        raise OptionError("--connect", f"'{text}': an IPv6 address goes in brackets; {valid}")
+        raise SettingError("connect", f"'{text}': an IPv6 address goes in brackets; {valid}")
     if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise OptionError("--connect", f"'{text}' is not an address; {valid} (a port from "
-                                       "1 to 65535)")
+        raise SettingError("connect", f"'{text}' is not an address; {valid} (a port from "
+                                      "1 to 65535)")
     return host, int(port)
 
 

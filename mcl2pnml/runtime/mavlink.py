@@ -60,7 +60,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping
 
-from mcl2pnml.core.errors import Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
                                   Reported, VehicleFault)
 from mcl2pnml.runtime.autopilot import AutopilotMapping, Binding
@@ -1097,8 +1098,8 @@ def _mavutil():
         # is connected
         from pymavlink import mavutil
     except ImportError:
-        raise OptionError("--vehicle", "a MAVLink autopilot needs pymavlink: pip install "
-                          "'mcl2pnml[mavlink]'") from None
+        raise SettingError("vehicle", "a MAVLink autopilot needs pymavlink: pip install "
+                           "'mcl2pnml[mavlink]'") from None
     return mavutil
 
 
@@ -1110,14 +1111,14 @@ def _url(address: str) -> str:
         # pymavlink's links take a host name or an IPv4 address (no IPv6)
         if not sep or not host or ":" in host or not port.isdigit() \
                 or not 0 < int(port) < 65536:
-            raise OptionError("--connect", f"'{address}': write {scheme}:HOST:PORT, as "
-                              f"{scheme}:127.0.0.1:{5760 if scheme == 'tcp' else 14550}")
+            raise SettingError("connect", f"'{address}': write {scheme}:HOST:PORT, as "
+                               f"{scheme}:127.0.0.1:{5760 if scheme == 'tcp' else 14550}")
         return f"{scheme}:{host}:{port}"
     if scheme == "serial":
         device, _, baud = rest.partition(":")
         if not device or (baud and not baud.isdigit()):
-            raise OptionError("--connect", f"'{address}': write serial:DEVICE[:BAUD], as "
-                              "serial:/dev/ttyACM0:115200")
+            raise SettingError("connect", f"'{address}': write serial:DEVICE[:BAUD], as "
+                               "serial:/dev/ttyACM0:115200")
         return f"serial:{device}:{baud or 115200}"
-    raise OptionError("--connect", f"'{address}': an autopilot is reached at tcp:HOST:PORT, "
-                      "udp:HOST:PORT or serial:DEVICE[:BAUD]")
+    raise SettingError("connect", f"'{address}': an autopilot is reached at tcp:HOST:PORT, "
+                       "udp:HOST:PORT or serial:DEVICE[:BAUD]")

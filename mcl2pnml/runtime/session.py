@@ -19,8 +19,9 @@ from dataclasses import fields, replace
 from pathlib import Path
 from typing import IO, Callable
 
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, OptionError
+from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, check_outputs
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.runtime import interrupts, journal as journals
 from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
@@ -40,7 +41,7 @@ def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
     if options.resume is None:
         return options, None
     if options.journal is not None:
-        raise OptionError("--journal", "--resume appends to its own journal; leave out --journal")
+        raise SettingError("journal", "--resume appends to its own journal; leave out --journal")
     loaded = journals.load(options.resume)
     header = loaded.header
     given = {"engine": options.engine, "vehicle": options.vehicle,
@@ -62,25 +63,25 @@ def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
 def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
     kind = kind_of(options.vehicle)
     if kind.realtime and (options.resume or options.journal):
-        raise OptionError("--resume" if options.resume else "--journal",
-                          "a journal replays a vehicle of its own (sim or a script); a real "
-                          "vehicle's run cannot be replayed")
+        raise SettingError("resume" if options.resume else "journal",
+                           "a journal replays a vehicle of its own (sim or a script); a real "
+                           "vehicle's run cannot be replayed")
     if options.world and not kind.takes_world:
-        raise OptionError("--world", "a world is for the simulator (--vehicle sim)")
+        raise SettingError("world", "a world is for the simulator (--vehicle sim)")
     if options.sim_primitives and not kind.takes_world:
-        raise OptionError("--sim-primitives", "simulated primitives are for the simulator "
-                          "(--vehicle sim)")
+        raise SettingError("sim_primitives", "simulated primitives are for the simulator "
+                           "(--vehicle sim)")
     if not kind.realtime:
         for name in ("connect",) + _LINK:
             if getattr(options, name) != _DEFAULTS[name]:
-                raise OptionError(f"--{name.replace('_', '-')}", "only for a real vehicle "
-                                  "(--vehicle bridge:MAPPING.json --connect HOST:PORT)")
+                raise SettingError(name, "only for a real vehicle "
+                                   "(--vehicle bridge:MAPPING.json --connect HOST:PORT)")
     if options.faults and kind.realtime:
-        raise OptionError("--faults", "faults are injected into a simulated vehicle (sim, a "
-                                      "vehicle model, a script), not a real one")
+        raise SettingError("faults", "faults are injected into a simulated vehicle (sim, a "
+                                     "vehicle model, a script), not a real one")
     if options.faults and (options.journal or options.resume):
-        raise OptionError("--faults", "a journal does not record injected faults: a run "
-                                      "with --faults is replayed by its seed, not resumed")
+        raise SettingError("faults", "a journal does not record injected faults: a run "
+                                     "with --faults is replayed by its seed, not resumed")
     # the opening of the link counts against the run's time limit too (wall seconds for a bridge)
     link = LinkOptions(**{name: getattr(options, name) for name in _LINK}, max_time=options.max_time)
     vehicle = kind.build(options.vehicle, options.connect, options.world, link)
@@ -145,7 +146,7 @@ def _check_primitives(engine: Engine, vehicle, mission: Path, options: RunOption
                        '--vehicle SCRIPT.json ({"PRIMITIVE": ["ok@5", "fail@3", "never"]})'))
         message = (f"the mission uses '{missing}', which {who} does not offer; it offers "
                    f"{', '.join(sorted(offered))}{hint}")
-        raise OptionError("--vehicle", message)
+        raise SettingError("vehicle", message)
     vehicle.check_primitives(needed)
     if isinstance(vehicle, LiveVehicle):    # before anything is sent to a real vehicle
         vehicle.check_enables(engine.enable_arguments())
@@ -193,7 +194,7 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
         note(f"world: {beside.world}, the one beside the mission (--world to give another)")
     options, loaded = resumed(beside)
     # no output may be a file the run reads, nor the other output (--journal j --log j)
-    check_outputs([("--journal", options.journal), ("--log", log_path)],
+    check_outputs([("journal", options.journal), ("log_path", log_path)],
                   [("the mission", mission), ("the world (--world)", options.world),
                    ("the faults (--faults)", options.faults),
                    ("the vehicle script (--vehicle)", kind_of(options.vehicle).source(

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
-from mcl2pnml.core.errors import OptionError
+from mcl2pnml.core.settings import SettingError
 
 if TYPE_CHECKING:   # the table names the kinds; building one imports what it needs
     from mcl2pnml.runtime.aal import LiveVehicle, Vehicle
@@ -48,8 +48,8 @@ def _simulator(spec: str, connect: str | None, world: Path | None,
     from mcl2pnml.runtime.simulator import AUVSimulator, World   # 20 ms: see VEHICLES
     seed = seed_of(spec)
     if spec != "sim" and seed is None:
-        raise OptionError("--vehicle", f"'{spec[:80]}': the seed after sim@ is a whole number "
-                                       "(sim@SEED)")
+        raise SettingError("vehicle", f"'{spec[:80]}': the seed after sim@ is a whole number "
+                                      "(sim@SEED)")
     w = World.load(world) if world else World()
     return AUVSimulator(w if seed is None else replace(w, seed=seed))
 
@@ -70,8 +70,8 @@ def _bridge(spec: str, connect: str | None, world: Path | None,
     """The mapped vehicle; its link is checked (address, key file, certificates), not opened."""
     from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping   # 33 ms
     if connect is None:
-        raise OptionError("--connect", "a bridge needs --connect HOST:PORT (the bridge server "
-                                       "on the vehicle)")
+        raise SettingError("connect", "a bridge needs --connect HOST:PORT (the bridge server "
+                                      "on the vehicle)")
     transport = TcpTransport(connect, link)
     return MappedVehicle(VehicleMapping.load(spec[len("bridge:"):]), transport)
 
@@ -84,11 +84,11 @@ def _mavlink(spec: str, connect: str | None, world: Path | None,
     from mcl2pnml.runtime.mavlink import MavlinkVehicle
     from mcl2pnml.runtime.simulator import World
     if connect is None:
-        raise OptionError("--connect", "an autopilot needs --connect tcp:HOST:PORT (or "
-                                       "udp:HOST:PORT, serial:DEVICE[:BAUD]); ArduSub's "
-                                       "simulator serves tcp:127.0.0.1:5760")
+        raise SettingError("connect", "an autopilot needs --connect tcp:HOST:PORT (or "
+                                      "udp:HOST:PORT, serial:DEVICE[:BAUD]); ArduSub's "
+                                      "simulator serves tcp:127.0.0.1:5760")
     if link.secret or link.tls_ca or link.tls_cert or link.tls_key:
-        raise OptionError("--secret" if link.secret else "--tls-ca",
+        raise SettingError("secret" if link.secret else "tls_ca",
                           "the bridge's link takes a secret and TLS; MAVLink does not")
     path = _mapping_path(spec)
     mapping = AutopilotMapping.load(path) if path else AutopilotMapping.ardusub()

@@ -51,9 +51,10 @@ from typing import Collection, Iterator, Mapping, Sequence
 
 import graphviz
 
-from mcl2pnml.core.errors import OptionError, did_you_mean
+from mcl2pnml.core.errors import did_you_mean
 from mcl2pnml.core.net import Arc, ArcKind, Net, Place, Transition
 from mcl2pnml.core.payloads import read_transition
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.io.dot import node_name
 
 TOKEN = "\u25cf"
@@ -831,11 +832,11 @@ EXPAND_ALL = "all"
 
 def check_expand(clusters: Mapping[str, Sequence[str]], expand: Collection[str]) -> list[str]:
     """The boxes ``expand`` names, each one of ``clusters``; a name of none is an
-    :class:`OptionError` naming the boxes there are."""
+    :class:`~mcl2pnml.core.settings.SettingError` of ``expand`` naming the boxes there are."""
     for name in expand:
         if name not in clusters:
-            raise OptionError("--expand", f"no box {name!r} in this drawing"
-                              + did_you_mean(name, clusters, "boxes"))
+            raise SettingError("expand", f"no box {name!r} in this drawing"
+                               + did_you_mean(name, clusters, "boxes"))
     return list(expand)
 
 

@@ -148,8 +148,8 @@ def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) ->
     from mcl2pnml.io.dot import dot_missing
     from mcl2pnml.view.drawing import border_out, dot_graph, instance_clusters
     if not dot_available():
-        raise dot_missing("--layout", "the layouts layers and none work without it, and auto "
-                                      "lays out in layers when it is missing")
+        raise dot_missing("layout_engine", "the layouts layers and none work without it, "
+                                           "and auto lays out in layers when it is missing")
     boxes = border_out(net, instance_clusters(net)) if clusters is None else {}
     if not boxes:
         graph = _run_dot(dot_graph(net, clusters=clusters, legend=False, expand=None).source)
