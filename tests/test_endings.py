@@ -134,11 +134,18 @@ def launched(folder: Path, mission: Path, *options: str,
     command = [sys.executable, "-m", "mcl2pnml", "run", str(mission),
                "--log", str(folder / "run.jsonl"), *options]
     streams = {"stdout": (folder / "run.out").open("w"), "stderr": (folder / "run.err").open("w")}
+
+    def as_a_shell_starts_it() -> None:
+        # every signal tested at its default, whatever the test process ignores (an ignored
+        # signal is inherited, and a run keeps ignoring it: in the whole suite, SIGINT was
+        # ignored in a worker by the time these tests ran), but ``ignoring``
+        for sig in SIGNALS:
+            signal.signal(sig, signal.SIG_DFL)
+        if ignoring is not None:
+            signal.signal(ignoring, signal.SIG_IGN)
     try:
-        process = subprocess.Popen(
-            command, cwd=ROOT, stdin=subprocess.DEVNULL, **streams,
-            preexec_fn=None if ignoring is None else lambda: signal.signal(ignoring,
-                                                                         signal.SIG_IGN))
+        process = subprocess.Popen(command, cwd=ROOT, stdin=subprocess.DEVNULL, **streams,
+                                   preexec_fn=as_a_shell_starts_it)
     finally:
         for stream in streams.values():
             stream.close()      # the child has its own copies
