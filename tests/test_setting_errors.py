@@ -11,6 +11,7 @@ import pytest
 
 import mcl2pnml
 import mcl2pnml.analysis
+from mcl2pnml.cli import main
 from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.settings import Quoted, SettingError
 from mcl2pnml.io.formats import FORMATS
@@ -42,10 +43,9 @@ def _texts(node: ast.AST) -> list[str]:
     return []
 
 
-def options_named(source: str) -> list[str]:
-    """Each setting of ``source`` spelled as a command-line option (``"--connect"``): the
-    first argument of a call of :data:`NAMING_A_SETTING`, an output's name given to
-    ``check_outputs``."""
+def settings_named(source: str) -> list[str]:
+    """Each setting ``source`` names by a string: the first argument of a call of
+    :data:`NAMING_A_SETTING`, an output's name given to ``check_outputs``."""
     found = []
     for call in (n for n in ast.walk(ast.parse(source)) if isinstance(n, ast.Call)):
         name = _called(call)
@@ -56,17 +56,36 @@ def options_named(source: str) -> list[str]:
         elif name == "check_outputs" and call.args:
             found += [text for pair in ast.walk(call.args[0]) if isinstance(pair, ast.Tuple)
                       and pair.elts for text in _texts(pair.elts[0])]
-    return [text for text in found if text.startswith("-")]
+    return found
+
+
+def options_named(source: str) -> list[str]:
+    """The settings of ``source`` spelled as command-line options (``"--connect"``)."""
+    return [text for text in settings_named(source) if text.startswith("-")]
+
+
+def _below_the_cli() -> dict[str, str]:
+    """The source of every module of the package but the CLI's, by its path."""
+    folders = [Path(mcl2pnml.__file__).parent, *map(Path, mcl2pnml.analysis.__path__)]
+    return {str(path): path.read_text(encoding="utf-8") for folder in folders
+            for path in sorted(folder.rglob("*.py"))
+            if path.name not in CLI_MODULES or path.parent != folders[0]}
 
 
 def test_no_module_below_the_cli_names_an_option():
     assert options_named('raise SettingError("--x" if a else "y", "m")') == ["--x"]
     assert options_named('check_outputs([("-o", p)], [])') == ["-o"]
-    folders = [Path(mcl2pnml.__file__).parent, *map(Path, mcl2pnml.analysis.__path__)]
-    offences = {str(path): named for folder in folders for path in sorted(folder.rglob("*.py"))
-                if path.name not in CLI_MODULES or path.parent != folders[0]
-                for named in [options_named(path.read_text(encoding="utf-8"))] if named}
+    offences = {path: named for path, source in _below_the_cli().items()
+                for named in [options_named(source)] if named}
     assert offences == {}
+
+
+def test_every_setting_named_below_the_cli_is_a_parameter_the_cli_names():
+    # "time" (a time bound finer than a microsecond) has no option: printed "--time"
+    parameters = {p.name for command in main.commands.values() for p in command.params}
+    unknown = {path: names for path, source in _below_the_cli().items()
+               for names in [set(settings_named(source)) - parameters - {"time"}] if names}
+    assert unknown == {}
 
 
 def test_a_runtime_setting_error_is_shown_as_its_option(tmp_path):
