@@ -504,6 +504,13 @@ def test_the_example_server_refuses_a_key_file_others_can_read(tmp_path, capsys)
     assert "can be read by its group or others" in capsys.readouterr().err
 
 
+def test_the_example_server_names_a_certificate_it_cannot_use(tmp_path, capsys):
+    missing = str(tmp_path / "missing.pem")
+    assert bridge_server.main(["--port", "0", "--tls-cert", missing, "--tls-key", missing]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("bridge: --tls-cert: cannot use ") and err.count("\n") == 1, err
+
+
 @pytest.mark.timeout(20)
 def test_a_key_file_that_is_a_fifo_is_refused_before_it_blocks(tmp_path):
     import os

@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Callable
 
 from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.settings import SettingError
 from mcl2pnml.runtime.link import (HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT, BadLine,
                                    Deadline, Link, LinkBroken, LinkOptions, Side, encode,
                                    read_secret, server_tls, tls_handshake)
@@ -283,6 +284,9 @@ def main(argv: list[str] | None = None) -> int:
                        options=options, secret=secret, tls=tls)
     except (Mcl2PnmlError, OSError) as e:
         print(f"bridge: {e}", file=sys.stderr)
+        return 2
+    except SettingError as e:   # a key or certificate file refused: named as our option
+        print(f"bridge: --{e.setting.replace('_', '-')}: {e.message}", file=sys.stderr)
         return 2
     print(f"bridge ({args.middleware}) on {args.host} port {server.server_address[1]}"
           f"{', authenticated' if secret else ''}{', TLS' if tls else ''}; Ctrl-C to stop",
