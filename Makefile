@@ -85,7 +85,7 @@ demo: setup
 # loads a browser), since a third of their time is spent waiting on peer
 # tools, the browser and the autopilot (on 2 cores: 5:35 with 4 workers, 5:57 with 3;
 # 5:22 with 6, where tests that time a wait fail under the load);
-# a single file runs in one process with `$(PY) -m pytest tests/FILE.py`
+# a single file runs in one process with `$(PY) -m pytest tests/GROUP/FILE.py`
 # --dist worksteal: a worker that runs out takes tests queued on the others, so that the
 # run does not end on one worker's tail of long tests
 TEST_WORKERS := -n $(shell n=$$(nproc 2>/dev/null || echo 1); echo $$(( n < 2 ? n + 2 : 4 ))) \

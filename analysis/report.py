@@ -58,7 +58,7 @@ WORK_LIMIT = 20_000_000
 #: of 20,000 places, 8 * 10^8: minutes), a subproblem a copy of its parent's set.
 SIPHON_WORK = 50_000_000
 
-# What the stages hold, in bytes, measured on the nets of tests/bignets.py at
+# What the stages hold, in bytes, measured on the nets of tests/support/bignets.py at
 # 10^5 places and rounded up: the estimates a stage is refused or left out by.
 #: the structure (pre, post, incidence both ways, pre- and post-sets) per arc and per node
 STRUCTURE_ARC, STRUCTURE_NODE = 900, 700

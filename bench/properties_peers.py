@@ -41,7 +41,7 @@ Every answer is compared with our verdict (query id = property name); the
 "verdicts" column says "agree" or which answers differ or are missing. A
 disagreement is reported, not fatal: this LoLA build has a known fault (an
 until of equal sides, ``a U a``, answered wrongly;
-tests/test_properties_peers.py). A call that passes :data:`TIMEOUT` seconds
+tests/peers/test_properties_peers.py). A call that passes :data:`TIMEOUT` seconds
 counts as timed out: the cell says so and its time is not summed. A peer not
 found (``../shared/peers/bin`` or PATH) is reported absent.
 """

@@ -32,7 +32,7 @@ stubborn sets.
 
 Dead markings, as the contest's 2021 consensus answers read them (every one
 of its 2,223 verdicts on the 19 models in ``../shared/external-nets/mcc-queries``
-agrees, tests/test_mcc.py): in CTL a path is maximal, so a dead marking has
+agrees, tests/analysis/test_mcc.py): in CTL a path is maximal, so a dead marking has
 no next marking (``EX`` false, ``AX`` true there) and ends its path (``EG φ``
 holds there where ``φ`` does); in LTL a finite path is extended by repeating
 its dead marking. The two differ only on ``X`` at a dead marking: a formula of

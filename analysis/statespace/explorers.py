@@ -24,7 +24,7 @@ and the plain-Python reference elsewhere; the function then takes it as
 
 Adding an explorer is one module with such a function and one entry in
 :data:`EXPLORERS`; the chooser, ``analyze --explorer`` and the shared test
-suite (tests/test_statespace.py, run against every entry) take it from
+suite (tests/analysis/test_statespace.py, run against every entry) take it from
 here.
 """
 from __future__ import annotations

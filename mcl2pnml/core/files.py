@@ -11,7 +11,7 @@ leaves none). Two outputs do not, by their nature: ``run --journal``,
 which is appended to a flushed line at a time so that a killed run can be
 resumed (:mod:`mcl2pnml.runtime.journal`; a torn last line is dropped on resume),
 and what goes to standard output (``--json``, ``template`` without
-``-o``), which is the shell's to redirect. tests/test_resume.py fills
+``-o``), which is the shell's to redirect. tests/runtime/test_resume.py fills
 the disk at the last moment and fails a PNML half-way: the old file
 stays, and no partial or temporary file is left.
 

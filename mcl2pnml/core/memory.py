@@ -11,7 +11,7 @@ partial answer or a refusal, before the kernel kills it.
 
 The estimates of :func:`load_estimate` are what reading takes per element
 of the file, measured on PNML, TINA and LoLA files of 10^5 and 10^6 places
-(``tests/bignets.py`` writes them) and on compiled missions, and rounded up:
+(``tests/support/bignets.py`` writes them) and on compiled missions, and rounded up:
 a parsed XML element and the node or arc it becomes cost 1 to 2 KB.
 """
 from __future__ import annotations

@@ -37,7 +37,7 @@ Conventions of the drawings (a legend is part of every figure):
 * a place that many transitions give tokens back to (a mutex) is drawn again,
   dashed and small, beside each of them, like PNML's reference places.
 
-``tests/test_drawings.py`` holds every template, Figs. 1-4 and every example
+``tests/view/test_drawings.py`` holds every template, Figs. 1-4 and every example
 to dot's own layout: no label on an arc, a node or another label, no node on
 a box's border, no arc through a node.
 """
@@ -77,7 +77,7 @@ COPY_RETURNS = 3
 
 #: Font sizes (points) of the drawings: every text at least :data:`SMALL`, and the
 #: spaces between nodes small beside it, so that a figure fitted to a 1920 x 1080
-#: slide shows every text at least 14 pixels high (``tests/test_drawings.py``).
+#: slide shows every text at least 14 pixels high (``tests/view/test_drawings.py``).
 FONT = 12
 SMALL = 11
 TITLE = 16

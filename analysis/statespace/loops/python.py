@@ -5,7 +5,7 @@ The same algorithms as the C loops (``_native.c``), written to be read: a
 marking is a tuple of words (Python integers), the set of markings found a
 dict from marking to position, each transition tested on every word. It
 serves where the C extension was not built, and the shared tests run it on
-their small nets beside C (tests/test_statespace.py, test_graph_kernels.py,
+their small nets beside C (tests/analysis/test_statespace.py, test_graph_kernels.py,
 test_onthefly.py), so that the two are held to one behaviour. The order in
 which a marking tries its transitions is C's (the key index's: the free
 transitions, then those keyed on each marked place upwards), so that both

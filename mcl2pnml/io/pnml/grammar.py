@@ -24,7 +24,7 @@ Three judges, in this order:
    both schemas.
 
 A file is valid only when every judge applied finds it so. The two schemas
-admit the same documents (``tests/test_schema.py`` holds them side by side on
+admit the same documents (``tests/io/test_schema.py`` holds them side by side on
 every file we write, a corpus and its mutations), but for some orders of a
 page's children that the standard admits and libxml2, checking the official
 grammar, refuses; where both reject an element, one message says so, naming
