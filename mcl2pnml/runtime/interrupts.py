@@ -101,6 +101,9 @@ class Guard:
         self.signum: int | None = None
         self.count = 0
         self.cut = False
+        #: steps being written down (:meth:`recording`), and a cut that waits for them
+        self.held = 0
+        self.deferred: int | None = None
 
     def handle(self, signum: int, frame=None) -> None:
         """The handler of every signal of :data:`SIGNALS` while the guard is installed."""
@@ -115,6 +118,9 @@ class Guard:
             if self.phase is Phase.SECURING:
                 _say(f"mcl2pnml: {name} again: the safe state is cut short; the vehicle may "
                      "not be in its safe state")
+                if self.held:       # a step half written down: it is cut once written
+                    self.deferred = signum
+                    return
                 raise SafeStateCut(signum)
             _say(f"mcl2pnml: {name} again: the outcome is not printed")
             raise Interrupted(signum)
@@ -122,6 +128,19 @@ class Guard:
             _say(f"mcl2pnml: {name}: the safe state goes on (a third signal cuts it short)")
         else:
             _say(f"mcl2pnml: {name}: the run is ending; its log and outcome are being written")
+
+    @contextmanager
+    def recording(self) -> Iterator[None]:
+        """A step of the safe state being written down (said, and kept in the log): a cut
+        waits for the block's end, so that a step said is a step in the log."""
+        self.held += 1
+        try:
+            yield
+        finally:
+            self.held -= 1
+        if not self.held and self.deferred is not None:
+            signum, self.deferred = self.deferred, None
+            raise SafeStateCut(signum)
 
     @contextmanager
     def securing(self) -> Iterator[None]:

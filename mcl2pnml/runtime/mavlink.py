@@ -62,6 +62,7 @@ from typing import Any, Callable, Mapping
 
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.runtime import interrupts
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, LiveVehicle,
                                   Reported, VehicleFault)
 from mcl2pnml.runtime.autopilot import AutopilotMapping, Binding
@@ -962,9 +963,10 @@ class MavlinkVehicle(LiveVehicle):
 
         def step(name: str, text: str, ok: bool) -> None:
             line = f"{name}: {text}"
-            done.append(line)
-            self.log(self.clock() if self.t0 else 0.0, "safe-state", line,
-                     {"safe_state": name, "acknowledged": ok, "detail": text})
+            with interrupts.current().recording():    # said on the console and in the log
+                done.append(line)
+                self.log(self.clock() if self.t0 else 0.0, "safe-state", line,
+                         {"safe_state": name, "acknowledged": ok, "detail": text})
 
         steps = list(self.mapping.safe_state)
         while steps:

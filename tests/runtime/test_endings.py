@@ -180,6 +180,17 @@ def test_the_first_signal_stops_the_run_the_second_is_said_the_third_cuts_the_sa
     assert err[0] == "mcl2pnml: SIGINT: the safe state goes on (a third signal cuts it short)"
     assert err[1].startswith("mcl2pnml: SIGINT again: the safe state is cut short")
     assert err[-1] == "mcl2pnml: SIGHUP: the run is ending; its log and outcome are being written"
+    # a cut that comes while a step is written down waits for the step to be written
+    g = Guard()
+    with g.securing():
+        g.handle(signal.SIGTERM)
+        g.handle(signal.SIGTERM)
+        written = []
+        with pytest.raises(SafeStateCut):
+            with g.recording():
+                g.handle(signal.SIGTERM)           # the third, in the middle of a step
+                written.append("hold")             # the rest of the step still runs
+        assert written == ["hold"] and g.cut
     # a signal after the mission's own result: said, until the third cuts its safe state
     g = Guard()
     with g.securing():
