@@ -56,7 +56,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Iterable, Iterator
 
 import networkx as nx
 import numpy as np
@@ -279,34 +279,6 @@ def _cycle_states(start, trans, succ):
 
 
 
-def _turns(net: Net, prop: Property, fired: list[str], loop: int) -> list[str]:
-    """``fired`` with its cycle (``fired[loop:]``) turned until the observer starts a turn
-    in a state it started one in before: at most one turn per observer state."""
-    s = structure(net)
-    index = s.transition_index
-    preds = _truths(prop)
-    m = list(s.initial_vector())
-
-    def after(obs, tids):
-        for tid in tids:
-            if tid not in index or not s.enabled(m, index[tid]):
-                return None     # judge says why, on the sequence as given
-            s.fire(m, index[tid])
-            marking = {s.places[k]: n for k, n in enumerate(m) if n}
-            obs = step(prop, obs, *(holds(x, marking) for x in preds))
-        return obs
-
-    marking = {s.places[k]: n for k, n in enumerate(m) if n}
-    obs = after(step(prop, initial(prop.scope.kind), *(holds(x, marking) for x in preds)),
-                fired[:loop])
-    cycle, out, starts = fired[loop:], list(fired), set()
-    while cycle and obs is not None and obs is not BAD and obs not in starts:
-        starts.add(obs)
-        obs = after(obs, cycle)
-        out += cycle
-    return out
-
-
 @dataclass(frozen=True)
 class Shown:
     """How one firing sequence shows a property violated (:func:`judge`).
@@ -341,8 +313,6 @@ def judge(net: Net, prop: Property, transitions: Iterable[str],
     started one in before, since a verdict enters its loop where the markings
     allow, and the observer may need more than one turn to come back.
     """
-    if loop is not None:
-        transitions = _turns(net, prop, list(transitions), loop)
     s = structure(net)
     index = s.transition_index
     m = list(s.initial_vector())
@@ -352,11 +322,22 @@ def judge(net: Net, prop: Property, transitions: Iterable[str],
         marking = {s.places[k]: n for k, n in enumerate(m) if n}
         return tuple(holds(x, marking) for x in preds)
 
+    fired = list(transitions)
+
+    def firings() -> Iterator[str]:
+        """The sequence, then its cycle again while each turn starts the observer in a
+        state no turn started it in before (``obs`` is read as the loop below leaves it)."""
+        yield from fired
+        starts = set()
+        while loop is not None and fired[loop:] and obs is not BAD and obs not in starts:
+            starts.add(obs)
+            yield from fired[loop:]
+
     obs = step(prop, initial(prop.scope.kind), *read())
     seen = {(tuple(m), obs): 0}
     open_since = 0 if pending(prop, obs) else None   # obligations open from this step on
     k = 0
-    for k, tid in enumerate(transitions, 1):
+    for k, tid in enumerate(firings(), 1):
         if obs is BAD:
             return Shown(Shape.PREFIX, k - 1)
         if tid not in index:
