@@ -298,9 +298,11 @@ def guard(budget: Budget, what: str) -> Iterator[None]:
 
     previous = signal.signal(signal.SIGINT, on_interrupt)
     watcher = threading.Thread(target=watch, name="memory guard", daemon=True)
-    watcher.start()
     stopped = False
     try:
+        # started inside the try: a process already past the budget is interrupted
+        # while ``start`` waits for the thread to run, before the body begins
+        watcher.start()
         yield
     except _Stop:
         stopped = True

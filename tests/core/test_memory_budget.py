@@ -23,6 +23,7 @@ from mcl2pnml.analysis import report
 from mcl2pnml.analysis.structure.invariants import AnalysisLimit
 from mcl2pnml.analysis.structure.siphons import minimal_siphons
 from mcl2pnml.analysis.zoo import cycle
+from mcl2pnml.core import memory
 from mcl2pnml.core.memory import (Budget, BudgetExceeded, check_load, guard, load_estimate,
                                   resident)
 from mcl2pnml.core.structure import structure
@@ -126,6 +127,21 @@ def test_the_guard_stops_what_grows_and_lets_the_rest_run():
         total = sum(range(100_000))
     assert total == 4_999_950_000
     assert signal.getsignal(signal.SIGINT) is before       # the guard put it back
+
+
+@pytest.mark.timeout(60)
+def test_a_guard_entered_past_its_budget_stops_the_stage_and_says_so(monkeypatch):
+    # the watcher trips on its first look, at once: the interruption lands while the
+    # guard is still starting it, before the body (on a loaded machine, the first look
+    # comes before the main thread is back from starting it); the stage ends in the message
+    monkeypatch.setattr(memory, "POLL", 0.0)
+    before = signal.getsignal(signal.SIGINT)
+    for _ in range(200):
+        with pytest.raises(BudgetExceeded, match="late stopped at the memory budget"):
+            with guard(Budget(1024), "late"):
+                while True:
+                    pass
+    assert signal.getsignal(signal.SIGINT) is before
 
 
 @pytest.mark.timeout(60)
