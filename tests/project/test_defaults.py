@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 from collections import defaultdict
+from functools import lru_cache
 from pathlib import Path
 
 import pytest
@@ -52,9 +53,12 @@ def _literal(node: ast.AST | None):
 NAMED = object()
 
 
-def defaults() -> list[tuple[str, int, str, object]]:
+@lru_cache(maxsize=1)
+def defaults() -> tuple[tuple[str, int, str, object], ...]:
     """(file, line, name, literal) of every parameter default and dataclass field default
     of the package whose value is a literal."""
+    # read once for the two tests that look at every default: each parsed the whole
+    # package again (a second of CPU each)
     found = []
     for path in SOURCES:
         where = str(path.relative_to(ROOT))
@@ -74,7 +78,7 @@ def defaults() -> list[tuple[str, int, str, object]]:
                 literal = _literal(value)
                 if literal is not NAMED and not isinstance(literal, (list, tuple, dict, set)):
                     found.append((where, value.lineno, name, literal))
-    return found
+    return tuple(found)
 
 
 def test_no_default_is_written_twice():
