@@ -33,10 +33,11 @@ system-deps:
 $(STAMP): pyproject.toml analysis/statespace/loops/_native.c
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,mavlink]'
-	@# Storm checks the exact odds in the tests; where its wheel cannot be had, they skip
-	$(PY) -m pip install --quiet -e '.[storm]' \
-	  || echo "warning: could not install stormpy; the tests that compare the odds with Storm's will say so"
+	@# Storm checks the exact odds in the tests; where its wheel cannot be had, they skip.
+	@# One install with it (one resolution, one build of the C loops), without it on failure
+	$(PY) -m pip install --quiet -e '.[test,mavlink,storm]' \
+	  || { echo "warning: could not install stormpy; the tests that compare the odds with Storm's will say so"; \
+	       $(PY) -m pip install --quiet -e '.[test,mavlink]'; }
 	touch $(STAMP)
 
 setup: system-deps $(STAMP)
