@@ -85,6 +85,43 @@ def browser():
         b.close()
 
 
+class Tab:
+    """One page of the browser that the tests opening page files one at a time navigate
+    afresh (each opening a new document: its script, its DOM, its timers): a new page
+    costs Chromium a window of its own, its renderer and its omnibox's WebUI, about a
+    core-second, where a navigation costs a fifth of that. A page closed (a test that
+    broke it) is replaced at the next opening."""
+
+    def __init__(self, browser):
+        self.browser = browser
+        self.current = None
+
+    def page(self, viewport: dict):
+        if self.current is None or self.current.is_closed():
+            self.current = self.browser.new_page(viewport=viewport)
+        else:
+            self.current.set_viewport_size(viewport)
+        return self.current
+
+    def leave(self) -> None:
+        """The page emptied (nothing of the last test's page runs on) for the next test;
+        closed if it does not answer, to be replaced."""
+        page = self.current
+        if page is None or page.is_closed():
+            return
+        try:
+            page.goto("about:blank", timeout=30_000)
+            page.mouse.up()                 # a drag a failed test left pressed
+        except Exception:   # noqa: BLE001  (a page that broke: the next test gets a new one)
+            page.close()
+
+
+@pytest.fixture(scope="session")
+def tab(browser) -> Tab:
+    """The page the tests share, one test at a time (see :class:`Tab`)."""
+    return Tab(browser)
+
+
 class CompiledExamples:
     """``examples/NAME.mcl`` checked, compiled and written as PNML at most once per test
     process, for the tests that need an example's net rather than the compiling itself.

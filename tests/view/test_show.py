@@ -28,26 +28,41 @@ mission {
 """
 
 
+VIEWPORT = {"width": 1400, "height": 900}
+
+
 @pytest.fixture
-def page_of(browser):
-    """Opens a page file; afterwards, no request but the file itself, and no script error."""
+def page_of(browser, tab):
+    """Opens a page file; afterwards, no request but the file itself, and no script error.
+
+    The first page of a test is the shared tab navigated to the file (a new document; a
+    new page would cost Chromium a window), any other a page of its own."""
     pages = []
 
     def open_(path: Path):
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page = tab.page(VIEWPORT) if not pages else browser.new_page(viewport=VIEWPORT)
         requests, errors = [], []
-        page.on("request", lambda r: requests.append(r.url))
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        watch = {"request": lambda r: requests.append(r.url),
+                 "pageerror": lambda e: errors.append(str(e)),
+                 "console": lambda m: errors.append(m.text) if m.type == "error" else None}
+        for event, handler in watch.items():
+            page.on(event, handler)
         page.goto(path.resolve().as_uri())
-        pages.append((page, requests, errors, path))
+        pages.append((page, watch, requests, errors, path))
         return page
 
     yield open_
-    for page, requests, errors, path in pages:
+    for k, (page, watch, requests, errors, path) in enumerate(pages):
+        if not page.is_closed():
+            for event, handler in watch.items():
+                page.remove_listener(event, handler)
+        if k == 0:
+            tab.leave()
+        else:
+            page.close()
+    for page, watch, requests, errors, path in pages:
         assert requests == [path.resolve().as_uri()], f"the page fetched {requests[1:]}"
         assert not errors, errors
-        page.close()
 
 
 def marking(page) -> list[str]:
