@@ -10,6 +10,7 @@ through the command line, each engine in its own process, as a user runs them.
 """
 from __future__ import annotations
 
+import functools
 import json
 import tempfile
 from pathlib import Path
@@ -49,6 +50,8 @@ mission { while (T(1)) { U(2); } }
 """
 
 
+# computed once per test process: five tests ask for sauce's, each asked the checker again
+@functools.cache
 def _witnesses(name: str):
     """The untimed verdicts (``--untimed``) of the example's failing properties on the net:
     its false ones and those of its true ones that hold in time only (docs/time.md), with
@@ -58,24 +61,41 @@ def _witnesses(name: str):
     _, true = pipeline.properties_of(mission, extra=EXAMPLES / f"{name}.props")
     verdicts = [v for v in pipeline.check_properties(net, props + true)
                 if v.status is Status.FAILS]
-    return net, verdicts, explaining.witnesses(mission, net, verdicts)
+    return net, tuple(verdicts), tuple(explaining.witnesses(mission, net, verdicts))
 
 
 def _fired(log: str) -> list[str]:
     return [e["fire"] for e in map(json.loads, log.splitlines()) if "fire" in e]
 
 
+@pytest.fixture(scope="module")
+def analyzed(tmp_path_factory):
+    """``analyze --untimed --state-space --counterexamples`` of an example's false
+    properties, run once per example and test process: sauce's two replayed properties and
+    the page's test read the same files, which each analyzed again (the state space, every
+    witness and its replays). Returns the command's result and the folder it wrote."""
+    done: dict[str, tuple] = {}
+
+    def analyze(name: str):
+        if name not in done:
+            folder = tmp_path_factory.mktemp(f"cx-{name}") / "cx"
+            out = run_cli("analyze", EXAMPLES / f"{name}.mcl", "--untimed", "--state-space",
+                          "--no-progress", "--properties", EXAMPLES / f"{name}.false.props",
+                          "--counterexamples", folder)
+            done[name] = (out, folder)
+        return done[name]
+    return analyze
+
+
 @pytest.mark.parametrize("name,prop", sorted(REPLAYED), ids="{0[0]}.{0[1]}".format)
-def test_the_script_leads_both_engines_to_the_violation(name, prop, tmp_path):
+def test_the_script_leads_both_engines_to_the_violation(name, prop, tmp_path, analyzed):
     """analyze --counterexamples writes the script; `run --vehicle` on each engine, in its own
     process, then reaches the violation: the executor's firings show it, and the reference
     engine's trace is the executor's."""
     mission = EXAMPLES / f"{name}.mcl"
-    out = run_cli("analyze", mission, "--untimed", "--state-space", "--no-progress",
-                  "--properties",
-                  EXAMPLES / f"{name}.false.props", "--counterexamples", tmp_path / "cx")
+    out, cx = analyzed(name)
     assert out.returncode == 1, out.stderr
-    script = tmp_path / "cx" / f"{prop}.vehicle.json"
+    script = cx / f"{prop}.vehicle.json"
     assert script.is_file() and f"wrote {script}" in out.stderr
     traces = {}
     for engine in ENGINES:
@@ -91,7 +111,7 @@ def test_the_script_leads_both_engines_to_the_violation(name, prop, tmp_path):
             shown = judge(net, p, _fired(log.read_text()))
             assert shown is not None, (prop, shown)
     assert traces["petri"] == traces["reference"]
-    text = (tmp_path / "cx" / f"{prop}.txt").read_text()
+    text = (cx / f"{prop}.txt").read_text()
     assert ("a run the engines take that violates it too" in text) == (REPLAYED[name, prop] == "own")
 
 
@@ -129,24 +149,22 @@ def test_the_mission_terms_name_calls_actions_events_and_time_outs():
     assert f"[{steps[0].number}]" in lines
 
 
-def test_the_page_steps_through_the_replayed_run(tmp_path):
+def test_the_page_steps_through_the_replayed_run(tmp_path, analyzed):
     """NAME.log is a run log that `show --run` follows (every firing enabled in turn, notes in
     the mission's terms) and NAME.html is that page, the log inside it as data."""
     mission = EXAMPLES / "multi_leg.mcl"
-    out = run_cli("analyze", mission, "--untimed", "--state-space", "--no-progress",
-                  "--properties",
-                  EXAMPLES / "multi_leg.false.props", "--counterexamples", tmp_path)
+    out, cx = analyzed("multi_leg")
     assert out.returncode == 1, out.stderr
-    log = (tmp_path / "FixOnlyAfterNavigationFailure.log").read_text()
+    log = (cx / "FixOnlyAfterNavigationFailure.log").read_text()
     entries = [json.loads(line) for line in log.splitlines()]
     assert any(e.get("note", "").startswith("call Goto") for e in entries)
     assert entries[-1]["note"] == "the property is violated (prefix)"
     net, props = pipeline.properties_of(mission, extra=EXAMPLES / "multi_leg.false.props")
     assert judge(net, props[0], _fired(log)).shape is Shape.PREFIX
-    page = (tmp_path / "FixOnlyAfterNavigationFailure.html").read_text()
+    page = (cx / "FixOnlyAfterNavigationFailure.html").read_text()
     assert "the property is violated (prefix)" in page and "<script>" in page
     # the same page as `show --run` writes from the log
-    again = run_cli("show", mission, "--run", tmp_path / "FixOnlyAfterNavigationFailure.log",
+    again = run_cli("show", mission, "--run", cx / "FixOnlyAfterNavigationFailure.log",
                     "-o", tmp_path / "again.html")
     assert again.returncode == 0, again.stderr
     assert (tmp_path / "again.html").read_text() == page
