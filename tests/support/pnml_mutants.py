@@ -362,8 +362,10 @@ def _ids(doc: Doc) -> set[str]:
     return {e.get("id") for e, _ in walk(doc.root) if e.get("id") is not None}
 
 
-def _fresh(doc: Doc, stem: str) -> str:
-    taken, k = _ids(doc), 0
+def _fresh(doc: Doc, stem: str, taken: set[str] | None = None) -> str:
+    """An id ``stem`` + a number that no element of ``doc`` has (``taken``: its ids, if
+    known already)."""
+    taken, k = _ids(doc) if taken is None else taken, 0
     while f"{stem}{k}" in taken:
         k += 1
     return f"{stem}{k}"
@@ -1295,9 +1297,13 @@ def _deep_pages(doc, rng):
         return False
     depth = rng.choice([2, 5, 50, 200, 254, 255, 256, 300, 1000])
     content, el.kids = el.kids, []
+    # the ids in the document (the content taken out) gathered once and kept up to date:
+    # walking the whole tree for each new page made a thousand-deep chain cost seconds
+    taken = _ids(doc)
     inner = el
     for k in range(depth):
-        page = new(el, "page", [("id", _fresh(doc, f"deep{k}_"))])
+        page = new(el, "page", [("id", _fresh(doc, f"deep{k}_", taken))])
+        taken.add(page.get("id"))
         inner.kids.append(page)
         inner = page
     inner.kids = content
