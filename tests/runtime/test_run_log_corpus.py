@@ -17,6 +17,7 @@ from mcl2pnml.pipeline import compile_file
 from mcl2pnml.view.show import check_run, read_run, run_log_schema
 
 from helpers import ROOT, run_cli
+from shown import shown
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
 CORPUS = json.loads((ROOT / "tests" / "data" / "runlogs" / "bad.json").read_text())["logs"]
@@ -76,13 +77,15 @@ def test_the_command_refuses_a_log_with_prototype_keys_and_writes_no_page(tmp_pa
 
 
 @pytest.mark.timeout(120)
-def test_the_pages_file_chooser_refuses_each_bad_log_and_lives(tmp_path, browser):
-    page_file = tmp_path / "page.html"
-    out = run_cli("show", SAUCE, "-o", page_file)
-    assert out.returncode == 0, out.stderr
-    page = browser.new_page()
+def test_the_pages_file_chooser_refuses_each_bad_log_and_lives(tmp_path, tab,
+                                                                tmp_path_factory):
+    # the paper's mission's page as other modules open it, made once per run (shown.py),
+    # in the shared tab (a new page costs Chromium a window of its own)
+    page_file = shown(tmp_path_factory, "sauce.html", SAUCE)
+    page = tab.page({"width": 1280, "height": 720})     # a new page's size
     errors: list[str] = []
-    page.on("pageerror", lambda e: errors.append(str(e)))
+    record = lambda e: errors.append(str(e))            # noqa: E731
+    page.on("pageerror", record)
     page.goto(page_file.as_uri())
     from playwright.sync_api import expect
     for log, path in zip(LOGS, write_logs(tmp_path)):
@@ -98,4 +101,5 @@ def test_the_pages_file_chooser_refuses_each_bad_log_and_lives(tmp_path, browser
     page.set_input_files("#run-file", str(good))
     expect(page.locator("#run-entries li")).to_have_count(1)
     assert page.text_content("#run-message") == ""
-    page.close()
+    page.remove_listener("pageerror", record)
+    tab.leave()

@@ -116,27 +116,41 @@ def listener():
     server.close()
 
 
+VIEWPORT = {"width": 1400, "height": 900}
+
+
 class Witnessed:
     """A page opened with every witness: requests, navigations, dialogs, console, errors."""
 
-    def __init__(self, browser, path: Path):
+    def __init__(self, page, path: Path):
         self.uri = path.resolve().as_uri()
-        self.page = browser.new_page(viewport={"width": 1400, "height": 900})
+        self.page = page
         self.requests: list[str] = []
         self.navigations: list[str] = []
         self.dialogs: list[str] = []
         self.console: list[str] = []
         self.errors: list[str] = []
-        page = self.page
-        page.on("request", lambda r: self.requests.append(r.url))
-        page.on("framenavigated", lambda f: self.navigations.append(f.url))
-        page.on("dialog", lambda d: (self.dialogs.append(d.message), d.dismiss()))
-        page.on("console", lambda m: self.console.append(f"{m.type}: {m.text}"))
-        page.on("pageerror", lambda e: self.errors.append(str(e)))
+        self.watch = {
+            "request": lambda r: self.requests.append(r.url),
+            "framenavigated": lambda f: self.navigations.append(f.url),
+            "dialog": lambda d: (self.dialogs.append(d.message), d.dismiss()),
+            "console": lambda m: self.console.append(f"{m.type}: {m.text}"),
+            "pageerror": lambda e: self.errors.append(str(e))}
+        for event, handler in self.watch.items():
+            page.on(event, handler)
         # every request is let through, so that the listener is a witness of its own
-        page.route("**/*", lambda route: route.continue_())
+        self.route = lambda route: route.continue_()
+        page.route("**/*", self.route)
         page.goto(self.uri)
         page.wait_for_timeout(300)   # a refresh or a timer would have fired by now
+
+    def detach(self) -> None:
+        """The witnesses taken off the page (one the next test opens again)."""
+        if self.page.is_closed():
+            return
+        for event, handler in self.watch.items():
+            self.page.remove_listener(event, handler)
+        self.page.unroute("**/*", self.route)
 
     def pwned(self) -> bool:
         return self.page.evaluate("window.__pwned !== undefined")
@@ -162,16 +176,37 @@ def drawn(page, places: int, transitions: int) -> None:
 
 # -- in the browser --------------------------------------------------------------------------
 
+@pytest.fixture
+def witnessed(browser, tab):
+    """Opens a page file with every witness (:class:`Witnessed`): a test's first page is the
+    shared tab navigated to the file (a new page costs Chromium a window of its own), any
+    other a page of its own; afterwards the witnesses are taken off and the tab emptied."""
+    made: list[Witnessed] = []
+
+    def open_(path: Path) -> Witnessed:
+        page = tab.page(VIEWPORT) if not made else browser.new_page(viewport=VIEWPORT)
+        made.append(Witnessed(page, path))
+        return made[-1]
+
+    yield open_
+    for k, w in enumerate(made):
+        w.detach()
+        if k == 0:
+            tab.leave()
+        elif not w.page.is_closed():
+            w.page.close()
+
+
 @pytest.mark.timeout(60)
 @pytest.mark.parametrize("stem", [*SLOT_NAMES, '<img src=x onerror="window.__pwned=1">',
                                   "<!--<script>", "a\u2028b\u2029c"])
-def test_a_hostile_net_is_drawn_and_played_as_text(tmp_path, browser, listener, stem):
+def test_a_hostile_net_is_drawn_and_played_as_text(tmp_path, witnessed, listener, stem):
     port, heard = listener
     evil = payloads(port)
     net = write_net(tmp_path, stem, port)
     out = run("show", net, "-o", tmp_path / "page.html")
     assert out.returncode == 0, out.stderr
-    w = Witnessed(browser, tmp_path / "page.html")
+    w = witnessed(tmp_path / "page.html")
     page = w.page
     assert page.title() == f"{stem} (mcl2pnml)"
     assert page.text_content("header h1") == stem
@@ -212,7 +247,7 @@ def mcl_string(text: str) -> str:
 
 
 @pytest.mark.timeout(60)
-def test_a_hostile_mission_tree_is_text(tmp_path, browser, listener):
+def test_a_hostile_mission_tree_is_text(tmp_path, witnessed, listener):
     """A mission's string arguments reach the tree view as text (the lines U+2028 and
     U+2029 aside: MCL's strings are read with Python's unicode_escape)."""
     port, heard = listener
@@ -222,7 +257,7 @@ def test_a_hostile_mission_tree_is_text(tmp_path, browser, listener):
     mission.write_text(f"primitive P(x);\ntask T(x) = AchieveGoal(P(x));\nmission {{\n{calls}}}\n")
     out = run("show", mission, "-o", tmp_path / "page.html")
     assert out.returncode == 0, out.stderr
-    w = Witnessed(browser, tmp_path / "page.html")
+    w = witnessed(tmp_path / "page.html")
     labels = w.page.locator("#tree div.call > span:first-child").all_text_contents()
     assert labels == [f"T({mcl_string(e)})" for e in evil]
     w.page.click("#tree div.call >> nth=0")
@@ -231,7 +266,7 @@ def test_a_hostile_mission_tree_is_text(tmp_path, browser, listener):
 
 
 @pytest.mark.timeout(60)
-def test_a_hostile_run_log_is_followed_as_text(tmp_path, browser, listener):
+def test_a_hostile_run_log_is_followed_as_text(tmp_path, witnessed, listener):
     port, heard = listener
     evil = payloads(port)
     img, script, comment, sep, meta = evil[:5]
@@ -246,7 +281,7 @@ def test_a_hostile_run_log_is_followed_as_text(tmp_path, browser, listener):
     log.write_text("".join(json.dumps(e, ensure_ascii=False) + "\n" for e in entries))
     out = run("show", net, "--run", log, "-o", tmp_path / "page.html")
     assert out.returncode == 0, out.stderr
-    w = Witnessed(browser, tmp_path / "page.html")
+    w = witnessed(tmp_path / "page.html")
     page = w.page
     drawn(page, len(evil), len(evil) - 1)
     assert page.locator("#run-entries li").count() == len(entries) - 1
@@ -285,13 +320,13 @@ def test_a_hostile_run_log_is_followed_as_text(tmp_path, browser, listener):
 
 
 @pytest.mark.timeout(60)
-def test_the_witnesses_see_an_attack(tmp_path, browser, listener):
+def test_the_witnesses_see_an_attack(tmp_path, witnessed, listener):
     """The same witnesses on a page made without the defences: every one of them trips,
     so their silence above means something."""
     port, heard = listener
     bare = tmp_path / "bare.html"
     bare.write_text("<!DOCTYPE html><title>x</title><body>" + payloads(port)[0] + "</body>")
-    w = Witnessed(browser, bare)
+    w = witnessed(bare)
     w.page.wait_for_function("window.__pwned !== undefined")
     w.page.wait_for_timeout(300)
     assert w.pwned() and w.dialogs == ["pwned"] and "log: pwned" in w.console
@@ -300,7 +335,7 @@ def test_the_witnesses_see_an_attack(tmp_path, browser, listener):
     w.page.close()
     refresh = tmp_path / "refresh.html"
     refresh.write_text("<!DOCTYPE html><title>x</title>" + payloads(port)[5])
-    w = Witnessed(browser, refresh)
+    w = witnessed(refresh)
     w.page.wait_for_timeout(300)
     assert f"http://127.0.0.1:{port}/refresh" in w.navigations
     assert any(b"GET /refresh" in h for h in heard)
@@ -308,14 +343,14 @@ def test_the_witnesses_see_an_attack(tmp_path, browser, listener):
 
 
 @pytest.mark.timeout(60)
-def test_a_broken_page_says_so(tmp_path, browser):
+def test_a_broken_page_says_so(tmp_path, tab):
     """A page whose script fails shows why, instead of a blank drawing."""
     html = show.page("t", [])           # no net at all: the script cannot draw one
     (tmp_path / "empty.html").write_text(html)
-    page = browser.new_page()
+    page = tab.page({"width": 1280, "height": 720})     # a new page's size
     page.goto((tmp_path / "empty.html").resolve().as_uri())
     assert "This page failed" in page.text_content("#failure")
-    page.close()
+    tab.leave()
 
 
 # -- the command line: a run log with NaN or infinities ----------------------------------------

@@ -77,7 +77,7 @@ def status(url: str, host: str | None = None) -> int:
         return e.code
 
 
-def test_the_page_follows_a_run_as_it_is_written(tmp_path, browser, recorded):
+def test_the_page_follows_a_run_as_it_is_written(tmp_path, tab, recorded):
     log = tmp_path / "run.jsonl"                  # not there yet: the run has not started
     with serving(log, "--linger", "1") as (proc, url):
         origin, token = url.rsplit("/", 2)[0], url.rsplit("/", 2)[1]
@@ -87,11 +87,14 @@ def test_the_page_follows_a_run_as_it_is_written(tmp_path, browser, recorded):
         assert status(origin + "/" + "x" * len(token) + "/log?from=0") == 403
         assert status(url, host="attacker.example:80") == 403
         assert status(url + "log?from=0") == 200
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        # the shared tab (a new page costs Chromium a window of its own)
+        page = tab.page({"width": 1400, "height": 900})
         requests, errors = [], []
-        page.on("request", lambda r: requests.append(r.url))
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+        watch = {"request": lambda r: requests.append(r.url),
+                 "pageerror": lambda e: errors.append(str(e)),
+                 "console": lambda m: errors.append(m.text) if m.type == "error" else None}
+        for event, handler in watch.items():
+            page.on(event, handler)
         answer = page.goto(url)
         policy = answer.headers["content-security-policy"]
         assert "connect-src 'self'" in policy and "default-src 'none'" in policy
@@ -116,20 +119,22 @@ def test_the_page_follows_a_run_as_it_is_written(tmp_path, browser, recorded):
         assert page.locator("#history li").all_text_contents() == fires
         assert page.text_content("#run-message") == ""
         assert proc.wait(timeout=WAIT) == 0       # the outcome served, then --linger: stopped
+        for event, handler in watch.items():
+            page.remove_listener(event, handler)
+        tab.leave()
         assert requests and all(r.startswith(url) for r in requests), requests
         assert not errors, errors
-        page.close()
 
 
-def test_a_bad_line_stops_the_following_and_is_shown(tmp_path, browser, recorded):
+def test_a_bad_line_stops_the_following_and_is_shown(tmp_path, tab, recorded):
     log = tmp_path / "run.jsonl"
     log.write_text(recorded[0] + '{"t": 1, "fire": "nowhere.t9"}\n' + "".join(recorded[1:]))
     with serving(log, "--linger", "0.5") as (proc, url):
-        page = browser.new_page()
+        page = tab.page({"width": 1280, "height": 720})     # a new page's size
         page.goto(url)
         page.wait_for_function("() => /error/.test(document.getElementById('live-status')"
                                ".textContent)", timeout=WAIT * 1000)
         assert "'nowhere.t9', which is no transition" in page.text_content("#run-message")
         assert page.locator("#history li").count() == 1
         assert proc.wait(timeout=WAIT) == 0
-        page.close()
+        tab.leave()

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from helpers import ROOT, run_cli as run
+from shown import shown
 from test_show import TWO_TASKS, marking, page_of  # noqa: F401 (fixtures)
 
 from mcl2pnml import pipeline
@@ -95,9 +96,7 @@ def two(tmp_path_factory):
     d = tmp_path_factory.mktemp("timed")
     mission = d / "two.mcl"
     mission.write_text(TWO_TASKS)
-    out = run("show", mission, "-o", d / "two.html")
-    assert out.returncode == 0, out.stderr
-    return d / "two.html"
+    return shown(tmp_path_factory, "two.html", mission)
 
 
 def test_advance_time_is_refused_while_the_supervisor_has_steps(page_of, two):
@@ -161,22 +160,22 @@ def test_a_time_out_keeps_its_timer_when_its_input_is_taken_and_given_back(tmp_p
     assert page.text_content("#clock-next") == "next time-out: timeout at t = 10"
 
 
-def test_settle_takes_the_executors_steps_on_the_sauce_mission(tmp_path, page_of):
+def test_settle_takes_the_executors_steps_on_the_sauce_mission(tmp_path, page_of,
+                                                               tmp_path_factory):
     """From M0, *Settle* fires what the executor's start fires, in its order; then, event
     after event of a run on the simulated AUV, what the executor fires for it."""
     source = ROOT / "examples" / "sauce.mcl"
     log = tmp_path / "sauce.jsonl"
     done = run("run", source, "--log", log)
     assert done.returncode == 0, done.stderr
-    out = run("show", source, "-o", tmp_path / "sauce.html")
-    assert out.returncode == 0, out.stderr
-    page = page_of(tmp_path / "sauce.html")
+    page = page_of(shown(tmp_path_factory, "sauce.html", source))
     lockstep(page, pipeline.compile_file(source), log)
     assert "mission.OK" in marking(page)
     assert "has its result" in page.text_content("#supervisor")
 
 
-def test_time_outs_fire_at_their_time_as_the_engines_fire_them(tmp_path, page_of):
+def test_time_outs_fire_at_their_time_as_the_engines_fire_them(tmp_path, page_of,
+                                                               tmp_path_factory):
     """A run of the multi-leg mission whose legs time out (the vehicle of a counterexample):
     each time-out fires at the time the run loop fires it, after the supervisor settled."""
     source = ROOT / "examples" / "multi_leg.mcl"
@@ -185,9 +184,7 @@ def test_time_outs_fire_at_their_time_as_the_engines_fire_them(tmp_path, page_of
     log = tmp_path / "run.jsonl"
     done = run("run", source, "--vehicle", script, "--log", log)
     assert done.returncode in (0, 1), done.stderr
-    out = run("show", source, "-o", tmp_path / "ml.html")
-    assert out.returncode == 0, out.stderr
-    page = page_of(tmp_path / "ml.html")
+    page = page_of(shown(tmp_path_factory, "ml.html", source))
     assert lockstep(page, pipeline.compile_file(source), log) >= 2
 
 
@@ -217,7 +214,7 @@ def test_settle_takes_the_step_enabled_longest_first(tmp_path, page_of):
     assert "has its result" in page.text_content("#supervisor")
 
 
-def test_settle_is_bounded(tmp_path, browser):
+def test_settle_is_bounded(tmp_path, tab):
     """A loop of supervisor steps that never settles is stopped, with a message."""
     b = NetBuilder("loop")
     b.place("p", tokens=1)
@@ -230,13 +227,13 @@ def test_settle_is_bounded(tmp_path, browser):
     b.arc("t2", "p")
     net = b.build()
     (tmp_path / "loop.html").write_text(show_page("loop", [variant(net, "loop")]))
-    page = browser.new_page()
+    page = tab.page({"width": 1280, "height": 720})    # a new page's size
     page.goto((tmp_path / "loop.html").resolve().as_uri())
     page.click("#settle")
     assert "Settle stopped after 10,000 firings" in page.text_content("#supervisor-note")
     assert page.evaluate("() => history.length") == 10_000
     assert page.is_disabled("#advance")
-    page.close()
+    tab.leave()
 
 
 def test_replayed_logs_show_each_steps_time(tmp_path, page_of):

@@ -1,0 +1,46 @@
+"""Pages ``mcl2pnml show`` writes, made once per test run for all its test processes.
+
+Several modules open the same page (the paper's mission's, in six modules' tests):
+each ran ``show`` again, 2.5 core-seconds for the paper's mission, in each xdist
+worker. A page is kept in a folder the workers share, under the digest of the
+command's arguments and of the files they name, written under a name of its own
+then renamed, so that a worker never reads half a page; the command's exit status
+is checked where it ran.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+from helpers import run_cli
+
+
+def shared_folder(tmp_path_factory) -> Path:
+    """A folder of this test run's that every worker sees (under xdist each worker's base
+    folder is in the run's; alone, the base folder is the run's)."""
+    base = tmp_path_factory.getbasetemp()
+    folder = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "shown"
+    folder.mkdir(exist_ok=True)
+    return folder
+
+
+def shown(tmp_path_factory, name: str, *args) -> Path:
+    """``mcl2pnml show ARGS -o NAME``'s page (to be read, not written to)."""
+    digest = hashlib.sha256()
+    for arg in args:
+        path = Path(arg)
+        if path.is_file():      # a file by its name and content, wherever a test wrote it
+            digest.update(b"file\0" + path.name.encode() + b"\0" + path.read_bytes())
+        else:
+            digest.update(b"arg\0" + str(arg).encode())
+        digest.update(b"\0")
+    folder = shared_folder(tmp_path_factory) / digest.hexdigest()[:32]
+    page = folder / name
+    if not page.is_file():
+        folder.mkdir(exist_ok=True)
+        part = folder / f"{os.getpid()}-{name}"
+        out = run_cli("show", *args, "-o", part)
+        assert out.returncode == 0, out.stderr
+        os.replace(part, page)
+    return page
