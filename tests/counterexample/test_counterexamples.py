@@ -295,9 +295,16 @@ def _witnesses_replay(case) -> None:
 
 # -- the command line ----------------------------------------------------------------------
 
-def test_analyze_json_gives_the_run_in_the_mission_terms_and_its_script():
-    out = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--untimed", "--state-space", "--json",
-                  "--properties", EXAMPLES / "multi_leg.false.props", "--explain")
+@pytest.fixture(scope="module")
+def explained_json():
+    """``analyze --json --explain`` of multi_leg's false property, which two tests read
+    (each ran it again: the state space, the witness and its replays)."""
+    return run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--untimed", "--state-space",
+                   "--json", "--properties", EXAMPLES / "multi_leg.false.props", "--explain")
+
+
+def test_analyze_json_gives_the_run_in_the_mission_terms_and_its_script(explained_json):
+    out = explained_json
     assert out.returncode == 1, out.stderr
     [prop] = json.loads(out.stdout)["properties"]
     cex = prop["counterexample"]
@@ -384,7 +391,7 @@ def test_counterexamples_are_explained_for_their_files_without_explain(monkeypat
                                         "FixOnlyAfterNavigationFailure.txt").read_text()
 
 
-def test_the_facade_gives_the_outcome_the_cli_prints(tmp_path):
+def test_the_facade_gives_the_outcome_the_cli_prints(tmp_path, explained_json):
     """commands.analyze decides what `analyze` does; the CLI prints its outcome."""
     outcome = analyzing.analyze(EXAMPLES / "multi_leg.mcl", analyzing.AnalyzeOptions(
         timed=False, state_space=True, properties=str(EXAMPLES / "multi_leg.false.props"),
@@ -394,8 +401,7 @@ def test_the_facade_gives_the_outcome_the_cli_prints(tmp_path):
     assert v.status is Status.FAILS and w.replayed is w.run
     assert outcome.messages == tuple(f"wrote {p}" for p in outcome.written)
     assert len(outcome.written) == 4 and all(p.is_file() for p in outcome.written)
-    cli = run_cli("analyze", EXAMPLES / "multi_leg.mcl", "--untimed", "--state-space",
-                  "--properties", EXAMPLES / "multi_leg.false.props", "--json", "--explain")
+    cli = explained_json
     assert json.loads(cli.stdout) == json.loads(json.dumps(outcome.as_json()))
     quiet = analyzing.analyze(EXAMPLES / "multi_leg.mcl", analyzing.AnalyzeOptions(
         properties=str(EXAMPLES / "multi_leg.false.props")))
