@@ -13,7 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from helpers import ROOT, run_cli as run
+from helpers import ROOT
+from shown import shown
 from test_show import SHOTS, page_of  # noqa: F401 (fixtures)
 
 from mcl2pnml.core.structure import structure
@@ -25,11 +26,8 @@ SAUCE = ROOT / "examples" / "sauce.mcl"
 @pytest.fixture(scope="module")
 def pages(tmp_path_factory) -> dict[str, Path]:
     """The paper's mission and the sequence structure (22 markings) as pages."""
-    d = tmp_path_factory.mktemp("graph")
-    for name, what in (("sauce", SAUCE), ("sequence", "sequence")):
-        out = run("show", what, "-o", d / f"{name}.html")
-        assert out.returncode == 0, out.stderr
-    return {"sauce": d / "sauce.html", "sequence": d / "sequence.html"}
+    return {name: shown(tmp_path_factory, f"{name}.html", what)
+            for name, what in (("sauce", SAUCE), ("sequence", "sequence"))}
 
 
 @pytest.fixture(scope="module")
