@@ -36,6 +36,8 @@ from __future__ import annotations
 
 import copy
 import heapq
+import weakref
+from dataclasses import dataclass
 from typing import Any
 
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
@@ -53,6 +55,82 @@ ZENO_LIMIT = 1_000_000
 ENABLE_ARGUMENTS_LIMIT = 100_000
 
 
+@dataclass(frozen=True, eq=False)
+class _Tables:
+    """What a run reads of its net and never changes: worked out once per net and shared
+    by every engine on it (a campaign or the exact odds build an engine per run, and
+    reading the payloads again took most of a short run's time)."""
+
+    places: tuple[str, ...]
+    transitions: tuple[str, ...]
+    pre: tuple[tuple[tuple[int, int], ...], ...]       # consumed: (place, weight), arc order
+    test: tuple[tuple[tuple[int, int], ...], ...]      # read
+    post: tuple[tuple[tuple[int, int], ...], ...]
+    inputs: tuple[tuple[tuple[int, int], ...], ...]    # the most private input first
+    delay: tuple[float | None, ...]
+    payload: tuple[TransitionPayload, ...]
+    by_event: dict[tuple[str, EventKind], list[int]]
+    event_driven: frozenset[int]
+    result_places: dict[int, Outcome]
+    changes: tuple[tuple[tuple[int, bool], ...], ...]
+    results_marked: tuple[tuple[int, ...], ...]
+    entry: tuple[bool, ...]
+    net: "weakref.ref[Net]"
+
+
+#: The tables of the nets alive, by the net's identity (a net never changes; its equality
+#: compares its whole content, too dear for a lookup per run).
+_TABLES: dict[int, _Tables] = {}
+
+
+def _tables(net: Net) -> _Tables:
+    """The net's tables, read once while the net lives."""
+    known = _TABLES.get(id(net))
+    if known is not None and known.net() is net:
+        return known
+    made = _read_tables(net)
+    _TABLES[id(net)] = made
+    weakref.finalize(net, _TABLES.pop, id(net), None)
+    return made
+
+
+def _read_tables(net: Net) -> _Tables:
+    s = structure(net)
+    pindex = s.place_index
+    pre = tuple(tuple(arcs.items()) for arcs in s.pre)
+    test = tuple(tuple(arcs.items()) for arcs in s.read)
+    consumers = [len(ts) for ts in s.place_post]          # p•, readers included
+    # the inputs of each transition, the most private first: the one to watch
+    inputs = tuple(tuple(sorted(pre[i] + test[i], key=lambda pw: consumers[pw[0]]))
+                   for i in range(len(s.transitions)))
+    payload = tuple(read_transition(t) for t in net.transitions)
+    by_event: dict[tuple[str, EventKind], list[int]] = {}
+    for i, p in enumerate(payload):
+        event = p.event
+        if event is not None and event.primitive is not None:
+            by_event.setdefault((event.primitive, event.kind), []).append(i)
+    result_places = {pindex[p]: o for p, o in RESULTS.items()}
+    # what each firing changes (its column of the incidence matrix), worked
+    # out once: the places whose count falls or rises (True: falls), in
+    # place order, and the result places among those that rise
+    changes, results_marked = [], []
+    for change in s.incidence:
+        rows = sorted(change)
+        changes.append(tuple((p, change[p] < 0) for p in rows))
+        results_marked.append(tuple(p for p in rows
+                                    if change[p] > 0 and p in result_places))
+    return _Tables(
+        places=s.places, transitions=s.transitions, pre=pre, test=test,
+        post=tuple(tuple(arcs.items()) for arcs in s.post), inputs=inputs,
+        delay=tuple(t.timing.earliest if t.timing is not None else None
+                    for t in net.transitions),
+        payload=payload, by_event=by_event,
+        event_driven=frozenset(i for ts in by_event.values() for i in ts),
+        result_places=result_places, changes=tuple(changes),
+        results_marked=tuple(results_marked),
+        entry=tuple(p.entry is not None for p in payload), net=weakref.ref(net))
+
+
 class PetriEngine(Engine):
     """Runs one mission net (see the module's documentation for the firing rules)."""
 
@@ -63,51 +141,26 @@ class PetriEngine(Engine):
             raise Mcl2PnmlError(f"net '{net.name}' is not a compiled mission: it has no place "
                                 f"{', '.join(missing)} (compile MCL with `mcl2pnml compile`)")
         self.net = net
-        s = structure(net)
-        self.places = list(s.places)
-        self.transitions = list(s.transitions)
-        pindex = s.place_index
+        tables = _tables(net)
+        self.places, self.transitions = tables.places, tables.transitions
+        self.pre, self.test, self.post = tables.pre, tables.test, tables.post
+        self.inputs, self.delay, self.payload = tables.inputs, tables.delay, tables.payload
+        self.by_event, self.event_driven = tables.by_event, tables.event_driven
+        self.result_places = tables.result_places
+        self.changes, self.results_marked = tables.changes, tables.results_marked
+        self.entry = tables.entry
         n = len(self.transitions)
-        # (place, weight) lists, in arc order: what the firing loop walks
-        self.pre = [list(arcs.items()) for arcs in s.pre]     # consumed
-        self.test = [list(arcs.items()) for arcs in s.read]   # read
-        self.post = [list(arcs.items()) for arcs in s.post]
-        consumers = [len(ts) for ts in s.place_post]          # p•, readers included
-        # the inputs of each transition, the most private first: the one to watch
-        self.inputs = [sorted(self.pre[i] + self.test[i], key=lambda pw: consumers[pw[0]])
-                       for i in range(n)]
         self.watch: list[set[int]] = [set() for _ in self.places]      # disabled, waiting on p
+        # the watch list whose sets this engine may change in place: those of the places
+        # named (None: every one), see _watchers
+        self._owned: tuple[list[set[int]], set[int] | None] = (self.watch, None)
         self.enabled_on: list[set[int]] = [set() for _ in self.places]  # enabled, using p
         self.watching: list[int | None] = [None] * n
-        self.delay: list[float | None] = []
         self._timeouts: dict[str, float] | None = None     # each task's, by timeout_of
-        self.payload: list[TransitionPayload] = []
-        self.by_event: dict[tuple[str, EventKind], list[int]] = {}
-        for i, t in enumerate(net.transitions):
-            payload = read_transition(t)
-            self.payload.append(payload)
-            self.delay.append(t.timing.earliest if t.timing is not None else None)
-            event = payload.event
-            if event is not None and event.primitive is not None:
-                key = (event.primitive, event.kind)
-                self.by_event.setdefault(key, []).append(i)
-        self.event_driven = {i for ts in self.by_event.values() for i in ts}
-        self.result_places = {pindex[p]: o for p, o in RESULTS.items()}
-        # what each firing changes (its column of the incidence matrix), worked
-        # out once: the places whose count falls or rises (True: falls), in
-        # place order, and the result places among those that rise
-        self.changes: list[tuple[tuple[int, bool], ...]] = []
-        self.results_marked: list[tuple[int, ...]] = []
-        for change in s.incidence:
-            rows = sorted(change)
-            self.changes.append(tuple((p, change[p] < 0) for p in rows))
-            self.results_marked.append(tuple(p for p in rows
-                                             if change[p] > 0 and p in self.result_places))
         self.marking = [net.initial[p] for p in self.places]
         self.env: dict[str, dict[str, Any]] = {MISSION: {}}
         self.ready: list[tuple[int, int, int]] = []  # (step enabled, index, version)
         self.entries: list[tuple[int, int]] = []     # call entries: (index, version)
-        self.entry = [p.entry is not None for p in self.payload]
         self.timers: list[tuple[float, str, int, int]] = []  # (due, task, index, version)
         self.version = [0] * n
         self.enabled = [False] * n
@@ -129,8 +182,8 @@ class PetriEngine(Engine):
             old = self.watching[i]
             if old != lacking:
                 if old is not None:
-                    self.watch[old].discard(i)
-                self.watch[lacking].add(i)
+                    self._watchers(old).discard(i)
+                self._watchers(lacking).add(i)
                 self.watching[i] = lacking
         if now == self.enabled[i]:
             return
@@ -138,7 +191,7 @@ class PetriEngine(Engine):
         for p, _ in self.inputs[i]:
             (self.enabled_on[p].add if now else self.enabled_on[p].discard)(i)
         if now and self.watching[i] is not None:
-            self.watch[self.watching[i]].discard(i)
+            self._watchers(self.watching[i]).discard(i)
             self.watching[i] = None
         self.version[i] += 1          # a timer set before a break no longer counts
         if not now or i in self.event_driven:
@@ -150,6 +203,17 @@ class PetriEngine(Engine):
         else:
             task = self.transitions[i].rsplit(".", 1)[0]
             heapq.heappush(self.timers, (self.now + self.delay[i], task, i, self.version[i]))
+
+    def _watchers(self, p: int) -> set[int]:
+        """``watch[p]`` to change: this engine's own set, copied on its first change since
+        a clone shared it (a clone copied every place's set, most of the exact odds' time)."""
+        watch, owned = self._owned
+        if watch is not self.watch:         # a new list: none of its sets is known ours
+            watch, owned = self._owned = (self.watch, set())
+        if owned is not None and p not in owned:
+            watch[p] = set(watch[p])
+            owned.add(p)
+        return watch[p]
 
     def _fire(self, i: int) -> list[Action]:
         m = self.marking
@@ -213,7 +277,9 @@ class PetriEngine(Engine):
         :mod:`mcl2pnml.odds`). What it ignored so far is not copied."""
         other = copy.copy(self)
         other.marking = list(self.marking)
-        other.watch = [set(w) for w in self.watch]
+        # the watch sets are shared, and copied by either engine as it changes one
+        other.watch = list(self.watch)
+        self._owned, other._owned = (self.watch, set()), (other.watch, set())
         other.enabled_on = [set(e) for e in self.enabled_on]
         other.watching = list(self.watching)
         other.env = {scope: dict(values) for scope, values in self.env.items()}
