@@ -10,7 +10,7 @@ from __future__ import annotations
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mcl2pnml.pipeline import check_source
+from mcl2pnml.pipeline import check_source, compile_checked
 
 from helpers import ROOT, both
 from missions import missions, scripts
@@ -30,18 +30,18 @@ def example_scripts(checked) -> list[dict]:
 
 @pytest.mark.parametrize("mission", EXAMPLES, ids=lambda p: p.stem)
 def test_every_example_runs_the_same_on_both_engines(mission, examples):
-    checked = examples.checked(mission.stem)
-    for script in example_scripts(checked):
-        petri, reference = both(checked, script)
+    checked, net = examples.checked(mission.stem), examples.net(mission.stem)
+    for script in example_scripts(checked):     # the net compiled once, for every script
+        petri, reference = both(checked, script, net)
         assert petri == reference, f"{mission.name} with {script}"
 
 
 def test_the_papers_mission_ends_as_the_paper_says(examples):
-    checked = examples.checked("sauce")
+    checked, net = examples.checked("sauce"), examples.net("sauce")
     # the cross is found during the survey: dive, drop the marker, surface
     found = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["ok@50"],
              "KeepDepth": ["ok@5", "ok@6"], "ReleaseMarker": ["ok@1"]}
-    petri, reference = both(checked, found)
+    petri, reference = both(checked, found, net)
     assert petri == reference and petri["outcome"] == "OK"
     enabled = [e["primitive"] for e in petri["trace"] if e.get("action") == "enable"]
     assert enabled[-3:] == ["KeepDepth", "ReleaseMarker", "KeepDepth"]
@@ -50,7 +50,7 @@ def test_the_papers_mission_ends_as_the_paper_says(examples):
     # no cross: the survey ends, the detector is stopped, the vehicle surfaces
     missed = {"GoToWayPoint": ["ok@30", "ok@40"], "DetectCross": ["never"],
               "KeepDepth": ["ok@5"]}
-    petri, reference = both(checked, missed)
+    petri, reference = both(checked, missed, net)
     assert petri == reference and petri["outcome"] == "OK" and petri["time"] == 75
     assert "ReleaseMarker" not in {e["primitive"] for e in petri["trace"]}
 
@@ -85,6 +85,7 @@ def test_an_abort_between_two_steps_of_a_structure(body):
     source = ("primitive Pa(v);\ntask T0(x) = AchieveGoal(Pa(x));\n"
               f"mission {{ {body} }}\n")
     checked = check_source(source, "race.mcl")
+    net = compile_checked(checked)      # once, for the three scripts
     for script in ({"Pa": []}, {"Pa": ["ok@0"] * 3}, {"Pa": ["fail@0"]}):
-        petri, reference = both(checked, script)
+        petri, reference = both(checked, script, net)
         assert petri == reference, (body, script)
