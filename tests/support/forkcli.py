@@ -225,10 +225,11 @@ def server() -> str | None:
     return _server[1]
 
 
-def run(args, cwd=None, env=None, timeout: float | None = None):
+def run(args, cwd=None, env=None, timeout: float | None = None, text: bool = True):
     """``mcl2pnml ARGS`` as ``subprocess.run([python, -m, mcl2pnml, ...],
-    capture_output=True, text=True)`` gives it: through the server, or in a fresh
-    interpreter under ``MCL2PNML_TEST_FRESH=1``."""
+    capture_output=True, text=text)`` gives it: through the server, or in a fresh
+    interpreter under ``MCL2PNML_TEST_FRESH=1``. ``text=False``: the streams' bytes, with
+    no decoding and no newline translation."""
     import io
     import subprocess
     import tempfile
@@ -237,7 +238,7 @@ def run(args, cwd=None, env=None, timeout: float | None = None):
     command = [sys.executable, "-m", "mcl2pnml", *args]
     path = server()
     if path is None:
-        return subprocess.run(command, capture_output=True, text=True, cwd=cwd, env=env,
+        return subprocess.run(command, capture_output=True, text=text, cwd=cwd, env=env,
                               timeout=timeout)
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err, \
             open(os.devnull, "rb") as null:
@@ -250,7 +251,8 @@ def run(args, cwd=None, env=None, timeout: float | None = None):
         texts = []
         for stream in (out, err):
             stream.seek(0)
-            texts.append(io.TextIOWrapper(stream).read())   # as text=True decodes
+            texts.append(io.TextIOWrapper(stream).read() if text   # as text=True decodes
+                         else stream.read())
     return subprocess.CompletedProcess(command, code, *texts)
 
 
