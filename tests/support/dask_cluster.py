@@ -78,8 +78,10 @@ def started(folder: Path, workers: int = 2) -> Iterator[Cluster]:
             cluster = Cluster(f"tcp://127.0.0.1:{port}", procs[0], log)
             cluster.wait_for("Scheduler at:")
             for _ in range(workers):
+                # no nanny: a second process per worker that imports Dask again, and
+                # restarts nothing a test asks of it (a killed worker's group is killed)
                 procs.append(_start("worker", cluster.address, "--nthreads", "1",
-                                    "--nworkers", "1", "--no-dashboard",
+                                    "--nworkers", "1", "--no-nanny", "--no-dashboard",
                                     "--local-directory", str(folder), log=null))
             cluster.workers = procs[1:]
             cluster.wait_for("Register worker", workers)
