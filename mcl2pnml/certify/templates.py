@@ -32,6 +32,7 @@ from __future__ import annotations
 import hashlib
 import json
 import sys
+import weakref
 from dataclasses import dataclass
 from itertools import product
 from pathlib import Path
@@ -366,6 +367,65 @@ def stored(folder: Path | None = None) -> dict[str, dict]:
         return {}
 
 
+#: The stored proofs as :func:`current` and :func:`untrusted_reduced` read them, with the
+#: file's path, size and time they were read at: the checker asks for them once per
+#: certificate, and parsing the file each time was a large part of checking a small one.
+_STORED: dict[Path, tuple[tuple[int, int], dict[str, dict]]] = {}
+
+
+def _stored_now() -> dict[str, dict]:
+    """:func:`stored`, read again only when the file changed (never written to: callers
+    copy what they hand on)."""
+    path = template_dirs()[0] / PROOFS
+    try:
+        info = path.stat()
+        stamp = (info.st_mtime_ns, info.st_size)
+    except OSError:
+        return {}
+    if _STORED.get(path, (None,))[0] != stamp:
+        _STORED[path] = (stamp, stored())
+    return _STORED[path][1]
+
+
+@dataclass(frozen=True)
+class _Parts:
+    """What :func:`current` computes from a library alone: each subject with its composed
+    net and that net's digest, each instance's own net with its slots and their shape, and
+    the digest of the reduced task composed (:func:`untrusted_reduced`)."""
+
+    subjects: tuple
+    own: dict
+    shapes: dict
+    reduced: str
+
+
+#: :class:`_Parts` per library, by identity (a library is not hashable), each dropped with
+#: its library: composing every template again for each certificate checked was most of the
+#: checker's time on a small mission.
+_PARTS: dict[int, tuple[weakref.ref, _Parts]] = {}
+
+
+def _parts(lib: Library) -> _Parts:
+    known = _PARTS.get(id(lib))
+    if known is not None and known[0]() is lib:
+        return known[1]
+    subjects, own = [], {}
+    for name, kind, make, children, source in _subjects(lib):
+        net = make(None)
+        subjects.append((name, kind, make, children, source, net, digest(net)))
+        if kind != "joint":
+            own[name] = local(lib, name)
+    for name in ("primitive", *(f"{CALL_SITE}/{k}" for k in range(MAX_LOCKS + 1))):
+        own[name] = local(lib, name)
+    parts = _Parts(tuple(subjects), own, {name: shape(*o) for name, o in own.items()},
+                   digest(lib.composed(lib.reduced.name)))
+    key = id(lib)
+    # the dict bound now: at exit the module's names may be gone when a library goes
+    _PARTS[key] = (weakref.ref(lib, lambda _, key=key, held=_PARTS: held.pop(key, None)),
+                   parts)
+    return parts
+
+
 class Proofs(dict):
     """The proofs of one library's parts: subject -> its proof, as ``templates/proofs.json``
     stores it, its ``local`` digest that of the own net an instance of it has in a compiled
@@ -393,24 +453,21 @@ def current(lib: Library | None = None, known: dict[str, dict] | None = None,
     read, unless ``eager``), and every instance's own digest computed from the library
     (:class:`BrokenTemplate` for a subject that breaks the contract)."""
     lib = lib or default_library()
-    known = stored() if known is None else known
+    known = _stored_now() if known is None else known
+    parts = _parts(lib)
     out: dict[str, dict] = {}
-    own = {}
-    for name, kind, make, children, source in _subjects(lib):
-        net = make(None)
+    for name, kind, make, children, source, net, net_digest in parts.subjects:
         entry = known.get(name)
-        if entry is None or entry.get("digest") != digest(net) or "results" not in entry:
+        if entry is None or entry.get("digest") != net_digest or "results" not in entry:
             entry = prove(name, kind, make, children, source, eager, net).as_json()
-        if kind != "joint":
-            own[name] = local(lib, name)
-            entry = {**entry, "local": shape(*own[name])}
+        # a copy: the stored entries are read by every call
+        entry = {**entry, "local": parts.shapes[name]} if kind != "joint" else dict(entry)
         out[name] = entry
     # the instances a compiled mission is made of, besides the proven components
     for name, kind in (("primitive", "primitive"),
                        *((f"{CALL_SITE}/{k}", "joint") for k in range(MAX_LOCKS + 1))):
-        own[name] = local(lib, name)
-        out[name] = {"kind": kind, "local": shape(*own[name])}
-    return Proofs(out, lib, own)
+        out[name] = {"kind": kind, "local": parts.shapes[name]}
+    return Proofs(out, lib, parts.own)
 
 
 def untrusted_reduced(lib: Library) -> Mcl2PnmlError | None:
@@ -418,8 +475,8 @@ def untrusted_reduced(lib: Library) -> Mcl2PnmlError | None:
     package's (a user's file replaced it). Every proof stands a child by the reduced model
     restricted to the child's signature, and that it may is an argument about the
     package's Fig. 3 (docs/certificate.md), not about any net a user names so."""
-    package = next((e for e in stored().values() if e.get("kind") == "reduced"), None)
-    if package is None or package.get("digest") == digest(lib.composed(lib.reduced.name)):
+    package = next((e for e in _stored_now().values() if e.get("kind") == "reduced"), None)
+    if package is None or package.get("digest") == _parts(lib).reduced:
         return None
     return Mcl2PnmlError(
         f"the reduced task '{lib.reduced.name}' is not the package's: certificates rest on "
