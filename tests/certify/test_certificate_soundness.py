@@ -11,15 +11,16 @@ certificate with problems or :class:`Mcl2PnmlError`, never another exception.
 """
 from __future__ import annotations
 
-import functools
 import json
 import os
 import random
+from pathlib import Path
 
 import pytest
 
 import certmutations as cm
 from helpers import ROOT, run_cli
+from sessioncache import shared
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
 
@@ -29,16 +30,27 @@ SEED, MISSIONS, NEVER_ENDING = 20_261_125, 12, 8
 PER_MUTATION = 16
 CHAINS = 300
 
-@functools.cache
-def _pool() -> tuple[list[cm.Base], int]:
-    return cm.bases(SEED, MISSIONS, NEVER_ENDING)
+def _drawn() -> tuple[list[cm.Base], int, list]:
+    pool, drawn = cm.bases(SEED, MISSIONS, NEVER_ENDING)
+    return pool, drawn, [(b.net, cm.explored(b.net)) for b in pool]
 
 
-def test_the_unmutated_certificates_are_accepted_and_the_forged_ones_refused():
+@pytest.fixture(scope="session")
+def pool(tmp_path_factory) -> tuple[list[cm.Base], int]:
+    """The normal run's pool, drawn once per session (each worker that ran one of these
+    tests drew and certified it again, several seconds each), with what exploring found of
+    its nets (explored while drawing it)."""
+    bases, drawn, explored = shared(tmp_path_factory, "soundness-pool",
+                                    (SEED, MISSIONS, NEVER_ENDING), _drawn)
+    cm.remember(explored)
+    return bases, drawn
+
+
+def test_the_unmutated_certificates_are_accepted_and_the_forged_ones_refused(pool):
     """The campaign's ground: each certificate ``certify`` writes is accepted and is what
     exploring finds (a checker that refuses everything fails here); each forged one, of a
     mission exploring finds may never end, is refused."""
-    pool, drawn = _pool()
+    pool, drawn = pool
     forged = [b for b in pool if b.kind == "forged"]
     assert len(pool) == 2 * (MISSIONS + NEVER_ENDING) and len(forged) == NEVER_ENDING
     for base in pool:
@@ -51,17 +63,17 @@ def test_the_unmutated_certificates_are_accepted_and_the_forged_ones_refused():
 
 
 @pytest.mark.parametrize("name", sorted(cm.MUTATIONS))
-def test_a_mutated_certificate_is_accepted_only_where_exploring_agrees(name):
-    pool, _ = _pool()
+def test_a_mutated_certificate_is_accepted_only_where_exploring_agrees(name, pool):
+    pool, _ = pool
     tally = cm.campaign(pool, [name], PER_MUTATION, cm.seed_of(name))
     assert tally.pairs == PER_MUTATION, f"{name} applied to only {tally.pairs} pairs"
     assert not tally.broken and not tally.crashes, tally.report()
 
 
-def test_chains_of_mutations_are_accepted_only_where_exploring_agrees():
+def test_chains_of_mutations_are_accepted_only_where_exploring_agrees(pool):
     """One to three mutations at once (a renaming in the certificate and the net, then the
     nodes reordered, then the ends...): the checker is seen to accept some, refuse most."""
-    pool, _ = _pool()
+    pool, _ = pool
     tally = cm.campaign(pool, None, CHAINS, SEED)
     assert tally.pairs == CHAINS and tally.accepted > 0 and tally.refused > 0, tally.summary()
     assert not tally.broken and not tally.crashes, tally.report()
@@ -141,8 +153,8 @@ def _verifypn_confirms(tmp_path, pool, pairs: int, sample: int, seed: int) -> in
     return len(chosen)
 
 
-def test_verifypn_confirms_a_sample_of_the_accepted_pairs(tmp_path):
-    assert _verifypn_confirms(tmp_path, _pool()[0], 300, 6, SEED + 2) >= 3
+def test_verifypn_confirms_a_sample_of_the_accepted_pairs(tmp_path, pool):
+    assert _verifypn_confirms(tmp_path, pool[0], 300, 6, SEED + 2) >= 3
 
 
 @pytest.mark.slow
@@ -414,6 +426,24 @@ _USER = {
 }
 
 
+def _parse_package_templates_once(monkeypatch, ours: Path) -> None:
+    """Each library loaded below parses the package's templates again (two thirds of the
+    time of sixty candidates): the same file read back is the same template, so the
+    package's files are parsed once; every generated file is still loaded as a user's is."""
+    from mcl2pnml.language import library
+    real, parsed = library.load_template, {}
+
+    def load_template(path, *args):
+        path = Path(path)
+        if path.parent != ours:
+            return real(path, *args)
+        key = (path, path.read_bytes(), args)
+        if key not in parsed:
+            parsed[key] = real(path, *args)
+        return parsed[key]
+    monkeypatch.setattr(library, "load_template", load_template)
+
+
 def _user_templates(tmp_path, monkeypatch, kind: str, candidates: int, used: int,
                     seed: int) -> tuple[int, int, cm.Tally]:
     """``candidates`` generated templates of ``kind``, those that keep the contract kept,
@@ -423,6 +453,7 @@ def _user_templates(tmp_path, monkeypatch, kind: str, candidates: int, used: int
     make, named, children, probes = _USER[kind]
     rng = random.Random(seed)
     ours = ROOT / "templates"
+    _parse_package_templates_once(monkeypatch, ours)
     kept, tally, certified_ = [], cm.Tally(), 0
     for k in range(candidates):
         folder = tmp_path / f"t{k}"

@@ -178,6 +178,13 @@ def explored(net: Net) -> Explored | None:
     return _EXPLORED[net]
 
 
+def remember(found: list[tuple[Net, Explored | None]]) -> None:
+    """What exploring found of nets, explored by another process (a pool drawn once for
+    every worker of a test session)."""
+    for net, explored_ in found:
+        _EXPLORED.setdefault(net, explored_)
+
+
 def _explore(net: Net) -> Explored | None:
     from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
     m0 = frozenset(p for p, n in net.initial.items() if n)
