@@ -87,18 +87,27 @@ def mcl_tokens() -> tuple[str, ...]:
 
 # -- character mutations ------------------------------------------------------------
 
+#: The strategies of the mutations that do not depend on the input, built once: built
+#: afresh at each draw, each was validated again (the draws are the same).
+_MUTATIONS = st.integers(1, 8)
+_TEXT_KINDS = st.sampled_from(["insert", "delete", "duplicate", "splice", "token", "unicode",
+                               "truncate", "swap"])
+_INSERTED = st.text(max_size=8)
+_ANY_CHARACTER = st.characters(codec=None)
+_ONE_IN_TEN = st.integers(0, 9)
+_BYTES = st.binary(min_size=1, max_size=4)
+
 @st.composite
 def mutated_text(draw, corpus: tuple[str, ...], tokens: tuple[str, ...]) -> str:
     """A corpus text after one to eight character-level mutations."""
     text = draw(st.sampled_from(corpus))
-    for _ in range(draw(st.integers(1, 8))):
+    for _ in range(draw(_MUTATIONS)):
         n = len(text)
         i = draw(st.integers(0, n))
         j = draw(st.integers(i, min(n, i + 40)))
-        kind = draw(st.sampled_from(["insert", "delete", "duplicate", "splice", "token",
-                                     "unicode", "truncate", "swap"]))
+        kind = draw(_TEXT_KINDS)
         if kind == "insert":
-            text = text[:i] + draw(st.text(max_size=8)) + text[i:]
+            text = text[:i] + draw(_INSERTED) + text[i:]
         elif kind == "delete":
             text = text[:i] + text[j:]
         elif kind == "duplicate":
@@ -111,7 +120,7 @@ def mutated_text(draw, corpus: tuple[str, ...], tokens: tuple[str, ...]) -> str:
         elif kind == "token":
             text = text[:i] + draw(st.sampled_from(tokens)) + text[j:]
         elif kind == "unicode":
-            text = text[:i] + draw(st.characters(codec=None)) + text[j:]
+            text = text[:i] + draw(_ANY_CHARACTER) + text[j:]
         elif kind == "truncate":
             text = text[:i]
         else:  # two pieces trade places
@@ -122,10 +131,10 @@ def mutated_text(draw, corpus: tuple[str, ...], tokens: tuple[str, ...]) -> str:
 @st.composite
 def mutated_mcl(draw) -> bytes:
     text = draw(mutated_text(mcl_corpus(), mcl_tokens()))
-    if draw(st.integers(0, 9)) == 0:  # now and then, bytes that are not UTF-8
+    if draw(_ONE_IN_TEN) == 0:  # now and then, bytes that are not UTF-8
         data = bytearray(text.encode("utf-8", "surrogatepass"))
         i = draw(st.integers(0, len(data)))
-        data[i:i] = draw(st.binary(min_size=1, max_size=4))
+        data[i:i] = draw(_BYTES)
         return bytes(data)
     return text.encode("utf-8", "surrogatepass")
 
@@ -134,14 +143,24 @@ def mutated_mcl(draw) -> bytes:
 
 _NUMBERS = ["-1", "-0", "0", "1", "99999999999999999999999999", "1e3", "1.5", "", " ",
             "x", "NaN", "inf", "٣", "0x10", "+2", "१२"]
+_TREE_KINDS = st.sampled_from(["drop", "duplicate", "move", "nest", "id", "arc end",
+                               "marking", "attribute", "text", "wrap"])
+_NEW_IDS = st.text(max_size=6).filter(lambda s: "\x00" not in s and s.isprintable())
+_ENDS = st.sampled_from(["source", "target", "ref"])
+_NUMBER_TEXTS = st.sampled_from(_NUMBERS)
+_ATTRIBUTES = st.sampled_from(["type", "tool", "x", "y", "earliest", "latest", "id"])
+_TEXTS = st.sampled_from(_NUMBERS + ["{", "[1,", "null", '{"a": 1}'])
+_WRAPPERS = st.sampled_from(["{http://www.pnml.org/version-2009/grammar/pnml}page", "page",
+                             "unknown"])
+_COIN = st.booleans()
+_TREE_MUTATIONS = st.integers(1, 6)
 
 
 def _mutate_tree(draw, root) -> None:
     elements = [e for e in root.iter() if isinstance(e.tag, str)]
     ids = [e.get("id") for e in elements if e.get("id") is not None] or ["x"]
     el = draw(st.sampled_from(elements))
-    kind = draw(st.sampled_from(["drop", "duplicate", "move", "nest", "id", "arc end",
-                                 "marking", "attribute", "text", "wrap"]))
+    kind = draw(_TREE_KINDS)
     parent = el.getparent()
     if kind == "drop" and parent is not None:
         parent.remove(el)
@@ -155,23 +174,21 @@ def _mutate_tree(draw, root) -> None:
     elif kind == "nest":  # an element inside a copy of itself
         el.append(copy.deepcopy(el))
     elif kind == "id":
-        el.set("id", draw(st.sampled_from(ids) | st.text(max_size=6)
-                          .filter(lambda s: "\x00" not in s and s.isprintable())))
+        el.set("id", draw(st.sampled_from(ids) | _NEW_IDS))
     elif kind == "arc end":
-        el.set(draw(st.sampled_from(["source", "target", "ref"])), draw(st.sampled_from(ids)))
+        el.set(draw(_ENDS), draw(st.sampled_from(ids)))
     elif kind == "marking":
         for label in el.iter("{*}initialMarking", "{*}inscription", "initialMarking",
                              "inscription"):
             for text in label.iter("{*}text", "text"):
-                text.text = draw(st.sampled_from(_NUMBERS))
+                text.text = draw(_NUMBER_TEXTS)
     elif kind == "attribute":
-        name = draw(st.sampled_from(["type", "tool", "x", "y", "earliest", "latest", "id"]))
+        name = draw(_ATTRIBUTES)
         el.set(name, draw(st.sampled_from(_NUMBERS + ids)))
     elif kind == "text":
-        el.text = draw(st.sampled_from(_NUMBERS + ["{", "[1,", "null", '{"a": 1}']))
+        el.text = draw(_TEXTS)
     elif parent is not None:  # wrap in a page, or in an element nobody knows
-        wrapper = etree.Element(draw(st.sampled_from(
-            ["{http://www.pnml.org/version-2009/grammar/pnml}page", "page", "unknown"])),
+        wrapper = etree.Element(draw(_WRAPPERS),
             id=draw(st.sampled_from(ids)))
         parent.replace(el, wrapper)
         wrapper.append(el)
@@ -180,16 +197,16 @@ def _mutate_tree(draw, root) -> None:
 @st.composite
 def mutated_pnml(draw) -> bytes:
     data = draw(st.sampled_from(pnml_corpus()))
-    if draw(st.booleans()):
+    if draw(_COIN):
         try:
             root = etree.fromstring(data, etree.XMLParser(resolve_entities=False))
         except etree.XMLSyntaxError:
             root = None  # a corpus file that is not XML on purpose
         if root is not None:
-            for _ in range(draw(st.integers(1, 6))):
+            for _ in range(draw(_TREE_MUTATIONS)):
                 _mutate_tree(draw, root)
-            data = etree.tostring(root, xml_declaration=draw(st.booleans()), encoding="utf-8")
-    if draw(st.booleans()):
+            data = etree.tostring(root, xml_declaration=draw(_COIN), encoding="utf-8")
+    if draw(_COIN):
         text = data.decode("utf-8", "replace")
         text = draw(mutated_text((text,), ("<", ">", "/>", "</net>", "<page>", '"', "&amp;",
                                           "&#0;", "<!--", "]]>", "<![CDATA[", "&x;")))
