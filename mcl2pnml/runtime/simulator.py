@@ -227,8 +227,11 @@ class AUVSimulator(Vehicle):
         no event depends on and which grows with the run."""
         kept = self.trajectory, self.setpoints
         self.trajectory, self.setpoints = kept[0][-1:], kept[1][-1:]
+        # the generator copied as a whole (its state, an immutable tuple, shared): a deep
+        # copy went through its 625 numbers one by one, most of a fork's time
+        memo = {id(self.world): self.world, id(self.rng): copy.copy(self.rng)}
         try:
-            return copy.deepcopy(self, {id(self.world): self.world})
+            return copy.deepcopy(self, memo)
         finally:
             self.trajectory, self.setpoints = kept
 
