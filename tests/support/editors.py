@@ -8,19 +8,24 @@ arc. They need Java 17 (``make setup`` installs ``openjdk-17-jre-headless``
 where ``java`` is missing). A test that needs one calls :func:`need`, which
 skips with the reason when Java or the jar is absent.
 
-A JVM takes about a second to start; each test process keeps a class-data
-archive of each reader (``-XX:ArchiveClassesAtExit``, written by its first
-run) so that the later runs start in about half that. Every run has a time
-bound.
+A JVM takes about a second to start; a class-data archive of each reader
+(``-XX:ArchiveClassesAtExit``) takes a third of that off. Writing one costs a
+reader's run twice over, more than the few runs of one test process saved
+(each process wrote its own: 3 s of CPU for WoPeD, then 1.2 s a run instead of
+1.5), so one archive per reader, jar and JVM is kept in the temporary folder
+and shared by every test process and run of the suite; the JVM checks it
+against the jars and itself, and starts without it where they differ. Every
+run has a time bound.
 """
 from __future__ import annotations
 
-import atexit
+import hashlib
 import os
 import re
 import shutil
 import subprocess
 import tempfile
+import uuid
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -56,8 +61,25 @@ def need(editor: str) -> list[str]:
     return command
 
 
-_ARCHIVES = Path(tempfile.mkdtemp(prefix="mcl2pnml-jsa-"))
-atexit.register(shutil.rmtree, _ARCHIVES, True)
+#: The readers' class-data archives, one per reader, jar and JVM (the module's documentation).
+_ARCHIVES = Path(tempfile.gettempdir()) / f"mcl2pnml-jsa-{os.getuid()}"
+#: JVM options: no log lines on standard output (a JVM that cannot use an archive says so
+#: there, among the reader's lines).
+QUIET = ("-Xlog:disable",)
+
+
+@lru_cache(maxsize=None)
+def _archive(editor: str, java: str) -> Path:
+    """Where the class-data archive of ``editor``'s reader run by ``java`` is kept: named by
+    a digest of the jar, of the jars beside it, and of the JVM."""
+    jar = JARS[editor]
+    digest = hashlib.sha256(jar.read_bytes())
+    home = Path(java).resolve().parent.parent
+    for path in sorted([*jar.parent.glob("lib/*.jar"), Path(java).resolve(),
+                        *home.glob("lib/server/libjvm.so")]):
+        stat = path.stat()
+        digest.update(f"{path}:{stat.st_size}:{stat.st_mtime_ns}\n".encode())
+    return _ARCHIVES / f"{editor}-{digest.hexdigest()[:20]}.jsa"
 
 
 @dataclass
@@ -87,12 +109,24 @@ def read(editor: str, path: Path) -> Read:
     """Run ``editor``'s reader on ``path`` with ``--list`` (and PIPE's ``--verbose``, which
     shows the elements it skipped); fails the test on an error."""
     command = need(editor)
-    archive = _ARCHIVES / f"{editor}-{os.getpid()}.jsa"
-    share = (f"-XX:SharedArchiveFile={archive}" if archive.is_file()
-             else f"-XX:ArchiveClassesAtExit={archive}")
-    args = [command[0], share, *command[1:], "--list",
+    archive = _archive(editor, command[0])
+    written = None
+    if archive.is_file():
+        share = f"-XX:SharedArchiveFile={archive}"
+    else:   # written under a name of its own, then put in place whole
+        _ARCHIVES.mkdir(exist_ok=True)
+        written = archive.with_name(f"{archive.name}.{uuid.uuid4().hex}.tmp")
+        share = f"-XX:ArchiveClassesAtExit={written}"
+    args = [command[0], *QUIET, share, *command[1:], "--list",
             *(["--verbose"] if editor == "pipe" else []), str(path)]
-    out = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT)
+    try:
+        out = subprocess.run(args, capture_output=True, text=True, timeout=TIMEOUT)
+    finally:
+        if written is not None and written.is_file():
+            if "out" in locals() and out.returncode == 0:    # a whole archive
+                os.replace(written, archive)
+            else:
+                written.unlink()
     assert out.returncode == 0, f"{editor} could not read {path.name}:\n{out.stdout}{out.stderr}"
     got = Read(output=out.stdout)
     for line in out.stdout.splitlines():
