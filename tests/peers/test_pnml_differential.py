@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import pytest
@@ -208,12 +209,30 @@ def assert_located(error: Mcl2PnmlError, path: Path) -> None:
         assert str(e).startswith(f"{path}:{where.line}:{where.column}: "), str(e)
 
 
+@lru_cache(maxsize=None)
+def _our_reading(path: Path):
+    """``read_pnml(path)``: the net, or the refusal. Computed once per file: the files do not
+    change during a run, and each was read again by the verifypn, pm4py and LoLA tests."""
+    try:
+        return read_pnml(path)
+    except Mcl2PnmlError as e:
+        return e
+
+
+def _read(path: Path):
+    """Our reading of ``path``, as ``read_pnml`` gives it (a refusal raised)."""
+    reading = _our_reading(path)
+    if isinstance(reading, Mcl2PnmlError):
+        raise reading
+    return reading
+
+
 def read_as_verifypn(path: Path) -> Mcl2PnmlError | None:
     """Our reading of ``path`` against verifypn's: the refusal, located, or None after
     asserting that we read verifypn's net."""
     theirs = pnml_peer.verifypn_net(path)
     try:
-        ours = read_pnml(path)
+        ours = _read(path)
     except Mcl2PnmlError as e:
         assert_located(e, path)
         return e
@@ -252,7 +271,7 @@ def test_the_hostile_table_names_every_file():
 
 def _ours_or_skip(path: Path):
     try:
-        return pnml_peer.read_net(read_pnml(path))
+        return pnml_peer.read_net(_read(path))
     except Mcl2PnmlError:
         pytest.skip("we refuse the file: no net of ours to compare")
 
