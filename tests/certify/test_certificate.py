@@ -411,6 +411,20 @@ def _with_mutant(name: str, net: Net):
                    lib.primitive, lib.reduced)
 
 
+@functools.cache
+def _probe(k: int):
+    """Probe ``k`` parsed (a frozen tree), once for every mutant: a tenth of judging one."""
+    from mcl2pnml.language.parser import parse
+    return parse(PROBES[k], f"probe{k}.mcl")
+
+
+@functools.lru_cache(maxsize=128)
+def _explored_probe(net: Net):
+    """:func:`_explored` of a probe's net, remembered: a probe that does not use the mutated
+    template compiles to the net it had before, explored once for every such mutant."""
+    return _explored(net, 200_000)
+
+
 def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
     """(certified, explored well, what the certificate got wrong) of the probes with one
     template mutated: certified when every probe is, from mission.B and with mission.A
@@ -420,7 +434,6 @@ def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
     from mcl2pnml.certify.templates import BrokenTemplate, current
     from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.compiler import compile_checked
-    from mcl2pnml.language.parser import parse
     lib = _with_mutant(name, net)
     try:
         proofs = current(lib)
@@ -428,12 +441,12 @@ def _judged(name: str, net: Net) -> tuple[bool, bool, list[str]]:
         proofs = None
     certified, fine, wrong = proofs is not None, True, []
     for k, text in enumerate(PROBES):
-        checked = check_program(parse(text, f"probe{k}.mcl"), lib)
+        checked = check_program(_probe(k), lib)
         compiled = compile_checked(checked, lib)
         for pending in (False, True):
             start = compiled.with_initial({**compiled.initial, "mission.A": 1}) \
                 if pending else compiled
-            holds, ends = _explored(start, 200_000) or (False, None)
+            holds, ends = _explored_probe(start) or (False, None)
             fine &= holds
             if proofs is None:
                 continue
