@@ -54,6 +54,18 @@ def find(editor: str) -> tuple[list[str] | None, str]:
     return [java, *FAST, "-jar", str(jar)], ""
 
 
+def archived(editor: str) -> list[str] | None:
+    """The command of :func:`find`, started from the shared class-data archive of the reader
+    where one is there (as a document's ``$`` line runs it: tests/support/tutorial.py)."""
+    command, _ = find(editor)
+    if command is None:
+        return None
+    archive = _archive(editor, command[0])
+    if not archive.is_file():
+        return command
+    return [command[0], *QUIET, f"-XX:SharedArchiveFile={archive}", *command[1:]]
+
+
 def need(editor: str) -> list[str]:
     command, why = find(editor)
     if command is None:
