@@ -30,6 +30,9 @@ SAUCE = ROOT / "examples" / "sauce.mcl"
 #: Wall seconds a wait for the page or the server may last: each ends as soon as what it
 #: waits for happens, so a loaded machine's seconds cost a quiet one nothing.
 WAIT = 60
+#: Milliseconds between two looks of a wait in the page: by default it looks at every
+#: frame, which keeps Chromium drawing 60 frames a second for as long as the wait lasts.
+POLL = 50
 
 
 @pytest.fixture(scope="module")
@@ -107,14 +110,15 @@ def test_the_page_follows_a_run_as_it_is_written(tmp_path, tab, recorded):
                 out.flush()
                 time.sleep(0.002)
             so_far = sum('"fire"' in line for line in recorded[:half])
-            page.wait_for_function(f"() => history.length === {so_far}", timeout=WAIT * 1000)
+            page.wait_for_function(f"() => history.length === {so_far}", timeout=WAIT * 1000,
+                                   polling=POLL)
             assert "mission.OK" not in marking(page)
             for line in recorded[half:]:
                 out.write(line)
                 out.flush()
                 time.sleep(0.002)
         page.wait_for_function("() => /ended/.test(document.getElementById('live-status')"
-                               ".textContent)", timeout=WAIT * 1000)
+                               ".textContent)", timeout=WAIT * 1000, polling=POLL)
         assert "mission.OK" in marking(page)
         assert page.locator("#history li").all_text_contents() == fires
         assert page.text_content("#run-message") == ""
@@ -133,7 +137,7 @@ def test_a_bad_line_stops_the_following_and_is_shown(tmp_path, tab, recorded):
         page = tab.page({"width": 1280, "height": 720})     # a new page's size
         page.goto(url)
         page.wait_for_function("() => /error/.test(document.getElementById('live-status')"
-                               ".textContent)", timeout=WAIT * 1000)
+                               ".textContent)", timeout=WAIT * 1000, polling=POLL)
         assert "'nowhere.t9', which is no transition" in page.text_content("#run-message")
         assert page.locator("#history li").count() == 1
         assert proc.wait(timeout=WAIT) == 0
