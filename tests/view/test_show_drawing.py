@@ -149,12 +149,11 @@ def test_the_copies_are_the_pages_alone_pnml_draws_the_nets_own_nodes():
 def test_the_page_draws_arcs_along_their_bends_and_copies_with_their_place(tmp_path, page_of):
     """In the browser: an arc with bend points is a path through them, and a copy of a
     place shows the place's tokens."""
-    pipeline.save_show_page(tmp_path / "task.html", pipeline.show_nets("task"))
+    data = page_data("task", str(tmp_path))["variants"][0]    # (it writes tmp_path/task.html)
     page = page_of(tmp_path / "task.html")
     points = page.locator('#net path.arc[data-from="t05"][data-to="W_OK"], '
                           '#net path.arc[data-from="EXE"][data-to="t03"]').evaluate_all(
         "(ps) => ps.map((p) => p.getAttribute('d').split('L').length)")
-    data = page_data("task", str(tmp_path))["variants"][0]
     bent = {(t["id"], len(flat) // 2) for t in data["transitions"]
             for _, flat in t["lines"]["post"] if flat}
     assert bent, "no arc of the task has bends"
