@@ -372,11 +372,13 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
         twice = [s.places[k] for k, n in enumerate(space.markings[node]) if n > 1]
         breach(Clause.SAFE, node, f"{', '.join(twice)} holds two tokens or more")
         return out, frozenset()   # the other clauses are read on a safe net's markings
+    # every marking decoded once: the clauses below read each several times
+    markings = list(space.markings)
     results = [index[role[r]] for r in RESULTS]
     control = {index[role[START]], index[role[ABORT]], *results}
     ends = []
     for node in space.terminal:
-        m = space.markings[node]
+        m = markings[node]
         held = [r for r, k in zip(RESULTS, results) if m[k]]
         left = [s.places[k] for k in range(len(s.places)) if k not in control
                 and m[k] != rest.get(s.places[k], 0)]
@@ -396,20 +398,20 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
         elif held[0] != "ABORTED" and aborted and not a_left:
             breach(Clause.ABORT, node, f"ended {held[0]} but consumed A")
     late = next((n for n in range(space.states)
-                 if any(space.markings[n][k] for k in results)
-                 and any(space.markings[n][k] != rest.get(s.places[k], 0)
+                 if any(markings[n][k] for k in results)
+                 and any(markings[n][k] != rest.get(s.places[k], 0)
                          for k in range(len(s.places)) if k not in control)), None)
     if late is not None:
-        m = space.markings[late]
+        m = markings[late]
         busy = [s.places[k] for k in range(len(s.places)) if k not in control
                 and m[k] != rest.get(s.places[k], 0)]
         breach(Clause.RESULT_LAST, late, f"a result is marked while {', '.join(busy)} "
                                          "is not back at rest")
     dead = set(space.terminal)
     moving = next((n for n in range(space.states) if n not in dead
-                   and any(space.markings[n][k] for k in results)), None)
+                   and any(markings[n][k] for k in results)), None)
     if moving is not None:
-        m = space.markings[moving]
+        m = markings[moving]
         fires = [t for j, t in enumerate(s.transitions) if s.enabled(m, j)]
         breach(Clause.RESULT_FINAL, moving, f"a result is marked and {', '.join(fires)} can "
                                             "still fire: a caller may take the result first")
@@ -421,4 +423,4 @@ def _started(space, role: dict[str, str], rest: dict[str, int], label: str,
     elif not space.terminal:
         breach(Clause.ALWAYS_ENDS, 0, "the component never ends")
     return out, frozenset(RESULTS[next(k for k, r in enumerate(results)
-                                       if space.markings[n][r])] for n in ends)
+                                       if markings[n][r])] for n in ends)

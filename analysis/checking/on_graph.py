@@ -164,6 +164,9 @@ def _holds_everywhere(predicate: Predicate, columns, n: int) -> np.ndarray:
 def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
     obs = ObserverTable(prop)
     move, bad, pend = obs.after, obs.bad, obs.pending
+    # a move already worked out (after()'s key: state * 16 + code) read here without a
+    # call of after(): this loop runs once per product edge, a million times on an example
+    known = obs.moves.get
     start = (0, move(obs.start, codes[0]))
     parent: dict = {start: None}
     order = [start]
@@ -185,7 +188,9 @@ def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
         nxt = []
         d = dist[node] + 1
         for b, t in after[m]:
-            child = (b, move(o, codes[b]))
+            code = codes[b]
+            moved = known(o * 16 + code)
+            child = (b, move(o, code) if moved is None else moved)
             nxt.append((child, t))
             if child not in parent:
                 if len(parent) >= max_states:

@@ -257,9 +257,22 @@ class PackedMarkings(DecodedMarkings):
     """The markings by node, decoded one at a time into tuples of 0/1."""
 
     def decode(self, node: int) -> tuple[int, ...]:
-        row = self.space.packed[self.space.position(node)]
-        return tuple(int(row[p // 64] >> np.uint64(p % 64)) & 1
-                     for p in range(len(self.space.structure.places)))
+        # the row's bytes unpacked at once, least significant bit first (place p is bit
+        # p % 64 of word p // 64): a shift per place cost ten times more, and the
+        # contract's checks decode every marking several times
+        row = np.ascontiguousarray(self.space.packed[self.space.position(node)], dtype="<u8")
+        bits = np.unpackbits(row.view(np.uint8), bitorder="little")
+        return tuple(bits[:len(self.space.structure.places)].tolist())
+
+    def __iter__(self):
+        """Every marking in node order, unpacked a chunk of rows at a time (the same tuples
+        as :meth:`decode`, without a numpy call per marking)."""
+        space, places = self.space, len(self.space.structure.places)
+        for part in chunks(space.states, max(1, places // 8)):
+            rows = space.packed[space.position(np.arange(part.start, part.stop))]
+            bits = np.unpackbits(np.ascontiguousarray(rows, dtype="<u8").view(np.uint8),
+                                 axis=1, bitorder="little")
+            yield from map(tuple, bits[:, :places].tolist())
 
 
 class PackedStateSpace(EdgesOnDemand, StateSpace):
