@@ -112,8 +112,8 @@ def test_the_zone_graph_agrees_with_one_state_per_second_on_many_missions(missio
         pass
 
 
-def test_the_latest_end_of_the_papers_mission_is_the_engines_longest_run(tmp_path):
-    net = pipeline.compile_file(EXAMPLES / "sauce.mcl")
+def test_the_latest_end_of_the_papers_mission_is_the_engines_longest_run(examples):
+    net = examples.net("sauce")     # compiled once per process, shared with other tests
     ends = pipeline.timed_ends(net)
     assert ends.always_ends is True and ends.deadlock is False
     search = Search(net)
@@ -121,7 +121,7 @@ def test_the_latest_end_of_the_papers_mission_is_the_engines_longest_run(tmp_pat
     assert not search.never
     assert ends.latest == Fraction(longest) and ends.earliest == 0
     # the longest run's script ends there on both engines, with the same trace
-    petri, reference = both(pipeline.check_file(EXAMPLES / "sauce.mcl"), script, net)
+    petri, reference = both(examples.checked("sauce"), script, net)
     assert petri == reference
     assert petri["time"] == longest, (script, petri["outcome"])
 

@@ -214,8 +214,8 @@ def test_every_template_is_valid_by_both(name):
 
 
 @pytest.mark.parametrize("path", sorted((ROOT / "examples").glob("*.mcl")), ids=lambda p: p.name)
-def test_every_example_mission_is_valid_by_both(path):
-    net = pipeline.compile_file(path)
+def test_every_example_mission_is_valid_by_both(path, examples):
+    net = examples.net(path.name)   # compiled once per process, shared with other tests
     assert_written_is_valid(pipeline.to_pnml_bytes(net, "layers"), path.name)
 
 
