@@ -83,10 +83,19 @@ def evaluate(predicate: Predicate, atom) -> bool:
         return atom(predicate)
     if isinstance(predicate, Not):
         return not evaluate(predicate.arg, atom)
+    # loops rather than all()/any() over a generator: the same operands asked, in the same
+    # order, stopping at the same one, without a generator frame per operand (a property of
+    # thousands of operands is evaluated in every marking)
     if isinstance(predicate, And):
-        return all(evaluate(a, atom) for a in predicate.args)
+        for a in predicate.args:
+            if not evaluate(a, atom):
+                return False
+        return True
     if isinstance(predicate, Or):
-        return any(evaluate(a, atom) for a in predicate.args)
+        for a in predicate.args:
+            if evaluate(a, atom):
+                return True
+        return False
     return predicate.value
 
 
@@ -97,13 +106,19 @@ def holds(predicate: Predicate, marking) -> bool:
 
 def atoms_of(predicate: Predicate) -> tuple[Tokens, ...]:
     """The ``Tokens`` comparisons a predicate is made of, each once, in the order met."""
-    if isinstance(predicate, Tokens):
-        return (predicate,)
-    if isinstance(predicate, Not):
-        return atoms_of(predicate.arg)
-    if isinstance(predicate, (And, Or)):
-        return tuple(dict.fromkeys(t for a in predicate.args for t in atoms_of(a)))
-    return ()
+    # walked with a stack of what is left, left to right: a recursion through nested
+    # generators cost several calls per operand, and the analysis asks this of every property
+    met: dict[Tokens, None] = {}
+    left = [predicate]
+    while left:
+        p = left.pop()
+        if isinstance(p, Tokens):
+            met[p] = None
+        elif isinstance(p, Not):
+            left.append(p.arg)
+        elif isinstance(p, (And, Or)):
+            left.extend(reversed(p.args))
+    return tuple(met)
 
 
 def places_of(predicate: Predicate) -> frozenset[str]:
