@@ -12,8 +12,12 @@ rectangles (``bb``). matplotlib's paths test curves against rectangles.
 """
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import pathlib
 import subprocess
+import tempfile
 from dataclasses import dataclass
 
 from matplotlib.path import Path
@@ -31,11 +35,46 @@ class Label:
     box: Bbox
 
 
+#: Where dot's outputs are kept for every test process of a run (set by the tests'
+#: conftest; None: in this process only). The same drawings are checked by several
+#: tests (a figure's overlaps, its legend, its text on a slide), each of which had dot
+#: lay it out again, in each worker.
+SHARED: pathlib.Path | None = None
+_LAID: dict[tuple[str, str], bytes] = {}
+#: The formats dot writes in one run when one of them is asked: the cheap ones together.
+_TOGETHER = {"json": ("json", "svg"), "svg": ("json", "svg"), "png": ("png",)}
+
+
+def laid_out(source: str, fmt: str) -> bytes:
+    """dot's output ``-T<fmt>`` of a DOT source (``json``, ``svg`` or ``png``), as
+    ``dot`` writes it; each source laid out once per run, for all its formats asked
+    together (one layout, several renderings), kept under its digest."""
+    digest = hashlib.sha256(source.encode()).hexdigest()[:40]
+    if (digest, fmt) not in _LAID:
+        kept = SHARED / f"{digest}.{fmt}" if SHARED is not None else None
+        if kept is not None and kept.is_file():
+            _LAID[digest, fmt] = kept.read_bytes()
+        else:
+            _dot(source, digest, _TOGETHER[fmt])
+    return _LAID[digest, fmt]
+
+
+def _dot(source: str, digest: str, formats) -> None:
+    with tempfile.TemporaryDirectory(dir=SHARED) as folder:   # (beside: renamed there)
+        outputs = {f: pathlib.Path(folder) / f"out.{f}" for f in formats}
+        command = ["dot"] + [a for f in formats for a in (f"-T{f}", "-o", str(outputs[f]))]
+        subprocess.run(command, input=source.encode(), capture_output=True, check=True,
+                       timeout=120)
+        for f, path in outputs.items():
+            _LAID[digest, f] = path.read_bytes()
+            if SHARED is not None:      # whole or not at all, whichever worker writes it
+                os.replace(path, SHARED / f"{digest}.{f}")
+
+
 def layout_json(source: str) -> dict:
-    """dot's layout of a DOT source, as its JSON output (``-Tjson``)."""
-    out = subprocess.run(["dot", "-Tjson"], input=source.encode(), capture_output=True,
-                         check=True, timeout=120)
-    return json.loads(out.stdout)
+    """dot's layout of a DOT source, as its JSON output (``-Tjson``); a fresh copy,
+    which the caller may change."""
+    return json.loads(laid_out(source, "json"))
 
 
 def svg_size(svg: bytes) -> tuple[float, float]:

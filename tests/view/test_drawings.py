@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 from lxml import etree
 
-from drawcheck import fitted_text, layout_json, problems
+from drawcheck import fitted_text, laid_out, layout_json, problems
 from helpers import ROOT, run_cli
 from mcl2pnml import pipeline
 from mcl2pnml.view.drawing import box_node, dot_graph, drawing, instance_clusters
@@ -40,28 +40,25 @@ def mission(name: str):
     return pipeline.compile_file(ROOT / "examples" / name)
 
 
-@lru_cache(maxsize=None)
 def overview(name: str) -> dict:
     """The example's drawing as ``compile --format svg`` makes it, laid out by dot."""
-    return layout_json(drawing(mission(name), name).source)
+    return layout_json(_drawing(f"mission:{name}").source)
 
 
 @pytest.mark.parametrize("name", TEMPLATES)
 def test_a_template_is_drawn_without_overlaps(name):
-    graph = drawing(pipeline.template_net(name), name,
-                    clusters=pipeline.template_clusters(name), expand=None)
-    assert problems(layout_json(graph.source)) == []
+    assert problems(layout_json(_drawing(f"tpl:{name}").source)) == []
 
 
 @pytest.mark.parametrize("number", sorted(FIGURES))
 def test_the_papers_figures_are_drawn_without_overlaps(number):
-    assert problems(layout_json(figure(default_library(), number).source)) == []
+    assert problems(layout_json(_drawing(f"fig:{number}").source)) == []
 
 
 def test_a_task_is_drawn_beside_its_primitive_with_the_fusion_places_between():
     """Fig. 2: the primitive in its box, the fusion places outside every box, the
     time-out dark and saying so."""
-    graph = layout_json(figure(default_library(), 2).source)
+    graph = layout_json(_drawing("fig:2").source)
     boxes = {o["name"]: o for o in graph["objects"] if o["name"].startswith("cluster")}
     assert set(boxes) == {"cluster_primitive"}
     x0, y0, x1, y1 = map(float, boxes["cluster_primitive"]["bb"].split(","))
@@ -83,7 +80,7 @@ SLOW_DRAWINGS = {"dam_inspection.mcl", "multi_leg.mcl", "sampling.mcl"}
 def test_an_example_is_drawn_as_its_calls_on_one_page(name):
     graph = overview(name)
     assert problems(graph) == []
-    png = drawing(mission(name), name).pipe(format="png")
+    png = laid_out(_drawing(f"mission:{name}").source, "png")
     width, height = struct.unpack(">II", png[16:24])
     assert width <= PAGE and height <= PAGE, (width, height)
     # one box per instance, shut
@@ -136,8 +133,12 @@ def _slide_drawings():
     yield "mission:sauce.mcl"
 
 
+# each drawing made once per test process: several tests check each (dot lays a drawing
+# out several times while it is made, to wrap its rows)
 @lru_cache(maxsize=None)
 def _drawing(which: str):
+    """A figure (``fig:N``), a template (``tpl:NAME``) or an example's overview
+    (``mission:NAME.mcl``), drawn as the commands draw it."""
     kind, _, name = which.partition(":")
     if kind == "fig":
         return figure(default_library(), int(name))
@@ -151,7 +152,7 @@ def _drawing(which: str):
     strict=True, reason="too wide yet")) if w in NOT_YET else w for w in _slide_drawings()])
 def test_every_text_is_readable_on_a_slide(which):
     """Fitted to a 1920 x 1080 slide, the SVG's smallest text is 14 px high or more."""
-    least, size = fitted_text(_drawing(which).pipe(format="svg"), SLIDE)
+    least, size = fitted_text(laid_out(_drawing(which).source, "svg"), SLIDE)
     assert least >= LEAST, (which, size, least)
 
 
@@ -209,7 +210,7 @@ def test_every_interface_circle_of_the_overview_says_whose_it_is():
 def test_the_arcs_into_a_transition_end_apart():
     """Fig. 2: the arcs into off_S1, off_S2 and off_C (from ON, D, S1, S2) each end at
     a point of their own on the box, not all at its middle."""
-    graph = layout_json(figure(default_library(), 2).source)
+    graph = layout_json(_drawing("fig:2").source)
     names = {o["_gvid"]: o["name"] for o in graph["objects"] if "pos" in o}
     for t in ("off_S1", "off_S2", "off_C"):
         ends = [next(op["points"][-1] for op in e["_draw_"] if op["op"] == "b")
