@@ -327,7 +327,7 @@ def test_the_witnesses_see_an_attack(tmp_path, witnessed, listener):
     bare = tmp_path / "bare.html"
     bare.write_text("<!DOCTYPE html><title>x</title><body>" + payloads(port)[0] + "</body>")
     w = witnessed(bare)
-    w.page.wait_for_function("window.__pwned !== undefined")
+    w.page.wait_for_function("window.__pwned !== undefined", polling=50)   # not every frame
     w.page.wait_for_timeout(300)
     assert w.pwned() and w.dialogs == ["pwned"] and "log: pwned" in w.console
     assert f"http://127.0.0.1:{port}/fetch" in w.requests

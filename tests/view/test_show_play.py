@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from helpers import ROOT, run_cli as run
+from helpers import ROOT
+from shown import shown
 from test_show import SHOTS, marking, page_of  # noqa: F401 (fixtures)
 
 #: The least width and height of a click target, in CSS pixels (WCAG 2.2's target size).
@@ -29,10 +30,7 @@ MAX_STEPS = 120
 @pytest.fixture(scope="module")
 def sauce(tmp_path_factory) -> Path:
     """The paper's mission (examples/sauce.mcl) as a page."""
-    path = tmp_path_factory.mktemp("sauce") / "sauce.html"
-    out = run("show", ROOT / "examples" / "sauce.mcl", "-o", path)
-    assert out.returncode == 0, out.stderr
-    return path
+    return shown(tmp_path_factory, "sauce.html", ROOT / "examples" / "sauce.mcl")
 
 
 def fired(page) -> list[str]:
@@ -105,6 +103,7 @@ def play_out(page, seed: int) -> dict:
 
 def _games_end(page, seeds) -> None:
     results = set()
+    role = roles(page)      # the page's, read once (it was read again for every firing)
     for seed in seeds:
         game = play_out(page, seed)
         # every game ends, in a bounded number of steps, with the mission's result marked
@@ -114,7 +113,7 @@ def _games_end(page, seeds) -> None:
         assert "The mission ended: " + game["result"] in page.text_content("#play-status")
         results.add(game["result"])
         # no lost/regained loop: a vehicle event is chosen again less and less
-        events = [t for t in fired(page) if roles(page)[t] == "event"]
+        events = [t for t in fired(page) if role[t] == "event"]
         assert max(events.count(t) for t in events) <= 4, (seed, events)
         # time passes: the vehicle takes its time, and a time-out fires at its due time
         assert game["now"] > 0
@@ -173,8 +172,10 @@ def test_play_and_pause_with_a_speed(sauce, page_of):
     # separate read on a loaded machine, and the button say Play again
     assert page.evaluate("() => { const b = document.getElementById('play'); b.click(); "
                          "return b.textContent; }") == "Pause"
+    # looked at every 50 ms (by default at every frame: Chromium drawing 60 frames a second
+    # for the whole game)
     page.wait_for_function("() => document.getElementById('play-status').className === 'result'",
-                           timeout=30_000)
+                           timeout=30_000, polling=50)
     assert page.text_content("#play") == "Play"
     assert page.evaluate("() => result()") in marking(page)
     states = page.locator("#tree div.node").evaluate_all("(ds) => ds.map((d) => d.dataset.state)")
