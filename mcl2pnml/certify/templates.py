@@ -405,16 +405,37 @@ class _Parts:
 _PARTS: dict[int, tuple[weakref.ref, _Parts]] = {}
 
 
+#: A subject's composed net, its digest and its own net (None for a joint), by the
+#: templates they are made of: a library that differs from another in a template or two
+#: (a user's pattern, a mutant's) composes only those again.
+_MADE: dict[tuple, tuple] = {}
+
+
+def _made_of(lib: Library, name: str, kind: str) -> tuple:
+    """The templates subject ``name`` of ``lib`` is composed from (its own, the primitive's,
+    the reduced task's; a joint's: the reduced task's, and the parallel's for two sites)."""
+    if kind == "joint":
+        return (name, lib.reduced, lib.get("parallel") if name == SHARED_CALLEE else None)
+    return (name, lib.get(name.removesuffix(" without a time-out")), lib.primitive,
+            lib.reduced)
+
+
 def _parts(lib: Library) -> _Parts:
     known = _PARTS.get(id(lib))
     if known is not None and known[0]() is lib:
         return known[1]
     subjects, own = [], {}
+    if len(_MADE) > 1_000:      # a long run of generated templates: keep memory flat
+        _MADE.clear()
     for name, kind, make, children, source in _subjects(lib):
-        net = make(None)
-        subjects.append((name, kind, make, children, source, net, digest(net)))
-        if kind != "joint":
-            own[name] = local(lib, name)
+        key = _made_of(lib, name, kind)
+        if key not in _MADE:
+            net = make(None)
+            _MADE[key] = (net, digest(net), None if kind == "joint" else local(lib, name))
+        net, net_digest, own_net = _MADE[key]
+        subjects.append((name, kind, make, children, source, net, net_digest))
+        if own_net is not None:
+            own[name] = own_net
     for name in ("primitive", *(f"{CALL_SITE}/{k}" for k in range(MAX_LOCKS + 1))):
         own[name] = local(lib, name)
     parts = _Parts(tuple(subjects), own, {name: shape(*o) for name, o in own.items()},
