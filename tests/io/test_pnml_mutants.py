@@ -13,6 +13,7 @@ certified missions, whose accepted certificates verifypn must confirm on the fil
 from __future__ import annotations
 
 import functools
+import hashlib
 import json
 
 import pytest
@@ -20,6 +21,7 @@ import pytest
 import peers
 import pnml_campaign as pc
 import pnml_mutants as pm
+from sessioncache import shared
 
 SEED = 20_260_301
 #: Mutants of each operator in the sample, and chains of two operators.
@@ -36,6 +38,25 @@ def _seeds() -> tuple[pm.Seed, ...]:
 @functools.cache
 def _bases() -> tuple[pc.CertBase, ...]:
     return tuple(pc.cert_bases(SEED, missions=2, never_ending=1))
+
+
+@pytest.fixture(scope="session")
+def operator_mutants(tmp_path_factory):
+    """The sample of one operator's mutants, made once per session: the two tests of each
+    operator below (changes real files; refused or read as verifypn reads it) judge the
+    same mutants, and under xdist they mostly ran on two workers that made them twice."""
+    pool = _seeds()
+    made: dict[str, list] = {}
+    seeds = hashlib.sha256(b"".join(hashlib.sha256(s.data).digest() for s in pool)).hexdigest()
+
+    def of(name: str) -> list:
+        if name not in made:
+            made[name] = shared(tmp_path_factory, "pnml-operator-mutants",
+                                (seeds, SEED, PER_OPERATOR, name),
+                                lambda: [pm.mutant(pool, k, SEED, [name])
+                                         for k in range(PER_OPERATOR)])
+        return made[name]
+    return of
 
 
 def _failures(results: list[pc.Result]) -> str:
@@ -60,11 +81,11 @@ def test_mutants_are_made_again_byte_for_byte_and_named_by_their_operator():
 
 
 @pytest.mark.parametrize("name", sorted(pm.OPERATORS))
-def test_every_operator_changes_real_files(name):
+def test_every_operator_changes_real_files(name, operator_mutants):
     """Each operator applies to the seeds, and (but for the seed's own bytes) changes
     them: a sample of its mutants is a sample of what it names."""
     pool = _seeds()
-    made = [pm.mutant(pool, k, SEED, [name]) for k in range(PER_OPERATOR)]
+    made = operator_mutants(name)
     assert all(m is not None and m.operator == name for m in made), made
     if name != "identity":
         seeds = {s.name: s.data for s in pool}
@@ -72,11 +93,9 @@ def test_every_operator_changes_real_files(name):
 
 
 @pytest.mark.parametrize("name", sorted(pm.OPERATORS))
-def test_mutants_are_refused_or_read_as_verifypn_reads_them(name, tmp_path):
+def test_mutants_are_refused_or_read_as_verifypn_reads_them(name, tmp_path, operator_mutants):
     peers.need(peers.VERIFYPN)
-    pool = _seeds()
-    results = [pc.judge(pm.mutant(pool, k, SEED, [name]), tmp_path)
-               for k in range(PER_OPERATOR)]
+    results = [pc.judge(m, tmp_path) for m in operator_mutants(name)]
     assert not _failures(results), _failures(results)
 
 
