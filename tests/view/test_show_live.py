@@ -11,10 +11,9 @@ outcome.
 from __future__ import annotations
 
 import json
+import os
 import re
 import select
-import subprocess
-import sys
 import time
 import urllib.error
 import urllib.request
@@ -24,6 +23,7 @@ from typing import Iterator
 import pytest
 
 from helpers import ROOT, run_cli as run
+from served import Served
 from test_show import marking
 
 SAUCE = ROOT / "examples" / "sauce.mcl"
@@ -45,16 +45,20 @@ def recorded(tmp_path_factory) -> list[str]:
 
 
 @contextmanager
-def serving(log, *options) -> Iterator[tuple[subprocess.Popen, str]]:
-    """`show --live LOG` started; the process and the URL it prints; killed if still up."""
-    proc = subprocess.Popen([sys.executable, "-m", "mcl2pnml", "show", str(SAUCE), "--live",
-                             str(log), *options], stderr=subprocess.PIPE, text=True)
+def serving(log, *options) -> Iterator[tuple[Served, str]]:
+    """`show --live LOG` started, a process of its own forked from the tests' command server
+    (served.py: a fresh interpreter imported the command again, a core-second); the process
+    and the URL it prints on its standard error; killed if still up."""
+    read_end, write_end = os.pipe()
+    with os.fdopen(write_end, "w") as err, open(os.devnull, "w") as out:
+        proc = Served(["show", SAUCE, "--live", log, *options], os.getcwd(), out, err)
+    stderr = os.fdopen(read_end)
     try:
         deadline, said, url = time.monotonic() + 60, "", None
         while url is None and time.monotonic() < deadline:
-            if not select.select([proc.stderr], [], [], 0.5)[0]:
+            if not select.select([stderr], [], [], 0.5)[0]:
                 continue
-            line = proc.stderr.readline()
+            line = stderr.readline()
             said += line
             found = re.search(r"http://127\.0\.0\.1:\d+/[A-Za-z0-9_-]{20,}/", line)
             if found:
@@ -68,7 +72,7 @@ def serving(log, *options) -> Iterator[tuple[subprocess.Popen, str]]:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-        proc.stderr.close()
+        stderr.close()
 
 
 def status(url: str, host: str | None = None) -> int:
