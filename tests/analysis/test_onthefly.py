@@ -20,6 +20,7 @@ from mcl2pnml.analysis.checking.on_graph import Status, check_properties, judge
 from mcl2pnml.analysis.statespace.loops import backends
 from helpers import ROOT
 from mcl2pnml import pipeline
+from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens
 from mcl2pnml.core.structure import structure
@@ -44,9 +45,24 @@ def searching_with(loops: str):
 in_c = pytest.mark.skipif(not C_BUILT, reason=NOT_BUILT)
 
 
+#: The reference method's verdicts by (net, properties, bound), worked out once per process:
+#: the examples' property files are compared with it by the on-the-fly test and by the
+#: reduced one, the same reference twice (several seconds on the larger missions). Nets,
+#: properties and verdicts are immutable.
+_FULL: dict = {}
+
+
+def full_verdicts(net, properties, max_states=MAX_CHECK_STATES):
+    """``check_properties(..., method="full")``, the reference, once per input."""
+    key = (net, tuple(properties), max_states)
+    if key not in _FULL:
+        _FULL[key] = check_properties(net, properties, max_states, method="full")
+    return _FULL[key]
+
+
 def assert_same(net, properties, max_states=1_000_000):
     fly = check_properties(net, properties, max_states, method="on-the-fly")
-    full = check_properties(net, properties, max_states, method="full")
+    full = full_verdicts(net, properties, max_states)
     for a, b in zip(fly, full):
         assert a.status is b.status, (a, b)
         assert len(a.transitions) == len(b.transitions), (a, b)
@@ -206,7 +222,7 @@ def safe_props(draw):
 
 def assert_reduced_same(net, properties, safe=False):
     reduced = check_properties(net, properties, stubborn=True, safe=safe)
-    full = check_properties(net, properties, method="full")
+    full = full_verdicts(net, properties)
     for a, b in zip(reduced, full):
         assert a.status is b.status, (a, b)
         if a.status is Status.FAILS:     # a real run that shows it, if not a shortest one
