@@ -7,8 +7,9 @@ package."""
 from __future__ import annotations
 
 import ast
-from functools import lru_cache
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = (ROOT / "analysis", ROOT / "mcl2pnml" / "language", ROOT / "mcl2pnml" / "certify",
@@ -16,10 +17,11 @@ PACKAGES = (ROOT / "analysis", ROOT / "mcl2pnml" / "language", ROOT / "mcl2pnml"
 LONGEST = 80
 
 
-@lru_cache(maxsize=1)
-def _modules() -> tuple[tuple[Path, tuple[str, ...], ast.Module], ...]:
-    # parsed once for the three tests that read every module: each parsed the whole code
-    # base again (a second of CPU each); the trees are only read, never changed
+@pytest.fixture(scope="module")
+def modules() -> tuple[tuple[Path, tuple[str, ...], ast.Module], ...]:
+    """Every module, read and parsed once for the tests that read them all (each parsed the
+    whole code base again); dropped after them: the trees held for the rest of a run
+    made every later garbage collection of the test process walk them."""
     out = []
     for package in PACKAGES:
         for path in sorted(package.rglob("*.py")):
@@ -36,18 +38,18 @@ def _where(path: Path, line: int) -> str:
     return f"{path.relative_to(ROOT)}:{line}"
 
 
-def test_no_function_is_called_a_bare_check():
+def test_no_function_is_called_a_bare_check(modules):
     """A method may be ``check`` (its class says what); a function names what it checks."""
-    bare = [_where(path, n.lineno) for path, _, tree in _modules() for n in tree.body
+    bare = [_where(path, n.lineno) for path, _, tree in modules for n in tree.body
             if isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef))
             and n.name in ("check", "check_all")]
     assert not bare, bare
 
 
-def test_a_long_function_says_why_it_is_long():
+def test_a_long_function_says_why_it_is_long(modules):
     """Over 80 lines, a comment at its head (above it, or among its first lines) says why."""
     unexplained = []
-    for path, lines, tree in _modules():
+    for path, lines, tree in modules:
         for f in _functions(tree):
             if f.end_lineno - f.lineno + 1 <= LONGEST:
                 continue
@@ -57,11 +59,11 @@ def test_a_long_function_says_why_it_is_long():
     assert not unexplained, unexplained
 
 
-def test_an_import_inside_a_function_says_why_it_waits():
+def test_an_import_inside_a_function_says_why_it_waits(modules):
     """Imports are at the top; one in a function carries a comment, or heads a block of
     imports under one, saying what it costs (``python -X importtime``)."""
     silent = []
-    for path, lines, tree in _modules():
+    for path, lines, tree in modules:
         for f in _functions(tree):
             for n in ast.walk(f):
                 if not isinstance(n, (ast.Import, ast.ImportFrom)) or "#" in lines[n.lineno - 1]:
