@@ -267,20 +267,30 @@ class TooLarge(Exception):
 
 # -- nets changed ------------------------------------------------------------------------------
 
-def rebuilt(net: Net, rename: Callable[[str], str] = lambda x: x, arcs=None,
+def _same(node: str) -> str:
+    return node
+
+
+def rebuilt(net: Net, rename: Callable[[str], str] = _same, arcs=None,
             initial=None, transitions=()) -> Net | None:
     """``net`` with every node id passed through ``rename`` (nodes given one id become one
     node, their arcs and tokens joined), ``arcs`` instead of its own, ``initial`` instead of
     its M0, ``transitions`` added; None when that is no net (an arc both read and consumed)."""
+    # no renaming (an arc or a transition added, most mutations): the nodes and arcs kept
+    # as they are, not copied one by one (a third of the campaign's time)
+    same = rename is _same
+
+    def kept(node):
+        return node if same and node.name != node.id else node.with_id(rename(node.id))
     places = {}
     for p in net.places:
-        places.setdefault(rename(p.id), p.with_id(rename(p.id)))
+        places.setdefault(rename(p.id), kept(p))
     trans = {}
     for t in (*net.transitions, *transitions):
-        trans.setdefault(rename(t.id), t.with_id(rename(t.id)))
+        trans.setdefault(rename(t.id), kept(t))
     joined: dict[tuple[str, str], Arc] = {}
     for a in (net.arcs if arcs is None else arcs):
-        b = a._replace(source=rename(a.source), target=rename(a.target))
+        b = a if same else a._replace(source=rename(a.source), target=rename(a.target))
         if joined.setdefault((b.source, b.target), b) != b:
             return None
     marking: dict[str, int] = {}
