@@ -48,10 +48,13 @@ def _small(name: str, tmp_path) -> object:
     return pipeline.compile_file(path)
 
 
-def _agree(net, assumptions: Assumptions, limit: int = 300_000) -> None:
+def _agree(net, assumptions: Assumptions, limit: int = 300_000,
+           zones: int = pipeline.MAX_CHECK_STATES) -> None:
     if assumptions.ack_within > 1 and limit < 10_000:
         return          # late acknowledgements: too many zones for a quick comparison
-    ours = pipeline.timed_ends(net, assumptions)
+    ours = pipeline.timed_ends(net, assumptions, max_states=zones)
+    if ours.always_ends is None and ours.states >= zones:
+        return          # our bound, as the reference's: too big for a quick comparison
     ref = Discrete(mission_timing(net, assumptions))
     if ours.always_ends and ours.latest is None:
         return          # the end times were not computed within the zones allowed
@@ -96,7 +99,9 @@ def test_the_zone_graph_agrees_with_one_state_per_second_on_the_examples(name, a
 def test_the_zone_graph_agrees_with_one_state_per_second_on_generated_missions(mission, k):
     net = pipeline.compile_source(_short(mission))
     try:
-        _agree(net, ASSUMED[k], limit=4_000)
+        # our zones bounded as the reference's states are: a draw of a few thousand
+        # states a second could take ours to millions of zones (minutes, a gigabyte)
+        _agree(net, ASSUMED[k], limit=4_000, zones=40_000)
     except RuntimeError:      # the reference's bound: too big for one state a second
         pass
 
