@@ -42,14 +42,12 @@ FACADE = [CLI.parent / name for name in ("pipeline.py", "cli.py", "cli_options.p
 FACADE += sorted((CLI.parent / "commands").glob("*.py"))
 
 
-def test_the_facade_and_the_commands_keep_the_code_shape(monkeypatch):
+def test_the_facade_and_the_commands_keep_the_code_shape():
     """Over 80 lines, a function says why it is long; an import inside a function says what
     it costs: tests/project/test_code_shape.py's rules, on these modules."""
     import test_code_shape as shape
 
-    def modules():
-        return [(path, text.splitlines(), ast.parse(text))
-                for path in FACADE for text in [path.read_text(encoding="utf-8")]]
-    monkeypatch.setattr(shape, "_modules", modules)
-    shape.test_a_long_function_says_why_it_is_long()
-    shape.test_an_import_inside_a_function_says_why_it_waits()
+    modules = tuple((path, tuple(text.splitlines()), ast.parse(text))
+                    for path in FACADE for text in [path.read_text(encoding="utf-8")])
+    shape.test_a_long_function_says_why_it_is_long(modules)
+    shape.test_an_import_inside_a_function_says_why_it_waits(modules)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import subprocess
+import sys
 from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import resources
@@ -34,7 +35,6 @@ from typing import Iterator
 import pytest
 
 import sitl
-from served import Served
 from helpers import ENGINES, ROOT, both, run_cli
 from mcl2pnml.pipeline import check_file
 from mcl2pnml.runtime.autopilot import AutopilotMapping
@@ -131,7 +131,7 @@ class Flight:
 class Launched:
     """A run in flight: finished within a bound, killed if the test ends first."""
 
-    def __init__(self, process: Served, folder: Path):
+    def __init__(self, process: subprocess.Popen, folder: Path):
         self.process, self.folder = process, folder
 
     def finish(self, bound: float = RUN_BOUND) -> Flight:
@@ -155,10 +155,10 @@ def flying(autopilot: sitl.Sitl, folder: Path, *options: str, mission: Path = SA
     ``folder``; a run still going when the block ends is killed."""
     folder.mkdir(parents=True, exist_ok=True)
     with open(folder / "run.out", "w") as out, open(folder / "run.err", "w") as err:
-        # forked from the tests' command server: a process of its own, without importing
-        # the command again for each flight (tests/support/served.py)
-        process = Served(["run", mission, "--vehicle", vehicle, "--connect", autopilot.address,
-                          "--log", folder / "run.jsonl", *options], ROOT, out, err)
+        process = subprocess.Popen(
+            [sys.executable, "-m", "mcl2pnml", "run", str(mission), "--vehicle", vehicle,
+             "--connect", autopilot.address, "--log", str(folder / "run.jsonl"), *options],
+            cwd=ROOT, stdin=subprocess.DEVNULL, stdout=out, stderr=err)
     try:
         yield Launched(process, folder)
     finally:
