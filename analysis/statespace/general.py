@@ -30,6 +30,8 @@ from array import array
 from collections import deque
 from dataclasses import dataclass, field
 from functools import cached_property
+from itertools import compress
+from operator import itemgetter
 from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
@@ -257,10 +259,21 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
             needs[p] = max(needs.get(p, 0), w)
         need.append(sorted(needs.items()))
         delta.append(sorted(s.incidence[j].items()))
+    # each transition filed under one place it needs a token in (or with those that
+    # need none): only the transitions filed under a marked place can be enabled, so
+    # a marking's few marked places name the transitions to test, instead of testing
+    # every transition on every marking (a ring of 10,000: 10,000 tests a marking)
+    filed: list[list[int]] = [[] for _ in s.places]
+    unfiled: list[int] = []
+    for t, needs in enumerate(need):
+        taken = [p for p, w in needs if w > 0]
+        (filed[taken[0]] if taken else unfiled).append(t)
+    places = range(len(s.places))
     free = _uncovered(s)
+    weigh = _weigher(free)
     markings: list[tuple] = [tuple(m0)]
     parent: list[int] = [-1]
-    lightest: list[int] = [_weight(markings[0], free)]   # smallest weight on the path
+    lightest: list[int] = [weigh(markings[0])]   # smallest weight on the path
     index = {markings[0]: 0}
     src, trans, dst = array("i"), array("i"), array("i")
     accelerated = False
@@ -268,16 +281,21 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
     while head < len(markings):
         m = markings[head]
         fired = False
-        for t in range(len(need)):
+        candidates = unfiled + [t for p in compress(places, m) for t in filed[p]]
+        candidates.sort()   # in the transitions' order, as testing them all took them
+        for t in candidates:
             if all(m[p] >= w for p, w in need[t]):
                 fired = True
                 m2 = list(m)
                 for p, d in delta[t]:
                     m2[p] += d  # OMEGA +- d stays OMEGA
                 m2 = tuple(m2)
-                if m2 not in index and (free is None or _weight(m2, free) > lightest[head]):
-                    m2, grew = _accelerate(m2, head, markings, parent)
-                    accelerated |= grew
+                if m2 not in index:
+                    w2 = weigh(m2)   # weighed once, for the filter and the path's lightest
+                    if free is None or w2 > lightest[head]:
+                        m2, grew = _accelerate(m2, head, markings, parent)
+                        if grew:
+                            accelerated, w2 = True, weigh(m2)
                 k = index.get(m2)
                 if k is None:
                     k = len(markings)
@@ -287,7 +305,7 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
                     index[m2] = k
                     markings.append(m2)
                     parent.append(head)
-                    lightest.append(min(lightest[head], _weight(m2, free)))
+                    lightest.append(min(lightest[head], w2))
                     if progress and k % every == 0:
                         progress(k, k - head)
                 src.append(head)
@@ -318,18 +336,29 @@ def _uncovered(s: Structure) -> "list[int] | None":
     return free or None
 
 
-def _weight(m: tuple, free: "list[int] | None") -> int:
+def _weigher(free: "list[int] | None") -> Callable[[tuple], int]:
     """What grows when a marking strictly covers an ancestor: its OMEGA places first,
-    then its tokens in uncovered places (a lexicographic pair as one exact integer)."""
+    then its tokens in uncovered places (a lexicographic pair as one exact integer);
+    0 for every marking when every place is covered.
+
+    The uncovered places are picked and summed in C (itemgetter, sum), and the
+    OMEGA places counted only when the sum says there are some: a loop in Python
+    over them took a sixth of exploring a ring of 10,000 places, where none is
+    covered for want of the invariants."""
     if free is None:
-        return 0
-    omegas = tokens = 0
-    for p in free:
-        if m[p] == OMEGA:
-            omegas += 1
-        else:
-            tokens += m[p]
-    return (omegas << 64) + int(tokens)
+        return lambda m: 0
+    pick = itemgetter(*free) if len(free) > 1 else (lambda m, p=free[0]: (m[p],))
+
+    def weight(m: tuple) -> int:
+        held = pick(m)
+        tokens = sum(held)   # counts are ints: the sum is OMEGA only if one of them is
+        if tokens != OMEGA:
+            return int(tokens)
+        omegas = held.count(OMEGA)
+        return (omegas << 64) + int(sum(x for x in held if x != OMEGA))
+    return weight
+
+
 def _accelerate(m: tuple, node: int, markings: list[tuple], parent: list[int]) -> tuple[tuple, bool]:
     """Karp-Miller: places that grew since an ancestor it covers become OMEGA."""
     total = sum(m)
