@@ -267,7 +267,10 @@ GENERATED = generated(6)
 @given(GENERATED)
 def test_peers_agree_on_generated_missions(batch):
     with tempfile.TemporaryDirectory() as folder:
-        assert _generated(batch, Path(folder)) >= len(batch) // 3
+        # some five in six missions drawn are within GENERATED_STATES, but a batch of six
+        # with only one was drawn: asking for two made the draw fail, not a peer; the
+        # comparison is not empty (and the slow variant says how many it compared)
+        assert _generated(batch, Path(folder)) >= 1
 
 
 #: Generated missions compared by the slow variant, said at its end (pytest -s).
