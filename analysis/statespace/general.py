@@ -251,23 +251,7 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
     :data:`PROGRESS_EVERY` markings.
     """
     every = PROGRESS_EVERY
-    need: list[list[tuple[int, int]]] = []
-    delta: list[list[tuple[int, int]]] = []
-    for j, (pre, read, post) in enumerate(zip(s.pre, s.read, s.post)):
-        needs = dict(read)
-        for p, w in pre.items():
-            needs[p] = max(needs.get(p, 0), w)
-        need.append(sorted(needs.items()))
-        delta.append(sorted(s.incidence[j].items()))
-    # each transition filed under one place it needs a token in (or with those that
-    # need none): only the transitions filed under a marked place can be enabled, so
-    # a marking's few marked places name the transitions to test, instead of testing
-    # every transition on every marking (a ring of 10,000: 10,000 tests a marking)
-    filed: list[list[int]] = [[] for _ in s.places]
-    unfiled: list[int] = []
-    for t, needs in enumerate(need):
-        taken = [p for p, w in needs if w > 0]
-        (filed[taken[0]] if taken else unfiled).append(t)
+    need, delta, filed, unfiled = _tables(s)
     places = range(len(s.places))
     free = _uncovered(s)
     weigh = _weigher(free)
@@ -316,6 +300,31 @@ def explore_general(s: Structure, m0: Sequence[int], max_states: int, limit_erro
     return StateSpace(s, markings, src, trans, dst, coverability=accelerated)
 
 
+
+
+def _tables(s: Structure):
+    """Each transition's needs and changes, as sorted (place, tokens) pairs, and the
+    transitions filed under one place each (``filed``) or with none (``unfiled``).
+
+    A transition is filed under one place it needs a token in, or with those that
+    need none: only the transitions filed under a marked place can be enabled, so a
+    marking's few marked places name the transitions to test, instead of testing
+    every transition on every marking (a ring of 10,000: 10,000 tests a marking).
+    """
+    need: list[list[tuple[int, int]]] = []
+    delta: list[list[tuple[int, int]]] = []
+    for j, (pre, read) in enumerate(zip(s.pre, s.read)):
+        needs = dict(read)
+        for p, w in pre.items():
+            needs[p] = max(needs.get(p, 0), w)
+        need.append(sorted(needs.items()))
+        delta.append(sorted(s.incidence[j].items()))
+    filed: list[list[int]] = [[] for _ in s.places]
+    unfiled: list[int] = []
+    for t, needs in enumerate(need):
+        taken = [p for p, w in needs if w > 0]
+        (filed[taken[0]] if taken else unfiled).append(t)
+    return need, delta, filed, unfiled
 
 
 def _uncovered(s: Structure) -> "list[int] | None":

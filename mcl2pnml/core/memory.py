@@ -76,18 +76,24 @@ def default_memory() -> int:
     of a 24 GB machine budgets 2 GB, not 12.
     """
     import resource   # Unix only: where a budget is asked, not on importing the core
+    # read as bytes in one call each: every exploration with the default budget asks
+    # (a contract check explores thousands of small nets), and a file object decoding
+    # the lines cost more than the kernel's writing them
     available = []
     try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    available.append(int(line.split()[1]) * 1024)
+        info = _read("/proc/meminfo")
+        at = info.find(b"MemAvailable:")
+        while at > 0 and info[at - 1] != ord("\n"):   # only at the start of a line
+            at = info.find(b"MemAvailable:", at + 1)
+        if at >= 0:
+            end = info.find(b"\n", at)
+            available.append(int((info[at:] if end < 0 else info[at:end]).split()[1]) * 1024)
     except OSError:
         pass
     try:
-        top = Path("/sys/fs/cgroup/memory.max").read_text().strip()
-        if top != "max":
-            used = int(Path("/sys/fs/cgroup/memory.current").read_text())
+        top = _read("/sys/fs/cgroup/memory.max").strip()
+        if top != b"max":
+            used = int(_read("/sys/fs/cgroup/memory.current"))
             available.append(max(0, int(top) - used))
     except (OSError, ValueError):
         pass
@@ -95,6 +101,18 @@ def default_memory() -> int:
     if soft != resource.RLIM_INFINITY:
         available.append(max(0, soft - resident()))
     return min(available) // 2 if available else 2 << 30
+
+
+def _read(path: str) -> bytes:
+    """A small file of /proc or /sys whole, as bytes."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        chunks = []
+        while chunk := os.read(fd, 1 << 16):
+            chunks.append(chunk)
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
 
 
 def release() -> None:
