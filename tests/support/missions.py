@@ -3,22 +3,33 @@
 from __future__ import annotations
 
 import random
+from functools import lru_cache
 
 from hypothesis import strategies as st
 
 PRIMITIVES = ["Pa", "Pb", "Pc"]
 
+#: The strategies a mission's draw uses, built once: built afresh inside each draw, each
+#: had its whole tree validated again, most of a draw's time (the draws are the same).
+TASK_KINDS = st.sampled_from(["AchieveGoal", "AchieveGoal", "KeepGoal", "KeepTwoGoals"])
+TIMEOUTS = st.sampled_from(["", " timeout 3", " timeout 10", " timeout 20"])
+PRIMITIVE_ORDERS = st.permutations(PRIMITIVES)
+SOME_PRIMITIVE = st.sampled_from(PRIMITIVES)
+TASK_COUNTS = st.integers(1, 3)
+FUNCTION_COUNTS = st.integers(0, 2)
+ARGUMENTS = st.sampled_from(["1", "2.5", "(1, 2)", "K"])
+
 
 @st.composite
 def task_decl(draw, name: str) -> str:
-    kind = draw(st.sampled_from(["AchieveGoal", "AchieveGoal", "KeepGoal", "KeepTwoGoals"]))
-    timeout = draw(st.sampled_from(["", " timeout 3", " timeout 10", " timeout 20"]))
+    kind = draw(TASK_KINDS)
+    timeout = draw(TIMEOUTS)
     if kind == "KeepTwoGoals":
-        a, b = draw(st.permutations(PRIMITIVES))[:2]
+        a, b = draw(PRIMITIVE_ORDERS)[:2]
         body = f"KeepTwoGoals({a}(x), {b}(1))"
         timeout = timeout or " timeout 10"
     else:
-        body = f"{kind}({draw(st.sampled_from(PRIMITIVES))}(x))"
+        body = f"{kind}({draw(SOME_PRIMITIVE)}(x))"
         if kind == "KeepGoal":
             timeout = timeout or " timeout 10"
     return f"task {name}(x) = {body}{timeout};"
@@ -35,13 +46,20 @@ def statement(depth: int, callees: list[str], width: int = 3, tasks: list[str] |
     that both engines stop as a zero-time loop, but not a mission to prove.
     ``any_condition``: a loop's condition may be any structure, such missions too.
     """
-    tasks = tasks or callees
-    arg = st.sampled_from(["1", "2.5", "(1, 2)", "K"])
+    return _statement(depth, tuple(callees), width, tuple(tasks or callees), any_condition)
+
+
+@lru_cache(maxsize=None)
+def _statement(depth: int, callees: tuple[str, ...], width: int, tasks: tuple[str, ...],
+               any_condition: bool):
+    """:func:`statement`'s strategy, built once for each shape and names: a mission draws
+    its bodies from it, and a new one would be validated again at each draw."""
+    arg = ARGUMENTS
     call = st.builds(lambda n, a: f"{n}({a});", st.sampled_from(callees), arg)
     condition = st.builds(lambda n, a: f"{n}({a})", st.sampled_from(tasks), arg)
     if depth == 0:
         return call
-    inner = statement(depth - 1, callees, width, tasks, any_condition)
+    inner = _statement(depth - 1, callees, width, tasks, any_condition)
     block = st.lists(inner, min_size=0, max_size=width).map(lambda b: "{ " + " ".join(b) + " }")
     nonempty = st.lists(inner, min_size=1, max_size=width).map(lambda b: "{ " + " ".join(b) + " }")
     structure = st.one_of(call.map(lambda c: c[:-1]), nonempty)
@@ -72,19 +90,30 @@ def missions(draw, depth: int = 2, width: int = 3, function_depth: int | None = 
     """
     lines = ["const K = (0.5, -1);"]
     lines += [f"primitive {p}(v);" for p in PRIMITIVES]
-    tasks = [f"T{i}" for i in range(draw(st.integers(1, 3)))]
-    lines += [draw(task_decl(t)) for t in tasks]
+    tasks = [f"T{i}" for i in range(draw(TASK_COUNTS))]
+    lines += [draw(_task_decl(t)) for t in tasks]
     callees = list(tasks)
     fdepth = depth - 1 if function_depth is None else function_depth
-    for k in range(draw(st.integers(0, 2))):
-        body = draw(st.lists(statement(fdepth, callees, width, tasks, any_condition),
-                             min_size=1, max_size=width))
+    for k in range(draw(FUNCTION_COUNTS)):
+        body = draw(_bodies(fdepth, tuple(callees), width, tuple(tasks), any_condition))
         lines.append(f"function F{k}(x) {{ {' '.join(body)} }}")
         callees.append(f"F{k}")
-    body = draw(st.lists(statement(depth, callees, width, tasks, any_condition), min_size=1,
-                         max_size=width))
+    body = draw(_bodies(depth, tuple(callees), width, tuple(tasks), any_condition))
     lines.append("mission { " + " ".join(body) + " }")
     return "\n".join(lines) + "\n"
+
+
+@lru_cache(maxsize=None)
+def _task_decl(name: str):
+    return task_decl(name)
+
+
+@lru_cache(maxsize=None)
+def _bodies(depth: int, callees: tuple[str, ...], width: int, tasks: tuple[str, ...],
+            any_condition: bool):
+    """A body's statements, one to ``width`` of them: the strategy built once per shape."""
+    return st.lists(_statement(depth, callees, width, tasks or callees, any_condition),
+                    min_size=1, max_size=width)
 
 
 replies = st.one_of(st.sampled_from(["never"]),
@@ -145,7 +174,6 @@ def shaped_missions(draw, depth: int = 3) -> str:
              "task A(x) = AchieveGoal(Pa(x)) timeout 3;",
              "task F(x) = KeepGoal(Pb(x));",
              "function E(x) { { } }"]
-    body = draw(st.lists(statement(depth, ["A", "F", "E"], 2, ["A", "F", "E"],
-                                   any_condition=True), min_size=1, max_size=2))
+    body = draw(_bodies(depth, ("A", "F", "E"), 2, ("A", "F", "E"), True))
     lines.append("mission { " + " ".join(body) + " }")
     return "\n".join(lines) + "\n"
