@@ -122,13 +122,26 @@ def _drive(loops: Loops, net: SafeNet, search: SafeSearch, max_states: int, limi
 
 
 def _dead(rows: np.ndarray, need: np.ndarray) -> int:
-    """How many of ``rows`` (markings, or one word each) enable no transition."""
+    """How many of ``rows`` (markings, or one word each) enable no transition.
+
+    A transition at a time, on the words its inputs are in, over the rows that no
+    transition tried so far enables: most markings enable one of the first few, so the
+    rows left shrink at once (testing every transition on every word of every row was a
+    third of a second for a limit of 20,000 markings)."""
     if not len(rows):   # stopped before any marking was explored (a limit of one or two)
         return 0
     rows = rows.reshape(len(rows), -1)
     need = need.reshape(len(need), -1)
+    inputs = [[(w, t[w]) for w in np.flatnonzero(t)] for t in np.unique(need, axis=0)]
     dead = 0
-    for start in range(0, len(rows), 1 << 12):
-        part = rows[start:start + (1 << 12), None, :]
-        dead += int((~np.all(part & need == need, axis=2)).all(axis=1).sum())
+    for start in range(0, len(rows), 1 << 16):   # a bounded copy of the queue at a time
+        left = rows[start:start + (1 << 16)]
+        for words in inputs:
+            enabled = np.ones(len(left), dtype=bool)
+            for w, mask in words:
+                enabled &= (left[:, w] & mask) == mask
+            left = left[~enabled]
+            if not len(left):
+                break
+        dead += len(left)
     return dead
