@@ -601,11 +601,16 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
     """The campaign on this loop: the cluster reached (or started), the batches sent, the
     runs taken in seed order, the scheduler watched; everything closed within a bound."""
     import asyncio   # with Dask: only a campaign's flight, not the command's start
-    from distributed import Client, LocalCluster   # Dask: only a campaign's flight
+    from dask.system import CPU_COUNT   # Dask: only a campaign's flight
+    from distributed import Client, LocalCluster
     made: list = []     # the cluster and the client, as soon as each exists: to close
 
     async def local():
-        made.append(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+        # no more workers than batches: a worker with none to fly still started an
+        # interpreter that imported Dask (a second and a half of CPU, for nothing, in a
+        # campaign of one batch on two workers)
+        count = max(1, min(workers or CPU_COUNT, -(-flight.runs // BATCH)))
+        made.append(LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
                                  dashboard_address=None, silence_logs=logging.CRITICAL,
                                  asynchronous=True))
         await made[-1]
