@@ -602,7 +602,7 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
     runs taken in seed order, the scheduler watched; everything closed within a bound."""
     import asyncio   # with Dask: only a campaign's flight, not the command's start
     from dask.system import CPU_COUNT   # Dask: only a campaign's flight
-    from distributed import Client, LocalCluster
+    from distributed import Client, LocalCluster   # Dask: only a campaign's flight
     made: list = []     # the cluster and the client, as soon as each exists: to close
 
     async def local():
