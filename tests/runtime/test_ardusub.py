@@ -357,7 +357,9 @@ def test_the_ground_station_failsafe_disarms_and_the_flown_primitives_fail(autop
     failed = flight.reports("failed")
     assert failed, flight.out[-3000:]
     assert all(e["source"] == "autopilot" and "disarmed" in e["why"] for e in failed), failed
-    assert failed[0]["primitive"] == "GoToWayPoint"
+    # which of the flown primitives the disarm reaches first depends on where the mission
+    # was when the failsafe came (on a loaded machine, between two legs): one of them
+    assert failed[0]["primitive"] in ("GoToWayPoint", "KeepDepth"), failed
     assert flight.outcome == "FAIL"
     assert_as_the_semantics_say(flight)
     flight.assert_left_disarmed()
