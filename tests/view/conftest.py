@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 import drawcheck
-from shown import shared_folder
+from sessioncache import folder as shared_folder
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -14,15 +14,7 @@ import os
 from pathlib import Path
 
 from helpers import run_cli
-
-
-def shared_folder(tmp_path_factory) -> Path:
-    """A folder of this test run's that every worker sees (under xdist each worker's base
-    folder is in the run's; alone, the base folder is the run's)."""
-    base = tmp_path_factory.getbasetemp()
-    folder = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "shown"
-    folder.mkdir(exist_ok=True)
-    return folder
+from sessioncache import folder as shared_folder    # the run's folder every worker sees
 
 
 def shown(tmp_path_factory, name: str, *args) -> Path:
@@ -35,7 +27,7 @@ def shown(tmp_path_factory, name: str, *args) -> Path:
         else:
             digest.update(b"arg\0" + str(arg).encode())
         digest.update(b"\0")
-    folder = shared_folder(tmp_path_factory) / digest.hexdigest()[:32]
+    folder = shared_folder(tmp_path_factory) / f"shown-{digest.hexdigest()[:32]}"
     page = folder / name
     if not page.is_file():
         folder.mkdir(exist_ok=True)
