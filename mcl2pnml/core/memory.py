@@ -104,12 +104,13 @@ def default_memory() -> int:
 
 
 def _read(path: str) -> bytes:
-    """A small file of /proc or /sys whole, as bytes."""
+    """A small file of /proc or /sys whole, as bytes (its first MiB: they are a few KiB)."""
     fd = os.open(path, os.O_RDONLY)
     try:
-        chunks = []
-        while chunk := os.read(fd, 1 << 16):
+        chunks, size = [], 0
+        while size < 1 << 20 and (chunk := os.read(fd, 1 << 16)):
             chunks.append(chunk)
+            size += len(chunk)
         return b"".join(chunks)
     finally:
         os.close(fd)
