@@ -32,12 +32,17 @@ system-deps:
 
 $(STAMP): pyproject.toml analysis/statespace/loops/_native.c
 	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
+	@# uv installs the dependencies in a few seconds where pip takes a minute and more
+	@# (pip resolves one by one and compiles every module to bytecode; the tests compile
+	@# those they import). Where uv cannot be had, pip does the same install.
+	$(PY) -m pip install --quiet uv || echo "warning: could not install uv; installing with pip"
 	@# Storm checks the exact odds in the tests; where its wheel cannot be had, they skip.
 	@# One install with it (one resolution, one build of the C loops), without it on failure
-	$(PY) -m pip install --quiet -e '.[test,mavlink,storm]' \
+	install() { if [ -x $(BIN)/uv ]; then $(BIN)/uv pip install --quiet --python $(PY) "$$@"; \
+	            else $(PY) -m pip install --quiet "$$@"; fi; }; \
+	install -e '.[test,mavlink,storm]' \
 	  || { echo "warning: could not install stormpy; the tests that compare the odds with Storm's will say so"; \
-	       $(PY) -m pip install --quiet -e '.[test,mavlink]'; }
+	       install -e '.[test,mavlink]'; }
 	touch $(STAMP)
 
 setup: system-deps $(STAMP)
