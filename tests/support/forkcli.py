@@ -38,25 +38,55 @@ STATUS = struct.Struct("!ii")   # (pid, 0) first, then (0, returncode as subproc
 # -- the server ---------------------------------------------------------------------
 
 def _preload() -> None:
-    """Import every module a command may import, and build the parsers that do not
-    depend on the environment, before any fork."""
+    """Import every module a command may import, the libraries its functions import
+    when they run (sympy, Dask, jsonschema: most of a second each, per command
+    otherwise), build the parsers that do not depend on the environment and load the
+    installed templates, before any fork."""
+    import ast
     import importlib
     import pkgutil
+    from pathlib import Path
 
     import mcl2pnml
     import mcl2pnml.analysis as analysis   # installed under mcl2pnml from its own folder
+    later: set[str] = set()
     for package in (mcl2pnml, analysis):
         for info in pkgutil.walk_packages(package.__path__, package.__name__ + "."):
             if not info.name.endswith("__main__"):
                 try:
-                    importlib.import_module(info.name)
+                    module = importlib.import_module(info.name)
                 except Exception:   # an optional extra (pymavlink...): imported when used
-                    pass
-    from mcl2pnml.language import parser
-    for name in dir(parser):
-        built = getattr(parser, name)
-        if callable(built) and hasattr(built, "cache_info") and not _needs_args(built):
-            built()
+                    continue
+                if str(module.__file__).endswith(".py"):    # not the compiled loops
+                    later |= _imported_when_run(Path(module.__file__), ast)
+    for name in sorted(later):
+        try:
+            importlib.import_module(name)
+        except Exception:       # an optional extra, or a module only some platforms have
+            pass
+    from mcl2pnml.language import parser, template_parser
+    for module in (parser, template_parser):
+        for name in dir(module):
+            built = getattr(module, name)
+            if callable(built) and hasattr(built, "cache_info") and not _needs_args(built):
+                built()
+    from mcl2pnml.language.library import ENV, default_library
+    if not os.environ.get(ENV):
+        default_library()       # a command whose environment names templates loads its own
+
+
+def _imported_when_run(path: Path, ast) -> set[str]:
+    """The modules the functions of the module at ``path`` import when they run."""
+    tree = ast.parse(path.read_bytes())
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for inner in ast.walk(node):
+                if isinstance(inner, ast.Import):
+                    found |= {alias.name for alias in inner.names}
+                elif isinstance(inner, ast.ImportFrom) and inner.level == 0 and inner.module:
+                    found.add(inner.module)
+    return found
 
 
 def _needs_args(function) -> bool:
@@ -92,6 +122,9 @@ def _command(request: dict, fds: list[int]) -> int:
     os.chdir(request["cwd"])
     os.environ.clear()
     os.environ.update(request["env"])
+    from mcl2pnml.language.library import ENV, default_library
+    if os.environ.get(ENV):     # templates of its own: not the server's library
+        default_library.cache_clear()
     sys.path[0] = os.getcwd()       # as ``python -m`` puts it
     # the streams as a fresh interpreter opens them on these descriptors
     sys.stdin = open(0, closefd=False)
