@@ -82,11 +82,12 @@ def shared():
 
 def test_the_sequential_test_stops_as_soon_as_it_decides(exact, shared):
     target = exact.outcomes["OK"] - 0.1       # plainly true: decided early
-    flown = campaign(SAUCE, CampaignOptions(MODEL, runs=20_000, target=target,
+    runs = 4 * BATCH        # decided in the first batch: the other three are never taken
+    flown = campaign(SAUCE, CampaignOptions(MODEL, runs=runs, target=target,
                                             scheduler=shared)).flown
     data = flown.as_json()
     assert data["test"]["decided"] == f"P(OK) >= {target:g}"
-    assert data["runs"] == data["test"]["after_runs"] < 20_000
+    assert data["runs"] == data["test"]["after_runs"] < BATCH
 
 
 @pytest.fixture
