@@ -105,8 +105,9 @@ PYTEST := env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest --durations=15
 test: setup
 	$(PYTEST) $(TEST_WORKERS)
 
+# every test, the slow ones too, each drawing its whole sample (tests/support/sampling.py)
 test-slow: setup
-	$(PYTEST) $(TEST_WORKERS) -m slow
+	MCL2PNML_TEST_THOROUGH=1 $(PYTEST) $(TEST_WORKERS) -m ''
 
 bench: setup
 	$(PY) -m bench.suite

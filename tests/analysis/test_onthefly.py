@@ -25,6 +25,7 @@ from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens
 from mcl2pnml.core.structure import structure
 from test_properties_check import props, small_nets
+from sampling import sample
 
 C_BUILT = onthefly.available()
 NOT_BUILT = "the loops in C were not built (no C compiler at install)"
@@ -80,7 +81,7 @@ def _safe(net) -> bool:
 
 
 @pytest.mark.parametrize("loops", LOOPS)
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=sample(100, 35), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
 def test_on_the_fly_agrees_with_the_full_exploration(loops, net, prop):
     with searching_with(loops):
@@ -233,7 +234,7 @@ def assert_reduced_same(net, properties, safe=False):
 
 
 @pytest.mark.parametrize("loops", LOOPS)
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=sample(80, 30), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(two_machines(), safe_props())
 def test_the_reduction_keeps_every_verdict(loops, net, prop):
     assert onthefly.proven_safe(structure(net))

@@ -16,6 +16,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_property
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens, holds
+from sampling import sample
 
 KINDS = list(ScopeKind)
 PATTERNS = list(Pattern)
@@ -215,7 +216,7 @@ def props(draw):
                                                           ScopeKind.AFTER_UNTIL) else None))
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=sample(150, 50), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
 def test_check_agrees_with_the_reference(net, prop):
     assert_agrees(net, prop, length=7)

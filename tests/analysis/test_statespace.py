@@ -26,6 +26,7 @@ from mcl2pnml.core.net import ArcKind, NetBuilder
 from mcl2pnml.core.structure import structure
 
 from strategies import nets
+from sampling import sample
 
 
 #: The safe-net explorers; ``native-python``: the native one on the Python loops.
@@ -189,7 +190,7 @@ def test_graph_and_paths(backend):
 
 
 @pytest.mark.parametrize("backend", SAFE_IN_C)
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=sample(80, 30), deadline=None)
 @given(nets(max_places=5, max_transitions=4))
 def test_the_bitset_explorers_agree_with_the_general_one(backend, net):
     with pytest.MonkeyPatch.context() as monkeypatch:
@@ -285,7 +286,7 @@ def _same_space(fast, slow):
 
 
 @pytest.mark.parametrize("backend", SAFE_IN_C)
-@settings(max_examples=120, deadline=None)
+@settings(max_examples=sample(120, 40), deadline=None)
 @given(spread_safe_nets())
 def test_the_bitset_explorers_on_markings_of_several_words(backend, net):
     with pytest.MonkeyPatch.context() as monkeypatch:
@@ -432,7 +433,7 @@ def test_counters_grow_past_their_first_width():
     assert sorted(space.format(n) for n in space.terminal) == [[]]
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=sample(150, 50), deadline=None)
 @given(nets(max_places=5, max_transitions=4))
 def test_the_counter_explorer_agrees_with_the_general_one(net):
     try:
@@ -475,7 +476,7 @@ def _karp_miller_walking_every_ancestor(s, m0, max_states):
     return markings, edges
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=sample(200, 60), deadline=None)
 @given(nets(max_places=5, max_transitions=4))
 def test_incremental_karp_miller_builds_the_graph_of_the_full_walk(net):
     s = structure(net)
@@ -537,7 +538,7 @@ def test_dead_markings_met_before_the_budget_are_counted(backend):
 
 
 @pytest.mark.parametrize("loops", LOOPS[:1])
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=sample(80, 30), deadline=None)
 @given(st.one_of(spread_safe_nets(), nets(max_places=6, max_transitions=5)),
        st.data())
 def test_the_loops_and_numpy_answer_alike_for_a_packed_state_space(loops, net, data):

@@ -30,6 +30,7 @@ from mcl2pnml.analysis.zoo import cycle, philosophers
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import ArcKind, Marking, Net, NetBuilder
 from mcl2pnml.core.structure import structure
+from sampling import sample
 
 # ---------------------------------------------------------------------------
 # hand-built nets
@@ -371,7 +372,7 @@ def small_nets(draw, max_places: int = 6, max_transitions: int = 5):
     return b.build()
 
 
-@settings(max_examples=250, deadline=None)
+@settings(max_examples=sample(250, 80), deadline=None)
 @given(small_nets(max_places=8, max_transitions=6))
 def test_minimal_siphons_and_traps_are_those_of_brute_force(net):
     s = structure(net)
@@ -390,7 +391,7 @@ def test_minimal_siphons_and_traps_are_those_of_brute_force(net):
             assert sum(c * net.initial[p] for p, c in y.items()) > 0
 
 
-@settings(max_examples=250, deadline=None)
+@settings(max_examples=sample(250, 80), deadline=None)
 @given(small_nets(max_places=6, max_transitions=5))
 def test_invariant_bases_by_definition(net):
     s = structure(net)
@@ -447,7 +448,7 @@ def _farkas_both_ways(net):
                   lambda x: right_null(s, x, c), 4)
 
 
-@settings(max_examples=250, deadline=None)
+@settings(max_examples=sample(250, 80), deadline=None)
 @given(small_nets(max_places=6, max_transitions=4))
 def test_farkas_finds_exactly_the_minimal_support_semipositive_invariants(net):
     _farkas_both_ways(net)

@@ -7,6 +7,7 @@ from mcl2pnml.core.errors import NetError
 from mcl2pnml.core.net import Marking, Net, NetBuilder
 
 from strategies import nets
+from sampling import sample
 
 
 def chain(name: str) -> "Net":
@@ -88,7 +89,7 @@ def _classes(net, groups):
     return {m: min(c, key=order.__getitem__) for m, c in cls.items()}
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=sample(100, 35), deadline=None)
 @given(net_and_groups(), st.randoms())
 def test_fusion_is_associative_and_loses_nothing(case, rnd):
     net, groups = case
@@ -138,7 +139,7 @@ def components_and_groups(draw):
     return parts, groups
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=sample(150, 50), deadline=None)
 @given(components_and_groups())
 def test_one_pass_composition_is_union_then_fusion_and_valid(case):
     """compose() skips the full check of its result: the result must pass it anyway."""

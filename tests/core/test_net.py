@@ -5,6 +5,7 @@ from hypothesis import given, settings, strategies as st
 from mcl2pnml.core.errors import NetError
 from mcl2pnml.core.net import (Arc, ArcKind, FrozenDict, Marking, Net, NetBuilder, Place,
                           Timing, Transition, freeze, thaw)
+from sampling import sample
 
 
 def small() -> Net:
@@ -102,7 +103,7 @@ _broken_arcs = st.builds(
     st.sampled_from([ArcKind.NORMAL, ArcKind.READ, "read"]))
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=sample(300, 100), deadline=None)
 @given(st.lists(_node_ids, max_size=3), st.lists(_node_ids, max_size=3),
        st.lists(_broken_arcs, max_size=4),
        st.dictionaries(_node_ids, st.integers(1, 2), max_size=2),

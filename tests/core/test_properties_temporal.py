@@ -16,6 +16,7 @@ from mcl2pnml.analysis.checking.on_graph import Status, check_property
 from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind
 from mcl2pnml.core.temporal import ctl, evaluate, ltl, reachability, show
 from test_properties_check import _graph, chain, at, props, runs, small_nets
+from sampling import sample
 
 
 def _runs_satisfy(net, formula, length=7):
@@ -29,7 +30,7 @@ def _runs_satisfy(net, formula, length=7):
     return True
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=sample(150, 50), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small_nets(), props())
 def test_the_ltl_form_means_what_the_observer_checks(net, prop):
     verdict = check_property(net, prop)

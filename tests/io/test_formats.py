@@ -22,6 +22,7 @@ from mcl2pnml.language.library import default_library
 from helpers import DATA, ROOT, assert_error_golden, run_cli as run
 from formats_readers import read_dot, read_lola, read_tina
 from strategies import nets
+from sampling import sample
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 TEMPLATES = ["primitive", "task", "KeepGoal", "sequence", "parallel", "monitor"]
@@ -102,7 +103,7 @@ def same_structure(a, b, *, read_as_loop: bool = False) -> None:
     assert plain(a, read_as=mode) == plain(b, read_as=mode)
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=sample(150, 50), deadline=None)
 @given(nets())
 def test_any_net_survives_tina_and_lola_through_our_readers(net):
     back = parse_tina(to_tina(net), "random.net")

@@ -47,6 +47,7 @@ from mcl2pnml.io.pnml.grammar import (ENV, OFFICIAL, OURS, find_grammar, officia
 from helpers import DATA, ROOT, assert_golden, run_cli
 from missions import missions
 from strategies import nets
+from sampling import sample
 
 PNML = DATA / "pnml"
 SCHEMA_VALID = sorted((PNML / "schema" / "valid").glob("*.pnml"))
@@ -429,7 +430,7 @@ def mutants(draw):
     return root
 
 
-@settings(max_examples=150, deadline=None, derandomize=True,
+@settings(max_examples=sample(150, 50), deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(mutants())
 def test_composed_mutants_get_one_verdict_from_both(official, root):

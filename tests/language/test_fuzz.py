@@ -35,6 +35,7 @@ from mcl2pnml.pipeline import to_pnml_bytes
 from mcl2pnml.language.library import default_library
 
 from helpers import DATA, ROOT
+from sampling import sample
 
 MCL_NAME = "fuzz.mcl"
 PNML_NAME = "fuzz.pnml"
@@ -255,13 +256,13 @@ def pnml_reader(data: bytes) -> None:
 
 # -- the short runs (make test) and the campaign (make test-slow) ---------------------
 
-@settings(max_examples=300, **CAMPAIGN)
+@settings(max_examples=sample(300, 100), **CAMPAIGN)
 @given(mutated_mcl())
 def test_mcl_front_end_mutants(data):
     mcl_front_end(data)
 
 
-@settings(max_examples=300, **CAMPAIGN)
+@settings(max_examples=sample(300, 100), **CAMPAIGN)
 @given(mutated_pnml())
 def test_pnml_reader_mutants(data):
     pnml_reader(data)

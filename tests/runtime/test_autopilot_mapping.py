@@ -27,6 +27,7 @@ from mcl2pnml.runtime.autopilot import MAX_MAPPING, SAFE_STEPS, AutopilotMapping
 from mcl2pnml.runtime.simprims import installed
 
 from helpers import DATA, ROOT, assert_error_golden, one_error, run_cli
+from sampling import sample
 
 INVALID = sorted((DATA / "autopilot" / "invalid").glob("*.json"))
 SAUCE = ROOT / "examples" / "sauce.mcl"
@@ -341,7 +342,7 @@ def _paths(value, path=()):
             yield from _paths(item, path + (index,))
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=sample(200, 70), deadline=None)
 @given(JSON, st.sampled_from([None, 0, 2, "\t"]), st.sampled_from([(",", ":"), (", ", ": ")]),
        st.booleans())
 def test_every_value_starts_where_the_locator_says(value, indent, separators, ascii_only):

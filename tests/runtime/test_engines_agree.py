@@ -14,6 +14,7 @@ from mcl2pnml.pipeline import check_source, compile_checked
 
 from helpers import ROOT, both
 from missions import missions, scripts
+from sampling import sample
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 
@@ -55,7 +56,7 @@ def test_the_papers_mission_ends_as_the_paper_says(examples):
     assert "ReleaseMarker" not in {e["primitive"] for e in petri["trace"]}
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=sample(80, 25), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(missions(), scripts)
 def test_generated_missions_run_the_same_on_both_engines(source, script):
     checked = check_source(source, "generated.mcl")
