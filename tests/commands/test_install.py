@@ -4,6 +4,7 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 
 from helpers import ROOT
 
@@ -13,8 +14,13 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
     # build from a copy: setuptools' build/ directory may hold stale files
     shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
         ".venv", ".git", "build", "out", "*.egg-info", "__pycache__", ".hypothesis"))
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
-                    "-w", str(wheel_dir), str(source)], check=True, timeout=300)
+    # uv where make setup installed it: it builds with the same backend (setuptools, from
+    # pyproject.toml) in an environment it keeps, where pip downloads setuptools each time
+    uv = Path(sys.executable).parent / "uv"
+    build = [str(uv), "build", "--quiet", "--wheel", "--out-dir", str(wheel_dir), str(source)] \
+        if uv.exists() else [sys.executable, "-m", "pip", "wheel", "--quiet", "--no-deps",
+                             "-w", str(wheel_dir), str(source)]
+    subprocess.run(build, check=True, timeout=300)
     wheel = next(wheel_dir.glob("mcl2pnml-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
     templates = sorted(n for n in names if n.startswith("mcl2pnml/templates/"))
