@@ -53,8 +53,11 @@ RUN_BOUND, MISSION_BOUND, TEST_BOUND = 30.0, 15.0, 120
 #: Seconds of the autopilot's clock after arming when a fault is made to happen:
 #: the vehicle is then on its way to the first waypoint.
 FAULT_AT = 5.0
-#: The speed-up of the autopilot whose GPS a second station turns off mid-survey.
-GPS_LOST_SPEEDUP = 20
+#: The speed-up of an autopilot a second station faults mid-mission (its GPS turned off,
+#: the autopilot killed, its ground station's heartbeat stopped): at 100 the mission runs
+#: on for 100 of its seconds in each second the station waits for a core, and two suites
+#: side by side on 2 cores had the mission end before the fault came.
+FAULT_SPEEDUP = 20
 #: A ground station's system id that nobody on the link has (we are 255, the
 #: second station 254): made the autopilot's own, its heartbeats stop for it.
 NOBODY = 200
@@ -73,6 +76,14 @@ def ardusub() -> Path:
 def autopilot(ardusub, tmp_path) -> Iterator[sitl.Sitl]:
     """An ArduSub of the test's own, with ArduPilot's SITL defaults, stopped at the end."""
     with sitl.running(ardusub, tmp_path / "sitl") as running:
+        yield running
+
+
+@pytest.fixture
+def faulted(ardusub, tmp_path) -> Iterator[sitl.Sitl]:
+    """An ArduSub of the test's own, as ``autopilot``, at :data:`FAULT_SPEEDUP`: a second
+    station faults it mid-mission."""
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=FAULT_SPEEDUP) as running:
         yield running
 
 
@@ -304,8 +315,8 @@ def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(ardusub, tmp_pat
     # the GPS must be off well before the survey's last waypoint (about 20 s of the
     # autopilot's clock after the fault's time): at a speed-up of 100 that is 0.2 s of
     # wall clock for the second station to see the time and set the parameter, which two
-    # suites side by side on 2 cores have exceeded; at GPS_LOST_SPEEDUP, 1 s
-    with sitl.running(ardusub, tmp_path / "sitl", speedup=GPS_LOST_SPEEDUP) as autopilot, \
+    # suites side by side on 2 cores have exceeded; at FAULT_SPEEDUP, 1 s
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=FAULT_SPEEDUP) as autopilot, \
             flying(autopilot, tmp_path, "--world", str(world)) as run, \
             sitl.second(autopilot) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
@@ -326,12 +337,12 @@ def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(ardusub, tmp_pat
 
 
 @pytest.mark.timeout(TEST_BOUND)
-def test_the_autopilot_killed_mid_mission_stalls_the_run_with_the_link_lost(autopilot,
-                                                                           tmp_path):
-    with flying(autopilot, tmp_path, "--liveness", "2") as run, \
-            sitl.second(autopilot) as ground:
+def test_the_autopilot_killed_mid_mission_stalls_the_run_with_the_link_lost(faulted,
+                                                                            tmp_path):
+    with flying(faulted, tmp_path, "--liveness", "2") as run, \
+            sitl.second(faulted) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
-        autopilot.kill()
+        faulted.kill()
         flight = run.finish()
     flight.assert_clean()
     assert flight.outcome == "STALLED" and flight.status == 5
@@ -344,10 +355,12 @@ def test_the_autopilot_killed_mid_mission_stalls_the_run_with_the_link_lost(auto
 
 
 @pytest.mark.timeout(TEST_BOUND)
-def test_the_ground_station_failsafe_disarms_and_the_flown_primitives_fail(autopilot,
+def test_the_ground_station_failsafe_disarms_and_the_flown_primitives_fail(faulted,
                                                                            tmp_path):
-    with flying(autopilot, tmp_path) as run, sitl.second(autopilot) as ground:
+    with flying(faulted, tmp_path) as run, sitl.second(faulted) as ground:
         assert ground.param("FS_GCS_ENABLE") == 2      # ArduSub's default: disarm
+        # the time-out ArduSub has (the harness gives the other flights more, sitl.HARNESS)
+        assert ground.set_param("FS_GCS_TIMEOUT", sitl.FS_GCS_TIMEOUT) == sitl.FS_GCS_TIMEOUT
         ground.mission_time(FAULT_AT, MISSION_BOUND)
         assert ground.set_param("MAV_GCS_SYSID", NOBODY) == NOBODY
         flight = run.finish()

@@ -478,7 +478,15 @@ def test_on_ardusub_a_signal_surfaces_and_disarms_the_sub(tmp_path, signals, spe
         assert ground.depth < SURFACED, ground.depth
     sig = signals[0]
     assert "Traceback" not in ended.err, ended.err[-3000:]
-    assert ended.status == 128 + sig, (ended.status, ended.err[-2000:])
+    # the second signal is sent once the autopilot has left GUIDED; a loaded machine can
+    # deliver it after the run has ended, its outcome written and its handlers given back:
+    # the interpreter then ends by SIGINT, which a shell sees as 130 all the same
+    # (test_a_second_signal_while_the_safe_state_runs_changes_nothing holds the run to
+    # the second signal within the safe state without racing it)
+    in_time = f"mcl2pnml: {sig.name}: the safe state goes on" in ended.err
+    late = len(signals) > 1 and not in_time
+    assert ended.status == 128 + sig or (late and ended.status == -sig), \
+        (ended.status, ended.err[-2000:])
     result = json.loads(ended.out)
     assert result["outcome"] == "INTERRUPTED"
     assert result["diagnosis"][0] == f"interrupted by {sig.name}"
@@ -486,8 +494,6 @@ def test_on_ardusub_a_signal_surfaces_and_disarms_the_sub(tmp_path, signals, spe
     assert safe_state(ended) == [("hold", True), ("surface", True), ("disarm", True)]
     assert ended.last["outcome"] == "INTERRUPTED"
     assert ended.last["diagnosis"][0] == f"interrupted by {sig.name}"
-    if len(signals) > 1:
-        assert f"mcl2pnml: {sig.name}: the safe state goes on" in ended.err
 
 
 # -- why a run ended -------------------------------------------------------------------------

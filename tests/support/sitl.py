@@ -49,6 +49,15 @@ DEFAULTS = "sub.parm"
 #: Simulated seconds per wall second asked for (about 100 is what two cores keep up).
 SPEEDUP = 100
 HOME = "43.6,-8.8,0,0"
+#: What every test's autopilot has besides ArduPilot's SITL defaults (a test's own file
+#: comes after it). The ground-station failsafe waits 60 s of the autopilot's clock for our
+#: heartbeat, not ArduSub's 5: at the speed-up of 100 those 5 s are 50 ms of wall time,
+#: less than a machine loaded by a second suite keeps our heartbeat thread waiting for a
+#: core, and the failsafe then ended flights that test something else. The failsafe's own
+#: test sets ArduSub's 5 s back.
+HARNESS = {"FS_GCS_TIMEOUT": 60}
+#: ArduSub's own ground-station failsafe time-out, in seconds of its clock.
+FS_GCS_TIMEOUT = 5
 #: The instance numbers the tests use (0, the program's default, is left to people).
 INSTANCES = range(1, 61)
 #: The first MAVLink port (SERIAL0, the mission's), the second (SERIAL1), the RC input.
@@ -214,8 +223,11 @@ def running(folder: Path, work: Path, extra: Path | None = None,
     """ArduSub from ``folder`` running in ``work`` (its eeprom and logs go there) on an
     instance of its own, waiting for its first client; ``extra``: a parameter file loaded
     after ArduPilot's SITL defaults. Stopped at the end, however the block ends."""
-    defaults = str(folder / DEFAULTS) + (f",{Path(extra).resolve()}" if extra else "")
     work.mkdir(parents=True, exist_ok=True)
+    harness = work / "harness.parm"
+    harness.write_text("".join(f"{name} {value:g}\n" for name, value in HARNESS.items()))
+    defaults = ",".join([str(folder / DEFAULTS), str(harness.resolve()),
+                         *([str(Path(extra).resolve())] if extra else [])])
     with instance() as n:
         output = work / "sitl.log"
         with open(output, "w") as console:
