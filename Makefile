@@ -34,12 +34,12 @@ $(STAMP): pyproject.toml analysis/statespace/loops/_native.c
 	$(PYTHON) -m venv $(VENV)
 	@# uv installs the dependencies in a few seconds where pip takes a minute and more
 	@# (pip resolves one by one and compiles every module to bytecode; the tests compile
-	@# those they import). Where uv cannot be had, pip does the same install.
+	@# those they import). Where uv cannot be had or fails, pip does the same install.
 	$(PY) -m pip install --quiet uv || echo "warning: could not install uv; installing with pip"
 	@# Storm checks the exact odds in the tests; where its wheel cannot be had, they skip.
 	@# One install with it (one resolution, one build of the C loops), without it on failure
-	install() { if [ -x $(BIN)/uv ]; then $(BIN)/uv pip install --quiet --python $(PY) "$$@"; \
-	            else $(PY) -m pip install --quiet "$$@"; fi; }; \
+	install() { { [ -x $(BIN)/uv ] && $(BIN)/uv pip install --quiet --python $(PY) "$$@"; } \
+	            || $(PY) -m pip install --quiet "$$@"; }; \
 	install -e '.[test,mavlink,storm]' \
 	  || { echo "warning: could not install stormpy; the tests that compare the odds with Storm's will say so"; \
 	       install -e '.[test,mavlink]'; }
