@@ -36,8 +36,8 @@ import sitl
 from mcl2pnml.runtime.mavlink import POSITION, TANK_MARGIN
 from mcl2pnml.runtime.simulator import World
 from test_ardusub import (FAULT_AT, MISSION_BOUND, RUN_BOUND, TEST_BOUND,  # noqa: F401
-                          ardusub, assert_autopilot_disarmed, assert_disarmed, autopilot, fly,
-                          flying)  # (fixtures too)
+                          ardusub, assert_autopilot_disarmed, assert_disarmed, autopilot,
+                          faulted, fly, flying)  # (fixtures too)
 
 #: Wall seconds the autopilot's process is stopped (SIGSTOP) mid-mission.
 STOPPED = 10.0
@@ -200,9 +200,11 @@ def test_a_home_that_puts_the_vehicle_outside_the_tank_never_arms_it(autopilot, 
 
 
 @pytest.mark.timeout(TEST_BOUND)
-def test_a_vehicle_sent_out_of_the_tank_is_stopped_at_its_wall(autopilot, tmp_path):
+def test_a_vehicle_sent_out_of_the_tank_is_stopped_at_its_wall(faulted, tmp_path):
     world = World()
-    with flying(autopilot, tmp_path) as run, sitl.second(autopilot) as ground:
+    # at the fault speed-up (test_ardusub.FAULT_SPEEDUP): at 100 a loaded machine had the
+    # mission ended before the second station sent the sub out
+    with flying(faulted, tmp_path) as run, sitl.second(faulted) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
         # the watching station (no heartbeat: not heard as one) sends the sub 30 m south
         # of the tank's wall, in the autopilot's frame (its origin: the world's start)

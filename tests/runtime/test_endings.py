@@ -33,7 +33,7 @@ from helpers import ROOT, run_cli
 
 #: Wall seconds: a run's start (a fresh interpreter), its end after a signal (the safe
 #: state included), a state of the fake autopilot awaited, the test as a whole.
-START_BOUND, END_BOUND, STATE_BOUND, TEST_BOUND = 60.0, 30.0, 30.0, 120
+START_BOUND, END_BOUND, STATE_BOUND, TEST_BOUND = 60.0, 30.0, 60.0, 120
 #: A mission that never ends on the simulator: each Hold is kept until its time-out
 #: (OK), and the loop goes on; beside it a watch that stays enabled (no obstacle comes).
 #: At a virtual time limit no machine reaches, it runs until it is stopped.
@@ -425,8 +425,9 @@ def test_a_run_ended_by_bad_input_writes_its_log_to_the_error(tmp_path):
 
 # -- on ArduSub (tests/support/sitl.py) ----------------------------------------------------------------
 
-#: Wall seconds: a SITL test as a whole (its start, the dive, the end).
-SITL_TEST_BOUND = 90
+#: Wall seconds: a SITL test as a whole (its start, the dive, the end; two suites side by
+#: side on 2 cores took over 30 s to have the run arm the sub).
+SITL_TEST_BOUND = 150
 #: Metres: the sub is diving (the paper's first waypoint is at 2 m), then surfaced (the
 #: mapping's surface depth, 0.3 m, and what the simulator's waves add).
 DIVING, SURFACED = 0.5, 0.5
