@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
 from mcl2pnml.core.bounds import MAX_STATES
-from mcl2pnml.core.memory import (NEGLIGIBLE, Budget, BudgetExceeded, guard, margin, release,
+from mcl2pnml.core.memory import (NEGLIGIBLE, SLACK, Budget, BudgetExceeded, guard, margin, release,
                                   resident, size_text)
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES
@@ -295,13 +295,18 @@ def _typed(result: dict[str, Any], state_space_only: bool, partial: Partial | No
 
 
 def _floored(budget: Budget) -> Budget:
-    """``budget``, or a little above what the process holds now when that is more:
-    a budget smaller than the process can only stop what grows."""
-    floor = resident() + NEGLIGIBLE
-    if budget.limit >= floor:
+    """``budget``, or one that lets the process grow by :data:`~mcl2pnml.core.memory.SLACK`
+    past what it holds now when that is more: a budget smaller than the process can only
+    stop what grows. The guard stops a stage :func:`~mcl2pnml.core.memory.margin` below
+    its limit, so the limit is raised by that too (without it the guard tripped at its
+    first look, and a small stage's result was kept or not by how long it took)."""
+    floor = resident() + SLACK
+    if budget.limit - margin(budget.limit) >= floor:
         return budget
-    raised = Budget(floor)
-    raised.given, raised.limit = budget.given, floor
+    # past 50 margins' worth the margin is a fiftieth of the limit
+    limit = max(floor + margin(floor), -(-floor * 50 // 49))
+    raised = Budget(limit)
+    raised.given, raised.limit = budget.given, limit
     return raised
 
 

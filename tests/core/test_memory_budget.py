@@ -283,3 +283,19 @@ def test_every_shape_of_a_hundred_thousand_places_ends_within_its_budget(tmp_pat
     r = json.loads(out.stdout)
     assert r["places"] in (99_999, 100_000)
     assert (out.returncode == 3) == ("partial" in r)
+
+
+@pytest.mark.parametrize("given", [1, 1 << 20, 90 << 20, 4 << 30])
+def test_a_budget_below_the_process_stops_a_stage_only_once_it_has_grown(given):
+    """A structural stage under a budget smaller than the process runs under one raised
+    past what the process holds: its guard trips only after the stage has grown by
+    SLACK, never at its first look (which made a small stage's result depend on how long
+    it took on a loaded machine)."""
+    budget = Budget(given)
+    floored = report._floored(budget)
+    trip = floored.limit - memory.margin(floored.limit)
+    assert trip >= memory.resident() + memory.SLACK or floored is budget
+    if floored is budget:       # a budget that already leaves that room is kept
+        assert budget.limit - memory.margin(budget.limit) >= memory.resident() + memory.SLACK
+    else:
+        assert floored.given == budget.given
