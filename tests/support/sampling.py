@@ -2,10 +2,10 @@
 whole one in ``make test-slow``.
 
 A test that draws its cases (Hypothesis's examples, generated missions, mutants)
-checks the same things on each; past a few dozen the new cases rarely reach code the
-first ones did not. ``make test`` draws the quick sample so that the suite ends within
-its budget on two cores; ``make test-slow`` sets ``MCL2PNML_TEST_THOROUGH=1`` and draws
-the whole one, besides running the tests marked ``slow``.
+makes the same checks on each: the quick sample keeps every check and draws fewer
+cases, so that the suite fits its budget on two cores. ``make test-slow`` sets
+``MCL2PNML_TEST_THOROUGH=1`` and draws the whole one, besides running the tests
+marked ``slow``.
 """
 from __future__ import annotations
 
