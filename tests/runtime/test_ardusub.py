@@ -309,16 +309,15 @@ def test_a_flight_is_replayed_on_the_page_and_drawn_as_fig_5(autopilot, tmp_path
 # -- faults ------------------------------------------------------------------------------------
 
 @pytest.mark.timeout(TEST_BOUND)
-def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(ardusub, tmp_path):
+def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(faulted, tmp_path):
     # without the cross nothing but the waypoints can end the survey
     world = world_without_the_cross(tmp_path)
     # the GPS must be off well before the survey's last waypoint (about 20 s of the
     # autopilot's clock after the fault's time): at a speed-up of 100 that is 0.2 s of
     # wall clock for the second station to see the time and set the parameter, which two
     # suites side by side on 2 cores have exceeded; at FAULT_SPEEDUP, 1 s
-    with sitl.running(ardusub, tmp_path / "sitl", speedup=FAULT_SPEEDUP) as autopilot, \
-            flying(autopilot, tmp_path, "--world", str(world)) as run, \
-            sitl.second(autopilot) as ground:
+    with flying(faulted, tmp_path, "--world", str(world)) as run, \
+            sitl.second(faulted) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
         assert ground.set_param("SIM_GPS1_ENABLE", 0) == 0
         flight = run.finish()
