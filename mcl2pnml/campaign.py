@@ -79,11 +79,14 @@ PING_EVERY = 2.0
 #: Seconds a local cluster may take to start its worker processes, and any cluster to
 #: close (a frozen scheduler is abandoned then, not waited for).
 LOCAL_START, CLOSE_BOUND = 120.0, 5.0
+#: Seconds a stopped campaign (a signal) has to close its client and its cluster (each
+#: within :data:`CLOSE_BOUND`) before it is abandoned.
+STOP_BOUND = 3 * CLOSE_BOUND
 #: What ``--plot`` can write (matplotlib's writers, by the file's suffix).
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 #: What ``--table`` can write.
 TABLE_SUFFIXES = (".csv", ".parquet")
-#: The signals that stop a campaign as Ctrl-C does (besides SIGINT, asyncio's own).
+#: The signals that stop a campaign as Ctrl-C (SIGINT) does.
 STOP_SIGNALS = (signal.SIGTERM, signal.SIGHUP)
 #: The loggers of Dask and of what it runs on, silenced while a campaign runs.
 DASK_LOGGERS = ("distributed", "tornado", "asyncio", "bokeh")
@@ -525,36 +528,91 @@ def _on_own_loop(make: Callable) -> None:
 
 
 def _stoppable(make: Callable) -> None:
-    """``asyncio.run(make())``, SIGTERM and SIGHUP stopping it as asyncio's own handling
-    of Ctrl-C does (in the main thread, unless the signal is ignored): the coroutine
+    """Run the coroutine ``make()`` on a new event loop, SIGINT, SIGTERM and SIGHUP
+    stopping it (in the main thread, unless the signal is ignored): the coroutine
     cancelled, its cluster closed, then the run time's
     :class:`~mcl2pnml.runtime.interrupts.Interrupted` (a KeyboardInterrupt naming the
     signal), which the CLI says as an interruption, exit 128 + the signal. The handlers
-    there before are put back."""
-    import asyncio   # with Dask: only a campaign's flight, not the command's start
-    caught: list[int] = []
+    there before are put back.
 
-    async def main():
-        loop, task = asyncio.get_running_loop(), asyncio.current_task()
-        before = {}
-        if threading.current_thread() is threading.main_thread():
-            for signum in STOP_SIGNALS:
-                if signal.getsignal(signum) not in (signal.SIG_IGN, None):
-                    before[signum] = signal.getsignal(signum)
-                    loop.add_signal_handler(signum, lambda n=signum: (caught.append(n),
-                                                                      task.cancel()))
-        try:
-            await make()
-        finally:
-            for signum, handler in before.items():
-                loop.remove_signal_handler(signum)
-                signal.signal(signum, handler)
+    Not ``asyncio.run``: it waits, unbounded, for a cancelled task to end, and Dask's
+    tasks can swallow a cancellation (a stop while a local cluster started hung so). Here
+    the stop waits :data:`STOP_BOUND` seconds for the campaign to close its cluster, and
+    the loop's own closing :data:`CLOSE_BOUND` for what is left; what is still running
+    then is abandoned with the loop."""
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
+    loop = asyncio.new_event_loop()
+    asyncio.set_event_loop(loop)        # as asyncio.run does: Dask may ask for it
+    caught: list[int] = []
+    stop = loop.create_future()
+    before = {}
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, *STOP_SIGNALS):
+            handler = signal.getsignal(signum)
+            # SIGINT: only while Python's own handler has it, as asyncio.run does
+            if handler in (signal.SIG_IGN, None) or \
+                    (signum == signal.SIGINT and handler is not signal.default_int_handler):
+                continue
+            before[signum] = handler
+            loop.add_signal_handler(signum, lambda n=signum: (
+                caught.append(n), stop.done() or stop.set_result(n)))
     try:
-        asyncio.run(main())
+        task = loop.create_task(make())
+        loop.run_until_complete(asyncio.wait({task, stop},
+                                             return_when=asyncio.FIRST_COMPLETED))
+        if task.done():
+            task.result()
+            return
+        task.cancel()           # its own ending closes its cluster, each step bounded
+        loop.run_until_complete(asyncio.wait({task}, timeout=STOP_BOUND))
+        if task.done() and not task.cancelled():
+            task.exception()    # taken: what failed while it stopped is not said apart
+        raise Interrupted(caught[0])
+    finally:
+        for signum, handler in before.items():
+            loop.remove_signal_handler(signum)
+            signal.signal(signum, handler)
+        _close_loop(loop)
+
+
+def _close_loop(loop) -> None:
+    """Close ``loop`` as ``asyncio.run`` does (its tasks cancelled, its generators and
+    default executor shut down), each step within :data:`CLOSE_BOUND` seconds: a task
+    that does not end when cancelled is abandoned with the loop, silently."""
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
+    try:
+        left = [t for t in asyncio.all_tasks(loop) if not t.done()]
+        for task in left:
+            task.cancel()
+        for step in ([asyncio.gather(*left, return_exceptions=True)] if left else []) + \
+                [loop.shutdown_asyncgens(), loop.shutdown_default_executor()]:
+            loop.run_until_complete(asyncio.wait({loop.create_task(step) if
+                                                  asyncio.iscoroutine(step) else step},
+                                                 timeout=CLOSE_BOUND))
+        if any(not t.done() for t in asyncio.all_tasks(loop)):
+            # what was abandoned is destroyed pending with the loop: not a message of ours
+            loop.set_exception_handler(lambda _loop, _context: None)
+    finally:
+        asyncio.set_event_loop(None)
+        loop.close()
+
+
+async def _within(awaitable, seconds: float):
+    """``awaitable``'s result, or ``asyncio.TimeoutError`` after ``seconds``: it is then
+    cancelled and left, not waited for (``asyncio.wait_for`` waits for a cancelled task to
+    end, which one of Dask's that swallows its cancellation never does). Cancelled from
+    outside, it cancels ``awaitable`` and ends at once, for the same reason."""
+    import asyncio   # with Dask: only a campaign's flight, not the command's start
+    task = asyncio.ensure_future(awaitable)
+    try:
+        done, _ = await asyncio.wait({task}, timeout=seconds)
     except asyncio.CancelledError:
-        if caught:
-            raise Interrupted(caught[0]) from None
+        task.cancel()
         raise
+    if not done:
+        task.cancel()
+        raise asyncio.TimeoutError
+    return task.result()
 
 
 class _NotDask(Exception):
@@ -625,13 +683,13 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
     try:
         if scheduler is None:
             try:
-                await asyncio.wait_for(local(), LOCAL_START)
+                await _within(local(), LOCAL_START)
             except asyncio.TimeoutError:
                 raise Mcl2PnmlError(f"the local Dask cluster did not start within "
                                     f"{LOCAL_START:g} s") from None
         else:
             try:
-                await asyncio.wait_for(reach(), timeouts.handshake)
+                await _within(reach(), timeouts.handshake)
             except asyncio.TimeoutError:
                 raise Mcl2PnmlError(f"the Dask scheduler {scheduler} did not complete "
                                     f"Dask's handshake within {timeouts.handshake:g} s "
@@ -650,7 +708,7 @@ async def _flown(flight: _Flight, scheduler: str | None, workers: int | None,
     finally:
         for closing in reversed(made):      # the client, then its cluster
             try:
-                await asyncio.wait_for(closing.close(), CLOSE_BOUND)
+                await _within(closing.close(), CLOSE_BOUND)
             except Exception:    # noqa: BLE001 (a lost or frozen scheduler: abandoned)
                 pass
 
@@ -717,7 +775,7 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
         question bounded by what is left of it, asked every :data:`PING_EVERY` s."""
         while (left := heard[0] + silence - loop.time()) > 0:
             try:
-                said = await asyncio.wait_for(client.scheduler.identity(n_workers=0), left)
+                said = await _within(client.scheduler.identity(n_workers=0), left)
             except Exception:       # noqa: BLE001 (no answer, or one Dask raises as an error)
                 said = None
             count = said.get("n_workers") if isinstance(said, dict) else None
@@ -733,7 +791,8 @@ async def _run(flight: _Flight, client, named: str, silence: float) -> None:
     finally:
         for task in (taking, watching):
             task.cancel()
-        await asyncio.gather(taking, watching, return_exceptions=True)
+        # bounded: a task awaiting Dask can swallow its cancellation (see _within)
+        await asyncio.wait({taking, watching}, timeout=CLOSE_BOUND)
     if taking in done:
         taking.result()
         return

@@ -337,3 +337,84 @@ def test_sigterm_stops_a_campaign_with_its_cluster_closed(tmp_path):
     assert not table.exists()
     _, alive = psutil.wait_procs(children, timeout=MARGIN)
     assert not alive, alive
+
+
+# a coroutine as Dask's can be: it swallows its cancellation and goes on waiting
+STUBBORN = """
+import asyncio, sys
+import mcl2pnml.campaign as campaign
+from mcl2pnml.runtime.interrupts import Interrupted
+campaign.STOP_BOUND = campaign.CLOSE_BOUND = 0.5
+
+async def stubborn():
+    print("waiting", flush=True)
+    while True:
+        try:
+            await asyncio.sleep(3600)
+        except asyncio.CancelledError:
+            pass
+
+try:
+    campaign._stoppable(stubborn)
+except Interrupted as e:
+    sys.exit(128 + e.signum)
+"""
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP],
+                         ids=lambda s: signal.Signals(s).name)
+def test_a_stop_ends_the_campaign_even_if_its_tasks_swallow_their_cancellation(signum):
+    """Dask's tasks can swallow a cancellation (a stop while a local cluster started hung
+    so): the stop waits a bound for them, then leaves them, and the process ends
+    interrupted by the signal."""
+    proc = subprocess.Popen([sys.executable, "-c", STUBBORN], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline() == "waiting\n", proc.stderr.read()
+        proc.send_signal(signum)
+        out = _ended(proc, MARGIN)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert out.returncode == 128 + signum, out.stderr
+    assert out.stderr == "", out.stderr     # nothing said of what was left behind
+
+
+def test_a_bounded_wait_leaves_a_task_that_swallows_its_cancellation(monkeypatch):
+    """The campaign's deadlines on Dask hold where ``asyncio.wait_for`` would wait, after
+    its timeout, for a task that does not end when cancelled; and so does the closing of
+    its loop, where ``asyncio.run``'s would wait for it."""
+    import asyncio
+    import mcl2pnml.campaign as module
+    monkeypatch.setattr(module, "CLOSE_BOUND", 0.2)
+    still: list[bool] = []
+
+    async def stubborn():
+        while True:
+            try:
+                await asyncio.sleep(3600)
+            except asyncio.CancelledError:
+                still.append(True)
+
+    async def deadline():
+        start = time.monotonic()
+        with pytest.raises(asyncio.TimeoutError):
+            await module._within(stubborn(), 0.2)
+        assert time.monotonic() - start < MARGIN
+        await asyncio.sleep(0)      # the cancellation is thrown in at the task's next step
+        assert still, "the task was not cancelled"
+
+    async def cancelled():
+        waiting = asyncio.ensure_future(module._within(stubborn(), 3600))
+        await asyncio.sleep(0.2)
+        waiting.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await asyncio.wait_for(waiting, MARGIN)
+    for case in (deadline, cancelled):
+        loop = asyncio.new_event_loop()
+        start = time.monotonic()
+        try:
+            loop.run_until_complete(case())
+        finally:
+            module._close_loop(loop)
+        assert time.monotonic() - start < MARGIN
