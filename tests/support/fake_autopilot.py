@@ -98,7 +98,8 @@ class FakeAutopilot:
         self.address = f"tcp:127.0.0.1:{self.port}"
         self.conn: socket.socket | None = None
         self.send_lock = threading.Lock()
-        self.state = threading.Lock()
+        # reentrant: the tick turns, under it, to what is due (which takes it again)
+        self.state = threading.RLock()
         self.stop = threading.Event()
         self.connected = threading.Event()
         self.random = random.Random(1)
@@ -204,14 +205,18 @@ class FakeAutopilot:
         except BaseException as e:     # a fault of the fake itself: the test shows it
             self.error = e
 
-    def _turn(self) -> bool:
-        """Turn to ``then`` once due; True when the connection is to end now."""
+    def _due(self) -> None:
+        """Turn to ``then`` once due: counted from the first target flown."""
         if self.then and self.turned_at is None and self.armed and self.flown:
             self.turned_at = time.monotonic()
         if self.turned_at is not None and self.then and \
                 time.monotonic() - self.turned_at >= self.after:
             self._become(self.then)
             self.then = None
+
+    def _turn(self) -> bool:
+        """Turn to ``then`` once due; True when the connection is to end now."""
+        self._due()
         if self.behaviour == "close":
             self.conn.close()
             return True
@@ -236,6 +241,8 @@ class FakeAutopilot:
                 self.frozen_at = self.boot()
             if behaviour == "paused":
                 self.paused_until = time.monotonic() + self.pause
+            if behaviour == "crowded":      # the other station is heard at once
+                self.next_heartbeat = 0.0
             self.behaviour = behaviour
 
     def _tick(self) -> None:
@@ -261,6 +268,11 @@ class FakeAutopilot:
                 self._send(self._heartbeat_message())
             return
         with self.state:
+            # under the lock the reader takes a target in: a turn due at a target is made
+            # before the vehicle flies one tick toward it (a tick a loaded machine can make
+            # long enough to fly the whole mission)
+            self._due()
+            b = self.behaviour
             self._move(dt)
             boot = self.boot()
         millis = int(boot * 1000) & 0xFFFFFFFF
@@ -275,12 +287,11 @@ class FakeAutopilot:
         if now >= self.next_heartbeat:
             self.next_heartbeat = now + 1.0 / self.speedup
             messages.append(self._heartbeat_message())
-            if b == "crowded":     # packed by the other station's own encoder
+            if b == "crowded":     # packed by the other station's own encoder, and sent
+                # first: heard before the telemetry of the tick it came in
                 other = self.station.heartbeat_encode(6, 8, 0, 0, 4).pack(self.station)
-                self._send(*messages)
                 with self.send_lock:
                     self.conn.sendall(other)
-                return
         self._send(*messages)
 
     def _late(self, now: float) -> None:
