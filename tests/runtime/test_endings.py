@@ -306,9 +306,14 @@ def fake_autopilot():
         fake.close()
 
 
+#: The runs' liveness on the fake autopilot: these tests are of signals, not of the link,
+#: and a loaded machine can hold the fake's thread (in the test's process) for seconds
+LIVENESS = "15"
+
+
 def flying(folder: Path, fake, *options: str):
     return launched(folder, SAUCE, "--vehicle", "mavlink", "--connect", fake.address,
-                    "--liveness", "5", *options)
+                    "--liveness", LIVENESS, *options)
 
 
 def safe_state(ended: Ended) -> list[tuple[str, bool]]:
@@ -361,7 +366,7 @@ def test_a_third_signal_cuts_the_safe_state_short_and_says_so(tmp_path, fake_aut
     settings = json.loads((ROOT / "mcl2pnml" / "runtime" / "ardusub.json").read_text())
     mapping.write_text(json.dumps({**settings, "secure_within": 4}))
     with launched(tmp_path / "run", SAUCE, "--vehicle", f"mavlink:{mapping}", "--connect",
-                  fake.address, "--liveness", "5") as run:
+                  fake.address, "--liveness", LIVENESS) as run:
         run.wait_for(lambda: fake.armed and fake.flown and fake.behaviour == "deaf",
                      "the sub flying, deaf")
         for _ in range(2):
