@@ -23,7 +23,11 @@ So the property fails iff the product reaches a ``BAD`` state, or a pending
 state on a dead marking, or a cycle of pending states (a nontrivial strongly
 connected component of the pending part). Breadth first search gives the
 shortest prefix; a lasso's cycle is the shortest one back within the
-pending part, and the counterexample returned is the shortest of all.
+pending part, and the counterexample returned is the shortest of all in the
+product. A finite one is so among the net's runs too; a lasso may not be: the
+observer can need several turns of a loop of the net to see the violation (a
+scope opened on the loop), and the product's lasso holds those turns, its loop
+moved back as far as the markings allow.
 
 The observer's state is ``(scope, pattern)``:
 

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, check_property
+from mcl2pnml.analysis.checking.observers import ObserverTable
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.patterns import Const, Not, Pattern, Property, Scope, ScopeKind, Tokens, holds
 from sampling import sample
@@ -168,13 +169,29 @@ def assert_agrees(net, prop, length=9):
         assert exts
         for s, l in exts:
             assert reference_violates(prop, marks, s, l), (prop, s, l)
-    # shortest: no violating finite run is shorter; a lasso's length is its prefix and
-    # cycle, compared with the other lassos (a prefix counts what it takes to see the
-    # violation, which an infinite run may show only on its second turn)
-    lengths = [len(t) for _, t, l in bad if l is None or verdict.shape is Shape.LASSO]
+    # shortest: no violating finite run is shorter. A lasso u v^w is seen by the observer
+    # (deterministic, of N states) within N turns of v, so the product holds it as a
+    # lasso of at most |u| + N |v| steps, which bounds the one returned: no tighter, as the
+    # loop the observer needs may be several turns of the net's (after Q, Q on the loop)
+    turns = len(_observer_states(prop))
+    lengths = [len(t) if l is None else l + turns * (len(t) - l) for _, t, l in bad]
     if lengths:
         assert len(verdict.transitions) <= min(lengths), (prop, verdict, min(lengths))
     return verdict
+
+
+def _observer_states(prop) -> set[int]:
+    """The observer states of ``prop`` reachable from its start, whatever is read."""
+    table = ObserverTable(prop)
+    seen, todo = {table.start}, [table.start]
+    while todo:
+        k = todo.pop()
+        for code in range(16):
+            nxt = table.after(k, code)
+            if nxt not in seen:
+                seen.add(nxt)
+                todo.append(nxt)
+    return seen
 
 
 # -- random nets ---------------------------------------------------------------------------
