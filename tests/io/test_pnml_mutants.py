@@ -21,13 +21,14 @@ import pytest
 import peers
 import pnml_campaign as pc
 import pnml_mutants as pm
+from sampling import sample
 from sessioncache import shared
 
 SEED = 20_260_301
 #: Mutants of each operator in the sample, and chains of two operators.
 PER_OPERATOR, CHAINS = 5, 40
-#: Mutants of certified missions in the sample (each operator about once).
-CERT_MUTANTS = 80
+#: Mutants of certified missions in the sample (each operator about once in the whole one).
+CERT_MUTANTS = sample(80, 30)
 
 
 @functools.cache

@@ -52,6 +52,7 @@ from hypothesis import HealthCheck, given, seed, settings, strategies as st
 
 import peers
 from helpers import ROOT
+from sampling import sample
 from missions import missions
 from strategies import ids, nets
 from mcl2pnml.analysis.statespace.explorers import CHOICES, EXPLORERS
@@ -73,7 +74,7 @@ HEAVY_STATES = 200_000
 #: Generated nets past this many markings are discarded (and counted).
 MAX_STATES = 20_000
 #: Generated missions and nets of each kind judged in `make test`, and their seed.
-FAST_MISSIONS, FAST_NETS, FAST_SEED = 25, 60, 0
+FAST_MISSIONS, FAST_NETS, FAST_SEED = sample(25, 12), sample(60, 30), 0
 #: The slow variants: chunks of generated missions and nets, each chunk its own seed,
 #: and the missions judged by every explorer whatever their size.
 SLOW_CHUNKS, SLOW_MISSIONS, SLOW_NETS, EVERY_EXPLORER_MISSIONS = 4, 500, 500, 20

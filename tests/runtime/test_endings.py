@@ -457,7 +457,10 @@ def watching_depth(ground) -> None:
 
 @pytest.mark.timeout(SITL_TEST_BOUND)
 @pytest.mark.parametrize("signals, speedup", [
-    ((signal.SIGTERM,), sitl.SPEEDUP), ((signal.SIGHUP,), sitl.SPEEDUP),
+    # SIGHUP takes SIGTERM's path (each signal is sent to the fake autopilot's runs above):
+    # on ArduSub, a variant of the slow suite
+    ((signal.SIGTERM,), sitl.SPEEDUP),
+    pytest.param((signal.SIGHUP,), sitl.SPEEDUP, marks=pytest.mark.slow),
     # the safe state takes two or three seconds of the autopilot's: at a speed-up of 10,
     # a fifth of a second of the wall clock, for the second signal to come in
     ((signal.SIGINT, signal.SIGINT), sitl.SPEEDUP / 10)], ids=["SIGTERM", "SIGHUP", "SIGINT-twice"])
