@@ -604,6 +604,8 @@ async def _within(awaitable, seconds: float):
     outside, it cancels ``awaitable`` and ends at once, for the same reason."""
     import asyncio   # with Dask: only a campaign's flight, not the command's start
     task = asyncio.ensure_future(awaitable)
+    # what a task left here ends in is taken when it ends: not an error said at its end
+    task.add_done_callback(lambda t: t.cancelled() or t.exception())
     try:
         done, _ = await asyncio.wait({task}, timeout=seconds)
     except asyncio.CancelledError:

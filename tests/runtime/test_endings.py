@@ -309,6 +309,9 @@ def fake_autopilot():
 #: The runs' liveness on the fake autopilot: these tests are of signals, not of the link,
 #: and a loaded machine can hold the fake's thread (in the test's process) for seconds
 LIVENESS = "15"
+#: ... but a command a deaf autopilot does not answer is waited for up to the liveness
+#: (each step of its safe state): less there, or that test waits it out at every step
+DEAF_LIVENESS = "8"
 
 
 def flying(folder: Path, fake, *options: str):
@@ -366,7 +369,7 @@ def test_a_third_signal_cuts_the_safe_state_short_and_says_so(tmp_path, fake_aut
     settings = json.loads((ROOT / "mcl2pnml" / "runtime" / "ardusub.json").read_text())
     mapping.write_text(json.dumps({**settings, "secure_within": 4}))
     with launched(tmp_path / "run", SAUCE, "--vehicle", f"mavlink:{mapping}", "--connect",
-                  fake.address, "--liveness", LIVENESS) as run:
+                  fake.address, "--liveness", DEAF_LIVENESS) as run:
         run.wait_for(lambda: fake.armed and fake.flown and fake.behaviour == "deaf",
                      "the sub flying, deaf")
         for _ in range(2):
