@@ -120,6 +120,18 @@ def free_port() -> int:
 # -- a peer that behaves ------------------------------------------------------------------------
 
 @pytest.mark.timeout(TEST_BOUND)
+def test_every_position_streamed_is_judged_not_only_the_latest():
+    # an autopilot ticking twice a wall second streams ten positions each time (a link
+    # that batches, a loaded machine): the last of them is metres past the cross under
+    # the second leg, one in between is over it
+    with FakeAutopilot(tick=0.5) as fake:
+        result, _, _ = fly(fake)
+    assert result.outcome is Outcome.OK, result.report()
+    assert [p[:2] for p in fake.commanded(DO_SET_SERVO)] == [(9, 1900), (9, 1100)], \
+        "the cross was flown over and not seen"
+
+
+@pytest.mark.timeout(TEST_BOUND)
 def test_a_peer_that_behaves_flies_the_mission_and_is_left_disarmed(tmp_path):
     log = tmp_path / "run.jsonl"
     with FakeAutopilot() as fake:

@@ -68,6 +68,10 @@ ACCEPTED, FAILED, UNSUPPORTED = 0, 4, 3
 EKF_OK = 0x1F7          # attitude, velocities, positions: 0x10 (horizontal absolute) among them
 PREARM_OK = 0x10000000
 CUSTOM_MODE_ENABLED, ARMED = 0x01, 0x80
+#: The longest step of its clock (s) between two positions it sends (half a metre at its
+#: default speed, within the camera's footprint on the cross), and the most steps
+#: one tick sends (a tick held longer than that takes longer steps).
+STEP, MAX_STEPS = 0.25, 400
 BEHAVIOURS = ("fly", "silent", "garbage", "flood", "flood+fly", "leap", "backwards", "frozen",
               "heartbeats", "deaf", "close", "drift", "paused", "crowded")
 
@@ -273,10 +277,19 @@ class FakeAutopilot:
             # long enough to fly the whole mission)
             self._due()
             b = self.behaviour
-            self._move(dt)
             boot = self.boot()
+            # a tick a loaded machine held long is flown in steps, each position sent, as an
+            # autopilot streams them: one jump would carry the vehicle past what the run
+            # senses on its way (the cross under the second leg)
+            steps = min(MAX_STEPS, max(1, math.ceil(dt / STEP)))
+            track = []
+            for k in range(steps):
+                self._move(dt / steps)
+                at = int((boot - (steps - 1 - k) * dt / steps) * 1000) & 0xFFFFFFFF
+                track.append(self.encoder.local_position_ned_encode(at, *self.ned,
+                                                                    *self.velocity))
         millis = int(boot * 1000) & 0xFFFFFFFF
-        messages = [self.encoder.local_position_ned_encode(millis, *self.ned, *self.velocity),
+        messages = [*track,
                     self.encoder.attitude_encode(millis, 0.0, 0.0, self.yaw, 0.0, 0.0, 0.0)]
         if now >= self.next_slow:
             self.next_slow = now + 0.5 / self.speedup
