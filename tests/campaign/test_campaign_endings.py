@@ -367,8 +367,11 @@ def test_a_stop_ends_the_campaign_even_if_its_tasks_swallow_their_cancellation(s
     """Dask's tasks can swallow a cancellation (a stop while a local cluster started hung
     so): the stop waits a bound for them, then leaves them, and the process ends
     interrupted by the signal."""
+    # the signal at its default in the child, as a shell starts it: a test worker can
+    # ignore SIGINT, and an ignored signal is inherited (and rightly left ignored)
     proc = subprocess.Popen([sys.executable, "-c", STUBBORN], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signum, signal.SIG_DFL))
     try:
         assert proc.stdout.readline() == "waiting\n", proc.stderr.read()
         proc.send_signal(signum)

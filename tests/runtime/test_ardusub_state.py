@@ -226,7 +226,10 @@ def test_a_vehicle_sent_out_of_the_tank_is_stopped_at_its_wall(faulted, tmp_path
 # -- case 7: the autopilot stopped for a while ------------------------------------------------
 
 @pytest.mark.timeout(TEST_BOUND + 30)
-def test_an_autopilot_stopped_mid_mission_is_disarmed_once_it_resumes(autopilot, tmp_path):
+def test_an_autopilot_stopped_mid_mission_is_disarmed_once_it_resumes(faulted, tmp_path):
+    # at the fault speed-up: at 100, a second suite beside this one had the mission ended
+    # between the station's reading of its time and the stop
+    autopilot = faulted
     with flying(autopilot, tmp_path, "--liveness", "2") as run, \
             sitl.second(autopilot) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)
