@@ -285,7 +285,9 @@ class FakeAutopilot:
             track = []
             for k in range(steps):
                 self._move(dt / steps)
-                at = int((boot - (steps - 1 - k) * dt / steps) * 1000) & 0xFFFFFFFF
+                # a clock that stands stamps every step with its time
+                back = 0.0 if self.frozen_at is not None else (steps - 1 - k) * dt / steps
+                at = int((boot - back) * 1000) & 0xFFFFFFFF
                 track.append(self.encoder.local_position_ned_encode(at, *self.ned,
                                                                     *self.velocity))
         millis = int(boot * 1000) & 0xFFFFFFFF
