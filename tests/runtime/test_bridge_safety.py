@@ -527,6 +527,12 @@ def test_the_example_server_refuses_a_second_client(server):
     first = TcpTransport(address(s), FAST)
     first.open()
     try:
+        # the place is taken once the server has the link open, which can be a moment
+        # after our side has (two suites side by side let the second take it first)
+        deadline = time.monotonic() + 15
+        while not s.busy.locked() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert s.busy.locked(), "the server never took the first link"
         with pytest.raises(Mcl2PnmlError, match=r"cannot connect to the vehicle's bridge at "
                            r".*: the vehicle's bridge refused the link: busy: this bridge "
                            r"serves one client at a time"):

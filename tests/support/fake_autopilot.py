@@ -115,6 +115,8 @@ class FakeAutopilot:
         self.target: tuple[float, float, float] | None = None
         self.offset = 100.0         # added to its clock: booted 100 s ago; a leap, a step back
         self.frozen_at: float | None = None
+        #: the time its last tick's positions were stamped up to (its clock)
+        self.stamped: float | None = None
         # what it was sent and did
         self.commands: list[tuple[int, tuple[float, ...]]] = []
         self.targets: list[tuple[float, float, float]] = []
@@ -283,13 +285,17 @@ class FakeAutopilot:
             # senses on its way (the cross under the second leg)
             steps = min(MAX_STEPS, max(1, math.ceil(dt / STEP)))
             track = []
+            # stamped from the last time sent to this one, never back (a tick can compute
+            # its time long after it started, behind a flood or the lock); a clock that
+            # leaps or stands is stamped at its time
+            last = self.stamped if self.stamped is not None and \
+                boot - STEP * MAX_STEPS <= self.stamped <= boot else boot
             for k in range(steps):
                 self._move(dt / steps)
-                # a clock that stands stamps every step with its time
-                back = 0.0 if self.frozen_at is not None else (steps - 1 - k) * dt / steps
-                at = int((boot - back) * 1000) & 0xFFFFFFFF
+                at = int((last + (boot - last) * (k + 1) / steps) * 1000) & 0xFFFFFFFF
                 track.append(self.encoder.local_position_ned_encode(at, *self.ned,
                                                                     *self.velocity))
+            self.stamped = boot
         millis = int(boot * 1000) & 0xFFFFFFFF
         messages = [*track,
                     self.encoder.attitude_encode(millis, 0.0, 0.0, self.yaw, 0.0, 0.0, 0.0)]
