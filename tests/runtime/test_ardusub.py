@@ -53,12 +53,6 @@ RUN_BOUND, MISSION_BOUND, TEST_BOUND = 30.0, 15.0, 120
 #: Seconds of the autopilot's clock after arming when a fault is made to happen:
 #: the vehicle is then on its way to the first waypoint.
 FAULT_AT = 5.0
-#: The speed-up of an autopilot a second station faults mid-mission (its GPS turned off,
-#: the autopilot killed, its ground station's heartbeat stopped): at 100 the mission runs
-#: on for 100 of its seconds in each second the station waits for a core, and two suites
-#: side by side on 2 cores had the mission end before the fault came (at 20, the GPS's
-#: loss once came after the survey's last waypoint).
-FAULT_SPEEDUP = 10
 #: A ground station's system id that nobody on the link has (we are 255, the
 #: second station 254): made the autopilot's own, its heartbeats stop for it.
 NOBODY = 200
@@ -82,9 +76,9 @@ def autopilot(ardusub, tmp_path) -> Iterator[sitl.Sitl]:
 
 @pytest.fixture
 def faulted(ardusub, tmp_path) -> Iterator[sitl.Sitl]:
-    """An ArduSub of the test's own, as ``autopilot``, at :data:`FAULT_SPEEDUP`: a second
+    """An ArduSub of the test's own, as ``autopilot``, at ``sitl.FAULT_SPEEDUP``: a second
     station faults it mid-mission."""
-    with sitl.running(ardusub, tmp_path / "sitl", speedup=FAULT_SPEEDUP) as running:
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=sitl.FAULT_SPEEDUP) as running:
         yield running
 
 
@@ -318,7 +312,7 @@ def test_gps_lost_on_the_way_fails_the_waypoint_and_the_mission(faulted, tmp_pat
     # the GPS must be off well before the survey's last waypoint (about 20 s of the
     # autopilot's clock after the fault's time): at a speed-up of 100 that is 0.2 s of
     # wall clock for the second station to see the time and set the parameter, which two
-    # suites side by side on 2 cores have exceeded; at FAULT_SPEEDUP, 2 s
+    # suites side by side on 2 cores have exceeded; at sitl.FAULT_SPEEDUP, 2 s
     with flying(faulted, tmp_path, "--world", str(world)) as run, \
             sitl.second(faulted) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)

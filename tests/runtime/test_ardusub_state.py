@@ -202,7 +202,7 @@ def test_a_home_that_puts_the_vehicle_outside_the_tank_never_arms_it(autopilot, 
 @pytest.mark.timeout(TEST_BOUND)
 def test_a_vehicle_sent_out_of_the_tank_is_stopped_at_its_wall(faulted, tmp_path):
     world = World()
-    # at the fault speed-up (test_ardusub.FAULT_SPEEDUP): at 100 a loaded machine had the
+    # at the fault speed-up (sitl.FAULT_SPEEDUP): at 100 a loaded machine had the
     # mission ended before the second station sent the sub out
     with flying(faulted, tmp_path) as run, sitl.second(faulted) as ground:
         ground.mission_time(FAULT_AT, MISSION_BOUND)

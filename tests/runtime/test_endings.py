@@ -459,19 +459,18 @@ def watching_depth(ground) -> None:
 
 
 @pytest.mark.timeout(SITL_TEST_BOUND)
-@pytest.mark.parametrize("signals, speedup", [
+@pytest.mark.parametrize("signals", [
     # SIGHUP takes SIGTERM's path (each signal is sent to the fake autopilot's runs above):
-    # on ArduSub, a variant of the slow suite. At a speed-up of 100 the whole mission is a
-    # third of a wall second, and beside a second suite the station never saw the sub
-    # diving before it had ended: 10, as the faulted flights
-    ((signal.SIGTERM,), sitl.SPEEDUP / 10),
-    pytest.param((signal.SIGHUP,), sitl.SPEEDUP / 10, marks=pytest.mark.slow),
-    # the safe state takes two or three seconds of the autopilot's: at a speed-up of 10,
-    # a fifth of a second of the wall clock, for the second signal to come in
-    ((signal.SIGINT, signal.SIGINT), sitl.SPEEDUP / 10)], ids=["SIGTERM", "SIGHUP", "SIGINT-twice"])
-def test_on_ardusub_a_signal_surfaces_and_disarms_the_sub(tmp_path, signals, speedup):
+    # on ArduSub, a variant of the slow suite
+    (signal.SIGTERM,), pytest.param((signal.SIGHUP,), marks=pytest.mark.slow),
+    (signal.SIGINT, signal.SIGINT)], ids=["SIGTERM", "SIGHUP", "SIGINT-twice"])
+def test_on_ardusub_a_signal_surfaces_and_disarms_the_sub(tmp_path, signals):
+    # at the fault speed-up: at 100 the whole mission is a third of a wall second, and
+    # beside a second suite the station never saw the sub diving before it had ended; and
+    # the safe state's two or three seconds of the autopilot's are a fifth of a second of
+    # the wall clock for the second signal to come in
     ardusub = sitl.need()
-    with sitl.running(ardusub, tmp_path / "sitl", speedup=speedup) as autopilot, \
+    with sitl.running(ardusub, tmp_path / "sitl", speedup=sitl.FAULT_SPEEDUP) as autopilot, \
             launched(tmp_path / "run", SAUCE, "--vehicle", "mavlink", "--connect",
                      autopilot.address, "--json") as run, \
             sitl.second(autopilot) as ground:

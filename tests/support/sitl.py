@@ -48,6 +48,12 @@ PROGRAM = "ardusub"
 DEFAULTS = "sub.parm"
 #: Simulated seconds per wall second asked for (about 100 is what two cores keep up).
 SPEEDUP = 100
+#: The speed-up of an autopilot whose test makes something happen mid-mission (a fault, a
+#: signal) from a second station: at 100 the mission runs on for 100 of its seconds in
+#: each second the station waits for a core, and two suites side by side on 2 cores had
+#: the mission end before the fault came (at 20, the GPS's loss once came after the
+#: survey's last waypoint).
+FAULT_SPEEDUP = 10
 HOME = "43.6,-8.8,0,0"
 #: What every test's autopilot has besides ArduPilot's SITL defaults (a test's own file
 #: comes after it). The ground-station failsafe waits 60 s of the autopilot's clock for our
