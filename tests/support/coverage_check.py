@@ -19,6 +19,7 @@ and exits 2 where they are missing.
 from __future__ import annotations
 
 import os
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -45,7 +46,7 @@ def _arcs(selection: str, folder: Path, args: list[str]) -> set[tuple[str, int, 
     command = [sys.executable, "-m", "pytest", "-n", "4", "--dist", "worksteal", "-q",
                "-p", "no:cacheprovider", "--cov", f"--cov-config={rc}", "--cov-report=",
                "-m", selection, *args]
-    print(f"$ {' '.join(command)}", flush=True)
+    print(f"$ {shlex.join(command)}", flush=True)
     done = subprocess.run(command, cwd=ROOT, env=env, stdout=subprocess.PIPE, text=True)
     print(done.stdout.strip().splitlines()[-1] if done.stdout.strip() else "(no output)")
     data = CoverageData(basename=str(folder / ".coverage"))
