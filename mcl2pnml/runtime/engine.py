@@ -500,7 +500,8 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
     Time is the wall clock from the start, or the vehicle's own clock where
     it keeps one (an autopilot's, so that a simulator sped up 100 times
     gives the same run); time-outs fire when it reaches them, and events
-    count from when they arrive. A real vehicle can always
+    count from when they arrive: one read after a time-out it came after is taken after
+    that time-out, however late the run reads it. A real vehicle can always
     still answer, so a run ends with a result, at ``max_time`` (TIMELIMIT), when
     the link drops (STALLED, saying so), or when a signal stops it (INTERRUPTED);
     each way with the safe stop of :func:`run`, then the vehicle's own safe
@@ -528,7 +529,15 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
                 wait = max(0.0, min(limit) - now()) if limit else None
                 event = d.vehicle_call(lambda w: vehicle.wait_event(w, now), wait, "waiting")
                 if event is not None:
-                    d.event(event)
+                    # the time-outs due before the event came fire first: a run late to
+                    # read its vehicle (a loaded machine; an autopilot sped up, whose
+                    # seconds are the run's) must not take a report that came after a
+                    # time-out as in time
+                    while (timer := engine.next_timer()) is not None and timer[0] < event.t \
+                            and engine.outcome is None:
+                        d.timer(timer[0], timer[1])
+                    if engine.outcome is None:
+                        d.event(event)
                     continue
                 if timer is not None and now() >= timer[0]:
                     d.timer(timer[0], timer[1])

@@ -327,6 +327,21 @@ def test_a_garbled_line_on_the_link_is_one_message_quoting_it_after_a_safe_stop(
     assert sent(transport) == [{"command": "start_P", "x": 1}, {"command": "stop_P"}]
 
 
+def test_a_report_read_after_its_time_out_is_taken_after_it(engine):
+    """A run late to read its link (its clock, an autopilot's, already past a time-out)
+    fires the time-out before the report that came after it, as a run on time would."""
+    transport = QueueTransport()
+    transport.inbox.put({"primitive": "P", "status": "done"})
+    transport.close()
+    ticks = iter([0.0])     # the start at 0; every later reading 12 s, past T's 10 s
+    result = run_realtime(engine(FAULTS), MappedVehicle(MAPPING, transport),
+                          clock=lambda: next(ticks, 12.0))
+    assert [(e.t, e.task) for e in result.timeouts] == [(10.0, "T")]
+    # T failed: U(1) skipped, U(2) started; P's late report changed nothing
+    assert sent(transport) == [{"command": "start_P", "x": 1}, {"command": "stop_P"},
+                               {"command": "start_Q", "x": 2}]
+
+
 def test_a_dropped_link_stalls_the_run_saying_so():
     results = []
     for engine in engines(FAULTS):
