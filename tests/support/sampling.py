@@ -1,5 +1,6 @@
-"""How many random cases a sampled test draws: a quick sample in ``make test``, the
-whole one in ``make test-slow``.
+"""What the quick suite keeps of a test's cases: a quick sample of the random cases in
+``make test``, the whole one in ``make test-slow``; and of a check made on every example,
+the examples that reach every line and branch of ours that the others reach (``variants``).
 
 A test that draws its cases (Hypothesis's examples, generated missions, mutants)
 makes the same checks on each: the quick sample keeps every check and draws fewer
