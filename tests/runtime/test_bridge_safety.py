@@ -288,14 +288,17 @@ def send_after_first_command(payload: bytes, then_close: bool = False, linger: b
     return script
 
 
-@pytest.mark.timeout(20)
+@pytest.mark.timeout(LIMIT + 15)
 def test_a_line_nested_100000_deep_is_one_message_after_the_safe_stop():
     deep = b"[" * 100_000 + b"]" * 100_000 + b"\n"
     peer = Peer(send_after_first_command(deep))
     recorder = Recorder()
+    # the peer's heartbeats bounded loosely: beside a second suite, the liveness of FAST
+    # (0.5 s) ran out before the line was read, and the run stalled on the silence instead
     with pytest.raises(VehicleInputError) as e:
-        run_bridge(peer.address, LinkOptions(**{**FAST.__dict__, "max_line": 1 << 20}),
-                   recorder=recorder)
+        run_bridge(peer.address, LinkOptions(**{**FAST.__dict__, "max_line": 1 << 20,
+                                                "liveness": 5.0}),
+                   recorder=recorder, max_time=LIMIT)
     message = str(e.value)
     assert message.startswith("the vehicle's bridge sent a line that is not a JSON object: "
                               "'[[[[")

@@ -86,7 +86,9 @@ def test_an_armed_vehicle_whose_armed_was_not_yet_read_is_disarmed(tmp_path):
         "no heartbeat from the autopilot for 0.5 s",
         "the autopilot's clock has not moved for 0.5 s")), result.waiting
     assert "the autopilot is silent" in text and "still trying" in text, text
-    assert [p[0] for p in fake.commanded(ARM_DISARM)] == [1, 0]
+    # armed once, then disarmed: again while the lagging link has not acknowledged it
+    arming = [p[0] for p in fake.commanded(ARM_DISARM)]
+    assert arming[0] == 1 and len(arming) > 1 and set(arming[1:]) == {0}, arming
     assert_left_disarmed(result, fake)
     assert elapsed < 10 + 5, elapsed
 
