@@ -37,7 +37,7 @@ from mcl2pnml.analysis.checking.on_graph import Status
 from mcl2pnml import pipeline
 
 from helpers import DATA, ROOT, assert_golden, untimed_only
-from sampling import VARIANT
+from sampling import variants
 
 EXAMPLES = ROOT / "examples"
 COUNTEREXAMPLES = DATA / "counterexamples"
@@ -49,9 +49,9 @@ SLOW = {"dam_inspection", "sampling"}
 def _examples(quick=None) -> list:
     """Every example, the ``SLOW`` ones and those not in ``quick`` (where it is given) marked
     slow."""
-    return [pytest.param(m.stem, id=m.stem, marks=[pytest.mark.slow] if m.stem in SLOW else
-                         VARIANT if quick is not None and m.stem not in quick else [])
-            for m in sorted(EXAMPLES.glob("*.mcl"))]
+    stems = [m.stem for m in sorted(EXAMPLES.glob("*.mcl"))]
+    kept = [s for s in stems if s not in SLOW and (quick is None or s in quick)]
+    return variants(stems, kept, ids=stems, slow=[s for s in stems if s in SLOW])
 
 
 @functools.lru_cache(maxsize=None)
