@@ -129,9 +129,7 @@ def _check_all_full(net: Net, properties: list[Property], max_states: int) -> li
                 for p in properties]
     ids = [pl.id for pl in net.places]
     tids = [t.id for t in net.transitions]
-    after: list[list[tuple[int, int]]] = [[] for _ in range(space.states)]
-    for a, b, t in zip(space.src.tolist(), space.dst.tolist(), space.trans.tolist()):
-        after[a].append((b, t))
+    after = _successors(space.states, space.src, space.dst, space.trans)
     # a property reads a few places of every marking: their columns, not the markings
     index = {pid: k for k, pid in enumerate(ids)}
     read = sorted({p for prop in properties for x in _truths(prop) for p in places_of(x)})
@@ -165,53 +163,84 @@ def _holds_everywhere(predicate: Predicate, columns, n: int) -> np.ndarray:
     return np.full(n, bool(predicate.value))
 
 
+def _successors(states: int, src, dst, trans) -> list[list[tuple[int, int]]]:
+    """Each marking's (successor, transition) pairs, in the order the explorer gave them:
+    the edges sorted by source (stably, so that a marking's own order is kept), then one
+    slice of the pairs per marking (slices in C, where an append per edge took a second on a
+    million edges)."""
+    order = np.argsort(src, kind="stable")
+    pairs = list(zip(dst[order].tolist(), trans[order].tolist()))
+    bounds = np.searchsorted(src[order], np.arange(states + 1)).tolist()
+    return [pairs[bounds[m]:bounds[m + 1]] for m in range(states)]
+
+
+def _moves(obs: ObserverTable) -> list[int]:
+    """The observer's every state and move, worked out before the product: ``moves[k * 16 +
+    code]`` is the state after state ``k`` reads a marking whose truths are ``code``. The
+    observer is finite (its counter stops at the bound plus one), so this ends; the product
+    then reads a move from a list, with no call."""
+    todo, seen = [obs.start, obs.bad], set()
+    while todo:
+        k = todo.pop()
+        if k not in seen:
+            seen.add(k)
+            todo.extend(obs.after(k, code) for code in range(16))
+    return [obs.after(k, code) for k in range(len(obs.states)) for code in range(16)]
+
+
 def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
+    """The breadth-first product of the state space with the observer of ``prop``: its
+    shortest violation (a bad prefix, a dead end with an obligation open, or a lasso whose
+    cycle keeps one open). A product state is the integer ``marking * K + observer state``
+    (K observer states), so that the maps this loop fills are keyed by integers, not pairs:
+    it runs once per product edge, millions of times on an example."""
     obs = ObserverTable(prop)
-    move, bad, pend = obs.after, obs.bad, obs.pending
-    # a move already worked out (after()'s key: state * 16 + code) read here without a
-    # call of after(): this loop runs once per product edge, a million times on an example
-    known = obs.moves.get
-    start = (0, move(obs.start, codes[0]))
+    moves = _moves(obs)
+    k_obs = len(obs.states)
+    bad, pend = obs.bad, obs.pending
+    open_ = [o != bad and pend[o] for o in range(k_obs)]
+    start = moves[obs.start * 16 + codes[0]]        # marking 0
+    # (node, transition) that first reached each state, in the order they were reached
     parent: dict = {start: None}
-    order = [start]
     dist = {start: 0}
     queue = deque([start])
-    succ: dict = {}
+    # a lasso needs the product's edges among states with an obligation open: kept only when
+    # the observer has such a state (an absence or universality never has)
+    succ: dict | None = {} if any(open_) else None
     best = None   # (length, shape, state) of the shortest violation so far
     while queue:
         node = queue.popleft()
-        m, o = node
+        m, o = divmod(node, k_obs)
         if o == bad:
             if best is None or dist[node] < best[0]:
                 best = (dist[node], Shape.PREFIX, node)
-            succ[node] = []
+            if succ is not None:
+                succ[node] = []
             continue
-        if not after[m] and pend[o]:
+        edges = after[m]
+        if not edges and pend[o]:
             if best is None or dist[node] < best[0]:
                 best = (dist[node], Shape.FINITE, node)
-        nxt = []
         d = dist[node] + 1
-        for b, t in after[m]:
-            code = codes[b]
-            moved = known(o * 16 + code)
-            child = (b, move(o, code) if moved is None else moved)
-            nxt.append((child, t))
+        row = o * 16
+        children = [(b * k_obs + moves[row + codes[b]], t) for b, t in edges]
+        for child, t in children:
             if child not in parent:
                 if len(parent) >= max_states:
                     return Verdict(prop, Status.UNKNOWN, states=len(parent),
                                    reason=f"more than {max_states:,} product states")
                 parent[child] = (node, t)
                 dist[child] = d
-                order.append(child)
                 queue.append(child)
-        succ[node] = nxt
-    lasso = _shortest_lasso(lambda o: o != bad and pend[o], order, succ, dist,
-                            best[0] if best else None)
+        if succ is not None:
+            succ[node] = children
+    lasso = None if succ is None else _shortest_lasso(
+        lambda n: open_[n % k_obs], parent, succ, dist, best[0] if best else None)
     if lasso is not None and (best is None or lasso[0] < best[0]):
         length, node, cycle = lasso
         path = path_to(parent, node)
         trans = path[1] + cycle[1]
-        ms = [m for m, _ in path[0] + cycle[0]]
+        ms = [n // k_obs for n in path[0] + cycle[0]]
         loop = len(path[0]) - 1
         # the same infinite run, its loop entered earlier where the markings allow: the
         # observer may need a turn of the cycle to settle that the marking run does not
@@ -225,26 +254,28 @@ def _product(prop, marked, tids, after, codes, max_states) -> Verdict:
         return Verdict(prop, Status.HOLDS, states=len(parent))
     nodes, trans = path_to(parent, best[2])
     return Verdict(prop, Status.FAILS, tuple(tids[t] for t in trans),
-                   tuple(marked(m) for m, _ in nodes), best[1], states=len(parent))
+                   tuple(marked(n // k_obs) for n in nodes), best[1], states=len(parent))
 
 
 def _shortest_lasso(open_, order, succ, dist, bound):
     """(prefix + cycle length, entry state, (cycle states after entry, transitions)) of
     the shortest lasso whose cycle stays in states with an obligation open (``open_`` of
-    the observer's state), or None."""
+    the product state), or None; ``order``: the states in the order they were reached."""
     g = nx.DiGraph()
     for node in order:
-        if open_(node[1]):
+        if open_(node):
             g.add_node(node)
             for child, _ in succ[node]:
-                if open_(child[1]):
+                if open_(child):
                     g.add_edge(node, child)
     on_cycle = set()
     for comp in nx.strongly_connected_components(g):
         if len(comp) > 1 or any(g.has_edge(n, n) for n in comp):
             on_cycle |= comp
     best = None
-    for node in sorted(on_cycle, key=dist.__getitem__):
+    # the entries nearest M0 first, ties in the order they were reached: breadth first,
+    # that is already by distance (so the lasso chosen is one function of the product)
+    for node in (n for n in order if n in on_cycle):
         if best is not None and dist[node] + 1 >= best[0]:
             break   # every later entry is at least as far, and a cycle is one step at least
         if bound is not None and dist[node] + 1 >= bound:

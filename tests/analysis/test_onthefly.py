@@ -105,7 +105,7 @@ def test_on_the_fly_agrees_with_the_full_exploration_long(net, prop):
 
 
 #: Every example's property files; the dam inspection's holding ones behind ``slow`` (the
-#: reference method takes 12 s on them, the on-the-fly one 0.6 s).
+#: reference method takes about 9 s on them, the on-the-fly one 0.6 s).
 PROPERTY_FILES = [pytest.param(p.name, marks=pytest.mark.slow)
                   if p.name == "dam_inspection.props" else p.name
                   for p in sorted((ROOT / "examples").glob("*.props"))]
