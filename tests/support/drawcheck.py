@@ -12,6 +12,7 @@ rectangles (``bb``). matplotlib's paths test curves against rectangles.
 """
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import os
@@ -38,7 +39,7 @@ class Label:
 #: Where dot's outputs are kept for every test process of a run (set by the tests'
 #: conftest; None: in this process only). The same drawings are checked by several
 #: tests (a figure's overlaps, its legend, its text on a slide), each of which had dot
-#: lay it out again, in each worker.
+#: lay it out again, in each worker; the first to ask lays it out, the others wait on its lock.
 SHARED: pathlib.Path | None = None
 _LAID: dict[tuple[str, str], bytes] = {}
 #: The formats dot writes in one run when one of them is asked: the cheap ones together.
@@ -51,11 +52,16 @@ def laid_out(source: str, fmt: str) -> bytes:
     together (one layout, several renderings), kept under its digest."""
     digest = hashlib.sha256(source.encode()).hexdigest()[:40]
     if (digest, fmt) not in _LAID:
-        kept = SHARED / f"{digest}.{fmt}" if SHARED is not None else None
-        if kept is not None and kept.is_file():
-            _LAID[digest, fmt] = kept.read_bytes()
-        else:
+        if SHARED is None:
             _dot(source, digest, _TOGETHER[fmt])
+            return _LAID[digest, fmt]
+        kept = SHARED / f"{digest}.{fmt}"
+        with open(SHARED / f"{digest}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)    # another worker laying it out: wait for it
+            if kept.is_file():
+                _LAID[digest, fmt] = kept.read_bytes()
+            else:
+                _dot(source, digest, _TOGETHER[fmt])
     return _LAID[digest, fmt]
 
 

@@ -3,12 +3,14 @@
 Several modules open the same page (the paper's mission's, in six modules' tests):
 each ran ``show`` again, 2.5 core-seconds for the paper's mission, in each xdist
 worker. A page is kept in a folder the workers share, under the digest of the
-command's arguments and of the files they name, written under a name of its own
-then renamed, so that a worker never reads half a page; the command's exit status
-is checked where it ran.
+command's arguments and of the files they name, made by the first worker that asks
+for it while the others wait on its lock, written under a name of its own then
+renamed, so that a worker never reads half a page; the command's exit status is
+checked where it ran.
 """
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import os
 from pathlib import Path
@@ -29,10 +31,16 @@ def shown(tmp_path_factory, name: str, *args) -> Path:
         digest.update(b"\0")
     folder = shared_folder(tmp_path_factory) / f"shown-{digest.hexdigest()[:32]}"
     page = folder / name
-    if not page.is_file():
-        folder.mkdir(exist_ok=True)
-        part = folder / f"{os.getpid()}-{name}"
-        out = run_cli("show", *args, "-o", part)
-        assert out.returncode == 0, out.stderr
-        os.replace(part, page)
+    if page.is_file():
+        return page
+    folder.mkdir(exist_ok=True)
+    with open(folder / f"{name}.lock", "w") as lock:
+        # the workers that start together all want the paper's mission's page: one makes
+        # it, the others wait for it instead of making it again
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not page.is_file():
+            part = folder / f"{os.getpid()}-{name}"
+            out = run_cli("show", *args, "-o", part)
+            assert out.returncode == 0, out.stderr
+            os.replace(part, page)
     return page
