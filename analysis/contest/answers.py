@@ -23,6 +23,10 @@ by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
   transition fires somewhere) and liveness (every transition fires in every
   bottom strongly connected component).
 
+Before any of this, the reachability questions go to the state equation
+(:mod:`mcl2pnml.analysis.structure.state_equation`), which proves some of them without a
+marking explored (``E F φ`` false, ``A G φ`` true: ``STATE_EQUATION``).
+
 Where the graph cannot be built (past the limits, or an unbounded net), the
 reachability questions of a 1-safe net are searched on the fly by the
 property checker's engine (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at the first
@@ -57,7 +61,8 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 
-from mcl2pnml.analysis.contest.reachability_queries import reach_on_the_fly, settled_without_exploring
+from mcl2pnml.analysis.contest.reachability_queries import (reach_on_the_fly, settled_by_state_equation,
+                                                            settled_without_exploring)
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
@@ -409,19 +414,24 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES
            safe: bool = False) -> list[Answer]:
     """Each query's answer, in order (the module's documentation).
 
-    With ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net
+    First, what the state equation proves unreachable (:func:`settled_by_state_equation`:
+    ``E F φ`` false, ``A G φ`` true). With ``stubborn``, the reachability questions
+    (``E F φ``, ``A G φ``) of a 1-safe net
     are searched on the fly under partial-order reduction first (:func:`reach_on_the_fly`);
     every other question is answered on the reachability graph. Past the graph's limits,
     the reachability questions are searched on the fly, each stopping at its first
     witness, and what the P-invariants and the initial marking settle is answered
-    (:func:`mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`); the rest is unanswered, with
-    the reason."""
+    (:func:`mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`); the
+    rest is unanswered, with the reason."""
     def answers(settled: dict) -> dict[str, Answer]:
         return {k: Answer(k, value, technique) for k, (value, technique) in settled.items()}
 
-    found: dict[str, Answer] = {}
+    # the cheap proof first, as the contest's tools order them: what the state equation
+    # proves unreachable needs no marking explored (seconds, where exploring may not end)
+    found: dict[str, Answer] = answers(settled_by_state_equation(net, queries))
     if stubborn:
-        found = answers(reach_on_the_fly(net, queries, max_states, max_memory, True, safe))
+        found.update(answers(reach_on_the_fly(
+            net, [x for x in queries if x.id not in found], max_states, max_memory, True, safe)))
     rest = [x for x in queries if x.id not in found]
     if not rest:
         return [found[x.id] for x in queries]

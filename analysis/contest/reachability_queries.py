@@ -9,9 +9,12 @@
 * Without a marking beyond the initial one: ``E F φ`` where φ holds initially, ``A G φ``
   where it does not; and what the bounds of the semi-positive P-invariants settle
   (Murata 1989, section VII).
+* By the state equation (:mod:`mcl2pnml.analysis.structure.state_equation`): ``E F φ``
+  false and ``A G not φ`` true where no solution of ``M = M0 + C x`` satisfies φ.
 """
 from __future__ import annotations
 
+import time
 from collections import Counter
 from typing import Sequence
 
@@ -22,6 +25,7 @@ from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.observers import Status
+from mcl2pnml.analysis.structure import state_equation
 from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
                                                     minimal_semipositive_p_invariants)
 
@@ -71,6 +75,35 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
             always = _three_valued(phi, s, bound_of)
             if always is not None:
                 found[x.id] = (always, "STRUCTURAL P_INVARIANTS")
+        except KeyError:            # a name the net does not have: said by the graph's path
+            continue
+    return found
+
+
+#: Seconds the state equation may take over all the questions of one command.
+STATE_EQUATION_SECONDS = 10.0
+
+
+def settled_by_state_equation(net: Net, queries: Sequence[q.Query],
+                              seconds: float = STATE_EQUATION_SECONDS) -> dict[str, Settled]:
+    """The reachability questions the state equation settles, by id: ``E F φ`` is false
+    and ``A G φ`` true where it proves φ (for ``A G``: not φ) unreachable, within
+    ``seconds`` over all of them. It proves only unreachability: the other answers are
+    left to the other techniques."""
+    s = structure(net)
+    found: dict[str, Settled] = {}
+    end = time.monotonic() + seconds
+    for x in queries:
+        left = end - time.monotonic()
+        if left <= 0:
+            break
+        r = reachability(x.asks) if not isinstance(x.asks, q.PlaceBound) else None
+        if r is None:
+            continue
+        exists, phi = r
+        try:
+            if state_equation.unreachable(s, phi if exists else q.Neg(phi), left):
+                found[x.id] = (not exists, "STATE_EQUATION")
         except KeyError:            # a name the net does not have: said by the graph's path
             continue
     return found

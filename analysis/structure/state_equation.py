@@ -1,0 +1,155 @@
+"""The state equation: markings that no run reaches, found without exploring.
+
+Every marking M reached from M0 by a firing sequence is ``M = M0 + C x``, with C the
+incidence matrix and x >= 0 the number of times each transition fired (Murata 1989,
+section VI, the state equation). So where no integer x >= 0 gives an M >= 0 that
+satisfies a condition, no reachable marking satisfies it. The converse is false (a
+solution need not be a run: a transition may lack its tokens at the moment it would
+fire), and nothing is concluded from a solution: the answer is "unreachable" or none.
+A read arc adds nothing to C, as it changes no count; the condition only loses
+precision, not soundness.
+
+A state formula of the contest is put in disjunctive normal form over linear
+constraints on M (``sum <= sum``; a transition enabled: each of its input places
+holds its arc's weight), each disjunct an integer program solved by HiGHS (scipy's
+``milp``): the formula is unreachable when every disjunct is infeasible. A deadlock,
+or a normal form past :data:`MAX_DISJUNCTS`, is not asked. This is the contest's
+``STATE_EQUATION`` technique, as verifypn and LoLA use it (verifypn: Jensen, Nielsen,
+Oestergaard and Srba, "TAPAAL and reachability analysis of P/T nets", 2016).
+"""
+from __future__ import annotations
+
+import time
+from functools import lru_cache
+from itertools import product
+
+import numpy as np
+
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.structure import Structure
+
+#: The most disjuncts a formula's normal form may have before it is not asked.
+MAX_DISJUNCTS = 64
+#: Seconds HiGHS may take on one disjunct; past it, the formula is not decided.
+SOLVE_SECONDS = 5.0
+
+# A constraint: (coefficients by place index, upper bound): sum of c * M(p) <= bound.
+Constraint = tuple[dict[int, int], int]
+
+
+class _TooLarge(Exception):
+    """The formula has no normal form this module takes (a deadlock, too many disjuncts)."""
+
+
+def unreachable(s: Structure, phi, seconds: float = SOLVE_SECONDS) -> bool:
+    """Whether the state equation proves that no reachable marking of ``s``'s net
+    satisfies the state formula ``phi`` (True); False: not proven (it may be reachable,
+    or ``seconds`` ran out). A place or transition the net does not have raises KeyError."""
+    try:
+        disjuncts = _normal_form(phi, s, True)
+    except _TooLarge:
+        return False
+    end = time.monotonic() + seconds
+    for conj in disjuncts:
+        left = min(SOLVE_SECONDS, end - time.monotonic())
+        if left <= 0 or not _infeasible(s, conj, left):
+            return False
+    return True
+
+
+def _normal_form(f, s: Structure, positive: bool) -> list[list[Constraint]]:
+    """``f`` (or its negation, ``positive`` False) as a list of conjunctions of
+    constraints; [] is false, [[]] true."""
+    if isinstance(f, q.BoolConst):
+        return [[]] if f.value is positive else []
+    if isinstance(f, q.Neg):
+        return _normal_form(f.arg, s, not positive)
+    if isinstance(f, (q.Conj, q.Disj)):
+        parts = [_normal_form(a, s, positive) for a in f.args]
+        if isinstance(f, q.Disj) is positive:     # a disjunction (De Morgan's, negated)
+            return _capped([c for part in parts for c in part])
+        out: list[list[Constraint]] = [[]]
+        for part in parts:
+            out = _capped([a + b for a, b in product(out, part)])
+        return out
+    if isinstance(f, q.IntLe):
+        coefficients, constant = _difference(f.left, f.right, s)   # left - right
+        # left - right <= 0, or (negated) right - left <= -1
+        if positive:
+            return [[(coefficients, -constant)]]
+        return [[({p: -c for p, c in coefficients.items()}, constant - 1)]]
+    if isinstance(f, q.Fireable):
+        needs = []
+        for t in f.transitions:
+            j = s.transition_index[t]
+            needs.append([(p, w) for arcs in (s.pre[j], s.read[j]) for p, w in arcs.items()])
+        if positive:        # some transition has each of its inputs: -M(p) <= -w
+            return _capped([[({p: -1}, -w) for p, w in need] for need in needs])
+        # every transition lacks one of its inputs: M(p) <= w - 1 for one p each
+        out = [[]]
+        for need in needs:
+            out = _capped([c + [({p: 1}, w - 1)] for c in out for p, w in need])
+        return out
+    raise _TooLarge     # a deadlock: a conjunction over every transition
+
+
+def _capped(disjuncts: list) -> list:
+    if len(disjuncts) > MAX_DISJUNCTS:
+        raise _TooLarge
+    return disjuncts
+
+
+def _difference(left, right, s: Structure) -> tuple[dict[int, int], int]:
+    """``left - right`` as (coefficients by place index, constant)."""
+    coefficients: dict[int, int] = {}
+    constant = 0
+    for e, sign in ((left, 1), (right, -1)):
+        if isinstance(e, q.IntConst):
+            constant += sign * e.value
+            continue
+        for p in e.places:
+            i = s.place_index[p]
+            coefficients[i] = coefficients.get(i, 0) + sign
+    return {p: c for p, c in coefficients.items() if c}, constant
+
+
+@lru_cache(maxsize=4)
+def _equation(s: Structure):
+    """C as a sparse matrix (places x transitions) and M0, once per net: every disjunct
+    of every question of a file shares them."""
+    from scipy.sparse import coo_matrix     # scipy: only when asked (as below)
+    rows, cols, values = [], [], []
+    for j, column in enumerate(s.incidence):
+        for p, v in column.items():
+            rows.append(p)
+            cols.append(j)
+            values.append(v)
+    c = coo_matrix((values, (rows, cols)), shape=(len(s.places), len(s.transitions)))
+    return c.tocsr(), np.asarray(s.initial_vector(), dtype=float)
+
+
+def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> bool:
+    """Whether no integer x >= 0 gives M = M0 + C x >= 0 meeting every constraint."""
+    # scipy's optimize and sparse, 0.7 s (python -X importtime): only when a question
+    # is asked, not at every command's start
+    from scipy.optimize import Bounds, LinearConstraint, milp
+    from scipy.sparse import coo_matrix
+
+    c, m0 = _equation(s)
+    places, transitions = len(s.places), len(s.transitions)
+    if transitions == 0:        # M0 is the only marking
+        return not all(sum(v * m0[p] for p, v in k.items()) <= b for k, b in conjunction)
+    # each constraint a . M <= b is a . C x <= b - a . M0
+    a = coo_matrix(([v for k, _ in conjunction for v in k.values()],
+                    ([i for i, (k, _) in enumerate(conjunction) for _ in k],
+                     [p for k, _ in conjunction for p in k])),
+                   shape=(len(conjunction), places)).tocsr()
+    bound = np.asarray([b for _, b in conjunction], dtype=float) - a @ m0
+    constraints = [LinearConstraint(c, -m0, np.inf)]          # M >= 0
+    if conjunction:
+        constraints.append(LinearConstraint(a @ c, -np.inf, bound))
+    result = milp(np.zeros(transitions), constraints=constraints,
+                  integrality=np.ones(transitions), bounds=Bounds(0, np.inf),
+                  options={"time_limit": seconds, "presolve": True})
+    # 2: infeasible; anything else (a solution, a time limit, unbounded) decides nothing
+    return result.status == 2
