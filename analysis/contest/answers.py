@@ -23,9 +23,10 @@ by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
   transition fires somewhere) and liveness (every transition fires in every
   bottom strongly connected component).
 
-Before any of this, the reachability questions go to the state equation
-(:mod:`mcl2pnml.analysis.structure.state_equation`), which proves some of them without a
-marking explored (``E F φ`` false, ``A G φ`` true: ``STATE_EQUATION``).
+Where the state space is larger than a first, small exploration, the reachability
+questions go first to the state equation (:mod:`mcl2pnml.analysis.structure.state_equation`),
+which proves some of them without a marking explored (``E F φ`` false, ``A G φ`` true:
+``STATE_EQUATION``).
 
 Where the graph cannot be built (past the limits, or an unbounded net), the
 reachability questions of a 1-safe net are searched on the fly by the
@@ -399,14 +400,21 @@ def _csr(src: np.ndarray, dst: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarr
 # -- the questions --------------------------------------------------------------------------------
 
 
+#: The markings explored before the state equation is asked: a state space this small is
+#: built in a fraction of a second, and answers every question exactly (the equation's
+#: solver alone takes most of a second to import).
+FIRST_STATES = 100_000
+
+
 def _space(net: Net, max_states: int, max_memory: int | None):
+    """The reachability graph, or None with the reason, and whether a limit stopped it."""
     try:
         space = explore(net, max_states=max_states, max_memory=max_memory)
     except ExplorationLimit as e:
-        return None, f"the state space is past its limit: {e.message}"
+        return None, f"the state space is past its limit: {e.message}", True
     if getattr(space, "coverability", False):
-        return None, "the net is unbounded: its coverability graph does not decide these"
-    return space, ""
+        return None, "the net is unbounded: its coverability graph does not decide these", False
+    return space, "", False
 
 
 def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES,
@@ -414,10 +422,12 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES
            safe: bool = False) -> list[Answer]:
     """Each query's answer, in order (the module's documentation).
 
-    First, what the state equation proves unreachable (:func:`settled_by_state_equation`:
-    ``E F φ`` false, ``A G φ`` true). With ``stubborn``, the reachability questions
-    (``E F φ``, ``A G φ``) of a 1-safe net
-    are searched on the fly under partial-order reduction first (:func:`reach_on_the_fly`);
+    A state space of up to :data:`FIRST_STATES` markings is built first, and answers
+    everything; past it, what the state equation proves unreachable is answered first
+    (:func:`settled_by_state_equation`: ``E F φ`` false, ``A G φ`` true), then the state
+    space is explored up to ``max_states``. With ``stubborn``, the state equation, then
+    the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net
+    searched on the fly under partial-order reduction (:func:`reach_on_the_fly`), come first;
     every other question is answered on the reachability graph. Past the graph's limits,
     the reachability questions are searched on the fly, each stopping at its first
     witness, and what the P-invariants and the initial marking settle is answered
@@ -426,16 +436,23 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES
     def answers(settled: dict) -> dict[str, Answer]:
         return {k: Answer(k, value, technique) for k, (value, technique) in settled.items()}
 
-    # the cheap proof first, as the contest's tools order them: what the state equation
-    # proves unreachable needs no marking explored (seconds, where exploring may not end)
-    found: dict[str, Answer] = answers(settled_by_state_equation(net, queries))
-    if stubborn:
-        found.update(answers(reach_on_the_fly(
-            net, [x for x in queries if x.id not in found], max_states, max_memory, True, safe)))
+    found: dict[str, Answer] = {}
+    # a small state space first: built at once, it answers everything exactly
+    space, why, limited = (None, "", True) if stubborn else \
+        _space(net, min(max_states, FIRST_STATES), max_memory)
+    if space is None:
+        # then the cheap proof, as the contest's tools order them: what the state equation
+        # proves unreachable needs no marking explored (seconds, where exploring may not end)
+        found = answers(settled_by_state_equation(net, queries))
+        if stubborn:
+            found.update(answers(reach_on_the_fly(
+                net, [x for x in queries if x.id not in found], max_states, max_memory,
+                True, safe)))
+        if all(x.id in found for x in queries):
+            return [found[x.id] for x in queries]
+        if limited and (stubborn or max_states > FIRST_STATES):
+            space, why, _ = _space(net, max_states, max_memory)
     rest = [x for x in queries if x.id not in found]
-    if not rest:
-        return [found[x.id] for x in queries]
-    space, why = _space(net, max_states, max_memory)
     if space is None:
         if not stubborn:
             found.update(answers(reach_on_the_fly(net, rest, max_states, max_memory)))
@@ -486,7 +503,7 @@ GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", 
 def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = MAX_STATES,
             max_memory: int | None = None) -> list[Answer]:
     """The generic examinations' answers (the module's documentation)."""
-    space, why = _space(net, max_states, max_memory)
+    space, why, _ = _space(net, max_states, max_memory)
     if space is None:
         return [Answer(name, None, "", why) for name in examinations]
     s = space.structure
