@@ -97,7 +97,7 @@ def settled_by_state_equation(net: Net, queries: Sequence[q.Query],
         left = end - time.monotonic()
         if left <= 0:
             break
-        r = reachability(x.asks) if not isinstance(x.asks, q.PlaceBound) else None
+        r = reachability(x.asks)        # None for an upper bound, as for CTL and LTL
         if r is None:
             continue
         exists, phi = r

@@ -76,8 +76,8 @@ BOTH_BUSY = q.IntLe(q.IntConst(2), q.TokensCount(("busy1", "busy2")))
 
 def test_mutual_exclusion_is_proven_and_a_second_token_is_not():
     assert unreachable(structure(_mutex()), BOTH_BUSY)
-    # both enabled at once is both busy's condition, one step before: not provable
-    # by the equation alone (the markings it allows include it), so not claimed
+    # reachable markings are never claimed: both busy with a second lock token, and one
+    # of the two entries enabled (at M0 already)
     assert not unreachable(structure(_mutex(extra_token=True)), BOTH_BUSY)
     assert not unreachable(structure(_mutex()), q.Fireable(("enter1", "enter2")))
 
