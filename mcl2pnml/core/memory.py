@@ -307,7 +307,13 @@ def guard(budget: Budget, what: str) -> Iterator[None]:
             return            # the body is over: an interruption still pending is moot
         if tripped.is_set():
             raise _Stop
-        raise KeyboardInterrupt   # a real Ctrl-C
+        # a real Ctrl-C, handled as it was before the guard: ignored where the process
+        # ignores it (a script's background job), else Python's KeyboardInterrupt
+        if previous is signal.SIG_IGN:
+            return
+        if callable(previous):
+            return previous(signum, frame)
+        raise KeyboardInterrupt
 
     trip = budget.limit - margin(budget.limit)
 

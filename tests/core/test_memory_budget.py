@@ -130,6 +130,27 @@ def test_the_guard_stops_what_grows_and_lets_the_rest_run():
 
 
 @pytest.mark.timeout(60)
+@pytest.mark.parametrize("handler", [signal.SIG_IGN, signal.default_int_handler])
+def test_a_ctrl_c_inside_a_guard_is_handled_as_before_it(handler):
+    # a script's background job starts with SIGINT ignored: the guard's own handler must
+    # not turn a Ctrl-C it was never meant to see into an interruption
+    before = signal.signal(signal.SIGINT, handler)
+    try:
+        interrupted = False
+        try:
+            with guard(Budget(resident() + 500 * MB), "ctrl-c"):
+                os.kill(os.getpid(), signal.SIGINT)
+                for _ in range(1_000):   # backward jumps: where a pending handler runs
+                    pass
+        except KeyboardInterrupt:
+            interrupted = True
+        assert interrupted is (handler is signal.default_int_handler)
+        assert signal.getsignal(signal.SIGINT) is handler
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+@pytest.mark.timeout(60)
 def test_a_guard_entered_past_its_budget_stops_the_stage_and_says_so(monkeypatch):
     # the watcher trips on its first look, at once: the interruption lands while the
     # guard is still starting it, before the body (on a loaded machine, the first look
