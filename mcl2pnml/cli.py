@@ -265,9 +265,15 @@ def query(net: Path, formulas: tuple[Path, ...], as_json: bool, **options) -> in
     """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
     LTL, upper bounds) and generic examinations on NET, one answer line each in the
     contest's format; exit 3 if one is not answered (docs/interop.md)."""
-    outcome = querying.query(net, formulas, querying.QueryOptions(**options))
-    _print(outcome, as_json)
-    return outcome.status
+    settings = querying.QueryOptions(**options)
+    if as_json:
+        outcome = querying.query(net, formulas, settings)
+        _print(outcome, as_json)
+        return outcome.status
+    answers = querying.query_as_found(net, formulas, settings)
+    for a in answers:   # each line as it is settled: a run cut short keeps them
+        click.echo(a.line())
+    return answers.status
 
 
 @main.command(epilog=EXAMPLES)

@@ -75,6 +75,7 @@ from mcl2pnml.analysis.checking.observers import BAD, Marked, Shape, Status, Ver
 from mcl2pnml.analysis.checking.observers import ObserverTable, initial, path_to, truths as _truths
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
+from mcl2pnml.analysis.statespace.rows import by_source
 
 
 def check_property(net: Net, prop: Property, max_states: int = MAX_CHECK_STATES) -> Verdict:
@@ -168,9 +169,9 @@ def _successors(states: int, src, dst, trans) -> list[list[tuple[int, int]]]:
     the edges sorted by source (stably, so that a marking's own order is kept), then one
     slice of the pairs per marking (slices in C, where an append per edge took a second on a
     million edges)."""
-    order = np.argsort(src, kind="stable")
-    pairs = list(zip(dst[order].tolist(), trans[order].tolist()))
-    bounds = np.searchsorted(src[order], np.arange(states + 1)).tolist()
+    bounds, order = by_source(src, states)
+    pairs = list(zip(np.asarray(dst)[order].tolist(), np.asarray(trans)[order].tolist()))
+    bounds = bounds.tolist()
     return [pairs[bounds[m]:bounds[m + 1]] for m in range(states)]
 
 

@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 
@@ -62,11 +62,13 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 
-from mcl2pnml.analysis.contest.reachability_queries import (reach_on_the_fly, settled_by_state_equation,
+from mcl2pnml.analysis.contest.reachability_queries import (reach_on_the_fly, settled_by_found,
+                                                            settled_by_state_equation,
                                                             settled_without_exploring)
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
+from mcl2pnml.analysis.statespace.rows import compressed_rows
 
 _loops = chosen()         # the graph searches in C, else the same in Python
 
@@ -104,12 +106,14 @@ class Graph:
         s = space.structure
         self.structure = s
         self.n = n = space.states
-        src, dst = np.asarray(space.src, dtype=np.int64), np.asarray(space.dst, dtype=np.int64)
-        self.trans = np.asarray(space.trans, dtype=np.int64)
+        # as the explorer gave them (int32 where it can: a copy in int64 was most of the
+        # memory of a graph of tens of millions of edges); the rows in int64 for the loops
+        src, dst = np.asarray(space.src), np.asarray(space.dst)
+        self.trans = np.asarray(space.trans)
         self.src, self.dst = src, dst
         self.dead = np.ones(n, dtype=bool)
         self.dead[src] = False
-        self.real = _csr(src, dst, n)
+        self.real = compressed_rows(src, dst, n)
         self.place_index = {p: i for i, p in enumerate(s.places)}
         self.transition_index = {t: i for i, t in enumerate(s.transitions)}
         self._tokens: dict[int, np.ndarray] = {}
@@ -120,13 +124,15 @@ class Graph:
     def succ(self) -> tuple[np.ndarray, np.ndarray]:
         """The temporal operators' graph: the firings, and a dead marking repeats for ever."""
         loops = np.flatnonzero(self.dead)
-        return _csr(np.concatenate([self.src, loops]), np.concatenate([self.dst, loops]), self.n)
+        return compressed_rows(np.concatenate([self.src, loops]),
+                               np.concatenate([self.dst, loops]), self.n)
 
     @cached_property
     def pred(self) -> tuple[np.ndarray, np.ndarray]:
         """The temporal operators' graph backwards."""
         loops = np.flatnonzero(self.dead)
-        return _csr(np.concatenate([self.dst, loops]), np.concatenate([self.src, loops]), self.n)
+        return compressed_rows(np.concatenate([self.dst, loops]),
+                               np.concatenate([self.src, loops]), self.n)
 
     # -- atoms ---------------------------------------------------------------------------------
 
@@ -145,7 +151,7 @@ class Graph:
     def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
         out = np.zeros(self.n, dtype=bool)
         if self._firings is None:          # the edges grouped by transition, once
-            self._firings = _csr(self.trans, self.src, len(self.transition_index))
+            self._firings = compressed_rows(self.trans, self.src, len(self.transition_index))
         ptr, sources = self._firings
         for t in transitions:
             j = self.transition_index.get(t)
@@ -381,20 +387,12 @@ def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
     for bit, members in enumerate(accepting):
         acc[sorted(members)] |= np.uint64(1 << bit)
     found, states = _loops.ltl_product(
-        *graph.succ, *_csr(a_src, a_dst, k), label.view(np.uint8).ravel(), acc,
+        *graph.succ, *compressed_rows(a_src, a_dst, k), label.view(np.uint8).ravel(), acc,
         (1 << len(accepting)) - 1, start, np.zeros(n * k, dtype=np.int32),
         min(max_states, 2 ** 31 - 2))
     if found < 0:
         raise TooLarge(f"the product is past its limit of {max_states:,} states")
     return not found
-
-
-def _csr(src: np.ndarray, dst: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """A graph's edges as compressed rows: row pointers, then the targets in source order."""
-    order = np.argsort(src, kind="stable")
-    ptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(src, minlength=n), out=ptr[1:])
-    return ptr, np.ascontiguousarray(dst[order], dtype=np.int64)
 
 
 # -- the questions --------------------------------------------------------------------------------
@@ -407,69 +405,94 @@ FIRST_STATES = 100_000
 
 
 def _space(net: Net, max_states: int, max_memory: int | None):
-    """The reachability graph, or None with the reason, and whether a limit stopped it."""
+    """The reachability graph, or None with the reason; whether a limit stopped it; and
+    the markings found before the limit (``ExplorationLimit.found``), or None."""
     try:
         space = explore(net, max_states=max_states, max_memory=max_memory)
     except ExplorationLimit as e:
-        return None, f"the state space is past its limit: {e.message}", True
+        return None, f"the state space is past its limit: {e.message}", True, e.found
     if getattr(space, "coverability", False):
-        return None, "the net is unbounded: its coverability graph does not decide these", False
-    return space, "", False
+        return (None, "the net is unbounded: its coverability graph does not decide these",
+                False, None)
+    return space, "", False, None
 
 
 def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES,
            max_memory: int | None = None, stubborn: bool = False,
            safe: bool = False) -> list[Answer]:
-    """Each query's answer, in order (the module's documentation).
+    """Each query's answer, in the queries' order (:func:`answers_as_found`)."""
+    got = {a.id: a for a in answers_as_found(net, queries, max_states=max_states,
+                                             max_memory=max_memory, stubborn=stubborn,
+                                             safe=safe)}
+    return [got[x.id] for x in queries]
+
+
+def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES,
+                     max_memory: int | None = None, stubborn: bool = False,
+                     safe: bool = False) -> Iterator[Answer]:
+    """Each query's answer once, as soon as a technique settles it (the module's
+    documentation): what the cheap techniques settle comes out before a long exploration
+    starts, as the contest's tools print it, and a run cut short keeps it.
 
     A state space of up to :data:`FIRST_STATES` markings is built first, and answers
-    everything; past it, what the state equation proves unreachable is answered first
-    (:func:`settled_by_state_equation`: ``E F φ`` false, ``A G φ`` true), then the state
-    space is explored up to ``max_states``. With ``stubborn``, the state equation, then
-    the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net
-    searched on the fly under partial-order reduction (:func:`reach_on_the_fly`), come first;
-    every other question is answered on the reachability graph. Past the graph's limits,
-    the reachability questions are searched on the fly, each stopping at its first
-    witness, and what the P-invariants and the initial marking settle is answered
-    (:func:`mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`); the
-    rest is unanswered, with the reason."""
-    def answers(settled: dict) -> dict[str, Answer]:
-        return {k: Answer(k, value, technique) for k, (value, technique) in settled.items()}
+    everything; past it, the markings it found are witnesses (:func:`settled_by_found`),
+    then what the state equation proves unreachable is answered
+    (:func:`settled_by_state_equation`: ``E F φ`` false, ``A G φ`` true), then what the
+    initial marking and the P-invariants settle
+    (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
+    then the state space is explored up to ``max_states``, its markings witnesses again
+    past that limit. With ``stubborn``, the reachability questions (``E F φ``, ``A G φ``)
+    of a 1-safe net are searched on the fly under partial-order reduction
+    (:func:`reach_on_the_fly`) before the graph. Past the graph's limits, the
+    reachability questions are searched on the fly, each stopping at its first witness;
+    the rest is unanswered, with the reason."""
+    done: set[str] = set()
 
-    found: dict[str, Answer] = {}
-    # a small state space first: built at once, it answers everything exactly
-    space, why, limited = (None, "", True) if stubborn else \
+    def settle(settled: dict) -> Iterator[Answer]:
+        for k, (value, technique) in settled.items():
+            if k not in done:
+                done.add(k)
+                yield Answer(k, value, technique)
+
+    def left() -> list[q.Query]:
+        return [x for x in queries if x.id not in done]
+
+    # a small state space first: built at once, it answers everything exactly; past its
+    # limit, the markings it found are witnesses
+    space, why, limited, seen = (None, "", True, None) if stubborn else \
         _space(net, min(max_states, FIRST_STATES), max_memory)
+    if seen is not None:
+        yield from settle(settled_by_found(net, left(), seen))
+    del seen
     if space is None:
-        # then the cheap proof, as the contest's tools order them: what the state equation
-        # proves unreachable needs no marking explored (seconds, where exploring may not end)
-        found = answers(settled_by_state_equation(net, queries))
+        # then the cheap proofs, as the contest's tools order them: what the state equation
+        # proves unreachable, and what the invariants bound, need no marking explored
+        # (seconds, where exploring may not end)
+        yield from settle(settled_by_state_equation(net, left()))
+        yield from settle(settled_without_exploring(net, left()))
         if stubborn:
-            found.update(answers(reach_on_the_fly(
-                net, [x for x in queries if x.id not in found], max_states, max_memory,
-                True, safe)))
-        if all(x.id in found for x in queries):
-            return [found[x.id] for x in queries]
+            yield from settle(reach_on_the_fly(net, left(), max_states, max_memory, True,
+                                               safe))
+        if not left():
+            return
         if limited and (stubborn or max_states > FIRST_STATES):
-            space, why, _ = _space(net, max_states, max_memory)
-    rest = [x for x in queries if x.id not in found]
+            space, why, _, seen = _space(net, max_states, max_memory)
+            if seen is not None:
+                yield from settle(settled_by_found(net, left(), seen))
+            del seen
     if space is None:
         if not stubborn:
-            found.update(answers(reach_on_the_fly(net, rest, max_states, max_memory)))
-        found.update(answers(settled_without_exploring(
-            net, [x for x in rest if x.id not in found])))
-        return [found.get(x.id) or Answer(x.id, None, "", why) for x in queries]
+            yield from settle(reach_on_the_fly(net, left(), max_states, max_memory))
+        for x in left():
+            yield Answer(x.id, None, "", why)
+        return
     graph = Graph(space)
-    out = []
-    for x in queries:
-        if x.id in found:
-            out.append(found[x.id])
-        elif isinstance(x.asks, q.PlaceBound):
-            out.append(Answer(x.id, int(graph.tokens(x.asks.places, x.location).max()),
-                              "EXPLICIT STATE_SPACE"))
+    for x in left():
+        if isinstance(x.asks, q.PlaceBound):
+            yield Answer(x.id, int(graph.tokens(x.asks.places, x.location).max()),
+                         "EXPLICIT STATE_SPACE")
         else:
-            out.append(_decide(graph, x, max_memory))
-    return out
+            yield _decide(graph, x, max_memory)
 
 
 def _decide(graph: Graph, x: q.Query, max_memory: int | None = None) -> Answer:
@@ -503,7 +526,7 @@ GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", 
 def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = MAX_STATES,
             max_memory: int | None = None) -> list[Answer]:
     """The generic examinations' answers (the module's documentation)."""
-    space, why, _ = _space(net, max_states, max_memory)
+    space, why, _, _ = _space(net, max_states, max_memory)
     if space is None:
         return [Answer(name, None, "", why) for name in examinations]
     s = space.structure

@@ -18,6 +18,8 @@ import time
 from collections import Counter
 from typing import Sequence
 
+import numpy as np
+
 from mcl2pnml.core import patterns as pr
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.net import Net
@@ -34,7 +36,122 @@ from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_
 Settled = tuple[bool | int, str]
 
 
-# -- without exploring: the initial marking and the P-invariants -----------------------------------
+# -- among markings known to be reachable: the initial one, or those an exploration found ----------
+
+class ListedMarkings:
+    """Markings given as rows of counts, a column per place (the initial marking): what
+    :class:`~mcl2pnml.analysis.statespace.general.FoundMarkings` offers, for a few."""
+
+    def __init__(self, rows):
+        self.rows = np.asarray(rows, dtype=np.int64).reshape(len(rows), -1)
+
+    @property
+    def states(self) -> int:
+        return len(self.rows)
+
+    def tokens(self, place: int) -> np.ndarray:
+        return self.rows[:, place]
+
+
+#: A deadlock atom is evaluated on a set of markings only up to this many markings times
+#: transitions (every transition tried on every marking).
+DEADLOCK_WORK = 50_000_000
+
+
+class Truths:
+    """State formulas evaluated on every marking of a set at once (``markings``: anything
+    with ``states`` and ``tokens(place)``), a column of counts per place kept for the
+    next formula."""
+
+    def __init__(self, s, markings):
+        self.s, self.markings, self.n = s, markings, markings.states
+        self._columns: dict[int, np.ndarray] = {}
+
+    def tokens(self, places) -> np.ndarray:
+        total = np.zeros(self.n, dtype=np.int64)
+        for p in places:
+            i = self.s.place_index[p]          # KeyError: a name the net does not have
+            if i not in self._columns:
+                self._columns[i] = np.asarray(self.markings.tokens(i), dtype=np.int64)
+            total += self._columns[i]
+        return total
+
+    def enabled(self, j: int) -> np.ndarray:
+        need: Counter = Counter(self.s.pre[j])
+        need.update(self.s.read[j])
+        on = np.ones(self.n, dtype=bool)
+        for i, w in need.items():
+            on &= self.tokens([self.s.places[i]]) >= w
+        return on
+
+    def of(self, f) -> np.ndarray:
+        """φ's truth in each marking. Raises KeyError at a name the net does not have,
+        LookupError at a deadlock atom past :data:`DEADLOCK_WORK`."""
+        s = self.s
+        if isinstance(f, q.BoolConst):
+            return np.full(self.n, f.value)
+        if isinstance(f, q.IntLe):
+            left, right = (e.value if isinstance(e, q.IntConst) else self.tokens(e.places)
+                           for e in (f.left, f.right))
+            return np.broadcast_to(np.asarray(left <= right), (self.n,)).copy()
+        if isinstance(f, q.Fireable):
+            out = np.zeros(self.n, dtype=bool)
+            for t in f.transitions:
+                out |= self.enabled(s.transition_index[t])
+            return out
+        if isinstance(f, q.Deadlock):
+            if self.n * len(s.transitions) > DEADLOCK_WORK:
+                raise LookupError
+            live = np.zeros(self.n, dtype=bool)
+            for j in range(len(s.transitions)):
+                live |= self.enabled(j)
+            return ~live
+        if isinstance(f, q.Neg):
+            return ~self.of(f.arg)
+        if isinstance(f, (q.Conj, q.Disj)):
+            parts = [self.of(a) for a in f.args]
+            return np.logical_and.reduce(parts) if isinstance(f, q.Conj) \
+                else np.logical_or.reduce(parts)
+        raise LookupError(f"not a state formula: {type(f).__name__}")
+
+
+def _witnessed(s, queries: Sequence[q.Query], markings, bound_of, technique: str,
+               bound_technique: str) -> dict[str, Settled]:
+    """The questions a reachable marking among ``markings`` settles: ``E F φ`` true and
+    ``A G φ`` false where one satisfies φ (for ``A G``: violates it); an upper bound where
+    the largest found is the bound ``bound_of`` proves."""
+    settled: dict[str, Settled] = {}
+    if not markings.states:
+        return settled
+    truths = Truths(s, markings)
+    for x in queries:
+        try:
+            if isinstance(x.asks, q.PlaceBound):
+                most = int(truths.tokens(x.asks.places).max())
+                if bound_of(x.asks.places) == most:
+                    settled[x.id] = (most, bound_technique)
+                continue
+            r = reachability(x.asks)
+            if r is None:
+                continue
+            exists, phi = r
+            if (truths.of(phi) == exists).any():
+                settled[x.id] = (exists, technique)
+        except (KeyError, LookupError):     # a name the net lacks: said by the graph's path
+            continue
+    return settled
+
+
+def _bounds(s):
+    """A function bounding a sum of places by the P-invariants, found once, if ever asked."""
+    invariants: list = []
+
+    def bound_of(places) -> int | None:
+        if not invariants:
+            invariants.append(_invariant_bounds(s))
+        return invariants[0](places)
+    return bound_of
+
 
 def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str, Settled]:
     """The questions decided without a reachable marking beyond the initial one, by id:
@@ -47,37 +164,37 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
       marking already reaches is the bound.
     """
     s = structure(net)
-    m0 = s.initial_vector()
-    found: dict[str, Settled] = {}
-    invariants: list = []
-
-    def bound_of(places) -> int | None:     # the P-invariants found once, if ever asked
-        if not invariants:
-            invariants.append(_invariant_bounds(s))
-        return invariants[0](places)
-
+    bound_of = _bounds(s)
+    found = _witnessed(s, queries, ListedMarkings([s.initial_vector()]), bound_of,
+                       "INITIAL_STATE", "STRUCTURAL P_INVARIANTS INITIAL_STATE")
     for x in queries:
+        if x.id in found or isinstance(x.asks, q.PlaceBound):
+            continue
+        r = reachability(x.asks)
+        if r is None:
+            continue
         try:
-            if isinstance(x.asks, q.PlaceBound):
-                start = sum(m0[s.place_index[p]] for p in x.asks.places)
-                ub = bound_of(x.asks.places)
-                if ub is not None and ub == start:
-                    found[x.id] = (ub, "STRUCTURAL P_INVARIANTS INITIAL_STATE")
-                continue
-            r = reachability(x.asks)
-            if r is None:
-                continue
-            exists, phi = r
-            if _three_valued(phi, s, None, m0) is exists:
-                # φ in the initial marking (E F), or not φ there (A G)
-                found[x.id] = (exists, "INITIAL_STATE")
-                continue
-            always = _three_valued(phi, s, bound_of)
-            if always is not None:
-                found[x.id] = (always, "STRUCTURAL P_INVARIANTS")
+            always = _three_valued(r[1], s, bound_of)
         except KeyError:            # a name the net does not have: said by the graph's path
             continue
+        if always is not None:
+            found[x.id] = (always, "STRUCTURAL P_INVARIANTS")
     return found
+
+
+def settled_by_found(net: Net, queries: Sequence[q.Query], found) -> dict[str, Settled]:
+    """The questions a witness among ``found`` settles, by id (``found``: the markings an
+    exploration met before its limit, each reachable: ``ExplorationLimit.found``):
+
+    * ``E F φ`` true, ``A G φ`` false, where a found marking satisfies φ (for ``A G``:
+      violates it); a witness proves it, its absence nothing;
+    * the upper bound of a place sum, where the largest found is the bound that the
+      P-invariants prove (:func:`_invariant_bounds`).
+
+    φ is evaluated on every found marking at once (:class:`Truths`)."""
+    s = structure(net)
+    return _witnessed(s, queries, found, _bounds(s), "EXPLICIT",
+                      "EXPLICIT STRUCTURAL P_INVARIANTS")
 
 
 #: Seconds the state equation may take over all the questions of one command.
@@ -140,18 +257,14 @@ def _invariant_bounds(s):
     return bound
 
 
-def _three_valued(phi, s, bound_of, marking=None) -> bool | None:
-    """φ's truth in the initial ``marking`` (given: token counts by place index), or in
-    every marking the invariants' bounds allow (``bound_of``): True, False, or None where
-    the bounds leave it open."""
+def _three_valued(phi, s, bound_of) -> bool | None:
+    """φ's truth in every marking the invariants' bounds allow (``bound_of``): True,
+    False, or None where the bounds leave it open."""
     def total(e):
         if isinstance(e, q.IntConst):
             return e.value, e.value
         if any(p not in s.place_index for p in e.places):
             raise KeyError
-        if marking is not None:
-            v = sum(marking[s.place_index[p]] for p in e.places)
-            return v, v
         return 0, bound_of(e.places)            # (at least, at most: None unbounded)
 
     def go(f):
@@ -176,15 +289,11 @@ def _three_valued(phi, s, bound_of, marking=None) -> bool | None:
         if isinstance(f, q.Fireable):
             if any(t not in s.transition_index for t in f.transitions):
                 raise KeyError
-            if marking is not None:
-                return any(s.enabled(marking, s.transition_index[t]) for t in f.transitions)
             # dead when some place it needs is bounded below its weight
             dead = all(any((b := bound_of([s.places[i]])) is not None and b < w
                            for i, w in (*s.pre[j].items(), *s.read[j].items()))
                        for j in (s.transition_index[t] for t in f.transitions))
             return False if dead else None
-        if isinstance(f, q.Deadlock) and marking is not None:
-            return not any(s.enabled(marking, j) for j in range(len(s.transitions)))
         return None
 
     return go(phi)

@@ -37,6 +37,7 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
+from mcl2pnml.analysis.statespace.general import FoundMarkings
 from mcl2pnml.analysis.statespace.loops.backends import c_loops
 from mcl2pnml.analysis.statespace.loops.interface import Code, Loops, SafeNet, SafeSearch
 from mcl2pnml.analysis.statespace.packedmarkings import (Firing, KeyCollision, NotSafe,
@@ -114,6 +115,10 @@ def _drive(loops: Loops, net: SafeNet, search: SafeSearch, max_states: int, limi
         if search.code == Code.LIMIT:
             limit_error.explored = search.count
             limit_error.deadlocks = _dead(search.queue[:search.head], net.need)
+            places = range(64 * net.need.reshape(len(net.need), -1).shape[1])   # a bit each
+            limit_error.found = FoundMarkings(search.queue[:search.count],
+                                              [p // 64 for p in places],
+                                              [p % 64 for p in places], [1] * len(places))
             raise limit_error
         if progress:
             progress(search.count, search.count - search.head)

@@ -41,7 +41,8 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
-from mcl2pnml.analysis.statespace.general import DecodedMarkings, EdgesOnDemand, StateSpace
+from mcl2pnml.analysis.statespace.general import (DecodedMarkings, EdgesOnDemand, FoundMarkings,
+                                                StateSpace)
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.loops.interface import Code, CounterNet, Fields, Index, Loops
 from mcl2pnml.analysis.statespace.packedmarkings import distinct
@@ -176,6 +177,9 @@ def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_err
             return CounterStateSpace(s, queue[:count], search.index, layout, loops)
         if search.code == Code.LIMIT:
             limit_error.explored, limit_error.deadlocks = count, search.dead
+            limit_error.found = FoundMarkings(
+                queue[:count], layout.word, layout.shift,
+                [layout.mask(p) for p in range(len(layout.widths))])
             raise limit_error
         if (search.code == Code.GROWING or layout.widths[info] >= MAX_BITS
                 or _covers_an_ancestor(s, layout, queue, search.parent, search.head)):

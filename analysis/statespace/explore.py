@@ -46,7 +46,8 @@ from mcl2pnml.core.memory import default_memory, resident, size_text
 from mcl2pnml.core.structure import Structure, structure as make_structure
 
 from mcl2pnml.analysis.statespace.explorers import CHOICES, EXPLORERS
-from mcl2pnml.analysis.statespace.general import OMEGA, Progress, StateSpace, explore_general
+from mcl2pnml.analysis.statespace.general import (OMEGA, FoundMarkings, Progress, StateSpace,
+                                                explore_general)
 from mcl2pnml.analysis.statespace.counters import NotBounded
 from mcl2pnml.analysis.statespace.loops.backends import c_loops
 from mcl2pnml.analysis.statespace.packedmarkings import KeyCollision, NotSafe
@@ -59,11 +60,16 @@ class ExplorationLimit(Mcl2PnmlError):
     """The exploration met its state limit before it finished.
 
     ``explored`` is how many markings were found, ``deadlocks`` how many dead
-    markings were met among those expanded (None when the explorer cannot tell).
+    markings were met among those expanded (None when the explorer cannot tell), and
+    ``found`` the markings themselves where the explorer keeps them packed
+    (:class:`~mcl2pnml.analysis.statespace.general.FoundMarkings`: each reachable, for
+    witnesses; None from the general explorer). Whoever catches the error drops it
+    soon: ``found`` holds the whole queue.
     """
 
     explored: int | None = None
     deadlocks: int | None = None
+    found: "FoundMarkings | None" = None
 
 
 class MemoryLimit(ExplorationLimit):

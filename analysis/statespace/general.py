@@ -218,6 +218,31 @@ class StateSpace:
         return g
 
 
+class FoundMarkings:
+    """The markings an exploration found before a limit stopped it: each one reachable,
+    not all the reachable ones (a breadth-first prefix). A witness among them is a
+    witness in the net; an absence proves nothing.
+
+    Rows of 64-bit words, as the packed explorers keep them: place ``p``'s count is the
+    field of row word ``word[p]`` at bit ``shift[p]`` under ``mask[p]`` (a bit a place
+    for the safe explorers, a counter for the bounded ones)."""
+
+    def __init__(self, rows: np.ndarray, word: Sequence[int], shift: Sequence[int],
+                 mask: Sequence[int]):
+        self.rows = rows.reshape(len(rows), -1)
+        self.word, self.shift, self.mask = list(word), list(shift), list(mask)
+
+    @property
+    def states(self) -> int:
+        return len(self.rows)
+
+    def tokens(self, place: int) -> np.ndarray:
+        """Place ``place``'s count in each found marking."""
+        field = (self.rows[:, self.word[place]] >> np.uint64(self.shift[place])) \
+            & np.uint64(self.mask[place])
+        return field.astype(np.int64)
+
+
 def footprint(s: Structure) -> int:
     """Bytes a marking costs at most: its tuple of counts, its entry in the index and
     the parent list, its edges (a few a marking), the reverse lists built to answer

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 from mcl2pnml import pipeline
 from mcl2pnml.commands.common import MISSION_SIZE
@@ -54,7 +54,36 @@ class QueryOutcome:
 
 def query(net_path: Path, formulas: Sequence[Path], options: QueryOptions = QueryOptions()
           ) -> QueryOutcome:
-    """``mcl2pnml query`` with ``options`` (:mod:`mcl2pnml.analysis.contest.answers`)."""
+    """``mcl2pnml query`` with ``options`` (:mod:`mcl2pnml.analysis.contest.answers`): every
+    answer, the formulas' in the files' order, then the examinations'."""
+    stream = query_as_found(net_path, formulas, options)
+    got = {a.id: a for a in stream}
+    return QueryOutcome(stream.net, [got[k] for k in stream.ids])
+
+
+class QueryStream:
+    """The answers of one ``query`` run, each as soon as it is settled (the order the
+    techniques settle them in, as the contest's tools print them: a run cut short keeps
+    what it printed); ``status`` as :attr:`QueryOutcome.status` once they are all out."""
+
+    def __init__(self, net: str, ids: list[str], answers: Iterator[Any]):
+        self.net, self.ids, self._answers = net, ids, answers
+        self.unanswered = False
+
+    def __iter__(self) -> Iterator[Any]:
+        for a in self._answers:
+            self.unanswered |= a.value is None
+            yield a
+
+    @property
+    def status(self) -> int:
+        return 3 if self.unanswered else 0
+
+
+def query_as_found(net_path: Path, formulas: Sequence[Path],
+                   options: QueryOptions = QueryOptions()) -> QueryStream:
+    """The files and the net read and checked now (a bad one raises before any answer);
+    the answers as they come, when iterated."""
     # the contest's answers and query reader: numpy 0.1 s and 25 ms; only query
     from mcl2pnml.analysis.contest import answers as mcc
     from mcl2pnml.io.mccquery import read_queries
@@ -64,9 +93,12 @@ def query(net_path: Path, formulas: Sequence[Path], options: QueryOptions = Quer
     queries = [x for path in formulas for x in read_queries(path)]
     net = pipeline.load_net(net_path, o.net_id, o.max_memory, o.lenient, o.max_mission_size)
     max_memory = size_or_none(o.max_memory, "max_memory")
-    answers = mcc.answer(net, queries, max_states=o.max_states, max_memory=max_memory,
-                         stubborn=o.stubborn) if queries else []
-    if o.examinations:
-        answers += mcc.generic(net, o.examinations, max_states=o.max_states,
-                               max_memory=max_memory)
-    return QueryOutcome(net.name, answers)
+
+    def answers() -> Iterator[Any]:
+        if queries:
+            yield from mcc.answers_as_found(net, queries, max_states=o.max_states,
+                                            max_memory=max_memory, stubborn=o.stubborn)
+        if o.examinations:
+            yield from mcc.generic(net, o.examinations, max_states=o.max_states,
+                                   max_memory=max_memory)
+    return QueryStream(net.name, [x.id for x in queries] + list(o.examinations), answers())

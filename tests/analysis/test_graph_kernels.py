@@ -4,14 +4,15 @@
 networkx on random graphs: Tarjan's components on a subset of the nodes, the backward
 search of ``E(a U b)``, and Couvreur's on-the-fly emptiness check of a graph's product
 with a generalised Büchi automaton, against the product built whole and its components
-searched by networkx."""
+searched by networkx; and the counting sort that puts a graph's edges in compressed
+rows, held to numpy's stable sort."""
 from __future__ import annotations
 
 import networkx as nx
 import numpy as np
 import pytest
 
-from mcl2pnml.analysis.contest.answers import _csr
+from mcl2pnml.analysis.statespace.rows import compressed_rows as _csr
 from mcl2pnml.analysis.statespace.loops import backends
 
 
@@ -30,6 +31,32 @@ def _graph(rng, n: int, m: int):
     g.add_nodes_from(range(n))
     g.add_edges_from(zip(src.tolist(), dst.tolist()))
     return src.astype(np.int64), dst.astype(np.int64), g
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_edges_are_ordered_by_source_as_a_stable_sort_orders_them(seed, native):
+    rng = np.random.default_rng(200 + seed)
+    for _ in range(100):
+        n = int(rng.integers(1, 40))
+        src = rng.integers(0, n, int(rng.integers(0, 3 * n))).astype(np.int64)
+        ptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(src, minlength=n), out=ptr[1:])
+        values = rng.integers(-5, 5, len(src)).astype(np.int64)
+        cursor, out = ptr[:-1].copy(), np.empty(len(src), dtype=np.int64)
+        native.scatter_by_source(src, values, cursor, out)
+        assert out.tolist() == values[np.argsort(src, kind="stable")].tolist()
+        assert cursor.tolist() == ptr[1:].tolist()      # each row's cursor at its end
+
+
+@pytest.mark.parametrize("src, cursor", [([3], [0, 0]), ([-1], [0, 0]), ([0, 0], [1, 0]),
+                                         ([1], [0, -5])])
+def test_an_edge_out_of_its_rows_is_refused_not_written(src, cursor, native):
+    # a source past the rows, or a row's slots past the edges: an error, never a write
+    # outside ``order``
+    out = np.full(len(src), -7, dtype=np.int64)
+    with pytest.raises(ValueError):
+        native.scatter_by_source(np.array(src, dtype=np.int64), np.zeros(len(src), np.int64),
+                                 np.array(cursor, dtype=np.int64), out)
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -154,7 +154,8 @@ def test_past_the_graphs_limits_what_is_answered_is_the_contests(model, monkeypa
     folder = CORPUS / model
     net = pipeline.load_net(folder / "model.pnml")
     queries = [x for name in FILES for x in read_queries(folder / f"{name}.xml")]
-    monkeypatch.setattr(mcc, "_space", lambda *a: (None, "the state space is past its limit", True))
+    monkeypatch.setattr(mcc, "_space",
+                        lambda *a: (None, "the state space is past its limit", True, None))
     answers = mcc.answer(net, queries)
     oracle = _oracle(model)
     wrong = [(a.id, _shown(a.value), oracle[a.id]) for a in answers

@@ -304,4 +304,5 @@ def product_edges(net: SafeNet, observer: Observer, search: ProductSearch, first
 
 scc = c.scc
 back_reach = c.back_reach
+scatter_by_source = c.scatter_by_source
 ltl_product = c.ltl_product

@@ -493,6 +493,25 @@ def scc(indptr: np.ndarray, indices: np.ndarray, keep: np.ndarray, label: np.nda
     return count
 
 
+def scatter_by_source(src: np.ndarray, values: np.ndarray, cursor: np.ndarray,
+                      out: np.ndarray) -> None:
+    """The edges' ``values`` in a stable order by source (C's counting sort): ``cursor[v]``
+    starts at row v's first slot and ends past its last."""
+    n, edges = len(cursor), len(src)
+    if len(out) != edges or len(values) != edges:
+        raise ValueError("values and out must have a slot per edge")
+    if edges and (src.min() < 0 or src.max() >= n):
+        raise ValueError("an edge's source is not a row")
+    ranked = np.argsort(src, kind="stable")
+    start = cursor.copy()
+    cursor += np.bincount(src, minlength=n)
+    if edges and (start.min() < 0 or cursor.max() > edges):
+        raise ValueError("a row is full")
+    # each row's edges, in order, at its slots
+    rows = src[ranked]
+    out[start[rows] + (np.arange(edges) - np.searchsorted(rows, rows))] = values[ranked]
+
+
 def back_reach(indptr: np.ndarray, indices: np.ndarray, through: np.ndarray,
                out: np.ndarray) -> None:
     """With the predecessors' compressed rows, add to ``out`` every node of ``through`` from

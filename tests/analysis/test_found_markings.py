@@ -1,0 +1,141 @@
+"""Past its limit, an exploration hands back the markings it found (``ExplorationLimit.found``,
+analysis/statespace/general.py): each is reachable, so a witness among them settles a
+question (``settled_by_found``, analysis/contest/reachability_queries.py), and ``query``
+answers with it where the graph is too large (EXPLICIT)."""
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from mcl2pnml.analysis.contest.answers import answer
+from mcl2pnml.analysis.contest.reachability_queries import settled_by_found
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.net import NetBuilder
+from mcl2pnml.core.structure import structure
+from sampling import sample
+from strategies import nets
+from test_state_equation import formulas
+
+SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                      HealthCheck.filter_too_much])
+
+
+def _cut_short(net, limit: int):
+    """The markings found by an exploration stopped at ``limit``, as tuples; None where it
+    was not stopped or kept none."""
+    try:
+        explore(net, max_states=limit)
+    except ExplorationLimit as e:
+        if e.found is None:
+            return None
+        s = structure(net)
+        columns = [e.found.tokens(i) for i in range(len(s.places))]
+        return e, [tuple(int(c[k]) for c in columns) for k in range(e.found.states)]
+    return None
+
+
+def _whole(net):
+    try:
+        space = explore(net, max_states=5_000)
+    except ExplorationLimit:
+        return None
+    return None if space.coverability else space
+
+
+@settings(max_examples=sample(600, 80), **SETTINGS)
+@given(st.data())
+def test_the_markings_found_before_the_limit_are_reachable_and_distinct(data):
+    net = data.draw(nets())
+    space = _whole(net)
+    if space is None:
+        return
+    cut = _cut_short(net, data.draw(st.integers(1, max(1, space.states - 1))))
+    if cut is None:
+        return
+    error, found = cut
+    reachable = {tuple(int(v) for v in m) for m in space.markings}
+    assert set(found) <= reachable
+    assert len(set(found)) == len(found) == error.explored
+
+
+@settings(max_examples=sample(1500, 150), **SETTINGS)
+@given(st.data())
+def test_a_question_settled_by_a_found_marking_is_answered_as_the_whole_graph_answers(data):
+    net = data.draw(nets())
+    s = structure(net)
+    phi = data.draw(formulas(list(s.places), list(s.transitions)))
+    asks = data.draw(st.sampled_from([q.ExistsPath(q.Finally(phi)),
+                                      q.AllPaths(q.Globally(phi)),
+                                      q.Neg(q.ExistsPath(q.Finally(phi)))]))
+    space = _whole(net)
+    if space is None or space.states < 2:
+        return
+    try:
+        explore(net, max_states=data.draw(st.integers(1, space.states - 1)))
+    except ExplorationLimit as e:
+        found = e.found
+    if found is None:
+        return
+    x = q.Query("x", asks)
+    settled = settled_by_found(net, [x], found)
+    if "x" in settled:
+        [truth] = answer(net, [x])
+        assert settled["x"][0] is truth.value, (net, asks)
+
+
+def _toggles(n: int, tokens: int = 1):
+    """``n`` independent places that each go on and off (2^n markings; with ``tokens``
+    more than 1 the net is not safe and the bounded explorer counts them)."""
+    b = NetBuilder("toggles")
+    for i in range(n):
+        b.place(f"off{i}", tokens)
+        b.place(f"on{i}", 0)
+        b.transition(f"up{i}")
+        b.arc(f"off{i}", f"up{i}")
+        b.arc(f"up{i}", f"on{i}")
+        b.transition(f"down{i}")
+        b.arc(f"on{i}", f"down{i}")
+        b.arc(f"down{i}", f"off{i}")
+    return b.build()
+
+
+@pytest.mark.parametrize("tokens", [1, 3])
+def test_past_the_graphs_limit_query_answers_with_a_found_witness(tokens):
+    net = _toggles(16, tokens)        # 65,536 markings (safe) or 4^16: past 1,000
+    on = [q.IntLe(q.IntConst(1), q.TokensCount((f"on{i}",))) for i in range(2)]
+    asks = [q.Query("two-on", q.ExistsPath(q.Finally(q.Conj(tuple(on))))),
+            q.Query("never-on", q.AllPaths(q.Globally(q.Neg(on[0])))),
+            q.Query("down-fires", q.ExistsPath(q.Finally(q.Fireable(("down1",))))),
+            q.Query("all-on", q.ExistsPath(q.Finally(q.Conj(tuple(
+                q.IntLe(q.IntConst(1), q.TokensCount((f"on{i}",))) for i in range(16))))))]
+    got = {a.id: a for a in answer(net, asks, max_states=1_000)}
+    assert (got["two-on"].value, got["two-on"].technique) == (True, "EXPLICIT")
+    assert (got["never-on"].value, got["never-on"].technique) == (False, "EXPLICIT")
+    assert (got["down-fires"].value, got["down-fires"].technique) == (True, "EXPLICIT")
+    # reachable, but 16 firings deep: past a breadth-first 1,000, no witness, no answer
+    assert got["all-on"].value is None
+
+
+def test_answers_come_out_as_they_are_settled_before_the_long_exploration(monkeypatch):
+    import mcl2pnml.analysis.contest.answers as mcc
+    explorations = []
+    real = mcc._space
+
+    def counted(net, max_states, max_memory):
+        explorations.append(max_states)
+        return real(net, max_states, max_memory)
+
+    monkeypatch.setattr(mcc, "_space", counted)
+    net = _toggles(18)                # 262,144 markings: past the first 100,000
+    on = [q.IntLe(q.IntConst(1), q.TokensCount((f"on{i}",))) for i in range(18)]
+    asks = [q.Query("all-on", q.ExistsPath(q.Finally(q.Conj(tuple(on))))),
+            q.Query("one-on", q.ExistsPath(q.Finally(on[0]))),
+            q.Query("at-most-one", q.AllPaths(q.Globally(
+                q.IntLe(q.TokensCount(("on0", "off0")), q.IntConst(1)))))]
+    when = {a.id: (a.value, a.technique, len(explorations))
+            for a in mcc.answers_as_found(net, asks, max_states=300_000)}
+    assert when == {"one-on": (True, "EXPLICIT", 1),
+                    "at-most-one": (True, "STATE_EQUATION", 1),
+                    "all-on": (True, "EXPLICIT CTL", 2)}
+    assert explorations == [mcc.FIRST_STATES, 300_000]
