@@ -405,16 +405,27 @@ FIRST_STATES = 100_000
 
 
 def _space(net: Net, max_states: int, max_memory: int | None):
-    """The reachability graph, or None with the reason; whether a limit stopped it; and
-    the markings found before the limit (``ExplorationLimit.found``), or None."""
+    """The reachability graph, or None with the reason, and the limit that stopped the
+    exploration, or None (its ``found``: the markings met before it)."""
     try:
         space = explore(net, max_states=max_states, max_memory=max_memory)
     except ExplorationLimit as e:
-        return None, f"the state space is past its limit: {e.message}", True, e.found
+        return None, f"the state space is past its limit: {e.message}", e
     if getattr(space, "coverability", False):
-        return (None, "the net is unbounded: its coverability graph does not decide these",
-                False, None)
-    return space, "", False, None
+        return None, "the net is unbounded: its coverability graph does not decide these", None
+    return space, "", None
+
+
+def _stages(max_states: int) -> list[int]:
+    """The limits of the explorations after the first: ten times larger each, up to
+    ``max_states``. Each one stopped at its limit hands its markings over as witnesses
+    before the next starts, so a run cut short keeps them; all of them cost about a
+    tenth more than the last alone."""
+    limits, limit = [], FIRST_STATES
+    while limit < max_states:
+        limit = min(max_states, 10 * limit)
+        limits.append(limit)
+    return limits
 
 
 def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES,
@@ -440,12 +451,12 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     (:func:`settled_by_state_equation`: ``E F φ`` false, ``A G φ`` true), then what the
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
-    then the state space is explored up to ``max_states``, its markings witnesses again
-    past that limit. With ``stubborn``, the reachability questions (``E F φ``, ``A G φ``)
-    of a 1-safe net are searched on the fly under partial-order reduction
-    (:func:`reach_on_the_fly`) before the graph. Past the graph's limits, the
-    reachability questions are searched on the fly, each stopping at its first witness;
-    the rest is unanswered, with the reason."""
+    then the state space is explored to limits ten times larger each up to ``max_states``
+    (:func:`_stages`), the markings of each one stopped witnesses again. With
+    ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
+    searched on the fly under partial-order reduction (:func:`reach_on_the_fly`) before
+    any graph. Past the graph's limits, the reachability questions are searched on the
+    fly, each stopping at its first witness; the rest is unanswered, with the reason."""
     done: set[str] = set()
 
     def settle(settled: dict) -> Iterator[Answer]:
@@ -459,11 +470,12 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
 
     # a small state space first: built at once, it answers everything exactly; past its
     # limit, the markings it found are witnesses
-    space, why, limited, seen = (None, "", True, None) if stubborn else \
+    space, why, stopped = (None, "", None) if stubborn else \
         _space(net, min(max_states, FIRST_STATES), max_memory)
-    if seen is not None:
-        yield from settle(settled_by_found(net, left(), seen))
-    del seen
+    if stopped is not None and stopped.found is not None:
+        yield from settle(settled_by_found(net, left(), stopped.found))
+    limited = stubborn or stopped is not None
+    del stopped
     if space is None:
         # then the cheap proofs, as the contest's tools order them: what the state equation
         # proves unreachable, and what the invariants bound, need no marking explored
@@ -475,11 +487,18 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
                                                safe))
         if not left():
             return
-        if limited and (stubborn or max_states > FIRST_STATES):
-            space, why, _, seen = _space(net, max_states, max_memory)
-            if seen is not None:
-                yield from settle(settled_by_found(net, left(), seen))
-            del seen
+        first = [min(max_states, FIRST_STATES)] if stubborn else []   # none explored yet
+        for limit in (first + _stages(max_states)) if limited else []:
+            space, why, stopped = _space(net, limit, max_memory)
+            if stopped is not None and stopped.found is not None:
+                yield from settle(settled_by_found(net, left(), stopped.found))
+            # a memory budget, not the count, stopped it: a larger limit would not pass it
+            ended = stopped is None or stopped.explored is None or stopped.explored < limit
+            del stopped
+            if ended or not left():
+                break
+        if not left():
+            return
     if space is None:
         if not stubborn:
             yield from settle(reach_on_the_fly(net, left(), max_states, max_memory))
@@ -526,7 +545,7 @@ GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", 
 def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = MAX_STATES,
             max_memory: int | None = None) -> list[Answer]:
     """The generic examinations' answers (the module's documentation)."""
-    space, why, _, _ = _space(net, max_states, max_memory)
+    space, why, _ = _space(net, max_states, max_memory)
     if space is None:
         return [Answer(name, None, "", why) for name in examinations]
     s = space.structure

@@ -139,3 +139,15 @@ def test_answers_come_out_as_they_are_settled_before_the_long_exploration(monkey
                     "at-most-one": (True, "STATE_EQUATION", 1),
                     "all-on": (True, "EXPLICIT CTL", 2)}
     assert explorations == [mcc.FIRST_STATES, 300_000]
+
+
+def test_the_explorations_after_the_first_grow_tenfold_up_to_the_limit():
+    import mcl2pnml.analysis.contest.answers as mcc
+    first = mcc.FIRST_STATES
+    assert mcc._stages(first) == []
+    assert mcc._stages(first + 1) == [first + 1]
+    assert mcc._stages(50 * first) == [10 * first, 50 * first]
+    # each stage's markings are witnesses before the next: all cost about a tenth more
+    # than the last alone
+    stages = mcc._stages(10**9)
+    assert sum(stages[:-1]) < stages[-1] / 8

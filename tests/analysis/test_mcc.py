@@ -24,6 +24,7 @@ import pytest
 from mcl2pnml.analysis.contest import answers as mcc
 from mcl2pnml.analysis.contest.reachability_queries import settled_by_state_equation
 from mcl2pnml.analysis.checking.observers import Status
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit
 from helpers import DATA, ROOT, assert_error_golden, one_error, run_cli
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import Mcl2PnmlError
@@ -154,8 +155,8 @@ def test_past_the_graphs_limits_what_is_answered_is_the_contests(model, monkeypa
     folder = CORPUS / model
     net = pipeline.load_net(folder / "model.pnml")
     queries = [x for name in FILES for x in read_queries(folder / f"{name}.xml")]
-    monkeypatch.setattr(mcc, "_space",
-                        lambda *a: (None, "the state space is past its limit", True, None))
+    monkeypatch.setattr(mcc, "_space", lambda *a: (None, "the state space is past its limit",
+                                                    ExplorationLimit("past it")))
     answers = mcc.answer(net, queries)
     oracle = _oracle(model)
     wrong = [(a.id, _shown(a.value), oracle[a.id]) for a in answers

@@ -1,0 +1,193 @@
+"""The contest's development ladder: ours against verifypn and LoLA, past what exploring
+answers.
+
+Run:  .venv/bin/python -m bench.mcc_ladder [--exams RC,RF,...] [--timeout 60] [--jobs 2]
+                                           [--only ours,verifypn,lola]
+(prints the section of bench/RESULTS.md; ``--floor`` alone checks the start-up floor)
+
+For each of the 36 instances of ``../shared/external-nets/mcc-ladder`` (18 families, as the
+contest published them) and each formula file asked (default: all seven), the whole
+command a user runs, each tool with its defaults (reductions on): ours, ``mcl2pnml query
+model.pnml FILE.xml``; verifypn, ``verifypn-linux64 -n 1 -x 1,...,16 model.pnml FILE.xml``
+(``-ltl`` for the LTL files); LoLA, ``lola --pnmlnet model.pnml --xmlformula
+--formula=FILE.xml --mcc --quiet``. A command past ``--timeout`` seconds (60 by default) is
+stopped, its whole process group; what it printed before counts, as in the contest. Every
+answer is held to the 2021 consensus (``oracle/``, ``?`` where the tools did not agree:
+neither right nor wrong). ``--jobs`` commands run at once (two on two cores: each tool is
+as loaded as the others). The instances are unpacked into a scratch folder, never into
+the project.
+
+``--floor``: ``mcl2pnml --version`` and a query on a 10-place net, the median of five
+whole commands, against 0.3 s (the interpreter's start-up is the floor; it must not grow).
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import os
+import re
+import signal
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+import time
+from pathlib import Path
+
+from bench.mcc_queries import LOLA, VERIFYPN, answers
+
+ROOT = Path(__file__).resolve().parents[1]
+LADDER = ROOT.parent / "shared" / "external-nets" / "mcc-ladder"
+TOOLS = ("ours", "verifypn", "lola")
+#: The formula files, by the short names of the oracle's files.
+FILES = {"RC": "ReachabilityCardinality", "RF": "ReachabilityFireability",
+         "CTLC": "CTLCardinality", "CTLF": "CTLFireability", "LTLC": "LTLCardinality",
+         "LTLF": "LTLFireability", "UB": "UpperBounds"}
+TIMEOUT = 60.0
+#: What a query on a 10-place net and ``--version`` may take, whole commands (seconds).
+FLOOR = 0.3
+
+
+def run(args: list[str], timeout: float, cwd: str) -> tuple[float, float, str]:
+    """Wall seconds (``timeout`` where stopped), the peak MiB (GNU time's %M, 0 where
+    stopped), and what the command printed, up to its end or its stop."""
+    start = time.perf_counter()
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        child = subprocess.Popen(["/usr/bin/time", "-f", "%M", *args], stdout=out,
+                                 stderr=err, cwd=cwd, start_new_session=True)
+        try:
+            child.wait(timeout)
+            seconds = time.perf_counter() - start
+        except subprocess.TimeoutExpired:
+            os.killpg(child.pid, signal.SIGKILL)   # the tool too, not only GNU time
+            child.wait()
+            seconds = timeout
+        out.seek(0)
+        err.seek(0)
+        text = out.read(1 << 24).decode(errors="replace")
+        tail = err.read(1 << 20).decode(errors="replace").strip().splitlines()
+    peak = tail[-1] if tail and seconds < timeout else "0"
+    return seconds, int(peak) / 1024 if peak.isdigit() else 0.0, text
+
+
+def oracle(instance: str, exam: str) -> dict[str, str]:
+    path = LADDER / "oracle" / f"{instance}-{exam}.out"
+    return dict(re.findall(r"^FORMULA (\S+) (\S+) TECHNIQUES", path.read_text(), re.M))
+
+
+def commands(folder: Path, exam: str) -> dict[str, list[str]]:
+    net, file = str(folder / "model.pnml"), str(folder / f"{FILES[exam]}.xml")
+    return {
+        "ours": [sys.executable, "-m", "mcl2pnml", "query", net, file],
+        "verifypn": [str(VERIFYPN), "-n", "1", *(["-ltl"] if exam.startswith("LTL") else []),
+                     "-x", ",".join(map(str, range(1, 17))), net, file],
+        "lola": [str(LOLA), "--pnmlnet", net, "--xmlformula", f"--formula={file}", "--mcc",
+                 "--quiet"],
+    }
+
+
+def unpack(scratch: Path) -> list[Path]:
+    """Each instance's folder, unpacked from the ladder's archives (members checked: no
+    path leaves the scratch folder)."""
+    folders = []
+    for archive in sorted((LADDER / "inputs").glob("*.tgz")):
+        with tarfile.open(archive) as tar:
+            tar.extractall(scratch, filter="data")
+        folders.append(scratch / archive.name[:-len(".tgz")])
+    return folders
+
+
+def ladder(exams: list[str], tools: list[str], timeout: float, jobs: int) -> list[str]:
+    scratch = Path(tempfile.mkdtemp(prefix="mcc-ladder-"))
+    folders = unpack(scratch)
+    work = [(folder, exam, who, args) for folder in folders for exam in exams
+            for who, args in commands(folder, exam).items() if who in tools]
+    # per examination and tool: right, wrong, unanswered (of the known), seconds, peak MiB
+    rows = {(e, w): [0, 0, 0, 0.0, 0.0] for e in exams for w in tools}
+
+    def one(item):
+        folder, exam, who, args = item
+        return item, run(args, timeout, str(scratch))
+
+    with cf.ThreadPoolExecutor(jobs) as pool:
+        for (folder, exam, who, _), (seconds, mib, out) in pool.map(one, work):
+            truth = {k: v for k, v in oracle(folder.name, exam).items() if v != "?"}
+            got = answers(out)
+            row = rows[exam, who]
+            right = sum(1 for k, v in got.items() if truth.get(k) == v)
+            wrong = sum(1 for k, v in got.items() if k in truth and truth[k] != v)
+            row[0] += right
+            row[1] += wrong
+            row[2] += len(truth) - right - wrong
+            row[3] += seconds
+            row[4] = max(row[4], mib)
+            print(f"  {folder.name} {exam} {who}: {right} right, {wrong} wrong of "
+                  f"{len(truth)}, {seconds:.1f} s", file=sys.stderr, flush=True)
+    lines = ["| examination | " + " | ".join(
+        f"{w}: right / wrong / unanswered | {w} (s) | {w} peak MiB" for w in tools) + " |",
+        "|---|" + "---:|---:|---:|" * len(tools)]
+    total = {w: [0, 0, 0, 0.0] for w in tools}
+    for exam in exams:
+        cells = []
+        for w in tools:
+            right, wrong, left, seconds, mib = rows[exam, w]
+            cells.append(f"{right} / {wrong} / {left} | {seconds:.0f} | {mib:.0f}")
+            for i, v in enumerate((right, wrong, left, seconds)):
+                total[w][i] += v
+        lines.append(f"| {FILES[exam]} | " + " | ".join(cells) + " |")
+    lines.append("| **total** | " + " | ".join(
+        f"**{r} / {w} / {u}** | **{s:.0f}** | " for r, w, u, s in total.values()) + " |")
+    return lines
+
+
+def floor() -> list[str]:
+    """The start-up floor: ``--version`` and a query on a 10-place net, median of five."""
+    scratch = Path(tempfile.mkdtemp(prefix="mcc-floor-"))
+    net, formula = scratch / "ten.pnml", scratch / "q.xml"
+    places = "".join(f'<place id="p{i}"><initialMarking><text>{int(i == 0)}</text>'
+                     f'</initialMarking></place>' for i in range(10))
+    transitions = "".join(f'<transition id="t{i}"/><arc id="a{i}" source="p{i}" '
+                          f'target="t{i}"/><arc id="b{i}" source="t{i}" '
+                          f'target="p{(i + 1) % 10}"/>' for i in range(10))
+    net.write_text('<?xml version="1.0"?><pnml xmlns="http://www.pnml.org/version-2009/grammar/'
+                   'pnml"><net id="ten" type="http://www.pnml.org/version-2009/grammar/ptnet">'
+                   f'<page id="g">{places}{transitions}</page></net></pnml>')
+    formula.write_text(
+        '<?xml version="1.0"?><property-set xmlns="http://mcc.lip6.fr/"><property>'
+        '<id>ten-0</id><description/><formula><exists-path><finally><integer-le>'
+        '<integer-constant>1</integer-constant><tokens-count><place>p9</place>'
+        '</tokens-count></integer-le></finally></exists-path></formula></property>'
+        '</property-set>')
+    lines = []
+    for what, args in (("--version", ["--version"]),
+                       ("query on a 10-place net", ["query", str(net), str(formula)])):
+        times = [run([sys.executable, "-m", "mcl2pnml", *args], 30.0, str(scratch))[0]
+                 for _ in range(5)]
+        median = statistics.median(times)
+        lines.append(f"- `mcl2pnml {args[0]}` ({what}): median {median:.2f} s of five; "
+                     f"{'within' if median <= FLOOR else 'PAST'} {FLOOR} s")
+    return lines
+
+
+def main() -> None:
+    argv = sys.argv[1:]
+
+    def option(name: str, default: str) -> str:
+        return argv[argv.index(name) + 1] if name in argv else default
+
+    if "--floor" in argv:
+        print("\n".join(floor()))
+        return
+    exams = option("--exams", ",".join(FILES)).split(",")
+    unknown = [e for e in exams if e not in FILES]
+    if unknown:
+        sys.exit(f"unknown examination {', '.join(unknown)}; known: {', '.join(FILES)}")
+    tools = option("--only", ",".join(TOOLS)).split(",")
+    print("\n".join(ladder(exams, tools, float(option("--timeout", str(TIMEOUT))),
+                           int(option("--jobs", "2")))))
+    print()
+    print("\n".join(floor()))
+
+
+if __name__ == "__main__":
+    main()
