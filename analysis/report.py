@@ -33,9 +33,10 @@ from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.behaviour import behaviour
-from mcl2pnml.analysis.structure.invariants import (AnalysisLimit, format_invariant, minimal_semipositive_p_invariants,
-                         minimal_semipositive_t_invariants, p_invariant_basis,
-                         t_invariant_basis)
+from mcl2pnml.analysis.structure.invariants import (DENSE_ENTRIES, AnalysisLimit, format_invariant,
+                                                   minimal_semipositive_p_invariants,
+                                                   minimal_semipositive_t_invariants,
+                                                   p_invariant_basis, t_invariant_basis)
 from mcl2pnml.analysis.structure.siphons import minimal_siphons, minimal_traps, siphon_control
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, MemoryLimit, Progress, explore
 from mcl2pnml.analysis.statespace.explorers import CHOICES
@@ -131,7 +132,7 @@ class StateSpaceFacts:
 
 @dataclass(frozen=True)
 class Structural:
-    """Invariants, siphons and traps (:func:`_structural`); each None past its limit or left
+    """Invariants, siphons and traps (:class:`_Stages`); each None past its limit or left
     out by the budget, the reason in :attr:`Analysis.limits`."""
 
     p_invariants: list[dict[str, int]] | None
@@ -229,15 +230,21 @@ class Analysis:
 def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only: bool = False,
             max_states: int = MAX_STATES, progress: Progress | None = None,
             explorer: str = AUTO, max_memory: int | None = None,
-            explore_states: bool = True) -> Analysis:
+            explore_states: bool = True, enumerate_all: bool = False) -> Analysis:
     """Everything we know how to prove about ``net``, as typed data (:class:`Analysis`).
 
     ``explorer`` is one of :data:`mcl2pnml.analysis.statespace.explore.BACKENDS`; ``max_memory``
     is the exploration's budget in bytes (default: half the memory available).
-    The structural results come first, so that an exploration stopped by its
-    budget still ends in a partial answer: ``"partial"`` says how many
-    markings were explored and whether a dead marking was met among them.
-    ``explore_states=False``: no exploration, the state space's facts left None.
+    The invariant bases come first, then the exploration, then the enumerations
+    (minimal semi-positive invariants, siphons, traps: exponential in the worst case,
+    and past their bounds on every compiled mission), within their full bounds where
+    the reachability graph was not built whole, or with ``enumerate_all``; where it was,
+    it decides every property they bear on, and they run within a hundredth of them
+    (:data:`QUICK`). An exploration stopped by its budget still ends in a partial
+    answer: ``"partial"`` says how many markings were explored and whether a dead
+    marking was met among them.
+    ``explore_states=False``: no exploration (a certificate decides the behaviour), the
+    state space's facts left None.
     """
     # the budget is the whole process's: what the net and the structural results
     # hold counts against it (the default, half of what is free now, comes on top
@@ -250,12 +257,19 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     s = structure(net)
     limits: dict[str, str] = {}
     left_out: dict[str, str] = {}
-    structural = {} if state_space_only else _structural(s, limits, left_out, budget)
     partial = None
+    stages = _Stages(s, limits, left_out, budget)
+    bases = {} if state_space_only else stages.bases()
     release()
+
+    def structural(decided: bool) -> dict[str, Any]:
+        if state_space_only:
+            return {}
+        return {**bases, **stages.enumerations(enumerate_all or not decided)}
+
     if not explore_states:     # the caller knows the behaviour otherwise (a certificate)
         result = _state_space_facts(net, s, None)
-        result.update(structural)
+        result.update(structural(True))
         _fit_output(result, limits, left_out, budget)
         return _typed(result, state_space_only, None, limits)
     try:
@@ -264,6 +278,9 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
                             max_memory=budget.limit,
                             held=resident() + 2 * margin(budget.limit))
             facts = _state_space_facts(net, s, space)
+            whole = not getattr(space, "coverability", False)
+            del space   # the markings are not the structural stages' to pay for
+        release()
     except BudgetExceeded as e:
         # an explorer's estimate of its markings fell short (or what follows the
         # exploration did not fit): the markings found are lost with it
@@ -277,7 +294,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         partial = Partial(True, e.explored, None if e.deadlocks is None else e.deadlocks > 0)
         facts = _state_space_facts(net, s, None)
     result = facts
-    result.update(structural)
+    result.update(structural(partial is None and whole))
     _fit_output(result, limits, left_out, budget)
     if left_out:
         partial = replace(partial or Partial(), left_out=left_out)
@@ -389,62 +406,92 @@ STAGES = {
 }
 
 
-def _structural(s, limits: dict[str, str], left_out: dict[str, str],
-                budget: Budget) -> dict[str, Any]:
-    """Invariants, siphons and traps, each within its limit (past it: None and the reason).
+#: The enumerations' bounds where the state space decides every property they bear on:
+#: a hundredth of the others (a net of a few dozen places is enumerated in full within
+#: them; a compiled mission's minimal siphons and semi-positive P-invariants are past
+#: even the full bounds, reached in seconds). ``--structure`` asks for the full ones.
+QUICK = 100
+#: What a bound reached where the quick ones applied says besides.
+RAISE = "; --structure raises the bound"
+
+
+class _Stages:
+    """The structural stages of one analysis, each within its limit (past it: None and the
+    reason in ``limits``).
 
     Each stage is estimated first and left out when its estimate does not fit
     in what is left of ``budget``; it then runs under the budget's guard. What
     the budget left out is also in ``left_out``: the answer is partial.
     """
-    width = len(s.places) + len(s.transitions)
 
-    def bounded_run(key: str, fn, *args, need: int = 0):
+    def __init__(self, s, limits: dict[str, str], left_out: dict[str, str], budget: Budget):
+        self.s, self.limits, self.left_out, self.budget = s, limits, left_out, budget
+
+    def run(self, key: str, fn, *args, need: int = 0, note: str = ""):
         what = STAGES[key]
         try:
-            budget.check(need, what)
-            with guard(_floored(budget), what):
+            self.budget.check(need, what)
+            with guard(_floored(self.budget), what):
                 return fn(*args)
         except BudgetExceeded as e:
-            limits[key] = left_out[key] = e.message
+            self.limits[key] = self.left_out[key] = e.message
         except AnalysisLimit as e:
-            limits[key] = e.message
+            self.limits[key] = e.message + note
         finally:
             release()   # what a stage built and dropped is not the next stage's to pay
         return None
 
-    if len(s.places) > 0:
-        import sympy  # noqa: F401  (loaded before the guard: the module is not the stage's)
-    elimination = elimination_estimate(s)
-    p_basis = bounded_run("p_invariants", p_invariant_basis, s, need=elimination)
-    t_basis = bounded_run("t_invariants", t_invariant_basis, s, need=elimination)
-    free = max(budget.free(), NEGLIGIBLE)
-    semi_p = bounded_run("semipositive_p_invariants", minimal_semipositive_p_invariants,
-                         s, min(_limit(FARKAS_LIMIT, width), farkas_rows(s, free)))
-    semi_t = bounded_run("semipositive_t_invariants", minimal_semipositive_t_invariants,
-                         s, min(_limit(FARKAS_LIMIT, width), farkas_rows(s, free, True)))
-    siphons = bounded_run("siphons", minimal_siphons, s, _limit(SIPHON_LIMIT, len(s.places)),
-                          SIPHON_WORK)
-    traps = bounded_run("traps", minimal_traps, s, _limit(SIPHON_LIMIT, len(s.places)),
-                        SIPHON_WORK)
-    control = (bounded_run("siphon_control", siphon_control, s, siphons, semi_p or [])
-               if siphons is not None else None)
-    return {
-        "p_invariants": p_basis,
-        "t_invariants": t_basis,
-        "semipositive_p_invariants": semi_p,
-        "semipositive_t_invariants": semi_t,
-        "siphons": None if siphons is None else [s.names(x) for x in siphons],
-        "siphon_control": None if control is None else [
-            {"siphon": list(r.places), "marked": r.marked, "source": r.source,
-             "controlled": r.controlled, "controlled_by": r.controlled_by}
-            for r in control],
-        # Iordache and Antsaklis: every siphon marked and controlled (inputs
-        # from outside, which nothing inside writes to, need no control)
-        "siphons_controlled": None if control is None else all(
-            r.source or (r.marked and r.controlled) for r in control),
-        "traps": None if traps is None else [s.names(x) for x in traps],
-    }
+    def bases(self) -> dict[str, Any]:
+        """The invariant bases (linear algebra): before the exploration, whose budget then
+        counts what they hold."""
+        s = self.s
+        if len(s.places) * len(s.transitions) > DENSE_ENTRIES:
+            _with_sympy()
+        elimination = elimination_estimate(s)
+        return {"p_invariants": self.run("p_invariants", p_invariant_basis, s, need=elimination),
+                "t_invariants": self.run("t_invariants", t_invariant_basis, s, need=elimination)}
+
+    def enumerations(self, thorough: bool) -> dict[str, Any]:
+        """The minimal semi-positive invariants, siphons and traps, and the siphons'
+        control: within their bounds, or a hundredth of them unless ``thorough``
+        (:data:`QUICK`)."""
+        s = self.s
+        scale, note = (1, "") if thorough else (QUICK, RAISE)
+        free = max(self.budget.free(), NEGLIGIBLE)
+        rows = _limit(FARKAS_LIMIT // scale, len(s.places) + len(s.transitions))
+        semi_p = self.run("semipositive_p_invariants", minimal_semipositive_p_invariants,
+                          s, min(rows, farkas_rows(s, free)), note=note)
+        semi_t = self.run("semipositive_t_invariants", minimal_semipositive_t_invariants,
+                          s, min(rows, farkas_rows(s, free, True)), note=note)
+        sets = _limit(SIPHON_LIMIT // scale, len(s.places))
+        siphons = self.run("siphons", minimal_siphons, s, sets, SIPHON_WORK // scale,
+                           note=note)
+        traps = self.run("traps", minimal_traps, s, sets, SIPHON_WORK // scale, note=note)
+        control = None
+        if siphons is not None:
+            _with_sympy()
+            control = self.run("siphon_control", siphon_control, s, siphons, semi_p or [])
+        return {
+            "semipositive_p_invariants": semi_p,
+            "semipositive_t_invariants": semi_t,
+            "siphons": None if siphons is None else [s.names(x) for x in siphons],
+            "siphon_control": None if control is None else [
+                {"siphon": list(r.places), "marked": r.marked, "source": r.source,
+                 "controlled": r.controlled, "controlled_by": r.controlled_by}
+                for r in control],
+            # Iordache and Antsaklis: every siphon marked and controlled (inputs
+            # from outside, which nothing inside writes to, need no control)
+            "siphons_controlled": None if control is None else all(
+                r.source or (r.marked and r.controlled) for r in control),
+            "traps": None if traps is None else [s.names(x) for x in traps],
+        }
+
+
+def _with_sympy() -> None:
+    # the sparse elimination and the siphons' control use sympy: loaded before their
+    # guard (the module is not the stage's); a small net's bases, and a net whose
+    # siphons are past their bound, do without it (most of a second to import)
+    import sympy  # noqa: F401
 
 
 def has_mission_interface(net: Net) -> bool:

@@ -91,6 +91,8 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     on the paper's task it reads like the paper's own equations
     (``MTX + EXE + E_OK + E_FAIL + W_OK + W_FAIL + W_A``).
     """
+    if len(rows) * ncols <= DENSE_ENTRIES:
+        return _nullspace_dense(rows, ncols)
     # sympy takes most of a second to import: Farkas (and so the counter
     # explorer's bounds) does without it
     from sympy import QQ, ZZ
@@ -102,6 +104,35 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     rref, pivots = a.to_sparse().convert_to(QQ).rref()
     basis = rref.nullspace_from_rref(pivots).to_sdm()
     vectors = [_canonical({last - j: v for j, v in basis[i].items()}) for i in basis]
+    return sorted(vectors, key=min)
+
+
+#: The largest matrix (rows times columns) whose nullspace is taken dense, by FLINT: in
+#: a few milliseconds, where importing sympy alone takes most of a second. Past it, the
+#: sparse elimination: a dense one of thousands of places grows as the cube.
+DENSE_ENTRIES = 1_000_000
+
+
+def _nullspace_dense(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, int]]:
+    """:func:`_nullspace` by FLINT's exact elimination (python-flint's ``fmpz_mat``). Its
+    nullspace is read off the same unique RREF, columns taken last first: a non-pivot
+    column's vector is the denominator there and minus the pivot rows' entries, so
+    after :func:`_canonical` the basis is the sparse elimination's, vector for vector."""
+    from flint import fmpz_mat
+    last = ncols - 1
+    a = fmpz_mat(max(1, len(rows)), ncols)
+    for i, row in enumerate(rows):
+        for j, v in row.items():
+            if v:
+                a[i, last - j] = v
+    basis, nullity = a.nullspace()
+    vectors = []
+    for k in range(nullity):
+        column = {last - j: int(basis[j, k]) for j in range(ncols) if basis[j, k] != 0}
+        g = gcd(*column.values())
+        first = min(column)
+        sign = -1 if column[first] < 0 else 1
+        vectors.append({j: sign * column[j] // g for j in sorted(column)})
     return sorted(vectors, key=min)
 
 

@@ -39,6 +39,9 @@ class AnalyzeOptions:
     initial: str | None = None
     #: the reachable markings only (no invariants)
     state_space: bool = False
+    #: the minimal semi-positive invariants, siphons and traps even where the state space
+    #: decides every property
+    structure: bool = False
     max_states: int = MAX_STATES
     #: a name of :data:`mcl2pnml.analysis.statespace.explorers.EXPLORERS`, or auto (the
     #: first of its choices: the fastest for the net's kind and size)
@@ -255,7 +258,8 @@ def _explored(file: Path, net: Net, start, notes: Notes, progress: ProgressMeter
                   + "): exploring instead")
     result = pipeline.analyze(net, start, state_space_only=o.state_space, progress=progress,
                               explore_states=certified is None, max_states=o.max_states,
-                              explorer=o.explorer, max_memory=o.max_memory)
+                              explorer=o.explorer, max_memory=o.max_memory,
+                              enumerate_all=o.structure)
     if certified is not None:
         result = result.certified(certified)
         notes(f"{beside}: the certificate holds: 1-safe, an end always reachable, reusable, "

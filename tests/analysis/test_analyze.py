@@ -182,3 +182,30 @@ def test_a_wide_net_ends_with_what_fits_in_its_limits(tmp_path):
     assert out.returncode == 3 and r["partial"]["markings_explored"] > 0
     assert {"semipositive_p_invariants", "siphons", "states"} <= set(r["limits"])
     assert len(r["p_invariants"]) == 2500   # the exact basis still comes: one per cycle
+
+
+def test_where_the_state_space_decides_the_enumerations_stay_within_a_hundredth(
+        task_pnml, monkeypatch):
+    # the task's siphons fit in the quick bounds; shrunk further here, they do not: the
+    # report says so and how to ask for more, and --structure's full bounds compute them
+    from mcl2pnml import pipeline
+    import mcl2pnml.analysis.report as report
+    net = pipeline.load_net(task_pnml)
+    full = pipeline.analyze(net)
+    assert full.structural.siphons and "siphons" not in full.limits
+    monkeypatch.setattr(report, "QUICK", report.SIPHON_LIMIT * 10)
+    quick = pipeline.analyze(net)
+    assert quick.structural.siphons is None
+    assert quick.limits["siphons"].endswith("; --structure raises the bound")
+    assert quick.facts == full.facts            # the verdicts are the state space's
+    asked = pipeline.analyze(net, enumerate_all=True)
+    assert asked.structural.siphons == full.structural.siphons
+    # a state space past its limit does not decide: the full bounds, with no shrinking
+    stopped = pipeline.analyze(net, max_states=2)
+    assert stopped.structural.siphons == full.structural.siphons
+
+
+def test_the_structure_option_reaches_the_enumerations(task_pnml):
+    out = run("analyze", task_pnml, "--structure", "--json")
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout)["siphons"]
