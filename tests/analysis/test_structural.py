@@ -413,6 +413,23 @@ def test_invariant_bases_by_definition(net):
         assert is_p_invariant(s, y)
 
 
+@settings(max_examples=sample(400, 100), deadline=None)
+@given(small_nets(max_places=8, max_transitions=7))
+def test_the_dense_and_the_sparse_elimination_give_the_same_basis(net):
+    # FLINT's dense nullspace (small nets) and sympy's sparse one (large nets) read the
+    # same unique RREF: vector for vector, in the same order
+    from mcl2pnml.analysis.structure import invariants as inv
+    s = structure(net)
+    for rows, n in ((s.incidence, len(s.places)), (s.incidence_rows, len(s.transitions))):
+        dense_basis = inv._nullspace_dense(rows, n)
+        saved, inv.DENSE_ENTRIES = inv.DENSE_ENTRIES, -1
+        try:
+            sparse_basis = inv._nullspace(rows, n)
+        finally:
+            inv.DENSE_ENTRIES = saved
+        assert dense_basis == sparse_basis
+
+
 def _check_farkas(found, order, rows, is_null, n_max):
     """Semi-positive, invariant, coprime, minimal support; and complete."""
     index = {k: i for i, k in enumerate(order)}
