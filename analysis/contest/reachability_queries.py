@@ -116,10 +116,11 @@ class Truths:
 
 
 def _witnessed(s, queries: Sequence[q.Query], markings, bound_of, technique: str,
-               bound_technique: str) -> dict[str, Settled]:
+               seen: str) -> dict[str, Settled]:
     """The questions a reachable marking among ``markings`` settles: ``E F φ`` true and
-    ``A G φ`` false where one satisfies φ (for ``A G``: violates it); an upper bound where
-    the largest found is the bound ``bound_of`` proves."""
+    ``A G φ`` false where one satisfies φ (for ``A G``: violates it), as ``technique``;
+    an upper bound where the largest found is the bound that ``bound_of`` proves (its
+    technique after ``seen``, the words for the witness)."""
     settled: dict[str, Settled] = {}
     if not markings.states:
         return settled
@@ -128,8 +129,9 @@ def _witnessed(s, queries: Sequence[q.Query], markings, bound_of, technique: str
         try:
             if isinstance(x.asks, q.PlaceBound):
                 most = int(truths.tokens(x.asks.places).max())
-                if bound_of(x.asks.places) == most:
-                    settled[x.id] = (most, bound_technique)
+                bound, how = bound_of(x.asks.places, most)
+                if bound == most:
+                    settled[x.id] = (most, f"{seen} {how}")
                 continue
             r = reachability(x.asks)
             if r is None:
@@ -142,15 +144,36 @@ def _witnessed(s, queries: Sequence[q.Query], markings, bound_of, technique: str
     return settled
 
 
-def _bounds(s):
-    """A function bounding a sum of places by the P-invariants, found once, if ever asked."""
-    invariants: list = []
+class _Bounds:
+    """Upper bounds of place sums over the reachable markings: the P-invariants' (found
+    once, if ever asked), then the state equation's (:func:`state_equation.upper_bound`)
+    where those do not close the question, within :data:`STATE_EQUATION_SECONDS` for a
+    command."""
 
-    def bound_of(places) -> int | None:
-        if not invariants:
-            invariants.append(_invariant_bounds(s))
-        return invariants[0](places)
-    return bound_of
+    def __init__(self, s):
+        self.s = s
+        self._invariants: list = []
+        self._end: float | None = None
+
+    def invariant(self, places) -> int | None:
+        if not self._invariants:
+            self._invariants.append(_invariant_bounds(self.s))
+        return self._invariants[0](places)
+
+    def __call__(self, places, reached: int) -> tuple[int | None, str]:
+        """The least bound proven, with its technique; ``reached`` is a sum known to be
+        reached: a bound that meets it needs nothing further."""
+        bound = self.invariant(places)
+        if bound is not None and bound <= reached:
+            return bound, "STRUCTURAL P_INVARIANTS"
+        if self._end is None:
+            self._end = time.monotonic() + STATE_EQUATION_SECONDS
+        left = self._end - time.monotonic()
+        if left > 0:
+            by_equation = state_equation.upper_bound(self.s, places, left)
+            if by_equation is not None and (bound is None or by_equation < bound):
+                return by_equation, "STATE_EQUATION"
+        return bound, "STRUCTURAL P_INVARIANTS"
 
 
 def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str, Settled]:
@@ -164,9 +187,9 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
       marking already reaches is the bound.
     """
     s = structure(net)
-    bound_of = _bounds(s)
-    found = _witnessed(s, queries, ListedMarkings([s.initial_vector()]), bound_of,
-                       "INITIAL_STATE", "STRUCTURAL P_INVARIANTS INITIAL_STATE")
+    bounds = _Bounds(s)
+    found = _witnessed(s, queries, ListedMarkings([s.initial_vector()]), bounds,
+                       "INITIAL_STATE", "INITIAL_STATE")
     for x in queries:
         if x.id in found or isinstance(x.asks, q.PlaceBound):
             continue
@@ -174,7 +197,7 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
         if r is None:
             continue
         try:
-            always = _three_valued(r[1], s, bound_of)
+            always = _three_valued(r[1], s, bounds.invariant)
         except KeyError:            # a name the net does not have: said by the graph's path
             continue
         if always is not None:
@@ -193,8 +216,7 @@ def settled_by_found(net: Net, queries: Sequence[q.Query], found) -> dict[str, S
 
     φ is evaluated on every found marking at once (:class:`Truths`)."""
     s = structure(net)
-    return _witnessed(s, queries, found, _bounds(s), "EXPLICIT",
-                      "EXPLICIT STRUCTURAL P_INVARIANTS")
+    return _witnessed(s, queries, found, _Bounds(s), "EXPLICIT", "EXPLICIT")
 
 
 #: Seconds the state equation may take over all the questions of one command.

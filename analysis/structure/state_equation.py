@@ -16,6 +16,9 @@ holds its arc's weight), each disjunct an integer program solved by HiGHS (scipy
 or a normal form past :data:`MAX_DISJUNCTS`, is not asked. This is the contest's
 ``STATE_EQUATION`` technique, as verifypn and LoLA use it (verifypn: Jensen, Nielsen,
 Oestergaard and Srba, "TAPAAL and reachability analysis of P/T nets", 2016).
+
+The same equation bounds a sum of places from above (:func:`upper_bound`): no
+reachable marking holds more than the largest sum any solution allows.
 """
 from __future__ import annotations
 
@@ -153,3 +156,31 @@ def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> 
                   options={"time_limit": seconds, "presolve": True})
     # 2: infeasible; anything else (a solution, a time limit, unbounded) decides nothing
     return result.status == 2
+
+
+def upper_bound(s: Structure, places, seconds: float = SOLVE_SECONDS) -> int | None:
+    """An upper bound of the token sum of ``places`` (names, repeats counted) over every
+    reachable marking: the largest ``a . M`` with ``M = M0 + C x``, ``M, x >= 0``
+    integers, by HiGHS; None where the equation does not bound it (or ``seconds`` ran
+    out with no bound). The solver's dual bound is read, not its best solution: a
+    solution within the optimality gap would understate the maximum, the dual bound
+    never does. A place the net does not have raises KeyError."""
+    from scipy.optimize import Bounds, LinearConstraint, milp   # as in _infeasible
+
+    weights = np.zeros(len(s.places))
+    for p in places:
+        weights[s.place_index[p]] += 1
+    c, m0 = _equation(s)
+    start = float(weights @ m0)
+    if len(s.transitions) == 0:
+        return int(round(start))
+    gain = np.asarray(c.T @ weights).ravel()          # a . C x: the sum's growth
+    result = milp(-gain, constraints=[LinearConstraint(c, -m0, np.inf)],
+                  integrality=np.ones(len(s.transitions)), bounds=Bounds(0, np.inf),
+                  options={"time_limit": seconds, "presolve": True})
+    # minimising -gain: every solution's -gain is at least the dual bound, so no
+    # reachable sum passes start - dual bound (a tolerance of the solver's own size)
+    dual = getattr(result, "mip_dual_bound", None)
+    if result.status not in (0, 1) or dual is None or not np.isfinite(dual):
+        return None
+    return int(np.floor(start - dual + 1e-6))

@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcl2pnml.analysis.contest.answers import answer
 from mcl2pnml.analysis.contest.reachability_queries import ListedMarkings, Truths
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
-from mcl2pnml.analysis.structure.state_equation import unreachable
+from mcl2pnml.analysis.structure.state_equation import unreachable, upper_bound
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import structure
@@ -112,3 +112,36 @@ def test_past_the_graphs_limit_query_answers_by_the_state_equation():
     assert [(a.id, a.value, a.technique) for a in got[:2]] == [
         ("never", True, "STATE_EQUATION"), ("ever", False, "STATE_EQUATION")]
     assert got[2].value is None        # reachable: the equation proves nothing, says nothing
+
+
+@settings(max_examples=sample(600, 80), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(st.data())
+def test_the_equations_upper_bound_is_never_below_a_reached_sum(data):
+    net = data.draw(nets())
+    s = structure(net)
+    places = data.draw(st.lists(st.sampled_from(list(s.places)), min_size=1, max_size=3))
+    bound = upper_bound(s, places)
+    try:
+        space = explore(net, max_states=5_000)
+    except ExplorationLimit:
+        return
+    if space.coverability:
+        return
+    most = max(sum(int(m[s.place_index[p]]) for p in places) for m in space.markings)
+    assert bound is None or bound >= most, (net, places, bound, most)
+
+
+def test_the_equation_bounds_the_mutex_and_query_answers_with_a_witness():
+    s = structure(_mutex())
+    assert upper_bound(s, ["busy1", "busy2"]) == 1
+    assert upper_bound(s, ["busy1", "busy2", "lock"]) == 1
+    # past the graph's limit (one marking), the found marking (M0: none busy) does not
+    # reach the busy places' bound; it reaches the lock's
+    got = answer(_mutex(), [q.Query("busy", q.PlaceBound(("busy1", "busy2"))),
+                            q.Query("lock", q.PlaceBound(("lock",)))], max_states=1)
+    assert got[0].value is None
+    assert (got[1].value, got[1].technique) == (1, "EXPLICIT STRUCTURAL P_INVARIANTS")
+    got = answer(_mutex(), [q.Query("busy", q.PlaceBound(("busy1", "busy2")))], max_states=2)
+    assert (got[0].value, got[0].technique) in {(1, "EXPLICIT STRUCTURAL P_INVARIANTS"),
+                                                (1, "EXPLICIT STATE_EQUATION")}
