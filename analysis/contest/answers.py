@@ -64,6 +64,7 @@ from mcl2pnml.core.net import Net
 
 from mcl2pnml.analysis.contest.reachability_queries import (reach_on_the_fly, settled_by_found,
                                                             settled_by_state_equation,
+                                                            settled_by_walks,
                                                             settled_without_exploring)
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
@@ -451,6 +452,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     (:func:`settled_by_state_equation`: ``E F φ`` false, ``A G φ`` true), then what the
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
+    then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are),
     then the state space is explored to limits ten times larger each up to ``max_states``
     (:func:`_stages`), the markings of each one stopped witnesses again. With
     ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
@@ -482,6 +484,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # (seconds, where exploring may not end)
         yield from settle(settled_by_state_equation(net, left()))
         yield from settle(settled_without_exploring(net, left()))
+        # then witnesses deep in the net, where the first exploration stayed near M0
+        yield from settle(settled_by_walks(net, left()))
         if stubborn:
             yield from settle(reach_on_the_fly(net, left(), max_states, max_memory, True,
                                                safe))

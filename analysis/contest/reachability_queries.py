@@ -27,6 +27,7 @@ from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.observers import Status
+from mcl2pnml.analysis.statespace.walks import random_walks
 from mcl2pnml.analysis.structure import state_equation
 from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
                                                     minimal_semipositive_p_invariants)
@@ -154,6 +155,7 @@ class _Bounds:
         self.s = s
         self._invariants: list = []
         self._end: float | None = None
+        self._by_equation: dict[tuple, int | None] = {}
 
     def invariant(self, places) -> int | None:
         if not self._invariants:
@@ -168,11 +170,13 @@ class _Bounds:
             return bound, "STRUCTURAL P_INVARIANTS"
         if self._end is None:
             self._end = time.monotonic() + STATE_EQUATION_SECONDS
+        key = tuple(sorted(places))
         left = self._end - time.monotonic()
-        if left > 0:
-            by_equation = state_equation.upper_bound(self.s, places, left)
-            if by_equation is not None and (bound is None or by_equation < bound):
-                return by_equation, "STATE_EQUATION"
+        if key not in self._by_equation and left > 0:
+            self._by_equation[key] = state_equation.upper_bound(self.s, places, left)
+        by_equation = self._by_equation.get(key)
+        if by_equation is not None and (bound is None or by_equation < bound):
+            return by_equation, "STATE_EQUATION"
         return bound, "STRUCTURAL P_INVARIANTS"
 
 
@@ -319,6 +323,32 @@ def _three_valued(phi, s, bound_of) -> bool | None:
         return None
 
     return go(phi)
+
+
+# -- random walks ---------------------------------------------------------------------------------
+
+#: Seconds the random walks may take over all the questions of one command.
+WALK_SECONDS = 5.0
+
+
+def settled_by_walks(net: Net, queries: Sequence[q.Query],
+                     seconds: float = WALK_SECONDS) -> dict[str, Settled]:
+    """The questions a marking met by random walks settles (:func:`random_walks`: each
+    reachable), as a found marking settles them (:func:`settled_by_found`): ``E F φ``
+    true, ``A G φ`` false, an upper bound the walks reach. Within ``seconds``; a
+    walk proves nothing by what it does not meet."""
+    s = structure(net)
+    asked = [x for x in queries
+             if isinstance(x.asks, q.PlaceBound) or reachability(x.asks) is not None]
+    settled: dict[str, Settled] = {}
+    bounds = _Bounds(s)
+    for batch in random_walks(s, seconds):
+        left = [x for x in asked if x.id not in settled]
+        if not left:
+            break
+        settled.update(_witnessed(s, left, ListedMarkings(batch), bounds,
+                                  "RANDOM_WALK", "RANDOM_WALK"))
+    return settled
 
 
 # -- on the fly: the property checker's engine ---------------------------------------

@@ -118,7 +118,7 @@ def _nullspace_dense(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict
     nullspace is read off the same unique RREF, columns taken last first: a non-pivot
     column's vector is the denominator there and minus the pivot rows' entries, so
     after :func:`_canonical` the basis is the sparse elimination's, vector for vector."""
-    from flint import fmpz_mat
+    from flint import fmpz_mat   # python-flint, 0.1 s to import: only for a basis
     last = ncols - 1
     a = fmpz_mat(max(1, len(rows)), ncols)
     for i, row in enumerate(rows):

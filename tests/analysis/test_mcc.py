@@ -91,8 +91,9 @@ def test_the_command_prints_the_contests_answer_lines(tmp_path):
     data = json.loads(run_cli("query", folder / "model.pnml", folder / "UpperBounds.xml",
                               "--json").stdout)
     assert [a["id"] for a in data["answers"]] == [line.split()[1] for line in lines[:16]]
-    # past the limits: no answer, said, and exit 3
-    out = run_cli("query", folder / "model.pnml", folder / "UpperBounds.xml",
+    # past the limits: what needs the graph (CTL beyond E F and A G) has no answer, said,
+    # and exit 3
+    out = run_cli("query", folder / "model.pnml", folder / "CTLCardinality.xml",
                   "--max-states", "2")
     assert out.returncode == 3 and "CANNOT_COMPUTE" in out.stdout and "limit" in out.stdout
 

@@ -137,10 +137,11 @@ def test_the_equation_bounds_the_mutex_and_query_answers_with_a_witness():
     assert upper_bound(s, ["busy1", "busy2"]) == 1
     assert upper_bound(s, ["busy1", "busy2", "lock"]) == 1
     # past the graph's limit (one marking), the found marking (M0: none busy) does not
-    # reach the busy places' bound; it reaches the lock's
+    # reach the busy places' bound (a random walk may); it reaches the lock's
     got = answer(_mutex(), [q.Query("busy", q.PlaceBound(("busy1", "busy2"))),
                             q.Query("lock", q.PlaceBound(("lock",)))], max_states=1)
-    assert got[0].value is None
+    assert (got[0].value, got[0].technique) in {(None, ""), (1, "RANDOM_WALK STATE_EQUATION"),
+                                                (1, "RANDOM_WALK STRUCTURAL P_INVARIANTS")}
     assert (got[1].value, got[1].technique) == (1, "EXPLICIT STRUCTURAL P_INVARIANTS")
     got = answer(_mutex(), [q.Query("busy", q.PlaceBound(("busy1", "busy2")))], max_states=2)
     assert (got[0].value, got[0].technique) in {(1, "EXPLICIT STRUCTURAL P_INVARIANTS"),
