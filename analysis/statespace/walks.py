@@ -21,6 +21,8 @@ import numpy as np
 
 from mcl2pnml.core.structure import Structure
 
+from mcl2pnml.analysis.structure.state_equation import incidence_matrix
+
 #: Walkers moving together.
 WALKERS = 256
 #: Steps between two batches handed back, at most.
@@ -54,14 +56,7 @@ def random_walks(s: Structure, seconds: float, walkers: int = WALKERS, seed: int
     inputs = csr_matrix((np.ones(len(at), dtype=np.float32),
                          (np.asarray(arc_transition, dtype=np.int64), np.arange(len(at)))),
                         shape=(transitions, len(at)))
-    rows, cols, values = [], [], []
-    for j, column in enumerate(s.incidence):
-        for p, v in column.items():
-            rows.append(j)
-            cols.append(p)
-            values.append(v)
-    change = csr_matrix((np.asarray(values, dtype=np.int64), (rows, cols)),
-                        shape=(transitions, places))
+    change = incidence_matrix(s)[0].T.tocsr().astype(np.int64)   # a row per transition
     rng = np.random.default_rng(seed)
     steps = max(1, min(STEPS, BATCH_BYTES // (8 * walkers * places)))
     marking = np.tile(m0, (walkers, 1))

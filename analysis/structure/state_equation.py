@@ -117,9 +117,10 @@ def _difference(left, right, s: Structure) -> tuple[dict[int, int], int]:
 
 
 @lru_cache(maxsize=4)
-def _equation(s: Structure):
-    """C as a sparse matrix (places x transitions) and M0, once per net: every disjunct
-    of every question of a file shares them."""
+def incidence_matrix(s: Structure):
+    """C as a sparse matrix (places x transitions, integers) and M0 (floats), once per
+    net: every disjunct of every question of a file shares them, and the walks fire by
+    C's columns."""
     from scipy.sparse import coo_matrix     # scipy: only when asked (as below)
     rows, cols, values = [], [], []
     for j, column in enumerate(s.incidence):
@@ -138,7 +139,7 @@ def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> 
     from scipy.optimize import Bounds, LinearConstraint, milp
     from scipy.sparse import coo_matrix
 
-    c, m0 = _equation(s)
+    c, m0 = incidence_matrix(s)
     places, transitions = len(s.places), len(s.transitions)
     if transitions == 0:        # M0 is the only marking
         return not all(sum(v * m0[p] for p, v in k.items()) <= b for k, b in conjunction)
@@ -170,7 +171,7 @@ def upper_bound(s: Structure, places, seconds: float = SOLVE_SECONDS) -> int | N
     weights = np.zeros(len(s.places))
     for p in places:
         weights[s.place_index[p]] += 1
-    c, m0 = _equation(s)
+    c, m0 = incidence_matrix(s)
     start = float(weights @ m0)
     if len(s.transitions) == 0:
         return int(round(start))
