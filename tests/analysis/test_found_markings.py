@@ -182,3 +182,16 @@ def test_a_random_walk_finds_a_witness_deep_past_the_breadth_first_limit():
     # breadth first, 100 markings stay within three firings of M0; the walks go deeper
     got = answer(net, [all_on], max_states=100)
     assert (got[0].value, got[0].technique) == (True, "RANDOM_WALK")
+
+
+@pytest.mark.parametrize("tokens", [1, 2])
+def test_each_explorers_found_markings_decode_to_reachable_ones(tokens):
+    # the safe explorer packs a bit a place, the bounded one a counter: both decoded
+    net = _toggles(9, tokens)          # 512 markings, or 3^9
+    space = explore(net, max_states=10**5)
+    cut = _cut_short(net, 200)
+    assert cut is not None
+    _, found = cut
+    reachable = {tuple(int(v) for v in m) for m in space.markings}
+    assert len(found) == 200 and set(found) <= reachable
+    assert tuple(structure(net).initial_vector()) in set(found)
