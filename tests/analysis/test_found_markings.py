@@ -195,3 +195,36 @@ def test_each_explorers_found_markings_decode_to_reachable_ones(tokens):
     reachable = {tuple(int(v) for v in m) for m in space.markings}
     assert len(found) == 200 and set(found) <= reachable
     assert tuple(structure(net).initial_vector()) in set(found)
+
+
+@pytest.mark.timeout(120)
+def test_a_query_cut_short_keeps_the_lines_it_printed(tmp_path):
+    # 2^26 markings: past every stage of the exploration. The found witness is printed
+    # at once, before the long explorations; a SIGTERM then ends the command, and the
+    # line is already out
+    import signal
+    import subprocess
+    import sys
+    from mcl2pnml import pipeline
+    net_path, formulas = tmp_path / "toggles.pnml", tmp_path / "q.xml"
+    pipeline.save_net(_toggles(26), net_path, layout="none")
+    formulas.write_text(
+        '<?xml version="1.0"?><property-set xmlns="http://mcc.lip6.fr/"><property>'
+        '<id>on</id><description/><formula><exists-path><finally><integer-le>'
+        '<integer-constant>1</integer-constant><tokens-count><place>on0</place>'
+        '</tokens-count></integer-le></finally></exists-path></formula></property>'
+        '<property><id>stays</id><description/><formula><exists-path><finally>'
+        '<exists-path><globally><integer-le><integer-constant>1</integer-constant>'
+        '<tokens-count><place>on0</place></tokens-count></integer-le></globally>'
+        '</exists-path></finally></exists-path></formula></property></property-set>')
+    child = subprocess.Popen([sys.executable, "-m", "mcl2pnml", "query", str(net_path),
+                              str(formulas)], stdout=subprocess.PIPE, text=True)
+    try:
+        first = child.stdout.readline()          # bounded by the test's timeout
+        assert first == "FORMULA on TRUE TECHNIQUES EXPLICIT\n"
+        child.send_signal(signal.SIGTERM)
+        rest, _ = child.communicate(timeout=60)
+    finally:
+        child.kill()
+    assert child.returncode in (143, -signal.SIGTERM, 3)   # stopped (3: it had ended)
+    assert "FORMULA on" not in rest                        # said once
