@@ -65,7 +65,8 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.analysis.contest.reachability_queries import (reach_on_the_fly, settled_by_found,
                                                             settled_by_state_equation,
                                                             settled_by_walks,
-                                                            settled_without_exploring)
+                                                            settled_without_exploring,
+                                                            simplified_by_structure)
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
@@ -467,8 +468,10 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
                 done.add(k)
                 yield Answer(k, value, technique)
 
+    asked = {x.id: x for x in queries}     # as simplified, once they are
+
     def left() -> list[q.Query]:
-        return [x for x in queries if x.id not in done]
+        return [asked[x.id] for x in queries if x.id not in done]
 
     # a small state space first: built at once, it answers everything exactly; past its
     # limit, the markings it found are witnesses
@@ -483,6 +486,9 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # proves unreachable, and what the invariants bound, need no marking explored
         # (seconds, where exploring may not end)
         yield from settle(settled_by_state_equation(net, left()))
+        decided, rewritten = simplified_by_structure(net, left())
+        yield from settle(decided)
+        asked.update(rewritten)
         yield from settle(settled_without_exploring(net, left()))
         # then witnesses deep in the net, where the first exploration stayed near M0
         yield from settle(settled_by_walks(net, left()))

@@ -27,6 +27,7 @@ from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.observers import Status
+from mcl2pnml.analysis.contest.simplify import ByStructure, simplified
 from mcl2pnml.analysis.statespace.walks import random_walks
 from mcl2pnml.analysis.structure import state_equation
 from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
@@ -252,12 +253,43 @@ def settled_by_state_equation(net: Net, queries: Sequence[q.Query],
     return found
 
 
+def simplified_by_structure(net: Net, queries: Sequence[q.Query],
+                            seconds: float = STATE_EQUATION_SECONDS
+                            ) -> tuple[dict[str, Settled], dict[str, q.Query]]:
+    """The questions other than ``E F φ`` and ``A G φ`` (those are the state equation's
+    own) with each state subformula the P-invariants or the state equation decide
+    replaced by its value (:mod:`mcl2pnml.analysis.contest.simplify`): those that become
+    a constant, answered, by id; those that become simpler, rewritten, by id."""
+    s = structure(net)
+    bounds = _Bounds(s)
+    decide = ByStructure(s, seconds, lambda phi: _three_valued(phi, s, bounds.invariant),
+                         state_equation.unreachable)
+    settled: dict[str, Settled] = {}
+    rewritten: dict[str, q.Query] = {}
+    for x in queries:
+        if isinstance(x.asks, q.PlaceBound) or reachability(x.asks) is not None:
+            continue
+        decide.used.clear()
+        f = simplified(x.asks, decide)
+        if isinstance(f, q.BoolConst):
+            settled[x.id] = (f.value, " ".join(sorted(decide.used)))
+        elif f != x.asks:
+            rewritten[x.id] = q.Query(x.id, f, x.location)
+    return settled, rewritten
+
+
+#: Seconds the semi-positive P-invariants may take for the bounds of one command: they
+#: come before the explorations, which must not wait on them.
+INVARIANT_SECONDS = 2.0
+
+
 def _invariant_bounds(s):
     """A function bounding a sum of places by the P-invariants (None: not bounded)."""
     invariants = []
     if len(s.places) <= INVARIANT_PLACES:
         try:
-            invariants = minimal_semipositive_p_invariants(s, INVARIANT_ROWS)
+            invariants = minimal_semipositive_p_invariants(s, INVARIANT_ROWS,
+                                                           INVARIANT_SECONDS)
         except AnalysisLimit:
             pass
     m0 = dict(zip(s.places, s.initial_vector()))

@@ -23,6 +23,7 @@ invariant.
 from __future__ import annotations
 
 import heapq
+import time
 from math import gcd, lcm
 from typing import Mapping, Sequence
 
@@ -220,6 +221,7 @@ class _FarkasRows:
         self.heap = [(0, j) for j in range(ncols)]  # (positive x negative, column), lazily
         self.next_id = 0
         self.limit, self.what = limit, what
+        self.deadline: float | None = None
 
     def index(self, rid: int, a: Mapping[int, int], step: int) -> None:
         for k, v in a.items():
@@ -242,6 +244,9 @@ class _FarkasRows:
         return row
 
     def over_limit(self, size: int) -> None:
+        if self.deadline is not None and time.monotonic() > self.deadline:
+            raise AnalysisLimit(f"past its time computing the minimal semi-positive "
+                                f"{self.what} (Farkas algorithm)")
         if self.limit is not None and size > self.limit:
             raise AnalysisLimit(f"more than {self.limit:,} intermediate rows computing the "
                                 f"minimal semi-positive {self.what} (Farkas algorithm)")
@@ -272,6 +277,7 @@ class _FarkasRows:
                           key=int.bit_count)
         new: list[tuple[int, dict[int, int], dict[int, int]]] = []
         for a1, y1, m1 in pos:
+            self.over_limit(len(rows) + len(new))   # a time bound is looked at here too
             for a2, y2, m2 in neg:
                 union = m1 | m2
                 if any(m & union == m for m in supports):
@@ -292,7 +298,7 @@ class _FarkasRows:
 
 
 def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
-            what: str) -> list[dict[int, int]]:
+            what: str, seconds: float | None = None) -> list[dict[int, int]]:
     """The minimal-support semi-positive solutions y >= 0 of y^T A = 0.
 
     Row i of A is ``a_rows[i]`` ({column: value}). The working rows are those
@@ -315,6 +321,8 @@ def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
     ``limit`` bounds the rows held at any time, new ones included.
     """
     work = _FarkasRows(ncols, limit, what)
+    if seconds is not None:     # a search's own bound: its answer must not wait on this
+        work.deadline = time.monotonic() + seconds
     # before the rows are built: row i's support mask is i bits wide, so a
     # million rows would take 60 GB before the limit could say no
     work.over_limit(len(a_rows))
@@ -329,18 +337,18 @@ def _farkas(a_rows: Sequence[Mapping[int, int]], ncols: int, limit: int | None,
                   key=lambda y: (len(y), list(y)))
 
 
-def minimal_semipositive_p_invariants(s: Structure, limit: int | None = None
-                                      ) -> list[dict[str, int]]:
+def minimal_semipositive_p_invariants(s: Structure, limit: int | None = None,
+                                      seconds: float | None = None) -> list[dict[str, int]]:
     """The minimal-support semi-positive P-invariants (Martinez and Silva 1982).
 
     Every y >= 0, y != 0 with y^T C = 0 whose support contains no other such
     vector's support, as {place: coefficient} with coprime coefficients;
     every semi-positive P-invariant is a nonnegative combination of them.
     Sorted by support size, then by place order. The Farkas algorithm can
-    need exponentially many rows: past ``limit`` intermediate rows it raises
-    :class:`AnalysisLimit`.
+    need exponentially many rows: past ``limit`` intermediate rows, or past ``seconds``
+    (a search's bound, where it may do without them), it raises :class:`AnalysisLimit`.
     """
-    found = _farkas(s.incidence_rows, len(s.transitions), limit, "P-invariants")
+    found = _farkas(s.incidence_rows, len(s.transitions), limit, "P-invariants", seconds)
     return [{s.places[i]: c for i, c in y.items()} for y in found]
 
 

@@ -1,0 +1,100 @@
+"""The contest's formulas simplified by what the net's structure proves of their states, as
+verifypn simplifies them (Bønneland, Dyhr, Jensen, Johannsen, Srba, "Simplification of CTL
+formulae for efficient model checking of Petri nets", 2018).
+
+A state subformula that no reachable marking satisfies (the state equation proves it
+unreachable) is false in every marking a run meets, and one whose negation none satisfies
+is true there: either is replaced by its value. The values are then carried up through
+the connectives and the temporal operators, by rules that hold in the contest's CTL
+reading (a maximal path may end at a dead marking) and in its LTL reading (a dead marking
+repeats) alike: ``F c``, ``G c`` and a quantifier over ``c`` are ``c``; ``a U true`` is
+true, ``a U false`` false, ``false U b`` is ``b`` and ``true U b`` is ``F b``. ``X`` keeps
+its argument's value only in one reading (a dead marking has no next marking in CTL), so
+it is left as it is. A formula that becomes a constant is answered; one that becomes
+simpler (``E F φ`` out of a CTL formula) goes on to the other techniques as that.
+"""
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+from mcl2pnml.core import queries as q
+
+#: A state formula's value in every reachable marking, where it is proven (None: not).
+Decide = Callable[[object], "bool | None"]
+
+
+def simplified(f, decide: Decide):
+    """``f`` with each state subformula ``decide`` settles replaced by its value, and the
+    values carried up (the module's rules)."""
+    if q.is_state(f):
+        value = decide(f)
+        if value is not None:
+            return q.BoolConst(value)
+        if isinstance(f, (q.Neg, q.Conj, q.Disj)):
+            return _fold(f, [simplified(a, decide) for a in q.children(f)])
+        return f
+    if isinstance(f, (q.Neg, q.Conj, q.Disj)):
+        return _fold(f, [simplified(a, decide) for a in q.children(f)])
+    if isinstance(f, (q.Finally, q.Globally)):
+        arg = simplified(f.arg, decide)
+        return arg if isinstance(arg, q.BoolConst) else type(f)(arg)
+    if isinstance(f, q.Until):
+        before, reach = simplified(f.before, decide), simplified(f.reach, decide)
+        if isinstance(reach, q.BoolConst):
+            return reach
+        if isinstance(before, q.BoolConst):
+            return q.Finally(reach) if before.value else reach
+        return q.Until(before, reach)
+    if isinstance(f, (q.AllPaths, q.ExistsPath)):
+        arg = simplified(f.arg, decide)
+        return arg if isinstance(arg, q.BoolConst) or q.is_state(arg) else type(f)(arg)
+    if isinstance(f, q.Next):
+        return q.Next(simplified(f.arg, decide))
+    return f
+
+
+def _fold(f, args: list):
+    """A connective over simplified arguments, its constants folded."""
+    if isinstance(f, q.Neg):
+        [a] = args
+        return q.BoolConst(not a.value) if isinstance(a, q.BoolConst) else q.Neg(a)
+    absorbing = isinstance(f, q.Disj)          # or: true absorbs; and: false absorbs
+    if any(isinstance(a, q.BoolConst) and a.value is absorbing for a in args):
+        return q.BoolConst(absorbing)
+    kept = [a for a in args if not isinstance(a, q.BoolConst)]
+    if not kept:
+        return q.BoolConst(not absorbing)
+    return kept[0] if len(kept) == 1 else type(f)(tuple(kept))
+
+
+class ByStructure:
+    """:data:`Decide` by the P-invariants' bounds, then the state equation, within
+    ``seconds`` for all the questions of a command; each state formula asked once."""
+
+    def __init__(self, s, seconds: float, bounds, unreachable):
+        self.s, self.bounds, self.unreachable = s, bounds, unreachable
+        self.end = time.monotonic() + seconds
+        self.known: dict = {}
+        #: the techniques that decided something (the answer's TECHNIQUES words)
+        self.used: set[str] = set()
+
+    def __call__(self, phi) -> bool | None:
+        if isinstance(phi, q.BoolConst):
+            return phi.value
+        if phi in self.known:
+            return self.known[phi]
+        value = None
+        try:
+            value = self.bounds(phi)
+            if value is not None:
+                self.used.add("STRUCTURAL P_INVARIANTS")
+            for candidate, meaning in ((phi, False), (q.Neg(phi), True)):
+                left = self.end - time.monotonic()
+                if value is None and left > 0 and self.unreachable(self.s, candidate, left):
+                    value = meaning
+                    self.used.add("STATE_EQUATION")
+        except KeyError:            # a name the net does not have: said by the graph's path
+            value = None
+        self.known[phi] = value
+        return value

@@ -1,0 +1,79 @@
+"""Formulas simplified by what the structure proves (analysis/contest/simplify.py): the
+rules carry constants up as both of the contest's readings do, and a simplified formula
+has the answer the whole graph gives the original."""
+from __future__ import annotations
+
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from mcl2pnml.analysis.contest.answers import answer
+from mcl2pnml.analysis.contest.reachability_queries import (_Bounds, _three_valued,
+                                                            simplified_by_structure)
+from mcl2pnml.analysis.contest.simplify import ByStructure, simplified
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
+from mcl2pnml.analysis.structure import state_equation
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.structure import structure
+from sampling import sample
+from strategies import nets
+from test_state_equation import formulas
+
+T, F = q.BoolConst(True), q.BoolConst(False)
+A = q.IntLe(q.IntConst(1), q.TokensCount(("a",)))
+B = q.IntLe(q.IntConst(1), q.TokensCount(("b",)))
+
+
+def _known(values):
+    return lambda phi: values.get(phi)
+
+
+def test_constants_are_carried_up_where_both_readings_agree():
+    never_a = _known({A: False})
+    assert simplified(q.ExistsPath(q.Finally(A)), never_a) == F
+    assert simplified(q.AllPaths(q.Globally(q.Neg(A))), never_a) == T
+    assert simplified(q.ExistsPath(q.Until(B, A)), never_a) == F          # a U false
+    assert simplified(q.ExistsPath(q.Until(A, B)), never_a) == B          # false U b
+    assert simplified(q.AllPaths(q.Until(q.Neg(A), B)), never_a) == \
+        q.AllPaths(q.Finally(B))                                          # true U b
+    assert simplified(q.Conj((q.Disj((A, B)), B)), never_a) == q.Conj((B, B))
+    # X: a dead marking has no next marking in CTL, and repeats in LTL: left alone
+    assert simplified(q.ExistsPath(q.Next(A)), never_a) == q.ExistsPath(q.Next(F))
+    assert simplified(q.ExistsPath(q.Finally(B)), _known({})) == q.ExistsPath(q.Finally(B))
+
+
+def _temporal(state):
+    """CTL and LTL formulas over state formulas ``state``."""
+    def path(inner):
+        return st.one_of(inner.map(q.Finally), inner.map(q.Globally), inner.map(q.Next),
+                         st.builds(q.Until, inner, inner))
+    ctl = st.recursive(state, lambda inner: st.one_of(
+        path(inner).map(q.ExistsPath), path(inner).map(q.AllPaths), inner.map(q.Neg),
+        st.lists(inner, min_size=2, max_size=2).map(lambda xs: q.Conj(tuple(xs)))),
+        max_leaves=4)
+    ltl = st.recursive(state, lambda inner: st.one_of(path(inner), inner.map(q.Neg)),
+                       max_leaves=3).map(q.AllPaths)
+    return st.one_of(ctl, ltl)
+
+
+@settings(max_examples=sample(800, 100), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(st.data())
+def test_a_simplified_formula_has_the_original_answer(data):
+    net = data.draw(nets())
+    s = structure(net)
+    f = data.draw(_temporal(formulas(list(s.places), list(s.transitions))))
+    try:
+        space = explore(net, max_states=3_000)
+    except ExplorationLimit:
+        return
+    if space.coverability:
+        return
+    bounds = _Bounds(s)
+    decide = ByStructure(s, 5.0, lambda phi: _three_valued(phi, s, bounds.invariant),
+                         state_equation.unreachable)
+    g = simplified(f, decide)
+    [before, after] = answer(net, [q.Query("f", f), q.Query("g", g)])
+    if before.value is not None and after.value is not None:
+        assert before.value is after.value, (net, f, g)
+    settled, _ = simplified_by_structure(net, [q.Query("f", f)])
+    if "f" in settled and before.value is not None:
+        assert settled["f"][0] is before.value, (net, f)
