@@ -238,9 +238,9 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     The invariant bases come first, then the exploration, then the enumerations
     (minimal semi-positive invariants, siphons, traps: exponential in the worst case,
     and past their bounds on every compiled mission), within their full bounds where
-    the reachability graph was not built whole, or with ``enumerate_all``; where it was,
-    it decides every property they bear on, and they run within a hundredth of them
-    (:data:`QUICK`). An exploration stopped by its budget still ends in a partial
+    the reachability graph was not built whole, on a net of at most
+    :data:`QUICK_PLACES` places, or with ``enumerate_all``; elsewhere the graph decides
+    every property they bear on, and they run within a hundredth of them (:data:`QUICK`). An exploration stopped by its budget still ends in a partial
     answer: ``"partial"`` says how many markings were explored and whether a dead
     marking was met among them.
     ``explore_states=False``: no exploration (a certificate decides the behaviour), the
@@ -265,7 +265,8 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     def structural(decided: bool) -> dict[str, Any]:
         if state_space_only:
             return {}
-        return {**bases, **stages.enumerations(enumerate_all or not decided)}
+        thorough = enumerate_all or not decided or len(s.places) <= QUICK_PLACES
+        return {**bases, **stages.enumerations(thorough)}
 
     if not explore_states:     # the caller knows the behaviour otherwise (a certificate)
         result = _state_space_facts(net, s, None)
@@ -406,11 +407,14 @@ STAGES = {
 }
 
 
-#: The enumerations' bounds where the state space decides every property they bear on:
-#: a hundredth of the others (a net of a few dozen places is enumerated in full within
-#: them; a compiled mission's minimal siphons and semi-positive P-invariants are past
-#: even the full bounds, reached in seconds). ``--structure`` asks for the full ones.
+#: The enumerations' bounds where the state space decides every property they bear on,
+#: on a net of more than :data:`QUICK_PLACES` places: a hundredth of the others (a
+#: compiled mission's minimal siphons and semi-positive P-invariants are past even the
+#: full bounds, reached in seconds). ``--structure`` asks for the full ones.
 QUICK = 100
+#: A net this small is enumerated within the full bounds whatever decides its properties:
+#: the paper's templates take a second at most, and their siphons are its equations'.
+QUICK_PLACES = 100
 #: What a bound reached where the quick ones applied says besides.
 RAISE = "; --structure raises the bound"
 

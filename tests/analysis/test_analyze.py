@@ -186,14 +186,17 @@ def test_a_wide_net_ends_with_what_fits_in_its_limits(tmp_path):
 
 def test_where_the_state_space_decides_the_enumerations_stay_within_a_hundredth(
         task_pnml, monkeypatch):
-    # the task's siphons fit in the quick bounds; shrunk further here, they do not: the
-    # report says so and how to ask for more, and --structure's full bounds compute them
+    # a net as small as the task is enumerated within the full bounds; a larger one within
+    # the quick ones (shrunk here so that the task's siphons are past them): the report
+    # says so and how to ask for more, and --structure's full bounds compute them
     from mcl2pnml import pipeline
     import mcl2pnml.analysis.report as report
     net = pipeline.load_net(task_pnml)
     full = pipeline.analyze(net)
     assert full.structural.siphons and "siphons" not in full.limits
     monkeypatch.setattr(report, "QUICK", report.SIPHON_LIMIT * 10)
+    assert pipeline.analyze(net).structural.siphons == full.structural.siphons   # small
+    monkeypatch.setattr(report, "QUICK_PLACES", 0)
     quick = pipeline.analyze(net)
     assert quick.structural.siphons is None
     assert quick.limits["siphons"].endswith("; --structure raises the bound")
