@@ -440,6 +440,8 @@ def answer(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES
     return [got[x.id] for x in queries]
 
 
+# long: one generator walks the portfolio in its order, each answer handed out as soon as
+# it is settled; split up, the order (the point of it) would be spread over functions
 def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = MAX_STATES,
                      max_memory: int | None = None, stubborn: bool = False,
                      safe: bool = False) -> Iterator[Answer]:
