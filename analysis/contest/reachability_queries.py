@@ -27,7 +27,7 @@ from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.observers import Status
-from mcl2pnml.analysis.contest.simplify import ByStructure, simplified
+from mcl2pnml.analysis.contest.simplify import ByStructure, at_start, simplified
 from mcl2pnml.analysis.statespace.walks import random_walks
 from mcl2pnml.analysis.structure import state_equation
 from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
@@ -259,11 +259,13 @@ def simplified_by_structure(net: Net, queries: Sequence[q.Query],
     """The questions other than ``E F φ`` and ``A G φ`` (those are the state equation's
     own) with each state subformula the P-invariants or the state equation decide
     replaced by its value (:mod:`mcl2pnml.analysis.contest.simplify`): those that become
-    a constant, answered, by id; those that become simpler, rewritten, by id."""
+    a constant, or that the initial marking decides on every path (:func:`at_start`),
+    answered, by id; those that become simpler, rewritten, by id."""
     s = structure(net)
     bounds = _Bounds(s)
     decide = ByStructure(s, seconds, lambda phi: _three_valued(phi, s, bounds.invariant),
                          state_equation.unreachable)
+    initially = Truths(s, ListedMarkings([s.initial_vector()]))
     settled: dict[str, Settled] = {}
     rewritten: dict[str, q.Query] = {}
     for x in queries:
@@ -273,6 +275,13 @@ def simplified_by_structure(net: Net, queries: Sequence[q.Query],
         f = simplified(x.asks, decide)
         if isinstance(f, q.BoolConst):
             settled[x.id] = (f.value, " ".join(sorted(decide.used)))
+            continue
+        try:
+            start = at_start(f, lambda phi: bool(initially.of(phi)[0]))
+        except (KeyError, LookupError):  # a name the net lacks: said by the graph's path
+            start = None
+        if start is not None:
+            settled[x.id] = (start, " ".join(sorted({*decide.used, "INITIAL_STATE"})))
         elif f != x.asks:
             rewritten[x.id] = q.Query(x.id, f, x.location)
     return settled, rewritten

@@ -98,3 +98,39 @@ class ByStructure:
             value = None
         self.known[phi] = value
         return value
+
+
+def at_start(f, holds_initially) -> bool | None:
+    """``f``'s value in the initial marking where that marking alone decides it on every
+    path from it (None elsewhere): ``F φ`` true where φ holds there, ``G φ`` false where
+    it does not, ``a U b`` true where ``b`` holds and false where neither does; a
+    quantifier over a path formula so decided has its value (E and A alike: every path
+    starts there); connectives three-valued. ``holds_initially`` decides a state formula
+    in the initial marking. ``X`` needs the next marking: left open."""
+    def go(g):
+        if q.is_state(g):
+            return holds_initially(g)
+        if isinstance(g, q.Neg):
+            v = go(g.arg)
+            return None if v is None else not v
+        if isinstance(g, (q.Conj, q.Disj)):
+            values = [go(a) for a in g.args]
+            absorbing = isinstance(g, q.Disj)
+            if absorbing in values:
+                return absorbing
+            return None if None in values else not absorbing
+        if isinstance(g, (q.AllPaths, q.ExistsPath)):
+            return go(g.arg)
+        if isinstance(g, q.Finally):
+            return True if go(g.arg) is True else None
+        if isinstance(g, q.Globally):
+            return False if go(g.arg) is False else None
+        if isinstance(g, q.Until):
+            reach = go(g.reach)
+            if reach is True:
+                return True
+            if reach is False and go(g.before) is False:
+                return False
+            return None
+        return None                 # X
+    return go(f)

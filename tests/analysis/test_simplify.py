@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcl2pnml.analysis.contest.answers import answer
 from mcl2pnml.analysis.contest.reachability_queries import (_Bounds, _three_valued,
                                                             simplified_by_structure)
-from mcl2pnml.analysis.contest.simplify import ByStructure, simplified
+from mcl2pnml.analysis.contest.simplify import ByStructure, at_start, simplified
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.structure import state_equation
 from mcl2pnml.core import queries as q
@@ -77,3 +77,19 @@ def test_a_simplified_formula_has_the_original_answer(data):
     settled, _ = simplified_by_structure(net, [q.Query("f", f)])
     if "f" in settled and before.value is not None:
         assert settled["f"][0] is before.value, (net, f)
+
+
+def test_the_initial_marking_decides_what_every_path_from_it_decides():
+    def a_now(phi):              # a marked, b not
+        return not a_now(phi.arg) if isinstance(phi, q.Neg) else {A: True, B: False}[phi]
+
+    assert at_start(q.AllPaths(q.Finally(A)), a_now) is True
+    assert at_start(q.ExistsPath(q.Globally(B)), a_now) is False
+    assert at_start(q.AllPaths(q.Until(B, A)), a_now) is True
+    assert at_start(q.AllPaths(q.Until(B, q.Neg(A))), a_now) is False
+    assert at_start(q.AllPaths(q.Globally(A)), a_now) is None       # later markings
+    assert at_start(q.ExistsPath(q.Next(A)), a_now) is None         # the next one
+    assert at_start(q.Conj((q.AllPaths(q.Finally(A)), q.ExistsPath(q.Next(B)))),
+                    a_now) is None
+    assert at_start(q.Disj((q.AllPaths(q.Finally(A)), q.ExistsPath(q.Next(B)))),
+                    a_now) is True
