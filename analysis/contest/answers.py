@@ -62,7 +62,8 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 
-from mcl2pnml.analysis.contest.reachability_queries import (reach_on_the_fly, settled_by_found,
+from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, reach_on_the_fly,
+                                                            settled_by_found,
                                                             settled_by_state_equation,
                                                             settled_by_walks,
                                                             settled_without_exploring,
@@ -457,7 +458,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
     then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are),
     then the state space is explored to limits ten times larger each up to ``max_states``
-    (:func:`_stages`), the markings of each one stopped witnesses again. With
+    (:func:`_stages`), the markings of each one stopped witnesses again, and walks twice
+    as long as the last after each (their own seed each: new walks). With
     ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
     searched on the fly under partial-order reduction (:func:`reach_on_the_fly`) before
     any graph. Past the graph's limits, the reachability questions are searched on the
@@ -492,7 +494,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         yield from settle(decided)
         asked.update(rewritten)
         yield from settle(settled_without_exploring(net, left()))
-        # then witnesses deep in the net, where the first exploration stayed near M0
+        # then witnesses deep in the net, where the first exploration stayed near M0; more
+        # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
         if stubborn:
             yield from settle(reach_on_the_fly(net, left(), max_states, max_memory, True,
@@ -500,7 +503,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         if not left():
             return
         first = [min(max_states, FIRST_STATES)] if stubborn else []   # none explored yet
-        for limit in (first + _stages(max_states)) if limited else []:
+        for k, limit in enumerate((first + _stages(max_states)) if limited else [], 1):
             space, why, stopped = _space(net, limit, max_memory)
             if stopped is not None and stopped.found is not None:
                 yield from settle(settled_by_found(net, left(), stopped.found))
@@ -509,6 +512,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
             del stopped
             if ended or not left():
                 break
+            yield from settle(settled_by_walks(net, left(), WALK_SECONDS * 2 ** k, seed=k))
         if not left():
             return
     if space is None:

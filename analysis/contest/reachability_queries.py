@@ -372,18 +372,19 @@ def _three_valued(phi, s, bound_of) -> bool | None:
 WALK_SECONDS = 5.0
 
 
-def settled_by_walks(net: Net, queries: Sequence[q.Query],
-                     seconds: float = WALK_SECONDS) -> dict[str, Settled]:
+def settled_by_walks(net: Net, queries: Sequence[q.Query], seconds: float = WALK_SECONDS,
+                     seed: int = 0) -> dict[str, Settled]:
     """The questions a marking met by random walks settles (:func:`random_walks`: each
     reachable), as a found marking settles them (:func:`settled_by_found`): ``E F φ``
-    true, ``A G φ`` false, an upper bound the walks reach. Within ``seconds``; a
-    walk proves nothing by what it does not meet."""
+    true, ``A G φ`` false, an upper bound the walks reach. Within ``seconds``, from
+    ``seed`` (another seed, other walks); a walk proves nothing by what it does not
+    meet."""
     s = structure(net)
     asked = [x for x in queries
              if isinstance(x.asks, q.PlaceBound) or reachability(x.asks) is not None]
     settled: dict[str, Settled] = {}
     bounds = _Bounds(s)
-    for batch in random_walks(s, seconds):
+    for batch in random_walks(s, seconds, seed=seed):
         left = [x for x in asked if x.id not in settled]
         if not left:
             break

@@ -228,3 +228,13 @@ def test_a_query_cut_short_keeps_the_lines_it_printed(tmp_path):
         child.kill()
     assert child.returncode in (143, -signal.SIGTERM, 3)   # stopped (3: it had ended)
     assert "FORMULA on" not in rest                        # said once
+
+
+def test_walks_of_another_seed_are_other_walks_and_every_marking_they_meet_is_reachable():
+    from mcl2pnml.analysis.statespace.walks import random_walks
+    net = _toggles(9, 2)
+    s = structure(net)
+    reachable = {tuple(int(v) for v in m) for m in explore(net, max_states=10**5).markings}
+    first = [next(random_walks(s, 10.0, walkers=8, seed=k)) for k in (0, 1)]
+    assert not (first[0] == first[1]).all()
+    assert all(tuple(int(v) for v in row) in reachable for batch in first for row in batch)
