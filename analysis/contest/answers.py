@@ -61,8 +61,10 @@ from mcl2pnml.core.bounds import MAX_STATES
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.structure import structure
 
-from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, reach_on_the_fly,
+from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, ListedMarkings, Truths,
+                                                            reach_on_the_fly,
                                                             settled_by_found,
                                                             settled_by_state_equation,
                                                             settled_by_walks,
@@ -72,6 +74,7 @@ from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
 from mcl2pnml.analysis.statespace.rows import compressed_rows
+from mcl2pnml.analysis.statespace.walks import runs
 
 _loops = chosen()         # the graph searches in C, else the same in Python
 
@@ -497,6 +500,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # then witnesses deep in the net, where the first exploration stayed near M0; more
         # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
+        yield from settle(settled_by_runs(net, left()))
         if stubborn:
             yield from settle(reach_on_the_fly(net, left(), max_states, max_memory, True,
                                                safe))
@@ -513,6 +517,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
             if ended or not left():
                 break
             yield from settle(settled_by_walks(net, left(), WALK_SECONDS * 2 ** k, seed=k))
+            yield from settle(settled_by_runs(net, left(), WALK_SECONDS * 2 ** k, seed=k))
         if not left():
             return
     if space is None:
@@ -552,6 +557,95 @@ def _decide(graph: Graph, x: q.Query, max_memory: int | None = None) -> Answer:
                                       "file does not say")
     return Answer(x.id, by_ctl if by_ctl is not None else by_ltl,
                   f"EXPLICIT {'CTL' if by_ctl is not None else 'LTL'}")
+
+
+# -- one run at a time: the lassos and maximal runs of random walkers ----------------------------
+
+class RunGraph(Graph):
+    """One run of the net as a graph (:func:`~mcl2pnml.analysis.statespace.walks.runs`):
+    its markings in a line, the last one's successor the marking it returns to (a lasso),
+    or none (a dead marking: a maximal run, the dead marking repeated in LTL's reading).
+    Its one path from the first node is the run. Whether a transition is enabled is read
+    from the markings (the graph's edges are not every firing); a node without a
+    successor is dead in the net too (the walker found nothing to fire)."""
+
+    def __init__(self, s, markings: np.ndarray, back: int | None):
+        n = len(markings)
+        src = np.arange(n - 1 if back is None else n, dtype=np.int64)
+        dst = np.append(np.arange(1, n, dtype=np.int64), [] if back is None else [back])
+        space = _Run(s, markings, src, dst.astype(np.int64))
+        super().__init__(space)
+        self._truths = Truths(s, ListedMarkings(markings))
+
+    def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
+        out = np.zeros(self.n, dtype=bool)
+        for t in transitions:
+            j = self.transition_index.get(t)
+            if j is None:
+                raise UnknownName(f"no transition '{t}' in the net", where)
+            out |= self._truths.enabled(j)
+        return out
+
+
+@dataclass
+class _Run:
+    """What :class:`Graph` reads of a state space, for one run."""
+
+    structure: object
+    markings: np.ndarray
+    src: np.ndarray
+    dst: np.ndarray
+
+    @property
+    def states(self) -> int:
+        return len(self.markings)
+
+    @property
+    def trans(self) -> np.ndarray:
+        return np.zeros(len(self.src), dtype=np.int64)
+
+    def tokens(self, place: int) -> np.ndarray:
+        return self.markings[:, place]
+
+
+def _on_one_run(f) -> tuple[bool, object, bool] | None:
+    """``(universal, ψ, negated)`` for ``A ψ`` or ``E ψ`` under negations, ψ free of path
+    quantifiers (a run decides ψ); None for any other formula."""
+    negated = False
+    while isinstance(f, q.Neg):
+        negated, f = not negated, f.arg
+    if isinstance(f, (q.AllPaths, q.ExistsPath)) and not q.is_state(f.arg) \
+            and not q.contains(f.arg, (q.AllPaths, q.ExistsPath)):
+        return isinstance(f, q.AllPaths), f, negated
+    return None
+
+
+def settled_by_runs(net: Net, queries: Sequence[q.Query], seconds: float = WALK_SECONDS,
+                    seed: int = 0) -> dict[str, tuple[bool, str]]:
+    """The path formulas a run of a random walker settles: ``A ψ`` is false where a run
+    (a lasso, or a maximal run to a dead marking) violates ψ, ``E ψ`` true where one
+    satisfies it; each run decided on its own graph (:class:`RunGraph`) as the whole
+    graph is decided (:func:`_decide`: CTL's and LTL's readings must agree). Within
+    ``seconds``; a run proves nothing by what it does not show."""
+    shaped = [(x, r) for x in queries if (r := _on_one_run(x.asks)) is not None]
+    settled: dict[str, tuple[bool, str]] = {}
+    if not shaped:
+        return settled
+    s = structure(net)
+    for markings, back in runs(s, seconds, seed=seed):
+        graph = RunGraph(s, markings, back)
+        for x, (universal, quantified, negated) in shaped:
+            if x.id in settled:
+                continue
+            try:
+                value = _decide(graph, q.Query(x.id, quantified, x.location)).value
+            except (UnknownName, KeyError, LookupError):
+                continue
+            if value is not None and value is not universal:   # A false, or E true
+                settled[x.id] = (value is not negated, "RANDOM_WALK")
+        if len(settled) == len(shaped):
+            break
+    return settled
 
 
 #: The contest's generic examinations, by name.

@@ -31,47 +31,103 @@ STEPS = 32
 BATCH_BYTES = 32 << 20
 
 
+class _Stepper:
+    """The walkers' one step: each fires one of its enabled transitions at random; one
+    with none is dead (its marking is the last of its run)."""
+
+    def __init__(self, s: Structure, seed: int):
+        from scipy.sparse import csr_matrix   # scipy: only for a walk
+        self.transitions = len(s.transitions)
+        arc_place, arc_weight, arc_transition = [], [], []
+        for j in range(self.transitions):
+            need: dict[int, int] = dict(s.pre[j])
+            for p, w in s.read[j].items():
+                need[p] = need.get(p, 0) + w
+            for p, w in need.items():
+                arc_place.append(p)
+                arc_weight.append(w)
+                arc_transition.append(j)
+        self.at = np.asarray(arc_place, dtype=np.int64)
+        self.aw = np.asarray(arc_weight, dtype=np.int64)
+        # transitions x arcs: a transition's count of missing inputs is its row's sum
+        self.inputs = csr_matrix((np.ones(len(self.at), dtype=np.float32),
+                                  (np.asarray(arc_transition, dtype=np.int64),
+                                   np.arange(len(self.at)))),
+                                 shape=(self.transitions, len(self.at)))
+        self.change = incidence_matrix(s)[0].T.tocsr().astype(np.int64)   # a row each
+        self.rng = np.random.default_rng(seed)
+
+    def step(self, marking: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The walkers' markings after one firing each, and which of them moved (the
+        others are dead: their marking is left as it was)."""
+        missing = self.inputs @ (marking[:, self.at] < self.aw).T.astype(np.float32)
+        enabled = missing == 0                                  # transitions x walkers
+        chosen = (self.rng.random(enabled.shape) * enabled).argmax(axis=0)
+        moving = enabled[chosen, np.arange(len(marking))]
+        after = np.where(moving[:, None], marking + self.change[chosen].toarray(), marking)
+        return after, moving
+
+
 def random_walks(s: Structure, seconds: float, walkers: int = WALKERS, seed: int = 0
                  ) -> Iterator[np.ndarray]:
     """Batches of reached markings (rows of counts, a column per place), each the markings
     of up to :data:`STEPS` steps of every walker (:data:`BATCH_BYTES` at most), until
-    ``seconds`` have passed (checked between batches) or no walker can move."""
-    from scipy.sparse import csr_matrix   # scipy: only for a walk
-    places, transitions = len(s.places), len(s.transitions)
+    ``seconds`` have passed (checked between batches); a dead walker starts over at M0."""
+    places = len(s.places)
     m0 = np.asarray(s.initial_vector(), dtype=np.int64)
-    if transitions == 0 or places == 0:
+    if len(s.transitions) == 0 or places == 0:
         return
-    arc_place, arc_weight, arc_transition = [], [], []
-    for j in range(transitions):
-        need: dict[int, int] = dict(s.pre[j])
-        for p, w in s.read[j].items():
-            need[p] = need.get(p, 0) + w
-        for p, w in need.items():
-            arc_place.append(p)
-            arc_weight.append(w)
-            arc_transition.append(j)
-    at = np.asarray(arc_place, dtype=np.int64)
-    aw = np.asarray(arc_weight, dtype=np.int64)
-    # transitions x arcs: a transition's count of missing inputs is its row's sum
-    inputs = csr_matrix((np.ones(len(at), dtype=np.float32),
-                         (np.asarray(arc_transition, dtype=np.int64), np.arange(len(at)))),
-                        shape=(transitions, len(at)))
-    change = incidence_matrix(s)[0].T.tocsr().astype(np.int64)   # a row per transition
-    rng = np.random.default_rng(seed)
+    stepper = _Stepper(s, seed)
     steps = max(1, min(STEPS, BATCH_BYTES // (8 * walkers * places)))
     marking = np.tile(m0, (walkers, 1))
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         batch = np.empty((steps * walkers, places), dtype=np.int64)
         for k in range(steps):
-            missing = inputs @ (marking[:, at] < aw).T.astype(np.float32)   # T x walkers
-            enabled = missing == 0
-            if not enabled.any():
-                return                                  # every walker dead at M0 too
-            score = rng.random(enabled.shape) * enabled
-            chosen = score.argmax(axis=0)
-            moving = enabled[chosen, np.arange(walkers)]
-            marking = np.where(moving[:, None], marking + change[chosen].toarray(),
-                               m0[None, :])             # a dead walker starts over
+            after, moving = stepper.step(marking)
+            if not moving.any() and (marking == m0).all():
+                return                                  # M0 is dead: nothing to walk
+            marking = np.where(moving[:, None], after, m0[None, :])
             batch[k * walkers:(k + 1) * walkers] = marking
         yield batch
+
+
+#: The longest run :func:`runs` follows before it starts a walker over.
+DEPTH = 1_000
+
+
+def runs(s: Structure, seconds: float, walkers: int = 64, seed: int = 0
+         ) -> Iterator[tuple[np.ndarray, int | None]]:
+    """Runs of random walkers that close: ``(markings, back)``, the markings from M0 on,
+    and the position the last one's successor returns to (a cycle, the run's lasso), or
+    None where the last is dead (a maximal run). Until ``seconds`` have passed; a walker
+    past :data:`DEPTH` firings starts over."""
+    places = len(s.places)
+    m0 = np.asarray(s.initial_vector(), dtype=np.int64)
+    if places == 0:
+        return
+    if len(s.transitions) == 0:
+        yield m0[None, :], None
+        return
+    stepper = _Stepper(s, seed)
+    marking = np.tile(m0, (walkers, 1))
+    paths: list[list[np.ndarray]] = [[m0] for _ in range(walkers)]
+    seen: list[dict[bytes, int]] = [{m0.tobytes(): 0} for _ in range(walkers)]
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        after, moving = stepper.step(marking)
+        for w in range(walkers):
+            if moving[w]:
+                key = after[w].tobytes()
+                back = seen[w].get(key)
+                if back is None and len(paths[w]) <= DEPTH:
+                    seen[w][key] = len(paths[w])
+                    paths[w].append(after[w].copy())
+                    continue
+                if back is not None:
+                    yield np.asarray(paths[w]), back
+            else:
+                yield np.asarray(paths[w]), None
+            paths[w], seen[w] = [m0], {m0.tobytes(): 0}     # this walker starts over
+            after[w] = m0
+        marking = after
