@@ -2,7 +2,7 @@
 answers.
 
 Run:  .venv/bin/python -m bench.mcc_ladder [--exams RC,RF,...] [--timeout 60] [--jobs 2]
-                                           [--only ours,verifypn,lola]
+                                           [--only ours,verifypn,lola] [--first-of-family]
 (prints the section of bench/RESULTS.md; ``--floor`` alone checks the start-up floor)
 
 For each of the 36 instances of ``../shared/external-nets/mcc-ladder`` (18 families, as the
@@ -16,6 +16,8 @@ answer is held to the 2021 consensus (``oracle/``, ``?`` where the tools did not
 neither right nor wrong). ``--jobs`` commands run at once (two on two cores: each tool is
 as loaded as the others). The instances are unpacked into a scratch folder, never into
 the project.
+
+``--first-of-family``: one instance of each family (the first by name, the smaller).
 
 ``--floor``: ``mcl2pnml --version`` and a query on a 10-place net, the median of five
 whole commands, against 0.3 s (the interpreter's start-up is the floor; it must not grow).
@@ -97,9 +99,10 @@ def unpack(scratch: Path) -> list[Path]:
     return folders
 
 
-def ladder(exams: list[str], tools: list[str], timeout: float, jobs: int) -> list[str]:
+def ladder(exams: list[str], tools: list[str], timeout: float, jobs: int,
+           instances: list[str] | None = None) -> list[str]:
     scratch = Path(tempfile.mkdtemp(prefix="mcc-ladder-"))
-    folders = unpack(scratch)
+    folders = [f for f in unpack(scratch) if instances is None or f.name in instances]
     work = [(folder, exam, who, args) for folder in folders for exam in exams
             for who, args in commands(folder, exam).items() if who in tools]
     # per examination and tool: right, wrong, unanswered (of the known), seconds, peak MiB
@@ -183,8 +186,12 @@ def main() -> None:
     if unknown:
         sys.exit(f"unknown examination {', '.join(unknown)}; known: {', '.join(FILES)}")
     tools = option("--only", ",".join(TOOLS)).split(",")
+    names = sorted(p.name[:-len(".tgz")] for p in (LADDER / "inputs").glob("*.tgz"))
+    if "--first-of-family" in argv:   # one instance a family: the smaller, by its name
+        names = [n for i, n in enumerate(names)
+                 if i == 0 or n.rsplit("-", 1)[0] != names[i - 1].rsplit("-", 1)[0]]
     print("\n".join(ladder(exams, tools, float(option("--timeout", str(TIMEOUT))),
-                           int(option("--jobs", "2")))))
+                           int(option("--jobs", "2")), names)))
     print()
     print("\n".join(floor()))
 
