@@ -29,6 +29,15 @@ WALKERS = 256
 STEPS = 32
 #: The largest batch, in bytes: fewer steps a batch on a wide net.
 BATCH_BYTES = 32 << 20
+#: What the walkers' markings may take, in bytes: fewer walkers on a wide net.
+WALKER_BYTES = 32 << 20
+#: What :func:`runs` may hold of its walkers' runs, in bytes.
+RUN_BYTES = 256 << 20
+
+
+def _fewer(walkers: int, places: int) -> int:
+    """As many walkers as asked, or as :data:`WALKER_BYTES` holds of ``places`` counts."""
+    return max(1, min(walkers, WALKER_BYTES // (8 * max(1, places))))
 
 
 class _Stepper:
@@ -78,6 +87,7 @@ def random_walks(s: Structure, seconds: float, walkers: int = WALKERS, seed: int
     if len(s.transitions) == 0 or places == 0:
         return
     stepper = _Stepper(s, seed)
+    walkers = _fewer(walkers, places)
     steps = max(1, min(STEPS, BATCH_BYTES // (8 * walkers * places)))
     marking = np.tile(m0, (walkers, 1))
     end = time.monotonic() + seconds
@@ -96,12 +106,12 @@ def random_walks(s: Structure, seconds: float, walkers: int = WALKERS, seed: int
 DEPTH = 1_000
 
 
-def runs(s: Structure, seconds: float, walkers: int = 64, seed: int = 0
+def runs(s: Structure, seconds: float, walkers: int = 16, seed: int = 0
          ) -> Iterator[tuple[np.ndarray, int | None]]:
     """Runs of random walkers that close: ``(markings, back)``, the markings from M0 on,
     and the position the last one's successor returns to (a cycle, the run's lasso), or
     None where the last is dead (a maximal run). Until ``seconds`` have passed; a walker
-    past :data:`DEPTH` firings starts over."""
+    past :data:`DEPTH` firings (fewer on a wide net, :data:`RUN_BYTES`) starts over."""
     places = len(s.places)
     m0 = np.asarray(s.initial_vector(), dtype=np.int64)
     if places == 0:
@@ -110,17 +120,27 @@ def runs(s: Structure, seconds: float, walkers: int = 64, seed: int = 0
         yield m0[None, :], None
         return
     stepper = _Stepper(s, seed)
+    walkers = _fewer(walkers, places)
+    # a run's markings are held as rows, found again by their hash: the depth shrinks on
+    # a wide net
+    depth = max(1, min(DEPTH, RUN_BYTES // (8 * walkers * places)))
     marking = np.tile(m0, (walkers, 1))
+    start = hash(m0.tobytes())
     paths: list[list[np.ndarray]] = [[m0] for _ in range(walkers)]
-    seen: list[dict[bytes, int]] = [{m0.tobytes(): 0} for _ in range(walkers)]
+    seen: list[dict[int, int]] = [{start: 0} for _ in range(walkers)]
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         after, moving = stepper.step(marking)
         for w in range(walkers):
             if moving[w]:
-                key = after[w].tobytes()
+                key = hash(after[w].tobytes())
                 back = seen[w].get(key)
-                if back is None and len(paths[w]) <= DEPTH:
+                if back is not None and not (paths[w][back] == after[w]).all():
+                    back = None     # two markings, one hash: not a cycle (and not kept)
+                    if len(paths[w]) <= depth:
+                        paths[w].append(after[w].copy())
+                        continue
+                if back is None and len(paths[w]) <= depth:
                     seen[w][key] = len(paths[w])
                     paths[w].append(after[w].copy())
                     continue
@@ -128,6 +148,6 @@ def runs(s: Structure, seconds: float, walkers: int = 64, seed: int = 0
                     yield np.asarray(paths[w]), back
             else:
                 yield np.asarray(paths[w]), None
-            paths[w], seen[w] = [m0], {m0.tobytes(): 0}     # this walker starts over
+            paths[w], seen[w] = [m0], {start: 0}             # this walker starts over
             after[w] = m0
         marking = after

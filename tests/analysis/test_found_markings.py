@@ -238,3 +238,16 @@ def test_walks_of_another_seed_are_other_walks_and_every_marking_they_meet_is_re
     first = [next(random_walks(s, 10.0, walkers=8, seed=k)) for k in (0, 1)]
     assert not (first[0] == first[1]).all()
     assert all(tuple(int(v) for v in row) in reachable for batch in first for row in batch)
+
+
+def test_walks_on_a_wide_net_hold_a_bounded_memory(monkeypatch):
+    # fewer walkers and shorter runs where a marking is wide: what they hold stays
+    # within the module's bounds, shrunk here so that a small net is "wide"
+    import mcl2pnml.analysis.statespace.walks as walks
+    monkeypatch.setattr(walks, "WALKER_BYTES", 8 * 20 * 3)       # three walkers
+    monkeypatch.setattr(walks, "RUN_BYTES", 8 * 3 * 20 * 5)       # runs of five
+    s = structure(_toggles(10))                                    # 20 places
+    batch = next(walks.random_walks(s, 10.0))
+    assert batch.shape[1] == 20 and len(batch) % 3 == 0 and len(batch) <= 3 * walks.STEPS
+    for markings, back in walks.runs(s, 0.5):
+        assert len(markings) <= 6
