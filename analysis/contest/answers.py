@@ -457,12 +457,15 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     everything; past it, the markings it found are witnesses (:func:`settled_by_found`),
     then what the state equation proves unreachable is answered
     (:func:`settled_by_state_equation`: ``E F φ`` false, ``A G φ`` true), then what the
+    formulas simplify to (:func:`simplified_by_structure`: a constant, or what the
+    initial marking decides on every path; the rest goes on simplified), then what the
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
-    then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are),
-    then the state space is explored to limits ten times larger each up to ``max_states``
-    (:func:`_stages`), the markings of each one stopped witnesses again, and walks twice
-    as long as the last after each (their own seed each: new walks). With
+    then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are)
+    and what the runs of walkers that close show (:func:`settled_by_runs`), then the
+    state space is explored to limits ten times larger each up to ``max_states``
+    (:func:`_stages`), the markings of each one stopped witnesses again, and walks and
+    runs twice as long as the last after each (their own seed each: new walks). With
     ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
     searched on the fly under partial-order reduction (:func:`reach_on_the_fly`) before
     any graph. Past the graph's limits, the reachability questions are searched on the
