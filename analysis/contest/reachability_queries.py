@@ -1,16 +1,22 @@
-"""The contest's reachability questions without the reachability graph
-(:func:`mcl2pnml.analysis.contest.answers.answer` asks here when the graph is past its limits, or with
-``--stubborn``).
+"""The contest's questions without the reachability graph
+(:func:`mcl2pnml.analysis.contest.answers.answers_as_found` asks here past its first
+exploration, or with ``--stubborn``; docs/query.md has the order).
 
+* Among markings known to be reachable (the initial one, those a stopped exploration
+  found, those random walks meet): ``E F φ`` true and ``A G φ`` false where one of them
+  satisfies φ (for ``A G``: violates it), an upper bound one of them reaches where a
+  proof allows no more (:class:`Truths` evaluates φ on all of them at once).
+* By the state equation (:mod:`mcl2pnml.analysis.structure.state_equation`): ``E F φ``
+  false and ``A G not φ`` true where no solution of ``M = M0 + C x`` satisfies φ; the
+  upper bound of a place sum.
+* By the bounds of the semi-positive P-invariants (Murata 1989, section VII).
+* CTL and LTL formulas simplified by what those prove of their state subformulas
+  (:mod:`mcl2pnml.analysis.contest.simplify`).
 * On the fly: on a 1-safe net, ``A G φ`` is the universality of φ and ``E F φ`` the
   failure of the universality of not φ, for the property checker's engine
-  (:mod:`mcl2pnml.analysis.checking.on_the_fly`), which searches breadth first in C and stops at the first
-  marking that decides; under stubborn sets when asked, on a net proven safe.
-* Without a marking beyond the initial one: ``E F φ`` where φ holds initially, ``A G φ``
-  where it does not; and what the bounds of the semi-positive P-invariants settle
-  (Murata 1989, section VII).
-* By the state equation (:mod:`mcl2pnml.analysis.structure.state_equation`): ``E F φ``
-  false and ``A G not φ`` true where no solution of ``M = M0 + C x`` satisfies φ.
+  (:mod:`mcl2pnml.analysis.checking.on_the_fly`), which searches breadth first in C and
+  stops at the first marking that decides; under stubborn sets when asked, on a net
+  proven safe.
 """
 from __future__ import annotations
 
