@@ -23,16 +23,17 @@ by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
   transition fires somewhere) and liveness (every transition fires in every
   bottom strongly connected component).
 
-Where the state space is larger than a first, small exploration, the reachability
-questions go first to the state equation (:mod:`mcl2pnml.analysis.structure.state_equation`),
-which proves some of them without a marking explored (``E F φ`` false, ``A G φ`` true:
-``STATE_EQUATION``).
+Where the state space is larger than a first, small exploration, cheaper techniques
+come first, each answer handed out as soon as one settles it (:func:`answers_as_found`;
+docs/query.md): the markings found as witnesses, the state equation
+(:mod:`mcl2pnml.analysis.structure.state_equation`), formulas simplified by it and the
+P-invariants, random walks and the runs of walkers that close (each run a one-path
+:class:`RunGraph`), then explorations in larger stages.
 
 Where the graph cannot be built (past the limits, or an unbounded net), the
 reachability questions of a 1-safe net are searched on the fly by the
-property checker's engine (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at the first
-witness, and what the initial marking and the P-invariants' bounds settle is
-answered. With ``stubborn``, those questions go to that engine first, under
+property checker's engine (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at
+the first witness. With ``stubborn``, those questions go to that engine first, under
 stubborn sets.
 
 Dead markings, as the contest's 2021 consensus answers read them (every one
