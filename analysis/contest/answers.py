@@ -615,9 +615,7 @@ class _Run:
 def _on_one_run(f) -> tuple[bool, object, bool] | None:
     """``(universal, ψ, negated)`` for ``A ψ`` or ``E ψ`` under negations, ψ free of path
     quantifiers (a run decides ψ); None for any other formula."""
-    negated = False
-    while isinstance(f, q.Neg):
-        negated, f = not negated, f.arg
+    negated, f = q.unnegated(f)
     if isinstance(f, (q.AllPaths, q.ExistsPath)) and not q.is_state(f.arg) \
             and not q.contains(f.arg, (q.AllPaths, q.ExistsPath)):
         return isinstance(f, q.AllPaths), f, negated

@@ -404,9 +404,7 @@ def settled_by_walks(net: Net, queries: Sequence[q.Query], seconds: float = WALK
 def reachability(f) -> tuple[bool, object] | None:
     """``(exists, φ)`` for ``E F φ`` (``exists``) or ``A G φ``, φ a state formula, under
     any negations; None for any other formula."""
-    negated = False
-    while isinstance(f, q.Neg):
-        negated, f = not negated, f.arg
+    negated, f = q.unnegated(f)
     if isinstance(f, q.ExistsPath) and isinstance(f.arg, q.Finally) and q.is_state(f.arg.arg):
         exists, phi = True, f.arg.arg
     elif isinstance(f, q.AllPaths) and isinstance(f.arg, q.Globally) \

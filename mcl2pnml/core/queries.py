@@ -111,6 +111,15 @@ def contains(f: Formula, kind: type) -> bool:
     return isinstance(f, kind) or any(contains(g, kind) for g in children(f))
 
 
+def unnegated(f: Formula) -> tuple[bool, Formula]:
+    """``(negated, g)``: ``f`` is ``g`` under an odd number of negations (``negated``) or
+    an even one; ``g`` is not a negation."""
+    negated = False
+    while isinstance(f, Neg):
+        negated, f = not negated, f.arg
+    return negated, f
+
+
 def is_state(f: Formula) -> bool:
     """Whether ``f`` is a state formula without temporal operators (a marking decides it)."""
     return isinstance(f, (*ATOMS, Neg, Conj, Disj)) and all(map(is_state, children(f)))

@@ -139,3 +139,20 @@ def test_a_run_of_a_cycle_shows_what_every_run_does_not_keep():
                                 q.Query("not-always", q.Neg(q.AllPaths(q.Globally(a))))],
                           seconds=5.0)
     assert got == {"always": (False, "RANDOM_WALK"), "not-always": (True, "RANDOM_WALK")}
+
+
+def test_each_shape_counts_its_negations_alike():
+    """The reachability shape and the one-run shape read ``not`` the same way."""
+    from mcl2pnml.analysis.contest.answers import _on_one_run
+    from mcl2pnml.analysis.contest.reachability_queries import reachability
+    eventually_a = q.ExistsPath(q.Finally(A))
+    one_run = q.AllPaths(q.Conj((q.Finally(A), q.Globally(B))))
+    for k in range(4):
+        def negated(f, k=k):
+            for _ in range(k):
+                f = q.Neg(f)
+            return f
+        assert q.unnegated(negated(A)) == (k % 2 == 1, A)
+        assert reachability(negated(eventually_a)) == \
+            ((True, A) if k % 2 == 0 else (False, q.Neg(A)))
+        assert _on_one_run(negated(one_run)) == (True, one_run, k % 2 == 1)
