@@ -51,6 +51,7 @@ an LTL product past the memory budget.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Iterator, Sequence
@@ -74,6 +75,7 @@ from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, Listed
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
+from mcl2pnml.analysis.statespace.partial import partial_space
 from mcl2pnml.analysis.statespace.rows import compressed_rows
 from mcl2pnml.analysis.statespace.walks import runs
 
@@ -151,7 +153,11 @@ class Graph:
                 raise UnknownName(f"no place '{p}' in the net", where)
             column = self._tokens.get(i)
             if column is None:
-                column = self._tokens[i] = np.asarray(self.space.tokens(i), dtype=np.int64)
+                # kept in the narrowest integer type the counts fit: a column a place
+                # named, of tens of millions of markings, adds up
+                column = np.asarray(self.space.tokens(i))
+                column = self._tokens[i] = column.astype(
+                    np.min_scalar_type(int(column.max(initial=0))))
             total += column
         return total
 
@@ -190,6 +196,11 @@ class Graph:
     def eg(self, sat: np.ndarray) -> np.ndarray:
         """EG sat: the states that reach, through ``sat``, a cycle inside ``sat`` (a dead
         marking's self-loop is one)."""
+        return self.eu(sat, self._cycles_in(sat))
+
+    def _cycles_in(self, sat: np.ndarray) -> np.ndarray:
+        """The states on a cycle inside ``sat``: in a strongly connected component of
+        ``sat`` with more than one state, or with an edge to themselves."""
         if not sat.any():
             return np.zeros(self.n, dtype=bool)
         keep = sat.astype(np.uint8)
@@ -204,8 +215,7 @@ class Graph:
             self._loops = np.unique(tail[tail == idx])
         loops = self._loops[inside[self._loops]]
         looped[label[loops]] = True
-        core = inside & looped[np.where(inside, label, 0)]
-        return self.eu(sat, core)
+        return inside & looped[np.where(inside, label, 0)]
 
     def check(self, f, where) -> np.ndarray:
         """The states where CTL formula ``f`` holds."""
@@ -362,11 +372,12 @@ class TooLarge(Exception):
 
 
 def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
-              max_memory: int | None = None) -> bool:
+              max_memory: int | None = None, within: np.ndarray | None = None) -> bool:
     """``A φ``: no path of the graph (a dead marking repeated for ever) satisfies ``not φ``:
     the product with the negation's automaton, searched on the fly from its initial states
     (Couvreur's check, in C), has no reachable cycle meeting every acceptance set. Only
-    the product states the search meets are numbered; it stops at the first such cycle."""
+    the product states the search meets are numbered; it stops at the first such cycle.
+    ``within``: the markings the paths may visit (every one where None)."""
     atoms: list[np.ndarray] = []
     literals, accepting, initial, edges = _tableau(_nnf(f.arg, True, atoms, graph, where))
     if any(not acc for acc in accepting):
@@ -385,6 +396,8 @@ def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
     for j, lits in enumerate(literals):
         for a in lits:
             label[j] &= atoms[a]
+        if within is not None:
+            label[j] &= within
     start = np.array([j for j in sorted(initial) if label[j][0]], dtype=np.int64)
     if not len(start):
         return True
@@ -490,6 +503,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         _space(net, min(max_states, FIRST_STATES), max_memory)
     if stopped is not None and stopped.found is not None:
         yield from settle(settled_by_found(net, left(), stopped.found))
+        yield from settle(settled_by_partial_graph(net, left(), stopped.found, max_memory))
     limited = stubborn or stopped is not None
     del stopped
     if space is None:
@@ -515,6 +529,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
             space, why, stopped = _space(net, limit, max_memory)
             if stopped is not None and stopped.found is not None:
                 yield from settle(settled_by_found(net, left(), stopped.found))
+                yield from settle(settled_by_partial_graph(net, left(), stopped.found,
+                                                           max_memory))
             # a memory budget, not the count, stopped it: a larger limit would not pass it
             ended = stopped is None or stopped.explored is None or stopped.explored < limit
             del stopped
@@ -561,6 +577,159 @@ def _decide(graph: Graph, x: q.Query, max_memory: int | None = None) -> Answer:
                                       "file does not say")
     return Answer(x.id, by_ctl if by_ctl is not None else by_ltl,
                   f"EXPLICIT {'CTL' if by_ctl is not None else 'LTL'}")
+
+
+# -- past the limit: the part of the graph explored, three-valued ---------------------------------
+
+class PartialGraph(Graph):
+    """The graph an exploration built before its limit
+    (:class:`~mcl2pnml.analysis.statespace.partial.PartialStateSpace`), read three-valued:
+    each formula gets the states where it surely holds and those where it may, whatever
+    the ``open`` frontier markings do (Bruns and Godefroid, *Model checking partial state
+    spaces with 3-valued temporal logics*, CAV 1999). An open marking has no known
+    successor: it may go anywhere, so it is neither dead nor surely anything past its
+    own atoms. The atoms are exact in every found marking: token sums from the markings,
+    a transition enabled by its needs, dead by the out-degree."""
+
+    def __init__(self, space):
+        super().__init__(space)
+        self.open = space.open
+        self.dead &= ~self.open           # no edge out of an open marking: not dead for that
+
+    def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
+        out = super().enabled(transitions, where)   # the expanded markings, by their edges
+        at = np.flatnonzero(self.open)
+        if len(at):
+            s = self.structure
+            for t in transitions:
+                j = self.transition_index[t]
+                needs = dict(s.read[j])
+                for p, w in s.pre[j].items():
+                    needs[p] = max(needs.get(p, 0), w)
+                ok = np.ones(len(at), dtype=bool)
+                for p, w in needs.items():
+                    ok &= self.tokens([s.places[p]], where)[at] >= w
+                out[at[ok]] = True
+        return out
+
+    def check3(self, f, where) -> tuple[np.ndarray, np.ndarray]:
+        """``(surely, maybe)``: the states where CTL formula ``f`` holds whatever the open
+        markings do, and those where it holds for some future of theirs."""
+        if q.is_state(f):
+            sat = self.check(f, where)
+            return sat, sat
+        if isinstance(f, q.Neg):
+            surely, maybe = self.check3(f.arg, where)
+            return ~maybe, ~surely
+        if isinstance(f, (q.Conj, q.Disj)):
+            parts = [self.check3(a, where) for a in f.args]
+            join = np.logical_and if isinstance(f, q.Conj) else np.logical_or
+            return (join.reduce([p[0] for p in parts]), join.reduce([p[1] for p in parts]))
+        if isinstance(f, (q.AllPaths, q.ExistsPath)):
+            return self._quantified3(f, where)
+        raise NotCTL("a temporal operator outside a path quantifier")
+
+    def _quantified3(self, f, where) -> tuple[np.ndarray, np.ndarray]:
+        inner, exists = f.arg, isinstance(f, q.ExistsPath)
+        if q.is_state(inner) or isinstance(inner, (q.AllPaths, q.ExistsPath)):
+            return self.check3(inner, where)
+        o = self.open
+
+        def neg(p):
+            return ~p[1], ~p[0]
+
+        def ex(p):          # an open marking may have a successor in anything
+            return self.ex(p[0]), self.ex(p[1]) | o
+
+        def eu(a, b):       # ... and may go on to b from there
+            return self.eu(a[0], b[0]), self.eu(a[1], b[1] | (a[1] & o))
+
+        def eg(a):          # ... or stay in a for ever
+            return self.eg(a[0] & ~o), self.eu(a[1], self._cycles_in(a[1]) | (a[1] & o))
+
+        true = np.ones(self.n, dtype=bool)
+        if isinstance(inner, q.Next):
+            a = self.check3(inner.arg, where)
+            return ex(a) if exists else neg(ex(neg(a)))
+        if isinstance(inner, q.Finally):
+            b = self.check3(inner.arg, where)
+            return eu((true, true), b) if exists else neg(eg(neg(b)))
+        if isinstance(inner, q.Globally):
+            a = self.check3(inner.arg, where)
+            return eg(a) if exists else neg(eu((true, true), neg(a)))
+        if isinstance(inner, q.Until):
+            a, b = self.check3(inner.before, where), self.check3(inner.reach, where)
+            if exists:
+                return eu(a, b)
+            # A(a U b) = not E(not b U (not a and not b)) and not EG not b
+            not_a, not_b = neg(a), neg(b)
+            one = neg(eu(not_b, (not_a[0] & not_b[0], not_a[1] & not_b[1])))
+            two = neg(eg(not_b))
+            return one[0] & two[0], one[1] & two[1]
+        raise NotCTL("a path formula that is not CTL (LTL under a path quantifier)")
+
+
+def _decide_partial(graph: PartialGraph, x: q.Query, max_memory: int | None) -> bool | None:
+    """A formula's answer on a partial graph where its open markings cannot change it,
+    else None: CTL three-valued at M0; LTL false where a lasso (or a path to a dead
+    marking) of expanded markings violates it (its product kept off the open ones). A
+    formula of both kinds with an ``X`` needs both answers, and the same."""
+    f = x.asks
+    ctl, ltl = q.is_ctl(f), q.is_ltl(f)
+    by_ctl = by_ltl = None
+    if ctl:
+        surely, maybe = graph.check3(f, x.location)
+        by_ctl = True if surely[0] else (False if not maybe[0] else None)
+    if ltl and (not ctl or q.contains(f, q.Next)):
+        try:
+            if not ltl_holds(graph, f, x.location, max_memory=max_memory,
+                             within=~graph.open):
+                by_ltl = False
+        except TooLarge:
+            pass
+    if ctl and ltl and q.contains(f, q.Next):
+        return by_ctl if by_ctl is not None and by_ctl == by_ltl else None
+    return by_ctl if ctl else by_ltl
+
+
+#: The largest partial graph labelled, in edges: its labelling costs about what the whole
+#: graph's would (a tenth of a second an operator a million markings), and past about ten
+#: million edges that is more than the explorations and walks it would delay.
+PARTIAL_EDGES = 10_000_000
+
+#: The seconds one partial graph's formulas may take, the smallest first: one formula
+#: started is finished.
+PARTIAL_SECONDS = 10.0
+
+
+def settled_by_partial_graph(net: Net, queries: Sequence[q.Query], found,
+                             max_memory: int | None = None,
+                             seconds: float = PARTIAL_SECONDS) -> dict[str, tuple[bool, str]]:
+    """The CTL and LTL formulas the graph of ``found`` (an exploration stopped at its
+    limit) decides whatever its open markings do (:class:`PartialGraph`), of up to
+    :data:`PARTIAL_EDGES` edges, within about ``seconds``."""
+    asked = sorted((x for x in queries if not isinstance(x.asks, q.PlaceBound)
+                    and (q.is_ctl(x.asks) or q.is_ltl(x.asks))),
+                   key=lambda x: len(repr(x.asks)))
+    if not asked or found is None:
+        return {}
+    space = partial_space(structure(net), found, max_memory, PARTIAL_EDGES)
+    if space is None:
+        return {}
+    graph = PartialGraph(space)
+    settled: dict[str, tuple[bool, str]] = {}
+    deadline = time.monotonic() + seconds
+    for x in asked:
+        if time.monotonic() > deadline:
+            break
+        try:
+            value = _decide_partial(graph, x, max_memory)
+        except (UnknownName, NotCTL):
+            continue
+        if value is not None:
+            kind = "CTL" if q.is_ctl(x.asks) else "LTL"
+            settled[x.id] = (value, f"EXPLICIT {kind} PARTIAL_STATE_SPACE")
+    return settled
 
 
 # -- one run at a time: the lassos and maximal runs of random walkers ----------------------------

@@ -118,7 +118,8 @@ def _drive(loops: Loops, net: SafeNet, search: SafeSearch, max_states: int, limi
             places = range(64 * net.need.reshape(len(net.need), -1).shape[1])   # a bit each
             limit_error.found = FoundMarkings(search.queue[:search.count],
                                               [p // 64 for p in places],
-                                              [p % 64 for p in places], [1] * len(places))
+                                              [p % 64 for p in places], [1] * len(places),
+                                              search.head)
             raise limit_error
         if progress:
             progress(search.count, search.count - search.head)

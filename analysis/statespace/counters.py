@@ -123,7 +123,7 @@ class Layout:
         return counts
 
 
-def _tables(s: Structure, layout: Layout) -> CounterNet:
+def counter_net(s: Structure, layout: Layout) -> CounterNet:
     """The transitions' needs and changes as compressed rows of fields, for the loops."""
     need, change = [], []
     for pre, read, col in zip(s.pre, s.read, s.incidence):
@@ -165,7 +165,7 @@ def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_err
     queue = layout.pack(np.array([m0], dtype=np.int64))
     search = loops.counter_search(queue, np.full(1, -1, dtype=np.int64), 1, 0)
     while True:
-        net = _tables(s, layout)
+        net = counter_net(s, layout)
         while True:
             search = loops.counter_step(net, search, max_states, SLICE)
             if progress and search.code == Code.GOING:
@@ -179,7 +179,7 @@ def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_err
             limit_error.explored, limit_error.deadlocks = count, search.dead
             limit_error.found = FoundMarkings(
                 queue[:count], layout.word, layout.shift,
-                [layout.mask(p) for p in range(len(layout.widths))])
+                [layout.mask(p) for p in range(len(layout.widths))], search.head)
             raise limit_error
         if (search.code == Code.GROWING or layout.widths[info] >= MAX_BITS
                 or _covers_an_ancestor(s, layout, queue, search.parent, search.head)):
@@ -235,7 +235,7 @@ class CounterStateSpace(EdgesOnDemand, StateSpace):
         # the loops that built the index ask it again: its slots are theirs
         self.loops = loops
         self.coverability = False
-        self._net = _tables(structure, layout)
+        self._net = counter_net(structure, layout)
 
     @property
     def states(self) -> int:

@@ -225,12 +225,15 @@ class FoundMarkings:
 
     Rows of 64-bit words, as the packed explorers keep them: place ``p``'s count is the
     field of row word ``word[p]`` at bit ``shift[p]`` under ``mask[p]`` (a bit a place
-    for the safe explorers, a counter for the bounded ones)."""
+    for the safe explorers, a counter for the bounded ones). The search was breadth first:
+    the first ``expanded`` rows had every successor found (each one among the rows), the
+    rest are the open frontier (:mod:`mcl2pnml.analysis.statespace.partial`)."""
 
     def __init__(self, rows: np.ndarray, word: Sequence[int], shift: Sequence[int],
-                 mask: Sequence[int]):
+                 mask: Sequence[int], expanded: int = 0):
         self.rows = rows.reshape(len(rows), -1)
         self.word, self.shift, self.mask = list(word), list(shift), list(mask)
+        self.expanded = expanded
 
     @property
     def states(self) -> int:

@@ -268,7 +268,9 @@ class Loops(Protocol):
     def counter_out_degree(self, rows: np.ndarray, net: CounterNet) -> np.ndarray: ...
 
     def counter_edges(self, rows: np.ndarray, index: Index, net: CounterNet, total: int
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The first ``total`` firings ``(source, transition, target)`` in node order:
+        every firing of the rows whose out-degrees sum to ``total``."""
 
     def counter_backward(self, rows: np.ndarray, net: CounterNet, seen: np.ndarray,
                          frontier: np.ndarray) -> np.ndarray: ...

@@ -265,9 +265,15 @@ def counter_out_degree(rows: np.ndarray, net: CounterNet) -> np.ndarray:
 def counter_edges(rows: np.ndarray, index: Index, net: CounterNet, total: int
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     tables = _Counters(net)
-    out = [(q, t, index.table[tables.fire(row, t, 1)[0]])
-           for q, row in enumerate(_lists(rows)) for t in range(net.transitions)
-           if tables.enabled(row, t)]
+    out: list[tuple[int, int, int]] = []
+    # the first ``total`` firings in node order, as C gives them: the rows past them
+    # (an exploration's open frontier) may have successors the index does not hold
+    for q, row in enumerate(_lists(rows)):
+        if len(out) == total:
+            break
+        for t in range(net.transitions):
+            if tables.enabled(row, t):
+                out.append((q, t, index.table[tables.fire(row, t, 1)[0]]))
     src, trans, dst = (np.array(x, dtype=np.int32) for x in zip(*out)) if out else \
         (np.zeros(0, dtype=np.int32),) * 3
     return src, trans, dst
