@@ -65,6 +65,8 @@ from mcl2pnml.core.memory import default_memory, size_text
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import structure
 
+from mcl2pnml.analysis.contest.buchi import NotLTL, negation_normal_form, tableau
+from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, settled_by_ltl_on_the_fly
 from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, ListedMarkings, Truths,
                                                             reach_on_the_fly,
                                                             settled_by_found,
@@ -270,102 +272,7 @@ class NotCTL(Exception):
     """A formula this labelling cannot decide (LTL)."""
 
 
-# -- LTL: the negation's Büchi automaton, in product with the graph -----------------------------
-#
-# Formulas in negation normal form as tuples: ("lit", k) an atom (a column of
-# ``atoms``, a state formula's truth in every marking, negations included),
-# ("and", a, b), ("or", a, b), ("X", a), ("U", a, b), ("R", a, b); ("true",) and
-# ("false",).
-
-def _nnf(f, negate: bool, atoms: list, graph: "Graph", where):
-    """``f`` (negated if ``negate``) in negation normal form, its state subformulas as
-    atoms: each maximal state subformula one column of truths."""
-    if q.is_state(f):
-        sat = graph.check(f, where)
-        atoms.append(~sat if negate else sat)
-        return ("lit", len(atoms) - 1)
-    if isinstance(f, q.Neg):
-        return _nnf(f.arg, not negate, atoms, graph, where)
-    if isinstance(f, (q.Conj, q.Disj)):
-        parts = [_nnf(a, negate, atoms, graph, where) for a in f.args]
-        op = "and" if isinstance(f, q.Conj) != negate else "or"
-        out = parts[0]
-        for p in parts[1:]:
-            out = (op, out, p)
-        return out
-    if isinstance(f, q.Next):
-        return ("X", _nnf(f.arg, negate, atoms, graph, where))
-    if isinstance(f, q.Finally):        # F a = true U a;  not F a = false R not a
-        a = _nnf(f.arg, negate, atoms, graph, where)
-        return ("R", ("false",), a) if negate else ("U", ("true",), a)
-    if isinstance(f, q.Globally):       # G a = false R a;  not G a = true U not a
-        a = _nnf(f.arg, negate, atoms, graph, where)
-        return ("U", ("true",), a) if negate else ("R", ("false",), a)
-    if isinstance(f, q.Until):          # not (a U b) = not a R not b
-        a = _nnf(f.before, negate, atoms, graph, where)
-        b = _nnf(f.reach, negate, atoms, graph, where)
-        return ("R", a, b) if negate else ("U", a, b)
-    raise NotCTL("a path quantifier inside an LTL formula")
-
-
-def _tableau(phi) -> tuple[list[frozenset], list[set[int]], set[int], list[tuple]]:
-    """The generalised Büchi automaton of ``phi`` by Gerth, Peled, Vardi and Wolper's
-    tableau (1995): each node's literals (its ``old`` set's), its predecessors, the
-    initial nodes, and the ``U`` subformulas (one acceptance set each)."""
-    nodes: list[dict] = []
-    INIT = -1
-    stack = [{"incoming": {INIT}, "new": [phi], "old": set(), "next": set()}]
-    while stack:
-        node = stack.pop()
-        if not node["new"]:
-            same = next((n for n in nodes if n["old"] == node["old"]
-                         and n["next"] == node["next"]), None)
-            if same is not None:
-                same["incoming"] |= node["incoming"]
-                continue
-            node["id"] = len(nodes)
-            nodes.append(node)
-            stack.append({"incoming": {node["id"]}, "new": list(node["next"]), "old": set(),
-                          "next": set()})
-            continue
-        f = node["new"].pop()
-        if f in node["old"]:
-            stack.append(node)
-            continue
-        kind = f[0]
-        if kind == "false":
-            continue
-        if kind in ("true", "lit"):
-            node["old"].add(f)
-            stack.append(node)
-        elif kind == "and":
-            node["old"].add(f)
-            node["new"] += [g for g in f[1:] if g not in node["old"]]
-            stack.append(node)
-        elif kind == "X":
-            node["old"].add(f)
-            node["next"].add(f[1])
-            stack.append(node)
-        else:
-            a, b = f[1], f[2]
-            if kind == "or":
-                one, two = ([a], set()), ([b], set())
-            elif kind == "U":                   # a U b = b or (a and X(a U b))
-                one, two = ([a], {f}), ([b], set())
-            else:                               # a R b = b and (a or X(a R b))
-                one, two = ([b], {f}), ([a, b], set())
-            for new, nxt in (one, two):
-                stack.append({"incoming": set(node["incoming"]),
-                              "new": node["new"] + [g for g in new if g not in node["old"]],
-                              "old": node["old"] | {f}, "next": node["next"] | nxt})
-    untils = sorted({g for n in nodes for g in n["old"] if g[0] == "U"}, key=repr)
-    literals = [frozenset(g[1] for g in n["old"] if g[0] == "lit") for n in nodes]
-    accepting = [{k for k, n in enumerate(nodes) if u not in n["old"] or u[2] in n["old"]}
-                 for u in untils]
-    initial = {k for k, n in enumerate(nodes) if INIT in n["incoming"]}
-    edges = [(j, k) for k, n in enumerate(nodes) for j in n["incoming"] if j != INIT]
-    return literals, accepting, initial, edges
-
+# -- LTL: the negation's Büchi automaton (buchi.py), in product with the graph ------------------
 
 class TooLarge(Exception):
     """A product past the limits: the question is left unanswered, with this reason."""
@@ -379,7 +286,13 @@ def ltl_holds(graph: "Graph", f: q.AllPaths, where, max_states: int = 1 << 31,
     the product states the search meets are numbered; it stops at the first such cycle.
     ``within``: the markings the paths may visit (every one where None)."""
     atoms: list[np.ndarray] = []
-    literals, accepting, initial, edges = _tableau(_nnf(f.arg, True, atoms, graph, where))
+
+    def atom(g, negate: bool) -> int:     # each maximal state subformula, a column of truths
+        sat = graph.check(g, where)
+        atoms.append(~sat if negate else sat)
+        return len(atoms) - 1
+
+    literals, accepting, initial, edges = tableau(negation_normal_form(f.arg, True, atom))
     if any(not acc for acc in accepting):
         return True                     # a set no node is in: no run of not-φ is accepted
     if len(accepting) > 64:
@@ -515,6 +428,9 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         yield from settle(decided)
         asked.update(rewritten)
         yield from settle(settled_without_exploring(net, left()))
+        # then the path formulas one search each decides on the fly, under stubborn sets
+        yield from settle(settled_by_ltl_on_the_fly(net, left(), max_states=max_states,
+                                                    max_memory=max_memory))
         # then witnesses deep in the net, where the first exploration stayed near M0; more
         # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
@@ -536,6 +452,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
             del stopped
             if ended or not left():
                 break
+            yield from settle(settled_by_ltl_on_the_fly(net, left(), FLY_SECONDS * 2 ** k,
+                                                        max_states, max_memory))
             yield from settle(settled_by_walks(net, left(), WALK_SECONDS * 2 ** k, seed=k))
             yield from settle(settled_by_runs(net, left(), WALK_SECONDS * 2 ** k, seed=k))
         if not left():
@@ -724,7 +642,7 @@ def settled_by_partial_graph(net: Net, queries: Sequence[q.Query], found,
             break
         try:
             value = _decide_partial(graph, x, max_memory)
-        except (UnknownName, NotCTL):
+        except (UnknownName, NotCTL, NotLTL):
             continue
         if value is not None:
             kind = "CTL" if q.is_ctl(x.asks) else "LTL"

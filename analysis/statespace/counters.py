@@ -147,7 +147,9 @@ def counter_net(s: Structure, layout: Layout) -> CounterNet:
     return CounterNet(rows(need, np.uint64), rows(change, np.int64), growing)
 
 
-def _initial_widths(s: Structure, m0: Sequence[int]) -> list[int]:
+def initial_widths(s: Structure, m0: Sequence[int]) -> list[int]:
+    """Each place's counter width: what its P-invariant bound needs, else room for twice
+    its initial tokens (widened where a firing overflows it)."""
     widths = []
     for p, bound in enumerate(invariant_bounds(s, m0)):
         if bound is None:
@@ -161,7 +163,7 @@ def explore_counters(s: Structure, m0: Sequence[int], max_states: int, limit_err
     """Breadth-first from ``m0`` by ``loops`` (default: C where built, else the Python
     reference); raises :class:`NotBounded` when the net may be unbounded."""
     loops = loops or chosen()
-    layout = Layout(_initial_widths(s, m0))
+    layout = Layout(initial_widths(s, m0))
     queue = layout.pack(np.array([m0], dtype=np.int64))
     search = loops.counter_search(queue, np.full(1, -1, dtype=np.int64), 1, 0)
     while True:

@@ -19,6 +19,7 @@
 #include <Python.h>
 #include <stdint.h>
 #include <string.h>
+#include <time.h>
 
 enum { GOING = 0, NOT_SAFE = 1, LIMIT = 2, QUEUE_FULL = 3, TABLE_FULL = 4 };
 
@@ -76,8 +77,10 @@ static inline int64_t candidates(const uint64_t *row, int64_t words, const int64
 /* -- arguments ------------------------------------------------------------------------- */
 
 /* The buffers of one call, released together whatever happens. */
+#define MAX_BUFFERS 48
+
 typedef struct {
-    Py_buffer views[32];
+    Py_buffer views[MAX_BUFFERS];
     int count;
 } Buffers;
 
@@ -89,6 +92,10 @@ static void release(Buffers *b) {
 
 /* The data of a C-contiguous buffer of `itemsize`-byte items; NULL and an exception if not. */
 static void *data_of(Buffers *b, PyObject *obj, Py_ssize_t itemsize, int writable) {
+    if (b->count == MAX_BUFFERS) {
+        PyErr_SetString(PyExc_ValueError, "too many arrays for one call");
+        return NULL;
+    }
     Py_buffer *v = &b->views[b->count];
     int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
     if (PyObject_GetBuffer(obj, v, flags) < 0)
@@ -467,6 +474,27 @@ static inline int marked(const uint64_t *row, int64_t p) {
     return (int)((row[p >> 6] >> (p & 63)) & 1);
 }
 
+/* An enabled member t of a stubborn set brings every transition that consumes a place t
+ * needs (it may disable t) and every one that needs a place t consumes (t may disable
+ * it): pushed on work (in[u] == stamp marks a member). */
+static inline void bring_conflicts(const Stubborn *st, int64_t t, int64_t *in, int64_t stamp,
+                                   int64_t *work, int64_t *top) {
+    for (int64_t k = st->t_need_ptr[t]; k < st->t_need_ptr[t + 1]; k++) {
+        int64_t p = st->t_need[k];
+        for (int64_t j = st->p_take_ptr[p]; j < st->p_take_ptr[p + 1]; j++) {
+            int64_t u = st->p_take[j];
+            if (in[u] != stamp) { in[u] = stamp; work[(*top)++] = u; }
+        }
+    }
+    for (int64_t k = st->t_pre_ptr[t]; k < st->t_pre_ptr[t + 1]; k++) {
+        int64_t p = st->t_pre[k];
+        for (int64_t j = st->p_need_ptr[p]; j < st->p_need_ptr[p + 1]; j++) {
+            int64_t u = st->p_need[j];
+            if (in[u] != stamp) { in[u] = stamp; work[(*top)++] = u; }
+        }
+    }
+}
+
 /* The stubborn set grown from the enabled transition `key` (in[t] == stamp marks a member,
  * work is a stack): an enabled member brings every transition that consumes a place it
  * needs (which may disable it) and every one that needs a place it consumes (which it may
@@ -485,20 +513,7 @@ static int64_t stubborn_set(const uint64_t *row, const Masks *m, const Stubborn 
             if (st->visible[t])
                 return -1;
             out[n++] = t;
-            for (int64_t k = st->t_need_ptr[t]; k < st->t_need_ptr[t + 1]; k++) {
-                int64_t p = st->t_need[k];
-                for (int64_t j = st->p_take_ptr[p]; j < st->p_take_ptr[p + 1]; j++) {
-                    int64_t u = st->p_take[j];
-                    if (in[u] != stamp) { in[u] = stamp; work[top++] = u; }
-                }
-            }
-            for (int64_t k = st->t_pre_ptr[t]; k < st->t_pre_ptr[t + 1]; k++) {
-                int64_t p = st->t_pre[k];
-                for (int64_t j = st->p_need_ptr[p]; j < st->p_need_ptr[p + 1]; j++) {
-                    int64_t u = st->p_need[j];
-                    if (in[u] != stamp) { in[u] = stamp; work[top++] = u; }
-                }
-            }
+            bring_conflicts(st, t, in, stamp, work, &top);
         } else {
             for (int64_t k = st->t_need_ptr[t]; k < st->t_need_ptr[t + 1]; k++) {
                 int64_t p = st->t_need[k];
@@ -1632,6 +1647,369 @@ fail:
     return NULL;
 }
 
+
+/* -- an LTL formula's product with a bounded net, on the fly (ltl_on_the_fly.py) ---------- */
+
+enum { OP_LINEAR = 0, OP_ENABLED = 1, OP_DEAD = 2, OP_CONST = 3, OP_NOT = 4, OP_AND = 5,
+       OP_OR = 6 };
+enum { LTL_HOLDS = 0, LTL_ACCEPTING = 1, LTL_LIMIT = 2, LTL_TIME = 3, LTL_OVERFLOW = 4,
+       LTL_GROWING = 5 };
+
+/* State formulas as postfix programs (interface.StateProgram). */
+typedef struct {
+    const int64_t *ops, *atom_ptr, *lin_ptr, *lin_word, *lin_coef, *bound;
+    const uint64_t *lin_shift, *lin_mask;
+    int64_t atoms, length;
+} Program;
+
+/* The atoms that hold in row, a bit each; stack holds `length` truths. */
+static uint64_t atoms_of(const uint64_t *row, const Program *pr, const Fields *n,
+                         uint8_t *stack) {
+    uint64_t out = 0;
+    int dead = -1;
+    for (int64_t i = 0; i < pr->atoms; i++) {
+        int64_t top = 0;
+        for (int64_t k = pr->atom_ptr[i]; k < pr->atom_ptr[i + 1]; k++) {
+            int64_t op = pr->ops[2 * k], arg = pr->ops[2 * k + 1];
+            switch (op) {
+            case OP_LINEAR: {
+                int64_t sum = 0;
+                for (int64_t j = pr->lin_ptr[arg]; j < pr->lin_ptr[arg + 1]; j++)
+                    sum += pr->lin_coef[j]
+                           * (int64_t)((row[pr->lin_word[j]] >> pr->lin_shift[j]) & pr->lin_mask[j]);
+                stack[top++] = sum <= pr->bound[arg];
+                break;
+            }
+            case OP_ENABLED:
+                stack[top++] = (uint8_t)counter_enabled(row, n, arg);
+                break;
+            case OP_DEAD:
+                if (dead < 0) {
+                    dead = 1;
+                    for (int64_t t = 0; t < n->transitions && dead; t++)
+                        if (counter_enabled(row, n, t)) dead = 0;
+                }
+                stack[top++] = (uint8_t)dead;
+                break;
+            case OP_CONST:
+                stack[top++] = (uint8_t)(arg != 0);
+                break;
+            case OP_NOT:
+                stack[top - 1] = !stack[top - 1];
+                break;
+            default: {   /* AND, OR of the top arg truths */
+                uint8_t v = op == OP_AND;
+                for (int64_t j = 0; j < arg; j++) {
+                    uint8_t x = stack[--top];
+                    v = op == OP_AND ? (v && x) : (v || x);
+                }
+                stack[top++] = v;
+            }
+            }
+        }
+        if (top > 0 && stack[top - 1]) out |= (uint64_t)1 << i;
+    }
+    return out;
+}
+
+/* The enabled members (into out) of the stubborn set grown from the enabled transition key
+ * on a marking of counters, or -1 if one is visible: an enabled member brings every
+ * transition that takes from a place it needs and every one that needs a place it takes
+ * from; a disabled one every transition that adds to the first place it lacks. */
+static int64_t counter_stubborn(const uint64_t *row, const Fields *n, const int64_t *need_place,
+                                const Stubborn *st, const uint8_t *is_enabled, int64_t key,
+                                int64_t *in, int64_t stamp, int64_t *work, int64_t *out) {
+    int64_t top = 0, count = 0;
+    in[key] = stamp;
+    work[top++] = key;
+    while (top > 0) {
+        int64_t t = work[--top];
+        if (is_enabled[t]) {
+            if (st->visible[t]) return -1;
+            out[count++] = t;
+            bring_conflicts(st, t, in, stamp, work, &top);
+        } else {
+            for (int64_t k = n->ptr[t]; k < n->ptr[t + 1]; k++) {
+                if (((row[n->word[k]] >> n->shift[k]) & n->mask[k]) >= n->need[k]) continue;
+                int64_t p = need_place[k];
+                for (int64_t j = st->p_make_ptr[p]; j < st->p_make_ptr[p + 1]; j++) {
+                    int64_t u = st->p_make[j];
+                    if (in[u] != stamp) { in[u] = stamp; work[top++] = u; }
+                }
+                break;
+            }
+        }
+    }
+    return count;
+}
+
+/* What one search shares: the net, the formula, the automaton, the table of product
+ * states (rows of the marking's words and the automaton node). */
+typedef struct {
+    Fields n, d;
+    const int64_t *need_place, *change_place;
+    const uint8_t *growing;
+    Program pr;
+    const int64_t *aptr, *asucc;
+    const uint64_t *required, *accepting;
+    Stubborn st;
+    uint64_t *rows, *table;
+    int64_t words, width, capacity, tmask;
+    int bits;
+    /* scratch */
+    uint64_t *next, *probe_row;
+    uint8_t *stack, *is_enabled, *on_stack;
+    int64_t *enabled, *best, *members, *in, *work, stamp;
+} Ltl;
+
+static int64_t ltl_find(Ltl *L, const uint64_t *row, int64_t node, int64_t *slot, uint64_t *h) {
+    memcpy(L->probe_row, row, 8 * (size_t)L->words);
+    L->probe_row[L->words] = (uint64_t)node;
+    *h = hash_row(L->probe_row, L->width);
+    return probe(L->rows, L->width, L->table, L->tmask, L->probe_row, *h & 0xFFFFFFFFULL,
+                 slot_of_hash(*h, L->bits), slot);
+}
+
+/* The transitions product state p fires, pushed on todo (-1: a dead marking stays);
+ * returns LTL_HOLDS (0) or LTL_OVERFLOW / LTL_GROWING with *info. */
+static int ltl_expand(Ltl *L, int64_t p, Stack *todo, int64_t *info, int *ok) {
+    const uint64_t *row = L->rows + p * L->width;
+    int64_t a = (int64_t)row[L->words], count = 0, T = L->n.transitions;
+    for (int64_t t = 0; t < T; t++) {
+        L->is_enabled[t] = (uint8_t)counter_enabled(row, &L->n, t);
+        if (L->is_enabled[t]) {
+            if (L->growing[t]) { *info = t; return LTL_GROWING; }
+            L->enabled[count++] = t;
+        }
+    }
+    if (count == 0) { *ok = push(todo, -1); return LTL_HOLDS; }
+    int64_t *chosen = L->enabled, size = count;
+    if (L->st.on && count > 1) {
+        int64_t best = -1;
+        for (int64_t i = 0; i < count && best != 1; i++) {
+            int64_t got = counter_stubborn(row, &L->n, L->need_place, &L->st, L->is_enabled,
+                                           L->enabled[i], L->in, ++L->stamp, L->work, L->members);
+            if (got > 0 && (best < 0 || got < best)) {
+                best = got;
+                memcpy(L->best, L->members, sizeof(int64_t) * (size_t)got);
+            }
+        }
+        if (best > 0 && best < count) {
+            /* the proviso: no product state the reduced set leads to is on the search's
+             * stack (every cycle of a depth-first search closes on its stack, so each
+             * cycle has a marking that fires everything) */
+            int fresh = 1;
+            for (int64_t i = 0; i < best && fresh; i++) {
+                int64_t k = counter_fire(row, L->next, L->words, &L->d, L->best[i], 1);
+                if (k >= 0) { *info = L->change_place[k]; return LTL_OVERFLOW; }
+                uint64_t m = atoms_of(L->next, &L->pr, &L->n, L->stack), h;
+                for (int64_t j = L->aptr[a]; j < L->aptr[a + 1] && fresh; j++) {
+                    int64_t b = L->asucc[j], slot;
+                    if ((L->required[b] & m) != L->required[b]) continue;
+                    int64_t q = ltl_find(L, L->next, b, &slot, &h);
+                    if (q >= 0 && L->on_stack[q]) fresh = 0;
+                }
+            }
+            if (fresh) { chosen = L->best; size = best; }
+        }
+    }
+    for (int64_t i = 0; i < size && *ok; i++)
+        *ok = push(todo, chosen[i]);
+    return LTL_HOLDS;
+}
+
+static double now_seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* ltl_search(n x5, need_place, d x5, change_place, growing, program x8, a_ptr, a_succ,
+ * required, accepting, all, initial, stubborn x11, on, m0, rows, table, bits, max_states,
+ * seconds) -> (code, states, info): Couvreur's check (as ltl_product) on the product of
+ * the net from m0 and the automaton, generated as it is searched, under stubborn sets
+ * with the proviso where `on` (interface.Loops.ltl_search). */
+static PyObject *py_ltl_search(PyObject *self, PyObject *args) {
+    PyObject *o[44];
+    unsigned long long all;
+    int on, bits;
+    long long max_states;
+    double seconds;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOOOOOOOOOOOKOOOOOOOOOOOOiOOOiLd",
+                          &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6], &o[7], &o[8], &o[9],
+                          &o[10], &o[11], &o[12], &o[13], &o[14], &o[15], &o[16], &o[17],
+                          &o[18], &o[19], &o[20], &o[21], &o[22], &o[23], &o[24], &all,
+                          &o[25], &o[26], &o[27], &o[28], &o[29], &o[30], &o[31], &o[32],
+                          &o[33], &o[34], &o[35], &o[36], &on, &o[37], &o[38], &o[39], &bits,
+                          &max_states, &seconds))
+        return NULL;
+    Buffers b = {.count = 0};
+    Ltl L;
+    memset(&L, 0, sizeof L);
+    const int64_t *initial;
+    const uint64_t *m0;
+    int64_t starts;
+    if (!fields_of(&b, o, &L.n, 0) || !(L.need_place = data_of(&b, o[5], 8, 0))
+        || !fields_of(&b, o + 6, &L.d, 1) || !(L.change_place = data_of(&b, o[11], 8, 0))
+        || !(L.growing = data_of(&b, o[12], 1, 0))
+        || !(L.pr.ops = data_of(&b, o[13], 8, 0)))
+        goto fail;
+    L.pr.length = items_of(&b) / 2;
+    if (!(L.pr.atom_ptr = data_of(&b, o[14], 8, 0))) goto fail;
+    L.pr.atoms = items_of(&b) - 1;
+    if (!(L.pr.lin_ptr = data_of(&b, o[15], 8, 0)) || !(L.pr.lin_word = data_of(&b, o[16], 8, 0))
+        || !(L.pr.lin_shift = data_of(&b, o[17], 8, 0))
+        || !(L.pr.lin_mask = data_of(&b, o[18], 8, 0))
+        || !(L.pr.lin_coef = data_of(&b, o[19], 8, 0)) || !(L.pr.bound = data_of(&b, o[20], 8, 0))
+        || !(L.aptr = data_of(&b, o[21], 8, 0)) || !(L.asucc = data_of(&b, o[22], 8, 0))
+        || !(L.required = data_of(&b, o[23], 8, 0)) || !(L.accepting = data_of(&b, o[24], 8, 0))
+        || !(initial = data_of(&b, o[25], 8, 0)))
+        goto fail;
+    starts = items_of(&b);
+    if (!stubborn_of(&b, o + 26, &L.st) || !(m0 = data_of(&b, o[37], 8, 0))) goto fail;
+    L.words = items_of(&b);
+    L.width = L.words + 1;
+    if (!(L.rows = data_of(&b, o[38], 8, 1))) goto fail;
+    L.capacity = items_of(&b) / L.width;
+    if (!(L.table = data_of(&b, o[39], 8, 1))) goto fail;
+    L.tmask = items_of(&b) - 1;
+    L.bits = bits;
+    L.st.on = on;
+    if (max_states > L.capacity) max_states = L.capacity;
+    if (10 * max_states > 7 * (L.tmask + 1)) max_states = 7 * (L.tmask + 1) / 10;
+    int64_t T = L.n.transitions;
+    L.next = PyMem_RawMalloc(8 * (size_t)(2 * L.width));
+    L.stack = PyMem_RawMalloc((size_t)L.pr.length + 1 + (size_t)T);
+    L.enabled = PyMem_RawMalloc(sizeof(int64_t) * (size_t)(5 * T + 5));
+    if (!L.next || !L.stack || !L.enabled) {
+        PyMem_RawFree(L.next); PyMem_RawFree(L.stack); PyMem_RawFree(L.enabled);
+        PyErr_NoMemory();
+        goto fail;
+    }
+    L.probe_row = L.next + L.width;
+    L.is_enabled = L.stack + L.pr.length + 1;
+    L.best = L.enabled + T + 1;
+    L.members = L.best + T + 1;
+    L.in = L.members + T + 1;
+    L.work = L.in + T + 1;
+    for (int64_t t = 0; t < T; t++) L.in[t] = 0;
+    Stack call = {0}, open = {0}, roots = {0}, todo = {0};
+    uint8_t *done = NULL;
+    int code = LTL_HOLDS, ok = 1;
+    int64_t count = 0, info = 0;
+    Py_BEGIN_ALLOW_THREADS
+    double deadline = now_seconds() + seconds;
+    done = PyMem_RawCalloc(2 * (size_t)(max_states > 0 ? max_states : 1), 1);
+    if (!done) ok = 0;
+    else L.on_stack = done + (max_states > 0 ? max_states : 1);
+    uint64_t m_start = ok ? atoms_of(m0, &L.pr, &L.n, L.stack) : 0;
+    for (int64_t i = 0; i < starts && ok && code == LTL_HOLDS; i++) {
+        int64_t a = initial[i], slot;
+        uint64_t h;
+        if ((L.required[a] & m_start) != L.required[a]) continue;
+        if (ltl_find(&L, m0, a, &slot, &h) >= 0) continue;
+        if (count >= max_states) { code = LTL_LIMIT; break; }
+        memcpy(L.rows + count * L.width, L.probe_row, 8 * (size_t)L.width);
+        L.table[slot] = entry(h, count);
+        int64_t p = count++;
+        ok = push(&open, p) && push(&roots, p + 1) && push(&roots, (int64_t)L.accepting[a]);
+        /* a frame: the product state, where its transitions start on todo, the one
+         * being fired, and the automaton move being tried for it */
+        int64_t begin = todo.size;
+        L.on_stack[p] = 1;
+        if (ok) code = ltl_expand(&L, p, &todo, &info, &ok);
+        ok = ok && push(&call, p) && push(&call, begin) && push(&call, begin) && push(&call, 0);
+        while (call.size && ok && code == LTL_HOLDS) {
+            int64_t f = call.size - 4;
+            int64_t pp = call.at[f], at = call.at[f + 2], bi = call.at[f + 3];
+            int pushed = 0;
+            /* the top frame's transitions run to the end of todo */
+            while (at < todo.size && !pushed && code == LTL_HOLDS && ok) {
+                int64_t t = todo.at[at];
+                const uint64_t *row = L.rows + pp * L.width;
+                int64_t aa = (int64_t)row[L.words];
+                if (t < 0) memcpy(L.next, row, 8 * (size_t)L.words);
+                else {
+                    int64_t k = counter_fire(row, L.next, L.words, &L.d, t, 1);
+                    if (k >= 0) { code = LTL_OVERFLOW; info = L.change_place[k]; break; }
+                }
+                uint64_t m = atoms_of(L.next, &L.pr, &L.n, L.stack);
+                int64_t moves = L.aptr[aa + 1] - L.aptr[aa];
+                while (bi < moves) {
+                    int64_t bnode = L.asucc[L.aptr[aa] + bi++];
+                    if ((L.required[bnode] & m) != L.required[bnode]) continue;
+                    int64_t q = ltl_find(&L, L.next, bnode, &slot, &h);
+                    if (q < 0) {
+                        if (count >= max_states) { code = LTL_LIMIT; break; }
+                        if ((count & 1023) == 0 && now_seconds() > deadline) {
+                            code = LTL_TIME; break;
+                        }
+                        memcpy(L.rows + count * L.width, L.probe_row, 8 * (size_t)L.width);
+                        L.table[slot] = entry(h, count);
+                        q = count++;
+                        call.at[f + 2] = at;
+                        call.at[f + 3] = bi;
+                        ok = push(&open, q) && push(&roots, q + 1)
+                             && push(&roots, (int64_t)L.accepting[bnode]);
+                        int64_t qbegin = todo.size;
+                        L.on_stack[q] = 1;
+                        if (ok) code = ltl_expand(&L, q, &todo, &info, &ok);
+                        ok = ok && push(&call, q) && push(&call, qbegin) && push(&call, qbegin)
+                             && push(&call, 0);
+                        pushed = 1;
+                        break;
+                    }
+                    if (!done[q]) {
+                        /* a cycle closes: every root above q's joins the component below */
+                        uint64_t met = 0;
+                        while (roots.at[roots.size - 2] > q + 1) {
+                            met |= (uint64_t)roots.at[roots.size - 1];
+                            roots.size -= 2;
+                        }
+                        roots.at[roots.size - 1] =
+                            (int64_t)((uint64_t)roots.at[roots.size - 1] | met);
+                        if ((uint64_t)roots.at[roots.size - 1] == all) {
+                            code = LTL_ACCEPTING;
+                            break;
+                        }
+                    }
+                }
+                if (pushed || code != LTL_HOLDS) break;
+                at++;
+                bi = 0;
+            }
+            if (pushed || code != LTL_HOLDS || !ok) continue;
+            /* every successor of pp is done with: its frame and its transitions go */
+            todo.size = call.at[f + 1];
+            call.size -= 4;
+            L.on_stack[pp] = 0;
+            if (roots.at[roots.size - 2] == pp + 1) {      /* pp roots a finished component */
+                roots.size -= 2;
+                int64_t w;
+                do {
+                    w = open.at[--open.size];
+                    done[w] = 1;
+                } while (w != pp);
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    PyMem_RawFree(done);
+    PyMem_RawFree(call.at);
+    PyMem_RawFree(open.at);
+    PyMem_RawFree(roots.at);
+    PyMem_RawFree(todo.at);
+    PyMem_RawFree(L.next);
+    PyMem_RawFree(L.stack);
+    PyMem_RawFree(L.enabled);
+    release(&b);
+    if (!ok) return PyErr_NoMemory();
+    return Py_BuildValue("(iLL)", code, (long long)count, (long long)info);
+fail:
+    release(&b);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
     {"step_words", py_step_words, METH_VARARGS, "Expand markings of several words."},
     {"step_one_word", py_step_one_word, METH_VARARGS, "Expand markings of one word."},
@@ -1658,6 +2036,8 @@ static PyMethodDef methods[] = {
      "A stable counting sort of a graph's edges by their source."},
     {"ltl_product", py_ltl_product, METH_VARARGS,
      "An accepting cycle of a graph's product with a Buchi automaton, on the fly."},
+    {"ltl_search", py_ltl_search, METH_VARARGS,
+     "An accepting cycle of a net's product with a Buchi automaton, on the fly."},
     {"slot_of_words", py_slot_of_words, METH_VARARGS, "A row's slot in a table of 2^bits."},
     {"slot_of_word", py_slot_of_word, METH_VARARGS, "A word's slot in a table of 2^bits."},
     {NULL, NULL, 0, NULL},

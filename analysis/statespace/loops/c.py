@@ -17,9 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 from mcl2pnml.analysis.statespace.loops import _native as c
-from mcl2pnml.analysis.statespace.loops.interface import (Code, CounterNet, CounterSearch, Index,
-                                                          KeyIndex, Observer, ProductSearch,
-                                                          SafeNet, SafeSearch, Stubborn)
+from mcl2pnml.analysis.statespace.loops.interface import (Buchi, Code, CounterNet, CounterSearch,
+                                                          Index, KeyIndex, LtlCode, Observer,
+                                                          ProductSearch, SafeNet, SafeSearch,
+                                                          StateProgram, Stubborn)
 
 name = "c"
 
@@ -306,3 +307,25 @@ scc = c.scc
 back_reach = c.back_reach
 scatter_by_source = c.scatter_by_source
 ltl_product = c.ltl_product
+
+
+# -- an LTL formula's product with a bounded net, on the fly ------------------------------------
+
+def ltl_search(net: CounterNet, program: StateProgram, buchi: Buchi, stubborn: Stubborn,
+               m0: np.ndarray, max_states: int, seconds: float) -> tuple[LtlCode, int, int]:
+    n, d = net.need, net.change
+    m0 = np.ascontiguousarray(m0, dtype=np.uint64).ravel()
+    capacity = max(1, max_states)
+    bits = _table_bits(capacity)
+    # np.empty and np.zeros take pages only as the search writes them
+    rows = np.empty((capacity, len(m0) + 1), dtype=np.uint64)
+    table = np.zeros(1 << bits, dtype=np.uint64)
+    code, states, info = c.ltl_search(
+        *_contiguous(n.ptr, n.word, n.shift, n.mask, n.value, n.place,
+                     d.ptr, d.word, d.shift, d.mask, d.value, d.place, net.growing,
+                     program.ops, program.atom_ptr, program.lin_ptr, program.lin_word,
+                     program.lin_shift, program.lin_mask, program.lin_coef, program.bound,
+                     buchi.ptr, buchi.succ, buchi.required, buchi.accepting),
+        buchi.all, np.ascontiguousarray(buchi.initial), *_stubborn(stubborn), int(stubborn.on),
+        m0, rows, table, bits, max_states, float(seconds))
+    return LtlCode(code), states, info

@@ -230,6 +230,76 @@ class ProductSearch:
     code: Code = Code.GOING
 
 
+# -- an LTL formula's product with a bounded net, on the fly ----------------------------------
+
+class Op(enum.IntEnum):
+    """An instruction of a :class:`StateProgram`: each pushes or combines truths."""
+
+    LINEAR = 0
+    """Push whether linear constraint ``arg`` holds (a weighted token sum at most a bound)."""
+    ENABLED = 1
+    """Push whether transition ``arg`` is enabled."""
+    DEAD = 2
+    """Push whether no transition is enabled."""
+    CONST = 3
+    """Push ``arg`` (0 or 1)."""
+    NOT = 4
+    """Negate the top."""
+    AND = 5
+    """Replace the top ``arg`` truths by their conjunction."""
+    OR = 6
+    """Replace the top ``arg`` truths by their disjunction."""
+
+
+@dataclass(frozen=True)
+class StateProgram:
+    """State formulas compiled for a marking of counters: atom ``i`` is the postfix program
+    ``ops[atom_ptr[i]:atom_ptr[i + 1]]`` of ``(Op, arg)`` rows; linear constraint ``c`` is
+    ``sum(coef * tokens) <= bound[c]`` over its fields ``lin_ptr[c]:lin_ptr[c + 1]`` (each a
+    place's word, shift and mask, and its coefficient)."""
+
+    ops: np.ndarray          # (instructions, 2) int64
+    atom_ptr: np.ndarray
+    lin_ptr: np.ndarray
+    lin_word: np.ndarray
+    lin_shift: np.ndarray    # uint64
+    lin_mask: np.ndarray     # uint64
+    lin_coef: np.ndarray
+    bound: np.ndarray
+
+
+@dataclass(frozen=True)
+class Buchi:
+    """A generalised Büchi automaton on the atoms of a :class:`StateProgram`: node ``a``'s
+    successors ``succ[ptr[a]:ptr[a + 1]]``, the atoms it requires (a bit each, all of
+    which must hold in the marking it reads), the acceptance sets it is in (a bit each;
+    ``all`` of them met by a cycle accepts) and the initial nodes."""
+
+    ptr: np.ndarray
+    succ: np.ndarray
+    required: np.ndarray     # uint64 per node
+    accepting: np.ndarray    # uint64 per node
+    all: int
+    initial: np.ndarray
+
+
+class LtlCode(enum.IntEnum):
+    """How an LTL product search on the fly ended."""
+
+    HOLDS = 0
+    """Every reachable cycle of the product was met, none accepting: the formula holds."""
+    ACCEPTING = 1
+    """An accepting cycle: a run of the net violates the formula."""
+    LIMIT = 2
+    """``max_states`` product states were met first."""
+    TIME = 3
+    """Its seconds were spent first."""
+    OVERFLOW = 4
+    """A counter would not fit its field: ``info`` is the place (widen it, search again)."""
+    GROWING = 5
+    """A transition that only adds tokens is enabled: the net is unbounded."""
+
+
 # -- what every backend implements -----------------------------------------------------------
 
 class Loops(Protocol):
@@ -294,6 +364,17 @@ class Loops(Protocol):
 
     def scatter_by_source(self, src: np.ndarray, values: np.ndarray, cursor: np.ndarray,
                           out: np.ndarray) -> None: ...
+
+    def ltl_search(self, net: CounterNet, program: StateProgram, buchi: Buchi,
+                   stubborn: Stubborn, m0: np.ndarray, max_states: int, seconds: float
+                   ) -> tuple[LtlCode, int, int]:
+        """The product of the net from ``m0`` (one row of counters) and ``buchi`` searched
+        on the fly, depth first, for a cycle meeting every acceptance set (Couvreur's
+        check); a dead marking repeats. With ``stubborn.on``, a marking fires only the
+        enabled members of a stubborn set with no visible member, unless one of the
+        product states that gives is on the search's stack (then it fires everything:
+        every cycle closes on the stack, so no cycle is reduced throughout). ``(code,
+        product states met, info)``."""
 
     def ltl_product(self, indptr, indices, a_ptr, a_succ, label, acc, all_sets: int,
                     initial, num, max_states: int) -> tuple[int, int]: ...

@@ -15,14 +15,16 @@ machine without a C compiler.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 
 import numpy as np
 
-from mcl2pnml.analysis.statespace.loops.interface import (Code, CounterNet, CounterSearch, Fields,
-                                                          Index, KeyIndex, Observer,
-                                                          ProductSearch, Rows, SafeNet,
-                                                          SafeSearch, Stubborn)
+from mcl2pnml.analysis.statespace.loops.interface import (Buchi, Code, CounterNet, CounterSearch,
+                                                          Fields, Index, KeyIndex, LtlCode,
+                                                          Observer, Op, ProductSearch, Rows,
+                                                          SafeNet, SafeSearch, StateProgram,
+                                                          Stubborn)
 
 name = "python"
 
@@ -328,11 +330,12 @@ class _Reducing:
                                                   _rows_of(st.makers))
 
 
-def _stubborn_set(row: Row, st: _Reducing, enabled: set[int], key: int) -> list[int] | None:
+def _stubborn_set(row: Row, st: _Reducing, enabled: set[int], key: int,
+                  lacking=None) -> list[int] | None:
     """The enabled members of the stubborn set grown from the enabled ``key`` (C's
     ``stubborn_set``: an enabled member brings the transitions that consume a place it
     needs and those that need a place it consumes; a disabled one those that mark its
-    first empty needed place), or None if one is visible."""
+    first empty needed place, or ``lacking(t)``'s), or None if one is visible."""
     members, work, out = {key}, [key], []
     while work:
         t = work.pop()
@@ -342,6 +345,8 @@ def _stubborn_set(row: Row, st: _Reducing, enabled: set[int], key: int) -> list[
             out.append(t)
             brought = [u for p in st.needs[t] for u in st.takers[p]]
             brought += [u for p in st.pre[t] for u in st.needers[p]]
+        elif lacking is not None:
+            brought = st.makers[lacking(t)]
         else:
             empty = [p for p in st.needs[t] if not row[p // 64] >> (p % 64) & 1]
             brought = st.makers[empty[0]] if empty else []
@@ -585,3 +590,160 @@ def ltl_product(indptr, indices, a_ptr, a_succ, label, acc, all_sets: int, initi
                     if w == p:
                         break
     return 0, nxt - 1
+
+
+# -- an LTL formula's product with a bounded net, on the fly ------------------------------------
+
+class _Program:
+    """A :class:`StateProgram` read into Python lists: ``atoms(row)`` is a mask, a bit an
+    atom that holds in the marking."""
+
+    def __init__(self, program: StateProgram, tables: _Counters, transitions: int):
+        ops = program.ops.reshape(-1, 2).tolist()
+        ptr = program.atom_ptr.tolist()
+        self.atoms = [ops[ptr[i]:ptr[i + 1]] for i in range(len(ptr) - 1)]
+        lp = program.lin_ptr.tolist()
+        fields = list(zip(program.lin_word.tolist(), program.lin_shift.tolist(),
+                          program.lin_mask.tolist(), program.lin_coef.tolist()))
+        self.linear = [(fields[lp[c]:lp[c + 1]], b) for c, b in enumerate(program.bound.tolist())]
+        self.tables, self.transitions = tables, transitions
+
+    def mask(self, row: Row) -> int:
+        out, dead = 0, None
+        for i, ops in enumerate(self.atoms):
+            stack: list[bool] = []
+            for op, arg in ops:
+                if op == Op.LINEAR:
+                    fields, bound = self.linear[arg]
+                    stack.append(sum(c * ((row[w] >> sh) & m) for w, sh, m, c in fields)
+                                 <= bound)
+                elif op == Op.ENABLED:
+                    stack.append(self.tables.enabled(row, arg))
+                elif op == Op.DEAD:
+                    if dead is None:
+                        dead = not any(self.tables.enabled(row, t)
+                                       for t in range(self.transitions))
+                    stack.append(dead)
+                elif op == Op.CONST:
+                    stack.append(bool(arg))
+                elif op == Op.NOT:
+                    stack.append(not stack.pop())
+                else:
+                    parts = [stack.pop() for _ in range(arg)]
+                    stack.append(all(parts) if op == Op.AND else any(parts))
+            if stack.pop():
+                out |= 1 << i
+        return out
+
+
+def ltl_search(net: CounterNet, program: StateProgram, buchi: Buchi, stubborn: Stubborn,
+               m0: np.ndarray, max_states: int, seconds: float) -> tuple[LtlCode, int, int]:
+    tables = _Counters(net)
+    transitions = net.transitions
+    reads = _Program(program, tables, transitions)
+    need_places = [net.need.place[net.need.ptr[t]:net.need.ptr[t + 1]].tolist()
+                   for t in range(transitions)]
+    reducing = _Reducing(stubborn)
+    aptr, asucc = buchi.ptr.tolist(), buchi.succ.tolist()
+    required, accepting = [int(x) for x in buchi.required], [int(x) for x in buchi.accepting]
+    deadline = time.monotonic() + seconds
+    number: dict[tuple, int] = {}     # product state -> its number; done: negated
+    on_stack: set[tuple] = set()      # the search's path
+    masks: dict[Row, int] = {}
+
+    def atoms(row: Row) -> int:
+        m = masks.get(row)
+        if m is None:
+            m = masks[row] = reads.mask(row)
+        return m
+
+    def successors(row: Row, a: int, ts: list[int]) -> list[tuple]:
+        out = []
+        for t in ts:
+            after = row if t < 0 else tables.fire(row, t, 1)[0]
+            if after is None:
+                raise _Overflow(tables.places[tables.fire(row, t, 1)[1]])
+            m = atoms(after)
+            out += [(after, b) for b in asucc[aptr[a]:aptr[a + 1]]
+                    if required[b] & m == required[b]]
+        return out
+
+    def expand(row: Row, a: int) -> list[tuple]:
+        enabled = [t for t in range(transitions) if tables.enabled(row, t)]
+        if any(tables.growing[t] for t in enabled):
+            raise _Growing
+        if not enabled:
+            return successors(row, a, [-1])     # a dead marking repeats
+        if stubborn.on and len(enabled) > 1:
+            best = None
+            def lacking(t: int) -> int:    # the first place t needs more tokens in
+                return next(p for (w, sh, m, tokens), p in zip(tables.needs[t], need_places[t])
+                            if (row[w] >> sh) & m < tokens)
+
+            for key in enabled:
+                got = _stubborn_set(row, reducing, set(enabled), key, lacking)
+                if got is not None and (best is None or len(got) < len(best)):
+                    best = got
+            if best is not None and len(best) < len(enabled):
+                reduced = successors(row, a, sorted(best))
+                if not any(x in on_stack for x in reduced):   # the proviso
+                    return reduced
+        return successors(row, a, enabled)
+
+    start = tuple(int(x) for x in np.asarray(m0).ravel())
+    try:
+        for a in buchi.initial.tolist():
+            if required[a] & atoms(start) != required[a] or (start, a) in number:
+                continue
+            first = (start, a)
+            number[first] = len(number) + 1
+            open_, roots = [first], [[number[first], accepting[a]]]
+            on_stack.add(first)
+            call = [(first, expand(*first), [0])]
+            while call:
+                p, todo, at = call[-1]
+                if at[0] < len(todo):
+                    q = todo[at[0]]
+                    at[0] += 1
+                    if q not in number:
+                        if len(number) >= max_states:
+                            return LtlCode.LIMIT, len(number), 0
+                        if time.monotonic() > deadline:
+                            return LtlCode.TIME, len(number), 0
+                        number[q] = len(number) + 1
+                        open_.append(q)
+                        roots.append([number[q], accepting[q[1]]])
+                        on_stack.add(q)
+                        call.append((q, expand(*q), [0]))
+                    elif number[q] > 0:
+                        # a cycle closes: every root above q's joins the component below
+                        met = 0
+                        while roots[-1][0] > number[q]:
+                            met |= roots.pop()[1]
+                        roots[-1][1] |= met
+                        if roots[-1][1] == buchi.all:
+                            return LtlCode.ACCEPTING, len(number), 0
+                    continue
+                call.pop()
+                on_stack.discard(p)
+                if roots[-1][0] == number[p]:
+                    roots.pop()
+                    while True:
+                        w = open_.pop()
+                        number[w] = -abs(number[w])
+                        if w == p:
+                            break
+    except _Overflow as e:
+        return LtlCode.OVERFLOW, len(number), e.place
+    except _Growing:
+        return LtlCode.GROWING, len(number), 0
+    return LtlCode.HOLDS, len(number), 0
+
+
+class _Overflow(Exception):
+    def __init__(self, place: int):
+        self.place = place
+
+
+class _Growing(Exception):
+    pass
