@@ -52,10 +52,10 @@ class PartialStateSpace:
 
 
 def partial_space(s: Structure, found: FoundMarkings, max_memory: int | None = None,
-                  max_edges: int = 2 ** 31 - 1) -> PartialStateSpace | None:
+                  max_edges: int | None = None) -> PartialStateSpace | None:
     """The graph of what was found (the module's documentation), or None where the found
     rows are not packed as counters are, none was expanded, or its edges are more than
-    ``max_edges`` or would not fit in ``max_memory`` (default:
+    ``max_edges`` (none: as many as int32 numbers) or would not fit in ``max_memory`` (default:
     :func:`~mcl2pnml.core.memory.default_memory`)."""
     layout = Layout([int(m).bit_length() for m in found.mask[:len(s.places)]])
     n, expanded = found.states, found.expanded
@@ -70,7 +70,8 @@ def partial_space(s: Structure, found: FoundMarkings, max_memory: int | None = N
     rows = np.ascontiguousarray(found.rows)
     degree = loops.counter_out_degree(rows, net)
     total = int(degree[:expanded].sum(dtype=np.int64))
-    if n * STATE_BYTES + total * EDGE_BYTES > budget or total > min(max_edges, 2 ** 31 - 1):
+    most = 2 ** 31 - 1 if max_edges is None else min(max_edges, 2 ** 31 - 1)
+    if n * STATE_BYTES + total * EDGE_BYTES > budget or total > most:
         return None
     index = loops.counter_search(rows, np.full(n, -1, dtype=np.int64), n, expanded).index
     edges = loops.counter_edges(rows, index, net, total)

@@ -636,6 +636,7 @@ class _Program:
         return out
 
 
+# long: the reference follows C's one loop (a search's state on its stacks) step by step
 def ltl_search(net: CounterNet, program: StateProgram, buchi: Buchi, stubborn: Stubborn,
                m0: np.ndarray, max_states: int, seconds: float) -> tuple[LtlCode, int, int]:
     tables = _Counters(net)
