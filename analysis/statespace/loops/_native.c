@@ -1655,6 +1655,7 @@ enum { OP_LINEAR = 0, OP_ENABLED = 1, OP_DEAD = 2, OP_CONST = 3, OP_NOT = 4, OP_
 enum { LTL_HOLDS = 0, LTL_ACCEPTING = 1, LTL_LIMIT = 2, LTL_TIME = 3, LTL_OVERFLOW = 4,
        LTL_GROWING = 5 };
 
+
 /* State formulas as postfix programs (interface.StateProgram). */
 typedef struct {
     const int64_t *ops, *atom_ptr, *lin_ptr, *lin_word, *lin_coef, *bound;
@@ -1759,7 +1760,7 @@ typedef struct {
     /* scratch */
     uint64_t *next, *probe_row;
     uint8_t *stack, *is_enabled, *on_stack;
-    int64_t *enabled, *best, *members, *in, *work, stamp;
+    int64_t *enabled, *best, *members, *in, *work, stamp, keys;
 } Ltl;
 
 static int64_t ltl_find(Ltl *L, const uint64_t *row, int64_t node, int64_t *slot, uint64_t *h) {
@@ -1786,7 +1787,8 @@ static int ltl_expand(Ltl *L, int64_t p, Stack *todo, int64_t *info, int *ok) {
     int64_t *chosen = L->enabled, size = count;
     if (L->st.on && count > 1) {
         int64_t best = -1;
-        for (int64_t i = 0; i < count && best != 1; i++) {
+        /* the smallest set grown from the first `keys` enabled keys (interface.STUBBORN_KEYS) */
+        for (int64_t i = 0; i < count && i < L->keys && best != 1; i++) {
             int64_t got = counter_stubborn(row, &L->n, L->need_place, &L->st, L->is_enabled,
                                            L->enabled[i], L->in, ++L->stamp, L->work, L->members);
             if (got > 0 && (best < 0 || got < best)) {
@@ -1826,22 +1828,22 @@ static double now_seconds(void) {
 
 /* ltl_search(n x5, need_place, d x5, change_place, growing, program x8, a_ptr, a_succ,
  * required, accepting, all, initial, stubborn x11, on, m0, rows, table, bits, max_states,
- * seconds) -> (code, states, info): Couvreur's check (as ltl_product) on the product of
+ * seconds, keys) -> (code, states, info): Couvreur's check (as ltl_product) on the product of
  * the net from m0 and the automaton, generated as it is searched, under stubborn sets
  * with the proviso where `on` (interface.Loops.ltl_search). */
 static PyObject *py_ltl_search(PyObject *self, PyObject *args) {
     PyObject *o[44];
     unsigned long long all;
-    int on, bits;
+    int on, bits, keys;
     long long max_states;
     double seconds;
-    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOOOOOOOOOOOKOOOOOOOOOOOOiOOOiLd",
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOOOOOOOOOOOOOOOOOKOOOOOOOOOOOOiOOOiLdi",
                           &o[0], &o[1], &o[2], &o[3], &o[4], &o[5], &o[6], &o[7], &o[8], &o[9],
                           &o[10], &o[11], &o[12], &o[13], &o[14], &o[15], &o[16], &o[17],
                           &o[18], &o[19], &o[20], &o[21], &o[22], &o[23], &o[24], &all,
                           &o[25], &o[26], &o[27], &o[28], &o[29], &o[30], &o[31], &o[32],
                           &o[33], &o[34], &o[35], &o[36], &on, &o[37], &o[38], &o[39], &bits,
-                          &max_states, &seconds))
+                          &max_states, &seconds, &keys))
         return NULL;
     Buffers b = {.count = 0};
     Ltl L;
@@ -1874,6 +1876,7 @@ static PyObject *py_ltl_search(PyObject *self, PyObject *args) {
     if (!(L.table = data_of(&b, o[39], 8, 1))) goto fail;
     L.tmask = items_of(&b) - 1;
     L.bits = bits;
+    L.keys = keys;
     L.st.on = on;
     if (max_states > L.capacity) max_states = L.capacity;
     if (10 * max_states > 7 * (L.tmask + 1)) max_states = 7 * (L.tmask + 1) / 10;
@@ -1941,7 +1944,9 @@ static PyObject *py_ltl_search(PyObject *self, PyObject *args) {
                     int64_t q = ltl_find(&L, L.next, bnode, &slot, &h);
                     if (q < 0) {
                         if (count >= max_states) { code = LTL_LIMIT; break; }
-                        if ((count & 1023) == 0 && now_seconds() > deadline) {
+                        /* the clock every 256 markings: an expansion of a wide net
+                         * can take a millisecond */
+                        if ((count & 255) == 0 && now_seconds() > deadline) {
                             code = LTL_TIME; break;
                         }
                         memcpy(L.rows + count * L.width, L.probe_row, 8 * (size_t)L.width);

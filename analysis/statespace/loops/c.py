@@ -20,7 +20,7 @@ from mcl2pnml.analysis.statespace.loops import _native as c
 from mcl2pnml.analysis.statespace.loops.interface import (Buchi, Code, CounterNet, CounterSearch,
                                                           Index, KeyIndex, LtlCode, Observer,
                                                           ProductSearch, SafeNet, SafeSearch,
-                                                          StateProgram, Stubborn)
+                                                          StateProgram, STUBBORN_KEYS, Stubborn)
 
 name = "c"
 
@@ -327,5 +327,5 @@ def ltl_search(net: CounterNet, program: StateProgram, buchi: Buchi, stubborn: S
                      program.lin_shift, program.lin_mask, program.lin_coef, program.bound,
                      buchi.ptr, buchi.succ, buchi.required, buchi.accepting),
         buchi.all, np.ascontiguousarray(buchi.initial), *_stubborn(stubborn), int(stubborn.on),
-        m0, rows, table, bits, max_states, float(seconds))
+        m0, rows, table, bits, max_states, float(seconds), STUBBORN_KEYS)
     return LtlCode(code), states, info

@@ -283,6 +283,12 @@ class Buchi:
     initial: np.ndarray
 
 
+#: How many enabled keys a marking's stubborn sets are grown from, the smallest set kept
+#: (C's ``KEYS``): each growth may look at every transition, and a marking of a wide net
+#: enables thousands.
+STUBBORN_KEYS = 16
+
+
 class LtlCode(enum.IntEnum):
     """How an LTL product search on the fly ended."""
 

@@ -23,6 +23,7 @@ import numpy as np
 from mcl2pnml.analysis.statespace.loops.interface import (Buchi, Code, CounterNet, CounterSearch,
                                                           Fields, Index, KeyIndex, LtlCode,
                                                           Observer, Op, ProductSearch, Rows,
+                                                          STUBBORN_KEYS,
                                                           SafeNet, SafeSearch, StateProgram,
                                                           Stubborn)
 
@@ -681,7 +682,7 @@ def ltl_search(net: CounterNet, program: StateProgram, buchi: Buchi, stubborn: S
                 return next(p for (w, sh, m, tokens), p in zip(tables.needs[t], need_places[t])
                             if (row[w] >> sh) & m < tokens)
 
-            for key in enabled:
+            for key in enabled[:STUBBORN_KEYS]:
                 got = _stubborn_set(row, reducing, set(enabled), key, lacking)
                 if got is not None and (best is None or len(got) < len(best)):
                     best = got
