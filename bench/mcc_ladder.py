@@ -2,7 +2,8 @@
 answers.
 
 Run:  .venv/bin/python -m bench.mcc_ladder [--exams RC,RF,...] [--timeout 60] [--jobs 2]
-                                           [--only ours,verifypn,lola] [--first-of-family]
+                                           [--only ours,verifypn,lola]
+                                           [--first-of-family | --rest-of-family]
 (prints the section of bench/RESULTS.md; ``--floor`` alone checks the start-up floor)
 
 For each of the 36 instances of ``../shared/external-nets/mcc-ladder`` (18 families, as the
@@ -17,7 +18,8 @@ neither right nor wrong). ``--jobs`` commands run at once (two on two cores: eac
 as loaded as the others). The instances are unpacked into a scratch folder, never into
 the project.
 
-``--first-of-family``: one instance of each family (the first by name, the smaller).
+``--first-of-family``: one instance of each family (the first by name, the smaller);
+``--rest-of-family``: the others (the larger). The two runs make the whole ladder.
 
 ``--floor``: ``mcl2pnml --version`` and a query on a 10-place net, the median of five
 whole commands, against 0.3 s (the interpreter's start-up is the floor; it must not grow).
@@ -187,9 +189,12 @@ def main() -> None:
         sys.exit(f"unknown examination {', '.join(unknown)}; known: {', '.join(FILES)}")
     tools = option("--only", ",".join(TOOLS)).split(",")
     names = sorted(p.name[:-len(".tgz")] for p in (LADDER / "inputs").glob("*.tgz"))
+    first = [n for i, n in enumerate(names)
+             if i == 0 or n.rsplit("-", 1)[0] != names[i - 1].rsplit("-", 1)[0]]
     if "--first-of-family" in argv:   # one instance a family: the smaller, by its name
-        names = [n for i, n in enumerate(names)
-                 if i == 0 or n.rsplit("-", 1)[0] != names[i - 1].rsplit("-", 1)[0]]
+        names = first
+    elif "--rest-of-family" in argv:  # the others: the larger ones
+        names = [n for n in names if n not in first]
     print("\n".join(ladder(exams, tools, float(option("--timeout", str(TIMEOUT))),
                            int(option("--jobs", "2")), names)))
     print()
