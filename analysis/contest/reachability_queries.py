@@ -36,6 +36,7 @@ from mcl2pnml.analysis.checking.observers import Status
 from mcl2pnml.analysis.contest.simplify import ByStructure, at_start, simplified
 from mcl2pnml.analysis.statespace.walks import random_walks
 from mcl2pnml.analysis.structure import state_equation
+from mcl2pnml.analysis.structure.state_machine import free_tokens
 from mcl2pnml.analysis.structure.invariants import (INVARIANT_PLACES, INVARIANT_ROWS, AnalysisLimit,
                                                     minimal_semipositive_p_invariants)
 
@@ -195,14 +196,23 @@ def settled_without_exploring(net: Net, queries: Sequence[q.Query]) -> dict[str,
       place set whose invariant weights are all at least 1 never holds more than the
       invariant's initial value): a state formula true or false in every marking those
       bounds allow decides both ``E F`` and ``A G`` of it; an upper bound the initial
-      marking already reaches is the bound.
+      marking already reaches is the bound;
+    * on a strongly connected state machine, every upper bound: all the tokens in the
+      sum's places (:func:`~mcl2pnml.analysis.structure.state_machine.free_tokens`).
     """
     s = structure(net)
     bounds = _Bounds(s)
     found = _witnessed(s, queries, ListedMarkings([s.initial_vector()]), bounds,
                        "INITIAL_STATE", "INITIAL_STATE")
+    tokens = free_tokens(s)
     for x in queries:
-        if x.id in found or isinstance(x.asks, q.PlaceBound):
+        if x.id in found:
+            continue
+        if isinstance(x.asks, q.PlaceBound):
+            named = x.asks.places
+            if tokens is not None and named and all(p in s.place_index for p in named):
+                found[x.id] = (tokens * max(Counter(named).values()),
+                               "STRUCTURAL STATE_MACHINE")
             continue
         r = reachability(x.asks)
         if r is None:
