@@ -240,7 +240,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     and past their bounds on every compiled mission), within their full bounds where
     the reachability graph was not built whole, on a net of at most
     :data:`QUICK_PLACES` places, or with ``enumerate_all``; elsewhere the graph decides
-    every property they bear on, and they run within a hundredth of them (:data:`QUICK`). An exploration stopped by its budget still ends in a partial
+    every property they bear on, and they run within a thousandth of them (:data:`QUICK`). An exploration stopped by its budget still ends in a partial
     answer: ``"partial"`` says how many markings were explored and whether a dead
     marking was met among them.
     ``explore_states=False``: no exploration (a certificate decides the behaviour), the
@@ -408,10 +408,10 @@ STAGES = {
 
 
 #: The enumerations' bounds where the state space decides every property they bear on,
-#: on a net of more than :data:`QUICK_PLACES` places: a hundredth of the others (a
+#: on a net of more than :data:`QUICK_PLACES` places: a thousandth of the others (a
 #: compiled mission's minimal siphons and semi-positive P-invariants are past even the
 #: full bounds, reached in seconds). ``--structure`` asks for the full ones.
-QUICK = 100
+QUICK = 1000
 #: A net this small is enumerated within the full bounds whatever decides its properties:
 #: the paper's templates take a second at most, and their siphons are its equations'.
 QUICK_PLACES = 100
@@ -457,7 +457,7 @@ class _Stages:
 
     def enumerations(self, thorough: bool) -> dict[str, Any]:
         """The minimal semi-positive invariants, siphons and traps, and the siphons'
-        control: within their bounds, or a hundredth of them unless ``thorough``
+        control: within their bounds, or a thousandth of them unless ``thorough``
         (:data:`QUICK`)."""
         s = self.s
         scale, note = (1, "") if thorough else (QUICK, RAISE)

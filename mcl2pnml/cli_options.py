@@ -304,7 +304,7 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
     click.option("--structure", is_flag=True,
                  help="Enumerate the minimal semi-positive invariants, siphons and traps "
                       "within their full bounds even where the state space decides every "
-                      "property (there, past 100 places: a hundredth of them; exponential "
+                      "property (there, past 100 places: a thousandth of them; exponential "
                       "in the worst case)."),
     click.option("--max-states", type=click.IntRange(min=1),
                  default=AnalyzeOptions.max_states,

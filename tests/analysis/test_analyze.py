@@ -184,7 +184,7 @@ def test_a_wide_net_ends_with_what_fits_in_its_limits(tmp_path):
     assert len(r["p_invariants"]) == 2500   # the exact basis still comes: one per cycle
 
 
-def test_where_the_state_space_decides_the_enumerations_stay_within_a_hundredth(
+def test_where_the_state_space_decides_the_enumerations_stay_within_a_thousandth(
         task_pnml, monkeypatch):
     # a net as small as the task is enumerated within the full bounds; a larger one within
     # the quick ones (shrunk here so that the task's siphons are past them): the report
