@@ -288,7 +288,7 @@ def simplified_by_structure(net: Net, queries: Sequence[q.Query],
         if isinstance(x.asks, q.PlaceBound) or reachability(x.asks) is not None:
             continue
         decide.used.clear()
-        f = simplified(x.asks, decide)
+        f = simplified(x.asks, decide, q.is_ltl(x.asks) and not q.is_ctl(x.asks))
         if isinstance(f, q.BoolConst):
             settled[x.id] = (f.value, " ".join(sorted(decide.used)))
             continue

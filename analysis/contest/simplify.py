@@ -10,7 +10,7 @@ reading (a maximal path may end at a dead marking) and in its LTL reading (a dea
 repeats) alike: ``F c``, ``G c`` and a quantifier over ``c`` are ``c``; ``a U true`` is
 true, ``a U false`` false, ``false U b`` is ``b`` and ``true U b`` is ``F b``. ``X`` keeps
 its argument's value only in one reading (a dead marking has no next marking in CTL), so
-it is left as it is. A formula that becomes a constant is answered; one that becomes
+it is left as it is, but in a formula read in LTL alone (``X c`` is ``c`` there). A formula that becomes a constant is answered; one that becomes
 simpler (``E F φ`` out of a CTL formula) goes on to the other techniques as that.
 """
 from __future__ import annotations
@@ -24,33 +24,38 @@ from mcl2pnml.core import queries as q
 Decide = Callable[[object], "bool | None"]
 
 
-def simplified(f, decide: Decide):
+def simplified(f, decide: Decide, linear: bool = False):
     """``f`` with each state subformula ``decide`` settles replaced by its value, and the
-    values carried up (the module's rules)."""
+    values carried up (the module's rules). ``linear``: ``f`` is read in LTL alone (the
+    contest's LTL, not CTL too), where every marking has a next one: ``X c`` is ``c``."""
+    def go(g):
+        return simplified(g, decide, linear)
+
     if q.is_state(f):
         value = decide(f)
         if value is not None:
             return q.BoolConst(value)
         if isinstance(f, (q.Neg, q.Conj, q.Disj)):
-            return _fold(f, [simplified(a, decide) for a in q.children(f)])
+            return _fold(f, [go(a) for a in q.children(f)])
         return f
     if isinstance(f, (q.Neg, q.Conj, q.Disj)):
-        return _fold(f, [simplified(a, decide) for a in q.children(f)])
+        return _fold(f, [go(a) for a in q.children(f)])
     if isinstance(f, (q.Finally, q.Globally)):
-        arg = simplified(f.arg, decide)
+        arg = go(f.arg)
         return arg if isinstance(arg, q.BoolConst) else type(f)(arg)
     if isinstance(f, q.Until):
-        before, reach = simplified(f.before, decide), simplified(f.reach, decide)
+        before, reach = go(f.before), go(f.reach)
         if isinstance(reach, q.BoolConst):
             return reach
         if isinstance(before, q.BoolConst):
             return q.Finally(reach) if before.value else reach
         return q.Until(before, reach)
     if isinstance(f, (q.AllPaths, q.ExistsPath)):
-        arg = simplified(f.arg, decide)
+        arg = go(f.arg)
         return arg if isinstance(arg, q.BoolConst) or q.is_state(arg) else type(f)(arg)
     if isinstance(f, q.Next):
-        return q.Next(simplified(f.arg, decide))
+        arg = go(f.arg)
+        return arg if linear and isinstance(arg, q.BoolConst) else q.Next(arg)
     return f
 
 
