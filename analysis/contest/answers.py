@@ -13,8 +13,8 @@ by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
   (Tarjan's strongly connected components); the other operators from these
   three. The reachability examinations are CTL's ``EF`` and ``AG``;
 * LTL (the contest's ``A φ``): the generalised Büchi automaton of ``not φ``
-  by Gerth, Peled, Vardi and Wolper's tableau (1995), its product with the
-  graph searched on the fly by Couvreur's emptiness check (1999), which
+  by Gerth, Peled, Vardi and Wolper's tableau (1995; ``buchi.py``), its product
+  with the graph searched on the fly by Couvreur's emptiness check (1999), which
   numbers only the product states it meets and stops at the first cycle
   meeting every acceptance set;
 * the upper bounds: the largest token sum over the markings;
@@ -25,10 +25,12 @@ by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
 
 Where the state space is larger than a first, small exploration, cheaper techniques
 come first, each answer handed out as soon as one settles it (:func:`answers_as_found`;
-docs/query.md): the markings found as witnesses, the state equation
+docs/query.md): the markings found as witnesses and the graph explored so far read
+three-valued (:class:`PartialGraph`), the state equation
 (:mod:`mcl2pnml.analysis.structure.state_equation`), formulas simplified by it and the
-P-invariants, random walks and the runs of walkers that close (each run a one-path
-:class:`RunGraph`), then explorations in larger stages.
+P-invariants, the path formulas searched on the fly from the net under stubborn sets
+(:mod:`mcl2pnml.analysis.contest.ltl_on_the_fly`), random walks and the runs of walkers
+that close (each run a one-path :class:`RunGraph`), then explorations in larger stages.
 
 Where the graph cannot be built (past the limits, or an unbounded net), the
 reachability questions of a 1-safe net are searched on the fly by the
