@@ -191,7 +191,7 @@ class _Search:
         self.index = {p: k for k, p in enumerate(s.places)}
         self.stubborn = stubborn
         # (the loop reads them only when it reduces: empty ones otherwise)
-        self.structure = _stubborn_rows(s) if stubborn else [_csr([[]])] * 5
+        self.structure = _stubborn_rows(s) if stubborn else [Rows.of_sets([[]])] * 5
 
     def _visible(self, atoms: list[Tokens]) -> np.ndarray:
         """Per transition, 1 if it changes a place the atoms read (pre and post differ)."""
@@ -355,15 +355,6 @@ class _Search:
                        states=states)
 
 
-def _csr(rows) -> Rows:
-    """Sets of integers as compressed rows."""
-    rows = [sorted(r) for r in rows]
-    ptr = np.zeros(len(rows) + 1, dtype=np.int64)
-    np.cumsum([len(r) for r in rows], out=ptr[1:])
-    items = np.array([x for r in rows for x in r], dtype=np.int64)
-    return Rows(ptr, items)
-
-
 def _stubborn_rows(s: Structure) -> list[Rows]:
     """What the stubborn sets are grown from (:class:`~mcl2pnml.analysis.statespace.loops.interface.Stubborn`):
     the places each transition consumes and needs, the transitions consuming, needing
@@ -378,7 +369,7 @@ def _stubborn_rows(s: Structure) -> list[Rows]:
             need[p].add(j)
         for p in post:
             make[p].add(j)
-    return [_csr(s.pre), _csr(s.transition_inputs), _csr(take), _csr(need), _csr(make)]
+    return [Rows.of_sets(r) for r in (s.pre, s.transition_inputs, take, need, make)]
 
 
 def _way_back(search: ProductSearch, row: int) -> tuple[list, list[int]]:

@@ -516,20 +516,17 @@ class PartialGraph(Graph):
         self.open = space.open
         self.dead &= ~self.open           # no edge out of an open marking: not dead for that
 
+    @cached_property
+    def _open_truths(self) -> Truths:
+        """The open markings' atoms, evaluated from their counts (they have no edges)."""
+        return Truths(self.structure, self.space.open_markings())
+
     def enabled(self, transitions: Sequence[str], where) -> np.ndarray:
         out = super().enabled(transitions, where)   # the expanded markings, by their edges
         at = np.flatnonzero(self.open)
         if len(at):
-            s = self.structure
             for t in transitions:
-                j = self.transition_index[t]
-                needs = dict(s.read[j])
-                for p, w in s.pre[j].items():
-                    needs[p] = max(needs.get(p, 0), w)
-                ok = np.ones(len(at), dtype=bool)
-                for p, w in needs.items():
-                    ok &= self.tokens([s.places[p]], where)[at] >= w
-                out[at[ok]] = True
+                out[at[self._open_truths.enabled(self.transition_index[t])]] = True
         return out
 
     def check3(self, f, where) -> tuple[np.ndarray, np.ndarray]:
@@ -704,11 +701,11 @@ class _Run:
 def _on_one_run(f) -> tuple[bool, object, bool] | None:
     """``(universal, ψ, negated)`` for ``A ψ`` or ``E ψ`` under negations, ψ free of path
     quantifiers (a run decides ψ); None for any other formula."""
-    negated, f = q.unnegated(f)
-    if isinstance(f, (q.AllPaths, q.ExistsPath)) and not q.is_state(f.arg) \
-            and not q.contains(f.arg, (q.AllPaths, q.ExistsPath)):
-        return isinstance(f, q.AllPaths), f, negated
-    return None
+    shaped = q.path_quantified(f)
+    if shaped is None or q.is_state(shaped[1].arg):
+        return None
+    negated, g = shaped
+    return isinstance(g, q.AllPaths), g, negated
 
 
 def settled_by_runs(net: Net, queries: Sequence[q.Query], seconds: float = WALK_SECONDS,

@@ -155,19 +155,11 @@ def automaton(f: q.AllPaths) -> tuple[Buchi | None, list]:
                  (1 << len(accepting)) - 1, np.array(sorted(initial), dtype=np.int64)), atoms
 
 
-def _rows(per: list[list[int]]) -> Rows:
-    ptr = np.zeros(len(per) + 1, dtype=np.int64)
-    ptr[1:] = np.cumsum([len(x) for x in per])
-    return Rows(ptr, np.array([v for x in per for v in x], dtype=np.int64))
-
-
 def stubborn_tables(s: Structure, atoms: list, reduce: bool) -> Stubborn:
     """What stubborn sets grow from (the module's documentation), with the transitions
     the atoms see marked visible."""
     places, transitions = len(s.places), len(s.transitions)
-    needs = []
-    for pre, read in zip(s.pre, s.read):
-        needs.append(sorted(set(pre) | set(read)))
+    needs = [sorted(inputs) for inputs in s.transition_inputs]    # what each needs
     takes = [sorted(p for p, w in col.items() if w < 0) for col in s.incidence]
     adds = [sorted(p for p, w in col.items() if w > 0) for col in s.incidence]
     takers: list[list[int]] = [[] for _ in range(places)]
@@ -202,8 +194,8 @@ def stubborn_tables(s: Structure, atoms: list, reduce: bool) -> Stubborn:
         look(f)
     visible = np.array([dead and bool(col) or any(p in seen for p in col)
                         for col in s.incidence], dtype=np.uint8)
-    return Stubborn(_rows(takes), _rows(needs), _rows(takers), _rows(needers), _rows(makers),
-                    visible, reduce)
+    return Stubborn(*map(Rows.of_sets, (takes, needs, takers, needers, makers)), visible,
+                    reduce)
 
 
 def ltl_on_the_fly(net: Net, f: q.AllPaths, max_states: int, seconds: float,
@@ -251,10 +243,10 @@ def path_formula(f) -> tuple[bool, q.AllPaths] | None:
     φ free of path quantifiers, decided by one LTL search; None for any other formula,
     and for one that is CTL too and has an ``X`` (CTL and LTL read a dead marking's next
     one differently: the graph decides those, both ways)."""
-    negated, g = q.unnegated(f)
-    if not isinstance(g, (q.AllPaths, q.ExistsPath)) or any(
-            q.contains(h, (q.AllPaths, q.ExistsPath)) for h in q.children(g)):
+    shaped = q.path_quantified(f)
+    if shaped is None:
         return None
+    negated, g = shaped
     if q.contains(g, q.Next) and q.is_ctl(g):
         return None
     if isinstance(g, q.ExistsPath):       # E ψ = not A not ψ

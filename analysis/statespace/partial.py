@@ -50,6 +50,11 @@ class PartialStateSpace:
     def tokens(self, place: int) -> np.ndarray:
         return self.found.tokens(place)
 
+    def open_markings(self) -> FoundMarkings:
+        """The open markings alone, in node order, packed as found."""
+        f = self.found
+        return FoundMarkings(f.rows[self.open], f.word, f.shift, f.mask)
+
 
 def partial_space(s: Structure, found: FoundMarkings, max_memory: int | None = None,
                   max_edges: int | None = None) -> PartialStateSpace | None:

@@ -120,6 +120,15 @@ def unnegated(f: Formula) -> tuple[bool, Formula]:
     return negated, f
 
 
+def path_quantified(f: Formula) -> tuple[bool, Formula] | None:
+    """``(negated, g)``: ``f`` is ``g``, ``A ψ`` or ``E ψ`` with ψ free of path quantifiers
+    (one run decides ψ), under ``negated``; None for any other formula."""
+    negated, g = unnegated(f)
+    if isinstance(g, (AllPaths, ExistsPath)) and not contains(g.arg, (AllPaths, ExistsPath)):
+        return negated, g
+    return None
+
+
 def is_state(f: Formula) -> bool:
     """Whether ``f`` is a state formula without temporal operators (a marking decides it)."""
     return isinstance(f, (*ATOMS, Neg, Conj, Disj)) and all(map(is_state, children(f)))

@@ -60,6 +60,14 @@ class Rows:
     def of(self, i: int) -> np.ndarray:
         return self.items[self.ptr[i]:self.ptr[i + 1]]
 
+    @classmethod
+    def of_sets(cls, rows) -> "Rows":
+        """Sets (or lists) of integers, each row sorted."""
+        rows = [sorted(r) for r in rows]
+        ptr = np.zeros(len(rows) + 1, dtype=np.int64)
+        np.cumsum([len(r) for r in rows], out=ptr[1:])
+        return cls(ptr, np.array([x for r in rows for x in r], dtype=np.int64))
+
 
 @dataclass(frozen=True)
 class KeyIndex:
