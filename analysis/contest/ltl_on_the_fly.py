@@ -157,7 +157,7 @@ def automaton(f: q.AllPaths) -> tuple[Buchi | None, list]:
 
 def stubborn_tables(s: Structure, atoms: list, reduce: bool) -> Stubborn:
     """What stubborn sets grow from (the module's documentation), with the transitions
-    the atoms see marked visible."""
+    the atoms see marked visible; raises :class:`Unnamed` at a name the net lacks."""
     places, transitions = len(s.places), len(s.transitions)
     needs = [sorted(inputs) for inputs in s.transition_inputs]    # what each needs
     takes = [sorted(p for p, w in col.items() if w < 0) for col in s.incidence]
@@ -181,9 +181,14 @@ def stubborn_tables(s: Structure, atoms: list, reduce: bool) -> Stubborn:
         if isinstance(f, q.IntLe):
             for e in (f.left, f.right):
                 if isinstance(e, q.TokensCount):
-                    seen.update(s.place_index[p] for p in e.places)
+                    for p in e.places:
+                        if p not in s.place_index:
+                            raise Unnamed(p)
+                        seen.add(s.place_index[p])
         elif isinstance(f, q.Fireable):
             for t in f.transitions:
+                if t not in trans:
+                    raise Unnamed(t)
                 seen.update(needs[trans[t]])
         elif isinstance(f, q.Deadlock):
             dead = True

@@ -112,3 +112,15 @@ def test_stubborn_sets_decide_within_a_limit_the_whole_product_is_past(loops):
     # with an X the formula is not stutter-invariant: no reduction, past the limit
     step = q.AllPaths(q.Globally(q.Disj((q.Neg(on), q.Next(q.Neg(on)), q.Next(on)))))
     assert ltl_on_the_fly(net, step, **limit) is None
+
+
+def test_a_name_the_net_lacks_is_left_to_the_graphs_message():
+    # the query's file may name anything: the search leaves it to the graph's path, which
+    # says what the net lacks (tests/analysis/test_mcc.py)
+    net = _shots_beside_a_ring(3)
+    nowhere = q.IntLe(q.IntConst(1), q.TokensCount(("nowhere",)))
+    fires = q.Fireable(("no-such-transition",))
+    asked = [q.Query("p", q.AllPaths(q.Globally(q.Finally(nowhere)))),
+             q.Query("t", q.ExistsPath(q.Globally(fires)))]
+    for x in asked:
+        assert settled_by_ltl_on_the_fly(net, [x], seconds=5.0) == {}
