@@ -237,10 +237,10 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     is the exploration's budget in bytes (default: half the memory available).
     The invariant bases come first, then the exploration, then the enumerations
     (minimal semi-positive invariants, siphons, traps: exponential in the worst case,
-    and past their bounds on every compiled mission), within their full bounds where
-    the reachability graph was not built whole, on a net of at most
-    :data:`QUICK_PLACES` places, or with ``enumerate_all``; elsewhere the graph decides
-    every property they bear on, and they run within a thousandth of them (:data:`QUICK`). An exploration stopped by its budget still ends in a partial
+    and past their bounds on every compiled mission) where the reachability graph was
+    not built whole, on a net of at most :data:`QUICK_PLACES` places, or with
+    ``enumerate_all``; elsewhere the graph decides every property they bear on, and they
+    are not run (:data:`DECIDED`). An exploration stopped by its budget still ends in a partial
     answer: ``"partial"`` says how many markings were explored and whether a dead
     marking was met among them.
     ``explore_states=False``: no exploration (a certificate decides the behaviour), the
@@ -265,8 +265,9 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
     def structural(decided: bool) -> dict[str, Any]:
         if state_space_only:
             return {}
-        thorough = enumerate_all or not decided or len(s.places) <= QUICK_PLACES
-        return {**bases, **stages.enumerations(thorough)}
+        if enumerate_all or not decided or len(s.places) <= QUICK_PLACES:
+            return {**bases, **stages.enumerations()}
+        return {**bases, **stages.decided()}
 
     if not explore_states:     # the caller knows the behaviour otherwise (a certificate)
         result = _state_space_facts(net, s, None)
@@ -407,16 +408,16 @@ STAGES = {
 }
 
 
-#: The enumerations' bounds where the state space decides every property they bear on,
-#: on a net of more than :data:`QUICK_PLACES` places: a thousandth of the others (a
-#: compiled mission's minimal siphons and semi-positive P-invariants are past even the
-#: full bounds, reached in seconds). ``--structure`` asks for the full ones.
-QUICK = 1000
 #: A net this small is enumerated within the full bounds whatever decides its properties:
 #: the paper's templates take a second at most, and their siphons are its equations'.
+#: A larger one, whose reachability graph was built whole, is not enumerated at all:
+#: the graph decides every property they bear on, and a compiled mission's minimal
+#: siphons and semi-positive P-invariants are past even the full bounds, reached in
+#: seconds. ``--structure`` asks for them.
 QUICK_PLACES = 100
-#: What a bound reached where the quick ones applied says besides.
-RAISE = "; --structure raises the bound"
+#: What the report says of each enumeration the graph made moot.
+DECIDED = ("the reachability graph, built whole, decides every property they bear on; "
+           "--structure computes them")
 
 
 class _Stages:
@@ -431,7 +432,7 @@ class _Stages:
     def __init__(self, s, limits: dict[str, str], left_out: dict[str, str], budget: Budget):
         self.s, self.limits, self.left_out, self.budget = s, limits, left_out, budget
 
-    def run(self, key: str, fn, *args, need: int = 0, note: str = ""):
+    def run(self, key: str, fn, *args, need: int = 0):
         what = STAGES[key]
         try:
             self.budget.check(need, what)
@@ -440,7 +441,7 @@ class _Stages:
         except BudgetExceeded as e:
             self.limits[key] = self.left_out[key] = e.message
         except AnalysisLimit as e:
-            self.limits[key] = e.message + note
+            self.limits[key] = e.message
         finally:
             release()   # what a stage built and dropped is not the next stage's to pay
         return None
@@ -455,22 +456,30 @@ class _Stages:
         return {"p_invariants": self.run("p_invariants", p_invariant_basis, s, need=elimination),
                 "t_invariants": self.run("t_invariants", t_invariant_basis, s, need=elimination)}
 
-    def enumerations(self, thorough: bool) -> dict[str, Any]:
+    def decided(self) -> dict[str, Any]:
+        """The enumerations a reachability graph built whole made moot (:data:`DECIDED`)."""
+        for key in ("semipositive_p_invariants", "semipositive_t_invariants", "siphons",
+                    "traps"):
+            self.limits[key] = DECIDED
+        return self._enumerated(None, None, None, None)
+
+    def enumerations(self) -> dict[str, Any]:
         """The minimal semi-positive invariants, siphons and traps, and the siphons'
-        control: within their bounds, or a thousandth of them unless ``thorough``
-        (:data:`QUICK`)."""
+        control, within their bounds."""
         s = self.s
-        scale, note = (1, "") if thorough else (QUICK, RAISE)
         free = max(self.budget.free(), NEGLIGIBLE)
-        rows = _limit(FARKAS_LIMIT // scale, len(s.places) + len(s.transitions))
+        rows = _limit(FARKAS_LIMIT, len(s.places) + len(s.transitions))
         semi_p = self.run("semipositive_p_invariants", minimal_semipositive_p_invariants,
-                          s, min(rows, farkas_rows(s, free)), note=note)
+                          s, min(rows, farkas_rows(s, free)))
         semi_t = self.run("semipositive_t_invariants", minimal_semipositive_t_invariants,
-                          s, min(rows, farkas_rows(s, free, True)), note=note)
-        sets = _limit(SIPHON_LIMIT // scale, len(s.places))
-        siphons = self.run("siphons", minimal_siphons, s, sets, SIPHON_WORK // scale,
-                           note=note)
-        traps = self.run("traps", minimal_traps, s, sets, SIPHON_WORK // scale, note=note)
+                          s, min(rows, farkas_rows(s, free, True)))
+        sets = _limit(SIPHON_LIMIT, len(s.places))
+        siphons = self.run("siphons", minimal_siphons, s, sets, SIPHON_WORK)
+        traps = self.run("traps", minimal_traps, s, sets, SIPHON_WORK)
+        return self._enumerated(semi_p, semi_t, siphons, traps)
+
+    def _enumerated(self, semi_p, semi_t, siphons, traps) -> dict[str, Any]:
+        s = self.s
         control = None
         if siphons is not None:
             _with_sympy()

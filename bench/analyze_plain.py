@@ -7,8 +7,7 @@ For each mission of ``examples/``, the whole command a user runs, ``mcl2pnml ana
 MISSION --untimed`` with and without ``--state-space``, each five times in turn, in fresh
 processes; the medians, and their ratio. The plain report has the exploration's verdicts
 and the invariant bases besides; where the state space is built whole, the minimal
-semi-positive invariants, siphons and traps are enumerated within a hundredth of their
-bounds (``--structure``: the full ones).
+semi-positive invariants, siphons and traps are not enumerated (``--structure`` asks).
 """
 from __future__ import annotations
 

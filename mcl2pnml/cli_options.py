@@ -303,9 +303,9 @@ ANALYZE_OPTIONS = _composed(  # analyze FILE
                  help="The reachable markings only (no invariants)."),
     click.option("--structure", is_flag=True,
                  help="Enumerate the minimal semi-positive invariants, siphons and traps "
-                      "within their full bounds even where the state space decides every "
-                      "property (there, past 100 places: a thousandth of them; exponential "
-                      "in the worst case)."),
+                      "even where the state space decides every property they bear on "
+                      "(there, past 100 places, they are left out; exponential in the "
+                      "worst case)."),
     click.option("--max-states", type=click.IntRange(min=1),
                  default=AnalyzeOptions.max_states,
                  show_default=True, help="Stop exploring past this many markings."),
