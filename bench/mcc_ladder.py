@@ -4,6 +4,7 @@ answers.
 Run:  .venv/bin/python -m bench.mcc_ladder [--exams RC,RF,...] [--timeout 60] [--jobs 2]
                                            [--only ours,verifypn,lola]
                                            [--first-of-family | --rest-of-family]
+                                           [--instances NAME,...]
 (prints the section of bench/RESULTS.md; ``--floor`` alone checks the start-up floor)
 
 For each of the 36 instances of ``../shared/external-nets/mcc-ladder`` (18 families, as the
@@ -26,6 +27,7 @@ whole commands, against 0.3 s (the interpreter's start-up is the floor; it must 
 """
 from __future__ import annotations
 
+import argparse
 import concurrent.futures as cf
 import os
 import re
@@ -174,32 +176,59 @@ def floor() -> list[str]:
     return lines
 
 
-def main() -> None:
-    argv = sys.argv[1:]
+def arguments(argv: list[str]) -> argparse.Namespace:
+    """The benchmark's options, as the module's docstring gives them (``--help``)."""
+    parser = argparse.ArgumentParser(
+        prog="python -m bench.mcc_ladder", description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter)
 
-    def option(name: str, default: str) -> str:
-        return argv[argv.index(name) + 1] if name in argv else default
+    def names(known):
+        def split(text: str) -> list[str]:
+            items = text.split(",")
+            unknown = [x for x in items if x not in known]
+            if unknown:
+                raise argparse.ArgumentTypeError(
+                    f"unknown: {', '.join(unknown)}; known: {', '.join(known)}")
+            return items
+        return split
+    parser.add_argument("--exams", type=names(FILES), default=list(FILES),
+                        help="formula files, comma-separated (default: all seven)")
+    parser.add_argument("--only", type=names(TOOLS), default=list(TOOLS),
+                        help="tools, comma-separated (default: all)")
+    parser.add_argument("--timeout", type=float, default=TIMEOUT,
+                        help="seconds a command may run (default: %(default)s)")
+    parser.add_argument("--jobs", type=int, default=2, help="commands at once (default: 2)")
+    half = parser.add_mutually_exclusive_group()
+    half.add_argument("--first-of-family", action="store_true",
+                      help="one instance a family, the smaller")
+    half.add_argument("--rest-of-family", action="store_true", help="the larger instances")
+    parser.add_argument("--instances", type=lambda s: s.split(","), default=None,
+                        help="these instances only, comma-separated")
+    parser.add_argument("--floor", action="store_true", help="the start-up floor alone")
+    return parser.parse_args(argv)
 
-    if "--floor" in argv:
+
+def main(argv: list[str]) -> None:
+    args = arguments(argv)
+    if args.floor:
         print("\n".join(floor()))
         return
-    exams = option("--exams", ",".join(FILES)).split(",")
-    unknown = [e for e in exams if e not in FILES]
-    if unknown:
-        sys.exit(f"unknown examination {', '.join(unknown)}; known: {', '.join(FILES)}")
-    tools = option("--only", ",".join(TOOLS)).split(",")
     names = sorted(p.name[:-len(".tgz")] for p in (LADDER / "inputs").glob("*.tgz"))
     first = [n for i, n in enumerate(names)
              if i == 0 or n.rsplit("-", 1)[0] != names[i - 1].rsplit("-", 1)[0]]
-    if "--first-of-family" in argv:   # one instance a family: the smaller, by its name
+    if args.first_of_family:   # one instance a family: the smaller, by its name
         names = first
-    elif "--rest-of-family" in argv:  # the others: the larger ones
+    elif args.rest_of_family:  # the others: the larger ones
         names = [n for n in names if n not in first]
-    print("\n".join(ladder(exams, tools, float(option("--timeout", str(TIMEOUT))),
-                           int(option("--jobs", "2")), names)))
+    if args.instances is not None:
+        unknown = sorted(set(args.instances) - set(names))
+        if unknown:
+            sys.exit(f"not instances of the ladder (or not in this half): {', '.join(unknown)}")
+        names = [n for n in names if n in args.instances]
+    print("\n".join(ladder(args.exams, args.only, args.timeout, args.jobs, names)))
     print()
     print("\n".join(floor()))
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])
