@@ -10,7 +10,9 @@ reading (a maximal path may end at a dead marking) and in its LTL reading (a dea
 repeats) alike: ``F c``, ``G c`` and a quantifier over ``c`` are ``c``; ``a U true`` is
 true, ``a U false`` false, ``false U b`` is ``b`` and ``true U b`` is ``F b``. ``X`` keeps
 its argument's value only in one reading (a dead marking has no next marking in CTL), so
-it is left as it is, but in a formula read in LTL alone (``X c`` is ``c`` there). A formula that becomes a constant is answered; one that becomes
+it is left as it is, but in a formula read in LTL alone (``X c`` is ``c`` there), and in
+``A X true`` (true) and ``E X false`` (false), which hold in both: no next marking, or
+one, satisfies false, and every one satisfies true. A formula that becomes a constant is answered; one that becomes
 simpler (``E F φ`` out of a CTL formula) goes on to the other techniques as that.
 """
 from __future__ import annotations
@@ -52,6 +54,9 @@ def simplified(f, decide: Decide, linear: bool = False):
         return q.Until(before, reach)
     if isinstance(f, (q.AllPaths, q.ExistsPath)):
         arg = go(f.arg)
+        if (isinstance(arg, q.Next) and isinstance(arg.arg, q.BoolConst)
+                and arg.arg.value is isinstance(f, q.AllPaths)):
+            return arg.arg      # A X true, E X false: a dead marking has no next one to differ
         return arg if isinstance(arg, q.BoolConst) or q.is_state(arg) else type(f)(arg)
     if isinstance(f, q.Next):
         arg = go(f.arg)

@@ -37,7 +37,13 @@ def test_constants_are_carried_up_where_both_readings_agree():
     assert simplified(q.Conj((q.Disj((A, B)), B)), never_a) == q.Conj((B, B))
     # X: a dead marking has no next marking in CTL, and repeats in LTL: left alone,
     # but where the formula is read in LTL alone
-    assert simplified(q.ExistsPath(q.Next(A)), never_a) == q.ExistsPath(q.Next(F))
+    assert simplified(q.ExistsPath(q.Next(A)), never_a) == F     # no next one satisfies false
+    assert simplified(q.AllPaths(q.Next(q.Neg(A))), never_a) == T    # every one satisfies true
+    # E X true and A X false say whether the marking is dead: left to the graph
+    assert simplified(q.ExistsPath(q.Next(q.Neg(A))), never_a) == q.ExistsPath(q.Next(T))
+    assert simplified(q.AllPaths(q.Next(A)), never_a) == q.AllPaths(q.Next(F))
+    assert simplified(q.ExistsPath(q.Until(B, q.Neg(q.AllPaths(q.Next(q.Neg(A)))))),
+                      never_a) == F
     assert simplified(q.AllPaths(q.Next(q.Globally(q.Next(A)))), never_a, True) == F
     assert simplified(q.ExistsPath(q.Finally(B)), _known({})) == q.ExistsPath(q.Finally(B))
 
