@@ -68,6 +68,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.contest.buchi import NotLTL, negation_normal_form, tableau
+from mcl2pnml.analysis.contest.ctl_on_the_fly import settled_by_ctl_on_the_fly
 from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, settled_by_ltl_on_the_fly
 from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, ListedMarkings, Truths,
                                                             reach_on_the_fly,
@@ -433,6 +434,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # then the path formulas one search each decides on the fly, under stubborn sets
         yield from settle(settled_by_ltl_on_the_fly(net, left(), max_states=max_states,
                                                     max_memory=max_memory))
+        yield from settle(settled_by_ctl_on_the_fly(net, left(), max_states=max_states,
+                                                    max_memory=max_memory))
         # then witnesses deep in the net, where the first exploration stayed near M0; more
         # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
@@ -455,6 +458,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
             if ended or not left():
                 break
             yield from settle(settled_by_ltl_on_the_fly(net, left(), FLY_SECONDS * 2 ** k,
+                                                        max_states, max_memory))
+            yield from settle(settled_by_ctl_on_the_fly(net, left(), FLY_SECONDS * 2 ** k,
                                                         max_states, max_memory))
             yield from settle(settled_by_walks(net, left(), WALK_SECONDS * 2 ** k, seed=k))
             yield from settle(settled_by_runs(net, left(), WALK_SECONDS * 2 ** k, seed=k))
