@@ -11,10 +11,10 @@ from mcl2pnml.analysis.contest.ctl_on_the_fly import (NotCTL, ctl_on_the_fly,
 from mcl2pnml.analysis.contest.ltl_on_the_fly import Unnamed
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.core import queries as q
-from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import structure
 from sampling import sample
 from strategies import nets
+from test_found_markings import _toggles
 from test_partial_graph import shrinking_nets
 from test_simplify import _temporal
 from test_state_equation import formulas
@@ -50,26 +50,10 @@ def test_the_search_answers_what_the_whole_graph_does(data):
     assert ctl_on_the_fly(net, f, 100_000, 30.0) is want, (net, f)
 
 
-def _counter(width: int):
-    """Independent counters of ``width`` places each: a state space of 2^width markings and
-    more, from which every marking goes on."""
-    b = NetBuilder("counters")
-    for i in range(width):
-        b.place(f"off{i}", 1)
-        b.place(f"on{i}", 0)
-        b.transition(f"up{i}")
-        b.arc(f"off{i}", f"up{i}")
-        b.arc(f"up{i}", f"on{i}")
-        b.transition(f"down{i}")
-        b.arc(f"on{i}", f"down{i}")
-        b.arc(f"down{i}", f"off{i}")
-    return b.build()
-
-
 def test_a_local_answer_needs_only_the_markings_near_m0():
     # 2^40 markings: only the answer's neighbourhood is explored (for A X A X E X, three
     # firings deep: the 10,701 markings within three firings of M0)
-    net = _counter(40)
+    net = _toggles(40)
     on = lambda i: q.IntLe(q.IntConst(1), q.TokensCount((f"on{i}",)))   # noqa: E731
     ax_ax_ex = q.AllPaths(q.Next(q.AllPaths(q.Next(q.ExistsPath(q.Next(
         q.Disj((on(0), q.Neg(on(0))))))))))
@@ -81,11 +65,11 @@ def test_a_local_answer_needs_only_the_markings_near_m0():
     assert ctl_on_the_fly(net, q.AllPaths(q.Globally(q.Neg(on(3)))), 1_000, 30.0) is False
     home = q.AllPaths(q.Globally(q.ExistsPath(q.Finally(q.Neg(on(0))))))
     assert ctl_on_the_fly(net, home, 1_000, 30.0) is None
-    assert ctl_on_the_fly(_counter(4), home, 1_000, 30.0) is True
+    assert ctl_on_the_fly(_toggles(4), home, 1_000, 30.0) is True
 
 
 def test_what_the_search_cannot_read_is_refused_or_left():
-    net = _counter(2)
+    net = _toggles(2)
     with pytest.raises(Unnamed):
         ctl_on_the_fly(net, q.ExistsPath(q.Finally(q.Fireable(("nowhere",)))))
     with pytest.raises(NotCTL):
@@ -102,7 +86,7 @@ def test_what_the_search_cannot_read_is_refused_or_left():
 def test_the_portfolio_answers_by_it_past_the_first_exploration():
     # past the first exploration's limit (near M0) nothing else settles this CTL formula
     # (not LTL: the E X inside), whose witness is eleven firings deep: the search does
-    net = _counter(40)
+    net = _toggles(40)
     on = [q.IntLe(q.IntConst(1), q.TokensCount((f"on{i}",))) for i in range(11)]
     f = q.ExistsPath(q.Finally(q.Conj((*on[:10], q.ExistsPath(q.Next(q.Conj(tuple(on))))))))
     [got] = answer(net, [q.Query("f", f)], max_states=200_000)
