@@ -45,7 +45,7 @@ from mcl2pnml.core.memory import default_memory
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import Structure, structure
 
-from mcl2pnml.analysis.contest.ltl_on_the_fly import Unnamed
+from mcl2pnml.analysis.contest.ltl_on_the_fly import Unnamed, path_formula
 
 #: Bytes a marking takes here (its tuple, its slot in the index, its successors' list)
 #: besides 8 a place; and a configuration (its value, its edges and dependants).
@@ -419,12 +419,15 @@ def settled_by_ctl_on_the_fly(net: Net, queries, seconds: float = FLY_SECONDS,
                               max_states: int = MAX_STATES,
                               max_memory: int | None = None) -> dict[str, tuple[bool, str]]:
     """The CTL formulas one search on the fly each decides, within ``seconds`` each. A
-    formula that is LTL too and has an ``X`` is left: the two readings differ there."""
+    formula the LTL search reads (:func:`~.ltl_on_the_fly.path_formula`: ``A G φ``,
+    ``E F φ``, ``A F φ`` ...) is left to it: it searched the same runs, under stubborn
+    sets, just before. One that is LTL too and has an ``X`` is left: the two readings of
+    a dead marking's next one differ."""
     settled: dict[str, tuple[bool, str]] = {}
     for x in queries:
         f = x.asks
-        if isinstance(f, q.PlaceBound) or not q.is_ctl(f) or (
-                q.is_ltl(f) and q.contains(f, q.Next)):
+        if (isinstance(f, q.PlaceBound) or not q.is_ctl(f) or path_formula(f) is not None
+                or (q.is_ltl(f) and q.contains(f, q.Next))):
             continue
         try:
             holds = ctl_on_the_fly(net, f, max_states, seconds, max_memory)

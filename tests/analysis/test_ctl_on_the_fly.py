@@ -78,6 +78,8 @@ def test_what_the_search_cannot_read_is_refused_or_left():
                q.Query("ltl", q.AllPaths(q.Finally(q.Globally(q.Fireable(("up0",)))))),
                # CTL and LTL with an X: the readings differ at a dead marking
                q.Query("both", q.AllPaths(q.Next(q.Fireable(("up0",))))),
+               # what the LTL search reads, it has searched just before
+               q.Query("reach", q.ExistsPath(q.Finally(q.Fireable(("down0",))))),
                q.Query("ctl", q.ExistsPath(q.Next(q.Fireable(("down0",)))))]
     assert settled_by_ctl_on_the_fly(net, queries) == {
         "ctl": (True, "EXPLICIT CTL ON_THE_FLY")}
