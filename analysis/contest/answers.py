@@ -250,7 +250,7 @@ class Graph:
 
     def _quantified(self, f, where) -> np.ndarray:
         inner, exists = f.arg, isinstance(f, q.ExistsPath)
-        if q.is_state(inner) or isinstance(inner, (q.AllPaths, q.ExistsPath)):
+        if q.is_closed(inner):
             return self.check(inner, where)        # a quantifier over a state formula
         true = np.ones(self.n, dtype=bool)
         if isinstance(inner, q.Next):
@@ -553,7 +553,7 @@ class PartialGraph(Graph):
 
     def _quantified3(self, f, where) -> tuple[np.ndarray, np.ndarray]:
         inner, exists = f.arg, isinstance(f, q.ExistsPath)
-        if q.is_state(inner) or isinstance(inner, (q.AllPaths, q.ExistsPath)):
+        if q.is_closed(inner):
             return self.check3(inner, where)
         o = self.open
 

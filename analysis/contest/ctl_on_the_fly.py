@@ -190,7 +190,7 @@ class _Formula:
         if not isinstance(f, (q.AllPaths, q.ExistsPath)):
             raise NotCTL
         exists, inner = isinstance(f, q.ExistsPath), f.arg
-        if q.is_state(inner) or isinstance(inner, (q.AllPaths, q.ExistsPath)):
+        if q.is_closed(inner):
             return self.node(inner)                 # a quantifier over a state formula
         if isinstance(inner, q.Next):
             return self._add(_EX if exists else _AX, (self.node(inner.arg),))

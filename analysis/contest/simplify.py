@@ -57,7 +57,7 @@ def simplified(f, decide: Decide, linear: bool = False):
         if (isinstance(arg, q.Next) and isinstance(arg.arg, q.BoolConst)
                 and arg.arg.value is isinstance(f, q.AllPaths)):
             return arg.arg      # A X true, E X false: a dead marking has no next one to differ
-        return arg if isinstance(arg, q.BoolConst) or q.is_state(arg) else type(f)(arg)
+        return arg if isinstance(arg, q.BoolConst) or q.is_closed(arg) else type(f)(arg)
     if isinstance(f, q.Next):
         arg = go(f.arg)
         return arg if linear and isinstance(arg, q.BoolConst) else q.Next(arg)

@@ -134,6 +134,14 @@ def is_state(f: Formula) -> bool:
     return isinstance(f, (*ATOMS, Neg, Conj, Disj)) and all(map(is_state, children(f)))
 
 
+def is_closed(f: Formula) -> bool:
+    """Whether every temporal operator of ``f`` is under a path quantifier of ``f``: a
+    marking decides it (a state formula of CTL*), so a quantifier over it is it."""
+    if isinstance(f, (AllPaths, ExistsPath)):
+        return True
+    return isinstance(f, (*ATOMS, Neg, Conj, Disj)) and all(map(is_closed, children(f)))
+
+
 def is_ctl(f: Formula) -> bool:
     """Whether ``f`` is a CTL formula: each temporal operator right under a quantifier."""
     if isinstance(f, (*ATOMS, Neg, Conj, Disj)):
@@ -142,7 +150,7 @@ def is_ctl(f: Formula) -> bool:
         inner = f.arg
         if isinstance(inner, (Next, Globally, Finally, Until)):
             return all(map(is_ctl, children(inner)))
-        return is_state(inner) or isinstance(inner, (AllPaths, ExistsPath)) and is_ctl(inner)
+        return is_closed(inner) and is_ctl(inner)      # A over a state formula: itself
     return False
 
 

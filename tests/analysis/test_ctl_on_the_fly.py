@@ -11,6 +11,7 @@ from mcl2pnml.analysis.contest.ctl_on_the_fly import (NotCTL, ctl_on_the_fly,
 from mcl2pnml.analysis.contest.ltl_on_the_fly import Unnamed
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.core import queries as q
+from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import structure
 from sampling import sample
 from strategies import nets
@@ -41,7 +42,9 @@ def test_the_search_answers_what_the_whole_graph_does(data):
     net = data.draw(st.one_of(nets(), shrinking_nets()))
     s = structure(net)
     state = st.one_of(formulas(list(s.places), list(s.transitions)), st.just(q.Deadlock()))
-    f = data.draw(_temporal(state))
+    g = data.draw(_temporal(state))
+    # a quantifier over a state formula (CTL*'s A not E G ...) is that state formula
+    f = data.draw(st.sampled_from([g, q.AllPaths(q.Neg(g)), q.ExistsPath(q.Conj((g, g)))]))
     if not q.is_ctl(f):
         return
     want = _whole(net, f)
@@ -93,3 +96,27 @@ def test_the_portfolio_answers_by_it_past_the_first_exploration():
     f = q.ExistsPath(q.Finally(q.Conj((*on[:10], q.ExistsPath(q.Next(q.Conj(tuple(on))))))))
     [got] = answer(net, [q.Query("f", f)], max_states=200_000)
     assert got.value is True and got.technique == "EXPLICIT CTL ON_THE_FLY"
+
+
+def _dying():
+    """Two firings, then a dead marking."""
+    b = NetBuilder("dies")
+    b.place("p", 2)
+    b.transition("t")
+    b.arc("p", "t")
+    return b.build()
+
+
+def test_a_quantifier_over_a_state_formula_is_that_formula():
+    # A not E G E X true (a CTL-cardinality file's shape): CTL, read as not E G E X true,
+    # which fails where every maximal path meets a dead marking
+    eg_live = q.ExistsPath(q.Globally(q.ExistsPath(q.Next(q.BoolConst(True)))))
+    f = q.AllPaths(q.Neg(eg_live))
+    assert q.is_ctl(f) and q.is_closed(f.arg) and not q.is_ltl(f)
+    assert not q.is_ctl(q.AllPaths(q.Neg(q.Finally(q.Deadlock()))))   # LTL, not CTL
+    live, dying = _toggles(2), _dying()
+    for net, holds in ((live, False), (dying, True)):
+        [got] = answer(net, [q.Query("f", f)])
+        assert got.value is holds and _whole(net, f) is holds
+        assert ctl_on_the_fly(net, f) is holds
+
