@@ -12,7 +12,10 @@ true, ``a U false`` false, ``false U b`` is ``b`` and ``true U b`` is ``F b``. `
 its argument's value only in one reading (a dead marking has no next marking in CTL), so
 it is left as it is, but in a formula read in LTL alone (``X c`` is ``c`` there), and in
 ``A X true`` (true) and ``E X false`` (false), which hold in both: no next marking, or
-one, satisfies false, and every one satisfies true. A formula that becomes a constant is answered; one that becomes
+one, satisfies false, and every one satisfies true. Read in LTL alone, an ``X`` before a
+formula both purely eventual and purely universal (``F G φ``, ``G F φ``: Etessami and
+Holzmann 2000) is dropped, and ``F X φ`` is ``F φ`` where that is one (``F X φ = X F φ``):
+a formula left without ``X`` is searched under stubborn sets. A formula that becomes a constant is answered; one that becomes
 simpler (``E F φ`` out of a CTL formula) goes on to the other techniques as that.
 """
 from __future__ import annotations
@@ -44,7 +47,11 @@ def simplified(f, decide: Decide, linear: bool = False):
         return _fold(f, [go(a) for a in q.children(f)])
     if isinstance(f, (q.Finally, q.Globally)):
         arg = go(f.arg)
-        return arg if isinstance(arg, q.BoolConst) else type(f)(arg)
+        if isinstance(arg, q.BoolConst):
+            return arg
+        if linear and isinstance(arg, q.Next) and _absolute(type(f)(arg.arg)):
+            return type(f)(arg.arg)       # F X φ = X F φ, and X drops before F φ here
+        return type(f)(arg)
     if isinstance(f, q.Until):
         before, reach = go(f.before), go(f.reach)
         if isinstance(reach, q.BoolConst):
@@ -60,8 +67,31 @@ def simplified(f, decide: Decide, linear: bool = False):
         return arg if isinstance(arg, q.BoolConst) or q.is_closed(arg) else type(f)(arg)
     if isinstance(f, q.Next):
         arg = go(f.arg)
-        return arg if linear and isinstance(arg, q.BoolConst) else q.Next(arg)
+        return arg if linear and (isinstance(arg, q.BoolConst) or _absolute(arg)) \
+            else q.Next(arg)
     return f
+
+
+def _pure(f, eventual: bool) -> bool:
+    """Whether ``f`` is purely eventual (``eventual``: a run that satisfies it still does
+    with any steps put before it) or purely universal (every suffix of a run that
+    satisfies it does), by Etessami and Holzmann's rules (2000): ``F φ`` is eventual and
+    ``G φ`` universal whatever φ; ``G``, ``X``, and, or keep eventual (``F``, ``X``, and,
+    or keep universal); a negation swaps the two."""
+    own, keeps = (q.Finally, q.Globally) if eventual else (q.Globally, q.Finally)
+    if isinstance(f, (own, q.BoolConst)):
+        return True
+    if isinstance(f, (keeps, q.Next)):
+        return _pure(f.arg, eventual)
+    if isinstance(f, q.Neg):
+        return _pure(f.arg, not eventual)
+    return isinstance(f, (q.Conj, q.Disj)) and all(_pure(a, eventual) for a in f.args)
+
+
+def _absolute(f) -> bool:
+    """Both: on infinite runs ``X f`` is ``f`` (the suffix keeps it, the step before
+    does not lose it): ``F G φ``, ``G F φ`` and the like."""
+    return _pure(f, True) and _pure(f, False)
 
 
 def _fold(f, args: list):

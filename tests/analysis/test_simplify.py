@@ -46,6 +46,19 @@ def test_constants_are_carried_up_where_both_readings_agree():
                       never_a) == F
     assert simplified(q.AllPaths(q.Next(q.Globally(q.Next(A)))), never_a, True) == F
     assert simplified(q.ExistsPath(q.Finally(B)), _known({})) == q.ExistsPath(q.Finally(B))
+    # in LTL alone, X drops before what is purely eventual and purely universal: X F G b is
+    # F G b, F X G b is F G b; not before F b (universal it is not), nor in CTL's reading
+    none = _known({})
+    fg, gf = q.Finally(q.Globally(B)), q.Globally(q.Finally(B))
+    for g in (fg, gf, q.Neg(fg), q.Conj((fg, gf))):
+        assert simplified(q.AllPaths(q.Next(g)), none, True) == q.AllPaths(g)
+    assert simplified(q.AllPaths(q.Finally(q.Next(q.Globally(B)))), none, True) == \
+        q.AllPaths(fg)
+    assert simplified(q.AllPaths(q.Next(q.Finally(B))), none, True) == \
+        q.AllPaths(q.Next(q.Finally(B)))
+    assert simplified(q.AllPaths(q.Finally(q.Next(B))), none, True) == \
+        q.AllPaths(q.Finally(q.Next(B)))
+    assert simplified(q.AllPaths(q.Next(fg)), none) == q.AllPaths(q.Next(fg))
 
 
 def _temporal(state):
