@@ -421,13 +421,17 @@ def settled_by_ctl_on_the_fly(net: Net, queries, seconds: float = FLY_SECONDS,
     """The CTL formulas one search on the fly each decides, within ``seconds`` each. A
     formula the LTL search reads (:func:`~.ltl_on_the_fly.path_formula`: ``A G φ``,
     ``E F φ``, ``A F φ`` ...) is left to it: it searched the same runs, under stubborn
-    sets, just before. One that is LTL too and has an ``X`` is left: the two readings of
-    a dead marking's next one differ."""
+    sets, just before. One that is LTL too and has an ``X`` (``A X φ``, φ a state formula:
+    the only such shape) is read both ways only where M0 is not dead: the two readings
+    differ at a dead marking's next one, and only M0's is asked."""
     settled: dict[str, tuple[bool, str]] = {}
+    s = structure(net)
+    m0 = s.initial_vector()
+    m0_dead = not any(s.enabled(m0, j) for j in range(len(s.transitions)))
     for x in queries:
         f = x.asks
         if (isinstance(f, q.PlaceBound) or not q.is_ctl(f) or path_formula(f) is not None
-                or (q.is_ltl(f) and q.contains(f, q.Next))):
+                or (q.is_ltl(f) and q.contains(f, q.Next) and m0_dead)):
             continue
         try:
             holds = ctl_on_the_fly(net, f, max_states, seconds, max_memory)

@@ -79,13 +79,18 @@ def test_what_the_search_cannot_read_is_refused_or_left():
         ctl_on_the_fly(net, q.AllPaths(q.Finally(q.Globally(q.Fireable(("up0",))))))
     queries = [q.Query("unnamed", q.ExistsPath(q.Finally(q.Fireable(("nowhere",))))),
                q.Query("ltl", q.AllPaths(q.Finally(q.Globally(q.Fireable(("up0",)))))),
-               # CTL and LTL with an X: the readings differ at a dead marking
-               q.Query("both", q.AllPaths(q.Next(q.Fireable(("up0",))))),
+               # CTL and LTL with an X: the readings differ at a dead M0 only
+               q.Query("both", q.AllPaths(q.Next(q.Fireable(("down0", "down1"))))),
                # what the LTL search reads, it has searched just before
                q.Query("reach", q.ExistsPath(q.Finally(q.Fireable(("down0",))))),
                q.Query("ctl", q.ExistsPath(q.Next(q.Fireable(("down0",)))))]
     assert settled_by_ctl_on_the_fly(net, queries) == {
-        "ctl": (True, "EXPLICIT CTL ON_THE_FLY")}
+        "ctl": (True, "EXPLICIT CTL ON_THE_FLY"), "both": (True, "EXPLICIT CTL ON_THE_FLY")}
+    dead = _dying()
+    dead = dead.with_initial({"p": 0})
+    ax_p = q.AllPaths(q.Next(q.IntLe(q.IntConst(1), q.TokensCount(("p",)))))
+    assert ctl_on_the_fly(dead, ax_p) is True          # CTL: no next marking; LTL: false
+    assert settled_by_ctl_on_the_fly(dead, [q.Query("both", ax_p)]) == {}
 
 
 def test_the_portfolio_answers_by_it_past_the_first_exploration():
