@@ -70,8 +70,10 @@ from mcl2pnml.core.structure import structure
 from mcl2pnml.analysis.contest.buchi import NotLTL, negation_normal_form, tableau
 from mcl2pnml.analysis.contest.ctl_on_the_fly import settled_by_ctl_on_the_fly
 from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, settled_by_ltl_on_the_fly
-from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS, ListedMarkings, Truths,
+from mcl2pnml.analysis.contest.reachability_queries import (BEST_FIRST_SECONDS, WALK_SECONDS,
+                                                            ListedMarkings, Truths,
                                                             reach_on_the_fly,
+                                                            settled_by_best_first,
                                                             settled_by_found,
                                                             settled_by_state_equation,
                                                             settled_by_walks,
@@ -391,8 +393,10 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     initial marking decides on every path; the rest goes on simplified), then what the
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
-    then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are)
+    then the formulas one search on the fly decides (LTL under stubborn sets, then CTL's
+    dependency graph), then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are)
     and what the runs of walkers that close show (:func:`settled_by_runs`), then the
+    upper bounds a best-first search reaches (:func:`settled_by_best_first`), then the
     state space is explored to limits ten times larger each up to ``max_states``
     (:func:`_stages`), the markings of each one stopped witnesses again, and walks and
     runs twice as long as the last after each (their own seed each: new walks). With
@@ -440,6 +444,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
         yield from settle(settled_by_runs(net, left()))
+        yield from settle(settled_by_best_first(net, left(), max_states=max_states,
+                                                max_memory=max_memory))
         if stubborn:
             yield from settle(reach_on_the_fly(net, left(), max_states, max_memory, True,
                                                safe))
@@ -463,6 +469,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
                                                         max_states, max_memory))
             yield from settle(settled_by_walks(net, left(), WALK_SECONDS * 2 ** k, seed=k))
             yield from settle(settled_by_runs(net, left(), WALK_SECONDS * 2 ** k, seed=k))
+            yield from settle(settled_by_best_first(net, left(), BEST_FIRST_SECONDS * 2 ** k,
+                                                    max_states, max_memory))
         if not left():
             return
     if space is None:

@@ -20,6 +20,7 @@ exploration, or with ``--stubborn``; docs/query.md has the order).
 """
 from __future__ import annotations
 
+import heapq
 import time
 from collections import Counter
 from typing import Sequence
@@ -28,12 +29,15 @@ import numpy as np
 
 from mcl2pnml.core import patterns as pr
 from mcl2pnml.core import queries as q
+from mcl2pnml.core.bounds import MAX_STATES
+from mcl2pnml.core.memory import default_memory
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.checking import on_the_fly as onthefly
 from mcl2pnml.analysis.checking.observers import Status
 from mcl2pnml.analysis.contest.simplify import ByStructure, at_start, simplified
+from mcl2pnml.analysis.statespace.firing import Firing
 from mcl2pnml.analysis.statespace.walks import random_walks
 from mcl2pnml.analysis.structure import state_equation
 from mcl2pnml.analysis.structure.state_machine import free_tokens
@@ -407,6 +411,73 @@ def settled_by_walks(net: Net, queries: Sequence[q.Query], seconds: float = WALK
         settled.update(_witnessed(s, left, ListedMarkings(batch), bounds,
                                   "RANDOM_WALK", "RANDOM_WALK"))
     return settled
+
+
+#: Seconds the best-first searches for upper bounds may take over the questions of one
+#: command, at first; after each stopped exploration, twice as long as the last.
+BEST_FIRST_SECONDS = 10.0
+#: Bytes a marking takes in a best-first search besides 8 a place (its key, its slot in
+#: the set of those seen and in the heap).
+BEST_FIRST_BYTES = 200
+
+
+def settled_by_best_first(net: Net, queries: Sequence[q.Query],
+                          seconds: float = BEST_FIRST_SECONDS, max_states: int = MAX_STATES,
+                          max_memory: int | None = None) -> dict[str, Settled]:
+    """The upper bounds a best-first search reaches: from M0, the marking with the most
+    tokens in the bound's places is fired next, until one holds the bound that a proof
+    allows (:class:`_Bounds`), within ``seconds`` over the questions and ``max_states``
+    markings (or the memory budget's share) each. Every marking met is reachable (it was
+    fired to), so one that holds the proven bound settles it; the search proves nothing by
+    what it does not meet. A bound that has no proof is not searched for."""
+    s = structure(net)
+    asked = [x for x in queries if isinstance(x.asks, q.PlaceBound)
+             and all(p in s.place_index for p in x.asks.places)]
+    settled: dict[str, Settled] = {}
+    if not asked:
+        return settled
+    budget = max_memory if max_memory is not None else default_memory()
+    limit = max(1, min(max_states, budget // (BEST_FIRST_BYTES + 8 * len(s.places))))
+    bounds, firing = _Bounds(s), Firing(s)
+    m0 = np.array(s.initial_vector(), dtype=np.int64)
+    end = time.monotonic() + seconds
+    for n, x in enumerate(asked):
+        counts = Counter(s.place_index[p] for p in x.asks.places)
+        places = np.array(list(counts), dtype=np.int64)
+        weights = np.array(list(counts.values()), dtype=np.int64)
+        bound, how = bounds(x.asks.places, int(m0[places] @ weights))
+        left = end - time.monotonic()
+        if bound is None or left <= 0:
+            continue
+        if _best_first(firing, m0, places, weights, bound, limit,
+                       time.monotonic() + left / (len(asked) - n)):
+            settled[x.id] = (bound, f"EXPLICIT BEST_FIRST {how}")
+    return settled
+
+
+def _best_first(firing: Firing, m0: np.ndarray, places: np.ndarray, weights: np.ndarray,
+                bound: int, limit: int, deadline: float) -> bool:
+    """Whether a marking with ``weights`` tokens in ``places`` summing to ``bound`` is met,
+    the fullest marking fired first, within ``limit`` markings and the deadline."""
+    seen = {m0.tobytes()}
+    heap = [(-int(m0[places] @ weights), 0, m0.tobytes())]
+    order = 1
+    while heap:
+        value, _, key = heapq.heappop(heap)
+        if -value >= bound:
+            return True
+        if order % 256 == 0 and time.monotonic() > deadline:
+            return False
+        rows = firing.successors(np.frombuffer(key, dtype=np.int64))
+        for row, v in zip(rows, (rows[:, places] @ weights).tolist()):
+            k = row.tobytes()
+            if k not in seen:
+                if len(seen) >= limit:
+                    return False
+                seen.add(k)
+                heapq.heappush(heap, (-v, order, k))   # the first met first among equals
+                order += 1
+    return False
 
 
 # -- on the fly: the property checker's engine ---------------------------------------
