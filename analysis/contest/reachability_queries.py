@@ -449,33 +449,62 @@ def settled_by_best_first(net: Net, queries: Sequence[q.Query],
         left = end - time.monotonic()
         if bound is None or left <= 0:
             continue
-        if _best_first(firing, m0, places, weights, bound, limit,
+        if _best_first(firing, m0, places, weights, _distances(s, places), bound, limit,
                        time.monotonic() + left / (len(asked) - n)):
             settled[x.id] = (bound, f"EXPLICIT BEST_FIRST {how}")
     return settled
 
 
+def _distances(s, places: np.ndarray) -> np.ndarray:
+    """Each place's distance to ``places``: the fewest firings that move a token from it
+    into one of them, by the arcs alone (a breadth-first search backwards through the
+    transitions); a place from which no token gets there, one more than the farthest."""
+    far = len(s.places)
+    dist = np.full(far, far, dtype=np.int64)
+    frontier = sorted(set(places.tolist()))
+    dist[frontier] = 0
+    feeding = [[] for _ in s.places]              # place -> the places a firing feeds it from
+    for pre, post in zip(s.pre, s.post):
+        for p in post:
+            feeding[p].extend(pre)
+    d = 0
+    while frontier:
+        d += 1
+        nxt = []
+        for p in frontier:
+            for r in feeding[p]:
+                if dist[r] == far:
+                    dist[r] = d
+                    nxt.append(r)
+        frontier = nxt
+    dist[dist == far] = d + 1
+    return dist
+
+
 def _best_first(firing: Firing, m0: np.ndarray, places: np.ndarray, weights: np.ndarray,
-                bound: int, limit: int, deadline: float) -> bool:
+                distance: np.ndarray, bound: int, limit: int, deadline: float) -> bool:
     """Whether a marking with ``weights`` tokens in ``places`` summing to ``bound`` is met,
-    the fullest marking fired first, within ``limit`` markings and the deadline."""
+    the fullest marking fired first, and among equally full ones the one whose tokens lie
+    nearest ``places`` (``distance``, a place's), within ``limit`` markings and the
+    deadline."""
     seen = {m0.tobytes()}
-    heap = [(-int(m0[places] @ weights), 0, m0.tobytes())]
+    heap = [(-int(m0[places] @ weights), int(m0 @ distance), 0, m0.tobytes())]
     order = 1
     while heap:
-        value, _, key = heapq.heappop(heap)
+        value, _, _, key = heapq.heappop(heap)
         if -value >= bound:
             return True
         if order % 256 == 0 and time.monotonic() > deadline:
             return False
         rows = firing.successors(np.frombuffer(key, dtype=np.int64))
-        for row, v in zip(rows, (rows[:, places] @ weights).tolist()):
+        for row, v, h in zip(rows, (rows[:, places] @ weights).tolist(),
+                             (rows @ distance).tolist()):
             k = row.tobytes()
             if k not in seen:
                 if len(seen) >= limit:
                     return False
                 seen.add(k)
-                heapq.heappush(heap, (-v, order, k))   # the first met first among equals
+                heapq.heappush(heap, (-v, h, order, k))   # then the first met first
                 order += 1
     return False
 
