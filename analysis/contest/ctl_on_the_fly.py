@@ -48,10 +48,12 @@ from mcl2pnml.core.structure import Structure, structure
 from mcl2pnml.analysis.contest.ltl_on_the_fly import Unnamed, path_formula
 from mcl2pnml.analysis.statespace.firing import Firing
 
-#: Bytes a marking takes here (its tuple, its slot in the index, its successors' list)
-#: besides 8 a place; and a configuration (its value, its edges and dependants).
+#: Bytes a marking takes here (its key, its slot in the index, its successors' list)
+#: besides 8 a place; a configuration (its slots in the tables); a hyperedge besides 8 a
+#: target (its tuple, its slots, its place on the stack and in a waiting list).
 MARKING_BYTES = 200
 CONFIGURATION_BYTES = 300
+EDGE_BYTES = 150
 #: Seconds the first pass gives each formula; after each stopped exploration, twice as long.
 FLY_SECONDS = 2.0
 #: Edges read between two looks at the clock.
@@ -162,13 +164,15 @@ class NotCTL(Exception):
 class _Search:
     """One formula's dependency graph, searched from (M0, φ) (the module's algorithm)."""
 
-    def __init__(self, s: Structure, f, limit: int, deadline: float):
+    def __init__(self, s: Structure, f, limit: int, memory: int, deadline: float):
         self.firing = Firing(s)
         formula = _Formula(s, self.firing)
         self.root_node = formula.node(f)
         self.nodes = formula.nodes
         self.m0 = np.array(s.initial_vector(), dtype=np.int64)
         self.limit, self.deadline = limit, deadline
+        self.memory = memory                 # bytes it may still take
+        self.marking_bytes = MARKING_BYTES + 8 * len(s.places)
         self.marking_number: dict[bytes, int] = {}
         self.markings: list[bytes] = []     # each marking's token counts, as int64 bytes
         self.next: list[list[int] | None] = []
@@ -191,7 +195,8 @@ class _Search:
         key = m.tobytes()
         got = self.marking_number.get(key)
         if got is None:
-            if len(self.markings) >= self.limit:
+            self.memory -= self.marking_bytes
+            if len(self.markings) >= self.limit or self.memory < 0:
                 raise _Limit
             got = self.marking_number[key] = len(self.markings)
             self.markings.append(key)
@@ -218,6 +223,9 @@ class _Search:
         key = (i, node)
         got = self.config.get(key)
         if got is None:
+            self.memory -= CONFIGURATION_BYTES
+            if self.memory < 0:
+                raise _Limit
             got = self.config[key] = len(self.value)
             self.at.append(key)
             self.value.append(None)
@@ -295,6 +303,9 @@ class _Search:
             self.explore(unknown)
 
     def edge(self, c: int, targets: tuple[int, ...]) -> None:
+        self.memory -= EDGE_BYTES + 8 * len(targets)
+        if self.memory < 0:
+            raise _Limit
         self.edge_source.append(c)
         self.edge_targets.append(targets)
         self.live[c] += 1
@@ -354,14 +365,12 @@ class _Limit(Exception):
 def ctl_on_the_fly(net: Net, f, max_states: int = MAX_STATES, seconds: float = FLY_SECONDS,
                    max_memory: int | None = None) -> bool | None:
     """Whether CTL formula ``f`` holds in M0, searched on the fly (the module's algorithm),
-    or None where the search met ``max_states`` markings, its share of the memory budget,
-    or ``seconds``. :class:`NotCTL` for a formula the encoding lacks, :class:`Unnamed`
+    or None where the search met ``max_states`` markings, the memory budget (what its
+    markings, configurations and edges take, counted as they come), or ``seconds``. :class:`NotCTL` for a formula the encoding lacks, :class:`Unnamed`
     for a name the net lacks."""
     s = structure(net)
     budget = max_memory if max_memory is not None else default_memory()
-    per_marking = MARKING_BYTES + 8 * len(s.places) + 4 * CONFIGURATION_BYTES
-    limit = max(1, min(max_states, budget // per_marking))
-    return _Search(s, f, limit, time.monotonic() + seconds).run()
+    return _Search(s, f, max_states, budget, time.monotonic() + seconds).run()
 
 
 def settled_by_ctl_on_the_fly(net: Net, queries, seconds: float = FLY_SECONDS,

@@ -69,6 +69,8 @@ def test_a_local_answer_needs_only_the_markings_near_m0():
     home = q.AllPaths(q.Globally(q.ExistsPath(q.Finally(q.Neg(on(0))))))
     assert ctl_on_the_fly(net, home, 1_000, 30.0) is None
     assert ctl_on_the_fly(_toggles(4), home, 1_000, 30.0) is True
+    # the memory budget counts what the search holds: a mebibyte stops it, unknown
+    assert ctl_on_the_fly(net, home, 10 ** 9, 30.0, max_memory=1 << 20) is None
 
 
 def test_what_the_search_cannot_read_is_refused_or_left():
