@@ -68,7 +68,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.contest.buchi import NotLTL, negation_normal_form, tableau
-from mcl2pnml.analysis.contest.ctl_on_the_fly import settled_by_ctl_on_the_fly
+from mcl2pnml.analysis.contest.ctl_on_the_fly import NotCTL, settled_by_ctl_on_the_fly
 from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, settled_by_ltl_on_the_fly
 from mcl2pnml.analysis.contest.reachability_queries import (BEST_FIRST_SECONDS, WALK_SECONDS,
                                                             ListedMarkings, Truths,
@@ -271,10 +271,6 @@ class Graph:
             # A(a U b) = not E(not b U (not a and not b)) and not EG not b
             return ~self.eu(~b, ~a & ~b) & ~self.eg(~b)
         raise NotCTL("a path formula that is not CTL (LTL under a path quantifier)")
-
-
-class NotCTL(Exception):
-    """A formula this labelling cannot decide (LTL)."""
 
 
 # -- LTL: the negation's Büchi automaton (buchi.py), in product with the graph ------------------

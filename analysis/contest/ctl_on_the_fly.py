@@ -45,7 +45,7 @@ from mcl2pnml.core.memory import default_memory
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import Structure, structure
 
-from mcl2pnml.analysis.contest.ltl_on_the_fly import Unnamed, path_formula
+from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, Unnamed, path_formula
 from mcl2pnml.analysis.statespace.firing import Firing
 
 #: Bytes a marking takes here (its key, its slot in the index, its successors' list)
@@ -54,8 +54,6 @@ from mcl2pnml.analysis.statespace.firing import Firing
 MARKING_BYTES = 200
 CONFIGURATION_BYTES = 300
 EDGE_BYTES = 150
-#: Seconds the first pass gives each formula; after each stopped exploration, twice as long.
-FLY_SECONDS = 2.0
 #: Edges read between two looks at the clock.
 _TICK = 4096
 
@@ -73,7 +71,7 @@ class _Node:
         self.kind, self.args, self.holds, self.depth = kind, args, holds, depth
 
 
-def _evaluator(s: Structure, firing: Firing, f) -> Callable[[tuple[int, ...]], bool]:
+def _evaluator(s: Structure, firing: Firing, f) -> Callable[[np.ndarray], bool]:
     """A state formula as a function of a marking (:class:`Unnamed` for a name the net
     lacks)."""
     place, transition = s.place_index, s.transition_index
@@ -158,7 +156,9 @@ class _Formula:
 
 
 class NotCTL(Exception):
-    """A formula the dependency graph does not encode (LTL under a quantifier)."""
+    """A formula CTL does not decide (LTL under a quantifier, a temporal operator outside
+    one): the dependency graph does not encode it, nor does the graph's labelling
+    (:class:`~mcl2pnml.analysis.contest.answers.Graph`) label it."""
 
 
 class _Search:
@@ -366,7 +366,8 @@ def ctl_on_the_fly(net: Net, f, max_states: int = MAX_STATES, seconds: float = F
                    max_memory: int | None = None) -> bool | None:
     """Whether CTL formula ``f`` holds in M0, searched on the fly (the module's algorithm),
     or None where the search met ``max_states`` markings, the memory budget (what its
-    markings, configurations and edges take, counted as they come), or ``seconds``. :class:`NotCTL` for a formula the encoding lacks, :class:`Unnamed`
+    markings, configurations and edges take, counted as they come), or ``seconds``.
+    :class:`NotCTL` for a formula the encoding lacks, :class:`Unnamed`
     for a name the net lacks."""
     s = structure(net)
     budget = max_memory if max_memory is not None else default_memory()
