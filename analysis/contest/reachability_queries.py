@@ -489,12 +489,13 @@ def _best_first(firing: Firing, m0: np.ndarray, places: np.ndarray, weights: np.
     deadline."""
     seen = {m0.tobytes()}
     heap = [(-int(m0[places] @ weights), int(m0 @ distance), 0, m0.tobytes())]
-    order = 1
+    order = popped = 1
     while heap:
         value, _, _, key = heapq.heappop(heap)
         if -value >= bound:
             return True
-        if order % 256 == 0 and time.monotonic() > deadline:
+        popped += 1
+        if popped % 256 == 0 and time.monotonic() > deadline:
             return False
         rows = firing.successors(np.frombuffer(key, dtype=np.int64))
         for row, v, h in zip(rows, (rows[:, places] @ weights).tolist(),
