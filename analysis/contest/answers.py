@@ -112,6 +112,29 @@ class UnknownName(Mcl2PnmlError):
     """A query names a place or a transition the net does not have."""
 
 
+def check_names(net: Net, queries: Sequence[q.Query]) -> None:
+    """Refuse the first query that names a place or a transition ``net`` lacks, at its
+    location (:class:`UnknownName`): before any answer, whatever the net's size (else a
+    small net's graph refused it and a large one's techniques left it unanswered, blaming
+    their limits)."""
+    def names(f):
+        if isinstance(f, (q.PlaceBound, q.TokensCount)):
+            yield from (("place", p) for p in f.places)
+        elif isinstance(f, q.Fireable):
+            yield from (("transition", t) for t in f.transitions)
+        elif isinstance(f, q.IntLe):
+            yield from names(f.left)
+            yield from names(f.right)
+        elif not isinstance(f, q.IntConst):
+            for g in q.children(f):
+                yield from names(g)
+    for x in queries:
+        for kind, name in names(x.asks):
+            known = net.place_index if kind == "place" else net.transition_index
+            if name not in known:
+                raise UnknownName(f"no {kind} '{name}' in the net", x.location)
+
+
 class Graph:
     """The reachability graph of a bounded net, as the checker reads it: its edges in
     compressed rows (successors with a dead marking's self-loop, the temporal operators'

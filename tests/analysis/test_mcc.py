@@ -125,14 +125,26 @@ def test_a_bad_file_is_one_message_at_its_line_and_column(path):
     assert_error_golden(path.with_suffix(".expected"), e.value)
 
 
-def test_a_place_the_net_does_not_have_is_named(tmp_path):
+@pytest.mark.parametrize("large", [False, True], ids=["small", "past-the-graph"])
+@pytest.mark.parametrize("formula, said", [
+    ("<place-bound><place>Nowhere</place></place-bound>", "no place 'Nowhere'"),
+    ("<exists-path><next><is-fireable><transition>never</transition></is-fireable></next>"
+     "</exists-path>", "no transition 'never'")], ids=["place", "transition"])
+def test_a_name_the_net_does_not_have_is_refused_at_its_line(tmp_path, formula, said, large):
+    # refused before any answer whatever the net's size: a net past the first exploration
+    # once had it left unanswered, its limits blamed
+    from test_found_markings import _toggles
     bad = tmp_path / "q.xml"
     bad.write_text('<?xml version="1.0"?>\n<property-set xmlns="http://mcc.lip6.fr/">\n'
-                   "  <property><id>p</id><formula><place-bound><place>Nowhere</place>"
-                   "</place-bound></formula></property>\n</property-set>\n")
-    net = tmp_path / "task.pnml"
-    net.write_bytes(pipeline.to_pnml_bytes(pipeline.template_net("task")))
-    one_error(run_cli("query", net, bad), "q.xml:3:3:", "no place 'Nowhere'")
+                   "  <property><id>ok</id><formula><place-bound><place>on0</place>"
+                   "</place-bound></formula></property>\n"
+                   f"  <property><id>p</id><formula>{formula}</formula></property>\n"
+                   "</property-set>\n")
+    net = tmp_path / "net.pnml"
+    net.write_bytes(pipeline.to_pnml_bytes(_toggles(30 if large else 2)))
+    out = run_cli("query", net, bad, "--max-states", "1000")
+    one_error(out, "q.xml:4:3:", said)
+    assert out.stdout == ""
 
 
 #: The models whose questions without the graph ``make test`` asks (every model's behind
