@@ -49,8 +49,8 @@ def simplified(f, decide: Decide, linear: bool = False):
         arg = go(f.arg)
         if isinstance(arg, q.BoolConst):
             return arg
-        if linear and isinstance(arg, q.Next) and _absolute(type(f)(arg.arg)):
-            return type(f)(arg.arg)       # F X φ = X F φ, and X drops before F φ here
+        while linear and isinstance(arg, q.Next) and _absolute(type(f)(arg.arg)):
+            arg = arg.arg                 # F X φ = X F φ, and X drops before F φ here
         return type(f)(arg)
     if isinstance(f, q.Until):
         before, reach = go(f.before), go(f.reach)

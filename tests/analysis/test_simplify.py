@@ -54,6 +54,8 @@ def test_constants_are_carried_up_where_both_readings_agree():
         assert simplified(q.AllPaths(q.Next(g)), none, True) == q.AllPaths(g)
     assert simplified(q.AllPaths(q.Finally(q.Next(q.Globally(B)))), none, True) == \
         q.AllPaths(fg)
+    assert simplified(q.AllPaths(q.Globally(q.Finally(q.Next(q.Next(q.Globally(B)))))),
+                      none, True) == q.AllPaths(q.Globally(fg))         # every X of them
     assert simplified(q.AllPaths(q.Next(q.Finally(B))), none, True) == \
         q.AllPaths(q.Next(q.Finally(B)))
     assert simplified(q.AllPaths(q.Finally(q.Next(B))), none, True) == \
