@@ -116,7 +116,7 @@ def check_names(net: Net, queries: Sequence[q.Query]) -> None:
     """Refuse the first query that names a place or a transition ``net`` lacks, at its
     location (:class:`UnknownName`): before any answer, whatever the net's size (else a
     small net's graph refused it and a large one's techniques left it unanswered, blaming
-    their limits)."""
+    their limits). :func:`answers_as_found` asks it first."""
     def names(f):
         if isinstance(f, (q.PlaceBound, q.TokensCount)):
             yield from (("place", p) for p in f.places)
@@ -422,7 +422,10 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
     searched on the fly under partial-order reduction (:func:`reach_on_the_fly`) before
     any graph. Past the graph's limits, the reachability questions are searched on the
-    fly, each stopping at its first witness; the rest is unanswered, with the reason."""
+    fly, each stopping at its first witness; the rest is unanswered, with the reason. A
+    query naming a place or transition the net lacks is refused before any answer
+    (:func:`check_names`)."""
+    check_names(net, queries)
     done: set[str] = set()
 
     def settle(settled: dict) -> Iterator[Answer]:

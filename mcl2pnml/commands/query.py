@@ -92,7 +92,6 @@ def query_as_found(net_path: Path, formulas: Sequence[Path],
         raise SettingError("formulas", "give a formula file of the contest, or --examination")
     queries = [x for path in formulas for x in read_queries(path)]
     net = pipeline.load_net(net_path, o.net_id, o.max_memory, o.lenient, o.max_mission_size)
-    mcc.check_names(net, queries)
     max_memory = size_or_none(o.max_memory, "max_memory")
 
     def answers() -> Iterator[Any]:
