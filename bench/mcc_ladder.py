@@ -8,11 +8,16 @@ Run:  .venv/bin/python -m bench.mcc_ladder [--exams RC,RF,...] [--timeout 60] [-
 (prints the section of bench/RESULTS.md; ``--floor`` alone checks the start-up floor)
 
 For each of the 36 instances of ``../shared/external-nets/mcc-ladder`` (18 families, as the
-contest published them) and each formula file asked (default: all seven), the whole
+contest published them) and each examination asked (default: the seven formula files and
+the five generic examinations), the whole
 command a user runs, each tool with its defaults (reductions on): ours, ``mcl2pnml query
 model.pnml FILE.xml``; verifypn, ``verifypn-linux64 -n 1 -x 1,...,16 model.pnml FILE.xml``
 (``-ltl`` for the LTL files); LoLA, ``lola --pnmlnet model.pnml --xmlformula
---formula=FILE.xml --mcc --quiet``. A command past ``--timeout`` seconds (60 by default) is
+--formula=FILE.xml --mcc --quiet``. A generic examination: ours, ``mcl2pnml query
+model.pnml --examination NAME``; LoLA, ``lola --pnmlnet model.pnml --check=CHECK --mcc
+--quiet``; verifypn, which has no command for them, the examination's definition as
+formulas, one a place or transition (:func:`write_atoms`), its answers combined
+(:func:`verdict`). A command past ``--timeout`` seconds (60 by default) is
 stopped, its whole process group; what it printed before counts, as in the contest. Every
 answer is held to the 2021 consensus (``oracle/``, ``?`` where the tools did not agree:
 neither right nor wrong). ``--jobs`` commands run at once (two on two cores: each tool is
@@ -42,6 +47,7 @@ import time
 from pathlib import Path
 
 from bench.mcc_queries import LOLA, VERIFYPN, answers
+from mcl2pnml.io.mccquery import escape
 
 ROOT = Path(__file__).resolve().parents[1]
 LADDER = ROOT.parent / "shared" / "external-nets" / "mcc-ladder"
@@ -50,6 +56,12 @@ TOOLS = ("ours", "verifypn", "lola")
 FILES = {"RC": "ReachabilityCardinality", "RF": "ReachabilityFireability",
          "CTLC": "CTLCardinality", "CTLF": "CTLFireability", "LTLC": "LTLCardinality",
          "LTLF": "LTLFireability", "UB": "UpperBounds"}
+#: The generic examinations, by the short names of the oracle's files, and the check LoLA
+#: names each by.
+GENERIC = {"RD": ("ReachabilityDeadlock", "deadlockfreedom"), "OS": ("OneSafe", "OneSafe"),
+           "SM": ("StableMarking", "StableMarking"),
+           "QL": ("QuasiLiveness", "QuasiLiveness"), "L": ("Liveness", "Liveness")}
+EXAMS = [*FILES, *GENERIC]
 TIMEOUT = 60.0
 #: What a query on a 10-place net and ``--version`` may take, whole commands (seconds).
 FLOOR = 0.3
@@ -84,7 +96,18 @@ def oracle(instance: str, exam: str) -> dict[str, str]:
 
 
 def commands(folder: Path, exam: str) -> dict[str, list[str]]:
-    net, file = str(folder / "model.pnml"), str(folder / f"{FILES[exam]}.xml")
+    net = str(folder / "model.pnml")
+    if exam in GENERIC:
+        name, check = GENERIC[exam]
+        atoms = folder / f"{name}.atoms.xml"
+        count = write_atoms(folder / "model.pnml", name, atoms)
+        return {
+            "ours": [sys.executable, "-m", "mcl2pnml", "query", net, "--examination", name],
+            "verifypn": [str(VERIFYPN), "-n", "1", "-x",
+                         ",".join(map(str, range(1, count + 1))), net, str(atoms)],
+            "lola": [str(LOLA), "--pnmlnet", net, f"--check={check}", "--mcc", "--quiet"],
+        }
+    file = str(folder / f"{FILES[exam]}.xml")
     return {
         "ours": [sys.executable, "-m", "mcl2pnml", "query", net, file],
         "verifypn": [str(VERIFYPN), "-n", "1", *(["-ltl"] if exam.startswith("LTL") else []),
@@ -92,6 +115,63 @@ def commands(folder: Path, exam: str) -> dict[str, list[str]]:
         "lola": [str(LOLA), "--pnmlnet", net, "--xmlformula", f"--formula={file}", "--mcc",
                  "--quiet"],
     }
+
+
+def write_atoms(net: Path, name: str, path: Path) -> int:
+    """The generic examination ``name`` as the contest's formulas, for a tool that has no
+    command for it (verifypn), written to ``path``; how many. Each is one atom of the
+    definition, ids ``A-0``, ``A-1``...: ReachabilityDeadlock ``E F deadlock``; OneSafe
+    ``A G (p <= 1)`` and StableMarking ``A G (p = M0(p))``, a place each; QuasiLiveness
+    ``E F fireable(t)`` and Liveness ``A G E F fireable(t)``, a transition each
+    (:func:`verdict` reads them back)."""
+    from mcl2pnml import pipeline
+    from mcl2pnml.core.structure import structure
+    s = structure(pipeline.load_net(net))
+
+    def le(a: str, b: str) -> str:
+        return f"<integer-le>{a}{b}</integer-le>"
+
+    def tokens(p: str) -> str:
+        return f"<tokens-count><place>{escape(p)}</place></tokens-count>"
+
+    def const(n: int) -> str:
+        return f"<integer-constant>{n}</integer-constant>"
+
+    def fires(t: str) -> str:
+        return f"<is-fireable><transition>{escape(t)}</transition></is-fireable>"
+    if name == "ReachabilityDeadlock":
+        formulas = ["<exists-path><finally><deadlock/></finally></exists-path>"]
+    elif name == "OneSafe":
+        formulas = [f"<all-paths><globally>{le(tokens(p), const(1))}</globally></all-paths>"
+                    for p in s.places]
+    elif name == "StableMarking":
+        formulas = [f"<all-paths><globally><conjunction>{le(tokens(p), const(int(m)))}"
+                    f"{le(const(int(m)), tokens(p))}</conjunction></globally></all-paths>"
+                    for p, m in zip(s.places, s.initial_vector())]
+    elif name == "QuasiLiveness":
+        formulas = [f"<exists-path><finally>{fires(t)}</finally></exists-path>"
+                    for t in s.transitions]
+    else:
+        formulas = [f"<all-paths><globally><exists-path><finally>{fires(t)}</finally>"
+                    f"</exists-path></globally></all-paths>" for t in s.transitions]
+    path.write_text('<?xml version="1.0"?>\n<property-set xmlns="http://mcc.lip6.fr/">\n' + "".join(
+        f"<property><id>A-{k}</id><description/><formula>{f}</formula></property>\n"
+        for k, f in enumerate(formulas)) + "</property-set>\n")
+    return len(formulas)
+
+
+def verdict(name: str, atoms: dict[str, str], count: int) -> dict[str, str]:
+    """The examination's answer from its atoms' (:func:`write_atoms`): StableMarking holds
+    where one atom does, the others where every one does; none where the atoms said
+    do not decide it."""
+    values = [atoms.get(f"A-{k}") for k in range(count)]
+    one = name in ("StableMarking", "ReachabilityDeadlock")
+    decisive, other = ("TRUE", "FALSE") if one else ("FALSE", "TRUE")
+    if decisive in values:
+        return {name: decisive}
+    if all(v == other for v in values):
+        return {name: other}
+    return {}
 
 
 def unpack(scratch: Path) -> list[Path]:
@@ -119,9 +199,11 @@ def ladder(exams: list[str], tools: list[str], timeout: float, jobs: int,
         return item, run(args, timeout, str(scratch))
 
     with cf.ThreadPoolExecutor(jobs) as pool:
-        for (folder, exam, who, _), (seconds, mib, out) in pool.map(one, work):
+        for (folder, exam, who, args), (seconds, mib, out) in pool.map(one, work):
             truth = {k: v for k, v in oracle(folder.name, exam).items() if v != "?"}
             got = answers(out)
+            if exam in GENERIC and who == "verifypn":    # its atoms' answers
+                got = verdict(GENERIC[exam][0], got, args[args.index("-x") + 1].count(",") + 1)
             row = rows[exam, who]
             right = sum(1 for k, v in got.items() if truth.get(k) == v)
             wrong = sum(1 for k, v in got.items() if k in truth and truth[k] != v)
@@ -143,7 +225,8 @@ def ladder(exams: list[str], tools: list[str], timeout: float, jobs: int,
             cells.append(f"{right} / {wrong} / {left} | {seconds:.0f} | {mib:.0f}")
             for i, v in enumerate((right, wrong, left, seconds)):
                 total[w][i] += v
-        lines.append(f"| {FILES[exam]} | " + " | ".join(cells) + " |")
+        lines.append(f"| {FILES[exam] if exam in FILES else GENERIC[exam][0]} | "
+                     + " | ".join(cells) + " |")
     lines.append("| **total** | " + " | ".join(
         f"**{r} / {w} / {u}** | **{s:.0f}** | " for r, w, u, s in total.values()) + " |")
     return lines
@@ -197,8 +280,9 @@ def arguments(argv: list[str]) -> argparse.Namespace:
                     f"unknown: {', '.join(unknown)}; known: {', '.join(known)}")
             return items
         return split
-    parser.add_argument("--exams", type=names(FILES), default=list(FILES),
-                        help="formula files, comma-separated (default: all seven)")
+    parser.add_argument("--exams", type=names(EXAMS), default=EXAMS,
+                        help="formula files and generic examinations, comma-separated "
+                             "(default: all twelve)")
     parser.add_argument("--only", type=names(TOOLS), default=list(TOOLS),
                         help="tools, comma-separated (default: all)")
     parser.add_argument("--timeout", type=float, default=TIMEOUT,

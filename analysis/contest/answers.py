@@ -17,11 +17,9 @@ by searches in C (``analysis/statespace/loops/_native.c``; the same in Python,
   with the graph searched on the fly by Couvreur's emptiness check (1999), which
   numbers only the product states it meets and stops at the first cycle
   meeting every acceptance set;
-* the upper bounds: the largest token sum over the markings;
-* the generic examinations: a reachable deadlock, one-safety, a stable
-  place (its count the same in every marking), quasi-liveness (every
-  transition fires somewhere) and liveness (every transition fires in every
-  bottom strongly connected component).
+* the upper bounds: the largest token sum over the markings.
+
+The generic examinations are :mod:`.generic`'s, on this module's graph and portfolio.
 
 Where the state space is larger than a first, small exploration, cheaper techniques
 come first, each answer handed out as soon as one settles it (:func:`answers_as_found`;
@@ -70,18 +68,19 @@ from mcl2pnml.core.structure import structure
 from mcl2pnml.analysis.contest.buchi import NotLTL, negation_normal_form, tableau
 from mcl2pnml.analysis.contest.ctl_on_the_fly import NotCTL, settled_by_ctl_on_the_fly
 from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, settled_by_ltl_on_the_fly
-from mcl2pnml.analysis.contest.reachability_queries import (BEST_FIRST_SECONDS, WALK_SECONDS,
+from mcl2pnml.analysis.contest.reachability_queries import (BEST_FIRST_SECONDS,
+                                                            GUIDED_SECONDS, WALK_SECONDS,
                                                             ListedMarkings, Truths,
                                                             reach_on_the_fly,
                                                             settled_by_best_first,
                                                             settled_by_found,
+                                                            settled_by_guided_search,
                                                             settled_by_state_equation,
                                                             settled_by_walks,
                                                             settled_without_exploring,
                                                             simplified_by_structure)
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.analysis.statespace.loops.backends import chosen
-from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
 from mcl2pnml.analysis.statespace.partial import partial_space
 from mcl2pnml.analysis.statespace.rows import compressed_rows
 from mcl2pnml.analysis.statespace.walks import runs
@@ -413,11 +412,12 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
     then the formulas one search on the fly decides (LTL under stubborn sets, then CTL's
-    dependency graph), then what random walks meet (:func:`settled_by_walks`, witnesses as found markings are)
-    and what the runs of walkers that close show (:func:`settled_by_runs`), then the
-    upper bounds a best-first search reaches (:func:`settled_by_best_first`), then the
-    state space is explored to limits ten times larger each up to ``max_states``
-    (:func:`_stages`), the markings of each one stopped witnesses again, and walks and
+    dependency graph), then what random walks meet (:func:`settled_by_walks`, witnesses
+    as found markings are) and what the runs of walkers that close show
+    (:func:`settled_by_runs`), then the witnesses a best-first search by the formula's
+    distance meets (:func:`settled_by_guided_search`), then the upper bounds a best-first
+    search reaches (:func:`settled_by_best_first`), then the state space is explored to
+    limits ten times larger each up to ``max_states`` (:func:`_stages`), the markings of each one stopped witnesses again, and walks and
     runs twice as long as the last after each (their own seed each: new walks). With
     ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
     searched on the fly under partial-order reduction (:func:`reach_on_the_fly`) before
@@ -466,6 +466,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
         yield from settle(settled_by_runs(net, left()))
+        yield from settle(settled_by_guided_search(net, left(), max_states=max_states,
+                                                   max_memory=max_memory))
         yield from settle(settled_by_best_first(net, left(), max_states=max_states,
                                                 max_memory=max_memory))
         if stubborn:
@@ -491,6 +493,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
                                                         max_states, max_memory))
             yield from settle(settled_by_walks(net, left(), WALK_SECONDS * 2 ** k, seed=k))
             yield from settle(settled_by_runs(net, left(), WALK_SECONDS * 2 ** k, seed=k))
+            yield from settle(settled_by_guided_search(net, left(), GUIDED_SECONDS * 2 ** k,
+                                                       max_states, max_memory))
             yield from settle(settled_by_best_first(net, left(), BEST_FIRST_SECONDS * 2 ** k,
                                                     max_states, max_memory))
         if not left():
@@ -769,65 +773,3 @@ def settled_by_runs(net: Net, queries: Sequence[q.Query], seconds: float = WALK_
         if len(settled) == len(shaped):
             break
     return settled
-
-
-#: The contest's generic examinations, by name.
-GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", "Liveness")
-
-
-def generic(net: Net, examinations: Sequence[str] = GENERIC, *, max_states: int = MAX_STATES,
-            max_memory: int | None = None) -> list[Answer]:
-    """The generic examinations' answers (the module's documentation)."""
-    space, why, _ = _space(net, max_states, max_memory)
-    if space is None:
-        return [Answer(name, None, "", why) for name in examinations]
-    s = space.structure
-    out = []
-    for name in examinations:
-        if name == "ReachabilityDeadlock":
-            value = bool(space.terminal)
-        elif name == "OneSafe":
-            value = bool(space.safe)
-        elif name == "StableMarking":
-            value = _stable_place(space)
-        elif name == "QuasiLiveness":
-            value = len(np.unique(np.asarray(space.trans))) == len(s.transitions)
-        elif name == "Liveness":
-            value = _live(Graph(space), len(s.transitions))   # the one that needs the graph
-        else:
-            raise Mcl2PnmlError(f"unknown examination '{name}'; known: {', '.join(GENERIC)}")
-        out.append(Answer(name, value, "EXPLICIT STATE_SPACE"))
-    return out
-
-
-def _stable_place(space) -> bool:
-    """Whether some place holds the same number of tokens in every reachable marking: on
-    markings packed one bit per place, a bit the same in the OR and the AND of them all;
-    else a place at a time (its column not kept: a large net has many)."""
-    places = len(space.structure.places)
-    if isinstance(space, PackedStateSpace) and space.states:
-        ones = np.bitwise_or.reduce(space.packed, axis=0)
-        both = np.bitwise_and.reduce(space.packed, axis=0)
-        same = ~(ones ^ both)
-        return any(int(same[i // 64]) >> (i % 64) & 1 for i in range(places))
-    for i in range(places):
-        column = space.tokens(i)
-        if column.min() == column.max():
-            return True
-    return False
-
-
-def _live(g: Graph, transitions: int) -> bool:
-    """Every transition fires in every bottom strongly connected component: from every
-    reachable marking, every transition can fire again."""
-    label = np.empty(g.n, dtype=np.int64)
-    count = _loops.scc(*g.real, np.ones(g.n, dtype=np.uint8), label)
-    leaving = label[g.src] != label[g.dst]
-    bottom = np.ones(count, dtype=bool)
-    bottom[label[g.src[leaving]]] = False
-    inside = ~leaving
-    for c in np.flatnonzero(bottom):
-        fired = np.unique(g.trans[inside & (label[g.src] == c)])
-        if len(fired) < transitions:
-            return False
-    return True

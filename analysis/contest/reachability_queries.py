@@ -23,7 +23,7 @@ from __future__ import annotations
 import heapq
 import time
 from collections import Counter
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -255,6 +255,7 @@ def settled_by_state_equation(net: Net, queries: Sequence[q.Query],
     ``seconds`` over all of them. It proves only unreachability: the other answers are
     left to the other techniques."""
     s = structure(net)
+    bounds = _Bounds(s)
     found: dict[str, Settled] = {}
     end = time.monotonic() + seconds
     for x in queries:
@@ -266,7 +267,8 @@ def settled_by_state_equation(net: Net, queries: Sequence[q.Query],
             continue
         exists, phi = r
         try:
-            if state_equation.unreachable(s, phi if exists else q.Neg(phi), left):
+            if state_equation.unreachable(s, phi if exists else q.Neg(phi), left,
+                                          lambda p: bounds.invariant((s.places[p],))):
                 found[x.id] = (not exists, "STATE_EQUATION")
         except KeyError:            # a name the net does not have: said by the graph's path
             continue
@@ -508,6 +510,163 @@ def _best_first(firing: Firing, m0: np.ndarray, places: np.ndarray, weights: np.
                 heapq.heappush(heap, (-v, h, order, k))   # then the first met first
                 order += 1
     return False
+
+
+def distance(phi, s) -> Callable[[np.ndarray], np.ndarray]:
+    """How far each marking (a row of counts) is from satisfying the state formula
+    ``phi``: 0 exactly where it does, else the tokens that would have to move (verifypn's
+    distance heuristic for its best-first search: Jensen, Nielsen, Oestergaard and Srba
+    2016). ``a <= b`` is ``a - b`` past 0; a transition enabled, the tokens its input
+    places lack; disabled, the fewest tokens that one of them must lose; a conjunction the
+    sum, a disjunction the least; a negation is pushed to the atoms. A deadlock is every
+    transition disabled. Raises KeyError at a name the net lacks."""
+    needs = []
+    for pre, read in zip(s.pre, s.read):
+        need = dict(read)
+        for p, w in pre.items():
+            need[p] = max(need.get(p, 0), w)
+        needs.append((np.array(list(need), dtype=np.int64),
+                      np.array(list(need.values()), dtype=np.int64)))
+
+    def value(e, rows):
+        if isinstance(e, q.IntConst):
+            return np.full(len(rows), e.value, dtype=np.int64)
+        cols = [s.place_index[p] for p in e.places]
+        return rows[:, cols].sum(axis=1)
+
+    def enable(j, rows):              # tokens t_j's input places lack
+        places, weights = needs[j]
+        if not len(places):
+            return np.zeros(len(rows), dtype=np.int64)
+        return np.maximum(weights - rows[:, places], 0).sum(axis=1)
+
+    def disable(j, rows):             # the fewest tokens one input place must lose
+        places, weights = needs[j]
+        if not len(places):
+            return np.full(len(rows), BIG, dtype=np.int64)
+        return np.maximum(rows[:, places] - weights + 1, 0).min(axis=1)
+
+    def d(f, positive: bool):
+        if isinstance(f, q.Neg):
+            return d(f.arg, not positive)
+        if isinstance(f, q.BoolConst):
+            return lambda rows: np.full(len(rows), 0 if f.value is positive else BIG,
+                                        dtype=np.int64)
+        if isinstance(f, (q.Conj, q.Disj)):
+            parts = [d(a, positive) for a in f.args]
+            if isinstance(f, q.Conj) is positive:
+                return lambda rows: np.minimum(sum(x(rows) for x in parts), BIG)
+            return lambda rows: np.min([x(rows) for x in parts], axis=0)
+        if isinstance(f, q.IntLe):
+            left, right = f.left, f.right
+            if positive:
+                return lambda rows: np.maximum(value(left, rows) - value(right, rows), 0)
+            return lambda rows: np.maximum(value(right, rows) + 1 - value(left, rows), 0)
+        if isinstance(f, q.Fireable):
+            ts = [s.transition_index[t] for t in f.transitions]
+            if positive:
+                return lambda rows: np.min([enable(j, rows) for j in ts], axis=0)
+            return lambda rows: np.minimum(sum(disable(j, rows) for j in ts), BIG)
+        if isinstance(f, q.Deadlock):
+            ts = range(len(s.transitions))
+            if positive:
+                return lambda rows: np.minimum(sum(disable(j, rows) for j in ts), BIG)
+            return lambda rows: np.min([enable(j, rows) for j in ts], axis=0)
+        raise LookupError(f"no distance to {type(f).__name__}")
+    return d(phi, True)
+
+
+#: A distance no marking reaches: a formula false whatever the tokens do.
+BIG = 1 << 40
+#: Seconds the guided searches for reachability witnesses may take over the questions of
+#: one command, at first.
+GUIDED_SECONDS = 10.0
+
+
+def settled_by_guided_search(net: Net, queries: Sequence[q.Query],
+                             seconds: float = GUIDED_SECONDS, max_states: int = MAX_STATES,
+                             max_memory: int | None = None) -> dict[str, Settled]:
+    """The reachability questions a best-first search settles: for ``E F φ`` (``A G φ``:
+    not φ) the marking nearest φ by :func:`distance` is fired next, from M0, until one
+    satisfies it (``E F φ`` true, ``A G φ`` false), within ``seconds`` over the questions
+    (shared equally) and ``max_states`` markings (or the memory budget's share) each.
+    Every marking met was fired to, so it is reachable; the found one is checked by the
+    formula's own evaluation (:class:`Truths`) before it is believed; the search proves
+    nothing by what it does not meet."""
+    s = structure(net)
+    asked = []
+    for x in queries:
+        r = reachability(x.asks)
+        if r is not None:
+            exists, phi = r
+            try:
+                asked.append((x, exists, phi if exists else q.Neg(phi),
+                              distance(phi if exists else q.Neg(phi), s)))
+            except (KeyError, LookupError):
+                continue
+    settled: dict[str, Settled] = {}
+    if not asked:
+        return settled
+    budget = max_memory if max_memory is not None else default_memory()
+    limit = max(1, min(max_states, budget // (BEST_FIRST_BYTES + 8 * len(s.places))))
+    firing = Firing(s)
+    m0 = np.array(s.initial_vector(), dtype=np.int64)
+    end = time.monotonic() + seconds
+    for n, (x, exists, target, far) in enumerate(asked):
+        left = end - time.monotonic()
+        if left <= 0:
+            break
+        near = _distances(s, np.array(sorted(_support(target, s)), dtype=np.int64))
+        found = _nearest_first(firing, m0, far, near, limit,
+                               time.monotonic() + left / (len(asked) - n))
+        if found is not None and Truths(s, ListedMarkings([found.tolist()])).of(target)[0]:
+            settled[x.id] = (exists, "EXPLICIT BEST_FIRST")
+    return settled
+
+
+def _support(phi, s) -> set[int]:
+    """The places ``phi`` counts, and the input places of the transitions it names."""
+    if isinstance(phi, q.TokensCount):
+        return {s.place_index[p] for p in phi.places}
+    if isinstance(phi, q.IntLe):
+        return _support(phi.left, s) | _support(phi.right, s)
+    if isinstance(phi, q.Fireable):
+        return {p for t in phi.transitions for arcs in (s.pre[s.transition_index[t]],
+                                                        s.read[s.transition_index[t]])
+                for p in arcs}
+    if isinstance(phi, (q.IntConst, q.BoolConst, q.Deadlock)):
+        return set()
+    return set().union(*(_support(a, s) for a in q.children(phi)))
+
+
+def _nearest_first(firing: Firing, m0: np.ndarray, far, near: np.ndarray, limit: int,
+                   deadline: float) -> np.ndarray | None:
+    """A marking at distance 0 (``far``), the nearest fired first; among equally near
+    ones, the one whose tokens lie fewest firings from the formula's places (``near``,
+    a place's, as for the bounds), then the first met; within ``limit`` markings and the
+    deadline. None where none is met."""
+    seen = {m0.tobytes()}
+    heap = [(int(far(m0[None, :])[0]), int(m0 @ near), 0, m0.tobytes())]
+    order = popped = 1
+    while heap:
+        value, _, _, key = heapq.heappop(heap)
+        if value == 0:
+            return np.frombuffer(key, dtype=np.int64)
+        popped += 1
+        if popped % 256 == 0 and time.monotonic() > deadline:
+            return None
+        rows = firing.successors(np.frombuffer(key, dtype=np.int64))
+        if not len(rows):
+            continue
+        for row, v, h in zip(rows, far(rows).tolist(), (rows @ near).tolist()):
+            k = row.tobytes()
+            if k not in seen and v < BIG:
+                if len(seen) >= limit:
+                    return None
+                seen.add(k)
+                heapq.heappush(heap, (v, h, order, k))
+                order += 1
+    return None
 
 
 # -- on the fly: the property checker's engine ---------------------------------------

@@ -12,8 +12,9 @@ precision, not soundness.
 A state formula of the contest is put in disjunctive normal form over linear
 constraints on M (``sum <= sum``; a transition enabled: each of its input places
 holds its arc's weight), each disjunct an integer program solved by HiGHS (scipy's
-``milp``): the formula is unreachable when every disjunct is infeasible. A deadlock,
-or a normal form past :data:`MAX_DISJUNCTS`, is not asked. This is the contest's
+``milp``): the formula is unreachable when every disjunct is infeasible. A deadlock
+alone is one program of its own (:func:`dead_unreachable`); inside a larger formula, or
+a normal form past :data:`MAX_DISJUNCTS`, it is not asked. This is the contest's
 ``STATE_EQUATION`` technique, as verifypn and LoLA use it (verifypn: Jensen, Nielsen,
 Oestergaard and Srba, "TAPAAL and reachability analysis of P/T nets", 2016).
 
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import time
 from functools import lru_cache
+from typing import Callable
 from itertools import product
 
 import numpy as np
@@ -44,10 +46,15 @@ class _TooLarge(Exception):
     """The formula has no normal form this module takes (a deadlock, too many disjuncts)."""
 
 
-def unreachable(s: Structure, phi, seconds: float = SOLVE_SECONDS) -> bool:
+def unreachable(s: Structure, phi, seconds: float = SOLVE_SECONDS,
+                place_bound: Callable[[int], int | None] = lambda p: None) -> bool:
     """Whether the state equation proves that no reachable marking of ``s``'s net
     satisfies the state formula ``phi`` (True); False: not proven (it may be reachable,
-    or ``seconds`` ran out). A place or transition the net does not have raises KeyError."""
+    or ``seconds`` ran out). A place or transition the net does not have raises KeyError.
+    ``place_bound``: proven upper bounds of single places, by index, for a deadlock
+    (:func:`dead_unreachable`)."""
+    if isinstance(phi, q.Deadlock):
+        return dead_unreachable(s, seconds, place_bound)
     try:
         disjuncts = _normal_form(phi, s, True)
     except _TooLarge:
@@ -156,6 +163,80 @@ def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> 
                   integrality=np.ones(transitions), bounds=Bounds(0, np.inf),
                   options={"time_limit": seconds, "presolve": True})
     # 2: infeasible; anything else (a solution, a time limit, unbounded) decides nothing
+    return result.status == 2
+
+
+def dead_unreachable(s: Structure, seconds: float = SOLVE_SECONDS,
+                     place_bound: Callable[[int], int | None] = lambda p: None) -> bool:
+    """Whether no integer solution of the state equation is a dead marking, so that no
+    reachable marking is (True; False: not proven).
+
+    A transition is disabled where one of its input places p holds less than its arc's
+    weight w: one binary ``y[p, w]`` per (place, weight) says ``M(p) <= w - 1``, and each
+    transition needs one of its own set. ``y`` is tied to M by a big M, which must be a
+    proven bound of M(p), or the program would leave out markings that hold more (and
+    prove "unreachable" wrongly): ``M(p) <= w - 1 + B(p) (1 - y)``, ``B(p)`` from
+    ``place_bound`` (the P-invariants), else from the equation's linear relaxation. A
+    transition with an unbounded input place is left out of the program: the markings it
+    asks about are then more, never fewer, and an infeasible program still proves.
+    A transition without input places is always enabled: no marking is dead."""
+    from scipy.optimize import Bounds, LinearConstraint, linprog, milp   # as in _infeasible
+    from scipy.sparse import coo_matrix, csr_matrix, hstack
+
+    end = time.monotonic() + seconds
+    c, m0 = incidence_matrix(s)
+    if any(not pre and not read for pre, read in zip(s.pre, s.read)):
+        return True
+    bounds: dict[int, float | None] = {}
+
+    def bound(p: int) -> float | None:
+        if p not in bounds:
+            b = place_bound(p)
+            if b is None and time.monotonic() < end:
+                # max M(p) = M0(p) + C[p] x over the real solutions: an upper bound of
+                # every integer one
+                r = linprog(-c[p].toarray().ravel(), A_ub=-c, b_ub=m0, bounds=(0, None),
+                            method="highs",
+                            options={"time_limit": max(0.01, end - time.monotonic())})
+                b = None if r.status != 0 else np.floor(m0[p] - r.fun + 1e-6)
+            bounds[p] = b
+        return bounds[p]
+    ys: dict[tuple[int, int], int] = {}        # (place, weight): its binary's column
+    choices: list[list[int]] = []              # each transition kept: its binaries
+    for pre, read in zip(s.pre, s.read):
+        needs = {**read, **pre}
+        if any(bound(p) is None for p in needs):
+            continue                            # left out: more markings, still sound
+        choices.append([ys.setdefault((p, max(w, read.get(p, 0))), len(ys))
+                        for p, w in needs.items()])
+    if time.monotonic() >= end:
+        return False
+    transitions, n = len(s.transitions), len(s.transitions) + len(ys)
+    rows, cols, values, upper = [], [], [], []
+    for (p, w), k in ys.items():               # C[p] x + B y <= w - 1 + B - M0(p)
+        big = bound(p)
+        row = len(upper)
+        start, stop = c.indptr[p], c.indptr[p + 1]
+        rows += [row] * (stop - start) + [row]
+        cols += list(c.indices[start:stop]) + [transitions + k]
+        values += list(c.data[start:stop]) + [big]
+        upper.append(w - 1 + big - m0[p])
+    tied = coo_matrix((values, (rows, cols)), shape=(len(upper), n)).tocsr()
+    pick = coo_matrix(([1.0] * sum(map(len, choices)),
+                       ([i for i, ks in enumerate(choices) for _ in ks],
+                        [transitions + k for ks in choices for k in ks])),
+                      shape=(len(choices), n)).tocsr()
+    marking = hstack([c, csr_matrix((c.shape[0], len(ys)))]).tocsr()
+    constraints = [LinearConstraint(marking, -m0, np.inf)]           # M >= 0
+    if len(upper):
+        constraints.append(LinearConstraint(tied, -np.inf, np.asarray(upper)))
+    if choices:
+        constraints.append(LinearConstraint(pick, 1, np.inf))
+    upper_x = np.concatenate([np.full(transitions, np.inf), np.ones(len(ys))])
+    result = milp(np.zeros(n), constraints=constraints, integrality=np.ones(n),
+                  bounds=Bounds(0, upper_x),
+                  options={"time_limit": max(0.01, end - time.monotonic()),
+                           "presolve": True})
     return result.status == 2
 
 

@@ -8,7 +8,8 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcl2pnml.analysis.contest.answers import answer
 from mcl2pnml.analysis.contest.reachability_queries import ListedMarkings, Truths
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
-from mcl2pnml.analysis.structure.state_equation import unreachable, upper_bound
+from mcl2pnml.analysis.structure.state_equation import (dead_unreachable, unreachable,
+                                                        upper_bound)
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.net import NetBuilder
 from mcl2pnml.core.structure import structure
@@ -147,3 +148,30 @@ def test_the_equation_bounds_the_mutex_and_query_answers_with_a_witness():
     got = answer(_mutex(), [q.Query("busy", q.PlaceBound(("busy1", "busy2")))], max_states=2)
     assert (got[0].value, got[0].technique) in {(1, "EXPLICIT STRUCTURAL P_INVARIANTS"),
                                                 (1, "EXPLICIT STATE_EQUATION")}
+
+
+@settings(max_examples=sample(800, 100), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(st.data())
+def test_what_it_calls_deadlock_free_has_no_reachable_dead_marking(data):
+    net = data.draw(nets())
+    s = structure(net)
+    try:
+        space = explore(net, max_states=5_000)
+    except ExplorationLimit:
+        return
+    if space.coverability:
+        return
+    # the big M from each place's true largest count (the tightest a proof can give), or
+    # from none (the equation's relaxation): neither may leave a dead marking out
+    most = [max(int(m[i]) for m in space.markings) for i in range(len(s.places))]
+    given_bounds = data.draw(st.booleans())
+    proven = dead_unreachable(s, place_bound=(lambda p: most[p]) if given_bounds
+                              else (lambda p: None))
+    assert not (proven and space.terminal), (net, given_bounds)
+
+
+def test_the_mutex_is_proven_deadlock_free_and_the_line_is_not():
+    assert dead_unreachable(structure(_mutex()))
+    assert unreachable(structure(_mutex()), q.Deadlock())
+    assert not dead_unreachable(structure(_line()))      # its last marking is dead

@@ -1,0 +1,82 @@
+"""The best-first search for reachability witnesses (``settled_by_guided_search``,
+analysis/contest/reachability_queries.py): its distance is 0 exactly where the formula
+holds, and what it settles is what exploring the whole graph says, a witness found
+wherever one exists on a graph it can search whole."""
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from mcl2pnml.analysis.contest.reachability_queries import (ListedMarkings, Truths, distance,
+                                                            settled_by_guided_search)
+from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.structure import structure
+from sampling import sample
+from strategies import nets
+from test_state_equation import formulas
+
+SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                      HealthCheck.filter_too_much])
+
+
+def _markings(net):
+    try:
+        space = explore(net, max_states=2_000)
+    except ExplorationLimit:
+        return None
+    if space.coverability:
+        return None
+    return [[int(v) for v in m] for m in space.markings]
+
+
+def _with_deadlocks(places, transitions):
+    """:func:`formulas`, with a deadlock atom inside some of them."""
+    return st.one_of(formulas(places, transitions),
+                     st.just(q.Deadlock()), st.just(q.Neg(q.Deadlock())),
+                     formulas(places, transitions).map(lambda f: q.Conj((f, q.Deadlock()))),
+                     formulas(places, transitions).map(lambda f: q.Disj((q.Neg(q.Deadlock()),
+                                                                         f))))
+
+
+def _drawn(data):
+    """A random net small enough to explore, its markings, and a formula over it; None
+    where the net is too large or unbounded."""
+    net = data.draw(nets())
+    s = structure(net)
+    markings = _markings(net)
+    if not markings:
+        return None
+    return net, s, markings, data.draw(_with_deadlocks(list(s.places), list(s.transitions)))
+
+
+@settings(max_examples=sample(800, 100), **SETTINGS)
+@given(st.data())
+def test_the_distance_is_zero_exactly_where_the_formula_holds(data):
+    drawn = _drawn(data)
+    if drawn is None:
+        return
+    net, s, markings, phi = drawn
+    far = distance(phi, s)(np.asarray(markings, dtype=np.int64))
+    holds = Truths(s, ListedMarkings(markings)).of(phi)
+    assert ((far == 0) == np.asarray(holds, dtype=bool)).all(), (net, phi)
+    assert (far >= 0).all()
+
+
+@settings(max_examples=sample(300, 50), **SETTINGS)
+@given(st.data())
+def test_what_it_settles_is_what_the_whole_graph_says(data):
+    drawn = _drawn(data)
+    if drawn is None:
+        return
+    net, s, markings, phi = drawn
+    asks = [q.Query("ef", q.ExistsPath(q.Finally(phi))),
+            q.Query("ag", q.AllPaths(q.Globally(phi)))]
+    reached = Truths(s, ListedMarkings(markings)).of(phi)
+    truth = {"ef": bool(np.any(reached)), "ag": bool(np.all(reached))}
+    settled = settled_by_guided_search(net, asks, seconds=60)
+    for k, (value, technique) in settled.items():
+        assert value == truth[k] and technique == "EXPLICIT BEST_FIRST", (net, phi, k)
+    # the graph is small: the search meets every marking before its time is out, so a
+    # witness that exists is found
+    assert ("ef" in settled) == truth["ef"] and ("ag" in settled) == (not truth["ag"])
