@@ -73,6 +73,7 @@ from mcl2pnml.analysis.contest.reachability_queries import (BEST_FIRST_SECONDS,
                                                             ListedMarkings, Truths,
                                                             reach_on_the_fly,
                                                             settled_by_best_first,
+                                                            settled_by_equation_witness,
                                                             settled_by_found,
                                                             settled_by_guided_search,
                                                             settled_by_state_equation,
@@ -414,8 +415,9 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     then the formulas one search on the fly decides (LTL under stubborn sets, then CTL's
     dependency graph), then what random walks meet (:func:`settled_by_walks`, witnesses
     as found markings are) and what the runs of walkers that close show
-    (:func:`settled_by_runs`), then the witnesses a best-first search by the formula's
-    distance meets (:func:`settled_by_guided_search`), then the upper bounds a best-first
+    (:func:`settled_by_runs`), then the state equation's solutions fired
+    (:func:`settled_by_equation_witness`), then the witnesses a best-first search by the
+    formula's distance meets (:func:`settled_by_guided_search`), then the upper bounds a best-first
     search reaches (:func:`settled_by_best_first`), then the state space is explored to
     limits ten times larger each up to ``max_states`` (:func:`_stages`), the markings of each one stopped witnesses again, and walks and
     runs twice as long as the last after each (their own seed each: new walks). With
@@ -466,6 +468,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         # walks, twice as long each time, after each larger exploration stopped
         yield from settle(settled_by_walks(net, left()))
         yield from settle(settled_by_runs(net, left()))
+        yield from settle(settled_by_equation_witness(net, left()))
         yield from settle(settled_by_guided_search(net, left(), max_states=max_states,
                                                    max_memory=max_memory))
         yield from settle(settled_by_best_first(net, left(), max_states=max_states,

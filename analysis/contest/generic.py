@@ -53,6 +53,7 @@ from mcl2pnml.core.structure import structure
 from mcl2pnml.analysis.contest.answers import (FIRST_STATES, Answer, Graph, _space,
                                                answers_as_found)
 from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS,
+                                                            settled_by_equation_witness,
                                                             settled_by_guided_search,
                                                             settled_by_state_equation,
                                                             settled_by_walks)
@@ -206,8 +207,8 @@ def _settled_by(net: Net, name: str, atoms: tuple[list[q.Query], bool, int], max
                 max_memory: int | None) -> Answer:
     """``name`` decided by ``atoms`` (:func:`_atoms`'s triple): as soon as an atom settles
     against "every" (or for "one"), or every deciding one has; else unanswered with the
-    reason of the first deciding one open. The state equation's proofs and random walks'
-    witnesses come first: an examination's atoms are many (hundreds, a place or a
+    reason of the first deciding one open. The state equation's proofs, random walks'
+    witnesses, the equation's solutions fired and the guided search come first: an examination's atoms are many (hundreds, a place or a
     transition each) and mostly settled so, where the formula files' portfolio would
     give each its own search first; what they leave goes through the portfolio
     (:func:`~.answers.answers_as_found`)."""
@@ -231,7 +232,8 @@ def _settled_by(net: Net, name: str, atoms: tuple[list[q.Query], bool, int], max
         return None
     done: set[str] = set()
     value = None
-    for technique in (settled_by_state_equation, settled_by_walks, settled_by_guided_search):
+    for technique in (settled_by_state_equation, settled_by_walks, settled_by_equation_witness,
+                      settled_by_guided_search):
         if value is None:
             got = technique(net, [x for x in queries if x.id not in done])
             done.update(got)

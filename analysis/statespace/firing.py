@@ -50,6 +50,13 @@ class Firing:
         found = self.needy[ok]
         return np.union1d(found, self.free) if len(self.free) else found
 
+    def fire(self, m: np.ndarray, j: int) -> np.ndarray:
+        """The marking ``m`` leads to by firing transition ``j`` (enabled: not checked)."""
+        after = m.copy()
+        first, last = self.delta_ptr[j], self.delta_ptr[j + 1]
+        after[self.delta_place[first:last]] += self.delta_weight[first:last]
+        return after
+
     def successors(self, m: np.ndarray) -> np.ndarray:
         """The markings ``m`` leads to, a row each (one per enabled transition)."""
         fired = self.enabled_all(m)

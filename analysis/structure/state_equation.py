@@ -141,6 +141,14 @@ def incidence_matrix(s: Structure):
 
 def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> bool:
     """Whether no integer x >= 0 gives M = M0 + C x >= 0 meeting every constraint."""
+    return _solve(s, conjunction, seconds, False)[0] == 2
+
+
+def _solve(s: Structure, conjunction: list[Constraint], seconds: float, fewest: bool
+           ) -> tuple[int, np.ndarray | None]:
+    """HiGHS's status on the equation with ``conjunction`` (0: solved, 2: infeasible,
+    anything else: nothing known) and its integer solution x, if any; ``fewest``: the
+    solution with the fewest firings."""
     # scipy's optimize and sparse, 0.7 s (python -X importtime): only when a question
     # is asked, not at every command's start
     from scipy.optimize import Bounds, LinearConstraint, milp
@@ -149,7 +157,8 @@ def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> 
     c, m0 = incidence_matrix(s)
     places, transitions = len(s.places), len(s.transitions)
     if transitions == 0:        # M0 is the only marking
-        return not all(sum(v * m0[p] for p, v in k.items()) <= b for k, b in conjunction)
+        ok = all(sum(v * m0[p] for p, v in k.items()) <= b for k, b in conjunction)
+        return (0, np.zeros(0, dtype=np.int64)) if ok else (2, None)
     # each constraint a . M <= b is a . C x <= b - a . M0
     a = coo_matrix(([v for k, _ in conjunction for v in k.values()],
                     ([i for i, (k, _) in enumerate(conjunction) for _ in k],
@@ -159,11 +168,32 @@ def _infeasible(s: Structure, conjunction: list[Constraint], seconds: float) -> 
     constraints = [LinearConstraint(c, -m0, np.inf)]          # M >= 0
     if conjunction:
         constraints.append(LinearConstraint(a @ c, -np.inf, bound))
-    result = milp(np.zeros(transitions), constraints=constraints,
-                  integrality=np.ones(transitions), bounds=Bounds(0, np.inf),
-                  options={"time_limit": seconds, "presolve": True})
-    # 2: infeasible; anything else (a solution, a time limit, unbounded) decides nothing
-    return result.status == 2
+    result = milp(np.ones(transitions) if fewest else np.zeros(transitions),
+                  constraints=constraints, integrality=np.ones(transitions),
+                  bounds=Bounds(0, np.inf), options={"time_limit": seconds, "presolve": True})
+    x = None if result.x is None else np.rint(result.x).astype(np.int64)
+    return result.status, x
+
+
+def firing_counts(s: Structure, phi, seconds: float = SOLVE_SECONDS) -> list[np.ndarray]:
+    """For each disjunct of ``phi`` that the equation does not rule out, its solution with
+    the fewest firings: how often each transition would fire on a run to a marking that
+    satisfies it, were the solution a run (it need not be: the caller fires it to see).
+    Within ``seconds``; [] where ``phi`` has no normal form taken here."""
+    try:
+        disjuncts = _normal_form(phi, s, True)
+    except _TooLarge:
+        return []
+    end = time.monotonic() + seconds
+    found = []
+    for conj in disjuncts:
+        left = min(SOLVE_SECONDS, end - time.monotonic())
+        if left <= 0:
+            break
+        status, x = _solve(s, conj, left, True)
+        if x is not None and status in (0, 1):
+            found.append(x)
+    return found
 
 
 def dead_unreachable(s: Structure, seconds: float = SOLVE_SECONDS,

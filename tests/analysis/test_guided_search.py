@@ -1,13 +1,16 @@
-"""The best-first search for reachability witnesses (``settled_by_guided_search``,
-analysis/contest/reachability_queries.py): its distance is 0 exactly where the formula
-holds, and what it settles is what exploring the whole graph says, a witness found
-wherever one exists on a graph it can search whole."""
+"""The searches for reachability witnesses without a graph
+(analysis/contest/reachability_queries.py): the best-first search by a formula's distance
+(``settled_by_guided_search``; the distance is 0 exactly where the formula holds), a
+witness found wherever one exists on a graph it can search whole; and the state
+equation's solutions fired (``settled_by_equation_witness``). What each settles is what
+exploring the whole graph says."""
 from __future__ import annotations
 
 import numpy as np
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from mcl2pnml.analysis.contest.reachability_queries import (ListedMarkings, Truths, distance,
+                                                            settled_by_equation_witness,
                                                             settled_by_guided_search)
 from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.core import queries as q
@@ -63,20 +66,51 @@ def test_the_distance_is_zero_exactly_where_the_formula_holds(data):
     assert (far >= 0).all()
 
 
-@settings(max_examples=sample(300, 50), **SETTINGS)
-@given(st.data())
-def test_what_it_settles_is_what_the_whole_graph_says(data):
+def _asked(data):
+    """:func:`_drawn`'s net and formula, asked as ``E F φ`` (id ``ef``) and ``A G φ``
+    (``ag``), with the whole graph's answers; None as :func:`_drawn`."""
     drawn = _drawn(data)
     if drawn is None:
-        return
+        return None
     net, s, markings, phi = drawn
     asks = [q.Query("ef", q.ExistsPath(q.Finally(phi))),
             q.Query("ag", q.AllPaths(q.Globally(phi)))]
     reached = Truths(s, ListedMarkings(markings)).of(phi)
-    truth = {"ef": bool(np.any(reached)), "ag": bool(np.all(reached))}
+    return net, phi, asks, {"ef": bool(np.any(reached)), "ag": bool(np.all(reached))}
+
+
+@settings(max_examples=sample(300, 50), **SETTINGS)
+@given(st.data())
+def test_what_it_settles_is_what_the_whole_graph_says(data):
+    asked = _asked(data)
+    if asked is None:
+        return
+    net, phi, asks, truth = asked
     settled = settled_by_guided_search(net, asks, seconds=60)
     for k, (value, technique) in settled.items():
         assert value == truth[k] and technique == "EXPLICIT BEST_FIRST", (net, phi, k)
     # the graph is small: the search meets every marking before its time is out, so a
     # witness that exists is found
     assert ("ef" in settled) == truth["ef"] and ("ag" in settled) == (not truth["ag"])
+
+
+@settings(max_examples=sample(300, 50), **SETTINGS)
+@given(st.data())
+def test_what_a_fired_solution_settles_is_what_the_whole_graph_says(data):
+    asked = _asked(data)
+    if asked is None:
+        return
+    net, phi, asks, truth = asked
+    for k, (value, technique) in settled_by_equation_witness(net, asks).items():
+        assert value == truth[k] and technique == "EXPLICIT STATE_EQUATION", (net, phi, k)
+
+
+def test_a_solution_is_fired_to_its_marking():
+    """``a -> b -> c``, one token: the solution t1 once, t2 once is a run to c."""
+    from test_state_equation import _line
+    c_marked = q.IntLe(q.IntConst(1), q.TokensCount(("c",)))
+    got = settled_by_equation_witness(_line(), [
+        q.Query("ef", q.ExistsPath(q.Finally(c_marked))),
+        q.Query("ag", q.AllPaths(q.Globally(q.Neg(c_marked))))])
+    assert got == {"ef": (True, "EXPLICIT STATE_EQUATION"),
+                   "ag": (False, "EXPLICIT STATE_EQUATION")}
