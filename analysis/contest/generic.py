@@ -147,6 +147,10 @@ def _by_atoms(net: Net, name: str, max_states: int, max_memory: int | None) -> A
     if tokens is not None:
         return Answer(name, _on_state_machine(name, tokens, len(s.places)),
                       "STRUCTURAL STATE_MACHINE")
+    if name == "StableMarking" and any(not row for row in s.incidence_rows):
+        return Answer(name, True, "STRUCTURAL")      # no transition changes that place
+    if name == "QuasiLiveness" and _never_again(s, 0.0):
+        return Answer(name, False, "STRUCTURAL SIPHON_TEST")   # M0 alone: dead already
     if name != "Liveness":
         return _settled_by(net, name, _atoms(net, name), max_states, max_memory)
     if _never_again(s, WALK_SECONDS):
@@ -181,18 +185,19 @@ def _on_state_machine(name: str, tokens: int, places: int) -> bool:
 
 
 def _never_again(s, seconds: float) -> bool:
-    """Whether a marking that random walks meet (or M0) has an empty siphon with a
-    transition that needs it: that siphon stays empty, so the transition never fires
-    again, and the net is not live (Murata 1989: a siphon emptied stays empty). Each
-    pattern of empty places is asked once (:func:`max_siphon_within`), within
-    ``seconds``."""
+    """Whether M0, or a marking that random walks meet within ``seconds``, has an empty
+    siphon with a transition that needs it: that siphon stays empty, so the transition
+    never fires again, and the net is not live (Murata 1989: a siphon emptied stays
+    empty); at M0, the transition never fires at all. Each pattern of empty places is
+    asked once (:func:`max_siphon_within`)."""
     places = len(s.places)
     m0 = np.asarray(s.initial_vector(), dtype=np.int64)[None, :]
     asked: set[bytes] = set()
     end = time.monotonic() + seconds
-    for batch in chain([m0], random_walks(s, seconds)):
+    walks = random_walks(s, seconds) if seconds > 0 else iter(())
+    for batch in chain([m0], walks):
         for row in np.unique(np.packbits(batch == 0, axis=1), axis=0):
-            if time.monotonic() > end:
+            if asked and time.monotonic() > end:      # M0's, at least
                 return False
             if row.tobytes() in asked:
                 continue
@@ -208,10 +213,10 @@ def _settled_by(net: Net, name: str, atoms: tuple[list[q.Query], bool, int], max
     """``name`` decided by ``atoms`` (:func:`_atoms`'s triple): as soon as an atom settles
     against "every" (or for "one"), or every deciding one has; else unanswered with the
     reason of the first deciding one open. The state equation's proofs, random walks'
-    witnesses, the equation's solutions fired and the guided search come first: an examination's atoms are many (hundreds, a place or a
-    transition each) and mostly settled so, where the formula files' portfolio would
-    give each its own search first; what they leave goes through the portfolio
-    (:func:`~.answers.answers_as_found`)."""
+    witnesses, the equation's solutions fired and the guided search come first: an
+    examination's atoms are many (hundreds, a place or a transition each) and mostly
+    settled so, where the formula files' portfolio would give each its own search first;
+    what they leave goes through the portfolio (:func:`~.answers.answers_as_found`)."""
     queries, every, refuting = atoms
     deciding = {x.id for x in queries[refuting:]}
     techniques: list[str] = []
@@ -232,8 +237,13 @@ def _settled_by(net: Net, name: str, atoms: tuple[list[q.Query], bool, int], max
         return None
     done: set[str] = set()
     value = None
-    for technique in (settled_by_state_equation, settled_by_walks, settled_by_equation_witness,
-                      settled_by_guided_search):
+    # the witnesses first where the atoms are mostly settled by one (a place that moves, a
+    # transition that fires), the proofs first where they are mostly proven
+    witnesses = (settled_by_walks, settled_by_equation_witness)
+    proofs = (settled_by_state_equation,)
+    first = witnesses + proofs if name in ("StableMarking", "QuasiLiveness") \
+        else proofs + witnesses
+    for technique in (*first, settled_by_guided_search):
         if value is None:
             got = technique(net, [x for x in queries if x.id not in done])
             done.update(got)

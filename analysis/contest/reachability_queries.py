@@ -580,7 +580,7 @@ def distance(phi, s) -> Callable[[np.ndarray], np.ndarray]:
 BIG = 1 << 40
 #: Seconds the guided searches for reachability witnesses may take over the questions of
 #: one command, at first.
-GUIDED_SECONDS = 10.0
+GUIDED_SECONDS = 5.0
 
 
 def settled_by_guided_search(net: Net, queries: Sequence[q.Query],
@@ -671,50 +671,68 @@ def _nearest_first(firing: Firing, m0: np.ndarray, far, near: np.ndarray, limit:
 
 #: Orders in which a solution of the state equation is fired before it is given up.
 FIRING_TRIES = 16
+#: Seconds the state equation's solutions may be sought and fired over the questions of
+#: one command.
+FIRED_SOLUTION_SECONDS = 5.0
 
 
 def settled_by_equation_witness(net: Net, queries: Sequence[q.Query],
-                                seconds: float = STATE_EQUATION_SECONDS, seed: int = 0
+                                seconds: float = FIRED_SOLUTION_SECONDS, seed: int = 0
                                 ) -> dict[str, Settled]:
     """The reachability questions a solution of the state equation, fired, settles: for
     ``E F φ`` (``A G φ``: not φ) the solution with the fewest firings of each disjunct
     (:func:`state_equation.firing_counts`) is fired from M0, an enabled transition with
     firings left at each step (the first, then in random orders, :data:`FIRING_TRIES`),
-    until a marking satisfies φ (``E F φ`` true, ``A G φ`` false). The markings are fired
-    to, so reachable, and the one found is checked by φ's own evaluation; a solution that
-    cannot be fired proves nothing (LoLA's Sara: Schmidt, Wimmel; it refines such a
-    solution, this does not). Within ``seconds`` over the questions."""
+    until a marking satisfies φ (``E F φ`` true, ``A G φ`` false). Every marking on the
+    way is fired to, so reachable: each is a witness for the other questions too, checked
+    after each solution fired. A witness is checked by the formula's own evaluation; a
+    solution that cannot be fired proves nothing (LoLA's Sara: Schmidt, Wimmel; it
+    refines such a solution, this does not). Within ``seconds`` over the questions."""
     s = structure(net)
     settled: dict[str, Settled] = {}
     firing = Firing(s)
     m0 = np.array(s.initial_vector(), dtype=np.int64)
     rng = np.random.default_rng(seed)
     end = time.monotonic() + seconds
+    pending = []
     for x in queries:
         r = reachability(x.asks)
-        left = end - time.monotonic()
-        if r is None or left <= 0:
-            continue
-        exists, phi = r
-        target = phi if exists else q.Neg(phi)
+        if r is not None:
+            exists, phi = r
+            pending.append((x.id, exists, phi if exists else q.Neg(phi)))
+    while pending and time.monotonic() < end:
+        k, exists, target = pending.pop(0)
+        met: list[np.ndarray] = []
         try:
             far = distance(target, s)
-            counts = state_equation.firing_counts(s, target, left)
+            for counts in state_equation.firing_counts(s, target, end - time.monotonic()):
+                if _fired(firing, m0, counts, far, rng, end, met) is not None:
+                    break
         except (KeyError, LookupError):
             continue
-        for fired in counts:
-            found = _fired(firing, m0, fired, far, rng, end)
-            if found is not None and Truths(s, ListedMarkings([found.tolist()])).of(target)[0]:
-                settled[x.id] = (exists, "EXPLICIT STATE_EQUATION")
-                break
+        if not met:
+            continue
+        # the markings met are witnesses for this question and for the ones still waiting
+        truths = Truths(s, ListedMarkings([m.tolist() for m in met]))
+        left = []
+        for item in [(k, exists, target), *pending]:
+            try:
+                hit = bool(np.any(truths.of(item[2])))
+            except (KeyError, LookupError):
+                hit = False
+            if hit:
+                settled[item[0]] = (item[1], "EXPLICIT STATE_EQUATION")
+            elif item[0] != k:
+                left.append(item)
+        pending = left
     return settled
 
 
-def _fired(firing: Firing, m0: np.ndarray, counts: np.ndarray, far, rng, deadline: float
-           ) -> np.ndarray | None:
+def _fired(firing: Firing, m0: np.ndarray, counts: np.ndarray, far, rng, deadline: float,
+           met: list[np.ndarray]) -> np.ndarray | None:
     """A marking at distance 0 (``far``) met while firing ``counts`` from ``m0``, an
     enabled transition with firings left at each step; None where every order tried
-    stops short of one."""
+    stops short of one. Each marking fired to is added to ``met``."""
     for attempt in range(FIRING_TRIES):
         if attempt and time.monotonic() > deadline:
             return None
@@ -728,6 +746,7 @@ def _fired(firing: Firing, m0: np.ndarray, counts: np.ndarray, far, rng, deadlin
                 break
             j = int(ready[0] if attempt == 0 else rng.choice(ready))
             m = firing.fire(m, j)
+            met.append(m)
             left[j] -= 1
     return None
 

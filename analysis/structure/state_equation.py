@@ -210,7 +210,8 @@ def dead_unreachable(s: Structure, seconds: float = SOLVE_SECONDS,
     transition with an unbounded input place is left out of the program: the markings it
     asks about are then more, never fewer, and an infeasible program still proves.
     A transition without input places is always enabled: no marking is dead."""
-    from scipy.optimize import Bounds, LinearConstraint, linprog, milp   # as in _infeasible
+    # scipy's optimize and sparse, 0.7 s: only when asked, as in _solve
+    from scipy.optimize import Bounds, LinearConstraint, linprog, milp
     from scipy.sparse import coo_matrix, csr_matrix, hstack
 
     end = time.monotonic() + seconds

@@ -99,7 +99,7 @@ def query_as_found(net_path: Path, formulas: Sequence[Path],
             yield from mcc.answers_as_found(net, queries, max_states=o.max_states,
                                             max_memory=max_memory, stubborn=o.stubborn)
         if o.examinations:
-            from mcl2pnml.analysis.contest.generic import generic_as_found
+            from mcl2pnml.analysis.contest.generic import generic_as_found  # as mcc, above
             yield from generic_as_found(net, o.examinations, max_states=o.max_states,
                                         max_memory=max_memory)
     return QueryStream(net.name, [x.id for x in queries] + list(o.examinations), answers())
