@@ -11,30 +11,28 @@ is built and decides each examination at once, as one pass over its markings (a 
 place: a bit the same in the OR and the AND of the packed markings; liveness: every
 transition fires in every bottom strongly connected component).
 
-Past it, an examination is what its *atoms* say, each a question of the contest's
-formula language answered by the formula files' portfolio
-(:func:`~.answers.answers_as_found`: witnesses, the state equation, the P-invariants,
-searches on the fly, walks, larger explorations), as the contest's tools split them
-(Thierry-Mieg's ITS-Tools, its global-property solver):
+Past it, structure first: on a strongly connected state machine every distribution of
+the tokens is reachable, and each examination follows from their number; a place no
+transition changes is a stable one; an empty siphon at M0 with a consumer leaves a
+transition that never fires. Then an examination is what its *atoms* say, each a question
+of the contest's formula language, as the contest's tools split them (Thierry-Mieg's
+ITS-Tools, its global-property solver):
 
-=================== ======================================= =========================
-examination         atoms                                   holds where
-=================== ======================================= =========================
-ReachabilityDeadlock ``E F deadlock``                        it does
-OneSafe             ``A G (p <= 1)`` for each place p        every one does
-StableMarking       ``A G (p = M0(p))`` for each place p     one does
-QuasiLiveness       ``E F fireable(t)`` for each transition  every one does
-Liveness            ``E F deadlock`` false, then ``E F      every one does
-                    fireable(t)`` and ``A G E F
-                    fireable(t)`` for each transition
-=================== ======================================= =========================
+* ReachabilityDeadlock: ``E F deadlock``;
+* OneSafe: ``A G (p <= 1)`` for each place p, true where every one is;
+* StableMarking: ``A G (p = M0(p))`` for each place p, true where one is;
+* QuasiLiveness: ``E F fireable(t)`` for each transition, true where every one is;
+* Liveness: ``A G E F fireable(t)`` for each transition, true where every one is; refuted
+  first by a marking met by random walks with an empty siphon that a transition needs
+  (that siphon stays empty), then by a reachable deadlock or a transition that never
+  fires (reachability questions, far cheaper), then decided by the whole graph where it
+  can be built.
 
+The atoms go to the state equation, random walks, the equation's solutions fired and the
+guided search, then to the formula files' portfolio (:func:`~.answers.answers_as_found`).
 The answer comes as soon as the atoms settled so far decide it (a false atom decides
-"every one", a true atom "one"), and is unanswered, with the reason, where they do not.
-Liveness asks the deadlock first because a reachable dead marking disables every
-transition for ever (the net is not live where it has a transition), and quasi-liveness
-next because a transition that never fires is not live; both are reachability questions,
-far cheaper than ``A G E F``.
+"every one", a true atom "one"), with the words of the atoms settled up to then, and is
+unanswered, with the reason, where they do not.
 """
 from __future__ import annotations
 

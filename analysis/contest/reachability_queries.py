@@ -21,6 +21,7 @@ exploration, or with ``--stubborn``; docs/query.md has the order).
 from __future__ import annotations
 
 import heapq
+import itertools
 import time
 from collections import Counter
 from typing import Callable, Sequence
@@ -674,6 +675,9 @@ FIRING_TRIES = 16
 #: Seconds the state equation's solutions may be sought and fired over the questions of
 #: one command.
 FIRED_SOLUTION_SECONDS = 5.0
+#: The markings met while firing one question's solutions that are kept as witnesses for
+#: the others (the rest are fired through, not kept).
+MET_MARKINGS = 100_000
 
 
 def settled_by_equation_witness(net: Net, queries: Sequence[q.Query],
@@ -737,7 +741,7 @@ def _fired(firing: Firing, m0: np.ndarray, counts: np.ndarray, far, rng, deadlin
         if attempt and time.monotonic() > deadline:
             return None
         m, left = m0, counts.copy()
-        while True:
+        for step in itertools.count(1):
             if far(m[None, :])[0] == 0:
                 return m
             enabled = firing.enabled_all(m)
@@ -746,8 +750,12 @@ def _fired(firing: Firing, m0: np.ndarray, counts: np.ndarray, far, rng, deadlin
                 break
             j = int(ready[0] if attempt == 0 else rng.choice(ready))
             m = firing.fire(m, j)
-            met.append(m)
+            if len(met) < MET_MARKINGS:
+                met.append(m)
             left[j] -= 1
+            # a solution may ask millions of firings: the clock bounds it too
+            if step % 256 == 0 and time.monotonic() > deadline:
+                return None
     return None
 
 
