@@ -417,10 +417,11 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     as found markings are) and what the runs of walkers that close show
     (:func:`settled_by_runs`), then the state equation's solutions fired
     (:func:`settled_by_equation_witness`), then the witnesses a best-first search by the
-    formula's distance meets (:func:`settled_by_guided_search`), then the upper bounds a best-first
-    search reaches (:func:`settled_by_best_first`), then the state space is explored to
-    limits ten times larger each up to ``max_states`` (:func:`_stages`), the markings of each one stopped witnesses again, and walks and
-    runs twice as long as the last after each (their own seed each: new walks). With
+    formula's distance meets (:func:`settled_by_guided_search`), then the upper bounds a
+    best-first search reaches (:func:`settled_by_best_first`), then the state space is
+    explored to limits ten times larger each up to ``max_states`` (:func:`_stages`), the
+    markings of each one stopped witnesses again, and walks, runs and the guided searches
+    twice as long as the last after each (their own seed each: new walks). With
     ``stubborn``, the reachability questions (``E F φ``, ``A G φ``) of a 1-safe net are
     searched on the fly under partial-order reduction (:func:`reach_on_the_fly`) before
     any graph. Past the graph's limits, the reachability questions are searched on the

@@ -48,20 +48,17 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.structure import structure
 
-from mcl2pnml.analysis.contest.answers import (FIRST_STATES, Answer, Graph, _space,
-                                               answers_as_found)
+from mcl2pnml.analysis.contest import answers
+from mcl2pnml.analysis.contest.answers import FIRST_STATES, Answer, Graph, answers_as_found
 from mcl2pnml.analysis.contest.reachability_queries import (WALK_SECONDS,
                                                             settled_by_equation_witness,
                                                             settled_by_guided_search,
                                                             settled_by_state_equation,
                                                             settled_by_walks)
-from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.packedmarkings import PackedStateSpace
 from mcl2pnml.analysis.statespace.walks import random_walks
 from mcl2pnml.analysis.structure.siphons import max_siphon_within
 from mcl2pnml.analysis.structure.state_machine import free_tokens
-
-_loops = chosen()
 
 #: The contest's generic examinations, by name.
 GENERIC = ("ReachabilityDeadlock", "OneSafe", "StableMarking", "QuasiLiveness", "Liveness")
@@ -82,7 +79,8 @@ def generic_as_found(net: Net, examinations: Sequence[str] = GENERIC, *,
     for name in examinations:
         if name not in GENERIC:
             raise Mcl2PnmlError(f"unknown examination '{name}'; known: {', '.join(GENERIC)}")
-    space, _, _ = _space(net, min(max_states, FIRST_STATES), max_memory)
+    # the portfolio's exploration and graph loops, one of each (a test swaps them there)
+    space, _, _ = answers._space(net, min(max_states, FIRST_STATES), max_memory)
     if space is not None:
         yield from (_on_graph(space, name) for name in examinations)
         return
@@ -160,7 +158,7 @@ def _by_atoms(net: Net, name: str, max_states: int, max_memory: int | None) -> A
                         max_memory)
     if first.value is False:
         return first
-    space, why, _ = _space(net, max_states, max_memory)
+    space, why, _ = answers._space(net, max_states, max_memory)
     if space is not None:
         return _on_graph(space, name)
     del space
@@ -220,10 +218,10 @@ def _settled_by(net: Net, name: str, atoms: tuple[list[q.Query], bool, int], max
     techniques: list[str] = []
     settled, open_ = 0, None
 
-    def found(answers: Iterator[Answer]) -> bool | None:
-        """The examination's value where ``answers`` decide it."""
+    def found(given: Iterator[Answer]) -> bool | None:
+        """The examination's value where ``given`` decide it."""
         nonlocal settled, open_
-        for a in answers:
+        for a in given:
             if a.value is None:
                 if a.id in deciding and open_ is None:
                     open_ = a
@@ -282,7 +280,7 @@ def _live(g: Graph, transitions: int) -> bool:
     """Every transition fires in every bottom strongly connected component: from every
     reachable marking, every transition can fire again."""
     label = np.empty(g.n, dtype=np.int64)
-    count = _loops.scc(*g.real, np.ones(g.n, dtype=np.uint8), label)
+    count = answers._loops.scc(*g.real, np.ones(g.n, dtype=np.uint8), label)
     leaving = label[g.src] != label[g.dst]
     bottom = np.ones(count, dtype=bool)
     bottom[label[g.src[leaving]]] = False

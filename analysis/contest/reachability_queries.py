@@ -489,45 +489,22 @@ def _best_first(firing: Firing, m0: np.ndarray, places: np.ndarray, weights: np.
     """Whether a marking with ``weights`` tokens in ``places`` summing to ``bound`` is met,
     the fullest marking fired first, and among equally full ones the one whose tokens lie
     nearest ``places`` (``distance``, a place's), within ``limit`` markings and the
-    deadline."""
-    seen = {m0.tobytes()}
-    heap = [(-int(m0[places] @ weights), int(m0 @ distance), 0, m0.tobytes())]
-    order = popped = 1
-    while heap:
-        value, _, _, key = heapq.heappop(heap)
-        if -value >= bound:
-            return True
-        popped += 1
-        if popped % 256 == 0 and time.monotonic() > deadline:
-            return False
-        rows = firing.successors(np.frombuffer(key, dtype=np.int64))
-        for row, v, h in zip(rows, (rows[:, places] @ weights).tolist(),
-                             (rows @ distance).tolist()):
-            k = row.tobytes()
-            if k not in seen:
-                if len(seen) >= limit:
-                    return False
-                seen.add(k)
-                heapq.heappush(heap, (-v, h, order, k))   # then the first met first
-                order += 1
-    return False
+    deadline: :func:`_nearest_first`, the distance being the tokens still short of it."""
+    def short(rows: np.ndarray) -> np.ndarray:
+        return np.maximum(bound - rows[:, places] @ weights, 0)
+    return _nearest_first(firing, m0, short, distance, limit, deadline) is not None
 
 
-def distance(phi, s) -> Callable[[np.ndarray], np.ndarray]:
+def distance(phi, s, firing: Firing | None = None) -> Callable[[np.ndarray], np.ndarray]:
     """How far each marking (a row of counts) is from satisfying the state formula
     ``phi``: 0 exactly where it does, else the tokens that would have to move (verifypn's
     distance heuristic for its best-first search: Jensen, Nielsen, Oestergaard and Srba
     2016). ``a <= b`` is ``a - b`` past 0; a transition enabled, the tokens its input
     places lack; disabled, the fewest tokens that one of them must lose; a conjunction the
     sum, a disjunction the least; a negation is pushed to the atoms. A deadlock is every
-    transition disabled. Raises KeyError at a name the net lacks."""
-    needs = []
-    for pre, read in zip(s.pre, s.read):
-        need = dict(read)
-        for p, w in pre.items():
-            need[p] = max(need.get(p, 0), w)
-        needs.append((np.array(list(need), dtype=np.int64),
-                      np.array(list(need.values()), dtype=np.int64)))
+    transition disabled. Raises KeyError at a name the net lacks. ``firing``: the net's,
+    where the caller has one (its input arcs are read here)."""
+    needs = (firing or Firing(s)).need_arrays
 
     def value(e, rows):
         if isinstance(e, q.IntConst):
@@ -595,14 +572,15 @@ def settled_by_guided_search(net: Net, queries: Sequence[q.Query],
     formula's own evaluation (:class:`Truths`) before it is believed; the search proves
     nothing by what it does not meet."""
     s = structure(net)
+    firing = Firing(s)
     asked = []
     for x in queries:
         r = reachability(x.asks)
         if r is not None:
             exists, phi = r
+            target = phi if exists else q.Neg(phi)
             try:
-                asked.append((x, exists, phi if exists else q.Neg(phi),
-                              distance(phi if exists else q.Neg(phi), s)))
+                asked.append((x, exists, target, distance(target, s, firing)))
             except (KeyError, LookupError):
                 continue
     settled: dict[str, Settled] = {}
@@ -610,7 +588,6 @@ def settled_by_guided_search(net: Net, queries: Sequence[q.Query],
         return settled
     budget = max_memory if max_memory is not None else default_memory()
     limit = max(1, min(max_states, budget // (BEST_FIRST_BYTES + 8 * len(s.places))))
-    firing = Firing(s)
     m0 = np.array(s.initial_vector(), dtype=np.int64)
     end = time.monotonic() + seconds
     for n, (x, exists, target, far) in enumerate(asked):
@@ -708,7 +685,7 @@ def settled_by_equation_witness(net: Net, queries: Sequence[q.Query],
         k, exists, target = pending.pop(0)
         met: list[np.ndarray] = []
         try:
-            far = distance(target, s)
+            far = distance(target, s, firing)
             for counts in state_equation.firing_counts(s, target, end - time.monotonic()):
                 if _fired(firing, m0, counts, far, rng, end, met) is not None:
                     break

@@ -8,6 +8,8 @@ transitions fired at once, each adding its column of the incidence matrix.
 """
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
 from mcl2pnml.core.structure import Structure
@@ -38,6 +40,12 @@ class Firing:
         self.delta_ptr = np.cumsum([0] + [len(d) for d in deltas], dtype=np.int64)
         self.delta_place = np.array([p for d in deltas for p, _ in d], dtype=np.int64)
         self.delta_weight = np.array([w for d in deltas for _, w in d], dtype=np.int64)
+
+    @cached_property
+    def need_arrays(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each transition's input places and the tokens it needs in each, as arrays."""
+        return [(np.array([p for p, _ in need], dtype=np.int64),
+                 np.array([w for _, w in need], dtype=np.int64)) for need in self.needs]
 
     def enabled(self, m: np.ndarray, j: int) -> bool:
         return all(m[p] >= w for p, w in self.needs[j])

@@ -235,11 +235,10 @@ def dead_unreachable(s: Structure, seconds: float = SOLVE_SECONDS,
     ys: dict[tuple[int, int], int] = {}        # (place, weight): its binary's column
     choices: list[list[int]] = []              # each transition kept: its binaries
     for pre, read in zip(s.pre, s.read):
-        needs = {**read, **pre}
+        needs = {**read, **pre}          # a net never both reads and takes one place
         if any(bound(p) is None for p in needs):
             continue                            # left out: more markings, still sound
-        choices.append([ys.setdefault((p, max(w, read.get(p, 0))), len(ys))
-                        for p, w in needs.items()])
+        choices.append([ys.setdefault((p, w), len(ys)) for p, w in needs.items()])
     if time.monotonic() >= end:
         return False
     transitions, n = len(s.transitions), len(s.transitions) + len(ys)

@@ -12,25 +12,19 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 from mcl2pnml.analysis.contest.reachability_queries import (ListedMarkings, Truths, distance,
                                                             settled_by_equation_witness,
                                                             settled_by_guided_search)
-from mcl2pnml.analysis.statespace.explore import ExplorationLimit, explore
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.structure import structure
 from sampling import sample
 from strategies import nets
-from test_state_equation import formulas
+from test_state_equation import explored, formulas
 
 SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                       HealthCheck.filter_too_much])
 
 
 def _markings(net):
-    try:
-        space = explore(net, max_states=2_000)
-    except ExplorationLimit:
-        return None
-    if space.coverability:
-        return None
-    return [[int(v) for v in m] for m in space.markings]
+    space = explored(net, max_states=2_000)
+    return None if space is None else [[int(v) for v in m] for m in space.markings]
 
 
 def _with_deadlocks(places, transitions):

@@ -22,7 +22,6 @@ from pathlib import Path
 import pytest
 
 from mcl2pnml.analysis.contest import answers as mcc
-from mcl2pnml.analysis.contest import generic as generic_module
 from mcl2pnml.analysis.contest.generic import GENERIC, generic
 from mcl2pnml.analysis.contest.reachability_queries import settled_by_state_equation
 from mcl2pnml.analysis.checking.observers import Status
@@ -196,10 +195,8 @@ def test_past_the_graphs_limits_the_generic_examinations_are_the_contests(model,
     answer given is the oracle's, the rest unanswered with the reason."""
     _corpus()
     net = pipeline.load_net(CORPUS / model / "model.pnml")
-    withheld = lambda *a: (None, "the state space is past its limit",  # noqa: E731
-                           ExplorationLimit("past it"))
-    monkeypatch.setattr(mcc, "_space", withheld)
-    monkeypatch.setattr(generic_module, "_space", withheld)
+    monkeypatch.setattr(mcc, "_space", lambda *a: (None, "the state space is past its limit",
+                                                    ExplorationLimit("past it")))
     answers = generic(net)
     oracle = _oracle(model)
     wrong = [(a.id, _shown(a.value), oracle[a.id]) for a in answers

@@ -17,6 +17,16 @@ from sampling import sample
 from strategies import nets
 
 
+def explored(net, max_states: int = 5_000):
+    """``net``'s whole state space, or None where it is past ``max_states`` or unbounded
+    (a coverability graph does not list its markings)."""
+    try:
+        space = explore(net, max_states=max_states)
+    except ExplorationLimit:
+        return None
+    return None if space.coverability else space
+
+
 def formulas(places, transitions):
     """State formulas over the names of a net: sums compared, transitions enabled, and
     their negations, conjunctions and disjunctions."""
@@ -43,11 +53,8 @@ def test_what_it_calls_unreachable_no_run_reaches(data):
     phi = data.draw(formulas(list(s.places), list(s.transitions)))
     if not unreachable(s, phi):
         return
-    try:
-        space = explore(net, max_states=5_000)
-    except ExplorationLimit:
-        return
-    if space.coverability:      # unbounded: its markings are not all listed
+    space = explored(net)
+    if space is None:
         return
     markings = [[int(v) for v in m] for m in space.markings]
     reached = Truths(s, ListedMarkings(markings)).of(phi)
@@ -124,11 +131,8 @@ def test_the_equations_upper_bound_is_never_below_a_reached_sum(data):
     s = structure(net)
     places = data.draw(st.lists(st.sampled_from(list(s.places)), min_size=1, max_size=3))
     bound = upper_bound(s, places)
-    try:
-        space = explore(net, max_states=5_000)
-    except ExplorationLimit:
-        return
-    if space.coverability:
+    space = explored(net)
+    if space is None:
         return
     most = max(sum(int(m[s.place_index[p]]) for p in places) for m in space.markings)
     assert bound is None or bound >= most, (net, places, bound, most)
@@ -156,11 +160,8 @@ def test_the_equation_bounds_the_mutex_and_query_answers_with_a_witness():
 def test_what_it_calls_deadlock_free_has_no_reachable_dead_marking(data):
     net = data.draw(nets())
     s = structure(net)
-    try:
-        space = explore(net, max_states=5_000)
-    except ExplorationLimit:
-        return
-    if space.coverability:
+    space = explored(net)
+    if space is None:
         return
     # the big M from each place's true largest count (the tightest a proof can give), or
     # from none (the equation's relaxation): neither may leave a dead marking out
