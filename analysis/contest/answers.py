@@ -71,7 +71,7 @@ from mcl2pnml.analysis.contest.ltl_on_the_fly import FLY_SECONDS, settled_by_ltl
 from mcl2pnml.analysis.contest.reachability_queries import (BEST_FIRST_SECONDS,
                                                             GUIDED_SECONDS, WALK_SECONDS,
                                                             ListedMarkings, Truths,
-                                                            reach_on_the_fly,
+                                                            reach_on_the_fly, reachability,
                                                             settled_by_best_first,
                                                             settled_by_equation_witness,
                                                             settled_by_found,
@@ -85,6 +85,7 @@ from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.partial import partial_space
 from mcl2pnml.analysis.statespace.rows import compressed_rows
 from mcl2pnml.analysis.statespace.walks import runs
+from mcl2pnml.analysis.structure.reductions import reduced
 
 _loops = chosen()         # the graph searches in C, else the same in Python
 
@@ -117,19 +118,8 @@ def check_names(net: Net, queries: Sequence[q.Query]) -> None:
     location (:class:`UnknownName`): before any answer, whatever the net's size (else a
     small net's graph refused it and a large one's techniques left it unanswered, blaming
     their limits). :func:`answers_as_found` asks it first."""
-    def names(f):
-        if isinstance(f, (q.PlaceBound, q.TokensCount)):
-            yield from (("place", p) for p in f.places)
-        elif isinstance(f, q.Fireable):
-            yield from (("transition", t) for t in f.transitions)
-        elif isinstance(f, q.IntLe):
-            yield from names(f.left)
-            yield from names(f.right)
-        elif not isinstance(f, q.IntConst):
-            for g in q.children(f):
-                yield from names(g)
     for x in queries:
-        for kind, name in names(x.asks):
+        for kind, name in q.named(x.asks):
             known = net.place_index if kind == "place" else net.transition_index
             if name not in known:
                 raise UnknownName(f"no {kind} '{name}' in the net", x.location)
@@ -460,6 +450,11 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         yield from settle(decided)
         asked.update(rewritten)
         yield from settle(settled_without_exploring(net, left()))
+        # then the reachability questions on the nets reduced for them, where those are
+        # small enough to explore whole
+        reductions: dict = {}
+        yield from settle(settled_by_reduction(net, left(), min(max_states, FIRST_STATES),
+                                               max_memory, reductions))
         # then the path formulas one search each decides on the fly, under stubborn sets
         yield from settle(settled_by_ltl_on_the_fly(net, left(), max_states=max_states,
                                                     max_memory=max_memory))
@@ -481,6 +476,10 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
             return
         first = [min(max_states, FIRST_STATES)] if stubborn else []   # none explored yet
         for k, limit in enumerate((first + _stages(max_states)) if limited else [], 1):
+            yield from settle(settled_by_reduction(net, left(), limit, max_memory, reductions,
+                                                   REDUCTION_SECONDS * 2 ** k))
+            if not left():
+                return
             space, why, stopped = _space(net, limit, max_memory)
             if stopped is not None and stopped.found is not None:
                 yield from settle(settled_by_found(net, left(), stopped.found))
@@ -689,6 +688,66 @@ def settled_by_partial_graph(net: Net, queries: Sequence[q.Query], found,
         if value is not None:
             kind = "CTL" if q.is_ctl(x.asks) else "LTL"
             settled[x.id] = (value, f"EXPLICIT {kind} PARTIAL_STATE_SPACE")
+    return settled
+
+
+# -- on a smaller net: the structural reductions ----------------------------------------------
+
+#: Seconds the reduced nets of one step may take, explorations included; one started is
+#: finished (it is bounded by its limit).
+REDUCTION_SECONDS = 10.0
+
+
+def reducible(x: q.Query) -> bool:
+    """Whether the reductions keep ``x``'s answer (:mod:`~mcl2pnml.analysis.structure.
+    reductions`): an upper bound, or ``E F φ`` / ``A G φ`` without a deadlock in φ."""
+    return isinstance(x.asks, q.PlaceBound) or (
+        reachability(x.asks) is not None and not q.contains(x.asks, q.Deadlock))
+
+
+def settled_by_reduction(net: Net, queries: Sequence[q.Query], max_states: int,
+                         max_memory: int | None, cache: dict,
+                         seconds: float = REDUCTION_SECONDS) -> dict[str, tuple]:
+    """The :func:`reducible` questions answered on the net reduced for what they see,
+    where the rules made it smaller: its whole state space, of up to ``max_states``
+    markings, decides them exactly (``STRUCTURAL_REDUCTION EXPLICIT STATE_SPACE``);
+    past it, its markings found are witnesses (``E F φ`` true, ``A G φ`` false, a bound
+    the invariants prove reached). Questions that see the same places and transitions
+    share one reduced net; ``cache`` keeps them (and those that did not shrink, as
+    None) across calls, so a later, larger limit does not reduce again."""
+    groups: dict[tuple, list[q.Query]] = {}
+    for x in queries:
+        if reducible(x):
+            named = list(q.named(x.asks))
+            key = (frozenset(n for kind, n in named if kind == "place"),
+                   frozenset(n for kind, n in named if kind == "transition"))
+            groups.setdefault(key, []).append(x)
+    settled: dict[str, tuple] = {}
+    deadline = time.monotonic() + seconds
+    for key, xs in sorted(groups.items(), key=lambda kv: len(kv[0][0]) + len(kv[0][1])):
+        if time.monotonic() > deadline:
+            break
+        if key not in cache:
+            r = reduced(net, *key)
+            cache[key] = r.net if r.smaller else None
+        small = cache[key]
+        if small is None:
+            continue
+        space, _, stopped = _space(small, max_states, max_memory)
+        if space is None:
+            if stopped is not None and stopped.found is not None:
+                for k, (value, technique) in settled_by_found(small, xs,
+                                                              stopped.found).items():
+                    settled[k] = (value, f"STRUCTURAL_REDUCTION {technique}")
+            continue
+        graph = Graph(space)
+        for x in xs:
+            if isinstance(x.asks, q.PlaceBound):
+                value = int(graph.tokens(x.asks.places, x.location).max())
+            else:
+                value = _decide(graph, x, max_memory).value
+            if value is not None:
+                settled[x.id] = (value, "STRUCTURAL_REDUCTION EXPLICIT STATE_SPACE")
     return settled
 
 

@@ -15,6 +15,7 @@ sequences; how a dead marking ends one (CTL and LTL read it differently) is
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Iterator
 
 from mcl2pnml.core.errors import Location
 from mcl2pnml.core.temporal import (AllPaths, Conj, Disj, ExistsPath, Finally,  # noqa: F401
@@ -104,6 +105,21 @@ def children(f: Formula) -> tuple[Formula, ...]:
     if isinstance(f, ATOMS):
         return ()
     return (f.arg,)
+
+
+def named(f: "Formula | PlaceBound") -> Iterator[tuple[str, str]]:
+    """``("place", id)`` for each place ``f`` counts and ``("transition", id)`` for each
+    transition whose fireability it asks, in the formula's order, repeats included."""
+    if isinstance(f, (PlaceBound, TokensCount)):
+        yield from (("place", p) for p in f.places)
+    elif isinstance(f, Fireable):
+        yield from (("transition", t) for t in f.transitions)
+    elif isinstance(f, IntLe):
+        yield from named(f.left)
+        yield from named(f.right)
+    elif not isinstance(f, IntConst):
+        for g in children(f):
+            yield from named(g)
 
 
 def contains(f: Formula, kind: type) -> bool:

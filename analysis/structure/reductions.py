@@ -1,0 +1,303 @@
+"""Structural reductions: a smaller net that answers a reachability question as the net does.
+
+A question sees some places and transitions: the places its atoms count, the transitions
+whose fireability it asks, and those transitions' input places (*visible*; the rest is
+*hidden*). :func:`reduced` rewrites the net, rule after rule until none applies, keeping
+
+    (R) the markings the reduced net reaches, restricted to the visible places, are exactly
+        the reachable markings of the net restricted to them; and a visible transition is
+        kept with all its input arcs.
+
+So ``E F φ``, ``A G φ`` (φ a state formula over visible places and transitions, without
+``deadlock``) and the upper bound of a sum of visible places have the same answer on both
+nets. Deadlocks, and the formulas over paths (CTL, LTL), are *not* kept: a hidden
+transition removed may have been one that fires for ever, or the only one enabled. Every
+rule below keeps (R) on its own, so their sequence does. They are Berthelot's ("Checking
+properties of nets using transformations", 1986) and verifypn's (Bonneland, Dyhr, Jensen,
+Johannsen and Srba, "Stubborn versus structural reductions for Petri nets", 2019), with the
+conditions written beside each:
+
+* ``DEAD``: a transition with an input place that no run can mark (the places that may
+  hold a token are closed from M0 under "every input place may hold one, so the outputs
+  may") never fires; removed, it changes no reachable marking.
+* ``CONSTANT``: a hidden place whose count no transition changes holds M0(p) in every
+  reachable marking. A transition needing more is dead and removed; the others do not
+  need the place's arc, always satisfied; the place goes.
+* ``IRRELEVANT`` (verifypn's relevance rule): the transitions that change a visible place,
+  or an input place of such a transition, and so on, are the relevant ones, with those
+  places. Any other transition changes no relevant place and no relevant transition needs
+  what it changes, so removing it keeps every run's relevant part fireable, and the
+  relevant places' counts.
+* ``DUPLICATE_TRANSITION``: two transitions with the same arcs fire alike; a hidden one
+  goes where another stays.
+* ``PARALLEL_PLACE``: a hidden place q with the same arcs as another place p and
+  M0(q) >= M0(p) holds M(q) = M(p) + M0(q) - M0(p) >= M(p) in every reachable marking,
+  so it never stops a transition that p lets fire; removed, the runs are the same.
+* ``POST_AGGLOMERATION`` (Berthelot): a hidden place p, empty at M0, read by no
+  transition, whose every consumer f takes one token from p and nothing else, is hidden
+  and puts tokens in hidden places only; whose every producer h puts one token in p, is
+  hidden and is not a consumer. Each pair becomes one transition "h then f". A consumer
+  can fire as soon as its token is there and takes nothing anyone else needs, so every
+  run can be reordered with each f right after its h, reaching the same marking; and a
+  marking with tokens still in p differs from the one after its consumers only on hidden
+  places. Applied only where the pairs are no more than the transitions they replace.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable
+
+from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Transition
+
+#: The rules in the order each round applies them.
+RULES = ("DEAD", "CONSTANT", "IRRELEVANT", "DUPLICATE_TRANSITION", "PARALLEL_PLACE",
+         "POST_AGGLOMERATION")
+
+
+@dataclass(frozen=True)
+class Reduced:
+    """The reduced net, and how many places and transitions each rule removed."""
+
+    net: Net
+    removed: tuple[tuple[str, int], ...]
+
+    @property
+    def smaller(self) -> bool:
+        """Whether any rule applied."""
+        return bool(self.removed)
+
+
+def reduced(net: Net, places: Iterable[str] = (), transitions: Iterable[str] = ()) -> Reduced:
+    """``net`` reduced for a question that sees ``places`` and the fireability of
+    ``transitions`` (the module's documentation: their input places are visible too).
+    Kept places and transitions keep their ids, so the question reads the reduced net as
+    it is; an agglomerated transition gets a new one. A name ``net`` lacks raises
+    KeyError."""
+    work = _Work(net, places, transitions)
+    counts: dict[str, int] = {}
+    changed = True
+    while changed:
+        changed = False
+        for rule in RULES:
+            n = getattr(work, rule.lower())()
+            if n:
+                counts[rule] = counts.get(rule, 0) + n
+                changed = True
+    if not counts:
+        return Reduced(net, ())
+    return Reduced(work.net(), tuple(counts.items()))
+
+
+class _Work:
+    """The net being reduced, by indices: arcs as {place: weight} per transition, and
+    each place's producers, consumers and readers, kept in step as nodes go."""
+
+    def __init__(self, net: Net, places: Iterable[str], transitions: Iterable[str]):
+        self.source = net
+        self.place_ids = [p.id for p in net.places]
+        self.transitions = {t.id: t for t in net.transitions}
+        pi = {p: i for i, p in enumerate(self.place_ids)}
+        self.m0 = [net.initial[p] for p in self.place_ids]
+        self.places = set(range(len(self.place_ids)))
+        self.pre: dict[str, dict[int, int]] = {t: {} for t in self.transitions}
+        self.read: dict[str, dict[int, int]] = {t: {} for t in self.transitions}
+        self.post: dict[str, dict[int, int]] = {t: {} for t in self.transitions}
+        for a in net.arcs:
+            if a.source in self.transitions:
+                self.post[a.source][pi[a.target]] = a.weight
+            elif a.kind is ArcKind.READ:
+                self.read[a.target][pi[a.source]] = a.weight
+            else:
+                self.pre[a.target][pi[a.source]] = a.weight
+        self.seen_t = set(transitions)
+        for t in self.seen_t:
+            if t not in self.transitions:
+                raise KeyError(t)
+        self.seen_p = {pi[p] for p in places}
+        for t in self.seen_t:
+            self.seen_p.update(self.pre[t], self.read[t])
+        # producers, consumers, readers of each place
+        self.into: list[set[str]] = [set() for _ in self.place_ids]
+        self.out: list[set[str]] = [set() for _ in self.place_ids]
+        self.reads: list[set[str]] = [set() for _ in self.place_ids]
+        for t in self.transitions:
+            self._index(t)
+        self.fresh = 0
+
+    # -- bookkeeping --------------------------------------------------------------------------
+
+    def _index(self, t: str) -> None:
+        for p in self.post[t]:
+            self.into[p].add(t)
+        for p in self.pre[t]:
+            self.out[p].add(t)
+        for p in self.read[t]:
+            self.reads[p].add(t)
+
+    def _drop_transition(self, t: str) -> None:
+        for p in self.post[t]:
+            self.into[p].discard(t)
+        for p in self.pre[t]:
+            self.out[p].discard(t)
+        for p in self.read[t]:
+            self.reads[p].discard(t)
+        for arcs in (self.pre, self.read, self.post):
+            del arcs[t]
+        del self.transitions[t]
+
+    def _drop_place(self, p: int) -> None:
+        for t in self.into[p]:
+            del self.post[t][p]
+        for t in self.out[p]:
+            del self.pre[t][p]
+        for t in self.reads[p]:
+            del self.read[t][p]
+        self.into[p], self.out[p], self.reads[p] = set(), set(), set()
+        self.places.discard(p)
+
+    def _changes(self, p: int) -> set[str]:
+        """The transitions that change p's count (a self-loop does not)."""
+        return {t for t in self.into[p] | self.out[p]
+                if self.post[t].get(p, 0) != self.pre[t].get(p, 0)}
+
+    # -- the rules, each returning how many nodes it removed ----------------------------------
+
+    def dead(self) -> int:
+        may = {p for p in self.places if self.m0[p] > 0}
+        missing = {t: sum(1 for p in set(self.pre[t]) | set(self.read[t]) if p not in may)
+                   for t in self.transitions}
+        queue = [t for t, n in missing.items() if n == 0]
+        while queue:
+            t = queue.pop()
+            for p in self.post[t]:
+                if p not in may:
+                    may.add(p)
+                    for u in self.out[p] | self.reads[p]:
+                        missing[u] -= 1
+                        if missing[u] == 0:
+                            queue.append(u)
+        dead = [t for t, n in missing.items() if n and t not in self.seen_t]
+        for t in dead:
+            self._drop_transition(t)
+        return len(dead)
+
+    def constant(self) -> int:
+        removed = 0
+        for p in sorted(self.places - self.seen_p):
+            if self._changes(p):
+                continue
+            for t in list(self.out[p] | self.reads[p]):
+                need = self.pre[t].get(p, 0) or self.read[t].get(p, 0)
+                if need > self.m0[p]:      # never enabled: t needs more than p ever holds
+                    self._drop_transition(t)
+                    removed += 1
+            self._drop_place(p)
+            removed += 1
+        return removed
+
+    def irrelevant(self) -> int:
+        places = set(self.seen_p)
+        kept = set(self.seen_t)
+        queue = list(places)
+        while queue:
+            p = queue.pop()
+            for t in self._changes(p) - kept:
+                kept.add(t)
+                for r in set(self.pre[t]) | set(self.read[t]):
+                    if r not in places:
+                        places.add(r)
+                        queue.append(r)
+        gone_t = [t for t in self.transitions if t not in kept]
+        gone_p = [p for p in self.places if p not in places]
+        for t in gone_t:
+            self._drop_transition(t)
+        for p in gone_p:
+            self._drop_place(p)
+        return len(gone_t) + len(gone_p)
+
+    def duplicate_transition(self) -> int:
+        groups: dict[tuple, list[str]] = {}
+        for t in self.transitions:
+            key = tuple(frozenset(arcs[t].items()) for arcs in (self.pre, self.read, self.post))
+            groups.setdefault(key, []).append(t)
+        gone = []
+        for group in groups.values():
+            if len(group) > 1:
+                seen = [t for t in group if t in self.seen_t]
+                hidden = [t for t in group if t not in self.seen_t]
+                gone += hidden if seen else hidden[1:]
+        for t in gone:
+            self._drop_transition(t)
+        return len(gone)
+
+    def parallel_place(self) -> int:
+        groups: dict[frozenset, list[int]] = {}
+        for p in self.places:
+            key = frozenset((t, self.pre[t].get(p, 0), self.read[t].get(p, 0),
+                             self.post[t].get(p, 0))
+                            for t in self.into[p] | self.out[p] | self.reads[p])
+            groups.setdefault(key, []).append(p)
+        gone = []
+        for group in groups.values():
+            if len(group) > 1:
+                least = min(self.m0[p] for p in group)
+                # the one left in place of the others: a visible one, else one holding least
+                keep = min(group, key=lambda p: (p not in self.seen_p, self.m0[p], p))
+                if self.m0[keep] == least:
+                    gone += [p for p in group if p != keep and p not in self.seen_p]
+        for p in gone:
+            self._drop_place(p)
+        return len(gone)
+
+    def post_agglomeration(self) -> int:
+        removed = 0
+        for p in sorted(self.places - self.seen_p):
+            if p not in self.places or self.m0[p] or self.reads[p]:
+                continue
+            producers, consumers = set(self.into[p]), set(self.out[p])
+            if not producers or not consumers or producers & consumers \
+                    or len(producers) * len(consumers) > len(producers) + len(consumers):
+                continue
+            if any(t in self.seen_t for t in producers | consumers):
+                continue
+            if any(self.pre[f] != {p: 1} or self.read[f] or
+                   any(r in self.seen_p for r in self.post[f]) for f in consumers):
+                continue
+            if any(self.post[h][p] != 1 for h in producers):
+                continue
+            for h in producers:
+                for f in consumers:
+                    post = {r: w for r, w in self.post[h].items() if r != p}
+                    for r, w in self.post[f].items():
+                        post[r] = post.get(r, 0) + w
+                    t = self._new_id()
+                    self.transitions[t] = Transition(t)
+                    self.pre[t], self.read[t], self.post[t] = \
+                        dict(self.pre[h]), dict(self.read[h]), post
+                    self._index(t)
+            for t in producers | consumers:
+                self._drop_transition(t)
+            self._drop_place(p)
+            removed += 1 + len(producers) + len(consumers) - len(producers) * len(consumers)
+        return removed
+
+    def _new_id(self) -> str:
+        while True:
+            self.fresh += 1
+            t = f"agglomerated{self.fresh}"
+            if t not in self.transitions and t not in self.source.place_index:
+                return t
+
+    # -- the result ---------------------------------------------------------------------------
+
+    def net(self) -> Net:
+        names = self.place_ids
+        arcs = []
+        for t in self.transitions:
+            arcs += [Arc(names[p], t, w) for p, w in self.pre[t].items()]
+            arcs += [Arc(names[p], t, w, ArcKind.READ) for p, w in self.read[t].items()]
+            arcs += [Arc(t, names[p], w) for p, w in self.post[t].items()]
+        kept = sorted(self.places)
+        initial = Marking({names[p]: self.m0[p] for p in kept if self.m0[p]})
+        return Net(self.source.name, tuple(self.source.places[p] for p in kept),
+                   tuple(self.transitions.values()), tuple(arcs), initial)

@@ -1,0 +1,231 @@
+"""Structural reductions keep what a reachability question sees
+(analysis/structure/reductions.py): on random nets, and on nets grown to hold what each
+rule looks for, the reduced net reaches exactly the visible places' markings the net
+reaches; on the contest's models, the questions answered on their reduced nets get the
+2021 consensus's answers."""
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from mcl2pnml.analysis.contest import answers as mcc
+from mcl2pnml.analysis.contest.answers import reducible
+from mcl2pnml.analysis.contest.reachability_queries import reachability
+from mcl2pnml.analysis.structure.reductions import RULES, reduced
+from mcl2pnml.core import queries as q
+from mcl2pnml.core.net import ArcKind, NetBuilder
+from mcl2pnml.core.structure import structure
+from mcl2pnml.io.mccquery import read_queries
+from mcl2pnml import pipeline
+from sampling import sample
+from strategies import nets
+from test_mcc import CORPUS, MODELS, _corpus, _oracle, _shown
+from test_state_equation import explored
+
+
+def _seen(net, places) -> set[tuple[int, ...]]:
+    space = explored(net, 20_000)
+    if space is None:
+        return None
+    order = [p.id for p in net.places]
+    at = [order.index(p) for p in places]
+    return {tuple(int(m[i]) for i in at) for m in space.markings}
+
+
+def _inputs(net, t) -> dict:
+    return {(a.source, a.kind): a.weight for a in net.arcs if a.target == t}
+
+
+def _holds(net, places, transitions):
+    r = reduced(net, places, transitions)
+    seen = sorted(set(places) | {a.source for a in net.arcs if a.target in transitions})
+    for t in transitions:
+        assert _inputs(r.net, t) == _inputs(net, t), (net, t)
+    before, after = _seen(net, seen), _seen(r.net, seen)
+    if before is not None:
+        assert after == before, (net, places, transitions, r.removed)
+    return r
+
+
+@st.composite
+def grown(draw):
+    """A random net grown with what the rules look for: an arc cut by a new place and
+    transition (a sequence to agglomerate), a place copied with more tokens (a parallel
+    place), a transition copied (a duplicate)."""
+    net = draw(nets(max_places=5, max_transitions=4))
+    arcs = {(a.source, a.target, a.kind): a.weight for a in net.arcs}
+    b = NetBuilder(net.name)
+    for p in net.places:
+        b.place(p.id, net.initial[p.id])
+    for t in net.transitions:
+        b.transition(t.id)
+    for k in range(draw(st.integers(1, 6))):
+        what = draw(st.sampled_from(("cut", "cut", "place", "transition")))
+        if what == "cut" and arcs:
+            (s, t, kind), w = draw(st.sampled_from(sorted(arcs.items(), key=str)))
+            if kind is ArcKind.NORMAL and t in b._places:      # transition -> place
+                del arcs[(s, t, kind)]
+                b.place(f"mid{k}")
+                b.transition(f"step{k}")
+                arcs[(s, f"mid{k}", kind)] = 1
+                arcs[(f"mid{k}", f"step{k}", kind)] = 1
+                arcs[(f"step{k}", t, kind)] = w
+        elif what == "place":
+            p = draw(st.sampled_from(sorted(b._places)))
+            b.place(f"copy{k}", net.initial[p] if p in net.initial else 0)
+            for (s, t, kind), w in list(arcs.items()):
+                if s == p:
+                    arcs[(f"copy{k}", t, kind)] = w
+                elif t == p:
+                    arcs[(s, f"copy{k}", kind)] = w
+        elif what == "transition":
+            u = draw(st.sampled_from(sorted(b._transitions)))
+            b.transition(f"twin{k}")
+            for (s, t, kind), w in list(arcs.items()):
+                if s == u:
+                    arcs[(f"twin{k}", t, kind)] = w
+                elif t == u:
+                    arcs[(s, f"twin{k}", kind)] = w
+    for (s, t, kind), w in arcs.items():
+        b.arc(s, t, w, kind)
+    return b.build()
+
+
+@st.composite
+def processes(draw):
+    """Cyclic processes sharing resources, as the contest's models are made: each a cycle
+    of places, its steps taking or giving back a resource now and then; bounded, so both
+    nets are explored."""
+    b = NetBuilder("processes")
+    resources = [b.place(f"r{i}", draw(st.integers(0, 2))) for i in range(draw(st.integers(0, 2)))]
+    for k in range(draw(st.integers(1, 3))):
+        n = draw(st.integers(2, 5))
+        ring = [b.place(f"p{k}_{i}", 1 if i == 0 else 0) for i in range(n)]
+        if draw(st.booleans()):
+            b.place(f"mirror{k}", draw(st.integers(1, 2)))      # a parallel place
+            ring_mirror = f"mirror{k}"
+        else:
+            ring_mirror = None
+        for i in range(n):
+            t = b.transition(f"t{k}_{i}")
+            b.arc(ring[i], t)
+            b.arc(t, ring[(i + 1) % n])
+            if ring_mirror and i == 0:
+                b.arc(ring_mirror, t)
+            if ring_mirror and i == n - 1:
+                b.arc(t, ring_mirror)
+            if resources and draw(st.booleans()):
+                r = draw(st.sampled_from(resources))
+                if draw(st.booleans()):
+                    b.arc(r, t)
+                else:
+                    b.arc(t, r)
+    return b.build()
+
+
+@settings(max_examples=sample(1500, 200), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(st.data())
+def test_the_reduced_net_reaches_what_the_net_reaches_on_the_visible_places(data):
+    net = data.draw(st.one_of(nets(), grown(), processes()))
+    ids = [p.id for p in net.places]
+    places = data.draw(st.lists(st.sampled_from(ids), max_size=3, unique=True))
+    transitions = data.draw(st.lists(st.sampled_from([t.id for t in net.transitions]),
+                                     max_size=2, unique=True)) if net.transitions else []
+    _holds(net, places, transitions)
+
+
+def _line(n: int, tokens: int = 1):
+    """``a0 -> t1 -> a1 -> ... -> an``, ``tokens`` in a0; ``back`` returns one token from
+    an to a0, and ``twin`` copies ``t1``; ``shadow`` is a copy of a0 with one more token."""
+    b = NetBuilder("line")
+    for i in range(n + 1):
+        b.place(f"a{i}", tokens if i == 0 else 0)
+    b.place("shadow", tokens + 1)
+    for i in range(1, n + 1):
+        b.transition(f"t{i}")
+        b.arc(f"a{i - 1}", f"t{i}")
+        b.arc(f"t{i}", f"a{i}")
+    b.place("idle")
+    for t in ("back", "twin", "never"):      # never: needs a place nothing marks
+        b.transition(t)
+    for source, target in ((f"a{n}", "back"), ("back", "a0"), ("back", "shadow"),
+                           ("shadow", "t1"), ("a0", "twin"), ("shadow", "twin"),
+                           ("twin", "a1"), ("idle", "never"), ("never", "a2")):
+        b.arc(source, target)
+    return b.build()
+
+
+def test_each_rule_applies_where_its_conditions_hold():
+    net = _line(6, tokens=2)
+    r = _holds(net, ["a0"], [])
+    assert {rule for rule, _ in r.removed} >= set(RULES) - {"IRRELEVANT", "CONSTANT"}
+    # the line's inner places are agglomerated away: t1 ... t6 and back become one cycle
+    assert len(r.net.places) < len(net.places) and len(r.net.transitions) <= 2
+    # a place that is seen stops the agglomeration there
+    r = _holds(net, ["a0", "a3"], ["t5"])
+    assert {"a3", "a4"} <= {p.id for p in r.net.places}
+    # what no seen place depends on goes; a constant place goes with its arcs
+    b = NetBuilder("two")
+    for p, m in (("x", 1), ("y", 0), ("z", 1), ("w", 0), ("k", 3)):
+        b.place(p, m)
+    for t, src, dst in (("f", "x", "y"), ("g", "z", "w")):
+        b.transition(t)
+        b.arc(src, t)
+        b.arc(t, dst)
+        b.read("k", t, 2)
+    r = _holds(b.build(), ["y"], [])
+    assert dict(r.removed).keys() >= {"IRRELEVANT", "CONSTANT"}
+    assert {p.id for p in r.net.places} == {"x", "y"}
+
+
+def test_a_name_the_net_lacks_is_refused():
+    with pytest.raises(KeyError):
+        reduced(_line(2), [], ["nowhere"])
+
+
+def _sees(f) -> tuple[set[str], set[str]]:
+    named = list(q.named(f))
+    return ({n for kind, n in named if kind == "place"},
+            {n for kind, n in named if kind == "transition"})
+
+
+@pytest.mark.parametrize("model", MODELS or ["(none)"])
+def test_on_the_contests_models_the_reduced_nets_answer_as_the_consensus(model):
+    _corpus()
+    folder = CORPUS / model
+    net = pipeline.load_net(folder / "model.pnml")
+    oracle = _oracle(model)
+    asked = 0
+    for name in ("ReachabilityCardinality", "ReachabilityFireability", "UpperBounds"):
+        for x in read_queries(folder / f"{name}.xml"):
+            if not isinstance(x.asks, q.PlaceBound) and (
+                    not reachability(x.asks) or q.contains(x.asks, q.Deadlock)):
+                continue
+            places, transitions = _sees(x.asks)
+            r = reduced(net, places, transitions)
+            got = mcc.answer(r.net, [x])[0]
+            assert got.value is not None, (model, x.id, got.reason)
+            if oracle[x.id] != "?":
+                assert _shown(got.value) == oracle[x.id], (model, x.id, r.removed)
+            asked += 1
+    assert asked and structure(net)
+
+
+def test_only_what_the_reductions_keep_is_asked_of_a_reduced_net():
+    a = q.IntLe(q.IntConst(1), q.TokensCount(("a0",)))
+    asked = {"ef": q.ExistsPath(q.Finally(a)), "not-ag": q.Neg(q.AllPaths(q.Globally(a))),
+             "bound": q.PlaceBound(("a0",)),
+             "deadlock": q.ExistsPath(q.Finally(q.Disj((a, q.Deadlock())))),
+             "af": q.AllPaths(q.Finally(a)), "eg": q.ExistsPath(q.Globally(a))}
+    assert {k for k, f in asked.items() if reducible(q.Query(k, f))} == {"ef", "not-ag", "bound"}
+    # in the portfolio, past a first graph too small, no other question is answered on a
+    # reduced net (tests/analysis/test_found_markings.py has a bound that is), and every
+    # answer is the whole graph's
+    net = _line(6, tokens=2)
+    queries = [q.Query(k, f) for k, f in asked.items()]
+    got = {x.id: x for x in mcc.answers_as_found(net, queries, max_states=3)}
+    truth = {x.id: x.value for x in mcc.answer(net, queries)}
+    for k in ("deadlock", "af", "eg"):
+        assert not got[k].technique.startswith("STRUCTURAL_REDUCTION"), got[k]
+    assert all(x.value == truth[k] for k, x in got.items() if x.value is not None), got
