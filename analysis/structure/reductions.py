@@ -30,9 +30,19 @@ conditions written beside each:
   relevant places' counts.
 * ``DUPLICATE_TRANSITION``: two transitions with the same arcs fire alike; a hidden one
   goes where another stays.
-* ``PARALLEL_PLACE``: a hidden place q with the same arcs as another place p and
-  M0(q) >= M0(p) holds M(q) = M(p) + M0(q) - M0(p) >= M(p) in every reachable marking,
-  so it never stops a transition that p lets fire; removed, the runs are the same.
+* ``IMPLICIT_PLACE`` (verifypn's rule C, read arcs counted as needs): a hidden place q and
+  another place p, with m the least number such that every transition needing q needs p,
+  and no more than m times as much of q as of p; if every transition changes q by at
+  least m times what it changes p by, and M0(q) >= m M0(p), then M(q) >= m M(p) in every
+  reachable marking (by induction on the run), so q never stops a transition that p
+  lets fire; removed, the runs are the same.
+* ``SEQUENTIAL_PLACE`` (verifypn's rule A): a hidden place p, read by none, whose one
+  consumer t takes w tokens from it and nothing else, is hidden and puts tokens in hidden
+  places other than p only; every producer puts a multiple k w of tokens in p. t can fire
+  as soon as its tokens are there and takes nothing anyone else needs, so it is fired at
+  once: each producer puts k times t's outputs in their places instead, M0's tokens in p
+  go on through t, and t and p go. A marking with tokens still in p differs from the one
+  after t's firings only on hidden places.
 * ``POST_AGGLOMERATION`` (Berthelot): a hidden place p, empty at M0, read by no
   transition, whose every consumer f takes one token from p and nothing else, is hidden
   and puts tokens in hidden places only; whose every producer h puts one token in p, is
@@ -41,17 +51,26 @@ conditions written beside each:
   run can be reordered with each f right after its h, reaching the same marking; and a
   marking with tokens still in p differs from the one after its consumers only on hidden
   places. Applied only where the pairs are no more than the transitions they replace.
+* ``PRE_AGGLOMERATION`` (Berthelot; verifypn's rule B): a hidden place p, empty at M0,
+  read by none, with one consumer f, hidden and reading nothing, whose every producer h
+  puts exactly f's weight in p and nothing else, reads nothing, is hidden and takes only
+  from hidden places. Each h is delayed until f fires and fused with it (h's inputs and
+  f's other inputs taken, f's outputs given); f and p go. In a run, delaying h only
+  leaves more tokens in the places h takes from (so every other firing stays enabled),
+  and those places and p, where the markings differ meanwhile, are hidden; a token h
+  put in p that f never took is a firing of h left out, again hidden.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Iterable
 
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Transition
 
 #: The rules in the order each round applies them.
-RULES = ("DEAD", "CONSTANT", "IRRELEVANT", "DUPLICATE_TRANSITION", "PARALLEL_PLACE",
-         "POST_AGGLOMERATION")
+RULES = ("DEAD", "CONSTANT", "IRRELEVANT", "DUPLICATE_TRANSITION", "IMPLICIT_PLACE",
+         "SEQUENTIAL_PLACE", "POST_AGGLOMERATION", "PRE_AGGLOMERATION")
 
 
 @dataclass(frozen=True)
@@ -230,24 +249,93 @@ class _Work:
             self._drop_transition(t)
         return len(gone)
 
-    def parallel_place(self) -> int:
-        groups: dict[frozenset, list[int]] = {}
-        for p in self.places:
-            key = frozenset((t, self.pre[t].get(p, 0), self.read[t].get(p, 0),
-                             self.post[t].get(p, 0))
-                            for t in self.into[p] | self.out[p] | self.reads[p])
-            groups.setdefault(key, []).append(p)
-        gone = []
-        for group in groups.values():
-            if len(group) > 1:
-                least = min(self.m0[p] for p in group)
-                # the one left in place of the others: a visible one, else one holding least
-                keep = min(group, key=lambda p: (p not in self.seen_p, self.m0[p], p))
-                if self.m0[keep] == least:
-                    gone += [p for p in group if p != keep and p not in self.seen_p]
-        for p in gone:
+    def _need(self, p: int, t: str) -> int:
+        return self.pre[t].get(p, 0) or self.read[t].get(p, 0)
+
+    def _change(self, p: int, t: str) -> int:
+        return self.post[t].get(p, 0) - self.pre[t].get(p, 0)
+
+    def implicit_place(self) -> int:
+        removed = 0
+        for q in sorted(self.places - self.seen_p):
+            needers = self.out[q] | self.reads[q]
+            if not needers:
+                continue
+            least = min(needers, key=lambda t: (len(self.pre[t]) + len(self.read[t]), t))
+            for p in sorted(set(self.pre[least]) | set(self.read[least])):
+                if p != q and self._dominates(p, q, needers):
+                    self._drop_place(q)
+                    removed += 1
+                    break
+        return removed
+
+    def _dominates(self, p: int, q: int, needers: set[str]) -> bool:
+        """Whether M(q) >= m M(p) in every reachable marking, with m the least factor by
+        which p's needs cover q's (the rule's conditions)."""
+        if any(self._need(p, t) == 0 for t in needers):
+            return False
+        m = max(Fraction(self._need(q, t), self._need(p, t)) for t in needers)
+        if self.m0[q] < m * self.m0[p]:
+            return False
+        touching = self.into[p] | self.out[p] | self.into[q] | self.out[q]
+        return all(self._change(q, t) >= m * self._change(p, t) for t in touching)
+
+    def sequential_place(self) -> int:
+        removed = 0
+        for p in sorted(self.places - self.seen_p):
+            if p not in self.places or self.reads[p] or len(self.out[p]) != 1:
+                continue
+            [t] = self.out[p]
+            w = self.pre[t][p]
+            if t in self.seen_t or len(self.pre[t]) != 1 or self.read[t] or p in self.post[t] \
+                    or any(r in self.seen_p for r in self.post[t]) \
+                    or any(self.post[h][p] % w for h in self.into[p]):
+                continue
+            outputs = dict(self.post[t])
+            producers = list(self.into[p])
+            initially = self.m0[p] // w
+            self._drop_transition(t)
+            for h in producers:
+                k = self.post[h].pop(p) // w
+                self.into[p].discard(h)
+                for r, v in outputs.items():
+                    self.post[h][r] = self.post[h].get(r, 0) + k * v
+                    self.into[r].add(h)
+            for r, v in outputs.items():
+                self.m0[r] += initially * v
+            self.m0[p] = 0
             self._drop_place(p)
-        return len(gone)
+            removed += 2
+        return removed
+
+    def pre_agglomeration(self) -> int:
+        removed = 0
+        for p in sorted(self.places - self.seen_p):
+            if p not in self.places or self.m0[p] or self.reads[p] or len(self.out[p]) != 1:
+                continue
+            [f] = self.out[p]
+            producers = list(self.into[p])
+            w = self.pre[f][p]
+            if f in self.seen_t or self.read[f] or not producers or f in producers:
+                continue
+            if any(h in self.seen_t or self.read[h] or self.post[h] != {p: w}
+                   or any(r in self.seen_p for r in self.pre[h]) for h in producers):
+                continue
+            takes = {r: v for r, v in self.pre[f].items() if r != p}
+            gives = dict(self.post[f])
+            self._drop_transition(f)
+            for h in producers:
+                pre = dict(self.pre[h])
+                for r, v in takes.items():
+                    pre[r] = pre.get(r, 0) + v
+                node = self.transitions[h]
+                self._drop_transition(h)
+                self.transitions[h] = node
+                self.pre[h], self.read[h], self.post[h] = pre, {}, dict(gives)
+                self._index(h)
+            self._drop_place(p)
+            removed += 2
+        return removed
 
     def post_agglomeration(self) -> int:
         removed = 0
