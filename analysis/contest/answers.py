@@ -477,7 +477,7 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         first = [min(max_states, FIRST_STATES)] if stubborn else []   # none explored yet
         for k, limit in enumerate((first + _stages(max_states)) if limited else [], 1):
             yield from settle(settled_by_reduction(net, left(), limit, max_memory, reductions,
-                                                   REDUCTION_SECONDS * 2 ** k))
+                                                   REDUCED_NETS_SECONDS * 2 ** k))
             if not left():
                 return
             space, why, stopped = _space(net, limit, max_memory)
@@ -695,7 +695,7 @@ def settled_by_partial_graph(net: Net, queries: Sequence[q.Query], found,
 
 #: Seconds the reduced nets of one step may take, explorations included; one started is
 #: finished (it is bounded by its limit).
-REDUCTION_SECONDS = 10.0
+REDUCED_NETS_SECONDS = 10.0
 
 
 def reducible(x: q.Query) -> bool:
@@ -707,7 +707,7 @@ def reducible(x: q.Query) -> bool:
 
 def settled_by_reduction(net: Net, queries: Sequence[q.Query], max_states: int,
                          max_memory: int | None, cache: dict,
-                         seconds: float = REDUCTION_SECONDS) -> dict[str, tuple]:
+                         seconds: float = REDUCED_NETS_SECONDS) -> dict[str, tuple]:
     """The :func:`reducible` questions answered on the net reduced for what they see,
     where the rules made it smaller: its whole state space, of up to ``max_states``
     markings, decides them exactly (``STRUCTURAL_REDUCTION EXPLICIT STATE_SPACE``);

@@ -62,6 +62,7 @@ conditions written beside each:
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Iterable
@@ -71,6 +72,9 @@ from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Transition
 #: The rules in the order each round applies them.
 RULES = ("DEAD", "CONSTANT", "IRRELEVANT", "DUPLICATE_TRANSITION", "IMPLICIT_PLACE",
          "SEQUENTIAL_PLACE", "POST_AGGLOMERATION", "PRE_AGGLOMERATION")
+#: Seconds the rules may take on one net; each rule started is finished (one pass over
+#: the net), so the result is the net after whole rules.
+REDUCTION_SECONDS = 2.0
 
 
 @dataclass(frozen=True)
@@ -86,18 +90,23 @@ class Reduced:
         return bool(self.removed)
 
 
-def reduced(net: Net, places: Iterable[str] = (), transitions: Iterable[str] = ()) -> Reduced:
+def reduced(net: Net, places: Iterable[str] = (), transitions: Iterable[str] = (),
+            seconds: float = REDUCTION_SECONDS) -> Reduced:
     """``net`` reduced for a question that sees ``places`` and the fireability of
     ``transitions`` (the module's documentation: their input places are visible too).
     Kept places and transitions keep their ids, so the question reads the reduced net as
-    it is; an agglomerated transition gets a new one. A name ``net`` lacks raises
-    KeyError."""
+    it is; an agglomerated transition gets a new one. Past ``seconds``, no rule is
+    started: the net as the rules applied so far left it is as sound. A name ``net``
+    lacks raises KeyError."""
     work = _Work(net, places, transitions)
     counts: dict[str, int] = {}
+    deadline = time.monotonic() + seconds
     changed = True
-    while changed:
+    while changed and time.monotonic() < deadline:
         changed = False
         for rule in RULES:
+            if time.monotonic() > deadline:
+                break
             n = getattr(work, rule.lower())()
             if n:
                 counts[rule] = counts.get(rule, 0) + n
