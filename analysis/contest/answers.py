@@ -26,7 +26,9 @@ come first, each answer handed out as soon as one settles it (:func:`answers_as_
 docs/query.md): the markings found as witnesses and the graph explored so far read
 three-valued (:class:`PartialGraph`), the state equation
 (:mod:`mcl2pnml.analysis.structure.state_equation`), formulas simplified by it and the
-P-invariants, the path formulas searched on the fly from the net under stubborn sets
+P-invariants, the reachability questions on the net reduced for each
+(:mod:`mcl2pnml.analysis.structure.reductions`), the path formulas searched on the fly
+from the net under stubborn sets
 (:mod:`mcl2pnml.analysis.contest.ltl_on_the_fly`), random walks and the runs of walkers
 that close (each run a one-path :class:`RunGraph`), then explorations in larger stages.
 
@@ -85,7 +87,7 @@ from mcl2pnml.analysis.statespace.loops.backends import chosen
 from mcl2pnml.analysis.statespace.partial import partial_space
 from mcl2pnml.analysis.statespace.rows import compressed_rows
 from mcl2pnml.analysis.statespace.walks import runs
-from mcl2pnml.analysis.structure.reductions import reduced
+from mcl2pnml.analysis.structure.reductions import Keep, reduced
 
 _loops = chosen()         # the graph searches in C, else the same in Python
 
@@ -402,7 +404,9 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     initial marking decides on every path; the rest goes on simplified), then what the
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
-    then the formulas one search on the fly decides (LTL under stubborn sets, then CTL's
+    then the reachability questions and upper bounds on the nets reduced for them
+    (:func:`settled_by_reduction`, again before each larger exploration), then the
+    formulas one search on the fly decides (LTL under stubborn sets, then CTL's
     dependency graph), then what random walks meet (:func:`settled_by_walks`, witnesses
     as found markings are) and what the runs of walkers that close show
     (:func:`settled_by_runs`), then the state equation's solutions fired
@@ -698,29 +702,39 @@ def settled_by_partial_graph(net: Net, queries: Sequence[q.Query], found,
 REDUCED_NETS_SECONDS = 10.0
 
 
-def reducible(x: q.Query) -> bool:
-    """Whether the reductions keep ``x``'s answer (:mod:`~mcl2pnml.analysis.structure.
-    reductions`): an upper bound, or ``E F φ`` / ``A G φ`` without a deadlock in φ."""
-    return isinstance(x.asks, q.PlaceBound) or (
-        reachability(x.asks) is not None and not q.contains(x.asks, q.Deadlock))
+def reducible(x: q.Query) -> Keep | None:
+    """What a reduced net must keep to answer ``x`` as the net does
+    (:class:`~mcl2pnml.analysis.structure.reductions.Keep`): the reachable markings for an
+    upper bound or ``E F φ`` / ``A G φ``; the paths, up to stuttering, for CTL and LTL
+    without ``X``; None for a formula with ``X`` or ``deadlock``, which no reduction
+    keeps."""
+    if isinstance(x.asks, q.PlaceBound):
+        return Keep.REACHABLE
+    if q.contains(x.asks, q.Deadlock) or q.contains(x.asks, q.Next):
+        return None
+    if reachability(x.asks) is not None:
+        return Keep.REACHABLE
+    return Keep.PATHS if q.is_ctl(x.asks) or q.is_ltl(x.asks) else None
 
 
 def settled_by_reduction(net: Net, queries: Sequence[q.Query], max_states: int,
                          max_memory: int | None, cache: dict,
                          seconds: float = REDUCED_NETS_SECONDS) -> dict[str, tuple]:
-    """The :func:`reducible` questions answered on the net reduced for what they see,
-    where the rules made it smaller: its whole state space, of up to ``max_states``
-    markings, decides them exactly (``STRUCTURAL_REDUCTION EXPLICIT STATE_SPACE``);
-    past it, its markings found are witnesses (``E F φ`` true, ``A G φ`` false, a bound
-    the invariants prove reached). Questions that see the same places and transitions
-    share one reduced net; ``cache`` keeps them (and those that did not shrink, as
-    None) across calls, so a later, larger limit does not reduce again."""
+    """The :func:`reducible` questions answered on the net reduced for what they see
+    and ask, where the rules made it smaller: its whole state space, of up to
+    ``max_states`` markings, decides them exactly (``STRUCTURAL_REDUCTION EXPLICIT
+    STATE_SPACE``, ``... CTL``, ``... LTL``); past it, its markings found are witnesses
+    (``E F φ`` true, ``A G φ`` false, a bound the invariants prove reached). Questions
+    that see the same places and transitions and keep the same share one reduced net;
+    ``cache`` keeps them (and those that did not shrink, as None) across calls, so a
+    later, larger limit does not reduce again."""
     groups: dict[tuple, list[q.Query]] = {}
     for x in queries:
-        if reducible(x):
+        keep = reducible(x)
+        if keep is not None:
             named = list(q.named(x.asks))
             key = (frozenset(n for kind, n in named if kind == "place"),
-                   frozenset(n for kind, n in named if kind == "transition"))
+                   frozenset(n for kind, n in named if kind == "transition"), keep)
             groups.setdefault(key, []).append(x)
     settled: dict[str, tuple] = {}
     deadline = time.monotonic() + seconds
@@ -728,7 +742,8 @@ def settled_by_reduction(net: Net, queries: Sequence[q.Query], max_states: int,
         if time.monotonic() > deadline:
             break
         if key not in cache:
-            r = reduced(net, *key)
+            places, transitions, keep = key
+            r = reduced(net, places, transitions, keep=keep)
             cache[key] = r.net if r.smaller else None
         small = cache[key]
         if small is None:
@@ -743,11 +758,14 @@ def settled_by_reduction(net: Net, queries: Sequence[q.Query], max_states: int,
         graph = Graph(space)
         for x in xs:
             if isinstance(x.asks, q.PlaceBound):
-                value = int(graph.tokens(x.asks.places, x.location).max())
+                value, technique = int(graph.tokens(x.asks.places, x.location).max()), ""
             else:
-                value = _decide(graph, x, max_memory).value
+                found = _decide(graph, x, max_memory)
+                value, technique = found.value, found.technique
+            if key[2] is Keep.REACHABLE:    # what the graph shows: the markings reached
+                technique = "EXPLICIT STATE_SPACE"
             if value is not None:
-                settled[x.id] = (value, "STRUCTURAL_REDUCTION EXPLICIT STATE_SPACE")
+                settled[x.id] = (value, f"STRUCTURAL_REDUCTION {technique}")
     return settled
 
 

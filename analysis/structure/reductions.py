@@ -62,16 +62,45 @@ conditions written beside each:
 """
 from __future__ import annotations
 
+import enum
 import time
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Iterable
+
+import numpy as np
 
 from mcl2pnml.core.net import Arc, ArcKind, Marking, Net, Transition
 
 #: The rules in the order each round applies them.
 RULES = ("DEAD", "CONSTANT", "IRRELEVANT", "DUPLICATE_TRANSITION", "IMPLICIT_PLACE",
          "SEQUENTIAL_PLACE", "POST_AGGLOMERATION", "PRE_AGGLOMERATION")
+
+
+class Keep(enum.Enum):
+    """What the reduced net must answer as the net does."""
+
+    REACHABLE = "reachable"
+    """The reachable markings on the visible places (R above): ``E F φ``, ``A G φ`` and
+    upper bounds. Every rule."""
+
+    PATHS = "paths"
+    """Besides, every path up to repeated visible markings (stuttering), branching
+    included: the reduced graph is divergence-sensitive branching bisimilar to the net's,
+    so CTL and LTL without ``X`` and without ``deadlock`` answer alike (De Nicola and
+    Vaandrager 1995). The rules that only drop what never fires or never matters (dead
+    transitions, constant places, duplicate transitions, implicit places), the
+    sequential places (the transition fired at once is an inert step that nothing
+    disables and that commutes with every other: Groote and Sellink's confluence), and
+    the irrelevant transitions where no run can fire them alone for ever (no
+    ``x >= 0``, ``x != 0``, over them with ``C x >= 0``: by Dickson's lemma a run that
+    did would repeat such a segment), as each then is a finite stutter."""
+
+
+#: The rules each kind of question keeps its answer under.
+KEPT_BY = {Keep.REACHABLE: RULES,
+           Keep.PATHS: ("DEAD", "CONSTANT", "IRRELEVANT", "DUPLICATE_TRANSITION",
+                        "IMPLICIT_PLACE", "SEQUENTIAL_PLACE")}
 #: Seconds the rules may take on one net; each rule started is finished (one pass over
 #: the net), so the result is the net after whole rules.
 REDUCTION_SECONDS = 2.0
@@ -91,20 +120,21 @@ class Reduced:
 
 
 def reduced(net: Net, places: Iterable[str] = (), transitions: Iterable[str] = (),
-            seconds: float = REDUCTION_SECONDS) -> Reduced:
+            seconds: float = REDUCTION_SECONDS, keep: Keep = Keep.REACHABLE) -> Reduced:
     """``net`` reduced for a question that sees ``places`` and the fireability of
     ``transitions`` (the module's documentation: their input places are visible too).
     Kept places and transitions keep their ids, so the question reads the reduced net as
-    it is; an agglomerated transition gets a new one. Past ``seconds``, no rule is
+    it is; an agglomerated transition gets a new one. ``keep``: what it answers alike
+    (:class:`Keep`), and so which rules apply. Past ``seconds``, no rule is
     started: the net as the rules applied so far left it is as sound. A name ``net``
     lacks raises KeyError."""
-    work = _Work(net, places, transitions)
+    work = _Work(net, places, transitions, keep)
     counts: dict[str, int] = {}
     deadline = time.monotonic() + seconds
     changed = True
     while changed and time.monotonic() < deadline:
         changed = False
-        for rule in RULES:
+        for rule in KEPT_BY[keep]:
             if time.monotonic() > deadline:
                 break
             n = getattr(work, rule.lower())()
@@ -120,8 +150,10 @@ class _Work:
     """The net being reduced, by indices: arcs as {place: weight} per transition, and
     each place's producers, consumers and readers, kept in step as nodes go."""
 
-    def __init__(self, net: Net, places: Iterable[str], transitions: Iterable[str]):
+    def __init__(self, net: Net, places: Iterable[str], transitions: Iterable[str],
+                 keep: Keep = Keep.REACHABLE):
         self.source = net
+        self.keep = keep
         self.place_ids = [p.id for p in net.places]
         self.transitions = {t.id: t for t in net.transitions}
         pi = {p: i for i, p in enumerate(self.place_ids)}
@@ -237,11 +269,37 @@ class _Work:
                         queue.append(r)
         gone_t = [t for t in self.transitions if t not in kept]
         gone_p = [p for p in self.places if p not in places]
+        if self.keep is Keep.PATHS and gone_t and self._repeatable(gone_t):
+            return 0
         for t in gone_t:
             self._drop_transition(t)
         for p in gone_p:
             self._drop_place(p)
         return len(gone_t) + len(gone_p)
+
+    def _repeatable(self, ts: list[str]) -> bool:
+        """Whether some x >= 0, x != 0, over ``ts`` has C x >= 0 (then they might fire
+        alone for ever; else not: Keep.PATHS). A linear program (HiGHS); where it fails
+        to answer, repeatable."""
+        # scipy takes a fifth of a second to import: only a question on paths asks
+        from scipy.optimize import linprog
+        rows = sorted({p for t in ts for p in set(self.pre[t]) | set(self.post[t])})
+        if not rows:
+            return True            # transitions that change nothing fire for ever
+        at = {p: i for i, p in enumerate(rows)}
+        a = np.zeros((len(rows) + 1, len(ts)))
+        for j, t in enumerate(ts):
+            for p, w in self.pre[t].items():
+                a[at[p], j] -= w
+            for p, w in self.post[t].items():
+                a[at[p], j] += w
+        # -C x <= 0 and -sum x <= -1
+        a = -a
+        a[-1, :] = -1.0
+        b = np.zeros(len(rows) + 1)
+        b[-1] = -1.0
+        found = linprog(np.zeros(len(ts)), A_ub=a, b_ub=b, bounds=(0, None), method="highs")
+        return found.status != 2            # 2: infeasible, proven
 
     def duplicate_transition(self) -> int:
         groups: dict[tuple, list[str]] = {}

@@ -1,8 +1,9 @@
 """Structural reductions keep what a reachability question sees
 (analysis/structure/reductions.py): on random nets, and on nets grown to hold what each
 rule looks for, the reduced net reaches exactly the visible places' markings the net
-reaches; on the contest's models, the questions answered on their reduced nets get the
-2021 consensus's answers."""
+reaches, and the net reduced for paths answers CTL and LTL as the net does; on the
+contest's models, the questions answered on their reduced nets get the 2021 consensus's
+answers."""
 from __future__ import annotations
 
 import pytest
@@ -10,8 +11,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from mcl2pnml.analysis.contest import answers as mcc
 from mcl2pnml.analysis.contest.answers import reducible
-from mcl2pnml.analysis.contest.reachability_queries import reachability
-from mcl2pnml.analysis.structure.reductions import RULES, reduced
+from mcl2pnml.analysis.structure.reductions import RULES, Keep, reduced
 from mcl2pnml.core import queries as q
 from mcl2pnml.core.net import ArcKind, NetBuilder
 from mcl2pnml.core.structure import structure
@@ -19,8 +19,9 @@ from mcl2pnml.io.mccquery import read_queries
 from mcl2pnml import pipeline
 from sampling import sample
 from strategies import nets
-from test_mcc import CORPUS, MODELS, _corpus, _oracle, _shown
-from test_state_equation import explored
+from test_mcc import CORPUS, FILES, MODELS, _corpus, _oracle, _shown
+from test_simplify import _temporal
+from test_state_equation import explored, formulas
 
 
 def _seen(net, places) -> set[tuple[int, ...]]:
@@ -244,13 +245,13 @@ def test_on_the_contests_models_the_reduced_nets_answer_as_the_consensus(model):
     net = pipeline.load_net(folder / "model.pnml")
     oracle = _oracle(model)
     asked = 0
-    for name in ("ReachabilityCardinality", "ReachabilityFireability", "UpperBounds"):
+    for name in FILES:
         for x in read_queries(folder / f"{name}.xml"):
-            if not isinstance(x.asks, q.PlaceBound) and (
-                    not reachability(x.asks) or q.contains(x.asks, q.Deadlock)):
+            keep = reducible(x)
+            if keep is None:
                 continue
             places, transitions = _sees(x.asks)
-            r = reduced(net, places, transitions)
+            r = reduced(net, places, transitions, keep=keep)
             got = mcc.answer(r.net, [x])[0]
             assert got.value is not None, (model, x.id, got.reason)
             if oracle[x.id] != "?":
@@ -264,15 +265,64 @@ def test_only_what_the_reductions_keep_is_asked_of_a_reduced_net():
     asked = {"ef": q.ExistsPath(q.Finally(a)), "not-ag": q.Neg(q.AllPaths(q.Globally(a))),
              "bound": q.PlaceBound(("a0",)),
              "deadlock": q.ExistsPath(q.Finally(q.Disj((a, q.Deadlock())))),
-             "af": q.AllPaths(q.Finally(a)), "eg": q.ExistsPath(q.Globally(a))}
-    assert {k for k, f in asked.items() if reducible(q.Query(k, f))} == {"ef", "not-ag", "bound"}
-    # in the portfolio, past a first graph too small, no other question is answered on a
-    # reduced net (tests/analysis/test_found_markings.py has a bound that is), and every
-    # answer is the whole graph's
+             "af": q.AllPaths(q.Finally(a)), "eg": q.ExistsPath(q.Globally(a)),
+             "ax": q.AllPaths(q.Next(a)), "ltl-x": q.AllPaths(q.Finally(q.Next(a)))}
+    keeps = {k: reducible(q.Query(k, f)) for k, f in asked.items()}
+    assert keeps == {"ef": Keep.REACHABLE, "not-ag": Keep.REACHABLE, "bound": Keep.REACHABLE,
+                     "deadlock": None, "af": Keep.PATHS, "eg": Keep.PATHS, "ax": None,
+                     "ltl-x": None}
+    # in the portfolio, past a first graph too small, no question with X or a deadlock is
+    # answered on a reduced net, and every answer is the whole graph's
     net = _line(6, tokens=2)
     queries = [q.Query(k, f) for k, f in asked.items()]
     got = {x.id: x for x in mcc.answers_as_found(net, queries, max_states=3)}
     truth = {x.id: x.value for x in mcc.answer(net, queries)}
-    for k in ("deadlock", "af", "eg"):
+    for k in ("deadlock", "ax", "ltl-x"):
         assert not got[k].technique.startswith("STRUCTURAL_REDUCTION"), got[k]
     assert all(x.value == truth[k] for k, x in got.items() if x.value is not None), got
+
+
+@settings(max_examples=sample(3000, 80), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(st.data())
+def test_the_net_reduced_for_paths_answers_ctl_and_ltl_as_the_net(data):
+    # CTL and LTL formulas without X and deadlock, over a few of the net's names, on the
+    # net reduced by the rules that keep paths: the whole graphs answer alike (with every
+    # rule, the irrelevant transitions that may fire for ever make LTL's answers differ)
+    net = data.draw(st.one_of(nets(), grown(), processes()))
+    names = [t.id for t in net.transitions]
+    places = data.draw(st.lists(st.sampled_from([p.id for p in net.places]), min_size=1,
+                                max_size=3, unique=True))
+    transitions = data.draw(st.lists(st.sampled_from(names), max_size=2, unique=True)) \
+        if names else []
+    f = data.draw(_temporal(formulas(places, transitions or places[:1])))
+    if q.contains(f, q.Next) or q.contains(f, q.Deadlock) or any(
+            kind == "transition" and name not in names for kind, name in q.named(f)):
+        return
+    seen = list(q.named(f))
+    r = reduced(net, {n for kind, n in seen if kind == "place"},
+                {n for kind, n in seen if kind == "transition"}, keep=Keep.PATHS)
+    if not r.smaller or explored(net, 3_000) is None:
+        return
+    x = q.Query("f", f)
+    assert mcc.answer(r.net, [x])[0].value == mcc.answer(net, [x])[0].value, \
+        (net, f, r.removed)
+
+
+def test_transitions_that_may_fire_alone_for_ever_stay_for_paths():
+    # tl1 and tl2 pass a token round for ever beside t: A F (p = 0) is false (a run may
+    # never fire t); without them, every run fires t. Removed for the reachable markings,
+    # they stay where the paths are kept; gone once they cannot go round for ever.
+    p_empty = q.AllPaths(q.Finally(q.IntLe(q.TokensCount(("p",)), q.IntConst(0))))
+    x = q.Query("f", p_empty)
+    for arcs, loops in (("p>t t>q r1>tl1 tl1>r2 r2>tl2 tl2>r1", True),
+                        ("p>t t>q r1>tl1 tl1>r2", False)):
+        net = _net({"p": 1, "r1": 1}, arcs)
+        truth = mcc.answer(net, [x])[0].value
+        for_paths = reduced(net, ["p"], [], keep=Keep.PATHS).net
+        assert mcc.answer(for_paths, [x])[0].value == truth
+        assert ({t.id for t in for_paths.transitions} != {"t"}) is loops    # a loop kept
+        reachable = reduced(net, ["p"], []).net
+        assert {t.id for t in reachable.transitions} == {"t"}
+        assert mcc.answer(reachable, [x])[0].value is True
+    assert truth is True
