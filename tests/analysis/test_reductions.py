@@ -19,7 +19,7 @@ from mcl2pnml.io.mccquery import read_queries
 from mcl2pnml import pipeline
 from sampling import sample
 from strategies import nets
-from test_mcc import CORPUS, FILES, MODELS, _corpus, _oracle, _shown
+from test_mcc import CORPUS, FILES, WITHOUT_GRAPH, _corpus, _oracle, _shown, _some
 from test_simplify import _temporal
 from test_state_equation import explored, formulas
 
@@ -238,7 +238,7 @@ def _sees(f) -> tuple[set[str], set[str]]:
             {n for kind, n in named if kind == "transition"})
 
 
-@pytest.mark.parametrize("model", MODELS or ["(none)"])
+@pytest.mark.parametrize("model", _some(WITHOUT_GRAPH))
 def test_on_the_contests_models_the_reduced_nets_answer_as_the_consensus(model):
     _corpus()
     folder = CORPUS / model
@@ -282,7 +282,7 @@ def test_only_what_the_reductions_keep_is_asked_of_a_reduced_net():
     assert all(x.value == truth[k] for k, x in got.items() if x.value is not None), got
 
 
-@settings(max_examples=sample(3000, 80), deadline=None,
+@settings(max_examples=sample(3000, 60), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(st.data())
 def test_the_net_reduced_for_paths_answers_ctl_and_ltl_as_the_net(data):
