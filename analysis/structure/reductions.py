@@ -1,4 +1,4 @@
-"""Structural reductions: a smaller net that answers a reachability question as the net does.
+"""Structural reductions: a smaller net that answers a question as the net does.
 
 A question sees some places and transitions: the places its atoms count, the transitions
 whose fireability it asks, and those transitions' input places (*visible*; the rest is
@@ -10,9 +10,10 @@ whose fireability it asks, and those transitions' input places (*visible*; the r
 
 So ``E F φ``, ``A G φ`` (φ a state formula over visible places and transitions, without
 ``deadlock``) and the upper bound of a sum of visible places have the same answer on both
-nets. Deadlocks, and the formulas over paths (CTL, LTL), are *not* kept: a hidden
-transition removed may have been one that fires for ever, or the only one enabled. Every
-rule below keeps (R) on its own, so their sequence does. They are Berthelot's ("Checking
+nets. Deadlocks are *not* kept (a hidden transition removed may have been the only one
+enabled), and paths (CTL, LTL) only by the rules :class:`Keep` names for them (one that
+fires for ever may be gone). Every rule below keeps (R) on its own, so their sequence
+does. They are Berthelot's ("Checking
 properties of nets using transformations", 1986) and verifypn's (Bonneland, Dyhr, Jensen,
 Johannsen and Srba, "Stubborn versus structural reductions for Petri nets", 2019), with the
 conditions written beside each:
