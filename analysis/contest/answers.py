@@ -26,7 +26,7 @@ come first, each answer handed out as soon as one settles it (:func:`answers_as_
 docs/query.md): the markings found as witnesses and the graph explored so far read
 three-valued (:class:`PartialGraph`), the state equation
 (:mod:`mcl2pnml.analysis.structure.state_equation`), formulas simplified by it and the
-P-invariants, the reachability questions on the net reduced for each
+P-invariants, the questions the structural reductions keep, on the net reduced for each
 (:mod:`mcl2pnml.analysis.structure.reductions`), the path formulas searched on the fly
 from the net under stubborn sets
 (:mod:`mcl2pnml.analysis.contest.ltl_on_the_fly`), random walks and the runs of walkers
@@ -404,8 +404,9 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
     initial marking decides on every path; the rest goes on simplified), then what the
     initial marking and the P-invariants settle
     (:func:`~mcl2pnml.analysis.contest.reachability_queries.settled_without_exploring`),
-    then the reachability questions and upper bounds on the nets reduced for them
-    (:func:`settled_by_reduction`, again before each larger exploration), then the
+    then the questions the reductions keep (reachability, bounds, CTL and LTL without
+    ``X``) on the nets reduced for them (:func:`settled_by_reduction`, again before each
+    larger exploration), then the
     formulas one search on the fly decides (LTL under stubborn sets, then CTL's
     dependency graph), then what random walks meet (:func:`settled_by_walks`, witnesses
     as found markings are) and what the runs of walkers that close show
@@ -454,8 +455,8 @@ def answers_as_found(net: Net, queries: Sequence[q.Query], *, max_states: int = 
         yield from settle(decided)
         asked.update(rewritten)
         yield from settle(settled_without_exploring(net, left()))
-        # then the reachability questions on the nets reduced for them, where those are
-        # small enough to explore whole
+        # then the questions the reductions keep, on the nets reduced for them, where
+        # those are small enough to explore whole
         reductions: dict = {}
         yield from settle(settled_by_reduction(net, left(), min(max_states, FIRST_STATES),
                                                max_memory, reductions))
