@@ -733,10 +733,7 @@ def settled_by_reduction(net: Net, queries: Sequence[q.Query], max_states: int,
     for x in queries:
         keep = reducible(x)
         if keep is not None:
-            named = list(q.named(x.asks))
-            key = (frozenset(n for kind, n in named if kind == "place"),
-                   frozenset(n for kind, n in named if kind == "transition"), keep)
-            groups.setdefault(key, []).append(x)
+            groups.setdefault((*q.seen(x.asks), keep), []).append(x)
     settled: dict[str, tuple] = {}
     deadline = time.monotonic() + seconds
     for key, xs in sorted(groups.items(), key=lambda kv: len(kv[0][0]) + len(kv[0][1])):

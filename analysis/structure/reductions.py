@@ -187,21 +187,20 @@ class _Work:
 
     # -- bookkeeping --------------------------------------------------------------------------
 
+    def _incident(self, t: str):
+        """Each place index that lists ``t`` (producers, consumers, readers), with the
+        places of ``t``'s arcs of that kind."""
+        return ((self.into, self.post[t]), (self.out, self.pre[t]), (self.reads, self.read[t]))
+
     def _index(self, t: str) -> None:
-        for p in self.post[t]:
-            self.into[p].add(t)
-        for p in self.pre[t]:
-            self.out[p].add(t)
-        for p in self.read[t]:
-            self.reads[p].add(t)
+        for index, arcs in self._incident(t):
+            for p in arcs:
+                index[p].add(t)
 
     def _drop_transition(self, t: str) -> None:
-        for p in self.post[t]:
-            self.into[p].discard(t)
-        for p in self.pre[t]:
-            self.out[p].discard(t)
-        for p in self.read[t]:
-            self.reads[p].discard(t)
+        for index, arcs in self._incident(t):
+            for p in arcs:
+                index[p].discard(t)
         for arcs in (self.pre, self.read, self.post):
             del arcs[t]
         del self.transitions[t]
@@ -218,8 +217,7 @@ class _Work:
 
     def _changes(self, p: int) -> set[str]:
         """The transitions that change p's count (a self-loop does not)."""
-        return {t for t in self.into[p] | self.out[p]
-                if self.post[t].get(p, 0) != self.pre[t].get(p, 0)}
+        return {t for t in self.into[p] | self.out[p] if self._change(p, t)}
 
     # -- the rules, each returning how many nodes it removed ----------------------------------
 
@@ -248,8 +246,7 @@ class _Work:
             if self._changes(p):
                 continue
             for t in list(self.out[p] | self.reads[p]):
-                need = self.pre[t].get(p, 0) or self.read[t].get(p, 0)
-                if need > self.m0[p]:      # never enabled: t needs more than p ever holds
+                if self._need(p, t) > self.m0[p]:   # never enabled: needs more than p holds
                     self._drop_transition(t)
                     removed += 1
             self._drop_place(p)

@@ -122,6 +122,14 @@ def named(f: "Formula | PlaceBound") -> Iterator[tuple[str, str]]:
             yield from named(g)
 
 
+def seen(f: "Formula | PlaceBound") -> tuple[frozenset[str], frozenset[str]]:
+    """The places ``f`` counts and the transitions whose fireability it asks
+    (:func:`named`, as two sets)."""
+    names = list(named(f))
+    return (frozenset(n for kind, n in names if kind == "place"),
+            frozenset(n for kind, n in names if kind == "transition"))
+
+
 def contains(f: Formula, kind: type) -> bool:
     """Whether an operator of ``kind`` occurs in ``f``."""
     return isinstance(f, kind) or any(contains(g, kind) for g in children(f))

@@ -129,15 +129,23 @@ def processes(draw):
     return b.build()
 
 
+def _drawn(data, fewest_places: int):
+    """A net (random, grown, or processes), up to three of its places and two of its
+    transitions."""
+    net = data.draw(st.one_of(nets(), grown(), processes()))
+    places = data.draw(st.lists(st.sampled_from([p.id for p in net.places]),
+                                min_size=fewest_places, max_size=3, unique=True))
+    names = [t.id for t in net.transitions]
+    transitions = data.draw(st.lists(st.sampled_from(names), max_size=2, unique=True)) \
+        if names else []
+    return net, places, transitions
+
+
 @settings(max_examples=sample(1500, 200), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(st.data())
 def test_the_reduced_net_reaches_what_the_net_reaches_on_the_visible_places(data):
-    net = data.draw(st.one_of(nets(), grown(), processes()))
-    ids = [p.id for p in net.places]
-    places = data.draw(st.lists(st.sampled_from(ids), max_size=3, unique=True))
-    transitions = data.draw(st.lists(st.sampled_from([t.id for t in net.transitions]),
-                                     max_size=2, unique=True)) if net.transitions else []
+    net, places, transitions = _drawn(data, fewest_places=0)
     _holds(net, places, transitions)
 
 
@@ -232,12 +240,6 @@ def test_a_name_the_net_lacks_is_refused():
         reduced(_line(2), [], ["nowhere"])
 
 
-def _sees(f) -> tuple[set[str], set[str]]:
-    named = list(q.named(f))
-    return ({n for kind, n in named if kind == "place"},
-            {n for kind, n in named if kind == "transition"})
-
-
 @pytest.mark.parametrize("model", _some(WITHOUT_GRAPH))
 def test_on_the_contests_models_the_reduced_nets_answer_as_the_consensus(model):
     _corpus()
@@ -250,7 +252,7 @@ def test_on_the_contests_models_the_reduced_nets_answer_as_the_consensus(model):
             keep = reducible(x)
             if keep is None:
                 continue
-            places, transitions = _sees(x.asks)
+            places, transitions = q.seen(x.asks)
             r = reduced(net, places, transitions, keep=keep)
             got = mcc.answer(r.net, [x])[0]
             assert got.value is not None, (model, x.id, got.reason)
@@ -289,19 +291,12 @@ def test_the_net_reduced_for_paths_answers_ctl_and_ltl_as_the_net(data):
     # CTL and LTL formulas without X and deadlock, over a few of the net's names, on the
     # net reduced by the rules that keep paths: the whole graphs answer alike (with every
     # rule, the irrelevant transitions that may fire for ever make LTL's answers differ)
-    net = data.draw(st.one_of(nets(), grown(), processes()))
-    names = [t.id for t in net.transitions]
-    places = data.draw(st.lists(st.sampled_from([p.id for p in net.places]), min_size=1,
-                                max_size=3, unique=True))
-    transitions = data.draw(st.lists(st.sampled_from(names), max_size=2, unique=True)) \
-        if names else []
+    net, places, transitions = _drawn(data, fewest_places=1)
     f = data.draw(_temporal(formulas(places, transitions or places[:1])))
-    if q.contains(f, q.Next) or q.contains(f, q.Deadlock) or any(
-            kind == "transition" and name not in names for kind, name in q.named(f)):
+    if q.contains(f, q.Next) or q.contains(f, q.Deadlock) \
+            or not q.seen(f)[1] <= {t.id for t in net.transitions}:
         return
-    seen = list(q.named(f))
-    r = reduced(net, {n for kind, n in seen if kind == "place"},
-                {n for kind, n in seen if kind == "transition"}, keep=Keep.PATHS)
+    r = reduced(net, *q.seen(f), keep=Keep.PATHS)
     if not r.smaller or explored(net, 3_000) is None:
         return
     x = q.Query("f", f)
