@@ -33,7 +33,7 @@ from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
 
 from mcl2pnml.analysis.behaviour import behaviour
-from mcl2pnml.analysis.structure.invariants import (DENSE_ENTRIES, AnalysisLimit, format_invariant,
+from mcl2pnml.analysis.structure.invariants import (AnalysisLimit, format_invariant,
                                                    minimal_semipositive_p_invariants,
                                                    minimal_semipositive_t_invariants,
                                                    p_invariant_basis, t_invariant_basis)
@@ -63,7 +63,8 @@ SIPHON_WORK = 50_000_000
 # 10^5 places and rounded up: the estimates a stage is refused or left out by.
 #: the structure (pre, post, incidence both ways, pre- and post-sets) per arc and per node
 STRUCTURE_ARC, STRUCTURE_NODE = 900, 700
-#: the exact elimination (sympy's sparse rationals) per nonzero of C, before fill-in
+#: the exact elimination (its sparse rows, the held entries and their index) per nonzero
+#: of C, before fill-in
 ELIMINATION_ENTRY = 600
 #: a Farkas row, per entry of its two parts
 FARKAS_ENTRY = 250
@@ -450,8 +451,6 @@ class _Stages:
         """The invariant bases (linear algebra): before the exploration, whose budget then
         counts what they hold."""
         s = self.s
-        if len(s.places) * len(s.transitions) > DENSE_ENTRIES:
-            _with_sympy()
         elimination = elimination_estimate(s)
         return {"p_invariants": self.run("p_invariants", p_invariant_basis, s, need=elimination),
                 "t_invariants": self.run("t_invariants", t_invariant_basis, s, need=elimination)}
@@ -501,9 +500,9 @@ class _Stages:
 
 
 def _with_sympy() -> None:
-    # the sparse elimination and the siphons' control use sympy: loaded before their
-    # guard (the module is not the stage's); a small net's bases, and a net whose
-    # siphons are past their bound, do without it (most of a second to import)
+    # the siphons' control uses sympy's linear programs: loaded before its guard (the
+    # module is not the stage's); a net whose siphons are past their bound does without
+    # it (most of a second to import)
     import sympy  # noqa: F401
 
 

@@ -8,8 +8,8 @@ per transition), each task's OK fused with the next one's B, and one mutex
 MTX for the whole chain. The default sizes are 100, 300, 1,000 and 5,000
 places.
 
-* ours: ``mcl2pnml.analysis.structure.invariants.p_invariant_basis`` (sparse ``DomainMatrix``
-  over QQ), the median of three runs;
+* ours: ``mcl2pnml.analysis.structure.invariants.p_invariant_basis`` (an exact elimination
+  on the sparse rows), the median of three runs;
 * plain: ``sympy.Matrix(dense C).T.nullspace()``, one run (building the
   dense matrix not counted), in a child process stopped after 60 s; once it
   has not finished in time the larger sizes skip it.

@@ -8,11 +8,13 @@ Read arcs add nothing to C (they are self-loops), so they change no
 invariant.
 
 * :func:`p_invariant_basis`, :func:`t_invariant_basis`: an exact basis of the
-  invariant space, the nullspace of C^T (or C) over the rationals, computed
-  with sympy's *sparse* domain matrices (``DomainMatrix`` in SDM form),
-  never a dense ``Matrix``: compiled missions have thousands of places and
-  about four arcs per transition, and the sparse elimination stays sparse on
-  them (``python -m bench.invariants_vs_nullspace`` measures it).
+  invariant space, the nullspace of C^T (or C) over the rationals, by an
+  exact elimination on the sparse rows, integers kept whole: compiled
+  missions have thousands of places and about four arcs per transition, and
+  the elimination stays sparse on them (``python -m
+  bench.invariants_vs_nullspace`` measures it). A dense matrix's, FLINT's
+  elimination in C; sympy's sparse one would do, but takes most of a second
+  to import, ten times the whole elimination on an example.
 * :func:`minimal_semipositive_p_invariants` and the T version: the
   invariants with nonnegative coefficients and minimal support, by the
   Farkas algorithm with the minimal-support pruning of Martinez and Silva
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import heapq
 import time
+from fractions import Fraction
 from math import gcd, lcm
 from typing import Mapping, Sequence
 
@@ -59,29 +62,16 @@ def integer_multiple(vec: Mapping[int, object]) -> dict[int, int]:
     return {k: v // g for k, v in ints.items()}
 
 
-def _canonical(vec: Mapping[int, object]) -> dict[int, int]:
-    """Coprime integers, the first nonzero (lowest index) positive, keys in order.
-
-    A basis vector's sign is arbitrary; fixing it makes the output one
-    function of the net, whatever the elimination did.
-    """
-    ints = integer_multiple(vec)
-    first = min(ints, default=None)
-    sign = -1 if first is not None and ints[first] < 0 else 1
-    return {k: sign * ints[k] for k in sorted(ints)}
-
-
 def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, int]]:
     """A basis of {x : A x = 0} for a sparse integer A (row i of A = ``rows[i]``).
 
-    Gauss-Jordan elimination over QQ on the sparse representation (sympy's
-    sparse RREF only ever touches nonzeros), with the columns taken last
-    first. The RREF is unique, so the basis is too: one vector per free
-    (non-pivot) column, with 1 there, 0 at the other free columns, and minus
-    the pivot rows' entries. That column is the vector's first nonzero
-    entry, which no other vector of the basis has, so the vectors are
-    independent at a glance; they come in the order of those columns, each
-    made canonical (:func:`_canonical`).
+    Gauss-Jordan elimination on the sparse rows (:func:`_reduced_rows`), with the columns
+    taken last first. The reduced row echelon form A' is unique, so the basis is too: one
+    vector per free (non-pivot) column f, with x_f = 1, 0 at the other free columns, and
+    -A'[r][f] at each pivot row r's pivot column, scaled to coprime integers. Every pivot column is
+    past its rows' other columns, so f is the vector's first nonzero entry, which no other
+    vector has: the vectors are independent at a glance. They come in the order of those
+    columns, each as coprime integers.
 
     Why last first: places are numbered as the nets were composed, so a
     compiled mission's first places are its outermost structure, through
@@ -91,35 +81,116 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     places) the basis has 4% of the nonzeros and comes fifty times faster;
     on the paper's task it reads like the paper's own equations
     (``MTX + EXE + E_OK + E_FAIL + W_OK + W_FAIL + W_A``).
+
+    Where the elimination writes more than :data:`FILL_IN` times the dense matrix's entries
+    (a dense or random net, whose rows no longer stay sparse), FLINT's dense elimination
+    reads the same unique form (:func:`_nullspace_dense`).
     """
-    if len(rows) * ncols <= DENSE_ENTRIES:
+    dense = len(rows) * ncols
+    budget = max(FILL_IN * dense, SMALL_WORK) if dense <= DENSE_ENTRIES else None
+    pivots = _reduced_rows(rows, budget)
+    if pivots is None:
         return _nullspace_dense(rows, ncols)
-    # sympy takes most of a second to import: Farkas (and so the counter
-    # explorer's bounds) does without it
-    from sympy import QQ, ZZ
-    from sympy.polys.matrices import DomainMatrix
-    last = ncols - 1
-    data = {i: {last - j: ZZ(v) for j, v in row.items() if v} for i, row in enumerate(rows)}
-    a = DomainMatrix({i: r for i, r in data.items() if r}, (len(rows), ncols), ZZ)
-    # ZZ -> QQ: Gauss-Jordan divides by the pivots; over QQ it stays exact
-    rref, pivots = a.to_sparse().convert_to(QQ).rref()
-    basis = rref.nullspace_from_rref(pivots).to_sdm()
-    vectors = [_canonical({last - j: v for j, v in basis[i].items()}) for i in basis]
-    return sorted(vectors, key=min)
+    holders: dict[int, list[int]] = {}      # free column -> the pivot rows holding it
+    for c, row in pivots.items():
+        for j in row:
+            if j not in pivots:
+                holders.setdefault(j, []).append(c)
+    vectors = []
+    for f in sorted(set(range(ncols)) - pivots.keys()):
+        entries = {f: Fraction(1), **{c: -Fraction(pivots[c][f]) for c in holders.get(f, ())}}
+        scale = lcm(*(q.denominator for q in entries.values()))
+        vec = {j: int(q * scale) for j, q in entries.items()}
+        g = gcd(*vec.values())
+        vectors.append({j: vec[j] // g for j in sorted(vec)})
+    return vectors
 
 
-#: The largest matrix (rows times columns) whose nullspace is taken dense, by FLINT: in
-#: a few milliseconds, where importing sympy alone takes most of a second. Past it, the
-#: sparse elimination: a dense one of thousands of places grows as the cube.
+#: What share of the dense matrix's entries the sparse elimination may write before FLINT's
+#: dense one takes over. Measured on the examples and the contest's nets (rows ordered as
+#: :func:`_reduced_rows` orders them): at most 0.17 on a matrix past :data:`SMALL_WORK`
+#: entries, where a random one with a fifth of its entries nonzero writes twenty to eighty
+#: times its size, in growing fractions.
+FILL_IN = 0.5
+#: Writes any matrix may take, however small: a few milliseconds, less than FLINT's import.
+SMALL_WORK = 10_000
+#: The largest matrix (rows times columns) FLINT may take dense: its elimination grows as
+#: the cube, its memory as the square. Past it, the sparse elimination runs to the end
+#: (under the budget's guard).
 DENSE_ENTRIES = 1_000_000
+
+
+def _reduced_rows(rows: Sequence[Mapping[int, int]],
+                  budget: int | None) -> dict[int, dict[int, Rational]] | None:
+    """The reduced row echelon form of A, columns last first: {pivot column: its row}, each
+    row 1 at its pivot and zero at every other pivot column. None once the entries
+    written pass ``budget``.
+
+    Row by row, the sparser first (Markowitz's rule, the cheapest pivots first): a row is
+    reduced by the pivot rows it meets (each holds no other pivot column, so one pass
+    clears them all), its last column becomes a pivot, and that column is cleared from
+    the pivot rows holding it. Every update is in place and touches only the pivot row's
+    nonzeros, so a long row (a place every transition uses) is not copied once per pivot;
+    entries stay Python integers while the pivots are 1 or -1, as a net's arcs mostly are.
+    """
+    pivots: dict[int, dict[int, Rational]] = {}
+    holders: dict[int, set[int]] = {}       # column -> the pivot columns whose rows hold it
+    written = 0
+    for given in sorted(rows, key=len):
+        row: dict[int, Rational] = {j: v for j, v in given.items() if v}
+        for c in [c for c in row if c in pivots]:
+            written += _subtract(row, row[c], pivots[c])
+        if not row:
+            continue
+        c = max(row)
+        scale = row[c]
+        if scale != 1:
+            row = {j: _divided(v, scale) for j, v in row.items()}
+        for k in holders.pop(c, ()):
+            old = pivots[k]
+            before = old.keys() - {c}
+            written += _subtract(old, old[c], row)
+            for j in before - old.keys():
+                holders[j].discard(k)
+            for j in old.keys() - before - {k}:
+                holders.setdefault(j, set()).add(k)
+        pivots[c] = row
+        for j in row:
+            if j != c:
+                holders.setdefault(j, set()).add(c)
+        if budget is not None and written > budget:
+            return None
+    return pivots
+
+
+#: An entry of the elimination: an int, or a Fraction once a pivot other than 1 or -1
+#: divides.
+Rational = int | Fraction
+
+
+def _subtract(row: dict[int, Rational], factor: Rational, pivot_row: dict[int, Rational]) -> int:
+    """row -= factor * pivot_row, in place, zeros dropped; how many entries it wrote."""
+    for j, v in pivot_row.items():
+        w = row.get(j, 0) - factor * v
+        if w:
+            row[j] = w
+        else:
+            del row[j]
+    return len(pivot_row)
+
+
+def _divided(v: Rational, d: Rational) -> Rational:
+    q = Fraction(v) / d
+    return q.numerator if q.denominator == 1 else q
 
 
 def _nullspace_dense(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, int]]:
     """:func:`_nullspace` by FLINT's exact elimination (python-flint's ``fmpz_mat``). Its
     nullspace is read off the same unique RREF, columns taken last first: a non-pivot
     column's vector is the denominator there and minus the pivot rows' entries, so
-    after :func:`_canonical` the basis is the sparse elimination's, vector for vector."""
-    from flint import fmpz_mat   # python-flint, 0.1 s to import: only for a basis
+    made coprime with its first entry positive, the basis is the sparse elimination's,
+    vector for vector."""
+    from flint import fmpz_mat   # python-flint, 20 ms to import: only for a dense net
     last = ncols - 1
     a = fmpz_mat(max(1, len(rows)), ncols)
     for i, row in enumerate(rows):
@@ -140,7 +211,7 @@ def _nullspace_dense(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict
 def p_invariant_basis(s: Structure) -> list[dict[str, int]]:
     """A basis of the P-invariants {y : y^T C = 0} (Murata 1989).
 
-    Exact, over the rationals, by sparse elimination (sympy ``DomainMatrix``):
+    Exact, over the rationals, by sparse elimination (:func:`_nullspace`):
     the dimension is |P| - rank(C). Each vector is {place: coefficient} with
     zero coefficients left out, coprime integers, the first nonzero one in
     place order positive; each vector's first place is in no other vector,

@@ -1,9 +1,11 @@
 """`mcl2pnml analyze` and `mcl2pnml template`: the contract of cli.md, on our nets and others'."""
 import json
+import subprocess
+import sys
 
 import pytest
 
-from helpers import DATA, run_cli as run
+from helpers import DATA, ROOT, run_cli as run
 
 SPEC_KEYS = {"places", "transitions", "p_invariants", "siphons", "bounded", "safe",
              "terminal_markings", "reusable", "deadlock_free", "states"}
@@ -212,3 +214,19 @@ def test_the_structure_option_reaches_the_enumerations(task_pnml):
     out = run("analyze", task_pnml, "--structure", "--json")
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["siphons"]
+
+
+def test_plain_analyze_of_an_example_loads_neither_flint_nor_sympy():
+    # the bases of a mission's net stay sparse (invariants.FILL_IN): plain analyze waits
+    # on neither library's import, which took longer than the whole elimination
+    code = ("import runpy, sys\n"
+            "sys.argv = ['mcl2pnml', 'analyze', sys.argv[1], '--untimed']\n"
+            "try:\n"
+            "    runpy.run_module('mcl2pnml', run_name='__main__')\n"
+            "finally:\n"
+            "    print(sorted(m for m in ('flint', 'sympy') if m in sys.modules),\n"
+            "          file=sys.stderr)\n")
+    out = subprocess.run([sys.executable, "-c", code, str(ROOT / "examples" / "docking.mcl")],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert out.returncode == 0 and "P-invariants" in out.stdout, out.stderr[-2000:]
+    assert out.stderr.strip() == "[]"

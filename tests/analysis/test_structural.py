@@ -416,18 +416,32 @@ def test_invariant_bases_by_definition(net):
 @settings(max_examples=sample(400, 100), deadline=None)
 @given(small_nets(max_places=8, max_transitions=7))
 def test_the_dense_and_the_sparse_elimination_give_the_same_basis(net):
-    # FLINT's dense nullspace (small nets) and sympy's sparse one (large nets) read the
-    # same unique RREF: vector for vector, in the same order
+    # FLINT's dense nullspace and our sparse elimination read the same unique RREF:
+    # vector for vector, in the same order
     from mcl2pnml.analysis.structure import invariants as inv
     s = structure(net)
     for rows, n in ((s.incidence, len(s.places)), (s.incidence_rows, len(s.transitions))):
-        dense_basis = inv._nullspace_dense(rows, n)
-        saved, inv.DENSE_ENTRIES = inv.DENSE_ENTRIES, -1
-        try:
-            sparse_basis = inv._nullspace(rows, n)
-        finally:
-            inv.DENSE_ENTRIES = saved
-        assert dense_basis == sparse_basis
+        assert inv._nullspace(rows, n) == inv._nullspace_dense(rows, n)
+
+
+@pytest.mark.parametrize("name", ["dam_inspection", "docking", "lawnmower", "sauce"])
+def test_a_mission_stays_sparse(examples, name):
+    # the bound past which FLINT takes over is never reached on a compiled mission
+    from mcl2pnml.analysis.structure import invariants as inv
+    s = structure(examples.net(name))
+    for rows, n in ((s.incidence, len(s.places)), (s.incidence_rows, len(s.transitions))):
+        assert inv._reduced_rows(rows, inv.FILL_IN * len(rows) * n) is not None, (name, n)
+
+
+def test_a_dense_matrix_goes_to_flint():
+    # a random dense matrix fills in past the bound: the same basis, by FLINT
+    from mcl2pnml.analysis.structure import invariants as inv
+    rng = random.Random(1)
+    rows = [{j: rng.randint(-3, 3) for j in range(160)} for _ in range(150)]
+    assert inv._reduced_rows(rows, max(inv.FILL_IN * 150 * 160, inv.SMALL_WORK)) is None
+    basis = inv._nullspace(rows, 160)
+    assert basis == inv._nullspace_dense(rows, 160) and len(basis) == 10
+    assert all(sum(r.get(j, 0) * v for j, v in y.items()) == 0 for y in basis for r in rows)
 
 
 def _check_farkas(found, order, rows, is_null, n_max):
