@@ -98,9 +98,12 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
                 holders.setdefault(j, []).append(c)
     vectors = []
     for f in sorted(set(range(ncols)) - pivots.keys()):
-        entries = {f: Fraction(1), **{c: -Fraction(pivots[c][f]) for c in holders.get(f, ())}}
-        scale = lcm(*(q.denominator for q in entries.values()))
-        vec = {j: int(q * scale) for j, q in entries.items()}
+        vec = {f: 1, **{c: -pivots[c][f] for c in holders.get(f, ())}}
+        # whole already where the pivots were 1 or -1, as a net's arcs mostly make them
+        fractions = [q.denominator for q in vec.values() if type(q) is Fraction]
+        if fractions:
+            scale = lcm(*fractions)
+            vec = {j: int(q * scale) for j, q in vec.items()}
         g = gcd(*vec.values())
         vectors.append({j: vec[j] // g for j in sorted(vec)})
     return vectors
@@ -180,6 +183,8 @@ def _subtract(row: dict[int, Rational], factor: Rational, pivot_row: dict[int, R
 
 
 def _divided(v: Rational, d: Rational) -> Rational:
+    if d == -1:
+        return -v
     q = Fraction(v) / d
     return q.numerator if q.denominator == 1 else q
 
