@@ -12,9 +12,9 @@ invariant.
   exact elimination on the sparse rows, integers kept whole: compiled
   missions have thousands of places and about four arcs per transition, and
   the elimination stays sparse on them (``python -m
-  bench.invariants_vs_nullspace`` measures it). A dense matrix's, FLINT's
-  elimination in C; sympy's sparse one would do, but takes most of a second
-  to import, ten times the whole elimination on an example.
+  bench.invariants_vs_nullspace`` measures it). A matrix that fills in goes
+  to FLINT's dense elimination, in C. sympy's sparse one would do the same,
+  but takes a third of a second to import, a hundred times an example's two bases.
 * :func:`minimal_semipositive_p_invariants` and the T version: the
   invariants with nonnegative coefficients and minimal support, by the
   Farkas algorithm with the minimal-support pruning of Martinez and Silva
@@ -68,10 +68,10 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     Gauss-Jordan elimination on the sparse rows (:func:`_reduced_rows`), with the columns
     taken last first. The reduced row echelon form A' is unique, so the basis is too: one
     vector per free (non-pivot) column f, with x_f = 1, 0 at the other free columns, and
-    -A'[r][f] at each pivot row r's pivot column, scaled to coprime integers. Every pivot column is
-    past its rows' other columns, so f is the vector's first nonzero entry, which no other
+    -A'[r][f] at each pivot row r's pivot column, scaled to coprime integers. A row's
+    pivot is its last column, so f is the vector's first nonzero entry, which no other
     vector has: the vectors are independent at a glance. They come in the order of those
-    columns, each as coprime integers.
+    columns.
 
     Why last first: places are numbered as the nets were composed, so a
     compiled mission's first places are its outermost structure, through
@@ -87,7 +87,7 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     reads the same unique form (:func:`_nullspace_dense`).
     """
     dense = len(rows) * ncols
-    budget = max(FILL_IN * dense, SMALL_WORK) if dense <= DENSE_ENTRIES else None
+    budget = max(int(FILL_IN * dense), SMALL_WORK) if dense <= DENSE_ENTRIES else None
     pivots = _reduced_rows(rows, budget)
     if pivots is None:
         return _nullspace_dense(rows, ncols)
@@ -129,7 +129,7 @@ def _reduced_rows(rows: Sequence[Mapping[int, int]],
     row 1 at its pivot and zero at every other pivot column. None once the entries
     written pass ``budget``.
 
-    Row by row, the sparser first (Markowitz's rule, the cheapest pivots first): a row is
+    Row by row, the shorter first (after Markowitz: the pivots that fill in least): a row is
     reduced by the pivot rows it meets (each holds no other pivot column, so one pass
     clears them all), its last column becomes a pivot, and that column is cleared from
     the pivot rows holding it. Every update is in place and touches only the pivot row's
