@@ -88,14 +88,10 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
     """
     dense = len(rows) * ncols
     budget = max(int(FILL_IN * dense), SMALL_WORK) if dense <= DENSE_ENTRIES else None
-    pivots = _reduced_rows(rows, budget)
-    if pivots is None:
+    reduced = _reduced_rows(rows, budget)
+    if reduced is None:
         return _nullspace_dense(rows, ncols)
-    holders: dict[int, list[int]] = {}      # free column -> the pivot rows holding it
-    for c, row in pivots.items():
-        for j in row:
-            if j not in pivots:
-                holders.setdefault(j, []).append(c)
+    pivots, holders = reduced
     vectors = []
     for f in sorted(set(range(ncols)) - pivots.keys()):
         vec = {f: 1, **{c: -pivots[c][f] for c in holders.get(f, ())}}
@@ -104,9 +100,18 @@ def _nullspace(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict[int, 
         if fractions:
             scale = lcm(*fractions)
             vec = {j: int(q * scale) for j, q in vec.items()}
-        g = gcd(*vec.values())
-        vectors.append({j: vec[j] // g for j in sorted(vec)})
+        vectors.append(_coprime(vec))
     return vectors
+
+
+def _coprime(vec: dict[int, int]) -> dict[int, int]:
+    """A basis vector as the output gives it: coprime integers, its first (lowest) index
+    positive, the indices in order. A basis vector's sign is arbitrary; fixing it makes
+    the basis one function of the net, whatever the elimination did."""
+    g = gcd(*vec.values())
+    if vec[min(vec)] < 0:
+        g = -g
+    return {j: vec[j] // g for j in sorted(vec)}
 
 
 #: What share of the dense matrix's entries the sparse elimination may write before FLINT's
@@ -123,11 +128,11 @@ SMALL_WORK = 10_000
 DENSE_ENTRIES = 1_000_000
 
 
-def _reduced_rows(rows: Sequence[Mapping[int, int]],
-                  budget: int | None) -> dict[int, dict[int, Rational]] | None:
+def _reduced_rows(rows: Sequence[Mapping[int, int]], budget: int | None
+                  ) -> tuple[dict[int, dict[int, Rational]], dict[int, set[int]]] | None:
     """The reduced row echelon form of A, columns last first: {pivot column: its row}, each
-    row 1 at its pivot and zero at every other pivot column. None once the entries
-    written pass ``budget``.
+    row 1 at its pivot and zero at every other pivot column; and {column: the pivot
+    columns whose rows hold it}. None once the entries written pass ``budget``.
 
     Row by row, the shorter first (after Markowitz: the pivots that fill in least): a row is
     reduced by the pivot rows it meets (each holds no other pivot column, so one pass
@@ -163,7 +168,7 @@ def _reduced_rows(rows: Sequence[Mapping[int, int]],
                 holders.setdefault(j, set()).add(c)
         if budget is not None and written > budget:
             return None
-    return pivots
+    return pivots, holders
 
 
 #: An entry of the elimination: an int, or a Fraction once a pivot other than 1 or -1
@@ -203,13 +208,8 @@ def _nullspace_dense(rows: Sequence[Mapping[int, int]], ncols: int) -> list[dict
             if v:
                 a[i, last - j] = v
     basis, nullity = a.nullspace()
-    vectors = []
-    for k in range(nullity):
-        column = {last - j: int(basis[j, k]) for j in range(ncols) if basis[j, k] != 0}
-        g = gcd(*column.values())
-        first = min(column)
-        sign = -1 if column[first] < 0 else 1
-        vectors.append({j: sign * column[j] // g for j in sorted(column)})
+    vectors = [_coprime({last - j: int(basis[j, k]) for j in range(ncols) if basis[j, k] != 0})
+               for k in range(nullity)]
     return sorted(vectors, key=min)
 
 
