@@ -44,12 +44,30 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Mapping
 
+from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import EventKind, read_transition
 from mcl2pnml.core.settings import SettingError
 
 #: The longest acknowledgement delay and report gap an option may set, in seconds.
 MAX_ASSUMED = 1_000_000
+#: How many units of time a second has at the finest: the timed analysis and the TINA
+#: export count in whole microseconds.
+PER_SECOND = 10 ** 6
+
+
+def exact_seconds(x: int | float | Fraction) -> Fraction:
+    """The number of seconds ``x`` stands for, exactly: a float (a time-out of MCL, a
+    timing of PNML, both read from decimal text) as the decimal of at most 15 significant
+    digits nearest it. Every such decimal is one double and back again, so that
+    ``999999999.999999`` read as a double is that decimal, not its binary neighbour."""
+    return Fraction(format(x, ".15g")) if isinstance(x, float) else Fraction(x)
+
+
+def finer_than_a_microsecond(x: int | float | Fraction) -> bool:
+    """Whether ``x`` seconds (as :func:`exact_seconds` reads them) are not a whole number
+    of microseconds, the finest time the timed analysis counts."""
+    return (exact_seconds(x) * PER_SECOND).denominator != 1
 
 
 @dataclass(frozen=True)
@@ -103,7 +121,7 @@ def seconds_setting(text: str, setting: str) -> Fraction:
         raise SettingError(setting, f"'{text}' is not a number of seconds") from None
     if value < 0 or value > MAX_ASSUMED:
         raise SettingError(setting, f"'{text}' is not between 0 and {MAX_ASSUMED:,} seconds")
-    if value.denominator > 1_000_000:
+    if finer_than_a_microsecond(value):
         raise SettingError(setting, f"'{text}' is finer than a microsecond")
     return value
 
@@ -131,15 +149,33 @@ class TimedNet:
         return units * self.unit if not isinstance(units, float) else units * float(self.unit)
 
 
-def _unit(values) -> Fraction:
-    """The largest unit 1/q (q a power of ten, up to a million) in which every value is whole."""
-    for digits in range(7):
-        q = 10 ** digits
-        if all((Fraction(v) * q).denominator == 1 for v in values):
-            return Fraction(1, q)
-    # no setting of its own (a bound of the mission's, or an assumption): "time", which
-    # the CLI has always printed "--time"
-    raise SettingError("time", "a time bound is finer than a microsecond")
+def _unit(values: list[Fraction]) -> Fraction:
+    """The largest unit 1/q (q a power of ten, up to :data:`PER_SECOND`) in which every
+    value, a whole number of microseconds (:func:`_check_microseconds`), is whole."""
+    q = 1
+    while not all((v * q).denominator == 1 for v in values):
+        q *= 10
+    return Fraction(1, q)
+
+
+def _check_microseconds(net: Net, assumptions: Assumptions) -> None:
+    """Refuse a time bound finer than a microsecond. A mission's time-outs were refused
+    at their place in the file by the checker: a bound here is one of a net read from a
+    file (a PNML timing), or an assumption given by a library call."""
+    for name in ("ack_within", "report_gap"):
+        value = getattr(assumptions, name)
+        if finer_than_a_microsecond(value):
+            raise SettingError(name, f"{value} s is finer than a microsecond")
+    for t in net.transitions:
+        if t.timing is None:
+            continue
+        what = "time-out" if t.timing.earliest == t.timing.latest else "time bound"
+        for bound in (t.timing.earliest, t.timing.latest):
+            if bound is not None and finer_than_a_microsecond(bound):
+                raise Mcl2PnmlError(
+                    f"net '{net.name}': the {what} of transition {t.id}, "
+                    f"{bound!r} s, is finer than a microsecond, "
+                    "the finest time the timed analysis counts")
 
 
 def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedNet:
@@ -158,16 +194,17 @@ def mission_timing(net: Net, assumptions: Assumptions = Assumptions()) -> TimedN
     * every other transition is a step of the supervisor: urgent, and first
       when ``priority``.
     """
-    values = [assumptions.ack_within, assumptions.report_gap]
+    _check_microseconds(net, assumptions)
+    values = [exact_seconds(assumptions.ack_within), exact_seconds(assumptions.report_gap)]
     for t in net.transitions:
         if t.timing is not None:
-            values.append(Fraction(t.timing.earliest).limit_denominator(10 ** 9))
+            values.append(exact_seconds(t.timing.earliest))
             if t.timing.latest is not None:
-                values.append(Fraction(t.timing.latest).limit_denominator(10 ** 9))
+                values.append(exact_seconds(t.timing.latest))
     unit = _unit(values)
 
     def units(x) -> int:
-        return int(Fraction(x).limit_denominator(10 ** 9) / unit)
+        return int(exact_seconds(x) / unit)
 
     intervals: dict[str, tuple[int, int | None]] = {}
     priority, reports, first, offs, eager = set(), {}, {}, {}, set()

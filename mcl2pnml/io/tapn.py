@@ -83,7 +83,7 @@ from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.patterns import (Grouping, Pattern, Predicate, PredicateSyntax, Property,
                                       ScopeKind, describe)
-from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
+from mcl2pnml.core.timing import Assumptions, TimedNet, exact_seconds, mission_timing
 from mcl2pnml.core.version import __version__
 
 #: The assumptions a timed-arc net is written under unless told: TAPAAL's urgency, no priority.
@@ -164,7 +164,7 @@ class TimedArcNet:
 
     def units(self, seconds: Fraction | int | float, what: str) -> int:
         """``seconds`` in this net's units; refused when it is not a whole number of them."""
-        value = Fraction(seconds).limit_denominator(10 ** 9) / self.unit
+        value = exact_seconds(seconds) / self.unit
         if value.denominator != 1 or value < 0:
             raise TapnError(f"{what} ({float(seconds):g} s) is not a whole number of the "
                             f"net's time unit ({_seconds(self.unit)} s)")

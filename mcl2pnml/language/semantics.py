@@ -17,6 +17,7 @@ from mcl2pnml.language import ast
 from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.errors import (SHOWN_ERRORS, Location, Mcl2PnmlError, did_you_mean, raise_all,
                                   source_lines)
+from mcl2pnml.core.timing import PER_SECOND, finer_than_a_microsecond
 from mcl2pnml.language.library import Library, default_library
 from mcl2pnml.language.declared_properties import property_errors
 from mcl2pnml.language.template_parser import Template, TemplateKind
@@ -233,10 +234,14 @@ class _Checker:
                 self.arity(call.pos, "primitive", call.name, prim.params, len(call.args))
                 self.check_args(call.args, task.params, where)
             # a time-out the engines and the net's timing can all hold: finite (the
-            # parser refuses 1e309) and within MAX_SECONDS
+            # parser refuses 1e309), within MAX_SECONDS, and a whole number of the
+            # microseconds the timed analysis and the TINA export count in
             if task.timeout is not None and not 0 < task.timeout.value <= MAX_SECONDS:
                 self.error(task.timeout.pos, f"a timeout is a positive number of seconds, "
                                              f"at most {MAX_SECONDS:,}, not {task.timeout.text}")
+            elif task.timeout is not None and finer_than_a_microsecond(task.timeout.value):
+                self.error(task.timeout.pos, f"a timeout is a whole number of microseconds "
+                                             f"({1 / PER_SECOND:f} s), not {task.timeout.text}")
         return out
 
     # -- statements ----------------------------------------------------------------------

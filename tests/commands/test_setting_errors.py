@@ -81,10 +81,9 @@ def test_no_module_below_the_cli_names_an_option():
 
 
 def test_every_setting_named_below_the_cli_is_a_parameter_the_cli_names():
-    # "time" (a time bound finer than a microsecond) has no option: printed "--time"
     parameters = {p.name for command in main.commands.values() for p in command.params}
     unknown = {path: names for path, source in _below_the_cli().items()
-               for names in [set(settings_named(source)) - parameters - {"time"}] if names}
+               for names in [set(settings_named(source)) - parameters] if names}
     assert unknown == {}
 
 

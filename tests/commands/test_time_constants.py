@@ -1,0 +1,80 @@
+"""A time the timed analysis cannot count is refused where it is written (docs/time.md).
+
+A time-out finer than a microsecond is one message of the checker, at the constant's line
+and column, whichever command reads the mission; a net read from a file with such a time
+bound is refused by the timed analysis, naming the net, the transition and the value.
+The golden messages of the checker are tests/data/mcl/invalid/timeout_finer_*.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from mcl2pnml import pipeline
+from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.net import Net, Timing
+from mcl2pnml.core.timing import exact_seconds, finer_than_a_microsecond, mission_timing
+from mcl2pnml.io.pnml.writer import write_pnml
+
+from helpers import run_cli
+
+FINE = """primitive P();
+task T() = AchieveGoal(P()) timeout 0.0000001;
+mission { T(); }
+"""
+CARET = ("m.mcl:2:37: a timeout is a whole number of microseconds (0.000001 s), not 0.0000001\n"
+         "    task T() = AchieveGoal(P()) timeout 0.0000001;\n"
+         "                                        ^\n")
+
+
+@pytest.mark.parametrize("command", [["check"], ["compile"], ["run"], ["analyze"],
+                                     ["analyze", "--timed"], ["functional"]])
+def test_every_command_refuses_a_time_out_finer_than_a_microsecond_at_its_place(
+        tmp_path, command):
+    mission = tmp_path / "m.mcl"
+    mission.write_text(FINE)
+    out = run_cli(*command, mission, cwd=tmp_path)
+    assert (out.returncode, out.stdout) == (2, "")
+    assert out.stderr.replace(str(mission), "m.mcl") == CARET
+    assert not list(tmp_path.glob("m.*[!l]"))           # nothing written beside it
+
+
+def test_the_last_microsecond_of_the_longest_time_out_is_one(tmp_path):
+    # a double holds 999999999.999999 only to within a tenth of a microsecond: read back
+    # as the decimal it was written as, it is whole microseconds for the checker and the
+    # analysis alike
+    assert not finer_than_a_microsecond(999999999.999999)
+    assert exact_seconds(999999999.999999) * 10 ** 6 == 999999999999999
+    assert finer_than_a_microsecond(1e-7) and finer_than_a_microsecond(0.1 + 1e-12)
+    assert not finer_than_a_microsecond(0.1 + 0.2)        # 0.30000000000000004: 0.3
+    net = pipeline.compile_source("primitive P();\n"
+                                  "task T() = AchieveGoal(P()) timeout 999999999.999999;\n"
+                                  "mission { T(); }\n")
+    timed = mission_timing(net)
+    assert timed.unit == exact_seconds(1e-6) and timed.intervals["T.t03"][0] == 10 ** 15 - 1
+
+
+def _with_time_out(net: Net, seconds: float) -> Net:
+    """``net`` with its time-out ``T.t03`` of ``seconds``, as a file may hold it."""
+    timed = [replace(t, timing=Timing.delay(seconds)) if t.id == "T.t03" else t
+             for t in net.transitions]
+    return Net(net.name, net.places, timed, net.arcs, net.initial)
+
+
+def test_a_net_read_from_a_file_with_a_finer_bound_names_it(tmp_path):
+    net = pipeline.compile_source(FINE.replace("0.0000001", "3"), "m.mcl")
+    fine = _with_time_out(net, 1e-7)
+    with pytest.raises(Mcl2PnmlError) as refused:
+        mission_timing(fine)
+    expected = ("net 'm': the time-out of transition T.t03, 1e-07 s, is finer than a "
+                "microsecond, the finest time the timed analysis counts")
+    assert refused.value.message == expected
+    path = tmp_path / "m.pnml"
+    write_pnml(net, path)
+    # a file another tool wrote: this one's checker refuses such a time-out
+    path.write_text(path.read_text().replace('earliest="3" latest="3"',
+                                             'earliest="0.0000001" latest="0.0000001"'))
+    out = run_cli("analyze", path, "--timed")
+    assert (out.returncode, out.stdout, out.stderr) == (2, "", expected + "\n")
+    assert "--time" not in out.stderr
