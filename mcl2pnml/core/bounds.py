@@ -13,6 +13,8 @@ through the analysis's 64-bit counters):
   :data:`MAX_SECONDS` seconds of virtual time (about 31.7 years), far
   beyond any mission and still exact as a float to the microsecond that
   the TINA writer counts in;
+* the vehicle's assumed timing (an acknowledgement, a gap between reports): at most
+  :data:`MAX_ACK_WITHIN` and :data:`MAX_REPORT_GAP` seconds;
 * any other number in MCL: an integer of at most :data:`MAX_INTEGER` in
   size, or a finite decimal (a double).
 
@@ -35,6 +37,14 @@ MAX_TOKENS = 2 ** 63 - 1
 MAX_TOKENS_TEXT = "2^63-1 (9,223,372,036,854,775,807)"
 #: The longest time-out and time bound, in seconds.
 MAX_SECONDS = 1_000_000_000
+#: The longest a vehicle may take to acknowledge a request, in seconds: ten minutes, both
+#: as the timed analysis assumes it (``analyze --ack-within``) and as the autopilot bridge
+#: waits for it (the mapping's ``ack_within``). A vehicle slower than that has a broken
+#: link; and the timed analysis's cost grows with the window (docs/time.md).
+MAX_ACK_WITHIN = 600
+#: The longest gap between a primitive's reports the timed analysis assumes, in seconds
+#: (``analyze --report-gap``): a day, far beyond any controller's reporting period.
+MAX_REPORT_GAP = 24 * 3600
 #: The largest integer literal of MCL, in size (a decimal may be larger, up to a double's).
 MAX_INTEGER = 2 ** 63 - 1
 #: The largest MCL mission read, unless raised (``--max-mission-size``): a mission a person

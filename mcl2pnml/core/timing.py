@@ -41,19 +41,27 @@ the vehicle's :class:`Assumptions`. May import: the rest of the core.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from decimal import Decimal
 from fractions import Fraction
 from typing import Mapping
 
+from mcl2pnml.core.bounds import MAX_ACK_WITHIN, MAX_REPORT_GAP
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import EventKind, read_transition
 from mcl2pnml.core.settings import SettingError
 
-#: The longest acknowledgement delay and report gap an option may set, in seconds.
-MAX_ASSUMED = 1_000_000
-#: How many units of time a second has at the finest: the timed analysis and the TINA
-#: export count in whole microseconds.
-PER_SECOND = 10 ** 6
+#: The longest each assumption on the vehicle may be, in seconds, by its setting's name,
+#: and why (docs/time.md, "The bounds on the assumptions").
+LONGEST = {"ack_within": (MAX_ACK_WITHIN, "ten minutes: a vehicle slower to acknowledge "
+                                          "has a broken link"),
+           "report_gap": (MAX_REPORT_GAP, "a day")}
+#: The finest time there is, in digits after the point of a second: the timed analysis
+#: and the TINA export count in whole microseconds.
+DIGITS = 6
+#: How many of those units a second has.
+PER_SECOND = 10 ** DIGITS
+_MICROSECOND = Decimal(1).scaleb(-DIGITS)
 
 
 def exact_seconds(x: int | float | Fraction) -> Fraction:
@@ -112,18 +120,33 @@ def _num(x: Fraction) -> int | float:
 
 
 def seconds_setting(text: str, setting: str) -> Fraction:
-    """A number of seconds as a setting writes it (``ack_within``): finite, 0 or more, at
-    most a million; one that is not is a :class:`~mcl2pnml.core.settings.SettingError`
-    of ``setting``."""
+    """A number of seconds as an assumption's setting writes it (``ack_within``,
+    ``report_gap``): 0 or more, at most its :data:`LONGEST`, in whole microseconds; one
+    that is not is a :class:`~mcl2pnml.core.settings.SettingError` of ``setting``."""
+    longest, why = LONGEST[setting]
     try:
-        value = Fraction(text)
-    except (ValueError, ZeroDivisionError):
-        raise SettingError(setting, f"'{text}' is not a number of seconds") from None
-    if value < 0 or value > MAX_ASSUMED:
-        raise SettingError(setting, f"'{text}' is not between 0 and {MAX_ASSUMED:,} seconds")
-    if finer_than_a_microsecond(value):
+        # a decimal is read as a Decimal, which keeps its exponent: Fraction("1e999999999")
+        # would build the power of ten, for hours; "p/q" is two whole numbers
+        value = Fraction(text) if "/" in text else Decimal(text)
+    except (ValueError, ZeroDivisionError, ArithmeticError):
+        value = None
+    if value is None or isinstance(value, Decimal) and not value.is_finite():
+        raise SettingError(setting, f"'{text}' is not a number of seconds")
+    if value < 0 or value > longest:
+        raise SettingError(setting, f"'{text}' is not between 0 and {longest:,} seconds "
+                                    f"({why})")
+    if isinstance(value, Decimal):
+        # its digits past the DIGITS-th after the point, read without arithmetic (which
+        # would round 1e-999999999 to 0 within the context's exponents)
+        _, digits, exponent = value.as_tuple()
+        past = -DIGITS - int(exponent)
+        finer = past > 0 and any(digits[-past:])
+    else:
+        finer = finer_than_a_microsecond(value)
+    if finer:
         raise SettingError(setting, f"'{text}' is finer than a microsecond")
-    return value
+    # a Decimal within the bounds is at most 11 digits of microseconds: quantized exactly
+    return Fraction(value.quantize(_MICROSECOND)) if isinstance(value, Decimal) else value
 
 
 @dataclass(frozen=True)

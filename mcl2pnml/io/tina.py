@@ -55,14 +55,13 @@ from mcl2pnml.core.errors import Location, Mcl2PnmlError, source_lines
 from mcl2pnml.core.files import atomic_write_text, decode_text, read_bytes
 from mcl2pnml.core.net import ArcKind, Net, NetBuilder, Timing, thaw
 from mcl2pnml.core.payloads import read_transition
+from mcl2pnml.core.timing import DIGITS
 from mcl2pnml.io.text import syntax_error
 
 # -- writing ---------------------------------------------------------------------------
 
 _ANAME = re.compile(r"[A-Za-z0-9_']+\Z")
 _KEYWORDS = {"net", "tr", "pl", "lb", "nt", "pr"}
-#: The finest time unit a writer falls back to: a microsecond.
-_DIGITS = 6
 
 
 def name(text: str) -> str:
@@ -76,7 +75,7 @@ def time_unit(net: Net) -> int:
     """The power of ten ``d`` such that every bound, in units of 10^-d s, is whole."""
     bounds = [b for t in net.transitions if t.timing is not None
               for b in (t.timing.earliest, t.timing.latest) if b is not None]
-    for digits in range(_DIGITS + 1):
+    for digits in range(DIGITS + 1):
         if all(abs(b * 10 ** digits - round(b * 10 ** digits)) < 1e-9 for b in bounds):
             return digits
     raise Mcl2PnmlError(f"a time bound of net '{net.name}' is finer than a microsecond; "
@@ -346,7 +345,7 @@ class _Reader:
                                                                   text[-1] == "]"):
             raise self.at(token, f"the interval {text} has an open bound; mcl2pnml's "
                                  "timings are closed intervals ([a,b] or [a,w[)")
-        bounds = [natural_at_most(b, MAX_SECONDS * 10 ** _DIGITS) for b in (low, high)
+        bounds = [natural_at_most(b, MAX_SECONDS * 10 ** DIGITS) for b in (low, high)
                   if b != "w"]
         if None in bounds or any(b * self.unit > MAX_SECONDS for b in bounds):
             shown = text if len(text) <= 40 else f"of {len(text) - 3:,} characters"

@@ -48,6 +48,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
+from mcl2pnml.core.bounds import MAX_ACK_WITHIN
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.files import read_text
 from mcl2pnml.core.jsontext import check_schema, parse_located
@@ -88,7 +89,7 @@ SCHEMA: dict[str, Any] = {
         "home": {"type": "array", "minItems": 2, "maxItems": 2,
                  "items": {"type": "number", "minimum": -1e6, "maximum": 1e6}},
         "ready_within": _seconds(1, 3600),
-        "ack_within": _seconds(0.1, 600),
+        "ack_within": _seconds(0.1, MAX_ACK_WITHIN),
         "position_lost_after": _seconds(0, 3600),
         "telemetry_rate": {"type": "number", "minimum": 1, "maximum": 50},
         "safe_state": {"anyOf": [{"type": "array", "minItems": 1, "maxItems": 3,

@@ -4,20 +4,30 @@ A time-out finer than a microsecond is one message of the checker, at the consta
 and column, whichever command reads the mission; a net read from a file with such a time
 bound is refused by the timed analysis, naming the net, the transition and the value.
 The golden messages of the checker are tests/data/mcl/invalid/timeout_finer_*.
+
+An assumption on the vehicle past its bound (``--ack-within`` past ten minutes, the
+autopilot bridge's own bound; ``--report-gap`` past a day) is one message naming the
+option, the value and the limit.
 """
 from __future__ import annotations
 
 from dataclasses import replace
+from fractions import Fraction
 
 import pytest
 
 from mcl2pnml import pipeline
+from mcl2pnml.core.bounds import MAX_ACK_WITHIN, MAX_REPORT_GAP
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net, Timing
-from mcl2pnml.core.timing import exact_seconds, finer_than_a_microsecond, mission_timing
+from mcl2pnml.core.timing import (exact_seconds, finer_than_a_microsecond, mission_timing,
+                                  seconds_setting)
 from mcl2pnml.io.pnml.writer import write_pnml
+from mcl2pnml.runtime import autopilot
 
-from helpers import run_cli
+from helpers import ROOT, run_cli
+
+SAUCE = ROOT / "examples" / "sauce.mcl"
 
 FINE = """primitive P();
 task T() = AchieveGoal(P()) timeout 0.0000001;
@@ -78,3 +88,37 @@ def test_a_net_read_from_a_file_with_a_finer_bound_names_it(tmp_path):
     out = run_cli("analyze", path, "--timed")
     assert (out.returncode, out.stdout, out.stderr) == (2, "", expected + "\n")
     assert "--time" not in out.stderr
+
+
+# -- the bounds on the assumptions ---------------------------------------------------------
+
+@pytest.mark.parametrize("args, message", [
+    (["--ack-within", "1000000"], "Invalid value for --ack-within: '1000000' is not between 0 "
+                                  "and 600 seconds (ten minutes: a vehicle slower to "
+                                  "acknowledge has a broken link)"),
+    (["--ack-within", "600.000001"], "--ack-within: '600.000001' is not between 0 and 600"),
+    (["--report-gap", "86401"], "Invalid value for --report-gap: '86401' is not between 0 "
+                                "and 86,400 seconds (a day)"),
+    # read without building the power of ten (hours), or rounding it to 0
+    (["--report-gap", "1e999999999"], "--report-gap: '1e999999999' is not between 0 and"),
+    (["--ack-within", "1e-999999999"], "--ack-within: '1e-999999999' is finer than a "
+                                       "microsecond"),
+])
+def test_an_assumption_past_its_bound_is_one_message(args, message):
+    out = run_cli("analyze", SAUCE, "--timed", *args)
+    assert (out.returncode, out.stdout) == (2, "")
+    assert out.stderr.count("\n") == 1 and "Traceback" not in out.stderr
+    assert message in out.stderr
+
+
+def test_the_bounds_themselves_are_assumed(tmp_path):
+    assert seconds_setting("600", "ack_within") == MAX_ACK_WITHIN
+    assert seconds_setting("86400", "report_gap") == MAX_REPORT_GAP
+    assert seconds_setting("0.000001", "report_gap") == Fraction(1, 10 ** 6)
+    out = run_cli("compile", SAUCE, "--format", "tapn", "-o", tmp_path / "s.tapn",
+                  "--ack-within", "601")
+    assert out.returncode == 2 and "--ack-within: '601' is not between 0 and 600" in out.stderr
+
+
+def test_the_autopilot_waits_for_an_acknowledgement_as_long_as_the_analysis_assumes():
+    assert autopilot.SCHEMA["properties"]["ack_within"]["maximum"] == MAX_ACK_WITHIN
