@@ -153,14 +153,17 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
 
     Time is virtual: a mission of hours runs in a moment. The live log shows each action
     and event; then the outcome (OK, FAIL, ABORTED, STALLED with what it waits for, or
-    TIMELIMIT: cut short by --max-time, INTERRUPTED: by SIGINT, SIGTERM or SIGHUP) and
-    the safe stop: every primitive still enabled is disabled, however the run ends
-    (docs/faults.md); a second signal meanwhile is ignored, a third cuts it short.
+    TIMELIMIT: cut short by --max-time, INTERRUPTED: by SIGINT, SIGTERM or SIGHUP,
+    BREACH: by --stop-on-breach) and the safe stop: every primitive still enabled is
+    disabled, however the run ends (docs/faults.md); a second signal meanwhile is
+    ignored, a third cuts it short. Each event the vehicle sends that breaks an
+    assumption of the timed verdicts (--ack-within, --report-gap; docs/time.md) is said.
     --journal writes the run as it goes; --resume continues it.
 
     \b
-    Exit status, one per outcome: 0 OK, 1 FAIL, 4 ABORTED, 5 STALLED, 6 TIMELIMIT;
-    2 bad input; interrupted: 128 + the signal (130 SIGINT, 143 SIGTERM, 129 SIGHUP).
+    Exit status, one per outcome: 0 OK, 1 FAIL, 4 ABORTED, 5 STALLED, 6 TIMELIMIT,
+    7 BREACH; 2 bad input; interrupted: 128 + the signal (130 SIGINT, 143 SIGTERM,
+    129 SIGHUP).
     """
     given = frozenset(k for k in options if ctx.get_parameter_source(k)
                       is click.core.ParameterSource.COMMANDLINE)

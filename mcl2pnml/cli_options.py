@@ -242,11 +242,23 @@ RUN_OPTIONS = _composed(  # run MISSION
                  show_default=True, help="Stop a mission still running at this time (virtual, or "
                  "the wall clock's for a real vehicle, the autopilot's own for --vehicle "
                  "mavlink): outcome TIMELIMIT, with the safe stop."),
+    click.option("--ack-within", metavar="SECONDS", default=RunOptions.ack_within,
+                 show_default=True,
+                 help="The assumption analyze --timed proved its verdicts under: the vehicle "
+                      "acknowledges enable and disable within this. A later one is said as a "
+                      "breach (docs/time.md)."),
+    click.option("--report-gap", metavar="SECONDS", default=RunOptions.report_gap,
+                 show_default=True,
+                 help="The assumption analyze --timed proved its verdicts under: a primitive's "
+                      "reports are at least this far apart. Closer ones are said as a breach."),
+    click.option("--stop-on-breach", is_flag=True,
+                 help="Stop the run at the first breach of --ack-within or --report-gap: "
+                      "outcome BREACH (exit 7), with the safe stop."),
     click.option("--journal", type=OUTPUT,
                  help="Journal the run here as it happens (a new file), to resume it if killed."),
     click.option("--resume", type=FILE, help="Continue the killed run of this journal, with its "
-                 "engine, vehicle, world, simulated primitives and time limit: replay, check, "
-                 "go on, append."),
+                 "engine, vehicle, world, simulated primitives, time limit and assumptions: "
+                 "replay, check, go on, append."),
     NET_OPTION,
     LENIENT_OPTION,
     MISSION_SIZE_OPTION,

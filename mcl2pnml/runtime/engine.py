@@ -29,10 +29,12 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from mcl2pnml.core.timing import Assumptions
 from mcl2pnml.runtime import interrupts
 from mcl2pnml.runtime.aal import (Action, ActionKind, Event, EventKind, LinkLost, Reported, SafeStop, Vehicle, VehicleFault, VehicleInputError,
                   _time, canonical_trace, causal_order)
 from mcl2pnml.runtime.interrupts import Interrupted, SafeStateCut
+from mcl2pnml.runtime.watch import Breach, Watch
 
 
 class Outcome(enum.Enum):
@@ -62,6 +64,11 @@ class Outcome(enum.Enum):
     dropped session), with its safe stop and the vehicle's safe state; the
     diagnosis names the signal (:mod:`mcl2pnml.runtime.interrupts`)."""
 
+    BREACH = "BREACH"
+    """The vehicle broke an assumption of the timed verdicts (``run --stop-on-breach``,
+    :mod:`mcl2pnml.runtime.watch`): the run stopped at the breach, with its safe stop and
+    the vehicle's safe state; the diagnosis says the breach."""
+
     # The member values are the words of cli.md's JSON and of the run log:
     # these two methods are the only mapping between the two, both ways.
     def as_json(self) -> str:
@@ -88,11 +95,11 @@ class Outcome(enum.Enum):
 
 #: ``mcl2pnml run``'s exit status per outcome (README.md, "Running a mission").
 _EXIT_STATUS = {Outcome.OK: 0, Outcome.FAIL: 1, Outcome.ABORTED: 4, Outcome.STALLED: 5,
-                Outcome.TIMELIMIT: 6,
+                Outcome.TIMELIMIT: 6, Outcome.BREACH: 7,
                 Outcome.INTERRUPTED: interrupts.exit_status(signal.SIGINT)}
 
 #: The outcomes that are not the mission's result: the run says why it stopped.
-NO_RESULT = (Outcome.STALLED, Outcome.TIMELIMIT, Outcome.INTERRUPTED)
+NO_RESULT = (Outcome.STALLED, Outcome.TIMELIMIT, Outcome.INTERRUPTED, Outcome.BREACH)
 
 
 @dataclass(frozen=True)
@@ -165,6 +172,12 @@ class Engine(ABC):
         """
 
     @abstractmethod
+    def waits_for(self, event: Event) -> bool:
+        """Whether :meth:`on_event` would take ``event`` now (False: it would ignore it),
+        changing nothing: the run loop watches the assumptions on the events a mission
+        takes (:mod:`mcl2pnml.runtime.watch`), before it takes them."""
+
+    @abstractmethod
     def next_timer(self) -> tuple[float, str] | None:
         """The next timer to expire, as (time, name of its task), or None."""
 
@@ -207,7 +220,7 @@ class Run:
     time: float
     entries: list[Action | Event] = field(default_factory=list)
     ignored: list[tuple[Event, str]] = field(default_factory=list)
-    #: why a run without a result stopped (STALLED, TIMELIMIT, INTERRUPTED), first the
+    #: why a run without a result stopped (STALLED, TIMELIMIT, INTERRUPTED, BREACH), first the
     #: fault or the signal, then what the mission waited for in the engine's words; and
     #: what the safe stop could not do (the text's lines under the outcome)
     waiting: list[str] = field(default_factory=list)
@@ -223,6 +236,8 @@ class Run:
     #: and the log's ``diagnosis``): the fault or the signal, the primitives still enabled
     #: or awaited off, the next time-out; what the safe stop could not do
     diagnosis: list[str] = field(default_factory=list)
+    #: every assumption of the timed verdicts the vehicle broke, in order (docs/time.md)
+    breaches: list[Breach] = field(default_factory=list)
 
     @property
     def exit_status(self) -> int:
@@ -234,8 +249,8 @@ class Run:
 
     def as_json(self) -> dict[str, Any]:
         """The object of ``mcl2pnml run --json`` (cli.md): ``diagnosis`` (why a run without
-        a result stopped), ``timeouts``, ``safe_stop``, ``safe_state`` and ``problems``
-        when there are any."""
+        a result stopped), ``timeouts``, ``safe_stop``, ``safe_state``, ``breaches`` and
+        ``problems`` when there are any."""
         out = {"outcome": self.outcome.as_json(), "time": _time(self.time),
                "trace": canonical_trace(self.entries)}
         if self.diagnosis:
@@ -246,6 +261,8 @@ class Run:
             out["safe_stop"] = [a.as_json() for a in self.safe_stop]
         if self.secured:
             out["safe_state"] = list(self.secured)
+        if self.breaches:
+            out["breaches"] = [b.as_json() for b in self.breaches]
         problems = self.problems()
         if problems:
             out["problems"] = problems
@@ -259,9 +276,11 @@ class Run:
                 if isinstance(e, Reported) and e.kind is EventKind.FAILED and e.why]
 
     def report(self) -> list[str]:
-        """The end of ``mcl2pnml run``'s text: the outcome, why (what it waits for, the
-        signal, the last time-out of a run that failed), the safe stop."""
+        """The end of ``mcl2pnml run``'s text: the outcome, the assumptions the vehicle
+        broke, why (what it waits for, the signal, the last time-out of a run that
+        failed), the safe stop."""
         lines = [f"outcome {self.outcome.value} at t={self.time:g} s"]
+        lines += [f"  {b.words()}" for b in self.breaches]
         if self.outcome is Outcome.FAIL and self.timeouts:
             lines.append(f"  the last time-out: {self.timeouts[-1].words()}")
         lines += [f"  {line}" for line in self.waiting]
@@ -271,7 +290,7 @@ class Run:
         return lines
 
 
-Listener = Callable[[Action | Event | TimedOut], None]
+Listener = Callable[[Action | Event | TimedOut | Breach], None]
 
 
 class _Driver:
@@ -284,8 +303,10 @@ class _Driver:
     driving to a waypoint for a mission that has stopped.
     """
 
-    def __init__(self, engine: Engine, vehicle, listener: Listener | None):
+    def __init__(self, engine: Engine, vehicle, listener: Listener | None,
+                 assumptions: Assumptions = Assumptions(), stop_on_breach: bool = False):
         self.engine, self.vehicle, self.listener = engine, vehicle, listener
+        self.watch, self.stop_on_breach = Watch(assumptions), stop_on_breach
         self.entries: list[Action | Event] = []
         self.enabled: dict[str, float] = {}     # since when, in the order they were enabled
         self.disabling: dict[str, float] = {}   # disabled at, its 'off' not yet come
@@ -321,16 +342,41 @@ class _Driver:
             else:
                 self.enabled.pop(action.primitive, None)
                 self.disabling[action.primitive] = action.t
+            self.watch.request(action)
             self.vehicle_call(self.vehicle.act, action, f"{action.kind.value} "
                               f"{action.primitive} at t={_time(action.t)} s")
 
     def event(self, event: Event) -> None:
+        """A vehicle event: recorded, watched (:meth:`breached`), then taken by the engine."""
+        taken = self.engine.waits_for(event)
         if event.kind is EventKind.OFF:
             self.disabling.pop(event.primitive, None)
         self.entries.append(event)
         if self.listener:
             self.listener(event)
+        self.breached(self.watch.event(event, taken))
         self.deliver(self.engine.on_event(event))
+
+    def due(self, now: float) -> None:
+        """Time is about to reach ``now``: the acknowledgements due before it that have
+        not come are breaches."""
+        self.breached(self.watch.overdue(now))
+
+    def breached(self, breaches: list[Breach], stop: bool = True) -> None:
+        """Say each breach (the live log, the run's ``breaches``); the first stops the run
+        with ``stop_on_breach``, before the mission takes what broke the assumption
+        (``stop`` False: the run is ending anyway)."""
+        for breach in breaches:
+            if self.listener:
+                self.listener(breach)
+        if breaches and stop and self.stop_on_breach:
+            raise _Breached(breaches[0])
+
+    def breach_end(self, stop: "_Breached") -> Run:
+        """The run a breach stopped (``stop_on_breach``): BREACH, at the breach."""
+        b = stop.breach
+        return self.end(Outcome.BREACH, b.t, [f"stopped at the first breach of an assumption "
+                                              f"({b.assumption}, by {b.primitive})"])
 
     def timer(self, t: float, task: str) -> None:
         """A task's time-out expires: said (the live log, the run's ``timeouts``), then fired."""
@@ -374,7 +420,8 @@ class _Driver:
             head = ([self.fault] if self.fault else []) + (note or [])
             waiting, why = head + self._waits(), head + pending
         return Run(outcome, t, self.entries, list(self.engine.ignored), waiting + failed,
-                   stopped, self.secured, self.timeouts, signum, why + failed)
+                   stopped, self.secured, self.timeouts, signum, why + failed,
+                   list(self.watch.breaches))
 
     def interrupted(self, stop: Interrupted, t: float) -> Run:
         """The run a signal stopped: INTERRUPTED, naming the signal, after the safe stop."""
@@ -448,8 +495,17 @@ class _Fault(Exception):
     """The vehicle failed (its :attr:`_Driver.fault` says how): the run ends STALLED."""
 
 
+class _Breached(Exception):
+    """The vehicle broke an assumption, and the run stops on a breach: it ends BREACH."""
+
+    def __init__(self, breach: Breach):
+        super().__init__(breach.words())
+        self.breach = breach
+
+
 def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
-        max_time: float | None = None) -> Run:
+        max_time: float | None = None, assumptions: Assumptions = Assumptions(),
+        stop_on_breach: bool = False) -> Run:
     """Drive ``engine`` against ``vehicle`` in virtual time until a result or a stall.
 
     ``listener`` sees every action and event as it happens (the live log);
@@ -458,8 +514,10 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
     primitives still enabled are disabled (:class:`~mcl2pnml.runtime.aal.SafeStop`):
     a signal (:class:`~mcl2pnml.runtime.interrupts.Interrupted`) ends the run
     INTERRUPTED, and an error is passed on after the safe stop (docs/faults.md).
+    Each vehicle event is watched against ``assumptions`` (docs/time.md): a breach is
+    said, and with ``stop_on_breach`` the first ends the run BREACH at its time.
     """
-    d = _Driver(engine, vehicle, listener)
+    d = _Driver(engine, vehicle, listener, assumptions, stop_on_breach)
 
     def loop() -> Run:
         try:
@@ -469,9 +527,12 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
                                     "its next event")
                 timer = engine.next_timer()
                 if te is None and timer is None:
+                    # nothing more will come: an acknowledgement still due never will
+                    d.breached(d.watch.overdue(None), stop=False)
                     return d.end(None, d.t)
                 by_vehicle = timer is None or (te is not None and te <= timer[0])
                 at = te if by_vehicle else timer[0]
+                d.due(at if max_time is None else min(at, max_time))
                 if max_time is not None and at > max_time:
                     # cut short, not stalled: the stop (and its safe stop) is at the limit
                     due = "a vehicle event" if by_vehicle else f"the time-out of {timer[1]}"
@@ -487,6 +548,8 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
                     d.timer(at, timer[1])
         except _Fault:
             return d.end(None, d.t)
+        except _Breached as stop:
+            return d.breach_end(stop)
         return d.end(engine.outcome, d.t)
 
     return d.drive(loop, lambda: d.t)
@@ -494,7 +557,8 @@ def run(engine: Engine, vehicle: Vehicle, *, listener: Listener | None = None,
 
 def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None = None,
                  listener: Listener | None = None, max_time: float | None = None,
-                 open_vehicle: bool = False) -> Run:
+                 open_vehicle: bool = False, assumptions: Assumptions = Assumptions(),
+                 stop_on_breach: bool = False) -> Run:
     """Drive ``engine`` against a real vehicle (a :class:`~mcl2pnml.runtime.bridge.MappedVehicle`).
 
     Time is the wall clock from the start, or the vehicle's own clock where
@@ -507,7 +571,9 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
     each way with the safe stop of :func:`run`, then the vehicle's own safe
     state (:meth:`~mcl2pnml.runtime.aal.LiveVehicle.secure`). ``open_vehicle``:
     the vehicle is opened here (connected, made ready: an autopilot is armed), so
-    that a signal or an error meanwhile brings it to its safe state too.
+    that a signal or an error meanwhile brings it to its safe state too. The
+    assumptions are watched as :func:`run` watches them, an acknowledgement that has
+    not come by its due time as soon as that time passes.
     """
     own = getattr(vehicle, "clock", None)
     if clock is None and own is not None:
@@ -516,7 +582,7 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
         clock = clock or time.monotonic
         start = clock()
         now = lambda: clock() - start    # noqa: E731
-    d = _Driver(engine, vehicle, listener)
+    d = _Driver(engine, vehicle, listener, assumptions, stop_on_breach)
 
     def loop() -> Run:
         try:
@@ -525,7 +591,9 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
             d.deliver(engine.start(0.0))
             while engine.outcome is None:
                 timer = engine.next_timer()
-                limit = [x for x in (timer[0] if timer else None, max_time) if x is not None]
+                due = d.watch.next_due()
+                limit = [x for x in (timer[0] if timer else None, max_time,
+                                     None if due is None else float(due)) if x is not None]
                 wait = max(0.0, min(limit) - now()) if limit else None
                 event = d.vehicle_call(lambda w: vehicle.wait_event(w, now), wait, "waiting")
                 if event is not None:
@@ -537,8 +605,10 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
                             and engine.outcome is None:
                         d.timer(timer[0], timer[1])
                     if engine.outcome is None:
+                        d.due(event.t)
                         d.event(event)
                     continue
+                d.due(now() if max_time is None else min(now(), max_time))
                 if timer is not None and now() >= timer[0]:
                     d.timer(timer[0], timer[1])
                 elif max_time is not None and now() >= max_time:
@@ -547,6 +617,8 @@ def run_realtime(engine: Engine, vehicle, *, clock: Callable[[], float] | None =
                                  [f"stopped at the time limit of {max_time:g} s"])
         except _Fault:
             return d.end(None, now())
+        except _Breached as stop:
+            return d.breach_end(stop)
         return d.end(engine.outcome, now())
 
     return d.drive(loop, now)

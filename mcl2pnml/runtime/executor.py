@@ -325,6 +325,9 @@ class PetriEngine(Engine):
         actions = self._fire(ready[0])
         return actions + self._settle()
 
+    def waits_for(self, event: Event) -> bool:
+        return any(self.enabled[i] for i in self.by_event.get((event.primitive, event.kind), ()))
+
     def next_timer(self) -> tuple[float, str] | None:
         while self.timers:
             due, task, i, version = self.timers[0]

@@ -50,6 +50,8 @@ from typing import IO, Any
 
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import json_fault, open_regular, read_bytes
+from mcl2pnml.core.settings import SettingError
+from mcl2pnml.core.timing import seconds_setting
 from mcl2pnml.runtime.vehicles import is_simulator
 
 VERSION = 1
@@ -249,6 +251,18 @@ def check_header(header: dict[str, Any], filename: str, line: str = "") -> None:
             or not math.isfinite(max_time) or max_time < 0:
         raise fault("max_time", '"max_time" is the time limit, a finite number of seconds '
                                 f">= 0, not {json.dumps(max_time)[:80]}")
+    for key in ("ack_within", "report_gap"):    # left out by an older journal: the default
+        value = header.get(key, "0")
+        try:
+            if not isinstance(value, str):
+                raise SettingError(key, "not a string")
+            seconds_setting(value, key)
+        except SettingError:
+            raise fault(key, f'"{key}" is an assumption of the timed verdicts, a number of '
+                             f"seconds in a string, not {json.dumps(value)[:80]}") from None
+    if not isinstance(header.get("stop_on_breach", False), bool):
+        raise fault("stop_on_breach", '"stop_on_breach" is true or false, not '
+                                      f'{json.dumps(header["stop_on_breach"])[:80]}')
     needed = {"mission_sha256": True, "vehicle_sha256": not is_simulator(vehicle),
               "world_sha256": world is not None}
     for key in DIGESTS:

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mcl2pnml.core.bounds import MAX_RUN_TIME
+from mcl2pnml.core.timing import Assumptions, seconds_setting
 from mcl2pnml.runtime.limits import HEARTBEAT, LIVENESS, MAX_LINE, SEND_TIMEOUT
 
 
@@ -29,6 +30,12 @@ class RunOptions:
     #: faults injected into a simulated vehicle's events (:mod:`mcl2pnml.runtime.faults`)
     faults: Path | None = None
     max_time: float = MAX_RUN_TIME
+    #: the assumptions on the vehicle the timed verdicts were proven under (docs/time.md),
+    #: as written (``analyze --timed``'s): watched on every event, each breach said
+    ack_within: str = str(Assumptions.ack_within)
+    report_gap: str = str(Assumptions.report_gap)
+    #: stop the run safely at the first breach (outcome BREACH)
+    stop_on_breach: bool = False
     #: show fired transitions in the live log
     transitions: bool = False
     journal: Path | None = None
@@ -46,3 +53,9 @@ class RunOptions:
     max_line: int = MAX_LINE
     #: the options the user gave (a resumed run must not contradict its journal on them)
     explicit: frozenset[str] = field(default_factory=frozenset)
+
+    def assumptions(self) -> Assumptions:
+        """The assumptions watched, read as ``analyze`` reads them (one message, naming
+        the option, for a bad one)."""
+        return Assumptions(seconds_setting(self.ack_within, "ack_within"),
+                           seconds_setting(self.report_gap, "report_gap"))

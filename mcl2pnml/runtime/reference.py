@@ -195,26 +195,34 @@ class ReferenceEngine(Engine):
     def _used(self) -> set[str]:
         return {p.name for t in self.c.tasks.values() for p in t.primitives}
 
+    def waits_for(self, event: Event) -> bool:
+        prim = self.prims.get(event.primitive)
+        return prim is not None and prim.name in self._used() \
+            and self._refusal(prim, event.kind) is None
+
     @staticmethod
-    def _accept(prim: _Primitive, kind: EventKind) -> str | None:
-        """Apply an event to the primitive as its net would; the reason if it would not."""
-        nothing = f"nothing waits for '{kind.value}' from '{prim.name}' now"
+    def _refusal(prim: _Primitive, kind: EventKind) -> str | None:
+        """Why the primitive's net would not take the event now (None: it would)."""
         if kind is EventKind.ON:
-            if prim.request is not ActionKind.ENABLE or prim.on:
-                return nothing
+            taken = prim.request is ActionKind.ENABLE and not prim.on
+        elif kind is EventKind.OFF:
+            taken = prim.request is ActionKind.DISABLE and prim.on
+        else:
+            taken = prim.on and prim.goal != ("S2" if kind is EventKind.ACHIEVED else "S1")
+        return None if taken else f"nothing waits for '{kind.value}' from '{prim.name}' now"
+
+    @classmethod
+    def _accept(cls, prim: _Primitive, kind: EventKind) -> str | None:
+        """Apply an event to the primitive as its net would; the reason if it would not."""
+        reason = cls._refusal(prim, kind)
+        if reason:
+            return reason
+        if kind is EventKind.ON:
             prim.on, prim.request = True, None
         elif kind is EventKind.OFF:
-            if prim.request is not ActionKind.DISABLE or not prim.on:
-                return nothing
             prim.on, prim.request, prim.goal = False, None, "C"
-        elif kind is EventKind.ACHIEVED:
-            if not prim.on or prim.goal == "S2":
-                return nothing
-            prim.goal = "S2"
         else:
-            if not prim.on or prim.goal == "S1":
-                return nothing
-            prim.goal = "S1"
+            prim.goal = "S2" if kind is EventKind.ACHIEVED else "S1"
         return None
 
     def set_timer(self, task: "_TaskRun", seconds: float) -> int:

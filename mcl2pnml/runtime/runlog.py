@@ -14,6 +14,8 @@ tool can follow a run while it happens or replay it after. The safe stop
 at the end of a run (docs/faults.md) is logged as ``safe-stop`` lines
 (``"safe_stop": true`` in JSON), a task's time-out that expires as a
 ``time-out`` line (``{"t": 901, "timeout": "Goto", "seconds": 900}``), and
+an assumption of the timed verdicts the vehicle broke (docs/time.md) as a ``breach``
+line (``{"t": 1.6, "breach": "report_gap", "primitive": ..., "message": ...}``),
 the run's end as ``{"t": ..., "outcome": ...}``, with ``"diagnosis"`` (why a
 run without a result stopped: the fault, the signal, what it waited for)
 where there is one; a run that ends in an error has ``{"t": ..., "error":
@@ -31,6 +33,7 @@ from typing import IO, Any
 
 from mcl2pnml.runtime.aal import Action, Event, SafeStop, _time
 from mcl2pnml.runtime.engine import Outcome, TimedOut
+from mcl2pnml.runtime.watch import Breach
 
 
 def _args(args: tuple) -> str:
@@ -61,9 +64,11 @@ class RunLog:
             self.text.flush()
         self._json(obj)
 
-    def entry(self, entry: Action | Event | TimedOut) -> None:
+    def entry(self, entry: Action | Event | TimedOut | Breach) -> None:
         if isinstance(entry, TimedOut):   # why a task ended that no event ended
             self._line(entry.t, "time-out", f"{entry.named()} expired", entry.as_json())
+        elif isinstance(entry, Breach):   # the timed verdicts no longer hold for this run
+            self._line(entry.t, "breach", entry.words(), entry.as_json())
         elif isinstance(entry, SafeStop):    # the run loop's, not the mission's: say so
             self._line(entry.t, "safe-stop", f"{entry.kind.value:<9} {entry.primitive}",
                        entry.as_json())

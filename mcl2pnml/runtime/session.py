@@ -22,6 +22,7 @@ from typing import IO, Callable
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, check_outputs
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.core.timing import Assumptions
 from mcl2pnml.runtime import interrupts, journal as journals
 from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
@@ -31,9 +32,22 @@ from mcl2pnml.runtime.options import RunOptions
 from mcl2pnml.runtime.runlog import RunLog
 from mcl2pnml.runtime.simprims import load_file
 from mcl2pnml.runtime.vehicles import VehicleKind, kind_of, seed_of
+from mcl2pnml.runtime.watch import seconds
 
 #: The options of a run that its journal's header records, and a resume reuses.
-JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives")
+JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives", "ack_within",
+             "report_gap", "stop_on_breach")
+#: What a journal that leaves out an option (an older one) says of it: its default.
+UNSAID = {"sim_primitives": [], "ack_within": seconds(Assumptions.ack_within),
+          "report_gap": seconds(Assumptions.report_gap), "stop_on_breach": False}
+
+
+def assumed(options: RunOptions) -> dict[str, str | bool]:
+    """The assumptions watched (docs/time.md), as a journal's header records them: each
+    number of seconds in decimal, however the user wrote it (0.50, 1/2)."""
+    a = options.assumptions()
+    return {"ack_within": seconds(a.ack_within), "report_gap": seconds(a.report_gap),
+            "stop_on_breach": options.stop_on_breach}
 
 
 def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
@@ -46,10 +60,10 @@ def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
     header = loaded.header
     given = {"engine": options.engine, "vehicle": options.vehicle,
              "world": options.world and str(options.world), "max_time": options.max_time,
-             "sim_primitives": [str(p) for p in options.sim_primitives]}
+             "sim_primitives": [str(p) for p in options.sim_primitives], **assumed(options)}
     for key in JOURNALED:
         # a journal without simulated primitives of its own says nothing of them
-        recorded = header.get(key, [] if key == "sim_primitives" else None)
+        recorded = header.get(key, UNSAID.get(key))
         if key in options.explicit and given[key] != recorded:
             raise Mcl2PnmlError(f"the journal's run has --{key.replace('_', '-')} "
                                 f"{recorded}, not {given[key]}",
@@ -57,7 +71,9 @@ def resumed(options: RunOptions) -> tuple[RunOptions, journals.Loaded | None]:
     world = Path(header["world"]) if header.get("world") else None
     return replace(options, engine=header["engine"], vehicle=header["vehicle"],
                    max_time=header["max_time"], world=world,
-                   sim_primitives=tuple(map(Path, header.get("sim_primitives", [])))), loaded
+                   sim_primitives=tuple(map(Path, header.get("sim_primitives", []))),
+                   **{key: header.get(key, UNSAID[key])
+                      for key in ("ack_within", "report_gap", "stop_on_breach")}), loaded
 
 
 def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
@@ -174,7 +190,7 @@ def _journal(mission: Path, options: RunOptions, kind: VehicleKind,
         "world": options.world and str(options.world), "max_time": options.max_time,
         **({"sim_primitives": [str(p) for p in options.sim_primitives]}
            if options.sim_primitives else {}),
-        **digests})
+        **assumed(options), **digests})
 
 
 def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str], Engine], *,
@@ -193,6 +209,7 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
     if beside.world != options.world:   # the user named none: say which world is flown
         note(f"world: {beside.world}, the one beside the mission (--world to give another)")
     options, loaded = resumed(beside)
+    assumptions = options.assumptions()     # a bad one is refused before anything is built
     # no output may be a file the run reads, nor the other output (--journal j --log j)
     check_outputs([("journal", options.journal), ("log_path", log_path)],
                   [("the mission", mission), ("the world (--world)", options.world),
@@ -231,11 +248,14 @@ def run_session(mission: Path, options: RunOptions, make_engine: Callable[[str],
                     # opened only now, in the run loop: the mission and mapping are checked,
                     # and a signal while it connects and arms brings it to its safe state
                     result = run_realtime(engine, vehicle, listener=listener,
-                                          max_time=options.max_time, open_vehicle=True)
+                                          max_time=options.max_time, open_vehicle=True,
+                                          assumptions=assumptions,
+                                          stop_on_breach=options.stop_on_breach)
                 finally:
                     vehicle.close()
             else:
-                result = drive(engine, vehicle, listener=listener, max_time=options.max_time)
+                result = drive(engine, vehicle, listener=listener, max_time=options.max_time,
+                               assumptions=assumptions, stop_on_breach=options.stop_on_breach)
         except BaseException as e:
             if log_path is not None:    # the log of a run that ended in an error, to the error
                 log.failed(log.last_t, _error_text(e))

@@ -28,7 +28,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.settings import SettingError
 from mcl2pnml.language.compiler import compile_checked
 from mcl2pnml.pipeline import check_source
-from mcl2pnml.runtime.aal import ActionKind, Event, VehicleInputError
+from mcl2pnml.runtime.aal import Action, ActionKind, Event, VehicleInputError
 from mcl2pnml.runtime.bridge import MappedVehicle, TcpTransport, VehicleMapping
 from mcl2pnml.runtime.engine import Outcome, Run, run_realtime
 from mcl2pnml.runtime.executor import PetriEngine
@@ -84,7 +84,7 @@ class Recorder:
         """The primitives enabled and never disabled, by the mission or the safe stop."""
         enabled: set[str] = set()
         for e in self.entries:
-            if isinstance(e, Event):
+            if not isinstance(e, Action):    # an event, a time-out, a breach: no action
                 continue
             (enabled.add if e.kind is ActionKind.ENABLE else enabled.discard)(e.primitive)
         return enabled

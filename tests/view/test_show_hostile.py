@@ -276,6 +276,7 @@ def test_a_hostile_run_log_is_followed_as_text(tmp_path, witnessed, listener):
                {"t": 1, "event": meta, "primitive": comment},
                {"t": 2, "ignored": {"event": img, "primitive": script}, "reason": comment},
                {"t": 3, "fire": f"{evil[0]} t", "note": "</script><!--<script>"},
+               {"t": 3.5, "breach": img, "primitive": script, "message": comment},
                {"t": 4, "outcome": script}]
     log = tmp_path / "run.jsonl"
     log.write_text("".join(json.dumps(e, ensure_ascii=False) + "\n" for e in entries))
@@ -288,6 +289,7 @@ def test_a_hostile_run_log_is_followed_as_text(tmp_path, witnessed, listener):
     shown = page.locator("#run-entries li").all_text_contents()
     args = ",".join(json.dumps(a, ensure_ascii=False) for a in (comment, sep))
     assert shown[0] == f"t=0  {img} {script}({args})"
+    assert shown[-2] == f"t=3.5  breach {comment}"      # a breach, said as the run said it
     page.click("#run-next")                              # up to the first firing
     assert page.locator("#history li").all_text_contents() == [f"{evil[0]} t"]
     assert page.text_content("#run-message") == ""
