@@ -57,7 +57,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.patterns import Predicate, Property, holds, places_of
 from mcl2pnml.core.payloads import MISSION, ActionKind, EventKind, read_transition
 from mcl2pnml.core.structure import structure
-from mcl2pnml.core.timing import mission_timing
+from mcl2pnml.core.timing import exact_seconds, mission_timing, seconds_text
 from mcl2pnml.language import ast
 from mcl2pnml.language.declared_properties import RESULTS, predicate
 from mcl2pnml.runtime.aal import Action, Event, Reply, ScriptedVehicle, _time
@@ -240,7 +240,8 @@ def explain(net: Net, prop: Property, transitions: Sequence[str], *, shape: str,
         elif t.timing is not None:
             kind = StepKind.TIMEOUT
             task = tid.rsplit(".", 1)[0]
-            text = f"the time-out of {task} ({t.timing.earliest:g} s) expires"
+            text = (f"the time-out of {task} ({seconds_text(exact_seconds(t.timing.earliest))}"
+                    " s) expires")
         else:
             kind, text = StepKind.INTERNAL, ""
         acts = tuple((a.kind, a.primitive, tuple(x.evaluate(env.get(a.scope, {})) for x in a.args))

@@ -29,7 +29,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MissionPlace, read_transition
 from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind, Tokens
-from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing
+from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing, seconds_text
 
 #: The mission's result places: a run has ended once one is marked.
 ENDS = (MissionPlace.OK.id, MissionPlace.FAIL.id, MissionPlace.ABORTED.id)
@@ -110,8 +110,8 @@ class TimedEnds:
                     "loop": self.never.loop}}
 
 
-def _s(x: Fraction) -> str:
-    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
+#: A time as the answers print it: exactly (core.timing.seconds_text).
+_s = seconds_text
 
 
 def _num(x: Fraction | None) -> int | float | None:

@@ -78,6 +78,24 @@ def finer_than_a_microsecond(x: int | float | Fraction) -> bool:
     return (exact_seconds(x) * PER_SECOND).denominator != 1
 
 
+def seconds_text(x: Fraction | int) -> str:
+    """``x`` seconds written exactly, as every printer of a time writes it: a decimal
+    (``100000.5``, ``1000000000``, ``0.001``), never rounded nor with an exponent. A unit
+    of time is a decimal fraction of a second, so that a time has a finite decimal; one
+    that has none (a third, from a library call) is written as the fraction ``p/q``."""
+    x = Fraction(x)
+    rest, twos, fives = x.denominator, 0, 0
+    while rest % 2 == 0:
+        rest, twos = rest // 2, twos + 1
+    while rest % 5 == 0:
+        rest, fives = rest // 5, fives + 1
+    if rest != 1:
+        return f"{x.numerator}/{x.denominator}"
+    places = max(twos, fives)
+    whole, part = divmod(abs(x.numerator) * 10 ** places // x.denominator, 10 ** places)
+    return ("-" if x < 0 else "") + str(whole) + (f".{part:0{places}d}" if places else "")
+
+
 @dataclass(frozen=True)
 class Assumptions:
     """What the vehicle is assumed to do, printed with every timed verdict (docs/time.md).
@@ -99,9 +117,9 @@ class Assumptions:
 
     def words(self) -> str:
         """The assumptions in one line, as every timed verdict is printed with."""
-        ack = "at once" if self.ack_within == 0 else f"within {_s(self.ack_within)} s"
+        ack = "at once" if self.ack_within == 0 else f"within {seconds_text(self.ack_within)} s"
         return (f"acknowledgements {ack}; a primitive's reports at least "
-                f"{_s(self.report_gap)} s apart; "
+                f"{seconds_text(self.report_gap)} s apart; "
                 + ("an enabled primitive reports eventually" if self.fair
                    else "a primitive may never report")
                 + ("" if self.priority else "; supervisor steps urgent, not first"))
@@ -109,10 +127,6 @@ class Assumptions:
     def as_json(self) -> dict:
         return {"ack_within": _num(self.ack_within), "report_gap": _num(self.report_gap),
                 "fair": self.fair, "priority": self.priority}
-
-
-def _s(x: Fraction) -> str:
-    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
 
 
 def _num(x: Fraction) -> int | float:
@@ -188,7 +202,7 @@ def _check_microseconds(net: Net, assumptions: Assumptions) -> None:
     for name in ("ack_within", "report_gap"):
         value = getattr(assumptions, name)
         if finer_than_a_microsecond(value):
-            raise SettingError(name, f"{value} s is finer than a microsecond")
+            raise SettingError(name, f"{seconds_text(value)} s is finer than a microsecond")
     for t in net.transitions:
         if t.timing is None:
             continue
@@ -197,7 +211,7 @@ def _check_microseconds(net: Net, assumptions: Assumptions) -> None:
             if bound is not None and finer_than_a_microsecond(bound):
                 raise Mcl2PnmlError(
                     f"net '{net.name}': the {what} of transition {t.id}, "
-                    f"{bound!r} s, is finer than a microsecond, "
+                    f"{seconds_text(exact_seconds(bound))} s, is finer than a microsecond, "
                     "the finest time the timed analysis counts")
 
 

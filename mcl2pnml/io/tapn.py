@@ -83,7 +83,8 @@ from mcl2pnml.core.net import ArcKind, Net
 from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.patterns import (Grouping, Pattern, Predicate, PredicateSyntax, Property,
                                       ScopeKind, describe)
-from mcl2pnml.core.timing import Assumptions, TimedNet, exact_seconds, mission_timing
+from mcl2pnml.core.timing import (Assumptions, TimedNet, exact_seconds, mission_timing,
+                                  seconds_text)
 from mcl2pnml.core.version import __version__
 
 #: The assumptions a timed-arc net is written under unless told: TAPAAL's urgency, no priority.
@@ -166,13 +167,9 @@ class TimedArcNet:
         """``seconds`` in this net's units; refused when it is not a whole number of them."""
         value = exact_seconds(seconds) / self.unit
         if value.denominator != 1 or value < 0:
-            raise TapnError(f"{what} ({float(seconds):g} s) is not a whole number of the "
-                            f"net's time unit ({_seconds(self.unit)} s)")
+            raise TapnError(f"{what} ({seconds_text(exact_seconds(seconds))} s) is not a whole "
+                            f"number of the net's time unit ({seconds_text(self.unit)} s)")
         return int(value)
-
-
-def _seconds(x: Fraction) -> str:
-    return str(x.numerator) if x.denominator == 1 else f"{float(x):g}"
 
 
 class _Names:
@@ -231,7 +228,7 @@ def timed_arc_net(net: Net, assumptions: Assumptions = TAPAAL_ASSUMPTIONS,
     transitions, arcs, copies = _variants(net, name, new, inputs, urgent, guards, gap_of)
     notes = [f"{net.name or 'net'}: written by mcl2pnml {__version__} for TAPAAL's "
              "verifydtapn (discrete time)",
-             f"time unit: {_seconds(timed.unit)} s (every age bound below counts this unit)",
+             f"time unit: {seconds_text(timed.unit)} s (every age bound below counts this unit)",
              f"assumptions: {assumptions.words()}"]
     return TimedArcNet(net.name or "net", tuple(places), tuple(transitions + extra_t),
                        tuple(arcs + extra_a), name, copies, timed.unit, assumptions,
@@ -635,17 +632,18 @@ def deadline_net(net: Net, seconds: Fraction | int | float,
     names = _Names()
     names.used = set(tnet.names.values()) | set(tnet.added)
     clock, late, done = names.take("CLOCK"), names.take("late"), names.take("LATE")
+    at = seconds_text(Fraction(w) * tnet.unit)
     observer = TimedArcNet(
         tnet.name, tnet.places + (TPlace(clock, 1), TPlace(done, 0)),
         tnet.transitions + (TTransition(late),),
         tnet.arcs + (TArc("input", clock, late, guard=(w, None)), TArc("output", late, done),
                      *(TArc("inhibitor", r, late) for r in results)),
         tnet.names, tnet.copies, tnet.unit, tnet.assumptions, tnet.watched,
-        tnet.notes + (f"observer: {late} fires at {_seconds(Fraction(w) * tnet.unit)} s or "
+        tnet.notes + (f"observer: {late} fires at {at} s or "
                       f"later while no result is marked",),
         {**tnet.added, clock: "the time since the start", late: "no result yet at the bound",
          done: "a run had no result at the bound"})
-    return observer, Query(f"late{w}", f"some run has no result at {_seconds(Fraction(w) * tnet.unit)} s",
+    return observer, Query(f"late{w}", f"some run has no result at {at} s",
                            f"EF {done} = 1\n")
 
 

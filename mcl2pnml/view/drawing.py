@@ -55,6 +55,7 @@ from mcl2pnml.core.errors import did_you_mean
 from mcl2pnml.core.net import Arc, ArcKind, Net, Place, Transition
 from mcl2pnml.core.payloads import read_transition
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.core.timing import exact_seconds, seconds_text
 from mcl2pnml.io.dot import node_name
 
 TOKEN = "\u25cf"
@@ -94,8 +95,9 @@ def timeout_text(t: Transition) -> str | None:
     own ``t03`` is a time-out of no set length yet.
     """
     if t.timing is not None:
-        lo, hi = t.timing.earliest, t.timing.latest
-        return f"{CLOCK} {lo:g} s" if hi == lo else f"{CLOCK} {t.timing} s"
+        lo, hi = (None if b is None else seconds_text(exact_seconds(b))
+                  for b in (t.timing.earliest, t.timing.latest))
+        return f"{CLOCK} {lo} s" if hi == lo else f"{CLOCK} [{lo}, {hi or 'inf'}] s"
     if read_transition(t).timeout is not None:
         return f"{CLOCK} time-out"
     return None

@@ -11,6 +11,7 @@ option, the value and the limit.
 """
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from fractions import Fraction
 
@@ -77,7 +78,7 @@ def test_a_net_read_from_a_file_with_a_finer_bound_names_it(tmp_path):
     fine = _with_time_out(net, 1e-7)
     with pytest.raises(Mcl2PnmlError) as refused:
         mission_timing(fine)
-    expected = ("net 'm': the time-out of transition T.t03, 1e-07 s, is finer than a "
+    expected = ("net 'm': the time-out of transition T.t03, 0.0000001 s, is finer than a "
                 "microsecond, the finest time the timed analysis counts")
     assert refused.value.message == expected
     path = tmp_path / "m.pnml"
@@ -122,3 +123,23 @@ def test_the_bounds_themselves_are_assumed(tmp_path):
 
 def test_the_autopilot_waits_for_an_acknowledgement_as_long_as_the_analysis_assumes():
     assert autopilot.SCHEMA["properties"]["ack_within"]["maximum"] == MAX_ACK_WITHIN
+
+
+# -- times printed exactly -----------------------------------------------------------------
+
+@pytest.mark.parametrize("timeouts, text, latest", [
+    (["100000.5"], "100000.5", 100000.5), (["1000000000"], "1000000000", 1000000000),
+    (["100000.5", "1000000000"], "1000100000.5", 1000100000.5),
+    (["999999999.999999"], "999999999.999999", 999999999.999999),
+])
+def test_the_end_times_are_printed_exactly(tmp_path, timeouts, text, latest):
+    mission = tmp_path / "long.mcl"
+    tasks = "".join(f"task T{n}() = AchieveGoal(P()) timeout {t};\n"
+                    for n, t in enumerate(timeouts))
+    calls = " ".join(f"T{n}();" for n in range(len(timeouts)))
+    mission.write_text(f"primitive P();\n{tasks}mission {{ {calls} }}\n")
+    out = run_cli("analyze", mission, "--timed")
+    assert out.returncode == 0, out.stderr
+    assert f"  end time: earliest 0 s, latest {text} s\n" in out.stdout
+    timed = json.loads(run_cli("analyze", mission, "--timed", "--json").stdout)["timed"]
+    assert (timed["earliest"], timed["latest"]) == (0, latest)
