@@ -7,6 +7,7 @@ the run's ``--json`` and its log; ``--stop-on-breach`` stops the run there, safe
 from __future__ import annotations
 
 import json
+import os
 from fractions import Fraction
 
 import pytest
@@ -17,7 +18,7 @@ from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
 from mcl2pnml.runtime.engine import Outcome, run
 from mcl2pnml.runtime.watch import Watch, exact, seconds
 
-from helpers import ENGINES, Engine, cli, one_error
+from helpers import ENGINES, Engine, cli, one_error, run_cli
 
 #: Two legs of one primitive: its second report comes after its first.
 TWO_LEGS = "primitive Go(x);\ntask Leg(x) = AchieveGoal(Go(x));\nmission { Leg(1); Leg(2); }\n"
@@ -190,3 +191,22 @@ def test_both_engines_watch_when_driven_directly(engine):
                   stop_on_breach=True)
     assert stopped.outcome is Outcome.BREACH and stopped.time == 1
     assert [a.primitive for a in stopped.safe_stop] == ["Go"]
+
+
+def test_a_resumed_run_watches_what_its_journal_recorded(tmp_path, mission):
+    vehicle = files(tmp_path, {"Go": ["ok@0.8", "ok@0.8"]}, None)
+    journal = tmp_path / "run.journal"
+    # the journal's test hook kills the first run part-way, as a crash would
+    env = {**os.environ, "MCL2PNML_JOURNAL_KILL_AFTER": "4"}
+    killed = run_cli("run", mission, *vehicle, "--journal", journal, "--report-gap", "0.9",
+                     env=env)
+    assert killed.returncode != 0
+    header = json.loads(journal.read_text().splitlines()[0])
+    assert (header["ack_within"], header["report_gap"], header["stop_on_breach"]) \
+        == ("0", "0.9", False)
+    # each resume a process of its own, as a user's: a refused one lets go of the journal
+    one_error(run_cli("run", mission, "--resume", journal, "--report-gap", "0.5"),
+              "the journal's run has --report-gap 0.9, not 0.5")
+    resumed = run_cli("run", mission, "--resume", journal, "--json")
+    assert "closer than the 0.9 s assumed" in json.loads(resumed.stdout)["breaches"][0][
+        "message"]
