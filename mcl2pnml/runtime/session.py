@@ -22,7 +22,7 @@ from typing import IO, Callable
 from mcl2pnml.core.errors import Location, Mcl2PnmlError
 from mcl2pnml.core.files import atomic_write_text, check_outputs
 from mcl2pnml.core.settings import SettingError
-from mcl2pnml.core.timing import Assumptions
+from mcl2pnml.core.timing import Assumptions, seconds_text as seconds
 from mcl2pnml.runtime import interrupts, journal as journals
 from mcl2pnml.runtime.aal import LiveVehicle
 from mcl2pnml.runtime.engine import Engine, Run, run as drive, run_realtime
@@ -32,7 +32,6 @@ from mcl2pnml.runtime.options import RunOptions
 from mcl2pnml.runtime.runlog import RunLog
 from mcl2pnml.runtime.simprims import load_file
 from mcl2pnml.runtime.vehicles import VehicleKind, kind_of, seed_of
-from mcl2pnml.runtime.watch import seconds
 
 #: The options of a run that its journal's header records, and a resume reuses.
 JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives", "ack_within",

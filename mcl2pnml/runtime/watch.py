@@ -32,7 +32,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-from mcl2pnml.core.timing import Assumptions
+from mcl2pnml.core.timing import Assumptions, seconds_text as seconds
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
 
 #: The resolution of a run's times (the run log's: :func:`mcl2pnml.runtime.aal._time`).
@@ -45,20 +45,6 @@ ANSWER = {ActionKind.ENABLE: EventKind.ON, ActionKind.DISABLE: EventKind.OFF}
 def exact(t: float) -> Fraction:
     """A time of the run, to the microsecond the log writes it with, as an exact number."""
     return Fraction(round(t * MICRO), MICRO)
-
-
-def seconds(x: Fraction) -> str:
-    """An exact number of seconds in decimal, as many digits as it has: 1.6, 0.000001."""
-    sign, x = ("-" if x < 0 else ""), abs(x)
-    whole, rest = divmod(x.numerator, x.denominator)
-    if not rest:
-        return f"{sign}{whole}"
-    digits = ""
-    while rest and len(digits) < 12:   # a run's times have six decimals at most
-        rest *= 10
-        digit, rest = divmod(rest, x.denominator)
-        digits += str(digit)
-    return f"{sign}{whole}.{digits}"
 
 
 @dataclass(frozen=True)

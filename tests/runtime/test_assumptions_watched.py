@@ -12,11 +12,11 @@ from fractions import Fraction
 
 import pytest
 
-from mcl2pnml.core.timing import Assumptions
+from mcl2pnml.core.timing import Assumptions, seconds_text as seconds
 from mcl2pnml.pipeline import check_source
 from mcl2pnml.runtime.aal import Action, ActionKind, Event, EventKind
 from mcl2pnml.runtime.engine import Outcome, run
-from mcl2pnml.runtime.watch import Watch, exact, seconds
+from mcl2pnml.runtime.watch import Watch, exact
 
 from helpers import ENGINES, Engine, cli, one_error, run_cli
 
