@@ -65,7 +65,8 @@ class TimedEnds:
     ``latest``: the first and last times, in seconds, at which a run reaches its
     result (``latest`` None when a run never ends); ``waits``: what a run that
     never ends waits for, in words; ``never``: that run's verdict (its firings);
-    ``latest_run``: the firings of a run that ends at ``latest``.
+    ``latest_run``: the firings of a run that ends at ``latest``; ``states`` and
+    ``time_states``: the zones the verdict and the end times searched.
     """
 
     assumptions: Assumptions
@@ -78,6 +79,7 @@ class TimedEnds:
     states: int
     reason: str | None = None
     latest_run: tuple[str, ...] = ()
+    time_states: int = 0
 
     def lines(self) -> list[str]:
         """The answer as ``analyze --timed`` prints it."""
@@ -94,7 +96,8 @@ class TimedEnds:
             latest = (f"{_s(self.latest)} s" if self.latest is not None else
                       f"unbounded ({self.reason})" if self.always_ends else
                       "never (a run does not end)")
-            out.append(f"  end time: earliest {_s(self.earliest)} s, latest {latest}")
+            out.append(f"  end time: earliest {_s(self.earliest)} s, latest {latest} "
+                       f"({self.time_states:,} zones)")
         elif self.always_ends is not None and self.reason:
             out.append(f"  end time: not computed ({self.reason})")
         return out
@@ -104,6 +107,7 @@ class TimedEnds:
                 "deadlock": self.deadlock, "reason": self.reason,
                 "earliest": _num(self.earliest), "latest": _num(self.latest),
                 "waits": list(self.waits), "zones": self.states,
+                "end_time_zones": self.time_states,
                 "latest_run": list(self.latest_run),
                 "never": None if self.never is None else {
                     "shape": self.never.shape.value, "transitions": list(self.never.transitions),
@@ -124,46 +128,47 @@ def ends(net: Net, assumptions: Assumptions = Assumptions(),
          max_states: int = MAX_CHECK_STATES) -> TimedEnds:
     """Whether every run of the mission ends, when, and what one that does not waits for."""
     tn = semantics(net, assumptions)
-    graph, (verdict,) = engine.check_timed_properties(tn, [ends_property()], max_states)
-    if graph is None:
-        return TimedEnds(assumptions, None, False, None, None, (), None, verdict.states,
-                         verdict.reason)
-    ended = _end_mask(graph)
-    deadlock = any(graph.waits[s] and not graph.enabled[s] and not graph.markings[s] & ended
-                   for s in range(graph.states))
+    (verdict,) = engine.check_timed_properties(tn, [ends_property()], max_states)
     if verdict.status == "unknown":
-        return TimedEnds(assumptions, None, deadlock, None, None, (), None, graph.states,
-                         verdict.reason)
+        return TimedEnds(assumptions, None, _stalls(tn, verdict, max_states), None, None, (),
+                         None, verdict.states, verdict.reason)
     times = engine.end_times(tn, ENDS, verdict, max_states)
     unit = tn.unit
-    reason = times.reason
     earliest = None if times.earliest is None else times.earliest * unit
     latest = None if times.latest is None else times.latest * unit
-    never = None if verdict.status == "holds" else as_verdict(graph, verdict)
-    waits = () if never is None else tuple(waiting(graph, verdict))
-    return TimedEnds(assumptions, verdict.status == "holds", deadlock, earliest, latest, waits,
-                     never, graph.states, reason, latest_run=times.latest_path)
+    places = engine.places(tn)
+    never = None if verdict.status == "holds" else as_verdict(places, verdict)
+    waits = () if never is None else tuple(waiting(tn, places, verdict))
+    return TimedEnds(assumptions, verdict.status == "holds", _stalls(tn, verdict, max_states),
+                     earliest, latest, waits, never, verdict.states, times.reason,
+                     latest_run=times.latest_path, time_states=times.states)
 
 
-def _end_mask(graph: engine.ZoneGraph) -> int:
-    mask = 0
-    for k, p in enumerate(graph.places):
-        if p in ENDS:
-            mask |= 1 << k
-    return mask
+def _stalls(tn: TimedNet, verdict: engine.TimedVerdict, max_states: int) -> bool:
+    """Whether a run stalls (nothing left to happen, no result): never when every run
+    ends, at once when the run that does not end stops with nothing enabled, else
+    searched for (False if the search passes its limit: the verdict says why)."""
+    if verdict.status == "holds":
+        return False
+    if verdict.status == "fails" and verdict.shape == "finite" and not engine.enables(
+            tn, verdict.path[-1]):
+        return True     # its run that does not end stops with nothing enabled
+    try:
+        return engine.stalls(tn, ENDS, max_states)
+    except engine.TimedLimit:
+        return False
 
 
-def waiting(graph: engine.ZoneGraph, verdict: engine.TimedVerdict) -> list[str]:
+def waiting(tn: TimedNet, places: list[str], verdict: engine.TimedVerdict) -> list[str]:
     """What a run that never ends waits for, in the mission's words."""
-    last = verdict.path[-1]
-    marked = set(graph.marked(last))
-    timeouts = {t.id.rsplit(".", 1)[0] for t in graph.tn.net.transitions if t.timing is not None}
+    marked = set(engine.marked_places(places, verdict.path[-1]))
+    timeouts = {t.id.rsplit(".", 1)[0] for t in tn.net.transitions if t.timing is not None}
     out = []
     tasks = [] if verdict.shape == "lasso" else sorted(
         p.rsplit(".", 1)[0] for p in marked if p.endswith(".EXE"))
     for task in tasks:
         prims = sorted(p.rsplit(".", 1)[0] for p in marked if p.endswith(".ON")
-                       and _uses(graph.tn.net, task, p.rsplit(".", 1)[0]))
+                       and _uses(tn.net, task, p.rsplit(".", 1)[0]))
         what = f"{task} waits for " + (" and ".join(f"{p}'s report" for p in prims) or
                                        "its primitives")
         what += ", and has no time-out" if task not in timeouts else ""
@@ -187,12 +192,12 @@ def _uses(net: Net, task: str, prim: str) -> bool:
     return any(a.target.startswith(prim + ".") for a in net.post[t01])
 
 
-def as_verdict(graph: engine.ZoneGraph, v: engine.TimedVerdict) -> Verdict:
+def as_verdict(places: list[str], v: engine.TimedVerdict) -> Verdict:
     """A timed verdict in the untimed checker's type (:class:`mcl2pnml.analysis.checking.on_graph.Verdict`)."""
     status = {"holds": Status.HOLDS, "fails": Status.FAILS, "unknown": Status.UNKNOWN}[v.status]
     if status is not Status.FAILS:
         return Verdict(v.property, status, states=v.states, reason=v.reason)
-    markings = tuple(tuple((p, 1) for p in graph.marked(s)) for s in v.path)
+    markings = tuple(tuple((p, 1) for p in engine.marked_places(places, m)) for m in v.path)
     shape = {"prefix": Shape.PREFIX, "finite": Shape.FINITE, "lasso": Shape.LASSO}[v.shape]
     return Verdict(v.property, status, v.transitions, markings, shape, v.loop, v.states)
 
@@ -202,8 +207,6 @@ def check_properties_timed(net: Net, properties: Sequence[Property],
                            max_states: int = MAX_CHECK_STATES) -> list[Verdict]:
     """Each property's verdict on the mission's time-divergent runs (docs/time.md)."""
     tn = semantics(net, assumptions)
-    graph, verdicts = engine.check_timed_properties(tn, properties, max_states)
-    if graph is None:
-        return [Verdict(v.property, Status.UNKNOWN, states=v.states, reason=v.reason)
-                for v in verdicts]
-    return [as_verdict(graph, v) for v in verdicts]
+    places = engine.places(tn)
+    return [as_verdict(places, v)
+            for v in engine.check_timed_properties(tn, properties, max_states)]

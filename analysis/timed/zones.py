@@ -1,4 +1,4 @@
-"""Timed verdicts: the zone graph of a time Petri net with priorities, and what it proves.
+"""Timed verdicts: the zones of a time Petri net with priorities, searched on the fly.
 
 The semantics is :mod:`mcl2pnml.core.timing`'s (docs/time.md): each
 transition has a static interval and a clock that starts when it becomes
@@ -8,39 +8,54 @@ gap groups (a primitive's reports) fire at least a number of units apart;
 fairness groups (a primitive's first report) eventually fire when one of
 them stays enabled. Time is dense; every bound is a whole number of units.
 
-**Method.** Zones, not one state per unit of time: a state is a marking and
-a difference-bound matrix over the clocks that matter in it (Dill's DBMs;
-Bengtsson and Yi, "Timed automata: semantics, algorithms and tools", 2004),
-so that a time-out of 900 s costs no more than one of 9 s. The clocks are
-those of the enabled transitions whose interval is neither ``[0,0]`` nor
-``[0,inf)`` (one per enabled time-out or late acknowledgement) and one per
-gap group whose gap has not yet passed; a clock that can no longer change a
-guard is dropped (active clock reduction, Daws and Yovine 1996), and every
-zone is extrapolated by the largest constant each clock is compared with
-(Extra_M, Behrmann, Bouyer, Larsen and Pelanek 2006), which keeps the graph
-finite and exact for every guard. The graph is built once by breadth-first
-search; every property is then read on its product with the observer of
-:mod:`mcl2pnml.analysis.checking.observers` (the same observer the untimed checker uses).
+**Zones.** A state is a marking and a difference-bound matrix over the
+clocks that matter in it (Dill's DBMs; Bengtsson and Yi, "Timed automata:
+semantics, algorithms and tools", 2004): one per enabled transition whose
+interval is neither ``[0,0]`` nor ``[0,inf)`` (a time-out, a late
+acknowledgement) and one per gap group whose gap has not yet passed. A
+clock that can no longer change a guard is dropped (active clock reduction,
+Daws and Yovine 1996), and every zone is extrapolated by its clocks' own
+lower and upper bounds (Extra+_LU, Behrmann, Bouyer, Larsen and Pelanek
+2006): a time-out's clock by its seconds, an acknowledgement's only from
+above, a report gap's only from below.
+
+**On the fly, with inclusion.** The graph is expanded as a search asks for
+it. A successor whose zone is included in one already found with the same
+marking and clocks is not added: its edge goes to the larger zone, which can
+do all it can (the simulation graph of Tripakis 1999; inclusion abstraction,
+Laarman, Olesen, Dalsgaard, Larsen and van de Pol 2013). Reachability and the
+end times are exact on that graph. Each property is read on its product with
+the observer of :mod:`mcl2pnml.analysis.checking.observers`, depth first
+(Tarjan's strongly connected components, each judged when it closes), and the
+search stops at its first counterexample.
 
 **Runs that end, and runs that do not.** A run is time-divergent: a state
 where time may pass for ever with nothing forced (no urgent transition, no
 enabled transition with a deadline) *waits forever*, and a run may stop
 there: with an obligation open it violates the property (a finite
-counterexample: "the mission waits here for ever"). A cycle of the zone
-graph is an infinite run; it is a run of the semantics only if time
-diverges along it. A cycle that fires a *progress* transition (a lower bound
-of one unit or more, or a member of a gap group of one unit or more) takes
-at least one unit a turn, so it diverges; a cycle through urgent states only
-takes no time at all (Zeno) and is no run; any other cycle is undecided, and
-a verdict that would rest on one says so (unknown). With fairness groups, a
-cycle (or a wait) in which a group stays enabled and never fires is no run
-either: a strongly connected component is fair iff every group is disabled
-somewhere in it or fires somewhere in it (then one cycle covers it all).
+counterexample). A cycle is an infinite run only if time diverges along it:
+it fires a *progress* transition (a lower bound of one unit or more, or a
+member of a gap group of one unit or more), so it takes a unit a turn; and
+no transition with a deadline stays enabled along it without firing (its
+deadline would bound the time), nor, with fairness, a fairness group. These
+are generalized Büchi conditions, so a strongly connected component has such
+a cycle iff every condition is met somewhere in it (Couvreur 1999). Where a
+cycle may take no time and fires no progress transition (a report gap or a
+time-out of 0 s), the search is run again with one more clock that ticks
+once a unit (Tripakis, Yovine and Bouajjani 2005), and a cycle that ticks
+diverges.
+
+**Every counterexample is replayed.** Inclusion makes a covering graph: every
+run of the net is a path of it, so "holds" is proven, but one of its paths
+need not be a run. A counterexample is therefore fired again, zone by zone,
+without inclusion: a prefix is kept if every step is possible; a cycle is
+repeated until its zone comes back. One that is not a run sends the search
+back to the exact zone graph (no inclusion), which answers alone.
 
 **End times.** With a clock that is never reset nor extrapolated, the
 earliest and latest times at which a run first reaches an end marking are
-the bounds of that clock in the zones where it does (exact: the
-extrapolation of the other clocks keeps every guard's answer).
+the bounds of that clock where it does (inclusion keeps both: a larger zone
+reaches every end time a smaller one does).
 
 Safe nets only (every marking 0 or 1, as compiled missions are): a firing
 that would put a second token in a place is refused with its reason. May
@@ -48,9 +63,10 @@ import :mod:`mcl2pnml.core` and the observers of :mod:`mcl2pnml.analysis.checkin
 """
 from __future__ import annotations
 
+import operator
 from collections import deque
-from dataclasses import dataclass, field
-from typing import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import Iterable, Sequence
 
 import networkx as nx
 
@@ -59,7 +75,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.patterns import Property, holds, places_of
 from mcl2pnml.core.structure import Structure, structure
 from mcl2pnml.core.timing import TimedNet
-from mcl2pnml.analysis.checking.observers import ObserverTable, path_to, truths
+from mcl2pnml.analysis.checking.observers import ObserverTable, truths
 
 # -- bounds: (c, <=) is 2c+1, (c, <) is 2c, no bound is INF ----------------------------
 
@@ -125,39 +141,8 @@ def _constrain(d: list[list[int]], i: int, j: int, b: int) -> bool:
     return True
 
 
-# -- the zone graph ----------------------------------------------------------------------
-
-@dataclass
-class ZoneGraph:
-    """The zone graph: per state its marking (a bit mask), clocks and DBM, its edges, and
-    whether time may pass for ever there (``waits``) or not at all (``urgent``)."""
-
-    tn: TimedNet
-    places: list[str]
-    transitions: list[str]
-    markings: list[int] = field(default_factory=list)
-    zones: list[tuple] = field(default_factory=list)
-    succ: list[list[tuple[int, int]]] = field(default_factory=list)
-    parent: list[tuple[int, int] | None] = field(default_factory=list)
-    waits: list[bool] = field(default_factory=list)
-    urgent: list[bool] = field(default_factory=list)
-    enabled: list[int] = field(default_factory=list)
-    """Per state, the transitions enabled by its marking, as a bit mask."""
-    progress: int = 0
-    """The progress transitions, as a bit mask."""
-    stuck: list[int] = field(default_factory=list)
-    """States where time cannot pass and nothing can fire (a time-lock)."""
-    ends: list[tuple[int, int, int, int | None]] = field(default_factory=list)
-    """With a global clock: (state, transition, earliest, latest) of each firing that
-    reaches an end from ``state``, the times in units, latest None if unbounded."""
-
-    @property
-    def states(self) -> int:
-        return len(self.markings)
-
-    def marked(self, s: int) -> list[str]:
-        m = self.markings[s]
-        return [p for k, p in enumerate(self.places) if m >> k & 1]
+#: A clock never compared from that side (Extra+_LU's minus infinity).
+NONE = -(1 << 40)
 
 
 class TimedLimit(Mcl2PnmlError):
@@ -172,7 +157,7 @@ class TimedLimit(Mcl2PnmlError):
 class _Timers:
     """The clocks of a net, fixed before the search: one per timer (a transition whose
     interval is neither ``[0,0]`` nor ``[0,inf)``, or a group of them sharing one,
-    :attr:`TimedNet.shared`), then one per gap group, then the global clock if any."""
+    :attr:`TimedNet.shared`), then one per gap group, then the tick and the global clock if any."""
 
     timer_of: tuple[int, ...]
     """Per transition, its timer, or -1 if it has none."""
@@ -249,8 +234,9 @@ def _mask_of(indices: Iterable[int]) -> int:
 @dataclass(frozen=True)
 class _TimedStructure:
     """A safe time Petri net as bit masks, with its clocks: what the search reads of it.
-    Clocks are numbered: timers ``0..K-1``, gap groups ``K..K+G-1``, the global clock
-    ``K+G`` (``glob``, only when end times are asked for)."""
+    Clocks are numbered: timers ``0..K-1``, gap groups ``K..K+G-1``, then the tick
+    (``tick``, only when asked for), then the global clock (``glob``, only when end
+    times are asked for)."""
 
     places: tuple[str, ...]
     transitions: tuple[str, ...]
@@ -270,16 +256,37 @@ class _TimedStructure:
     """Per transition, its gap group, or -1."""
     gap: tuple[int, ...]
     """Per gap group, its gap in units."""
+    tick: int | None
+    """The clock that ticks once a unit (only when cycles that may take no time are
+    judged): the clock ``K+G``; its transition is :attr:`tick_t`."""
     glob: int | None
+    """The clock of the whole run (only when end times are asked for): the last one."""
     ceiling: tuple[int, ...]
-    """Per clock but the global one, the largest constant it is compared with (its
-    extrapolation bound, Extra_M)."""
+    """Per clock but the global one, the constant past which it no longer matters to a
+    clock without an upper bound (active clock reduction)."""
+    lower: tuple[int, ...]
+    """Per clock but the global one, the largest constant it is compared with from
+    below (a guard ``x >= c``; :data:`NONE` if none): Extra+_LU's L."""
+    upper: tuple[int, ...]
+    """Per clock but the global one, the largest constant it is compared with from
+    above (a deadline ``x <= c``; :data:`NONE` if none): Extra+_LU's U."""
     progress: int
-    """The progress transitions (a lower bound of a unit or more, or a gap of one)."""
+    """The progress transitions (a lower bound of a unit or more, or a gap of one, or
+    the tick), as a bit mask."""
+    bounded: tuple[int, ...]
+    """The timers with a deadline, as bit masks of their transitions: along a cycle on
+    which time diverges, none stays enabled without firing."""
+    fair: tuple[int, ...]
+    """The fairness groups, as bit masks of their transitions."""
     end: int
     """The end places, as a bit mask (0 without ends)."""
     m0: int
     """The initial marking, as a bit mask."""
+
+    @property
+    def tick_t(self) -> int:
+        """The tick's transition number: one past the net's transitions."""
+        return len(self.transitions)
 
     @property
     def timer_count(self) -> int:
@@ -295,7 +302,8 @@ class _TimedStructure:
         return e
 
 
-def _timed_structure(tn: TimedNet, ends: Iterable[str] | None) -> _TimedStructure:
+def _timed_structure(tn: TimedNet, ends: Iterable[str] | None, tick: bool = False
+                     ) -> _TimedStructure:
     """``tn`` read once into :class:`_TimedStructure` (its refusals, in the order a
     reader meets them: the initial marking, the weights, the shared clocks)."""
     s = structure(tn.net)
@@ -312,10 +320,22 @@ def _timed_structure(tn: TimedNet, ends: Iterable[str] | None) -> _TimedStructur
     for g, (group, _) in enumerate(tn.gaps):
         for tid in group:
             group_of[s.transition_index[tid]] = g
-    ceiling = tuple([max(timers.lo[k], timers.hi[k] or 0) for k in range(K)] + list(gap))
+    ticks = [1] if tick else []
+    ceiling = tuple([max(timers.lo[k], timers.hi[k] or 0) for k in range(K)] + list(gap)
+                    + ticks)
+    if ends is None:
+        lower = tuple([timers.lo[k] if timers.lo[k] > 0 else NONE for k in range(K)]
+                      + list(gap) + ticks)
+        upper = tuple([NONE if timers.hi[k] is None else timers.hi[k] for k in range(K)]
+                      + [NONE] * (G + len(ticks)))
+    else:
+        # with the clock of the whole run, one constant a clock (Extra+_M): its exact
+        # differences keep what Extra+_LU forgets, and the zones split more than they merge
+        lower = upper = ceiling
     progress = _mask_of(j for j in range(T)
                         if lo[j] >= 1 or (group_of[j] >= 0 and gap[group_of[j]] >= 1))
     end = 0 if ends is None else _mask_of(s.place_index[p] for p in ends if p in s.place_index)
+    index = s.transition_index
     return _TimedStructure(
         tuple(s.places), tuple(s.transitions), tuple(pre), tuple(need), tuple(post), tuple(lo),
         priority=_mask_of(j for j, t in enumerate(s.transitions) if t in tn.priority),
@@ -323,9 +343,13 @@ def _timed_structure(tn: TimedNet, ends: Iterable[str] | None) -> _TimedStructur
         urgent=_mask_of(j for j in range(T) if hi[j] == 0),
         deadline=_mask_of(j for j in range(T) if hi[j] is not None),
         timers=timers, group_of=tuple(group_of), gap=gap,
-        glob=K + G if ends is not None else None, ceiling=ceiling, progress=progress, end=end,
-        m0=_mask_of(p for p, n in enumerate(s.initial_vector()) if n))
-
+        tick=K + G if tick else None,
+        glob=K + G + len(ticks) if ends is not None else None, ceiling=ceiling,
+        lower=lower, upper=upper,
+        progress=progress | (1 << T if tick else 0),
+        bounded=tuple(m for m, h in zip(timers.members, timers.hi) if h is not None),
+        fair=tuple(_mask_of(index[t] for t in group) for group in tn.fair),
+        end=end, m0=_mask_of(p for p, n in enumerate(s.initial_vector()) if n))
 
 def _bits(x: int):
     """The indices of the bits set in ``x``, lowest first."""
@@ -370,29 +394,41 @@ def _let_time_pass(ts: _TimedStructure, en: int, clocks: tuple, d: list[list[int
 
 
 def _extrapolate(ts: _TimedStructure, clocks: tuple, d: list[list[int]]) -> None:
-    """Extra_M (Behrmann, Bouyer, Larsen and Pelanek 2006) in place, then the closure:
-    every bound past a clock's largest constant forgotten (the global clock kept)."""
+    """Extra+_LU (Behrmann, Bouyer, Larsen and Pelanek 2006) in place, then the closure:
+    a bound is forgotten where no guard or deadline of its clock can tell it from a
+    larger one (the global clock kept whole)."""
     n = len(d)
+    glob = ts.glob
+    low = [NONE] * n          # per index, L of its clock (the constant: 0)
+    up = [NONE] * n
+    low[0] = up[0] = 0
+    whole = [False] * n       # the global clock: never extrapolated
+    for i, c in enumerate(clocks, 1):
+        if c == glob:
+            whole[i] = True
+        else:
+            low[i], up[i] = ts.lower[c], ts.upper[c]
+    row0 = list(d[0])
     changed = False
     for i in range(1, n):
-        ci = clocks[i - 1]
-        if ci == ts.glob:
+        if whole[i]:
             continue
-        mi = ts.ceiling[ci]
+        li = _le(low[i])
+        drop = row0[i] < _le(-low[i])          # x_i is past its L everywhere
         row = d[i]
-        for jj in range(n):
-            if jj != i and row[jj] < INF and row[jj] > _le(mi):
-                row[jj] = INF
+        for j in range(n):
+            if j != i and row[j] < INF and (drop or row[j] > li or
+                                            (j and not whole[j] and row0[j] < _le(-up[j]))):
+                row[j] = INF
                 changed = True
-    for jj in range(1, n):
-        cj = clocks[jj - 1]
-        if cj == ts.glob:
+    for j in range(1, n):
+        if whole[j] or row0[j] >= _le(-up[j]):
             continue
-        bound = _lt(-ts.ceiling[cj])
-        for i in range(n):
-            if i != jj and d[i][jj] < bound:
-                d[i][jj] = bound
-                changed = True
+        # x_j is past its U everywhere: keep only that (0 when it has no U)
+        bound = LE0 if up[j] == NONE else _lt(-up[j])
+        if d[0][j] != bound:
+            d[0][j] = bound
+            changed = True
     if changed:
         _canonical(d)
 
@@ -400,8 +436,8 @@ def _extrapolate(ts: _TimedStructure, clocks: tuple, d: list[list[int]]) -> None
 def _drop_inactive(ts: _TimedStructure, clocks: tuple, d: list[list[int]]
                    ) -> tuple[tuple, list[list[int]]]:
     """The clocks and DBM without the clocks that no longer change a guard (active clock
-    reduction, Daws and Yovine 1996): a gap clock past its gap, or a clock of an interval
-    ``[a, inf)`` past ``a`` (absent means "long enough")."""
+    reduction, Daws and Yovine 1996): a gap clock past its gap, the tick past its unit, or
+    a clock of an interval ``[a, inf)`` past ``a`` (absent means "long enough")."""
     n = len(d)
     keep = [0]
     for i in range(1, n):
@@ -417,105 +453,97 @@ def _drop_inactive(ts: _TimedStructure, clocks: tuple, d: list[list[int]]
 
 
 def _finish(ts: _TimedStructure, m: int, en: int, clocks: tuple, d: list[list[int]]):
-    """Let time pass (where it may), bound it by the deadlines, extrapolate, drop the
-    clocks that no longer matter; the state's key and whether it is urgent, or None if
+    """Let time pass (where it may), bound it by the deadlines, drop the clocks that no
+    longer matter, extrapolate; the state's key and whether it is urgent, or None if
     time-locked."""
     urgent = _let_time_pass(ts, en, clocks, d)
     if urgent is None:
         return None
-    _extrapolate(ts, clocks, d)
+    # dropped first: the extrapolation forgets the lower bounds that tell a clock is past
     clocks, d = _drop_inactive(ts, clocks, d)
+    _extrapolate(ts, clocks, d)
+    if any(a > b for a, b in zip(clocks, clocks[1:])):
+        # one order of the clocks, so that one zone has one key whatever order they started
+        order = [0] + [i + 1 for i in sorted(range(len(clocks)), key=clocks.__getitem__)]
+        clocks = tuple(sorted(clocks))
+        d = [[d[i][j] for j in order] for i in order]
     return (m, clocks, tuple(v for row in d for v in row)), urgent
 
 
-class _Search:
-    """The breadth-first search that builds a :class:`ZoneGraph` (see :func:`zone_graph`)."""
+def _start(ts: _TimedStructure) -> tuple[tuple, bool, int]:
+    """The initial state: its key, whether it is urgent, its enabled transitions. Every
+    enabled timer at 0, and the global clock."""
+    en0 = ts.enabled(ts.m0)
+    clocks0: list = []
+    d0 = [[LE0]]
+    for k in range(ts.timer_count):
+        if en0 & ts.timers.members[k]:
+            _add_clock(clocks0, d0, k)
+    if ts.glob is not None:
+        _add_clock(clocks0, d0, ts.glob)
+    got = _finish(ts, ts.m0, en0, tuple(clocks0), d0)
+    if got is None:
+        raise Mcl2PnmlError("the initial state is time-locked")
+    return got[0], got[1], en0
 
-    def __init__(self, tn: TimedNet, ts: _TimedStructure, max_states: int, earliest_only: bool,
-                 progress: Callable[[int, int], None] | None):
-        self.ts, self.max_states = ts, max_states
-        self.earliest_only, self.progress = earliest_only, progress
-        self.graph = ZoneGraph(tn, list(ts.places), list(ts.transitions), progress=ts.progress)
-        self.index: dict = {}
-        self.queue: deque[int] = deque()
-        self.best = INF          # the earliest end found so far
 
-    def intern(self, key, urgent: bool, en: int, parent) -> int:
-        """The state of ``key``, added (and queued) if new."""
-        k = self.index.get(key)
-        if k is not None:
-            return k
-        g = self.graph
-        k = self.index[key] = len(g.markings)
-        if k >= self.max_states:
-            raise TimedLimit(k, self.max_states)
-        g.markings.append(key[0])
-        g.zones.append(key[1:])
-        g.succ.append([])
-        g.parent.append(parent)
-        g.urgent.append(urgent)
-        g.enabled.append(en)
-        g.waits.append(not urgent and not (en & self.ts.deadline))
-        self.queue.append(k)
-        if self.progress is not None and k % 20000 == 0 and k:
-            self.progress(k, len(self.queue))
-        return k
+def _clocks_after(ts: _TimedStructure, en: int, en2: int, j: int, clocks: tuple,
+                  d: list[list[int]]) -> tuple[list, list[list[int]]]:
+    """The clocks and DBM after ``j`` fires: a timer starts when its transitions become
+    enabled, or again when one of them fires and one stays enabled; it stops when none
+    is; ``j``'s gap group (or the tick) starts its clock again."""
+    K, members = ts.timer_count, ts.timers.members
+    restart = [c for c in range(K) if en2 & members[c] and
+               (not en & members[c] or members[c] >> j & 1)]
+    keep_idx = [0]
+    new_clocks = []
+    for i, c in enumerate(clocks, 1):
+        if c >= K or (en2 & members[c] and c not in restart):
+            keep_idx.append(i)
+            new_clocks.append(c)
+    d2 = [[d[a][b] for b in keep_idx] for a in keep_idx]
+    for c in restart:
+        _add_clock(new_clocks, d2, c)
+    if j == ts.tick_t:
+        c = ts.tick
+    else:
+        gj = ts.group_of[j]
+        c = K + gj if gj >= 0 and ts.gap[gj] > 0 else None
+    if c is not None:
+        if c in new_clocks:
+            _reset(d2, new_clocks.index(c) + 1)
+        else:
+            _add_clock(new_clocks, d2, c)
+    return new_clocks, d2
 
-    def start(self) -> None:
-        """The initial state: every enabled timer at 0, and the global clock."""
-        ts = self.ts
-        en0 = ts.enabled(ts.m0)
-        clocks0: list = []
-        d0 = [[LE0]]
-        for k in range(ts.timer_count):
-            if en0 & ts.timers.members[k]:
-                _add_clock(clocks0, d0, k)
-        if ts.glob is not None:
-            _add_clock(clocks0, d0, ts.glob)
-        got = _finish(ts, ts.m0, en0, tuple(clocks0), d0)
-        if got is None:
-            raise Mcl2PnmlError("the initial state is time-locked")
-        key0, urg0 = got
-        self.intern(key0, urg0, en0, None)
 
-    def run(self) -> ZoneGraph:
-        """Every state reached, each expanded once, in breadth-first order."""
-        self.start()
-        g = self.graph
-        while self.queue:
-            k = self.queue.popleft()
-            if self.ts.end & g.markings[k]:
-                continue       # the run has ended: its time was recorded when it got here
-            clocks, flat = g.zones[k]
-            if self.earliest_only and g.ends:
-                gi = clocks.index(self.ts.glob) + 1
-                if -(flat[gi] >> 1) >= self.best:
-                    continue
-            en = g.enabled[k]
-            cand = en & self.ts.priority or en & self.ts.eager or en
-            fired_any = False
-            for j in _bits(cand):
-                fired_any |= self.fire(k, j)
-            if not fired_any and not g.waits[k]:
-                g.stuck.append(k)   # time cannot pass for ever, and nothing can fire
-        return g
+#: What :func:`_post` gives when the firing is possible but no time may pass after it.
+LOCKED = "time-locked"
 
-    def fire(self, k: int, j: int) -> bool:
-        """Transition ``j`` fired from state ``k`` where its guard allows, its successor
-        added; whether the guard allowed it."""
-        ts, g = self.ts, self.graph
-        clocks, flat = g.zones[k]
-        n = len(clocks) + 1
-        d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
+
+def _post(ts: _TimedStructure, en: int, key: tuple, j: int):
+    """The successor of state ``key`` (enabling ``en``) by ``j`` (the tick if
+    ``ts.tick_t``): ``(key, urgent, enabled, end)`` with ``end`` the bounds of the
+    global clock when it reaches an end (else None); None if ``j``'s guard is false
+    everywhere in the zone; :data:`LOCKED` if it fires into a time-lock."""
+    m, clocks, flat = key
+    n = len(clocks) + 1
+    d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
+    K = ts.timer_count
+    if j == ts.tick_t:
+        # the tick: a unit since the last, a step of no transition
+        if ts.tick in clocks and not _constrain(d, 0, clocks.index(ts.tick) + 1, _le(-1)):
+            return None
+        m2, en2 = m, en
+    else:
         # the guard: its own clock at its lower bound, its group's gap passed
-        tj, gj, K = ts.timers.timer_of[j], ts.group_of[j], ts.timer_count
+        tj, gj = ts.timers.timer_of[j], ts.group_of[j]
         if tj >= 0 and ts.lo[j] > 0 and tj in clocks:
             if not _constrain(d, 0, clocks.index(tj) + 1, _le(-ts.lo[j])):
-                return False
+                return None
         if gj >= 0 and (K + gj) in clocks:
             if not _constrain(d, 0, clocks.index(K + gj) + 1, _le(-ts.gap[gj])):
-                return False
-        m = g.markings[k]
+                return None
         rest = m & ~ts.pre[j]
         if rest & ts.post[j]:
             raise Mcl2PnmlError(
@@ -523,64 +551,162 @@ class _Search:
                 f"second token in '{ts.places[(rest & ts.post[j]).bit_length() - 1]}'")
         m2 = rest | ts.post[j]
         en2 = ts.enabled(m2)
-        new_clocks, d2 = self._clocks_after(g.enabled[k], en2, j, clocks, d)
-        ends = ts.glob is not None and ts.end and m2 & ts.end
-        if ends:
-            gi = new_clocks.index(ts.glob) + 1
-            earliest = -(d2[0][gi] >> 1)
-            latest = None if d2[gi][0] >= INF else d2[gi][0] >> 1
-        got = _finish(ts, m2, en2, tuple(new_clocks), d2)
-        if got is None:
-            return True
-        key, urg = got
-        g.succ[k].append((self.intern(key, urg, en2, (k, j)), j))
-        if ends:
-            # every way in counts: past the end time passes, so the end states of
-            # different times may share one zone
-            g.ends.append((k, j, earliest, latest))
-            self.best = min(self.best, earliest)
-        return True
-
-    def _clocks_after(self, en: int, en2: int, j: int, clocks: tuple, d: list[list[int]]
-                      ) -> tuple[list, list[list[int]]]:
-        """The clocks and DBM after ``j`` fires: a timer starts when its transitions become
-        enabled, or again when one of them fires and one stays enabled; it stops when none
-        is; ``j``'s gap group starts its clock again."""
-        ts = self.ts
-        K, members = ts.timer_count, ts.timers.members
-        restart = [c for c in range(K) if en2 & members[c] and
-                   (not en & members[c] or members[c] >> j & 1)]
-        keep_idx = [0]
-        new_clocks = []
-        for i, c in enumerate(clocks, 1):
-            if c >= K or (en2 & members[c] and c not in restart):
-                keep_idx.append(i)
-                new_clocks.append(c)
-        d2 = [[d[a][b] for b in keep_idx] for a in keep_idx]
-        for c in restart:
-            _add_clock(new_clocks, d2, c)
-        gj = ts.group_of[j]
-        if gj >= 0 and ts.gap[gj] > 0:
-            c = K + gj
-            if c in new_clocks:
-                _reset(d2, new_clocks.index(c) + 1)
-            else:
-                _add_clock(new_clocks, d2, c)
-        return new_clocks, d2
+    new_clocks, d2 = _clocks_after(ts, en, en2, j, clocks, d)
+    end = None
+    if ts.glob is not None and m2 & ts.end:
+        gi = new_clocks.index(ts.glob) + 1
+        end = (-(d2[0][gi] >> 1), None if d2[gi][0] >= INF else d2[gi][0] >> 1)
+    got = _finish(ts, m2, en2, tuple(new_clocks), d2)
+    if got is None:
+        return LOCKED
+    return got[0], got[1], en2, end
 
 
-def zone_graph(tn: TimedNet, *, max_states: int = MAX_CHECK_STATES,
-               ends: Iterable[str] | None = None, earliest_only: bool = False,
-               progress: Callable[[int, int], None] | None = None) -> ZoneGraph:
-    """The zone graph of ``tn`` from its initial marking (see the module's documentation).
+# -- the graph, expanded on demand ----------------------------------------------------------
 
-    ``ends``: places of which any marked is an end; given, the graph stops at
-    the first end of each run and records the global time of reaching it
-    (:attr:`ZoneGraph.ends`). ``earliest_only``: a state reached no earlier
-    than an end already found is not explored further (enough for the
-    earliest end, and finite even where runs never end).
+class ZoneGraph:
+    """The zones reached from the initial state, each expanded when a search asks for its
+    successors; per state its marking (a bit mask), key, edges, and whether time may pass
+    for ever there (``waits``) or not at all (``urgent``).
+
+    With ``subsume``, a successor included in a state of the same marking and clocks is
+    that state (see the module's documentation); ``stop_at_ends``: a state with an end
+    place marked has no successor (its run has ended), and each firing into one is
+    recorded in :attr:`ends` with the bounds of the global clock; ``earliest_only``: a
+    state reached no earlier than an end already found has no successor either;
+    ``cover``: what inclusion compares (:meth:`_seen`).
     """
-    return _Search(tn, _timed_structure(tn, ends), max_states, earliest_only, progress).run()
+
+    def __init__(self, tn: TimedNet, ts: _TimedStructure, *, max_states: int = MAX_CHECK_STATES,
+                 subsume: bool = True, stop_at_ends: bool = False, earliest_only: bool = False,
+                 cover: str = "zone"):
+        self.tn, self.ts, self.max_states, self.cover = tn, ts, max_states, cover
+        self.subsume, self.stop_at_ends, self.earliest_only = subsume, stop_at_ends, earliest_only
+        self.places, self.transitions = list(ts.places), list(ts.transitions)
+        if ts.tick is not None:
+            self.transitions.append(TICK)
+        self.progress = ts.progress
+        self.markings: list[int] = []
+        self.keys: list[tuple] = []
+        self.succ: list[list[tuple[int, int]] | None] = []
+        self.parent: list[tuple[int, int] | None] = []
+        self.waits: list[bool] = []
+        self.urgent: list[bool] = []
+        self.enabled: list[int] = []
+        self.ends: list[tuple[int, int, int, int | None]] = []
+        """(state, transition, earliest, latest) of each firing into an end, in units,
+        latest None if unbounded (with ``stop_at_ends``)."""
+        self._exact: dict[tuple, int] = {}
+        self._cover: dict[tuple, list[int]] = {}
+        self._compared: list[tuple] = []
+        self.best = INF
+        key, urgent, en = _start(ts)
+        self._add(key, urgent, en, None)
+
+    @property
+    def states(self) -> int:
+        return len(self.markings)
+
+    def marked(self, s: int) -> list[str]:
+        return marked_places(self.places, self.markings[s])
+
+    def _add(self, key: tuple, urgent: bool, en: int, parent) -> int:
+        """The state of ``key``: the one already found (equal, or including it), else a new
+        one."""
+        k = self._exact.get(key)
+        if k is not None:
+            return k
+        if self.subsume:
+            seen = self._seen(key)
+            cover = self._cover.setdefault(key[:2], [])
+            keys = self._compared
+            for c in cover:
+                if all(map(operator.le, seen, keys[c])):
+                    return c
+            # the new zone replaces, as a cover, every one it includes
+            cover[:] = [c for c in cover if not all(map(operator.le, keys[c], seen))]
+        k = len(self.markings)
+        if k >= self.max_states:
+            raise TimedLimit(k, self.max_states)
+        self._exact[key] = k
+        if self.subsume:
+            cover.append(k)
+            self._compared.append(seen)
+        self.markings.append(key[0])
+        self.keys.append(key)
+        self.succ.append(None)
+        self.parent.append(parent)
+        self.urgent.append(urgent)
+        self.enabled.append(en)
+        self.waits.append(not urgent and not (en & self.ts.deadline))
+        return k
+
+    def _seen(self, key: tuple) -> tuple:
+        """The bounds of ``key``'s zone that inclusion compares: all of them, or all but
+        those of the global clock from below (``latest``: a zone whose clock of the whole
+        run may be later can do all a zone can, and end no earlier) or from above
+        (``earliest``)."""
+        if self.cover == "zone":
+            return key[2]
+        clocks, flat = key[1], key[2]
+        n = len(clocks) + 1
+        gi = clocks.index(self.ts.glob) + 1
+        if self.cover == "latest":
+            return tuple(v for k, v in enumerate(flat) if k % n != gi)
+        return flat[:gi * n] + flat[(gi + 1) * n:]
+
+    def successors(self, k: int) -> list[tuple[int, int]]:
+        """The edges ``(state, transition)`` from state ``k``, found the first time asked."""
+        got = self.succ[k]
+        if got is not None:
+            return got
+        ts = self.ts
+        out: list[tuple[int, int]] = []
+        self.succ[k] = out
+        key, en = self.keys[k], self.enabled[k]
+        if self.stop_at_ends and ts.end & key[0]:
+            return out        # the run has ended: its time was recorded when it got here
+        if self.earliest_only and self.ends:
+            clocks, flat = key[1], key[2]
+            gi = clocks.index(ts.glob) + 1
+            if -(flat[gi] >> 1) >= self.best:
+                return out
+        cand = en & ts.priority or en & ts.eager or en
+        fire = list(_bits(cand))
+        if ts.tick is not None and not self.urgent[k]:
+            fire.append(ts.tick_t)
+        for j in fire:
+            got = _post(ts, en, key, j)
+            if got is None or got is LOCKED:
+                continue
+            key2, urgent2, en2, end = got
+            if end is not None and self.stop_at_ends:
+                # every way in counts: past the end time passes, so the end states of
+                # different times may share one zone
+                self.ends.append((k, j, end[0], end[1]))
+                self.best = min(self.best, end[0])
+            out.append((self._add(key2, urgent2, en2, (k, j)), j))
+        return out
+
+    def explore(self) -> None:
+        """Every state reached, each expanded once, breadth first (inclusion then finds
+        the larger zones first)."""
+        queue = deque([0])
+        seen = {0}
+        while queue:
+            for child, _ in self.successors(queue.popleft()):
+                if child not in seen:
+                    seen.add(child)
+                    queue.append(child)
+
+
+#: The tick's name in a run (it fires nothing: time passes).
+TICK = "(a unit passes)"
+
+
+def marked_places(places: Sequence[str], mask: int) -> list[str]:
+    """The places a marking (a bit mask) marks."""
+    return [p for k, p in enumerate(places) if mask >> k & 1]
 
 
 # -- verdicts ------------------------------------------------------------------------------
@@ -604,68 +730,208 @@ class TimedVerdict:
     states: int = 0
     reason: str | None = None
     path: tuple[int, ...] = ()
-    """The zone-graph states the run passes through (M0's first)."""
+    """The markings the run passes through (M0's first), as bit masks."""
 
 
-def check_timed_property(graph: ZoneGraph, prop: Property) -> TimedVerdict:
-    """``prop`` on every time-divergent run of ``graph`` (see the module's documentation)."""
+#: Why a verdict is unknown when a cycle may take no time even with the tick.
+ZENO = ("a cycle of the zone graph without a transition that makes time pass (a report gap "
+        "or a time-out of 0 s): whether time diverges along it is not decided")
+
+
+class _Spurious(Exception):
+    """A counterexample of the covering graph that is no run: search without inclusion."""
+
+
+class _Budget(Exception):
+    """The depth-first search visited as many product states as it was given."""
+
+
+def check_timed_property(graph: ZoneGraph, prop: Property, budget: int | None = None
+                         ) -> TimedVerdict:
+    """``prop`` on every time-divergent run of ``graph``'s net (see the module's
+    documentation); ``unknown`` with :data:`ZENO` when only a cycle that may take no
+    time is left undecided. Past ``budget`` product states, :class:`_Budget`; where
+    the counterexample found is no run, :class:`_Spurious`."""
     obs = ObserverTable(prop)
     preds = truths(prop)
     index = {p: k for k, p in enumerate(graph.places)}
+    wanted = [index[p] for p in _places_of_preds(preds) if p in index]
     cache: dict[int, int] = {}
 
     def code(s: int) -> int:
         m = graph.markings[s]
         got = cache.get(m)
         if got is None:
-            marking = {p: 1 for p in _places_of_preds(preds) if p in index and m >> index[p] & 1}
+            marking = {graph.places[p]: 1 for p in wanted if m >> p & 1}
             p_, s_, q_, r_ = (holds(x, marking) for x in preds)
             got = cache[m] = 8 * p_ + 4 * s_ + 2 * q_ + r_
         return got
 
-    start = (0, obs.after(obs.start, code(0)))
-    parent = {start: None}
-    queue = deque([start])
-    order = [start]
-    best = None
-    succ: dict = {}
-    while queue:
-        node = queue.popleft()
+    search = _ProductSearch(graph, obs, code, budget)
+    found = search.run()
+    if found is None:
+        status, reason = ("unknown", ZENO) if search.undecided else ("holds", None)
+        return TimedVerdict(prop, status, states=search.count, reason=reason)
+    shape, trans, loop = found
+    replayed = _replay(graph.ts, trans, loop)
+    if replayed is None:
+        raise _Spurious
+    trans, loop, path = replayed
+    return TimedVerdict(prop, "fails", tuple(graph.transitions[t] for t in trans), shape,
+                        loop=loop, states=search.count, path=path)
+
+
+class _ProductSearch:
+    """Tarjan's depth-first search of the product of ``graph`` with an observer, stopping
+    at the first counterexample: a state past the observer's ``bad``, a state that waits
+    for ever with an obligation open, or a strongly connected component of open states
+    with a time-divergent (and fair) cycle."""
+
+    def __init__(self, graph: ZoneGraph, obs: ObserverTable, code, budget: int | None):
+        self.graph, self.obs, self.code, self.budget = graph, obs, code, budget
+        self.count = 0
+        self.undecided = False
+        self.parent: dict = {}
+
+    def children(self, node) -> list:
         z, o = node
+        after, code = self.obs.after, self.code
+        return [((c, after(o, code(c))), t) for c, t in self.graph.successors(z)]
+
+    def stops(self, node) -> str | None:
+        """The shape of the counterexample ``node`` ends, if it ends one."""
+        z, o = node
+        obs, graph = self.obs, self.graph
         if o == obs.bad:
-            best = best or ("prefix", node)
-            succ[node] = []
-            continue
+            return "prefix"
         if graph.waits[z] and obs.pending[o] and _fair_wait(graph, z):
-            best = best or ("finite", node)
-        nxt = []
-        for child_z, t in graph.succ[z]:
-            child = (child_z, obs.after(o, code(child_z)))
-            nxt.append((child, t))
-            if child not in parent:
-                parent[child] = (node, t)
-                order.append(child)
-                queue.append(child)
-        succ[node] = nxt
-    if best is not None:
-        shape, node = best
-        path, trans = path_to(parent, node)
-        return TimedVerdict(prop, "fails", tuple(graph.transitions[t] for t in trans), shape,
-                            states=len(parent), path=tuple(z for z, _ in path))
-    lasso = _lasso(graph, order, succ, lambda o: o != obs.bad and obs.pending[o])
-    if isinstance(lasso, str):
-        return TimedVerdict(prop, "unknown", states=len(parent), reason=lasso)
-    if lasso is None:
-        return TimedVerdict(prop, "holds", states=len(parent))
-    entry, cycle = lasso
-    path, trans = path_to(parent, entry)
-    loop = len(trans)
-    nodes = [z for z, _ in path]
-    for child, t in cycle:
-        trans.append(t)
-        nodes.append(child[0])
-    return TimedVerdict(prop, "fails", tuple(graph.transitions[t] for t in trans), "lasso",
-                        loop=loop, states=len(parent), path=tuple(nodes))
+            return "finite"
+        return None
+
+    def run(self):
+        """``(shape, transitions, loop)`` of the first counterexample, or None."""
+        # long: Tarjan's algorithm kept iterative and in one piece, its stacks side by side
+        start = (0, self.obs.after(self.obs.start, self.code(0)))
+        self.parent[start] = None
+        index, low, on_stack = {start: 0}, {start: 0}, {start}
+        stack, succ = [start], {}
+        shape = self.stops(start)
+        if shape is not None:
+            return shape, [], None
+        succ[start] = self.children(start)
+        work = [(start, 0)]
+        while work:
+            node, i = work[-1]
+            edges = succ[node]
+            if i < len(edges):
+                work[-1] = (node, i + 1)
+                child, t = edges[i]
+                if child not in index:
+                    if self.budget is not None and len(index) >= self.budget:
+                        raise _Budget
+                    index[child] = low[child] = len(index)
+                    self.parent[child] = (node, t)
+                    shape = self.stops(child)
+                    if shape is not None:
+                        self.count = len(index)
+                        # the shortest such run explains best: breadth first, now that
+                        # one is known to exist
+                        found = self._nearest(lambda n: self.stops(n) is not None)
+                        return self.stops(found), self._path(found), None
+                    stack.append(child)
+                    on_stack.add(child)
+                    succ[child] = [] if child[1] == self.obs.bad else self.children(child)
+                    work.append((child, 0))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                up = work[-1][0]
+                low[up] = min(low[up], low[node])
+            if low[node] != index[node]:
+                continue
+            comp = []
+            while True:
+                x = stack.pop()
+                on_stack.discard(x)
+                comp.append(x)
+                if x == node:
+                    break
+            found = self._cycle(comp, succ)
+            if found is not None:
+                self.count = len(index)
+                entry, cycle = found
+                trans = self._path(self._nearest(lambda n: n == entry))
+                return "lasso", trans + [t for _, t in cycle], len(trans)
+        self.count = len(index)
+        return None
+
+    def _nearest(self, wanted):
+        """The first product state in breadth-first order that is ``wanted``, its
+        :attr:`parent` rewritten to the breadth-first tree (one is known to be reachable)."""
+        start = next(n for n, p in self.parent.items() if p is None)
+        parent = {start: None}
+        queue = deque([start])
+        while queue:
+            node = queue.popleft()
+            if wanted(node):
+                self.parent = parent
+                return node
+            if node[1] == self.obs.bad:
+                continue
+            for child, t in self.children(node):
+                if child not in parent:
+                    parent[child] = (node, t)
+                    queue.append(child)
+        raise AssertionError("a product state found depth first is reached breadth first")
+
+    def _path(self, node) -> list[int]:
+        trans = []
+        while self.parent[node] is not None:
+            node, t = self.parent[node]
+            trans.append(t)
+        return trans[::-1]
+
+    def _cycle(self, comp: list, succ: dict):
+        """A time-divergent, fair cycle of open states in the component ``comp``, as
+        ``(entry, [(state, transition), ...])``, or None (noting an undecided one)."""
+        obs, graph = self.obs, self.graph
+        open_ = {n for n in comp if n[1] != obs.bad and obs.pending[n[1]]}
+        if not open_ or (len(comp) == 1 and all(c != comp[0] for c, _ in succ[comp[0]])):
+            return None
+        dg = nx.DiGraph()
+        for n in open_:
+            dg.add_node(n)
+            for child, t in succ[n]:
+                if child in open_:
+                    dg.add_edge(n, child, t=t)
+        ts = graph.ts
+        groups = list(ts.fair) + list(ts.bounded)
+        for part in nx.strongly_connected_components(dg):
+            if len(part) == 1:
+                (n,) = part
+                if not dg.has_edge(n, n):
+                    continue
+            sub = dg.subgraph(part)
+            fired = 0
+            for _, _, t in sub.edges(data="t"):
+                fired |= 1 << t
+            if any(not fired & grp and all(graph.enabled[n[0]] & grp for n in part)
+                   for grp in groups):
+                continue        # a deadline or fairness group stays enabled, never fires
+            if not fired & graph.progress:
+                if not all(graph.urgent[n[0]] for n in part):
+                    self.undecided = True
+                continue        # no time passes along it: Zeno, no run
+            entry = min(part, key=lambda n: self.order(n))
+            return entry, _covering_cycle(sub, entry, graph, groups, fired)
+        return None
+
+    def order(self, node) -> int:
+        """How deep ``node`` was found (its path's length): the entry of a cycle is its
+        shallowest state."""
+        return len(self._path(node))
 
 
 def _places_of_preds(preds) -> set[str]:
@@ -678,78 +944,21 @@ def _places_of_preds(preds) -> set[str]:
 def _fair_wait(graph: ZoneGraph, z: int) -> bool:
     """Whether waiting in ``z`` for ever is fair: no fairness group is enabled there."""
     en = graph.enabled[z]
-    return not any(en & _mask(graph, group) for group in graph.tn.fair)
+    return not any(en & grp for grp in graph.ts.fair)
 
 
-def _mask(graph: ZoneGraph, group) -> int:
-    cache = graph.__dict__.setdefault("_masks", {})
-    got = cache.get(group)
-    if got is None:
-        got = 0
-        for k, t in enumerate(graph.transitions):
-            if t in group:
-                got |= 1 << k
-        cache[group] = got
-    return got
-
-
-def _lasso(graph: ZoneGraph, order, succ, open_):
-    """A fair, time-divergent cycle of open product states, as (entry, [(state, t), ...]),
-    None if there is none, or the reason it is undecided."""
-    dg = nx.DiGraph()
-    for node in order:
-        if open_(node[1]):
-            dg.add_node(node)
-            for child, t in succ[node]:
-                if open_(child[1]):
-                    dg.add_edge(node, child, t=t)
-    undecided = None
-    found = None
-    position = {n: k for k, n in enumerate(order)}
-    groups = [_mask(graph, grp) for grp in graph.tn.fair]
-    for comp in nx.strongly_connected_components(dg):
-        if len(comp) == 1:
-            (n,) = comp
-            if not dg.has_edge(n, n):
-                continue
-        edges = [(a, b, d["t"]) for a, b, d in dg.subgraph(comp).edges(data=True)]
-        fired = 0
-        for _, _, t in edges:
-            fired |= 1 << t
-        always = ~0
-        for n in comp:
-            always &= graph.enabled[n[0]]
-        if any(always & grp and not fired & grp for grp in groups):
-            continue        # unfair: a group stays enabled and never fires
-        if not fired & graph.progress:
-            if all(graph.urgent[n[0]] for n in comp):
-                continue    # no time passes along it: Zeno, no run
-            undecided = ("a cycle of the zone graph without a transition that makes time "
-                         "pass (a report gap or a time-out of 0 s): whether time diverges "
-                         "along it is not decided")
-            continue
-        entry = min(comp, key=position.__getitem__)
-        found = (entry, _covering_cycle(dg, comp, entry, graph, groups, fired))
-        break
-    if found is not None:
-        return found
-    return undecided
-
-
-def _covering_cycle(dg, comp, entry, graph, groups, fired):
-    """A cycle from ``entry`` inside ``comp`` through a progress transition and, for each
-    fairness group, a state where it is disabled or an edge that fires it."""
-    sub = dg.subgraph(comp)
+def _covering_cycle(sub, entry, graph: ZoneGraph, groups, fired) -> list:
+    """A cycle from ``entry`` inside ``sub`` through a progress transition and, for each
+    fairness or deadline group, a state where it is disabled or an edge that fires it."""
     targets = []   # edges (a, b, t) the cycle must take
-    prog = [(a, b, d["t"]) for a, b, d in sub.edges(data=True) if graph.progress >> d["t"] & 1]
+    prog = [(a, b, t) for a, b, t in sub.edges(data="t") if graph.progress >> t & 1]
     targets.append(prog[0])
     for grp in groups:
-        edge = next(((a, b, d["t"]) for a, b, d in sub.edges(data=True) if grp >> d["t"] & 1),
-                    None)
+        edge = next(((a, b, t) for a, b, t in sub.edges(data="t") if grp >> t & 1), None)
         if edge is not None:
             targets.append(edge)
             continue
-        off = next((n for n in comp if not graph.enabled[n[0]] & grp), None)
+        off = next((n for n in sub if not graph.enabled[n[0]] & grp), None)
         if off is not None:
             targets.append((off, off, None))
     cycle: list = []
@@ -769,16 +978,113 @@ def _covering_cycle(dg, comp, entry, graph, groups, fired):
     return cycle
 
 
+#: How many turns of a cycle found with inclusion are fired again before it is taken for
+#: no run (its zone comes back within as many turns as the zones it passes through).
+REPLAY_TURNS = 10_000
+
+
+def _replay(ts: _TimedStructure, trans: list[int], loop: int | None):
+    """``trans`` fired from the initial state without inclusion: ``(transitions, loop,
+    markings)`` of the run it stands for (the cycle from ``loop`` turned until its zone
+    comes back), or None if some step is not possible (no run)."""
+    key, _, en = _start(ts)
+    marks = [key[0]]
+    head = trans if loop is None else trans[:loop]
+    out: list[int] = []
+
+    def step(j: int) -> bool:
+        nonlocal key, en
+        got = _post(ts, en, key, j)
+        if got is None or got is LOCKED:
+            return False
+        key, _, en, _ = got
+        out.append(j)
+        marks.append(key[0])
+        return True
+
+    if not all(step(j) for j in head):
+        return None
+    if loop is None:
+        return _without_ticks(ts, out, None, marks)
+    cycle = trans[loop:]
+    seen = {key: len(out)}
+    for _ in range(REPLAY_TURNS):
+        if not all(step(j) for j in cycle):
+            return None
+        back = seen.get(key)
+        if back is not None:
+            return _without_ticks(ts, out, back, marks)
+        seen[key] = len(out)
+    return None
+
+
+def _without_ticks(ts: _TimedStructure, trans: list[int], loop: int | None,
+                   marks: list[int]):
+    """A run as the net fires it: the tick (time passing) left out of its transitions and
+    markings, the loop's start moved with them."""
+    keep = [k for k, j in enumerate(trans) if j != ts.tick_t]
+    new_loop = None if loop is None else sum(1 for k in keep if k < loop)
+    return ([trans[k] for k in keep], new_loop,
+            tuple([marks[0]] + [marks[k + 1] for k in keep]))
+
+
+#: The product states a depth-first search may visit on a graph expanded on demand, before
+#: the graph is built breadth first instead: depth first finds a run that never ends at
+#: once, but meets small zones before the larger ones that include them, and a property
+#: that holds can cost it many times the zones of breadth first (a mission with late
+#: acknowledgements: 10^6 against 10^4).
+DEPTH_FIRST_STATES = 20_000
+
+
 def check_timed_properties(tn: TimedNet, properties: Sequence[Property],
-                           max_states: int = MAX_CHECK_STATES
-                           ) -> tuple[ZoneGraph | None, list[TimedVerdict]]:
-    """Each property's timed verdict, on one zone graph."""
-    try:
-        graph = zone_graph(tn, max_states=max_states)
-    except TimedLimit as e:
-        return None, [TimedVerdict(p, "unknown", states=e.states, reason=str(e))
-                      for p in properties]
-    return graph, [check_timed_property(graph, p) for p in properties]
+                           max_states: int = MAX_CHECK_STATES) -> list[TimedVerdict]:
+    """Each property's timed verdict (see the module's documentation): depth first on the
+    graph with inclusion expanded on demand, up to :data:`DEPTH_FIRST_STATES`; past them,
+    on the graph with inclusion built breadth first; for a property left undecided by a
+    cycle that may take no time, again with the tick; where a counterexample found with
+    inclusion is no run, on the exact graph."""
+    graphs: dict[tuple[bool, str], ZoneGraph] = {}
+
+    def graph(tick: bool, how: str) -> ZoneGraph:
+        got = graphs.get((tick, how))
+        if got is None:
+            got = graphs[tick, how] = ZoneGraph(
+                tn, _timed_structure(tn, None, tick), max_states=max_states,
+                subsume=how != "exact")
+            if how == "breadth":
+                got.explore()
+        return got
+
+    def verdict(prop: Property, tick: bool) -> TimedVerdict:
+        try:
+            try:
+                return check_timed_property(graph(tick, "depth"), prop, DEPTH_FIRST_STATES)
+            except _Budget:
+                return check_timed_property(graph(tick, "breadth"), prop)
+        except _Spurious:
+            return check_timed_property(graph(tick, "exact"), prop)
+
+    out = []
+    for prop in properties:
+        try:
+            found = verdict(prop, False)
+            if found.reason == ZENO:
+                found = verdict(prop, True)
+        except TimedLimit as e:
+            found = TimedVerdict(prop, "unknown", states=e.states, reason=str(e))
+        out.append(found)
+    return out
+
+
+def stalls(tn: TimedNet, ends: Iterable[str], max_states: int = MAX_CHECK_STATES) -> bool:
+    """Whether a state is reached where nothing can happen, time passes for ever, and no
+    end place is marked (a stall)."""
+    ts = _timed_structure(tn, None)
+    end = _mask_of(ts.places.index(p) for p in ends if p in ts.places)
+    graph = ZoneGraph(tn, ts, max_states=max_states)
+    graph.explore()
+    return any(graph.waits[s] and not graph.enabled[s] and not graph.markings[s] & end
+               for s in range(graph.states))
 
 
 @dataclass(frozen=True)
@@ -786,8 +1092,8 @@ class EndTimes:
     """When the runs of a net end (reach an end marking), in units of ``TimedNet.unit``.
 
     ``earliest`` and ``latest`` over every run; ``latest`` is None if some run
-    never ends (``never`` then holds that run's firings, whose last state waits for
-    ever or starts its cycle at ``loop``). ``states``: the zones explored.
+    never ends (``never`` then holds that run's verdict). ``states``: the zones
+    explored; ``latest_path``: the firings of a run that ends at ``latest``.
     """
 
     earliest: int | None
@@ -796,35 +1102,52 @@ class EndTimes:
     states: int
     reason: str | None = None
     latest_path: tuple[str, ...] = ()
-    latest_states: tuple[int, ...] = ()
 
 
 def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
               max_states: int = MAX_CHECK_STATES) -> EndTimes:
     """The earliest and latest end times, given ``always`` (the verdict of "an end is
-    always reached" on the same net): when it fails, the latest is unbounded."""
+    always reached" on the same net): when it fails, the latest is unbounded. Each
+    bound is searched apart, its inclusion blind to the other side of the global clock
+    (:meth:`ZoneGraph._seen`), so that runs shifted in time share their zones."""
     ends = list(ends)
     bounded = always.status == "holds"
+    ts = _timed_structure(tn, ends)
     try:
-        graph = zone_graph(tn, max_states=max_states, ends=ends, earliest_only=not bounded)
+        first = ZoneGraph(tn, ts, max_states=max_states, stop_at_ends=True, earliest_only=True,
+                          cover="earliest")
+        first.explore()
+        last = None
+        if bounded:
+            last = ZoneGraph(tn, ts, max_states=max_states, stop_at_ends=True, cover="latest")
+            last.explore()
     except TimedLimit as e:
         # the times are left unknown: the clock of the whole run multiplies the zones
         return EndTimes(None, None, None if bounded else always, e.states,
                         reason=f"{e}, with the clock of the whole run")
-    if not graph.ends:
-        return EndTimes(None, None, always if not bounded else None, graph.states)
-    earliest = min(e for _, _, e, _ in graph.ends)
-    if not bounded:
-        return EndTimes(earliest, None, always, graph.states)
-    if any(lt is None for _, _, _, lt in graph.ends):
+    states = max(first.states, 0 if last is None else last.states)
+    if not first.ends:
+        return EndTimes(None, None, always if not bounded else None, states)
+    earliest = min(e for _, _, e, _ in first.ends)
+    if last is None:
+        return EndTimes(earliest, None, always, states)
+    if any(lt is None for _, _, _, lt in last.ends):
         # every run ends (fairness: a report comes eventually), but not by any bound
-        return EndTimes(earliest, None, None, graph.states,
+        return EndTimes(earliest, None, None, states,
                         reason="no bound: a report that comes eventually may come at any time")
-    state, last, _, latest = max(graph.ends, key=lambda e: e[3])
-    trans, nodes = [graph.transitions[last]], [state]
-    while graph.parent[nodes[-1]] is not None:
-        k, t = graph.parent[nodes[-1]]
-        trans.append(graph.transitions[t])
-        nodes.append(k)
-    return EndTimes(earliest, latest, None, graph.states, latest_path=tuple(trans[::-1]),
-                    latest_states=tuple(nodes[::-1]))
+    state, t, _, latest = max(last.ends, key=lambda e: e[3])
+    trans = [last.transitions[t]]
+    while last.parent[state] is not None:
+        state, t = last.parent[state]
+        trans.append(last.transitions[t])
+    return EndTimes(earliest, latest, None, states, latest_path=tuple(trans[::-1]))
+
+
+def places(tn: TimedNet) -> list[str]:
+    """The places of ``tn`` in the order of the markings' bits."""
+    return list(structure(tn.net).places)
+
+
+def enables(tn: TimedNet, marking: int) -> bool:
+    """Whether ``marking`` (a bit mask) enables some transition of ``tn``."""
+    return bool(_timed_structure(tn, None).enabled(marking))

@@ -140,6 +140,6 @@ def test_the_end_times_are_printed_exactly(tmp_path, timeouts, text, latest):
     mission.write_text(f"primitive P();\n{tasks}mission {{ {calls} }}\n")
     out = run_cli("analyze", mission, "--timed")
     assert out.returncode == 0, out.stderr
-    assert f"  end time: earliest 0 s, latest {text} s\n" in out.stdout
+    assert f"  end time: earliest 0 s, latest {text} s (" in out.stdout
     timed = json.loads(run_cli("analyze", mission, "--timed", "--json").stdout)["timed"]
     assert (timed["earliest"], timed["latest"]) == (0, latest)
