@@ -581,18 +581,22 @@ def drawn(shown: Shown) -> dict[str, Any]:
 # -- time in the verdicts (docs/time.md) --------------------------------------------------
 
 def timed_ends(net: Net, assumptions: "Assumptions | None" = None,
-               max_states: int = MAX_CHECK_STATES):
+               max_states: int = MAX_CHECK_STATES, max_memory: int | str | None = None):
     """Whether every run of the compiled mission ``net`` ends under ``assumptions`` (the
     defaults of :class:`~mcl2pnml.core.timing.Assumptions` if None), its earliest and
     latest end times, and what a run that never ends waits for
-    (:class:`mcl2pnml.timed_verdicts.TimedEnds`)."""
+    (:class:`mcl2pnml.timed_verdicts.TimedEnds`); past ``max_states`` zones or the
+    memory budget (``max_memory``, as ``analyze --max-memory``), unknown, saying why."""
     from mcl2pnml import timed_verdicts as timed   # numpy, 0.2 s: only timed
-    return timed.ends(net, assumptions or Assumptions(), max_states)
+    return timed.ends(net, assumptions or Assumptions(), max_states,
+                      Budget(size_or_none(max_memory, "max_memory")))
 
 
 def check_properties_timed(net: Net, properties, assumptions: "Assumptions | None" = None,
-                           max_states: int = MAX_CHECK_STATES) -> list:
+                           max_states: int = MAX_CHECK_STATES,
+                           max_memory: int | str | None = None) -> list:
     """Each property's :class:`mcl2pnml.analysis.checking.on_graph.Verdict` on the mission's time-divergent
-    runs (docs/time.md), on one zone graph."""
+    runs (docs/time.md); past ``max_states`` zones or the memory budget, unknown."""
     from mcl2pnml import timed_verdicts as timed   # numpy, 0.2 s: only timed
-    return timed.check_properties_timed(net, properties, assumptions or Assumptions(), max_states)
+    return timed.check_properties_timed(net, properties, assumptions or Assumptions(), max_states,
+                                        Budget(size_or_none(max_memory, "max_memory")))

@@ -26,6 +26,7 @@ from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.analysis.timed import zones as engine
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, Verdict
 from mcl2pnml.core.errors import Mcl2PnmlError
+from mcl2pnml.core.memory import Budget, BudgetExceeded, guard, release
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MissionPlace, read_transition
 from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind, Tokens
@@ -125,23 +126,41 @@ def _num(x: Fraction | None) -> int | float | None:
 
 
 def ends(net: Net, assumptions: Assumptions = Assumptions(),
-         max_states: int = MAX_CHECK_STATES) -> TimedEnds:
-    """Whether every run of the mission ends, when, and what one that does not waits for."""
+         max_states: int = MAX_CHECK_STATES, budget: Budget | None = None) -> TimedEnds:
+    """Whether every run of the mission ends, when, and what one that does not waits for;
+    each search stopped at ``max_states`` zones or at the memory ``budget`` (the default
+    one if None), its answer then unknown with the reason."""
     tn = semantics(net, assumptions)
-    (verdict,) = engine.check_timed_properties(tn, [ends_property()], max_states)
+    budget = budget or Budget()
+    (verdict,) = _within(budget, lambda: engine.check_timed_properties(
+        tn, [ends_property()], max_states), lambda why: [engine.TimedVerdict(
+            ends_property(), "unknown", reason=why)])
     if verdict.status == "unknown":
-        return TimedEnds(assumptions, None, _stalls(tn, verdict, max_states), None, None, (),
-                         None, verdict.states, verdict.reason)
-    times = engine.end_times(tn, ENDS, verdict, max_states)
+        return TimedEnds(assumptions, None, False, None, None, (), None, verdict.states,
+                         verdict.reason)
+    times = _within(budget, lambda: engine.end_times(tn, ENDS, verdict, max_states),
+                    lambda why: engine.EndTimes(None, None, None, 0, reason=why))
     unit = tn.unit
     earliest = None if times.earliest is None else times.earliest * unit
     latest = None if times.latest is None else times.latest * unit
     places = engine.places(tn)
     never = None if verdict.status == "holds" else as_verdict(places, verdict)
     waits = () if never is None else tuple(waiting(tn, places, verdict))
-    return TimedEnds(assumptions, verdict.status == "holds", _stalls(tn, verdict, max_states),
+    stalls = _within(budget, lambda: _stalls(tn, verdict, max_states), lambda why: False)
+    return TimedEnds(assumptions, verdict.status == "holds", stalls,
                      earliest, latest, waits, never, verdict.states, times.reason,
                      latest_run=times.latest_path, time_states=times.states)
+
+
+def _within(budget: Budget, search, otherwise):
+    """``search()`` under the memory ``budget``; past it, ``otherwise(reason)``."""
+    try:
+        with guard(budget, "the timed search"):
+            return search()
+    except BudgetExceeded as e:
+        return otherwise(e.message)
+    finally:
+        release()
 
 
 def _stalls(tn: TimedNet, verdict: engine.TimedVerdict, max_states: int) -> bool:
@@ -204,9 +223,13 @@ def as_verdict(places: list[str], v: engine.TimedVerdict) -> Verdict:
 
 def check_properties_timed(net: Net, properties: Sequence[Property],
                            assumptions: Assumptions = Assumptions(),
-                           max_states: int = MAX_CHECK_STATES) -> list[Verdict]:
-    """Each property's verdict on the mission's time-divergent runs (docs/time.md)."""
+                           max_states: int = MAX_CHECK_STATES,
+                           budget: Budget | None = None) -> list[Verdict]:
+    """Each property's verdict on the mission's time-divergent runs (docs/time.md), unknown
+    past ``max_states`` zones or the memory ``budget``."""
     tn = semantics(net, assumptions)
     places = engine.places(tn)
-    return [as_verdict(places, v)
-            for v in engine.check_timed_properties(tn, properties, max_states)]
+    verdicts = _within(budget or Budget(), lambda: engine.check_timed_properties(
+        tn, properties, max_states), lambda why: [engine.TimedVerdict(p, "unknown", reason=why)
+                                                  for p in properties])
+    return [as_verdict(places, v) for v in verdicts]

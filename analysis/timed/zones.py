@@ -517,6 +517,16 @@ def _clocks_after(ts: _TimedStructure, en: int, en2: int, j: int, clocks: tuple,
     return new_clocks, d2
 
 
+def _firable(ts: _TimedStructure, en: int, urgent: bool) -> int:
+    """What may fire in a state enabling ``en``, as a bit mask: the supervisor's steps
+    before all, then the acknowledgements at once, else every enabled transition; and
+    the tick where time may pass."""
+    out = en & ts.priority or en & ts.eager or en
+    if ts.tick is not None and not urgent:
+        out |= 1 << ts.tick_t
+    return out
+
+
 #: What :func:`_post` gives when the firing is possible but no time may pass after it.
 LOCKED = "time-locked"
 
@@ -671,11 +681,7 @@ class ZoneGraph:
             gi = clocks.index(ts.glob) + 1
             if -(flat[gi] >> 1) >= self.best:
                 return out
-        cand = en & ts.priority or en & ts.eager or en
-        fire = list(_bits(cand))
-        if ts.tick is not None and not self.urgent[k]:
-            fire.append(ts.tick_t)
-        for j in fire:
+        for j in _bits(_firable(ts, en, self.urgent[k])):
             got = _post(ts, en, key, j)
             if got is None or got is LOCKED:
                 continue
@@ -987,17 +993,19 @@ def _replay(ts: _TimedStructure, trans: list[int], loop: int | None):
     """``trans`` fired from the initial state without inclusion: ``(transitions, loop,
     markings)`` of the run it stands for (the cycle from ``loop`` turned until its zone
     comes back), or None if some step is not possible (no run)."""
-    key, _, en = _start(ts)
+    key, urgent, en = _start(ts)
     marks = [key[0]]
     head = trans if loop is None else trans[:loop]
     out: list[int] = []
 
     def step(j: int) -> bool:
-        nonlocal key, en
+        nonlocal key, urgent, en
+        if not (_firable(ts, en, urgent) >> j & 1):
+            return False
         got = _post(ts, en, key, j)
         if got is None or got is LOCKED:
             return False
-        key, _, en, _ = got
+        key, urgent, en, _ = got
         out.append(j)
         marks.append(key[0])
         return True

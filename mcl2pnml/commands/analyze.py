@@ -156,9 +156,10 @@ def analyze(file: str | Path, options: AnalyzeOptions = AnalyzeOptions(), *,
     start = None if o.initial is None else pipeline.parse_marking(o.initial, net, str(file))
     result = ends = verdicts = None
     if timed:   # the runs in time: the timed answers alone, the untimed ones with --untimed
-        ends = pipeline.timed_ends(net, assumptions, o.max_states)
+        ends = pipeline.timed_ends(net, assumptions, o.max_states, o.max_memory)
         if props is not None:
-            verdicts = pipeline.check_properties_timed(net, props, assumptions, o.max_states)
+            verdicts = pipeline.check_properties_timed(net, props, assumptions, o.max_states,
+                                                       o.max_memory)
     else:
         result = _explored(file, net, start, notes, progress, o)
         if progress is not None:

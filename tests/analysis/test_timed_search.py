@@ -1,0 +1,95 @@
+"""How the timed verdicts are searched (docs/time.md, "How it is computed"): on the fly,
+with zone inclusion, every counterexample replayed without it, under the state and memory
+limits. What they answer is held to independent readings in ``test_timed.py``."""
+from __future__ import annotations
+
+from fractions import Fraction
+
+from mcl2pnml import pipeline
+from mcl2pnml.analysis.timed import zones
+from mcl2pnml.core.timing import Assumptions
+from mcl2pnml.timed_verdicts import ends_property, semantics
+
+#: A loop whose body holds for 5 s, in a monitor beside a 200 s time-out: dozens of
+#: turns before the time-out, each its own zones (seconds of search, not milliseconds).
+LOOP_BESIDE_TIMER = """
+primitive Sonar();
+primitive Hover();
+primitive Wait();
+task Check() = AchieveGoal(Sonar()) timeout 3;
+task Hold() = KeepGoal(Hover()) timeout 5;
+task Watch() = AchieveGoal(Wait()) timeout 200;
+function Loop() { while (Check()) do { Hold(); } }
+mission { monitor(Loop(), Watch()); }
+"""
+
+
+def test_a_mission_that_never_ends_is_found_before_the_whole_graph(examples):
+    tn = semantics(examples.net("sampling"), Assumptions())
+    (verdict,) = zones.check_timed_properties(tn, [ends_property()])
+    assert verdict.status == "fails" and verdict.shape == "lasso"
+    # found depth first, within its budget: no graph was built breadth first
+    assert 0 < verdict.states <= zones.DEPTH_FIRST_STATES
+    cycle = verdict.transitions[verdict.loop:]
+    assert "FireBottle.achieved" in cycle and cycle
+
+
+def test_a_counterexample_that_is_no_run_sends_the_search_to_the_exact_graph(examples,
+                                                                               monkeypatch):
+    tn = semantics(examples.net("docking"), Assumptions())
+    (expected,) = zones.check_timed_properties(tn, [ends_property()])
+    made = []
+    real_graph, real_replay = zones.ZoneGraph, zones._replay
+
+    def graph(*args, **kwargs):
+        made.append(kwargs.get("subsume", True))
+        return real_graph(*args, **kwargs)
+
+    refused = []
+
+    def replay(ts, trans, loop):
+        if not refused:            # the first counterexample, taken for no run
+            refused.append(trans)
+            return None
+        return real_replay(ts, trans, loop)
+
+    monkeypatch.setattr(zones, "ZoneGraph", graph)
+    monkeypatch.setattr(zones, "_replay", replay)
+    (verdict,) = zones.check_timed_properties(tn, [ends_property()])
+    assert refused and made[-1] is False        # the exact graph answered
+    assert verdict.status == expected.status == "fails"
+    assert verdict.shape == "lasso"
+
+
+def test_a_cycle_with_no_report_gap_is_decided_by_the_tick(examples):
+    # reports 0 s apart: a cycle of reports may take no time, or some; the tick decides
+    ends = pipeline.timed_ends(examples.net("docking"), Assumptions(report_gap=Fraction(0)))
+    assert ends.always_ends is False, ends.reason
+    assert ends.never.shape.value == "lasso"
+    assert zones.TICK not in ends.never.transitions
+    assert ends.waits and ends.waits[-1].startswith("a cycle repeats for ever")
+
+
+def test_a_replayed_run_that_cannot_fire_is_no_run(examples):
+    tn = semantics(examples.net("sauce"), Assumptions())
+    ts = zones._timed_structure(tn, None)
+    # a time-out of the paper's mission cannot fire before anything else has
+    timeout = next(j for j, t in enumerate(ts.transitions) if t.endswith(".t03"))
+    assert zones._replay(ts, [timeout], None) is None
+
+
+def test_the_timed_search_answers_unknown_past_its_limits(tmp_path):
+    net = pipeline.compile_source(LOOP_BESIDE_TIMER)
+    few = pipeline.timed_ends(net, max_states=500)
+    assert few.always_ends is None and "more than 500 states" in few.reason
+    small = pipeline.timed_ends(net, max_memory="1K")
+    assert small.always_ends is None and "memory budget" in small.reason
+    out = pipeline.timed_ends(net)
+    assert out.always_ends is True and out.latest == 200
+
+
+def test_the_end_times_count_their_own_zones(examples):
+    ends = pipeline.timed_ends(examples.net("sauce"))
+    assert ends.always_ends is True and ends.time_states > 0
+    assert f"latest 730 s ({ends.time_states:,} zones)" in "\n".join(ends.lines())
+    assert ends.as_json()["end_time_zones"] == ends.time_states
