@@ -517,6 +517,29 @@ def _clocks_after(ts: _TimedStructure, en: int, en2: int, j: int, clocks: tuple,
     return new_clocks, d2
 
 
+def _widened(ts: _TimedStructure, key: tuple) -> tuple:
+    """``key`` with every timer's clock (a time-out's, a late acknowledgement's) free of
+    every bound but ``0 <= x <= hi``: a larger zone, so that a graph of widened zones has
+    every run of the net (each real successor lies in a widened one), whatever the timers'
+    values; the report gaps and the tick are kept, which make a cycle take time."""
+    m, clocks, flat = key
+    K = ts.timer_count
+    free = [i for i, c in enumerate(clocks, 1) if c < K]
+    if not free:
+        return key
+    n = len(clocks) + 1
+    d = [list(flat[i * n:(i + 1) * n]) for i in range(n)]
+    for i in free:
+        for j in range(n):
+            if j != i:
+                d[i][j] = d[j][i] = INF
+        d[0][i] = LE0
+        hi = ts.timers.hi[clocks[i - 1]]
+        d[i][0] = INF if hi is None else _le(hi)
+    _canonical(d)
+    return m, clocks, tuple(v for row in d for v in row)
+
+
 def _firable(ts: _TimedStructure, en: int, urgent: bool) -> int:
     """What may fire in a state enabling ``en``, as a bit mask: the supervisor's steps
     before all, then the acknowledgements at once, else every enabled transition; and
@@ -584,13 +607,16 @@ class ZoneGraph:
     place marked has no successor (its run has ended), and each firing into one is
     recorded in :attr:`ends` with the bounds of the global clock; ``earliest_only``: a
     state reached no earlier than an end already found has no successor either;
-    ``cover``: what inclusion compares (:meth:`_seen`).
+    ``cover``: what inclusion compares (:meth:`_seen`); ``widen``: every timer's clock
+    forgotten but its own bounds (:func:`_widened`), a graph that has every run of the
+    net and more (its "holds" is proven, its counterexamples replayed).
     """
 
     def __init__(self, tn: TimedNet, ts: _TimedStructure, *, max_states: int = MAX_CHECK_STATES,
                  subsume: bool = True, stop_at_ends: bool = False, earliest_only: bool = False,
-                 cover: str = "zone"):
+                 cover: str = "zone", widen: bool = False):
         self.tn, self.ts, self.max_states, self.cover = tn, ts, max_states, cover
+        self.widen = widen
         self.subsume, self.stop_at_ends, self.earliest_only = subsume, stop_at_ends, earliest_only
         self.places, self.transitions = list(ts.places), list(ts.transitions)
         if ts.tick is not None:
@@ -611,7 +637,7 @@ class ZoneGraph:
         self._compared: list[tuple] = []
         self.best = INF
         key, urgent, en = _start(ts)
-        self._add(key, urgent, en, None)
+        self._add(_widened(ts, key) if widen else key, urgent, en, None)
 
     @property
     def states(self) -> int:
@@ -691,6 +717,8 @@ class ZoneGraph:
                 # different times may share one zone
                 self.ends.append((k, j, end[0], end[1]))
                 self.best = min(self.best, end[0])
+            if self.widen:
+                key2 = _widened(ts, key2)
             out.append((self._add(key2, urgent2, en2, (k, j)), j))
         return out
 
@@ -1046,8 +1074,10 @@ DEPTH_FIRST_STATES = 20_000
 
 def check_timed_properties(tn: TimedNet, properties: Sequence[Property],
                            max_states: int = MAX_CHECK_STATES) -> list[TimedVerdict]:
-    """Each property's timed verdict (see the module's documentation): depth first on the
-    graph with inclusion expanded on demand, up to :data:`DEPTH_FIRST_STATES`; past them,
+    """Each property's timed verdict (see the module's documentation): first on the graph
+    whose timers are widened (:class:`ZoneGraph`'s ``widen``), depth first up to
+    :data:`DEPTH_FIRST_STATES`, kept where it holds or its counterexample is a run; then
+    depth first on the graph with inclusion expanded on demand, up to the same; past them,
     on the graph with inclusion built breadth first; for a property left undecided by a
     cycle that may take no time, again with the tick; where a counterexample found with
     inclusion is no run, on the exact graph."""
@@ -1058,12 +1088,18 @@ def check_timed_properties(tn: TimedNet, properties: Sequence[Property],
         if got is None:
             got = graphs[tick, how] = ZoneGraph(
                 tn, _timed_structure(tn, None, tick), max_states=max_states,
-                subsume=how != "exact")
+                subsume=how != "exact", widen=how == "widened")
             if how == "breadth":
                 got.explore()
         return got
 
     def verdict(prop: Property, tick: bool) -> TimedVerdict:
+        try:
+            # first with the timers' values forgotten: where that proves the property or
+            # finds a run, the long timers' many zones are never made
+            return check_timed_property(graph(tick, "widened"), prop, DEPTH_FIRST_STATES)
+        except (_Budget, _Spurious):
+            pass
         try:
             try:
                 return check_timed_property(graph(tick, "depth"), prop, DEPTH_FIRST_STATES)
