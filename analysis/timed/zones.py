@@ -815,6 +815,11 @@ def check_timed_property(graph: ZoneGraph, prop: Property, budget: int | None = 
                         loop=loop, states=search.count, path=path)
 
 
+#: The product states a breadth-first search for the shortest counterexample may visit
+#: beyond those the depth-first search did (a shorter run explains better, at a price).
+NEAREST_STATES = 2_000
+
+
 class _ProductSearch:
     """Tarjan's depth-first search of the product of ``graph`` with an observer, stopping
     at the first counterexample: a state past the observer's ``bad``, a state that waits
@@ -870,7 +875,7 @@ class _ProductSearch:
                         self.count = len(index)
                         # the shortest such run explains best: breadth first, now that
                         # one is known to exist
-                        found = self._nearest(lambda n: self.stops(n) is not None)
+                        found = self._nearest(lambda n: self.stops(n) is not None, child)
                         return self.stops(found), self._path(found), None
                     stack.append(child)
                     on_stack.add(child)
@@ -896,18 +901,21 @@ class _ProductSearch:
             if found is not None:
                 self.count = len(index)
                 entry, cycle = found
-                trans = self._path(self._nearest(lambda n: n == entry))
+                trans = self._path(self._nearest(lambda n: n == entry, entry))
                 return "lasso", trans + [t for _, t in cycle], len(trans)
         self.count = len(index)
         return None
 
-    def _nearest(self, wanted):
+    def _nearest(self, wanted, found):
         """The first product state in breadth-first order that is ``wanted``, its
-        :attr:`parent` rewritten to the breadth-first tree (one is known to be reachable)."""
+        :attr:`parent` rewritten to the breadth-first tree; ``found`` (one that is, found
+        depth first) where breadth first would visit more than :data:`NEAREST_STATES`
+        and as many as depth first did, which the shortest run is not worth."""
         start = next(n for n, p in self.parent.items() if p is None)
         parent = {start: None}
         queue = deque([start])
-        while queue:
+        limit = max(NEAREST_STATES, len(self.parent))
+        while queue and len(parent) <= limit:
             node = queue.popleft()
             if wanted(node):
                 self.parent = parent
@@ -918,7 +926,7 @@ class _ProductSearch:
                 if child not in parent:
                     parent[child] = (node, t)
                     queue.append(child)
-        raise AssertionError("a product state found depth first is reached breadth first")
+        return found
 
     def _path(self, node) -> list[int]:
         trans = []
