@@ -23,6 +23,7 @@ from fractions import Fraction
 from typing import Any, Sequence
 
 from mcl2pnml.core.bounds import MAX_CHECK_STATES
+from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.analysis.timed import zones as engine
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, Verdict
 from mcl2pnml.core.errors import Mcl2PnmlError
@@ -172,10 +173,23 @@ def _stalls(tn: TimedNet, verdict: engine.TimedVerdict, max_states: int) -> bool
     if verdict.status == "fails" and verdict.shape == "finite" and not engine.enables(
             tn, verdict.path[-1]):
         return True     # its run that does not end stops with nothing enabled
+    if _no_untimed_stall(tn, max_states):
+        return False    # the markings of the runs in time are among those of the net
     try:
         return engine.stalls(tn, ENDS, max_states)
     except engine.TimedLimit:
         return False
+
+
+def _no_untimed_stall(tn: TimedNet, max_states: int) -> bool:
+    """Whether every dead marking of the net, time aside, has a result marked (False if
+    its markings pass ``max_states``): explored in C, far faster than the zones."""
+    try:
+        space = explore(tn.net, max_states=max_states)
+    except Mcl2PnmlError:
+        return False
+    index = [space.structure.place_index[p] for p in ENDS]
+    return all(any(space.markings[n][i] for i in index) for n in space.terminal)
 
 
 def waiting(tn: TimedNet, places: list[str], verdict: engine.TimedVerdict) -> list[str]:
