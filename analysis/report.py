@@ -26,8 +26,8 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
 from mcl2pnml.core.bounds import MAX_STATES
-from mcl2pnml.core.memory import (NEGLIGIBLE, SLACK, Budget, BudgetExceeded, guard, margin, release,
-                                  resident, size_text)
+from mcl2pnml.core.memory import (NEGLIGIBLE, SLACK, Budget, BudgetExceeded, floored, guard,
+                                  margin, release, resident, size_text)
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
@@ -276,7 +276,7 @@ def analyze(net: Net, initial: dict[str, int] | None = None, *, state_space_only
         _fit_output(result, limits, left_out, budget)
         return _typed(result, state_space_only, None, limits)
     try:
-        with guard(_floored(budget), "the exploration"):
+        with guard(floored(budget), "the exploration"):
             space = explore(s, max_states=max_states, progress=progress, backend=explorer,
                             max_memory=budget.limit,
                             held=resident() + 2 * margin(budget.limit))
@@ -312,22 +312,6 @@ def _typed(result: dict[str, Any], state_space_only: bool, partial: Partial | No
     structural = None if state_space_only else Structural(
         **{f.name: result[f.name] for f in fields(Structural)})
     return Analysis(facts, structural, partial, limits)
-
-
-def _floored(budget: Budget) -> Budget:
-    """``budget``, or one that lets the process grow by :data:`~mcl2pnml.core.memory.SLACK`
-    past what it holds now when that is more: a budget smaller than the process can only
-    stop what grows. The guard stops a stage :func:`~mcl2pnml.core.memory.margin` below
-    its limit, so the limit is raised by that too (without it the guard tripped at its
-    first look, and a small stage's result was kept or not by how long it took)."""
-    floor = resident() + SLACK
-    if budget.limit - margin(budget.limit) >= floor:
-        return budget
-    # past 50 margins' worth the margin is a fiftieth of the limit
-    limit = max(floor + margin(floor), -(-floor * 50 // 49))
-    raised = Budget(limit)
-    raised.given, raised.limit = budget.given, limit
-    return raised
 
 
 #: The lists of the answer that can be left out when printing them would not fit,
@@ -437,7 +421,7 @@ class _Stages:
         what = STAGES[key]
         try:
             self.budget.check(need, what)
-            with guard(_floored(self.budget), what):
+            with guard(floored(self.budget), what):
                 return fn(*args)
         except BudgetExceeded as e:
             self.limits[key] = self.left_out[key] = e.message

@@ -27,7 +27,7 @@ from mcl2pnml.analysis.statespace.explore import explore
 from mcl2pnml.analysis.timed import zones as engine
 from mcl2pnml.analysis.checking.on_graph import Shape, Status, Verdict
 from mcl2pnml.core.errors import Mcl2PnmlError
-from mcl2pnml.core.memory import Budget, BudgetExceeded, guard, release
+from mcl2pnml.core.memory import Budget, BudgetExceeded, floored, guard, release
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import MissionPlace, read_transition
 from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind, Tokens
@@ -156,7 +156,7 @@ def ends(net: Net, assumptions: Assumptions = Assumptions(),
 def _within(budget: Budget, search, otherwise):
     """``search()`` under the memory ``budget``; past it, ``otherwise(reason)``."""
     try:
-        with guard(budget, "the timed search"):
+        with guard(floored(budget), "the timed search"):
             return search()
     except BudgetExceeded as e:
         return otherwise(e.message)

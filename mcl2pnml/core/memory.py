@@ -285,6 +285,22 @@ def _land() -> None:
         pass
 
 
+def floored(budget: Budget) -> Budget:
+    """``budget``, or one that lets the process grow by :data:`SLACK`
+    past what it holds now when that is more: a budget smaller than the process can only
+    stop what grows. The guard stops a stage :func:`margin` below
+    its limit, so the limit is raised by that too (without it the guard tripped at its
+    first look, and a small stage's result was kept or not by how long it took)."""
+    floor = resident() + SLACK
+    if budget.limit - margin(budget.limit) >= floor:
+        return budget
+    # past 50 margins' worth the margin is a fiftieth of the limit
+    limit = max(floor + margin(floor), -(-floor * 50 // 49))
+    raised = Budget(limit)
+    raised.given, raised.limit = budget.given, limit
+    return raised
+
+
 @contextmanager
 def guard(budget: Budget, what: str) -> Iterator[None]:
     """Run the body until it ends or the process reaches ``budget.limit``.

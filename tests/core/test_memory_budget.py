@@ -313,7 +313,7 @@ def test_a_budget_below_the_process_stops_a_stage_only_once_it_has_grown(given):
     SLACK, never at its first look (which made a small stage's result depend on how long
     it took on a loaded machine)."""
     budget = Budget(given)
-    floored = report._floored(budget)
+    floored = memory.floored(budget)
     trip = floored.limit - memory.margin(floored.limit)
     assert trip >= memory.resident() + memory.SLACK or floored is budget
     if floored is budget:       # a budget that already leaves that room is kept
