@@ -45,6 +45,17 @@ time-out of 0 s), the search is run again with one more clock that ticks
 once a unit (Tripakis, Yovine and Bouajjani 2005), and a cycle that ticks
 diverges.
 
+**Widened first.** Each property is first read on a graph whose timers' clocks are
+forgotten but for their own bounds (``0 <= x <= hi``): a graph with every run of the net
+and more, where a loop beside a long timer takes the same zones whatever the timer's
+length. What holds there holds; a counterexample found there is replayed as below. Past
+:data:`DEPTH_FIRST_STATES` product states depth first, or where it finds no run, the
+timers' values are searched: depth first again, then breadth first.
+
+**Clocks per location.** A clock exists only where it matters (a timer while one of its
+transitions is enabled, a gap until it has passed), and its bounds are its own
+transition's or primitive's, so the bounds of Extra+_LU are those of the location.
+
 **Every counterexample is replayed.** Inclusion makes a covering graph: every
 run of the net is a path of it, so "holds" is proven, but one of its paths
 need not be a run. A counterexample is therefore fired again, zone by zone,
