@@ -91,7 +91,9 @@ def _short(mission: str) -> str:
 @pytest.mark.parametrize("assumptions", ASSUMED[:3], ids=["defaults", "gap2", "ack1"])
 def test_the_zone_graph_agrees_with_one_state_per_second_on_the_examples(name, assumptions,
                                                                           tmp_path):
-    _agree(_small(name, tmp_path), assumptions)
+    # our zones bounded: dam_inspection with late acknowledgements takes ours 485,000 zones
+    # for its end times, and one state a second longer than a test may take
+    _agree(_small(name, tmp_path), assumptions, zones=200_000)
 
 
 @settings(max_examples=5, deadline=None, suppress_health_check=list(HealthCheck))
