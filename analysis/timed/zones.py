@@ -967,8 +967,11 @@ class _ProductSearch:
                 if not dg.has_edge(n, n):
                     continue
             sub = dg.subgraph(part)
+            # every edge, not the graph's: two transitions between the same two states
+            # are one edge of it, with one label
+            edges = [(a, b, t) for a in part for b, t in succ[a] if b in part]
             fired = 0
-            for _, _, t in sub.edges(data="t"):
+            for _, _, t in edges:
                 fired |= 1 << t
             if any(not fired & grp and all(graph.enabled[n[0]] & grp for n in part)
                    for grp in groups):
@@ -978,7 +981,7 @@ class _ProductSearch:
                     self.undecided = True
                 continue        # no time passes along it: Zeno, no run
             entry = min(part, key=lambda n: self.order(n))
-            return entry, _covering_cycle(sub, entry, graph, groups, fired)
+            return entry, _covering_cycle(sub, edges, entry, graph, groups)
         return None
 
     def order(self, node) -> int:
@@ -1000,14 +1003,15 @@ def _fair_wait(graph: ZoneGraph, z: int) -> bool:
     return not any(en & grp for grp in graph.ts.fair)
 
 
-def _covering_cycle(sub, entry, graph: ZoneGraph, groups, fired) -> list:
-    """A cycle from ``entry`` inside ``sub`` through a progress transition and, for each
-    fairness or deadline group, a state where it is disabled or an edge that fires it."""
+def _covering_cycle(sub, edges, entry, graph: ZoneGraph, groups) -> list:
+    """A cycle from ``entry`` inside ``sub`` (its ``edges`` all of them, with their
+    transitions) through a progress transition and, for each fairness or deadline group,
+    a state where it is disabled or an edge that fires it."""
     targets = []   # edges (a, b, t) the cycle must take
-    prog = [(a, b, t) for a, b, t in sub.edges(data="t") if graph.progress >> t & 1]
+    prog = [(a, b, t) for a, b, t in edges if graph.progress >> t & 1]
     targets.append(prog[0])
     for grp in groups:
-        edge = next(((a, b, t) for a, b, t in sub.edges(data="t") if grp >> t & 1), None)
+        edge = next(((a, b, t) for a, b, t in edges if grp >> t & 1), None)
         if edge is not None:
             targets.append(edge)
             continue
