@@ -86,7 +86,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.patterns import Property, holds, places_of
 from mcl2pnml.core.structure import Structure, structure
 from mcl2pnml.core.timing import TimedNet
-from mcl2pnml.analysis.checking.observers import ObserverTable, truths
+from mcl2pnml.analysis.checking.observers import ObserverTable, path_to, truths
 
 # -- bounds: (c, <=) is 2c+1, (c, <) is 2c, no bound is INF ----------------------------
 
@@ -940,11 +940,7 @@ class _ProductSearch:
         return found
 
     def _path(self, node) -> list[int]:
-        trans = []
-        while self.parent[node] is not None:
-            node, t = self.parent[node]
-            trans.append(t)
-        return trans[::-1]
+        return path_to(self.parent, node)[1]
 
     def _cycle(self, comp: list, succ: dict):
         """A time-divergent, fair cycle of open states in the component ``comp``, as
@@ -1203,11 +1199,10 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
         return EndTimes(earliest, None, None, states,
                         reason="no bound: a report that comes eventually may come at any time")
     state, t, _, latest = max(last.ends, key=lambda e: e[3])
-    trans = [last.transitions[t]]
-    while last.parent[state] is not None:
-        state, t = last.parent[state]
-        trans.append(last.transitions[t])
-    return EndTimes(earliest, latest, None, states, latest_path=tuple(trans[::-1]))
+    # the graph's parents, a list indexed by state, read as path_to reads a map
+    trans = path_to(last.parent, state)[1] + [t]
+    return EndTimes(earliest, latest, None, states,
+                    latest_path=tuple(last.transitions[j] for j in trans))
 
 
 def places(tn: TimedNet) -> list[str]:
