@@ -74,6 +74,7 @@ import :mod:`mcl2pnml.core` and the observers of :mod:`mcl2pnml.analysis.checkin
 """
 from __future__ import annotations
 
+import heapq
 import operator
 from collections import deque
 from dataclasses import dataclass
@@ -620,14 +621,16 @@ class ZoneGraph:
     state reached no earlier than an end already found has no successor either;
     ``cover``: what inclusion compares (:meth:`_seen`); ``widen``: every timer's clock
     forgotten but its own bounds (:func:`_widened`), a graph that has every run of the
-    net and more (its "holds" is proven, its counterexamples replayed).
+    net and more (its "holds" is proven, its counterexamples replayed); ``widen_loops``:
+    a zone that comes back to the marking and clocks of one of its ancestors, larger, is
+    widened against it (:meth:`_widen_loop`), also a graph with every run and more.
     """
 
     def __init__(self, tn: TimedNet, ts: _TimedStructure, *, max_states: int = MAX_CHECK_STATES,
                  subsume: bool = True, stop_at_ends: bool = False, earliest_only: bool = False,
-                 cover: str = "zone", widen: bool = False):
+                 cover: str = "zone", widen: bool = False, widen_loops: bool = False):
         self.tn, self.ts, self.max_states, self.cover = tn, ts, max_states, cover
-        self.widen = widen
+        self.widen, self.widen_loops = widen, widen_loops
         self.subsume, self.stop_at_ends, self.earliest_only = subsume, stop_at_ends, earliest_only
         self.places, self.transitions = list(ts.places), list(ts.transitions)
         if ts.tick is not None:
@@ -637,6 +640,9 @@ class ZoneGraph:
         self.keys: list[tuple] = []
         self.succ: list[list[tuple[int, int]] | None] = []
         self.parent: list[tuple[int, int] | None] = []
+        self.widened: list[bool] = []
+        """Per state, whether its zone was widened, or one of its parents' was (with
+        ``widen_loops``): it may then hold valuations that no run reaches."""
         self.waits: list[bool] = []
         self.urgent: list[bool] = []
         self.enabled: list[int] = []
@@ -657,7 +663,7 @@ class ZoneGraph:
     def marked(self, s: int) -> list[str]:
         return marked_places(self.places, self.markings[s])
 
-    def _add(self, key: tuple, urgent: bool, en: int, parent) -> int:
+    def _add(self, key: tuple, urgent: bool, en: int, parent, widened: bool = False) -> int:
         """The state of ``key``: the one already found (equal, or including it), else a new
         one."""
         k = self._exact.get(key)
@@ -683,6 +689,7 @@ class ZoneGraph:
         self.keys.append(key)
         self.succ.append(None)
         self.parent.append(parent)
+        self.widened.append(widened)
         self.urgent.append(urgent)
         self.enabled.append(en)
         self.waits.append(not urgent and not (en & self.ts.deadline))
@@ -730,8 +737,82 @@ class ZoneGraph:
                 self.best = min(self.best, end[0])
             if self.widen:
                 key2 = _widened(ts, key2)
-            out.append((self._add(key2, urgent2, en2, (k, j)), j))
+            widened = False
+            if self.widen_loops:
+                key2, widened = self._widen_loop(k, key2)
+            out.append((self._add(key2, urgent2, en2, (k, j), widened or self.widened[k]), j))
         return out
+
+    def _widen_loop(self, k: int, key: tuple) -> tuple[tuple, bool]:
+        """``key`` (a successor of state ``k``) widened against its nearest ancestor of the
+        same marking and clocks, if it is not included in it: every bound that grew from
+        the ancestor's is dropped, then the deadlines and ``x >= 0`` put back (the widening
+        of Cousot and Halbwachs on difference-bound matrices, Mine 2001). The result
+        includes both zones, and a loop's growing bounds reach their deadline, or none, in
+        one step, so that a loop beside a long timer takes as many zones whatever its
+        length; the clock of the whole run keeps its difference with the timer that bounds
+        it, since neither changes it."""
+        m, clocks, flat = key
+        s: int | None = k
+        while s is not None and self.keys[s][:2] != (m, clocks):
+            p = self.parent[s]
+            s = None if p is None else p[0]
+        if s is None:
+            return key, False
+        old = self.keys[s][2]
+        if all(map(operator.le, flat, old)):
+            return key, False
+        n = len(clocks) + 1
+        d = [[o if f <= o else INF for f, o in zip(flat[i * n:(i + 1) * n], old[i * n:(i + 1) * n])]
+             for i in range(n)]
+        K, t_hi = self.ts.timer_count, self.ts.timers.hi
+        for i, c in enumerate(clocks, 1):
+            d[i][i] = LE0
+            d[0][i] = min(d[0][i], LE0)
+            if c < K and t_hi[c] is not None:
+                # every state lies within its deadlines: time stops at them
+                d[i][0] = min(d[i][0], _le(t_hi[c]))
+        _canonical(d)
+        return (m, clocks, tuple(v for row in d for v in row)), True
+
+    def _glob(self, s: int) -> tuple[int, int]:
+        """The lower and upper bounds of the global clock in state ``s``, in units (the
+        upper ``INF >> 1`` if none)."""
+        _, clocks, flat = self.keys[s]
+        n = len(clocks) + 1
+        gi = clocks.index(self.ts.glob) + 1
+        return -(flat[gi] >> 1), flat[gi * n] >> 1
+
+    def explore_earliest(self) -> None:
+        """The states in the order of their earliest time (Dijkstra's order on the global
+        clock's lower bound, which no step lowers), up to the first end: every state not
+        expanded is reached no earlier than it (with ``earliest_only``)."""
+        heap = [(self._glob(0)[0], 0)]
+        seen = {0}
+        while heap:
+            t, s = heapq.heappop(heap)
+            if self.ends and self.best <= t:
+                return
+            for child, _ in self.successors(s):
+                if child not in seen:
+                    seen.add(child)
+                    heapq.heappush(heap, (self._glob(child)[0], child))
+
+    def explore_latest(self, bound: int) -> None:
+        """The states latest first (the global clock's upper bound, largest first), until an
+        end is found at ``bound`` or unbounded, or every state is: a run that ends at the
+        bound of a graph with every run and more ends latest."""
+        heap = [(-self._glob(0)[1], 0, 0)]
+        seen = {0}
+        while heap:
+            _, _, s = heapq.heappop(heap)
+            known = len(self.ends)
+            for child, _ in self.successors(s):
+                if child not in seen:
+                    seen.add(child)
+                    heapq.heappush(heap, (-self._glob(child)[1], -child, child))
+            if any(lt is None or lt >= bound for _, _, _, lt in self.ends[known:]):
+                return
 
     def explore(self) -> None:
         """Every state reached, each expanded once, breadth first (inclusion then finds
@@ -1090,6 +1171,16 @@ def _without_ticks(ts: _TimedStructure, trans: list[int], loop: int | None,
 #: acknowledgements: 10^6 against 10^4).
 DEPTH_FIRST_STATES = 20_000
 
+#: The zones the graph whose loops are widened may take to bound the latest end time
+#: before the exact graph is searched alone: the widened graph is meant to be small (its
+#: loops close in a few steps), and past this it is not paying for itself.
+WIDENED_END_STATES = 50_000
+
+#: The zones the search for a run that ends at the widened graph's bound may take, without
+#: inclusion, before every state is searched with it: a run that turns a loop beside a
+#: timer of 10,000 s a thousand times takes about 100,000.
+LATEST_RUN_STATES = 200_000
+
 
 def check_timed_properties(tn: TimedNet, properties: Sequence[Property],
                            max_states: int = MAX_CHECK_STATES) -> list[TimedVerdict]:
@@ -1172,23 +1263,39 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
     """The earliest and latest end times, given ``always`` (the verdict of "an end is
     always reached" on the same net): when it fails, the latest is unbounded. Each
     bound is searched apart, its inclusion blind to the other side of the global clock
-    (:meth:`ZoneGraph._seen`), so that runs shifted in time share their zones."""
+    (:meth:`ZoneGraph._seen`), so that runs shifted in time share their zones.
+
+    The earliest: states in the order of their earliest time, up to the first end.
+    The latest: searched on a graph whose loops are widened (``widen_loops``), which has
+    every run and more, so no run ends later than its latest end. Where a zone on the
+    way to that end was widened, a run that ends as late is looked for in the graph
+    without widening, latest states first; where none is found, or the widened graph
+    has no bound, every state of that graph is searched."""
     ends = list(ends)
     bounded = always.status == "holds"
     ts = _timed_structure(tn, ends)
+    states = 0
     try:
         first = ZoneGraph(tn, ts, max_states=max_states, stop_at_ends=True, earliest_only=True,
                           cover="earliest")
-        first.explore()
+        first.explore_earliest()
+        states = first.states
         last = None
         if bounded:
-            last = ZoneGraph(tn, ts, max_states=max_states, stop_at_ends=True, cover="latest")
-            last.explore()
+            last, bound = _latest_bound(tn, ts, max_states)
+            states += last.states
+            if bound is not None and bound >= 0:
+                last, bound = _latest_run(tn, ts, bound, max_states)
+                states += last.states
+            if bound is not None:
+                last = ZoneGraph(tn, ts, max_states=max_states, stop_at_ends=True,
+                                 cover="latest")
+                last.explore()
+                states += last.states
     except TimedLimit as e:
         # the times are left unknown: the clock of the whole run multiplies the zones
-        return EndTimes(None, None, None if bounded else always, e.states,
+        return EndTimes(None, None, None if bounded else always, states + e.states,
                         reason=f"{e}, with the clock of the whole run")
-    states = max(first.states, 0 if last is None else last.states)
     if not first.ends:
         return EndTimes(None, None, always if not bounded else None, states)
     earliest = min(e for _, _, e, _ in first.ends)
@@ -1198,11 +1305,56 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
         # every run ends (fairness: a report comes eventually), but not by any bound
         return EndTimes(earliest, None, None, states,
                         reason="no bound: a report that comes eventually may come at any time")
-    state, t, _, latest = max(last.ends, key=lambda e: e[3])
+    # of the ends as late, one reached without widening: its path is a run
+    state, t, _, latest = max(last.ends, key=lambda e: (e[3], not last.widened[e[0]]))
     # the graph's parents, a list indexed by state, read as path_to reads a map
     trans = path_to(last.parent, state)[1] + [t]
     return EndTimes(earliest, latest, None, states,
                     latest_path=tuple(last.transitions[j] for j in trans))
+
+
+def _latest_run(tn: TimedNet, ts: _TimedStructure, bound: int, max_states: int):
+    """A run that ends at ``bound`` (a zone on the way to the widened graph's latest end was
+    widened), looked for latest states first, without inclusion: it follows the run and
+    keeps only the zones it meets, as many as the run's steps and their siblings. The
+    graph and None if found, else what it took and -1 (every state is then searched)."""
+    graph = ZoneGraph(tn, ts, max_states=min(max_states, LATEST_RUN_STATES),
+                      stop_at_ends=True, cover="latest", subsume=False)
+    try:
+        graph.explore_latest(bound)
+    except TimedLimit as e:
+        return _Outgrown(e.states), -1
+    if any(lt is None or lt >= bound for _, _, _, lt in graph.ends):
+        return graph, None
+    return graph, -1
+
+
+class _Outgrown:
+    """A graph that outgrew its limit: only its zones are read."""
+
+    def __init__(self, states: int):
+        self.states = states
+
+
+def _latest_bound(tn: TimedNet, ts: _TimedStructure, max_states: int):
+    """The graph whose loops are widened, searched to its latest end (``widen_loops``: it
+    has every run and more, so no run ends later), and what is left to do: None if that
+    end is reached without widening (its graph answers), the bound a run should reach
+    otherwise, or -1 if it has none (it outgrew :data:`WIDENED_END_STATES`, or a widened
+    zone has no bound): every state is then searched."""
+    graph = ZoneGraph(tn, ts, max_states=min(max_states, WIDENED_END_STATES),
+                      stop_at_ends=True, cover="latest", widen_loops=True)
+    try:
+        graph.explore()
+    except TimedLimit as e:
+        return _Outgrown(e.states), -1
+    if not graph.ends:
+        return graph, None
+    if any(lt is None for _, _, _, lt in graph.ends):
+        exact = [e for e in graph.ends if e[3] is None and not graph.widened[e[0]]]
+        return graph, (None if exact else -1)
+    state, _, _, latest = max(graph.ends, key=lambda e: (e[3], not graph.widened[e[0]]))
+    return graph, (None if not graph.widened[state] else latest)
 
 
 def places(tn: TimedNet) -> list[str]:

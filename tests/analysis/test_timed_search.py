@@ -86,8 +86,8 @@ def test_the_timed_search_answers_unknown_past_its_limits(tmp_path):
     assert times.always_ends is True and times.latest is None
     assert "more than 1,000 states" in times.reason
     # a budget below the process lets it grow by a few megabytes, as the exploration's
-    # does: the end times of a 1,000 s timer beside the loop take more
-    longer = pipeline.compile_source(LOOP_BESIDE_TIMER.replace("timeout 200", "timeout 1000"))
+    # does: the run that ends latest beside a 10,000 s timer takes more
+    longer = pipeline.compile_source(LOOP_BESIDE_TIMER.replace("timeout 200", "timeout 10000"))
     small = pipeline.timed_ends(longer, max_memory="1K")
     assert small.always_ends is True and small.latest is None
     assert "memory budget" in small.reason
