@@ -10,14 +10,16 @@ GNU ``time``, on missions whose only change from row to row is a constant:
 
 * a loop beside a long timer: a ``while`` whose body holds for 5 s and whose
   condition waits up to 3 s for a report, in a monitor whose other branch is a
-  time-out of 100 s, then of 1,000 s;
+  time-out of 100 s, then of 1,000 s and 10,000 s;
 * ``examples/sampling.mcl`` with every time-out multiplied by 1, 2 and 3;
 * ``examples/sauce.mcl`` with acknowledgements within 0, 1, 10 and 100 s.
 
 Each row prints the zones of the verdict and of the end times (the JSON's
-``zones`` and ``end_time_zones``) and the number of distinct time constants of
-the mission and its assumptions: the zones may grow with how many constants
-there are, not with how large they are.
+``zones`` and ``end_time_zones``), of the latter those that bound the latest end
+(``latest_bound_zones``), the steps of the run that ends latest, and the number
+of distinct time constants of the mission and its assumptions: the zones may
+grow with how many constants there are, not with how large they are, but for
+the run that ends latest, which is found zone by zone.
 """
 from __future__ import annotations
 
@@ -65,7 +67,7 @@ def _constants(source: str, extra: tuple[str, ...]) -> int:
 def cases() -> list[tuple[str, str, list[str]]]:
     """(row name, MCL source, extra options) of every row."""
     out = [(f"loop beside a {t:,} s timer", LOOP_BESIDE_TIMER.format(long=t), [])
-           for t in (100, 1000)]
+           for t in (100, 1000, 10000)]
     sampling = (ROOT / "examples" / "sampling.mcl").read_text()
     out += [(f"sampling, time-outs x{k}", _scaled(sampling, k), []) for k in (1, 2, 3)]
     sauce = (ROOT / "examples" / "sauce.mcl").read_text()
@@ -91,7 +93,8 @@ def run(timeout: float = TIMEOUT) -> list[dict]:
                 got = json.loads(output[:output.rindex("}") + 1])["timed"]
                 row.update(seconds=seconds, peak=peak, ends=got["always_ends"],
                            zones=got["zones"], time_zones=got.get("end_time_zones"),
-                           latest=got["latest"])
+                           bound_zones=got.get("latest_bound_zones"),
+                           steps=len(got.get("latest_run") or ()), latest=got["latest"])
             rows.append(row)
             print(f"  {row}", file=sys.stderr, flush=True)
     return rows
@@ -99,16 +102,18 @@ def run(timeout: float = TIMEOUT) -> list[dict]:
 
 def table(rows: list[dict], timeout: float) -> str:
     out = ["| mission | distinct constants | always ends | zones (verdict) | zones (end times) "
-           "| latest end (s) | seconds | peak MiB |", "|---|---:|---|---:|---:|---:|---:|---:|"]
+           "| of which the latest's bound | latest end (s) | steps of the latest run | seconds "
+           "| peak MiB |", "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         if r["seconds"] is None:
             out.append(f"| {r['name']} | {r['constants']} | no answer in {timeout:g} s "
-                       "| - | - | - | - | - |")
+                       "| - | - | - | - | - | - | - |")
             continue
         ends = {True: "yes", False: "no", None: "unknown"}[r["ends"]]
         latest = "never" if r["latest"] is None else f"{r['latest']:,}"
         out.append(f"| {r['name']} | {r['constants']} | {ends} | {r['zones']:,} "
-                   f"| {r['time_zones'] or 0:,} | {latest} | {r['seconds']:.2f} "
+                   f"| {r['time_zones'] or 0:,} | {r['bound_zones'] or 0:,} | {latest} "
+                   f"| {r['steps']:,} | {r['seconds']:.2f} "
                    f"| {r['peak']:.0f} |")
     return "\n".join(out)
 

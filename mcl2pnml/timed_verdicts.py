@@ -68,7 +68,9 @@ class TimedEnds:
     result (``latest`` None when a run never ends); ``waits``: what a run that
     never ends waits for, in words; ``never``: that run's verdict (its firings);
     ``latest_run``: the firings of a run that ends at ``latest``; ``states`` and
-    ``time_states``: the zones the verdict and the end times searched.
+    ``time_states``: the zones the verdict and the end times searched;
+    ``latest_bound_states``: of the latter, those that bound the latest end on a graph
+    whose loops are widened (docs/time.md, "How it is computed").
     """
 
     assumptions: Assumptions
@@ -82,6 +84,7 @@ class TimedEnds:
     reason: str | None = None
     latest_run: tuple[str, ...] = ()
     time_states: int = 0
+    latest_bound_states: int = 0
 
     def lines(self) -> list[str]:
         """The answer as ``analyze --timed`` prints it."""
@@ -110,6 +113,7 @@ class TimedEnds:
                 "earliest": _num(self.earliest), "latest": _num(self.latest),
                 "waits": list(self.waits), "zones": self.states,
                 "end_time_zones": self.time_states,
+                "latest_bound_zones": self.latest_bound_states,
                 "latest_run": list(self.latest_run),
                 "never": None if self.never is None else {
                     "shape": self.never.shape.value, "transitions": list(self.never.transitions),
@@ -150,7 +154,8 @@ def ends(net: Net, assumptions: Assumptions = Assumptions(),
     stalls = _within(budget, lambda: _stalls(tn, verdict, max_states), lambda why: False)
     return TimedEnds(assumptions, verdict.status == "holds", stalls,
                      earliest, latest, waits, never, verdict.states, times.reason,
-                     latest_run=times.latest_path, time_states=times.states)
+                     latest_run=times.latest_path, time_states=times.states,
+                     latest_bound_states=times.bound_states)
 
 
 def _within(budget: Budget, search, otherwise):

@@ -66,7 +66,10 @@ back to the exact zone graph (no inclusion), which answers alone.
 **End times.** With a clock that is never reset nor extrapolated, the
 earliest and latest times at which a run first reaches an end marking are
 the bounds of that clock where it does (inclusion keeps both: a larger zone
-reaches every end time a smaller one does).
+reaches every end time a smaller one does). The earliest is searched in the
+order of that clock; the latest is bounded on a graph whose loops are widened
+(:meth:`ZoneGraph._widen_loop`), then a run that reaches the bound is looked
+for (:func:`end_times`).
 
 Safe nets only (every marking 0 or 1, as compiled missions are): a firing
 that would put a second token in a place is refused with its reason. May
@@ -562,6 +565,12 @@ def _firable(ts: _TimedStructure, en: int, urgent: bool) -> int:
     return out
 
 
+#: How many times a loop comes back to one marking and clocks, larger each time, before its
+#: zone is widened (:meth:`ZoneGraph._widen_loop`): once is often a sequence that passes
+#: the same marking again, not a loop that grows.
+WIDEN_AFTER = 2
+
+
 #: What :func:`_post` gives when the firing is possible but no time may pass after it.
 LOCKED = "time-locked"
 
@@ -753,13 +762,16 @@ class ZoneGraph:
         length; the clock of the whole run keeps its difference with the timer that bounds
         it, since neither changes it."""
         m, clocks, flat = key
+        found: list[int] = []
         s: int | None = k
-        while s is not None and self.keys[s][:2] != (m, clocks):
+        while s is not None and len(found) < WIDEN_AFTER:
+            if self.keys[s][:2] == (m, clocks):
+                found.append(s)
             p = self.parent[s]
             s = None if p is None else p[0]
-        if s is None:
+        if len(found) < WIDEN_AFTER:
             return key, False
-        old = self.keys[s][2]
+        old = self.keys[found[0]][2]
         if all(map(operator.le, flat, old)):
             return key, False
         n = len(clocks) + 1
@@ -1247,7 +1259,9 @@ class EndTimes:
 
     ``earliest`` and ``latest`` over every run; ``latest`` is None if some run
     never ends (``never`` then holds that run's verdict). ``states``: the zones
-    explored; ``latest_path``: the firings of a run that ends at ``latest``.
+    explored, ``bound_states`` of them those of the graph whose loops are widened
+    (:func:`_latest_bound`); ``latest_path``: the firings of a run that ends at
+    ``latest``.
     """
 
     earliest: int | None
@@ -1256,6 +1270,7 @@ class EndTimes:
     states: int
     reason: str | None = None
     latest_path: tuple[str, ...] = ()
+    bound_states: int = 0
 
 
 def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
@@ -1274,7 +1289,7 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
     ends = list(ends)
     bounded = always.status == "holds"
     ts = _timed_structure(tn, ends)
-    states = 0
+    states = bound_states = 0
     try:
         first = ZoneGraph(tn, ts, max_states=max_states, stop_at_ends=True, earliest_only=True,
                           cover="earliest")
@@ -1284,6 +1299,7 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
         if bounded:
             last, bound = _latest_bound(tn, ts, max_states)
             states += last.states
+            bound_states = last.states
             if bound is not None and bound >= 0:
                 last, bound = _latest_run(tn, ts, bound, max_states)
                 states += last.states
@@ -1310,7 +1326,8 @@ def end_times(tn: TimedNet, ends: Iterable[str], always: TimedVerdict,
     # the graph's parents, a list indexed by state, read as path_to reads a map
     trans = path_to(last.parent, state)[1] + [t]
     return EndTimes(earliest, latest, None, states,
-                    latest_path=tuple(last.transitions[j] for j in trans))
+                    latest_path=tuple(last.transitions[j] for j in trans),
+                    bound_states=bound_states)
 
 
 def _latest_run(tn: TimedNet, ts: _TimedStructure, bound: int, max_states: int):

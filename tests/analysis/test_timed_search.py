@@ -8,7 +8,7 @@ from fractions import Fraction
 from mcl2pnml import pipeline
 from mcl2pnml.analysis.timed import zones
 from mcl2pnml.core.timing import Assumptions
-from mcl2pnml.timed_verdicts import ends_property, semantics
+from mcl2pnml.timed_verdicts import ENDS, ends_property, semantics
 
 #: A loop whose body holds for 5 s, in a monitor beside a 200 s time-out: dozens of
 #: turns before the time-out, each its own zones (seconds of search, not milliseconds).
@@ -100,3 +100,41 @@ def test_the_end_times_count_their_own_zones(examples):
     assert ends.always_ends is True and ends.time_states > 0
     assert f"latest 730 s ({ends.time_states:,} zones)" in "\n".join(ends.lines())
     assert ends.as_json()["end_time_zones"] == ends.time_states
+    assert 0 < ends.as_json()["latest_bound_zones"] == ends.latest_bound_states <= ends.time_states
+
+
+def _loop_beside(seconds: int):
+    net = pipeline.compile_source(LOOP_BESIDE_TIMER.replace("timeout 200", f"timeout {seconds}"))
+    tn = semantics(net, Assumptions())
+    return tn, zones._timed_structure(tn, ENDS)
+
+
+def test_the_latest_end_beside_a_long_timer_is_bounded_in_zones_that_do_not_grow():
+    # the widened graph: as many zones beside a 100 s timer as beside a 1,000 s one
+    bounds = []
+    for seconds in (100, 1000):
+        tn, ts = _loop_beside(seconds)
+        graph, bound = zones._latest_bound(tn, ts, zones.MAX_CHECK_STATES)
+        assert bound * tn.unit == seconds          # a zone on the way was widened
+        bounds.append(graph.states)
+    assert bounds[0] == bounds[1]
+
+
+def test_the_run_that_ends_latest_is_a_run_and_ends_at_the_bound():
+    out = pipeline.timed_ends(pipeline.compile_source(LOOP_BESIDE_TIMER))
+    assert out.latest == 200
+    # the run the engines replay: the loop turned until the time-out, as the exact graph has it
+    assert out.latest_run.count("Loop.t4") > 20 and out.latest_run[-1] == "mission.f7"
+
+
+def test_a_widened_bound_that_no_run_reaches_sends_the_search_to_the_whole_graph(monkeypatch):
+    expected = pipeline.timed_ends(pipeline.compile_source(LOOP_BESIDE_TIMER))
+    real = zones._latest_bound
+
+    def too_high(tn, ts, max_states):
+        graph, bound = real(tn, ts, max_states)
+        return graph, bound + 1
+    monkeypatch.setattr(zones, "_latest_bound", too_high)
+    forced = pipeline.timed_ends(pipeline.compile_source(LOOP_BESIDE_TIMER))
+    assert (forced.earliest, forced.latest) == (expected.earliest, expected.latest) == (0, 200)
+    assert forced.time_states > expected.time_states      # every state was searched
