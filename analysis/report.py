@@ -535,9 +535,9 @@ def _textbook(r: dict[str, Any]) -> str:
 
 def render_text(r: dict[str, Any]) -> str:
     """The analysis as a report of short tables, for people."""
-    out = [f"Net {r['net']}: {counted(r['places'], 'place')}, "
-           f"{counted(r['transitions'], 'transition')}; "
-           f"M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
+    size = ", ".join(counted(r[key], noun) if isinstance(r.get(key), int) else f"? {key}"
+                     for key, noun in (("places", "place"), ("transitions", "transition")))
+    out = [f"Net {r['net']}: {size}; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
     textbook = ["deadlock-free (textbook: no dead marking reachable)", _textbook(r)]
     out.append(_table(["property", "holds"], [
         ["bounded", _yes(r["bounded"])],

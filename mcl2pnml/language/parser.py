@@ -457,9 +457,39 @@ def _syntax_error(e: UnexpectedInput, text: str, lines: list[str],
                          Location(filename, line, col, line_of(lines, line)))
 
 
-#: The most words of a statement tried as misspelled keywords, from the fault backwards:
-#: each try parses the file again.
+#: The most words of a statement tried as misspelled keywords, from the fault backwards.
 _TRIED = 8
+#: How far past the fault a guess is parsed (characters): far enough to see the parse go on.
+_PAST = 200
+#: What the guesses parse in all, at most (characters): each parses the file from its start
+#: to a little past the fault, so that a fault deep in a generated mission of megabytes gets
+#: the plain message at once rather than after minutes of guessing.
+_GUESSED = 2_000_000
+
+
+class _Guesses:
+    """Edits of the text around a syntax error, each held to the parser: does the parse go
+    past the fault with it? Each parses the text up to :data:`_PAST` characters past the
+    fault (an end there is no fault of the edit), within :data:`_GUESSED` in all."""
+
+    def __init__(self, text: str, fault: int, fault_end: int):
+        self.text, self.fault, self.fault_end = text, fault, fault_end
+        self.left = _GUESSED
+
+    def helps(self, start: int, end: int, new: str) -> bool:
+        """Whether writing ``new`` over ``text[start:end]`` lets the parse go past the
+        fault's token (False once the guesses have parsed what they may)."""
+        shift = len(new) - (end - start)
+        cut = min(len(self.text), self.fault_end + _PAST)
+        edited = self.text[:start] + new + self.text[end:cut]
+        if len(edited) > self.left:
+            return False
+        self.left -= len(edited)
+        at = _fault_at(edited)
+        if at is None or at >= len(edited) and cut < len(self.text):
+            return True          # parsed, or stopped by the cut only
+        return (at - shift if at >= start + len(new) else at) >= max(self.fault + 1,
+                                                                     self.fault_end)
 
 
 def _fault_at(text: str) -> int | None:
@@ -476,15 +506,6 @@ def _fault_at(text: str) -> int | None:
     return None
 
 
-def _helps(text: str, fault: int, start: int, end: int, new: str) -> bool:
-    """Whether writing ``new`` over ``text[start:end]`` lets the parse go past ``fault``."""
-    at = _fault_at(text[:start] + new + text[end:])
-    if at is None:
-        return True
-    shift = len(new) - (end - start)
-    return (at - shift if at >= start + len(new) else at) > fault
-
-
 def _repair(e: UnexpectedInput, text: str) -> tuple[str, int, int] | None:
     """A misspelled keyword or a missing ``;`` that explains the syntax error ``e``, as
     (message, line, column) where the fix goes; None when neither does.
@@ -494,10 +515,12 @@ def _repair(e: UnexpectedInput, text: str) -> tuple[str, int, int] | None:
     written in its place, the parse goes past the fault: ``paralel(Dive(1), Dive(2))``
     fails at the second ``(``, ``parallel(...)`` parses. Otherwise a ``;`` is missing at
     the end of the token before the fault if, inserted there, the parse goes past it.
-    Each guess is held to the parser, so none is offered that would not help.
+    Each guess is held to the parser (:class:`_Guesses`), so none is offered that would
+    not help.
     """
-    fault = len(text) if isinstance(e, UnexpectedEOF) or e.token.type == "$END" \
-        else e.token.start_pos
+    at_end = isinstance(e, UnexpectedEOF) or e.token.type == "$END"
+    fault = len(text) if at_end else e.token.start_pos
+    guesses = _Guesses(text, fault, len(text) if at_end else e.token.end_pos)
     tokens = []
     try:
         for token in _tree_parser().lex(text[:fault]):
@@ -506,18 +529,17 @@ def _repair(e: UnexpectedInput, text: str) -> tuple[str, int, int] | None:
         pass
     statement = next((i + 1 for i in range(len(tokens) - 1, -1, -1)
                       if tokens[i].type in ("SEMICOLON", "LBRACE", "RBRACE")), 0)
-    found = [] if fault == len(text) else [e.token]
     words, _ = grammar_words()
-    for token in [*found, *reversed(tokens[statement:])][:_TRIED]:
+    for token in [*([] if at_end else [e.token]), *reversed(tokens[statement:])][:_TRIED]:
         if not _WORD.fullmatch(token) or token in words:
             continue
         for word in difflib.get_close_matches(str(token), words, n=3, cutoff=0.5):
-            if _helps(text, fault, token.start_pos, token.end_pos, word):
+            if guesses.helps(token.start_pos, token.end_pos, word):
                 return (f"unexpected '{token}'; did you mean '{word}'?", token.line,
                         token.column)
-    if tokens and _helps(text, fault, tokens[-1].end_pos, tokens[-1].end_pos, ";"):
+    if tokens and guesses.helps(tokens[-1].end_pos, tokens[-1].end_pos, ";"):
         last = tokens[-1]
-        where = "" if fault == len(text) else \
+        where = "" if at_end else \
             f" before '{e.token}'" + (f" (line {e.token.line})"
                                        if e.token.line != last.end_line else "")
         return f"missing ';'{where}", last.end_line, last.end_column
