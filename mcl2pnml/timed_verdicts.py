@@ -81,11 +81,10 @@ class TimedEnds:
     ``latest``: the first and last times, in seconds, at which a run reaches its
     result (``latest`` None when a run never ends); ``waits``: what a run that
     never ends waits for, in words; ``cycle``: the transitions of the cycle such a
-    run repeats, if it does (once round), ``calls`` the net's call sites, each with the shared nets it
-    enters (its callee's, its primitives'), and
-    ``sites`` each instance's call and line, from the mission, where it is known
-    (:meth:`cycle_steps` puts the cycle in the mission's terms);
-    ``never``: that run's verdict (its firings);
+    run repeats, if it does (once round); ``calls``: the net's call sites, each with
+    the shared nets it enters (its callee's, its primitives'); ``sites``: each
+    instance's call and line, from the mission, where it is known (:meth:`cycle_steps`
+    puts the cycle in the mission's terms); ``never``: that run's verdict (its firings);
     ``latest_run``: the firings of a run that ends at ``latest``; ``states`` and
     ``time_states``: the zones the verdict and the end times searched;
     ``latest_bound_states``: of the latter, those that bound the latest end on a graph
@@ -131,8 +130,8 @@ class TimedEnds:
         for tid, owner in zip(self.cycle, owners):
             if owner in self.calls:
                 inside.update((n, owner) for n in self.calls[owner])
-            elif owner in inside and owner not in self.sites:   # (a function's root
-                owner = inside[owner]                               # structure is a site)
+            elif owner in inside and owner not in self.sites:   # a function's root
+                owner = inside[owner]             # structure is told as itself, a site
             if not steps or steps[-1][0] != owner:
                 steps.append((owner, []))
             steps[-1][1].append(tid)
