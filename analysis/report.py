@@ -31,6 +31,7 @@ from mcl2pnml.core.memory import (NEGLIGIBLE, SLACK, Budget, BudgetExceeded, flo
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES
 from mcl2pnml.core.structure import structure
+from mcl2pnml.core.vocabulary import CAN_END, NO_DEADLOCK, REUSABLE, SAFE, counted
 
 from mcl2pnml.analysis.behaviour import behaviour
 from mcl2pnml.analysis.structure.invariants import (AnalysisLimit, format_invariant,
@@ -201,8 +202,8 @@ class Analysis:
 
     def certified(self, certificate: CertifiedFacts) -> "Analysis":
         """This analysis with the facts a holding certificate proves (sections 2.3-2.5):
-        bounded, 1-safe, free of deadlocks, ends properly, an end always reachable,
-        reusable."""
+        bounded, 1-safe, free of deadlocks, ends properly, a proper end always reachable,
+        reusable (:mod:`mcl2pnml.core.vocabulary`)."""
         proven = replace(self.facts, bounded=True, safe=True, deadlock_free=True,
                          ends_properly=True, final_always_reachable=True, reusable=True)
         return replace(self, facts=proven, certificate=certificate)
@@ -534,18 +535,18 @@ def _textbook(r: dict[str, Any]) -> str:
 
 def render_text(r: dict[str, Any]) -> str:
     """The analysis as a report of short tables, for people."""
-    out = [f"Net {r['net']}: {r.get('places', '?')} places, {r.get('transitions', '?')} "
-           f"transitions; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
+    size = ", ".join(counted(r[key], noun) if isinstance(r.get(key), int) else f"? {key}"
+                     for key, noun in (("places", "place"), ("transitions", "transition")))
+    out = [f"Net {r['net']}: {size}; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
     textbook = ["deadlock-free (textbook: no dead marking reachable)", _textbook(r)]
     out.append(_table(["property", "holds"], [
         ["bounded", _yes(r["bounded"])],
         ["every siphon marked and controlled (inputs aside)", _yes(r.get("siphons_controlled"))],
-        ["safe (1-bounded)", _yes(r["safe"])],
+        [SAFE, _yes(r["safe"])],
         *([textbook,
-           ["no deadlock (ours: every dead marking is a proper end)",
-            _yes(r.get("deadlock_free"))],
-           ["a proper end is always reachable", _yes(r.get("final_always_reachable"))],
-           ["reusable", _yes(r.get("reusable"))]] if r.get("interface") != "none" else
+           [NO_DEADLOCK, _yes(r.get("deadlock_free"))],
+           [CAN_END, _yes(r.get("final_always_reachable"))],
+           [REUSABLE, _yes(r.get("reusable"))]] if r.get("interface") != "none" else
           [textbook,
            ["M0 reachable again from every marking", _yes(r.get("home_marking"))]]),
         ["reachable markings" + (" (coverability nodes)" if r["bounded"] is False else ""),

@@ -8,7 +8,7 @@ Run:  .venv/bin/python -m bench.certify_scale [--quick]
   certificate against the compiled net (:func:`mcl2pnml.certify.recheck.check_certificate`,
   which re-reads the stored proofs and re-derives the library's own
   digests), each in this process, the median of :data:`RUNS`; beside them,
-  exploring the same net and deciding its behaviour (1-safe, an end always
+  exploring the same net and deciding its behaviour (1-safe, a proper end always
   reachable, reusable) with our fastest explorer;
 * surveys of 100 to 10,000 calls (:func:`bench.missions.survey`): certify
   and check, with the fitted exponent of time against size (1: linear);

@@ -15,8 +15,8 @@ seconds, the whole process's peak resident memory in MiB), one run each:
   (the supervisor's steps urgent only: verifydtapn's semantics, the one its
   verdict is compared with);
 * verifydtapn on the timed-arc net ``mcl2pnml compile MISSION --format tapn``
-  writes (not timed: it is the file the user hands over) with the query "an end
-  is always reached" (``MISSION.ends.q``) and the ``-k`` bound ``compile``
+  writes (not timed: it is the file the user hands over) with the query "every
+  run ends" (``MISSION.ends.q``) and the ``-k`` bound ``compile``
   prints beside it.
 
 Both under the same vehicle assumptions, the defaults of both commands:
@@ -35,6 +35,7 @@ import tempfile
 from pathlib import Path
 
 from bench.real_models import ROOT, _tool, timed
+from mcl2pnml.core.vocabulary import ENDS
 
 EXAMPLES = ROOT / "examples"
 #: Seconds a call may take, ours or verifydtapn's.
@@ -44,7 +45,7 @@ OURS = str(Path(sys.executable).with_name("mcl2pnml"))
 
 def _ours_answer(output: str) -> tuple[bool | None, str]:
     """(always ends, the end times as printed) from ``analyze --timed``'s lines."""
-    found = re.search(r"an end is always reached: (yes|no|unknown)", output)
+    found = re.search(re.escape(ENDS) + r": (yes|no|unknown)", output)
     ends = None if found is None or found.group(1) == "unknown" else found.group(1) == "yes"
     times = re.search(r"end time: (.*)", output)
     return ends, times.group(1).strip() if times else "-"
@@ -157,8 +158,8 @@ def section(names: list[str] = (), timeout: float = TIMEOUT, log=lambda text: No
     return ["## Timed verdicts: ours, verifydtapn", "",
             f"Measured {datetime.date.today().isoformat()}, one process at a time, one run "
             "each (`python -m bench.timed_peers`). Ours: `mcl2pnml analyze MISSION --timed`, "
-            "the command a user runs (start-up, compiling, the zone graph, then \"an end is "
-            "always reached\" and the end times), in our semantics "
+            f"the command a user runs (start-up, compiling, the zone graph, then \"{ENDS}\" "
+            "and the end times), in our semantics "
             "(the supervisor's steps first at their instant) and with `--urgency-only` "
             "(verifydtapn's: urgent only). verifydtapn: `verifydtapn -k K MISSION.tapn "
             "MISSION.ends.q` on what `mcl2pnml compile MISSION --format tapn` writes, K the "

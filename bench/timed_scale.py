@@ -5,7 +5,7 @@ Run:  .venv/bin/python -m bench.timed_scale [--timeout SECONDS]
 (prints the section of ``bench/RESULTS.md``.)
 
 The cost of ``mcl2pnml analyze MISSION --timed --json`` (start-up, compiling,
-"an end is always reached", the end times), one fresh process per row under
+"every run ends", the end times), one fresh process per row under
 GNU ``time``, on missions whose only change from row to row is a constant:
 
 * a loop beside a long timer: a ``while`` whose body holds for 5 s and whose

@@ -15,9 +15,9 @@ from pathlib import Path
 import click
 
 from mcl2pnml.cli_options import (
-    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS, EXAMPLES,
+    ANALYZE_OPTIONS, CAMPAIGN_OPTIONS, CERTIFY_OPTIONS, CHECK_OPTIONS, COMPILE_OPTIONS,
     FUNCTIONAL_OPTIONS, ODDS_OPTIONS, QUERY_OPTIONS, RUN_OPTIONS, SHOW_OPTIONS, TEMPLATE_OPTIONS,
-    VALIDATE_OPTIONS)
+    VALIDATE_OPTIONS, examples)
 from mcl2pnml.commands import (analyze as analyzing, certify as certifying, check as checking,
                                compile as compiling, fly as campaigning, page as showing,
                                query as querying, run as running, template as templating,
@@ -95,7 +95,7 @@ def _shown(progress: bool | None) -> bool:   # a progress display: as asked, or 
     return sys.stderr.isatty() if progress is None else progress
 
 
-@click.group(cls=Cli, epilog=EXAMPLES, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(cls=Cli, epilog=examples(), context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(VERSION, "--version", prog_name="mcl2pnml", message="%(prog)s %(version)s")
 def main() -> None:
     """Compile AUV missions written in MCL to Petri nets, analyse them, run them.
@@ -104,7 +104,7 @@ def main() -> None:
     """
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("check"))
 @CHECK_OPTIONS
 def check(mission: Path, **options) -> int:
     """Parse and check MISSION (MCL): names, arities, patterns, recursion, properties.
@@ -120,7 +120,7 @@ def check(mission: Path, **options) -> int:
     return 0
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("functional"))
 @FUNCTIONAL_OPTIONS
 def functional(mission: Path, **options) -> int:
     """Print the functional form of MISSION (the paper's Algorithm 2).
@@ -132,7 +132,7 @@ def functional(mission: Path, **options) -> int:
     return 0
 
 
-@main.command("compile", epilog=EXAMPLES)
+@main.command("compile", epilog=examples("compile"))
 @COMPILE_OPTIONS
 def compile_(mission: Path, **options) -> int:
     """Compile MISSION (MCL) to one composed Petri net, from mission.B and mission.MTX.
@@ -144,7 +144,7 @@ def compile_(mission: Path, **options) -> int:
     return 0
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("run"))
 @RUN_OPTIONS
 @click.pass_context
 def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
@@ -176,11 +176,11 @@ def run(ctx: click.Context, mission: Path, as_json: bool, log_path: Path | None,
     return outcome.status
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("validate"))
 @VALIDATE_OPTIONS
 def validate(file: Path, **options) -> int:
     """Check FILE against mcl2pnml's PNML schema, the official grammar where it is
-    given or found, and the P/T net rules.
+    given (--grammar, or $MCL2PNML_PNML_GRAMMAR), and the P/T net rules.
 
     The rules catch what no schema can say (an arc from a place to a place, a
     reference loop). Exit 0 when valid, 2 with every problem when not.
@@ -193,7 +193,7 @@ def validate(file: Path, **options) -> int:
     return outcome.status
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("template"))
 @TEMPLATE_OPTIONS
 def template(name: str | None, list_: bool, **options) -> int:
     """Write the paper's net NAME, from the paper's initial marking M0.
@@ -210,7 +210,7 @@ def template(name: str | None, list_: bool, **options) -> int:
     return 0
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("show"))
 @SHOW_OPTIONS
 def show(what: str, **options) -> int:
     """Write one self-contained HTML page to play the token game on a net.
@@ -227,7 +227,7 @@ def show(what: str, **options) -> int:
     return 0
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("certify"))
 @CERTIFY_OPTIONS
 def certify(mission: Path, **options) -> int:
     """Prove MISSION from its parts, without exploring: write its certificate.
@@ -235,8 +235,8 @@ def certify(mission: Path, **options) -> int:
     Every task pattern and control structure was proven once against the
     interface contract (docs/ARCHITECTURE.md, mcl2pnml.certify); the
     certificate says, instance by instance, which proof and which rule make
-    the mission 1-safe, always able to end, and reusable, and which ends it
-    has, and is re-checked at once against the compiled net. Exit status 1:
+    the mission 1-safe, a proper end always reachable, and reusable, and
+    which ends it has, and is re-checked at once against the compiled net. Exit status 1:
     it does not hold; 2: the mission cannot be certified (a loop that can
     never end: the message points at it; or, with --check, a certificate that is
     not one: too large, not JSON, or not of the certificate's shape).
@@ -246,7 +246,7 @@ def certify(mission: Path, **options) -> int:
     return outcome.status
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("analyze"))
 @ANALYZE_OPTIONS
 def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
     """Analyse FILE: a P/T net (PNML, TINA .net, LoLA) or a mission (MCL, compiled first).
@@ -262,7 +262,7 @@ def analyze(file: Path, as_json: bool, progress: bool | None, **options) -> int:
     return outcome.status
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("query"))
 @QUERY_OPTIONS
 def query(net: Path, formulas: tuple[Path, ...], as_json: bool, **options) -> int:
     """Answer the Model Checking Contest's formula files (FORMULAS.xml: reachability, CTL,
@@ -279,7 +279,7 @@ def query(net: Path, formulas: tuple[Path, ...], as_json: bool, **options) -> in
     return answers.status
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("odds"))
 @ODDS_OPTIONS
 def odds(mission: Path, model: Path, as_json: bool, **options) -> int:
     """The exact odds of MISSION with a vehicle model: how likely it ends OK, FAIL or
@@ -293,7 +293,7 @@ def odds(mission: Path, model: Path, as_json: bool, **options) -> int:
     return 0
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("campaign"))
 @CAMPAIGN_OPTIONS
 def campaign(mission: Path, as_json: bool, progress: bool | None, **options) -> int:
     """Fly MISSION many times, on Dask, with a vehicle model or on the kinematic

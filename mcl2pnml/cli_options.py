@@ -22,6 +22,7 @@ from mcl2pnml.commands.weigh import OddsOptions
 from mcl2pnml.commands.query import EXAMINATIONS, QueryOptions
 from mcl2pnml.commands.page import ShowOptions
 from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS as PROPERTY_ATOMS
+from mcl2pnml.core.vocabulary import CAN_END
 from mcl2pnml.io.formats import FORMATS
 from mcl2pnml.io.mccquery import TOOLS as QUERY_TOOLS
 from mcl2pnml.runtime.options import RunOptions
@@ -29,23 +30,85 @@ from mcl2pnml.runtime.simprims import built_in as simulated
 from mcl2pnml.runtime.vehicles import VEHICLES
 from mcl2pnml.view.layout import DOT_LIMIT, ENGINES, LAYERS_LIMIT
 
-#: The epilog of every command's --help.
-EXAMPLES = """\b
-Examples:
-  mcl2pnml check examples/sauce.mcl
-  mcl2pnml functional examples/sauce.mcl
-  mcl2pnml compile examples/sauce.mcl -o sauce.pnml
-  mcl2pnml run examples/sauce.mcl --engine reference --vehicle script.json --json
-  mcl2pnml run examples/sauce.mcl --vehicle script.json --journal run.journal
-  mcl2pnml run examples/sauce.mcl --resume run.journal
-  mcl2pnml template task -o task.pnml
-  mcl2pnml analyze task.pnml --json --initial B,MTX,OFF,C
-  mcl2pnml show examples/sauce.mcl --run run.jsonl
-  mcl2pnml validate task.pnml --grammar ~/pnml/grammar
-  mcl2pnml certify examples/sauce.mcl
-  mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.model.json
-  mcl2pnml campaign examples/sauce.mcl --vehicle-model examples/sauce.model.json --runs 10000
-"""
+#: Each command's examples, its --help's epilog: each one a command line that works from
+#: the repository's root, on files the repository holds (tests/commands/test_cli_help.py
+#: parses every one); the files they write are the only ones not there.
+EXAMPLES: dict[str, tuple[str, ...]] = {
+    "check": (
+        "mcl2pnml check examples/sauce.mcl",
+        "mcl2pnml check examples/docking.mcl --vehicle sim",
+        "mcl2pnml check examples/docking.mcl --properties --strict",
+    ),
+    "functional": (
+        "mcl2pnml functional examples/sauce.mcl",
+        "mcl2pnml functional examples/sampling.mcl --functions",
+    ),
+    "compile": (
+        "mcl2pnml compile examples/sauce.mcl -o sauce.pnml",
+        "mcl2pnml compile examples/sauce.mcl --format svg -o sauce.svg --expand all",
+        "mcl2pnml compile examples/docking.mcl --format tapn -o docking.tapn",
+        "mcl2pnml compile examples/sauce.mcl -o sauce.pnml --queries sauce.queries.xml",
+    ),
+    "run": (
+        "mcl2pnml run examples/sauce.mcl",
+        "mcl2pnml run examples/docking.mcl --vehicle examples/docking.vehicle.json "
+        "--engine reference --json",
+        "mcl2pnml run examples/sauce.mcl --vehicle model:examples/sauce.model.json@7 "
+        "--log run.jsonl",
+        "mcl2pnml run examples/lawnmower.mcl --journal run.journal",
+        "mcl2pnml run examples/sauce.mcl --faults examples/sauce.faults.json",
+    ),
+    "validate": (
+        "mcl2pnml validate tests/data/pnml/schema/valid/labels_in_any_order.pnml",
+        "mcl2pnml validate tests/data/pnml/invalid/place_to_place.pnml",
+        "MCL2PNML_PNML_GRAMMAR=../shared/pnml-grammar mcl2pnml validate "
+        "tests/data/pnml/schema/valid/labels_in_any_order.pnml",
+    ),
+    "template": (
+        "mcl2pnml template --list",
+        "mcl2pnml template task -o task.pnml",
+        "mcl2pnml template while --format svg -o while.svg",
+    ),
+    "show": (
+        "mcl2pnml show examples/sauce.mcl -o sauce.html",
+        "mcl2pnml show task -o task.html",
+    ),
+    "certify": (
+        "mcl2pnml certify examples/dam_inspection.mcl -o dam.cert.json",
+        "mcl2pnml certify examples/dam_inspection.mcl --abort-pending -o dam.abort.cert.json",
+    ),
+    "analyze": (
+        "mcl2pnml analyze examples/sauce.mcl",
+        "mcl2pnml analyze examples/docking.mcl --timed",
+        "mcl2pnml analyze examples/docking.mcl --properties --explain",
+        "mcl2pnml analyze tests/data/formats/foreign/buffer.net --json",
+        "mcl2pnml analyze tests/data/pnml/foreign/pm4py_order_process.pnml --lenient",
+    ),
+    "query": (
+        "mcl2pnml query tests/data/formats/foreign/mutex.lola --examination "
+        "ReachabilityDeadlock --examination OneSafe",
+    ),
+    "odds": (
+        "mcl2pnml odds examples/sauce.mcl --vehicle-model examples/sauce.model.json",
+        "mcl2pnml odds examples/lawnmower.mcl --vehicle-model examples/lawnmower.model.json "
+        "--sensitivity",
+    ),
+    "campaign": (
+        "mcl2pnml campaign examples/sauce.mcl --vehicle-model examples/sauce.model.json "
+        "--runs 10000",
+        "mcl2pnml campaign examples/sauce.mcl --faults examples/sauce.faults.json --runs 500 "
+        "--target 0.9",
+    ),
+}
+
+
+def examples(command: str | None = None) -> str:
+    """The epilog of ``command``'s --help: its examples; of ``mcl2pnml --help``
+    (``command`` None), each command's first."""
+    lines = [shown[0] for shown in EXAMPLES.values()] if command is None else \
+        EXAMPLES[command]
+    return "\b\nExamples:\n" + "".join(f"  {line}\n" for line in lines)
+
 
 FILE, OUTPUT = (click.Path(exists=True, dir_okay=False, path_type=Path),
                 click.Path(dir_okay=False, path_type=Path))
@@ -72,6 +135,14 @@ ATOMS_OPTION = click.option(
 def _certificate_size_option(said: str):
     return click.option("--max-certificate-size", "max_cert", metavar="SIZE",
                         default=CertifyOptions.max_cert, show_default=True, help=said)
+
+
+SIM_PRIMITIVES_OPTION = click.option(
+    "--sim-primitives", type=FILE, multiple=True, metavar="FILE.py",
+    help="Python file registering simulated primitives of your own (@register on a "
+         "SimulatedPrimitive, docs/simulator.md); may be repeated.")
+#: The vehicles --vehicle names, as the table of kinds of vehicle names them.
+VEHICLE_SPECS = "|".join(kind.name for kind in VEHICLES)
 
 
 STRICT_OPTION = click.option(
@@ -108,6 +179,12 @@ def _properties_options(what: str):
 
 CHECK_OPTIONS = _composed(  # check MISSION
     click.argument("mission", type=FILE),
+    click.option("--vehicle", metavar=VEHICLE_SPECS,
+                 help="Also check that this vehicle, as run --vehicle names it, offers every "
+                      "primitive the mission's tasks call: each one it does not offer is an "
+                      "error at its first call, all at once (the simulator's primitives: "
+                      "docs/simulator.md; a script or a vehicle model answers for any)."),
+    SIM_PRIMITIVES_OPTION,
     _properties_options("Also print each property compiled to place formulas"),
     STRICT_OPTION,
     MISSION_SIZE_OPTION,
@@ -127,8 +204,7 @@ VALIDATE_OPTIONS = _composed(  # validate FILE
     click.option("--grammar", type=click.Path(exists=True, file_okay=False, path_type=Path),
                  help="Directory of the official PNML RELAX NG grammar (ptnet.pntd...), "
                       "applied as well as mcl2pnml's own schema. Default: "
-                      "$MCL2PNML_PNML_GRAMMAR, else a shared/pnml-grammar beside or above, "
-                      "else none."),
+                      "$MCL2PNML_PNML_GRAMMAR, else none (it is never looked for)."),
     NET_OPTION,
 )
 
@@ -155,8 +231,8 @@ COMPILE_OPTIONS = _composed(  # compile MISSION
                  help="For a drawing (svg, png, dot): the calls drawn open, by the names on "
                       "their boxes, or all; the others are drawn shut, one box each."),
     click.option("--queries", type=OUTPUT, metavar="FILE.xml",
-                 help="Also write the mission's properties (deadlock, an end always reachable) "
-                      "in the Model Checking Contest's XML, for the tools that read the PNML."),
+                 help=f"Also write the mission's properties (a deadlock, {CAN_END}) in the "
+                      "Model Checking Contest's XML, for the tools that read the PNML."),
     click.option("--queries-for", "tool", type=click.Choice(list(QUERY_TOOLS)),
                  default=CompileOptions.tool,
                  show_default=True, help="How --queries writes a deadlock inside a formula: "
@@ -188,7 +264,7 @@ RUN_OPTIONS = _composed(  # run MISSION
                  show_default=True, help="petri: the executor plays the compiled net; "
                  "reference: MCL interpreted directly. Both must give the same result."),
     click.option("--vehicle", default=RunOptions.vehicle, show_default=True,
-                 metavar="|".join(kind.name for kind in VEHICLES),
+                 metavar=VEHICLE_SPECS,
                  help="The AUV simulator (it offers " + ", ".join(sorted(simulated()))
                  + ", and those of --sim-primitives and installed packages; docs/simulator.md; "
                  "a world NAME.world.json beside the mission is its default), a real vehicle "
@@ -230,9 +306,7 @@ RUN_OPTIONS = _composed(  # run MISSION
                  "dock, obstacles, plumes, noise, seed, limits; docs/simulator.md). Default: "
                  "NAME.world.json beside the mission if there is one, else the paper's "
                  "16 x 8 x 5 m tank, a cross at (10, 4)."),
-    click.option("--sim-primitives", type=FILE, multiple=True, metavar="FILE.py",
-                 help="Python file registering simulated primitives of your own "
-                 "(@register on a SimulatedPrimitive, docs/simulator.md); may be repeated."),
+    SIM_PRIMITIVES_OPTION,
     click.option("--faults", type=FILE, metavar="FAULTS.json",
                  help="Inject these faults into a simulated vehicle's events (sim, a model, "
                       "a script; docs/faults.md), drawn with the seed of sim@SEED or "

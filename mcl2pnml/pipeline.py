@@ -18,6 +18,7 @@ the runtime (0.1 s), graphviz or the certificates' proofs (0.2 s).
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +27,8 @@ from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, Sequence
 from mcl2pnml.core.bounds import (MAX_CERTIFICATE_SIZE, MAX_CHECK_STATES, MAX_MISSION_SIZE,
                                   MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS, MAX_TOKENS,
                                   MAX_TOKENS_TEXT, natural_at_most)
-from mcl2pnml.core.errors import Location, Mcl2PnmlError, did_you_mean
+from mcl2pnml.core.errors import (Location, Mcl2PnmlError, did_you_mean, line_of, source_lines,
+                                  visible)
 from mcl2pnml.core.files import atomic_write_text, read_text
 from mcl2pnml.core.jsontext import load_json
 from mcl2pnml.core.memory import Budget, check_load, guard, release
@@ -36,6 +38,7 @@ from mcl2pnml.core.settings import SettingError, parse_size, size_or_none
 from mcl2pnml.core.timing import Assumptions
 from mcl2pnml.io.formats import FORMATS, SUFFIXES, SaveOptions, reader_of
 from mcl2pnml.runtime.options import RunOptions
+from mcl2pnml.runtime.vehicles import offered
 
 if TYPE_CHECKING:   # for the annotations only
     from mcl2pnml.analysis.report import Analysis
@@ -50,7 +53,8 @@ __all__ = [
     "template_clusters", "templates", "validate_pnml", "analyze", "parse_marking",
     "run_mission", "RunOptions", "show_nets", "save_show_page", "Shown", "certify_file",
     "load_certificate", "check_certificate", "save_certificate", "check_properties",
-    "timed_ends", "check_properties_timed", "parse_size",
+    "timed_ends", "check_properties_timed", "parse_size", "instance_trees", "call_sites",
+    "unflown",
 ]
 
 
@@ -90,6 +94,29 @@ def check_source(text: str, filename: str = "<mcl>"):
     from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse
     return check_program(parse(text, filename))
+
+
+def unflown(checked, vehicle: str, sim_primitives: Sequence[str | Path] = ()
+            ) -> list[Mcl2PnmlError]:
+    """Each primitive the checked mission's tasks call that ``vehicle`` (as ``run
+    --vehicle`` names it, with the simulated primitives of ``sim_primitives``) does not
+    offer: an error at its first call in a task, with what the vehicle offers. Empty when
+    it offers them all, or answers for any (a script, a vehicle model), as ``run`` finds
+    before it starts (section 2.1: the vehicle's side of the abstraction layer)."""
+    offers = offered(vehicle, tuple(map(Path, sim_primitives)))
+    if offers is None:
+        return []
+    first: dict[str, tuple[int, int]] = {}   # a primitive not offered -> its first call
+    for task in checked.tasks.values():
+        for call in task.primitives:
+            at = (call.pos.line, call.pos.column)
+            if call.name not in offers and at < first.get(call.name, (math.inf, 0)):
+                first[call.name] = at
+    lines = source_lines(checked.program.source)
+    return [Mcl2PnmlError(f"--vehicle {visible(vehicle)} does not offer the primitive "
+                          f"'{name}'" + did_you_mean(name, offers, "it offers"),
+                          Location(checked.program.file, line, column, line_of(lines, line)))
+            for name, (line, column) in sorted(first.items(), key=lambda item: item[1])]
 
 
 def warnings_of(checked) -> list:
@@ -296,8 +323,8 @@ def _drawn(net: Net, layout: str):
 def validate_pnml(path: str | Path, grammar: str | Path | None = None,
                   net_id: str | None = None):
     """The verdict on a PNML file of our schema, of the official grammar when ``grammar``
-    gives it (or it is found: :func:`mcl2pnml.io.pnml.grammar.find_grammar`) and of the
-    reader's rules; and the net when it is valid."""
+    gives it (else ``$MCL2PNML_PNML_GRAMMAR``'s: :func:`mcl2pnml.io.pnml.grammar.find_grammar`)
+    and of the reader's rules; and the net when it is valid."""
     # lxml, 15 ms: only a PNML file
     from mcl2pnml.io.pnml.grammar import validate
     from mcl2pnml.io.pnml.reader import read_pnml
@@ -528,16 +555,11 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
             raise SettingError("what", f"no file '{what}'")
         if path.suffix != ".mcl":
             return Shown(path.stem, [(load_net(path, net_id, lenient=lenient), "the net")])
-        # lark, 40 ms: only a mission read
-        from mcl2pnml.language.functional import (function_expression, instances,
-                                                  mission_expression)
         checked = check_file(path, max_mission_size)
-        trees = [(MISSION, instances(mission_expression(checked.mission), MISSION, ""))]
-        trees += [(name, instances(function_expression(checked.functions[name]), name, name))
-                  for name in checked.function_order]
         return Shown(path.stem, [(compile_checked(checked), "the mission"),
                                  (compile_checked(checked, reduced=True),
-                                  "the mission, every task reduced (Fig. 3)")], trees)
+                                  "the mission, every task reduced (Fig. 3)")],
+                     instance_trees(checked))
     if with_run:
         raise SettingError("run_log", "a run is of a mission: give the mission's .mcl or "
                                       "its compiled net, not a template")
@@ -576,6 +598,26 @@ def drawn(shown: Shown) -> dict[str, Any]:
         shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label))
                            for net, label in shown.nets)
     return tree
+
+
+def instance_trees(checked) -> list[tuple[str, list["Instance"]]]:
+    """The mission's functional form, then each function's, as the compiled net names their
+    instances (:func:`mcl2pnml.language.functional.instances`): the page's tree, and
+    where each instance of the net comes from."""
+    # lark, 40 ms: only a mission read
+    from mcl2pnml.language.functional import function_expression, instances, mission_expression
+    trees = [(MISSION, instances(mission_expression(checked.mission), MISSION, ""))]
+    trees += [(name, instances(function_expression(checked.functions[name]), name, name))
+              for name in checked.function_order]
+    return trees
+
+
+def call_sites(checked) -> dict:
+    """Each instance of the checked mission's net, by name (``Goto-2``, ``while-1``), with
+    its call as written or its structure's kind, and its line
+    (:class:`mcl2pnml.timed_verdicts.Site`): where an answer about the net is in the MCL."""
+    from mcl2pnml.timed_verdicts import Site   # numpy, 0.2 s: only timed
+    return {i.name: Site(i.label, i.line) for _, tree in instance_trees(checked) for i in tree}
 
 
 # -- time in the verdicts (docs/time.md) --------------------------------------------------

@@ -3,11 +3,12 @@
 :mod:`mcl2pnml.analysis.timed.zones` answers on any :class:`~mcl2pnml.core.timing.TimedNet`;
 this module asks it about a compiled mission (docs/time.md): the mission's
 semantics under the vehicle's :class:`~mcl2pnml.core.timing.Assumptions`
-(:func:`~mcl2pnml.core.timing.mission_timing`), "an end is always reached"
+(:func:`~mcl2pnml.core.timing.mission_timing`), "every run ends"
 (the existence of a result, Dwyer et al.'s *eventually*, on every
 time-divergent run), the earliest and latest end times, and, when a run
 never ends, what it waits for, in words: "FindCross waits for DetectCross's
-report, and has no time-out". The property verdicts are handed back as
+report, and has no time-out", or the cycle it repeats, call by call with each
+call's line. The property verdicts are handed back as
 :class:`mcl2pnml.analysis.checking.on_graph.Verdict`, so that the counterexample machinery of
 :mod:`mcl2pnml.counterexample` reads them as it reads the untimed ones.
 
@@ -18,9 +19,9 @@ a name with :mod:`mcl2pnml.analysis.timed`.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Mapping, NamedTuple, Sequence
 
 from mcl2pnml.core.bounds import MAX_CHECK_STATES
 from mcl2pnml.analysis.statespace.explore import explore
@@ -29,9 +30,10 @@ from mcl2pnml.analysis.checking.on_graph import Shape, Status, Verdict
 from mcl2pnml.core.errors import Mcl2PnmlError
 from mcl2pnml.core.memory import Budget, BudgetExceeded, floored, guard, release
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.payloads import MissionPlace, read_transition
+from mcl2pnml.core.payloads import ENTER, MissionPlace, read_transition
 from mcl2pnml.core.patterns import Pattern, Property, Scope, ScopeKind, Tokens
 from mcl2pnml.core.timing import Assumptions, TimedNet, mission_timing, seconds_text
+from mcl2pnml.core.vocabulary import CYCLE, ENDS as EVERY_RUN_ENDS, STALL
 
 #: The mission's result places: a run has ended once one is marked.
 ENDS = (MissionPlace.OK.id, MissionPlace.FAIL.id, MissionPlace.ABORTED.id)
@@ -51,10 +53,22 @@ def semantics(net: Net, assumptions: Assumptions) -> TimedNet:
 
 
 def ends_property() -> Property:
-    """"An end is always reached": one of the results, eventually, on every run."""
+    """"Every run ends": one of the results, eventually, on every run."""
     return Property("AlwaysEnds", Pattern.EXISTENCE, Tokens(ENDS, 1),
                     scope=Scope(ScopeKind.GLOBALLY),
                     text="eventually outcome(OK) or outcome(FAIL) or outcome(ABORTED)")
+
+
+class Site(NamedTuple):
+    """Where an instance of the compiled net comes from in the mission: a call as written
+    (``Goto(Approach)``) or a structure's kind (``while``), and its line."""
+
+    label: str
+    line: int
+
+
+#: How much of a cycle the answer shows: its first steps, each with its first transitions.
+CYCLE_STEPS, STEP_TRANSITIONS = 12, 12
 
 
 @dataclass(frozen=True)
@@ -66,7 +80,11 @@ class TimedEnds:
     and no result (time passes for ever there: a stall); ``earliest`` and
     ``latest``: the first and last times, in seconds, at which a run reaches its
     result (``latest`` None when a run never ends); ``waits``: what a run that
-    never ends waits for, in words; ``never``: that run's verdict (its firings);
+    never ends waits for, in words; ``cycle``: the transitions of the cycle such a
+    run repeats, if it does (once round); ``calls``: the net's call sites, each with
+    the shared nets it enters (its callee's, its primitives'); ``sites``: each
+    instance's call and line, from the mission, where it is known (:meth:`cycle_steps`
+    puts the cycle in the mission's terms); ``never``: that run's verdict (its firings);
     ``latest_run``: the firings of a run that ends at ``latest``; ``states`` and
     ``time_states``: the zones the verdict and the end times searched;
     ``latest_bound_states``: of the latter, those that bound the latest end on a graph
@@ -85,18 +103,74 @@ class TimedEnds:
     latest_run: tuple[str, ...] = ()
     time_states: int = 0
     latest_bound_states: int = 0
+    cycle: tuple[str, ...] = ()
+    calls: Mapping[str, frozenset[str]] = field(default_factory=dict)
+    sites: Mapping[str, Site] = field(default_factory=dict)
+
+    def placed(self, sites: Mapping[str, Site]) -> "TimedEnds":
+        """These answers with the mission's ``sites``: the cycle told by calls and lines."""
+        return replace(self, sites=sites)
+
+    def cycle_steps(self) -> list[tuple[str, tuple[str, ...]]]:
+        """The cycle in the mission's terms: each stretch of it in one call or structure,
+        as (the call and its line, its transitions), in the order the cycle runs.
+
+        A transition's instance is its name's prefix (``Goto-2.return_OK``: the call
+        ``Goto-2``). A task's or function's own net, and a primitive's, is shared by the
+        calls that enter it (a call of a task takes its primitives' locks): its
+        transitions (``Goto.t02``, ``GoToWayPoint.off_S2``) are the call's that entered it
+        last, read round the cycle (a cycle may enter at its end what it runs at its
+        start).
+        """
+        owners = [tid.rsplit(".", 1)[0] for tid in self.cycle]
+        inside: dict[str, str] = {}      # a shared net -> the call last entered into it
+        for owner in owners:             # once round: what the cycle enters at its end
+            inside.update((n, owner) for n in self.calls.get(owner, ()))
+        steps: list[tuple[str, list[str]]] = []
+        for tid, owner in zip(self.cycle, owners):
+            if owner in self.calls:
+                inside.update((n, owner) for n in self.calls[owner])
+            elif owner in inside and owner not in self.sites:   # a function's root
+                owner = inside[owner]             # structure is told as itself, a site
+            if not steps or steps[-1][0] != owner:
+                steps.append((owner, []))
+            steps[-1][1].append(tid)
+        return [(self._where(owner), tuple(tids)) for owner, tids in steps]
+
+    def _where(self, instance: str) -> str:
+        site = self.sites.get(instance)
+        return instance if site is None else f"{site.label} (line {site.line})"
+
+    def said(self) -> list[str]:
+        """What a run that never ends does, in words: what it waits for, or the calls and
+        structures of the cycle it repeats, each once, in the order the cycle meets them."""
+        if not self.cycle:
+            return list(self.waits)
+        met = list(dict.fromkeys(where for where, _ in self.cycle_steps()))
+        more = len(met) - CYCLE_STEPS
+        return [*self.waits, f"{CYCLE} through " + ", ".join(met[:CYCLE_STEPS])
+                + (f", ... ({more:,} more)" if more > 0 else "")]
 
     def lines(self) -> list[str]:
         """The answer as ``analyze --timed`` prints it."""
         out = [f"timed (docs/time.md): {self.assumptions.words()}"]
         if self.always_ends is None:
-            out.append(f"  an end is always reached: unknown ({self.reason})")
+            out.append(f"  {EVERY_RUN_ENDS}: unknown ({self.reason})")
         elif self.always_ends:
-            out.append(f"  an end is always reached: yes ({self.states:,} zones)")
+            out.append(f"  {EVERY_RUN_ENDS}: yes ({self.states:,} zones)")
+        elif self.cycle:
+            out.append(f"  {EVERY_RUN_ENDS}: no, {CYCLE}:")
+            steps = self.cycle_steps()
+            for where, tids in steps[:CYCLE_STEPS]:
+                shown = " ".join(tids[:STEP_TRANSITIONS])
+                out.append(f"    {where}: {shown}" + (" ..." if len(tids) > STEP_TRANSITIONS
+                                                      else ""))
+            if len(steps) > CYCLE_STEPS:
+                out.append(f"    ... ({len(steps) - CYCLE_STEPS:,} more; --json: all of it)")
         else:
-            out.append("  an end is always reached: no, " + "; ".join(self.waits))
+            out.append(f"  {EVERY_RUN_ENDS}: no, " + "; ".join(self.waits))
         if self.deadlock:
-            out.append("  a state with nothing left to happen and no result: yes (a stall)")
+            out.append(f"  {STALL}: yes (a stall)")
         if self.earliest is not None:
             latest = (f"{_s(self.latest)} s" if self.latest is not None else
                       f"unbounded ({self.reason})" if self.always_ends else
@@ -111,10 +185,12 @@ class TimedEnds:
         return {"assumptions": self.assumptions.as_json(), "always_ends": self.always_ends,
                 "deadlock": self.deadlock, "reason": self.reason,
                 "earliest": _num(self.earliest), "latest": _num(self.latest),
-                "waits": list(self.waits), "zones": self.states,
+                "waits": self.said(), "zones": self.states,
                 "end_time_zones": self.time_states,
                 "latest_bound_zones": self.latest_bound_states,
                 "latest_run": list(self.latest_run),
+                "cycle": [{"in": where, "transitions": list(tids)}
+                          for where, tids in self.cycle_steps()],
                 "never": None if self.never is None else {
                     "shape": self.never.shape.value, "transitions": list(self.never.transitions),
                     "loop": self.never.loop}}
@@ -151,11 +227,39 @@ def ends(net: Net, assumptions: Assumptions = Assumptions(),
     places = engine.places(tn)
     never = None if verdict.status == "holds" else as_verdict(places, verdict)
     waits = () if never is None else tuple(waiting(tn, places, verdict))
+    cycle = _period(verdict.transitions[verdict.loop:]) if never is not None \
+        and verdict.shape == "lasso" else ()
     stalls = _within(budget, lambda: _stalls(tn, verdict, max_states), lambda why: False)
     return TimedEnds(assumptions, verdict.status == "holds", stalls,
                      earliest, latest, waits, never, verdict.states, times.reason,
                      latest_run=times.latest_path, time_states=times.states,
-                     latest_bound_states=times.bound_states)
+                     latest_bound_states=times.bound_states, cycle=cycle,
+                     calls=_call_sites(net) if cycle else {})
+
+
+def _period(loop: Sequence[str]) -> tuple[str, ...]:
+    """The shortest sequence that ``loop`` repeats whole: the zones may close a cycle only
+    after going round it several times (a clock's value recurs later than the marking)."""
+    n = len(loop)
+    for p in range(1, n):
+        if n % p == 0 and all(loop[i] == loop[i - p] for i in range(p, n)):
+            return tuple(loop[:p])
+    return tuple(loop)
+
+
+def _call_sites(net: Net) -> dict[str, frozenset[str]]:
+    """The call sites of a compiled mission, by their instances' names (``Goto-2``), each
+    with the shared nets it enters: its callee's (its entry's payload says which) and its
+    primitives' (whose locks its entry takes)."""
+    out = {}
+    for t in net.transitions:
+        if t.id.endswith("." + ENTER):
+            entry = read_transition(t).entry
+            if entry is not None:
+                locks = (a.source.rsplit(".", 1)[0] for a in net.pre[t.id]
+                         if a.source.endswith(".LOCK"))
+                out[t.id.rsplit(".", 1)[0]] = frozenset([entry.callee, *locks])
+    return out
 
 
 def _within(budget: Budget, search, otherwise):
@@ -198,7 +302,8 @@ def _no_untimed_stall(tn: TimedNet, max_states: int) -> bool:
 
 
 def waiting(tn: TimedNet, places: list[str], verdict: engine.TimedVerdict) -> list[str]:
-    """What a run that never ends waits for, in the mission's words."""
+    """What a run that never ends waits for, in the mission's words (a run that goes round
+    a cycle waits for nothing: :meth:`TimedEnds.said` tells its cycle)."""
     marked = set(engine.marked_places(places, verdict.path[-1]))
     timeouts = {t.id.rsplit(".", 1)[0] for t in tn.net.transitions if t.timing is not None}
     out = []
@@ -212,10 +317,8 @@ def waiting(tn: TimedNet, places: list[str], verdict: engine.TimedVerdict) -> li
         what += ", and has no time-out" if task not in timeouts else ""
         out.append(what)
     if verdict.shape == "lasso":
-        cycle = verdict.transitions[verdict.loop:]
-        out.append("a cycle repeats for ever: " + " ".join(cycle[:12])
-                   + (" ..." if len(cycle) > 12 else ""))
-    elif not out:
+        return out
+    if not out:
         out.append("the run waits for ever with " + ", ".join(sorted(marked)[:8]) + " marked")
     if verdict.shape == "finite" and tasks:
         out[-1] += " (nothing aborts it)"

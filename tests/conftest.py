@@ -1,4 +1,4 @@
-"""Shared fixtures: the official PNML grammar where it is, a validator every PNML test uses,
+"""Shared fixtures: the official PNML grammar beside the checkout, a validator every PNML test uses,
 graphviz, headless Chromium, the engine under test, and the examples compiled once; what
 tests import lives in helpers.py."""
 from __future__ import annotations
@@ -11,7 +11,8 @@ import pytest
 
 pytest.register_assert_rewrite("helpers")  # its assertions explain their failures, as a test's do
 
-from helpers import ENGINES, ROOT, Engine  # noqa: E402  (after the rewrite hook)
+from helpers import (ENGINES, NO_GRAMMAR, ROOT, Engine,  # noqa: E402  (after the rewrite hook)
+                     official_grammar_dir)
 
 from mcl2pnml import pipeline  # noqa: E402
 from mcl2pnml.core.net import Net  # noqa: E402
@@ -21,15 +22,11 @@ sys.path.insert(0, str(ROOT))  # examples/ and paper_repro/ are not installed
 
 @pytest.fixture(scope="session")
 def grammar_dir() -> Path:
-    """The official grammar, for the tests that need AFNOR's files themselves; skipped
-    where they are not (a clone without ../shared), since they are not ours to ship."""
-    from mcl2pnml.io.pnml.grammar import ENV, find_grammar
-
-    found = find_grammar()
+    """The official grammar at ../shared/pnml-grammar, for the tests that need AFNOR's files
+    themselves; skipped where it is not (a clone without ../shared), saying so."""
+    found = official_grammar_dir()
     if found is None:
-        pytest.skip(f"the official PNML grammar is not here (no {ENV}, no shared/pnml-grammar "
-                    f"beside or above) or is set aside ({ENV}=none); our own schema is applied "
-                    "without it")
+        pytest.skip(NO_GRAMMAR)
     return found
 
 
@@ -40,7 +37,7 @@ def assert_valid():
     from mcl2pnml.io.pnml.grammar import validate_bytes
 
     def check(data: bytes, name: str = "<written>") -> None:
-        verdict = validate_bytes(data, name)
+        verdict = validate_bytes(data, name, official_grammar_dir())
         assert verdict.valid, "\n".join(str(e) for e in verdict.errors)
 
     return check

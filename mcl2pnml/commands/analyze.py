@@ -20,6 +20,7 @@ from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes, ProgressMeter
 from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.timing import Assumptions, seconds_setting
+from mcl2pnml.core.vocabulary import CERTIFIED
 
 if TYPE_CHECKING:   # for the annotations only: the analysis loads numpy
     from mcl2pnml.analysis.report import Analysis, CertifiedFacts
@@ -157,6 +158,9 @@ def analyze(file: str | Path, options: AnalyzeOptions = AnalyzeOptions(), *,
     result = ends = verdicts = None
     if timed:   # the runs in time: the timed answers alone, the untimed ones with --untimed
         ends = pipeline.timed_ends(net, assumptions, o.max_states, o.max_memory)
+        if ends.cycle and file.suffix == ".mcl":   # the cycle told by the mission's calls
+            ends = ends.placed(pipeline.call_sites(pipeline.check_file(file,
+                                                                       o.max_mission_size)))
         if props is not None:
             verdicts = pipeline.check_properties_timed(net, props, assumptions, o.max_states,
                                                        o.max_memory)
@@ -263,9 +267,8 @@ def _explored(file: Path, net: Net, start, notes: Notes, progress: ProgressMeter
                               enumerate_all=o.structure)
     if certified is not None:
         result = result.certified(certified)
-        notes(f"{beside}: the certificate holds: 1-safe, an end always reachable, reusable, "
-              "proven from the mission's parts; the markings were not explored (--explore to "
-              "explore them)")
+        notes(f"{beside}: the certificate holds: {', '.join(CERTIFIED)}, proven from the "
+              "mission's parts; the markings were not explored (--explore to explore them)")
     return result
 
 

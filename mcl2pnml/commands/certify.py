@@ -12,6 +12,7 @@ from mcl2pnml.core.files import check_outputs
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.progress import Notes
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.core.vocabulary import CERTIFIED, counted
 
 
 @dataclass(frozen=True)
@@ -49,11 +50,10 @@ class CertifyOutcome:
                     *(f"  {p}" for p in self.problems)]
         cert = self.certificate
         instances = sum(len(t) for t in cert.get("trees", {}).values())
-        tasks, functions = len(cert["tasks"]), len(cert["functions"])
-        return [f"{self.net.name}: certified from its parts ({instances} instances, "
-                f"{tasks} task{'s' * (tasks != 1)}, {functions} function"
-                f"{'s' * (functions != 1)}): 1-safe, an end always reachable, reusable; every "
-                "end one of " + ", ".join(cert["conclusion"]["ends"])]
+        return [f"{self.net.name}: certified from its parts ({counted(instances, 'instance')}, "
+                f"{counted(len(cert['tasks']), 'task')}, "
+                f"{counted(len(cert['functions']), 'function')}): {', '.join(CERTIFIED)}; "
+                "every end one of " + ", ".join(cert["conclusion"]["ends"])]
 
     def as_json(self) -> dict[str, Any]:
         return {"net": self.net.name, "holds": not self.problems,

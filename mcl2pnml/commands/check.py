@@ -11,7 +11,7 @@ from typing import Any
 from mcl2pnml import pipeline
 from mcl2pnml.commands.common import MISSION_SIZE, PROPERTIES_SIZE, properties_file, warned
 from mcl2pnml.core.bounds import MAX_PROPERTY_ATOMS
-from mcl2pnml.core.errors import visible
+from mcl2pnml.core.errors import raise_all, visible
 from mcl2pnml.core.patterns import describe
 from mcl2pnml.core.progress import Notes
 
@@ -27,23 +27,31 @@ class CheckOptions:
     #: the warnings are errors
     strict: bool = False
     max_mission_size: str = MISSION_SIZE
+    #: the vehicle that must offer every primitive, as ``run --vehicle`` names it (None: any)
+    vehicle: str | None = None
+    #: files of simulated primitives the simulator offers besides its own
+    sim_primitives: tuple[Path, ...] = ()
 
 
 @dataclass(frozen=True)
 class CheckOutcome:
-    """A mission checked: its name as given, the checked program, its warnings."""
+    """A mission checked: its name as given, the checked program, its warnings, and the
+    vehicle it was checked against (None: none)."""
 
     mission: Path
     checked: Any
     warnings: tuple = ()
+    vehicle: str | None = None
 
     def lines(self) -> list[str]:
         """What ``check`` prints first: ok, and what the mission holds."""
-        return [f"{visible(str(self.mission))}: ok ({self.checked.summary()})"]
+        flown = "" if self.vehicle is None else \
+            f"; --vehicle {visible(self.vehicle)} offers every primitive it uses"
+        return [f"{visible(str(self.mission))}: ok ({self.checked.summary()}){flown}"]
 
     def as_json(self) -> dict[str, Any]:
         return {"mission": str(self.mission), "ok": True, "summary": self.checked.summary(),
-                "warnings": len(self.warnings)}
+                "warnings": len(self.warnings), "vehicle": self.vehicle}
 
 
 @dataclass(frozen=True)
@@ -63,11 +71,15 @@ class PropertiesOutcome:
 def check(mission: Path, options: CheckOptions = CheckOptions(), *,
           notes: Notes | None = None) -> CheckOutcome:
     """``mcl2pnml check`` with ``options``: every error of the file at once (raised), then
-    the warnings, said to ``notes``. Its properties are :func:`properties`' (the mission is
-    ok before they are compiled, and said to be so first)."""
+    every primitive ``vehicle`` does not offer (raised), then the warnings, said to
+    ``notes``. Its properties are :func:`properties`' (the mission is ok before they are
+    compiled, and said to be so first)."""
     o, notes = options, Notes() if notes is None else notes
     checked = pipeline.check_file(mission, o.max_mission_size)
-    return CheckOutcome(mission, checked, tuple(warned(mission, checked, o.strict, notes)))
+    if o.vehicle is not None:
+        raise_all(pipeline.unflown(checked, o.vehicle, o.sim_primitives))
+    return CheckOutcome(mission, checked, tuple(warned(mission, checked, o.strict, notes)),
+                        o.vehicle)
 
 
 def properties(checked: CheckOutcome, options: CheckOptions = CheckOptions()

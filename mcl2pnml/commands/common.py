@@ -11,6 +11,7 @@ from mcl2pnml.core.errors import Mcl2PnmlError, visible
 from mcl2pnml.core.progress import Notes, ProgressMeter, RunsBar
 from mcl2pnml.core.settings import SettingError, UsageProblem
 from mcl2pnml.core.version import __version__ as VERSION
+from mcl2pnml.core.vocabulary import counted
 from mcl2pnml.runtime.options import RunOptions
 
 #: What the command line takes of the layers below, through the commands alone: the
@@ -61,8 +62,7 @@ def warned(mission: Path, checked, strict: bool, notes: Notes) -> list:
     for line in shown(found):
         notes(line)
     if strict and found:
-        n = len(found)
-        raise Mcl2PnmlError(f"{mission}: {n} warning{'s' * (n != 1)}, which --strict makes "
+        raise Mcl2PnmlError(f"{mission}: {counted(len(found), 'warning')}, which --strict makes "
                             "errors (fix them, or acknowledge one that is meant with "
                             "// mcl: allow CODE because ... on the line before it)")
     return found

@@ -139,7 +139,7 @@ def _saved_beside(net: Net, output: Path, timing, queries: Path | None, tool: st
     # verifydtapn's query writer: 25 ms at start-up; only compile
     from mcl2pnml.io.tapn import write_queries
     written = []
-    if timing is not None:   # an end always reached, a dead state that is not an end...
+    if timing is not None:   # every run ends, no stall...
         notes(f"timed semantics: {timing.words()}")
         for path, query, bound in write_queries(net, output, timing, props):
             notes(f"wrote {path}: {query.description} (verifydtapn -k {bound} {output} "

@@ -1,5 +1,5 @@
 """``mcl2pnml validate FILE``: a PNML file against our schema, the official grammar where it
-is given or found, and the P/T net rules."""
+is given, and the P/T net rules."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -9,13 +9,14 @@ from typing import Any
 from mcl2pnml import pipeline
 from mcl2pnml.core.errors import shown, visible
 from mcl2pnml.core.net import Net
+from mcl2pnml.core.vocabulary import counted
 
 
 @dataclass(frozen=True)
 class ValidateOptions:
     """``validate``'s settings, by the names of its options (``--help`` says each)."""
 
-    #: the folder of the official PNML grammar (None: $MCL2PNML_PNML_GRAMMAR or found)
+    #: the folder of the official PNML grammar (None: $MCL2PNML_PNML_GRAMMAR's, or none)
     grammar: Path | None = None
     net_id: str | None = None
 
@@ -37,9 +38,9 @@ class ValidateOutcome:
         """What an invalid file prints on standard error: each problem, then the count."""
         if self.verdict.valid:
             return []
-        n = len(self.verdict.errors)
         return [*shown(self.verdict.errors),
-                f"{visible(str(self.file))}: invalid PNML ({n} problem{'s' * (n != 1)}; "
+                f"{visible(str(self.file))}: invalid PNML "
+                f"({counted(len(self.verdict.errors), 'problem')}; "
                 f"{self.verdict.judges()})"]
 
     def lines(self) -> list[str]:
@@ -48,8 +49,8 @@ class ValidateOutcome:
             return []
         net = self.net
         return [f"{visible(str(self.file))}: valid PNML P/T net ({self.verdict.judges()}): "
-                f"{len(net.places)} places, {len(net.transitions)} transitions, "
-                f"{len(net.arcs)} arcs"]
+                f"{counted(len(net.places), 'place')}, "
+                f"{counted(len(net.transitions), 'transition')}, {counted(len(net.arcs), 'arc')}"]
 
     def as_json(self) -> dict[str, Any]:
         return {"file": str(self.file), "valid": self.verdict.valid,

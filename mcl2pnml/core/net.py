@@ -34,6 +34,7 @@ from operator import not_
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple
 
 from mcl2pnml.core.errors import NetError
+from mcl2pnml.core.vocabulary import counted
 
 # --------------------------------------------------------------------------
 # Frozen JSON-like payloads
@@ -577,8 +578,9 @@ class Net:
         marked = self.initial.format()
         if len(marked) > SUMMARY_MARKED:  # a long mission marks every call site's MTX
             marked = [*marked[:SUMMARY_MARKED], f"... {len(marked) - SUMMARY_MARKED:,} more"]
-        return (f"{self.name}: {len(self.places):,} places, {len(self.transitions):,} "
-                f"transitions ({timed:,} timed), {len(self.arcs):,} arcs ({reads:,} read), "
+        return (f"{self.name}: {counted(len(self.places), 'place')}, "
+                f"{counted(len(self.transitions), 'transition')} ({timed:,} timed), "
+                f"{counted(len(self.arcs), 'arc')} ({reads:,} read), "
                 f"initial marking {{{', '.join(marked)}}}")
 
 

@@ -61,6 +61,7 @@ from mcl2pnml.core.files import atomic_write_text, read_bytes
 from mcl2pnml.core.net import Net
 from mcl2pnml.core.payloads import RESULT_PLACES, MissionPlace
 from mcl2pnml.core.settings import SettingError
+from mcl2pnml.core.vocabulary import CAN_END
 from mcl2pnml.io import ids
 
 if TYPE_CHECKING:
@@ -192,7 +193,7 @@ def mission_properties(net: Net, tool: str = "verifypn") -> tuple[Property, ...]
                  _e("exists-path", _e("finally", _e("conjunction", stuck,
                                                     _e("negation", end))))),
         Property(f"{name}-end-always-reachable",
-                 "AG EF end: from every reachable marking a proper end can be reached; "
+                 f"AG EF end: {CAN_END} (from every reachable marking); "
                  "mcl2pnml analyze: final_always_reachable",
                  _e("all-paths", _e("globally", _e("exists-path", _e("finally", end))))),
     )

@@ -86,6 +86,7 @@ from mcl2pnml.core.patterns import (Grouping, Pattern, Predicate, PredicateSynta
 from mcl2pnml.core.timing import (Assumptions, TimedNet, exact_seconds, mission_timing,
                                   seconds_text)
 from mcl2pnml.core.version import __version__
+from mcl2pnml.core.vocabulary import ENDS, STALL
 
 #: The assumptions a timed-arc net is written under unless told: TAPAAL's urgency, no priority.
 TAPAAL_ASSUMPTIONS = Assumptions(priority=False)
@@ -532,16 +533,15 @@ def _results(tnet: TimedArcNet) -> list[str]:
 
 
 def ends_query(tnet: TimedArcNet) -> Query:
-    """"An end is always reached": every run, however time passes, marks a result."""
+    """"Every run ends": every run, however time passes, marks a result."""
     some = " or ".join(f"{r} = 1" for r in _results(tnet))
-    return Query("ends", "an end is always reached (AF a result)", f"AF ({some})\n")
+    return Query("ends", f"{ENDS} (AF a result)", f"AF ({some})\n")
 
 
 def deadlock_query(tnet: TimedArcNet) -> Query:
-    """"A dead state that is not an end": nothing can fire now or after any delay, and no
-    result is marked."""
+    """A stall: nothing can fire now or after any delay, and no result is marked."""
     none = " and ".join(f"{r} = 0" for r in _results(tnet))
-    return Query("deadlock", "a dead state that is not an end (EF deadlock and no result)",
+    return Query("deadlock", f"{STALL} (EF deadlock and no result)",
                  f"EF (deadlock and {none})\n")
 
 

@@ -13,12 +13,14 @@ UTF-8 text (or is binary) is refused the same way, at the first bad byte.
 """
 from __future__ import annotations
 
+import difflib
 import math
+import re
 from functools import lru_cache
 from pathlib import Path
 
 from lark import (Lark, Token, Transformer_NonRecursive, Tree, UnexpectedCharacters,
-                  UnexpectedEOF, UnexpectedInput)
+                  UnexpectedEOF, UnexpectedInput, UnexpectedToken)
 
 from mcl2pnml.language import ast
 from mcl2pnml.core.bounds import MAX_INTEGER, natural_at_most
@@ -103,8 +105,52 @@ COMMENT: /\/\/[^\n]*/ | /\/\*(.|\n)*?\*\//
 %ignore COMMENT
 """
 
-KEYWORDS = {"const", "primitive", "task", "function", "mission", "if", "then", "else",
-            "while", "do", "timeout", "parallel", "monitor"}
+#: A keyword's shape: a literal of the grammar that a name could be.
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: The rule whose words are keywords only inside it (the contextual lexer's).
+_PROPERTY_RULE = "property"
+
+
+@lru_cache(maxsize=None)
+def grammar_words() -> tuple[frozenset[str], frozenset[str]]:
+    """The grammar's keywords, read from :data:`GRAMMAR`: (every word of it, those of
+    missions).
+
+    A word is a literal of the grammar shaped as a name (``"while"``); those of
+    missions are the words of the rules reached from ``start`` without entering
+    a property, which alone may not be names. A property's words (``before``,
+    ``never``...) are keywords only inside a property: a mission may name a
+    thing ``before``. Read from the parser the first parse builds anyway.
+    """
+    parser = _fast_parser()
+    literal = {t.name: t.pattern.value for t in parser.terminals
+               if t.pattern.type == "str" and _WORD.fullmatch(t.pattern.value)}
+    expansions: dict[str, list] = {}
+    for rule in parser.rules:
+        expansions.setdefault(rule.origin.name, []).append(rule.expansion)
+    seen, todo, mission = {"start"}, ["start"], set()
+    while todo:
+        for expansion in expansions.get(todo.pop(), ()):
+            for symbol in expansion:
+                if symbol.is_term:
+                    mission.update([literal[symbol.name]] if symbol.name in literal else [])
+                elif symbol.name not in seen and symbol.name != _PROPERTY_RULE:
+                    seen.add(symbol.name)
+                    todo.append(symbol.name)
+    return frozenset(literal.values()), frozenset(mission)
+
+
+def keywords() -> frozenset[str]:
+    """The words a mission may not use as names (:func:`grammar_words`)."""
+    return grammar_words()[1]
+
+
+def __getattr__(name: str):
+    # KEYWORDS stays a name of this module, read from the grammar on first use: building
+    # the parser at import would cost every command that reads no MCL lark's analysis
+    if name == "KEYWORDS":
+        return keywords()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 _READABLE = {"NAME": "a name", "NUMBER": "a number", "STRING": "a string",
              "$END": "the end of the file"}
@@ -334,7 +380,7 @@ class _Suspect(Exception):
 
 def _name(token: Token) -> Token:
     """The lexer's check of every name: a keyword lets the tree's checks say what is wrong."""
-    if token in KEYWORDS:
+    if token in keywords():
         raise _Suspect
     return token
 
@@ -377,29 +423,127 @@ def _parse_tree(text: str, filename: str) -> tuple[ast.Declaration, ...]:
     try:
         tree = _tree_parser().parse(text)
     except UnexpectedInput as e:
-        line, col = e.line, e.column
-        if isinstance(e, UnexpectedEOF) or line < 1:
-            line = max(1, len(lines))
-            col = len(lines[-1]) + 1 if lines else 1
-        src = line_of(lines, line)
-        expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
-                                                  or getattr(e, "allowed", None) or ())})
-        if isinstance(e, UnexpectedCharacters):
-            found = f"unexpected character {text[e.pos_in_stream]!r}"
-        elif isinstance(e, UnexpectedEOF):
-            found = "unexpected end of file"
-        elif e.token.type == "$END":
-            found = "unexpected end of file"
-        else:
-            tok = e.token
-            found = (f"'{tok}' is a keyword" if str(tok) in KEYWORDS and "a name" in expected
-                     else f"unexpected {_describe(tok.type) if tok.type != 'NAME' else repr(str(tok))}")
-        hint = f"; expected {', '.join(expected[:-1])} or {expected[-1]}" if len(expected) > 1 \
-            else (f"; expected {expected[0]}" if expected else "")
-        raise Mcl2PnmlError(f"syntax error: {found}{hint}",
-                            Location(filename, line, col, src)) from None
+        raise _syntax_error(e, text, lines, filename) from None
     _check_nesting(tree, lines, filename)
     return _Build().transform(tree)
+
+
+def _syntax_error(e: UnexpectedInput, text: str, lines: list[str],
+                  filename: str) -> Mcl2PnmlError:
+    """The one message of a syntax error: a repair that lets the parse go on where there is
+    one (:func:`_repair`), else what was found and what would have been valid there."""
+    repaired = None if isinstance(e, UnexpectedCharacters) else _repair(e, text)
+    if repaired is not None:
+        message, line, col = repaired
+        return Mcl2PnmlError(f"syntax error: {message}",
+                             Location(filename, line, col, line_of(lines, line)))
+    line, col = e.line, e.column
+    if isinstance(e, UnexpectedEOF) or line < 1:
+        line = max(1, len(lines))
+        col = len(lines[-1]) + 1 if lines else 1
+    expected = sorted({_describe(t) for t in (getattr(e, "expected", None)
+                                              or getattr(e, "allowed", None) or ())})
+    if isinstance(e, UnexpectedCharacters):
+        found = f"unexpected character {text[e.pos_in_stream]!r}"
+    elif isinstance(e, UnexpectedEOF) or e.token.type == "$END":
+        found = "unexpected end of file"
+    else:
+        tok = e.token
+        found = (f"'{tok}' is a keyword" if str(tok) in keywords() and "a name" in expected
+                 else f"unexpected {_describe(tok.type) if tok.type != 'NAME' else repr(str(tok))}")
+    hint = f"; expected {', '.join(expected[:-1])} or {expected[-1]}" if len(expected) > 1 \
+        else (f"; expected {expected[0]}" if expected else "")
+    return Mcl2PnmlError(f"syntax error: {found}{hint}",
+                         Location(filename, line, col, line_of(lines, line)))
+
+
+#: The most words of a statement tried as misspelled keywords, from the fault backwards.
+_TRIED = 8
+#: How far past the fault a guess is parsed (characters): far enough to see the parse go on.
+_PAST = 200
+#: What the guesses parse in all, at most (characters): each parses the file from its start
+#: to a little past the fault, so that a fault deep in a generated mission of megabytes gets
+#: the plain message at once rather than after minutes of guessing.
+_GUESSED = 2_000_000
+
+
+class _Guesses:
+    """Edits of the text around a syntax error, each held to the parser: does the parse go
+    past the fault with it? Each parses the text up to :data:`_PAST` characters past the
+    fault (an end there is no fault of the edit), within :data:`_GUESSED` in all."""
+
+    def __init__(self, text: str, fault: int, fault_end: int):
+        self.text, self.fault, self.fault_end = text, fault, fault_end
+        self.left = _GUESSED
+
+    def helps(self, start: int, end: int, new: str) -> bool:
+        """Whether writing ``new`` over ``text[start:end]`` lets the parse go past the
+        fault's token (False once the guesses have parsed what they may)."""
+        shift = len(new) - (end - start)
+        cut = min(len(self.text), self.fault_end + _PAST)
+        edited = self.text[:start] + new + self.text[end:cut]
+        if len(edited) > self.left:
+            return False
+        self.left -= len(edited)
+        at = _fault_at(edited)
+        if at is None or at >= len(edited) and cut < len(self.text):
+            return True          # parsed, or stopped by the cut only
+        return (at - shift if at >= start + len(new) else at) >= max(self.fault + 1,
+                                                                     self.fault_end)
+
+
+def _fault_at(text: str) -> int | None:
+    """The offset where the parser first fails on ``text`` (an unexpected end: the text's
+    length), or None when it parses."""
+    try:
+        _tree_parser().parse(text)
+    except UnexpectedEOF:
+        return len(text)
+    except UnexpectedToken as e:
+        return len(text) if e.token.type == "$END" else e.token.start_pos
+    except UnexpectedInput as e:
+        return e.pos_in_stream
+    return None
+
+
+def _repair(e: UnexpectedInput, text: str) -> tuple[str, int, int] | None:
+    """A misspelled keyword or a missing ``;`` that explains the syntax error ``e``, as
+    (message, line, column) where the fix goes; None when neither does.
+
+    A word of the statement the fault is in (from the fault backwards) that is close to a
+    keyword of the grammar (difflib's ratio) is that keyword misspelled if, the keyword
+    written in its place, the parse goes past the fault: ``paralel(Dive(1), Dive(2))``
+    fails at the second ``(``, ``parallel(...)`` parses. Otherwise a ``;`` is missing at
+    the end of the token before the fault if, inserted there, the parse goes past it.
+    Each guess is held to the parser (:class:`_Guesses`), so none is offered that would
+    not help.
+    """
+    at_end = isinstance(e, UnexpectedEOF) or e.token.type == "$END"
+    fault = len(text) if at_end else e.token.start_pos
+    guesses = _Guesses(text, fault, len(text) if at_end else e.token.end_pos)
+    tokens = []
+    try:
+        for token in _tree_parser().lex(text[:fault]):
+            tokens.append(token)
+    except UnexpectedInput:   # a character no token begins with: the tokens before it
+        pass
+    statement = next((i + 1 for i in range(len(tokens) - 1, -1, -1)
+                      if tokens[i].type in ("SEMICOLON", "LBRACE", "RBRACE")), 0)
+    words, _ = grammar_words()
+    for token in [*([] if at_end else [e.token]), *reversed(tokens[statement:])][:_TRIED]:
+        if not _WORD.fullmatch(token) or token in words:
+            continue
+        for word in difflib.get_close_matches(str(token), words, n=3, cutoff=0.5):
+            if guesses.helps(token.start_pos, token.end_pos, word):
+                return (f"unexpected '{token}'; did you mean '{word}'?", token.line,
+                        token.column)
+    if tokens and guesses.helps(tokens[-1].end_pos, tokens[-1].end_pos, ";"):
+        last = tokens[-1]
+        where = "" if at_end else \
+            f" before '{e.token}'" + (f" (line {e.token.line})"
+                                       if e.token.line != last.end_line else "")
+        return f"missing ';'{where}", last.end_line, last.end_column
+    return None
 
 
 #: How deep blocks, structures, calls and tuples may nest. Missions people
@@ -438,7 +582,7 @@ def _check_nesting(tree: Tree, lines: list[str], filename: str) -> None:
             if fault is not None:
                 src = line_of(lines, node.line)
                 raise Mcl2PnmlError(fault, Location(filename, node.line, node.column, src))
-            if node.type == "NAME" and str(node) in KEYWORDS:
+            if node.type == "NAME" and str(node) in keywords():
                 # the contextual lexer lets a keyword through as a name
                 src = line_of(lines, node.line)
                 raise Mcl2PnmlError(f"'{node}' is a keyword and cannot be used as a name",

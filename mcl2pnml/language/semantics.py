@@ -18,6 +18,7 @@ from mcl2pnml.core.bounds import MAX_SECONDS
 from mcl2pnml.core.errors import (SHOWN_ERRORS, Location, Mcl2PnmlError, did_you_mean, raise_all,
                                   source_lines)
 from mcl2pnml.core.timing import PER_SECOND, finer_than_a_microsecond
+from mcl2pnml.core.vocabulary import counted
 from mcl2pnml.language.library import Library, default_library
 from mcl2pnml.language.declared_properties import property_errors
 from mcl2pnml.language.template_parser import Template, TemplateKind
@@ -41,9 +42,10 @@ class Checked:
 
     def summary(self) -> str:
         """What the program declares, as ``mcl2pnml check`` reports it."""
-        n = len(self.functions)
-        return (f"{len(self.primitives)} primitives, {len(self.tasks)} tasks, "
-                f"{n} function{'s' * (n != 1)}, {len(self.consts)} consts")
+        return ", ".join([counted(len(self.primitives), "primitive"),
+                          counted(len(self.tasks), "task"),
+                          counted(len(self.functions), "function"),
+                          counted(len(self.consts), "const")])
 
 
 class _Checker:
@@ -196,10 +198,9 @@ class _Checker:
 
     def arity(self, pos, kind: str, name: str, params: tuple[str, ...], given: int) -> None:
         if len(params) != given:
-            plural = "s" * (len(params) != 1)
             listing = f" ({', '.join(params)})" if params else ""
-            self.error(pos, f"{kind} '{name}' takes {len(params)} argument{plural}{listing}, "
-                            f"given {given}")
+            self.error(pos, f"{kind} '{name}' takes {counted(len(params), 'argument')}"
+                            f"{listing}, given {given}")
 
     # -- tasks ---------------------------------------------------------------------------
 
@@ -218,8 +219,8 @@ class _Checker:
                 slots = len(template.primitives)
                 if slots != len(task.primitives):
                     self.error(task.pattern_pos,
-                               f"pattern {task.pattern} takes {slots} primitive"
-                               f"{'s' * (slots != 1)}, given {len(task.primitives)}")
+                               f"pattern {task.pattern} takes {counted(slots, 'primitive')}, "
+                               f"given {len(task.primitives)}")
             for call in task.primitives:
                 prim = self.names.get(call.name)
                 if not isinstance(prim, ast.Primitive):

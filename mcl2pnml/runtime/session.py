@@ -31,7 +31,7 @@ from mcl2pnml.runtime.link import LinkOptions
 from mcl2pnml.runtime.options import RunOptions
 from mcl2pnml.runtime.runlog import RunLog
 from mcl2pnml.runtime.simprims import load_file
-from mcl2pnml.runtime.vehicles import VehicleKind, kind_of, seed_of
+from mcl2pnml.runtime.vehicles import VehicleKind, kind_of, refuse_sim_primitives, seed_of
 
 #: The options of a run that its journal's header records, and a resume reuses.
 JOURNALED = ("engine", "vehicle", "world", "max_time", "sim_primitives", "ack_within",
@@ -83,9 +83,7 @@ def _vehicle(options: RunOptions) -> tuple[VehicleKind, object]:
                            "vehicle's run cannot be replayed")
     if options.world and not kind.takes_world:
         raise SettingError("world", "a world is for the simulator (--vehicle sim)")
-    if options.sim_primitives and not kind.takes_world:
-        raise SettingError("sim_primitives", "simulated primitives are for the simulator "
-                           "(--vehicle sim)")
+    refuse_sim_primitives(kind, options.sim_primitives)
     if not kind.realtime:
         for name in ("connect",) + _LINK:
             if getattr(options, name) != _DEFAULTS[name]:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Sequence
 
 from mcl2pnml.core.settings import SettingError
 
@@ -39,6 +39,10 @@ class VehicleKind:
     takes_world: bool = False
     #: the file the vehicle is read from, whose digest a journal keeps (None: none)
     source: Callable[[str], "Path | None"] = lambda spec: None
+    #: the primitives it offers, from the specification and the files of simulated
+    #: primitives, read without making the vehicle (None: any, as a script answers for any)
+    offers: Callable[[str, Sequence[Path]], "frozenset[str] | None"] = \
+        lambda spec, files: None
 
 
 def _simulator(spec: str, connect: str | None, world: Path | None,
@@ -46,12 +50,28 @@ def _simulator(spec: str, connect: str | None, world: Path | None,
     """The simulator in ``world``; ``sim@SEED`` seeds its noise with SEED instead of the
     world's seed (a campaign's run, flown again alone)."""
     from mcl2pnml.runtime.simulator import AUVSimulator, World   # 20 ms: see VEHICLES
+    seed = _sim_seed(spec)
+    w = World.load(world) if world else World()
+    return AUVSimulator(w if seed is None else replace(w, seed=seed))
+
+
+def _sim_seed(spec: str) -> int | None:
+    """The seed of ``sim@SEED`` (None: ``sim``, the world's), or why it is none."""
     seed = seed_of(spec)
     if spec != "sim" and seed is None:
         raise SettingError("vehicle", f"'{spec[:80]}': the seed after sim@ is a whole number "
                                       "(sim@SEED)")
-    w = World.load(world) if world else World()
-    return AUVSimulator(w if seed is None else replace(w, seed=seed))
+    return seed
+
+
+def _simulated(spec: str, files: Sequence[Path]) -> frozenset[str]:
+    """The simulator's primitives: the built-ins, the installed packages', the files'."""
+    from mcl2pnml.runtime.simprims import installed, load_file   # 22 ms: see VEHICLES
+    _sim_seed(spec)
+    table = installed()
+    for path in files:
+        table = load_file(path, table)
+    return frozenset(table)
 
 
 def seed_of(spec: str) -> int | None:
@@ -99,6 +119,20 @@ def _mapping_path(spec: str) -> Path | None:
     return Path(spec[len("mavlink:"):]) if spec.startswith("mavlink:") else None
 
 
+def _autopilot_offers(spec: str, files: Sequence[Path]) -> frozenset[str]:
+    """The primitives the autopilot's mapping binds (ArduSub's, without a mapping file)."""
+    from mcl2pnml.runtime.autopilot import AutopilotMapping   # 40 ms: see VEHICLES
+    path = _mapping_path(spec)
+    return frozenset((AutopilotMapping.load(path) if path else AutopilotMapping.ardusub())
+                     .bindings)
+
+
+def _bridge_offers(spec: str, files: Sequence[Path]) -> frozenset[str]:
+    """The primitives the bridge's mapping binds."""
+    from mcl2pnml.runtime.bridge import VehicleMapping   # 33 ms: see VEHICLES
+    return frozenset(VehicleMapping.load(spec[len("bridge:"):]).bindings)
+
+
 def _model_spec(spec: str) -> tuple[Path, int]:
     """``model:FILE.json`` or ``model:FILE.json@SEED``: the model's file and the seed."""
     seed = seed_of(spec)
@@ -120,6 +154,14 @@ def _script(spec: str, connect: str | None, world: Path | None,
     return ScriptedVehicle.load(spec)
 
 
+def _any(build: Callable) -> Callable[[str, Sequence[Path]], None]:
+    """The offer of a vehicle that answers for any primitive (a script, a model): its file
+    read, so that a fault in it is said where it is, and no primitive refused."""
+    def offers(spec: str, files: Sequence[Path]) -> None:
+        build(spec, None, None, None)
+    return offers
+
+
 # (Each kind's module is imported when a vehicle of that kind is made, 20 to 40 ms each,
 # measured with python -X importtime: the CLI imports this table at its start, for
 # --vehicle's help.)
@@ -129,18 +171,36 @@ def _script(spec: str, connect: str | None, world: Path | None,
 #: answers (docs/odds.md; the seed after @ replays a run), and (whatever else is
 #: given) a vehicle script (docs/running.md).
 VEHICLES: tuple[VehicleKind, ...] = (
-    VehicleKind("sim[@SEED]", is_simulator, _simulator, takes_world=True),
+    VehicleKind("sim[@SEED]", is_simulator, _simulator, takes_world=True, offers=_simulated),
     VehicleKind("bridge:MAPPING.json", lambda spec: spec.startswith("bridge:"), _bridge,
-                realtime=True),
+                realtime=True, offers=_bridge_offers),
     VehicleKind("mavlink[:MAPPING.json]",
                 lambda spec: spec == "mavlink" or spec.startswith("mavlink:"), _mavlink,
-                realtime=True, takes_world=True, source=_mapping_path),
+                realtime=True, takes_world=True, source=_mapping_path,
+                offers=_autopilot_offers),
     VehicleKind("model:MODEL.json[@SEED]", lambda spec: spec.startswith("model:"), _model,
-                source=lambda spec: _model_spec(spec)[0]),
-    VehicleKind("SCRIPT.json", lambda spec: True, _script, source=Path),
+                source=lambda spec: _model_spec(spec)[0], offers=_any(_model)),
+    VehicleKind("SCRIPT.json", lambda spec: True, _script, source=Path, offers=_any(_script)),
 )
 
 
 def kind_of(spec: str) -> VehicleKind:
     """The kind of vehicle ``spec`` names (the script, when nothing else matches)."""
     return next(kind for kind in VEHICLES if kind.matches(spec))
+
+
+def refuse_sim_primitives(kind: VehicleKind, files: Sequence[Path]) -> None:
+    """Files of simulated primitives are for a vehicle that simulates (sim, mavlink)."""
+    if files and not kind.takes_world:
+        raise SettingError("sim_primitives", "simulated primitives are for the simulator "
+                                             "(--vehicle sim)")
+
+
+def offered(spec: str, sim_primitives: Sequence[Path] = ()) -> frozenset[str] | None:
+    """The primitives the vehicle ``spec`` (as ``run --vehicle`` names it) offers, with the
+    simulated primitives of the files ``sim_primitives``; None when it answers for any (a
+    script, a vehicle model). Read from its table or its files, without making the
+    vehicle: no link is opened, no world read (``check --vehicle``)."""
+    kind = kind_of(spec)
+    refuse_sim_primitives(kind, sim_primitives)
+    return kind.offers(spec, sim_primitives)

@@ -3,11 +3,13 @@ with zone inclusion, every counterexample replayed without it, under the state a
 limits. What they answer is held to independent readings in ``test_timed.py``."""
 from __future__ import annotations
 
+import re
 from fractions import Fraction
 
 from mcl2pnml import pipeline
 from mcl2pnml.analysis.timed import zones
 from mcl2pnml.core.timing import Assumptions
+from mcl2pnml.core.vocabulary import CYCLE, ENDS as EVERY_RUN_ENDS
 from mcl2pnml.timed_verdicts import ENDS, ends_property, semantics
 
 #: A loop whose body holds for 5 s, in a monitor beside a 200 s time-out: dozens of
@@ -67,7 +69,27 @@ def test_a_cycle_with_no_report_gap_is_decided_by_the_tick(examples):
     assert ends.always_ends is False, ends.reason
     assert ends.never.shape.value == "lasso"
     assert zones.TICK not in ends.never.transitions
-    assert ends.waits and ends.waits[-1].startswith("a cycle repeats for ever")
+    # the cycle in the mission's terms: its calls and structures, each on its line
+    ends = ends.placed(pipeline.call_sites(examples.checked("docking")))
+    loop = ends.never.transitions[ends.never.loop:]
+    assert ends.cycle and loop == ends.cycle * (len(loop) // len(ends.cycle))   # once round
+    steps = ends.cycle_steps()
+    assert tuple(t for _, fired in steps for t in fired) == ends.cycle   # each firing, in order
+    source = examples.mission("docking").read_text().splitlines()
+    tasks = examples.checked("docking").tasks
+    calls = set()
+    for where, fired in steps:
+        label, line = re.fullmatch(r"(.+) \(line (\d+)\)", where).groups()
+        assert label.split("(")[0] in source[int(line) - 1], where
+        # a task's own net is shared: its firings go with the call that entered it
+        assert all(label.startswith(t.split(".")[0] + "(") for t in fired
+                   if t.split(".")[0] in tasks), (where, fired)
+        calls |= {label} if "(" in label else set()
+    assert {"Goto(Approach)", "Home()"} <= calls
+    assert ends.said()[-1].startswith(CYCLE) and all(c in ends.said()[-1] for c in calls)
+    printed = "\n".join(ends.lines())
+    assert f"{EVERY_RUN_ENDS}: no, {CYCLE}:" in printed
+    assert all(f"    {where}: " in printed for where, _ in steps)
 
 
 def test_a_replayed_run_that_cannot_fire_is_no_run(examples):

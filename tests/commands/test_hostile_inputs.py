@@ -345,7 +345,7 @@ def test_a_deep_chain_of_functions_checks_compiles_and_runs(tmp_path, n):
     mission = tmp_path / f"chain{n}.mcl"
     mission.write_text(chain(n))
     out = cli("check", mission)
-    assert out.exit_code == 0 and f"{n} functions" in out.output, out.output
+    assert out.exit_code == 0 and f"{n:,} functions" in out.output, out.output
     checked = pipeline.check_file(mission)
     assert checked.function_order[0] == f"F{n - 1}" and checked.function_order[-1] == "F0"
     lines = pipeline.functional_form(checked, functions=True)

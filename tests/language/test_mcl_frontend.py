@@ -8,9 +8,10 @@ from mcl2pnml.language.functional import format_node, mission_expression
 from mcl2pnml.language.semantics import check_program
 from mcl2pnml.language.parser import decode, parse, parse_file
 
-from helpers import DATA, ROOT, assert_error_golden, run_cli as run
+from helpers import DATA, ROOT, assert_error_golden, assert_golden, run_cli as run
 
 INVALID = sorted((DATA / "mcl" / "invalid").glob("*.mcl"))
+NOT_ON_SIM = sorted((DATA / "mcl" / "not_on_sim").glob("*.mcl"))
 EXAMPLES = sorted((ROOT / "examples").glob("*.mcl"))
 ALGORITHM_2 = ("sequence(if-then-else(monitor(Survey(), FindCross()), sequence("
                "AchieveDepth(CrossDepth), DropMarker()), NULL), AchieveDepth(SurfaceDepth))")
@@ -68,6 +69,13 @@ def test_invalid_files_give_the_expected_messages(path):
     with pytest.raises(Mcl2PnmlError) as info:
         check_program(parse(decode(path.read_bytes(), path.name), path.name))
     assert_error_golden(path, info.value)
+
+
+@pytest.mark.parametrize("path", NOT_ON_SIM, ids=lambda p: p.name)
+def test_check_vehicle_sim_names_every_primitive_the_simulator_cannot_fly(path):
+    out = run("check", path.name, "--vehicle", "sim", cwd=path.parent)
+    assert out.returncode == (0 if path.stem.startswith("every") else 2), out.stderr
+    assert_golden(path.with_suffix(".expected"), out.stdout + out.stderr)
 
 
 @pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.name)

@@ -30,6 +30,17 @@ from mcl2pnml.runtime.reference import ReferenceEngine
 ROOT = Path(__file__).resolve().parents[2]
 DATA = Path(__file__).resolve().parents[1] / "data"
 REGOLD = os.environ.get("MCL2PNML_REGOLD") == "1"
+#: The official PNML grammar (pnml.org's grammar.zip, not ours to ship) where a checkout
+#: keeps it, beside it: validate never looks for it, so the tests pass it explicitly.
+GRAMMAR = ROOT.parent / "shared" / "pnml-grammar"
+#: Why a test that needs the official grammar is skipped without it.
+NO_GRAMMAR = (f"the official PNML grammar is not at {GRAMMAR} (pnml.org's version-2009 "
+              "grammar.zip, not ours to ship); our own schema is applied without it")
+
+
+def official_grammar_dir() -> Path | None:
+    """:data:`GRAMMAR`, where it holds the grammar; else None."""
+    return GRAMMAR if (GRAMMAR / "ptnet.pntd").is_file() else None
 
 #: The engines, as ``mcl2pnml run --engine`` names them.
 ENGINES = ("petri", "reference")

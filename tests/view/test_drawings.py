@@ -19,7 +19,7 @@ import pytest
 from lxml import etree
 
 from drawcheck import fitted_text, laid_out, layout_json, problems
-from helpers import ROOT, run_cli
+from helpers import ROOT, official_grammar_dir, run_cli
 from sampling import variants
 from mcl2pnml import pipeline
 from mcl2pnml.view.drawing import box_node, dot_graph, drawing, instance_clusters
@@ -302,10 +302,11 @@ def _bezier(points, t: float) -> tuple[float, float]:
 def test_a_templates_bend_points_lie_on_the_arcs_of_its_drawing(tmp_path):
     net = pipeline.template_net("task")
     path = pipeline.save_net(net, tmp_path / "task.pnml")
-    verdict, _ = pipeline.validate_pnml(path)       # our schema and the official grammar
+    official = official_grammar_dir()
+    verdict, _ = pipeline.validate_pnml(path, official)   # ours, and the official grammar
     assert verdict.valid, verdict
-    from mcl2pnml.io.pnml.grammar import OFFICIAL, find_grammar
-    if find_grammar() is not None:      # shared/pnml-grammar: arcs' positions as it allows
+    from mcl2pnml.io.pnml.grammar import OFFICIAL
+    if official is not None:      # ../shared/pnml-grammar: arcs' positions as it allows
         assert OFFICIAL in {s.schema for s in verdict.schemas if s.valid}
     assert pipeline.load_net(path) == net          # the reader takes bend points in its stride
     bends = _arcs(path)

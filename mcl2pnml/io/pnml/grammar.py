@@ -1,24 +1,20 @@
-"""Validation of PNML P/T nets: our schema, the official grammar where it is, the reader's rules.
+"""Validation of PNML P/T nets: our schema, the official grammar where given, the reader's rules.
 
 Three judges, in this order:
 
 1. mcl2pnml's own RELAX NG schema of ISO/IEC 15909-2 P/T nets (``ptnet.rng``
    beside this module, shipped with the package), always;
 2. the official 2009 grammar (AFNOR's RELAX NG files, not shipped with
-   mcl2pnml), when it is given or found, looked for in order:
-
-   a. the directory given explicitly (``mcl2pnml validate --grammar DIR``);
-   b. the directory in the environment variable ``MCL2PNML_PNML_GRAMMAR``;
-   c. a ``shared/pnml-grammar`` directory beside or above the working
-      directory or the installed package (where a checkout of this project
-      keeps it).
-
-   ``MCL2PNML_PNML_GRAMMAR=none`` applies our schema alone, wherever the
-   official grammar is. A directory given (a or b) must hold ``ptnet.pntd``
-   and the files it includes (``pnmlcoremodel.rng``, ``conventions.rng``,
-   ``anyElement.rng``) with local ``include`` references, as pnml.org's
-   ``grammar.zip`` unpacked and pointed at its own files; one that does not,
-   or that lxml cannot compile, is an error, as is a broken one found by c;
+   mcl2pnml), when it is given: the directory given explicitly (``mcl2pnml
+   validate --grammar DIR``), else the one in the environment variable
+   ``MCL2PNML_PNML_GRAMMAR`` (``none``: our schema alone). It is never looked
+   for: a file's verdict does not depend on the folders above the working
+   directory or the package (a checkout passes ``--grammar ../shared/pnml-grammar``
+   where that is, as its tests and ``make demo`` do). A directory given must
+   hold ``ptnet.pntd`` and the files it includes (``pnmlcoremodel.rng``,
+   ``conventions.rng``, ``anyElement.rng``) with local ``include`` references,
+   as pnml.org's ``grammar.zip`` unpacked and pointed at its own files; one
+   that does not, or that lxml cannot compile, is an error;
 3. the reader's own rules (:func:`mcl2pnml.io.pnml.reader.parse_pnml`), which
    no RELAX NG schema can express: an arc from a place to a place passes
    both schemas.
@@ -77,28 +73,23 @@ _HINTS = (
 
 
 def find_grammar(explicit: str | Path | None = None) -> Path | None:
-    """The directory of the official PNML grammar, or ``None`` when none is found.
+    """The directory of the official PNML grammar given (``explicit``, else
+    ``$MCL2PNML_PNML_GRAMMAR``), or ``None`` when none is given (or the variable says
+    ``none``): it is never looked for.
 
-    A directory given (``explicit``, else ``$MCL2PNML_PNML_GRAMMAR``) that has
-    no ``ptnet.pntd`` is a :class:`PnmlError` saying how to get the grammar;
-    ``$MCL2PNML_PNML_GRAMMAR`` set to ``none`` turns the search off.
+    A directory given that has no ``ptnet.pntd`` is a :class:`PnmlError` saying how to
+    get the grammar.
     """
     given = explicit if explicit is not None else os.environ.get(ENV) or None
-    if explicit is None and given == NONE:
+    if given is None or explicit is None and given == NONE:
         return None
-    if given is not None:
-        if (Path(given) / ENTRY).is_file():
-            return Path(given)
-        source = "--grammar" if explicit is not None else ENV
-        raise PnmlError(
-            f"PNML grammar: no {ENTRY} in {given} (from {source}); unpack pnml.org's "
-            f"version-2009 grammar.zip (ptnet.pntd and the .rng files it includes) and pass "
-            f"--grammar DIR or set {ENV}=DIR")
-    for start in (Path.cwd(), Path(__file__).resolve().parent):
-        for d in (start, *start.parents):
-            if (d / "shared" / "pnml-grammar" / ENTRY).is_file():
-                return d / "shared" / "pnml-grammar"
-    return None
+    if (Path(given) / ENTRY).is_file():
+        return Path(given)
+    source = "--grammar" if explicit is not None else ENV
+    raise PnmlError(
+        f"PNML grammar: no {ENTRY} in {given} (from {source}); unpack pnml.org's "
+        f"version-2009 grammar.zip (ptnet.pntd and the .rng files it includes) and pass "
+        f"--grammar DIR or set {ENV}=DIR")
 
 
 def schema_text() -> bytes:
