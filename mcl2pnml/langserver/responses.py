@@ -349,8 +349,9 @@ def symbols(outline: Outline, units: Units, uri: str, hierarchical: bool = True
     """Every declaration, in the order written, with its parameters (a list of
     declarations alone for a client that takes no tree)."""
     if not hierarchical:
-        return [types.SymbolInformation(d.name, _SYMBOLS[d.kind],
-                                        types.Location(uri, units.range(d.start, d.end)))
+        return [types.SymbolInformation(name=d.name, kind=_SYMBOLS[d.kind],
+                                        location=types.Location(uri, units.range(d.start,
+                                                                                 d.end)))
                 for d in outline.declarations]
     out = []
     for d in outline.declarations:

@@ -229,7 +229,8 @@ async def test_completion_reads_a_document_that_does_not_parse(client):
 # -- every example ---------------------------------------------------------------------------
 
 @pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
-async def test_every_example_is_diagnosed_completed_and_explained(client, example: Path):
+async def test_every_example_is_diagnosed_completed_explained_and_outlined(client,
+                                                                          example: Path):
     uri, text = example.as_uri(), example.read_text(encoding="utf-8")
     found = await opened(client, uri, text)
     checked = pipeline.check_file(example)
@@ -251,6 +252,7 @@ async def test_every_example_is_diagnosed_completed_and_explained(client, exampl
         said = await hover_text(client, uri, *at(prim.pos))
         row = simulated.get(prim.name)
         assert (row[2] in said and row[3] in said) if row else "has no primitive" in said
+    await definitions_and_symbols_hold(client, uri, checked)
     closed(client, uri)
 
 
@@ -265,19 +267,15 @@ async def task_is_explained(client: LanguageClient, uri: str, task) -> None:
     assert told == [*ends, "ABORTED"]
 
 
-@pytest.mark.parametrize("example", EXAMPLES[:2], ids=lambda p: p.stem)
-async def test_definitions_and_symbols_are_where_the_parser_puts_them(client, example: Path):
-    uri, text = example.as_uri(), example.read_text(encoding="utf-8")
-    await opened(client, uri, text)
-    checked = pipeline.check_file(example)
+async def definitions_and_symbols_hold(client: LanguageClient, uri: str, checked) -> None:
+    """Each call of the mission leads to its declaration, a pattern to its template; the
+    symbols are the declarations, at the parser's positions."""
     declared = {d.name: d for d in checked.program.declarations if hasattr(d, "name")}
-    calls = [s for s in walk(checked.mission.body) if hasattr(s, "args")]
-    for call in calls:
+    for call in [s for s in walk(checked.mission.body) if hasattr(s, "args")]:
         (where,) = await client.text_document_definition_async(types.DefinitionParams(
             types.TextDocumentIdentifier(uri), types.Position(*at(call.pos))))
-        assert where.uri == uri
-        assert (where.range.start.line, where.range.start.character) == \
-            at(declared[call.name].pos)
+        assert (where.uri, where.range.start.line, where.range.start.character) == \
+            (uri, *at(declared[call.name].pos))
     task = next(iter(checked.tasks.values()))
     (template,) = await client.text_document_definition_async(types.DefinitionParams(
         types.TextDocumentIdentifier(uri), types.Position(*at(task.pattern_pos))))
@@ -285,11 +283,10 @@ async def test_definitions_and_symbols_are_where_the_parser_puts_them(client, ex
 
     symbols = await client.text_document_document_symbol_async(types.DocumentSymbolParams(
         types.TextDocumentIdentifier(uri)))
-    names = [getattr(d, "name", "mission") for d in checked.program.declarations]
-    assert [s.name for s in symbols] == names
-    assert [(s.selection_range.start.line + 1, s.selection_range.start.character + 1)
-            for s in symbols] == [(d.pos.line, d.pos.column) for d in checked.program.declarations]
-    closed(client, uri)
+    program = checked.program.declarations
+    assert [s.name for s in symbols] == [getattr(d, "name", "mission") for d in program]
+    assert [(s.selection_range.start.line, s.selection_range.start.character)
+            for s in symbols] == [at(d.pos) for d in program]
 
 
 def walk(statement):

@@ -12,7 +12,7 @@ from mcl2pnml import pipeline
 from mcl2pnml.language import ast
 from mcl2pnml.language.parser import KEYWORDS, parse
 from mcl2pnml.langserver import outline, reading
-from mcl2pnml.langserver.responses import Units
+from mcl2pnml.langserver.responses import Units, hover, symbols
 from mcl2pnml.langserver.vocabulary import (DECLARATION_WORDS, FOLLOWING_WORDS,
                                             STATEMENT_WORDS, STRUCTURE_TEMPLATES, TASK_WORDS,
                                             Vocabulary, grammar_words)
@@ -142,3 +142,15 @@ def test_a_diagnostic_spans_the_token_it_points_at_or_nothing_past_the_end():
     assert sorted(text[d.start:d.end] for d in found) == ["Far", "Go"]
     (empty,), _ = reading.diagnose("", "<mcl>")     # no mission: at the end of nothing
     assert (empty.severity, empty.start, empty.end) == ("error", 0, 0)
+
+
+def test_a_client_without_markdown_or_trees_gets_plain_text_and_a_list():
+    text = (ROOT / "examples" / "sauce.mcl").read_text(encoding="utf-8")
+    read = outline.read(text)
+    units = Units(read)
+    said = hover(read, text.index("FindCross"), Vocabulary(), units, types.MarkupKind.PlainText)
+    assert said.contents.kind == types.MarkupKind.PlainText and "AchieveGoal" in \
+        said.contents.value
+    flat = symbols(read, units, "file:///sauce.mcl", hierarchical=False)
+    assert [s.name for s in flat] == [s.name for s in symbols(read, units, "file:///s.mcl")]
+    assert all(isinstance(s, types.SymbolInformation) for s in flat)
