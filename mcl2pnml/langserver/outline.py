@@ -75,6 +75,8 @@ class Declaration:
     timeout: Token | None = None
     #: where the body opens (a function's or the mission's ``{``), as an index of the tokens
     body: int | None = None
+    #: whether it ends with its ``;`` or its body's ``}`` (else it runs on to the next)
+    closed: bool = False
 
     @property
     def name(self) -> str:
@@ -174,13 +176,18 @@ class Outline:
         # a line comment runs to its line's end, a cursor there still in it
         return c.start < offset < c.end or (offset == c.end and c.text.startswith("//"))
 
+    @cached_property
+    def _declaration_starts(self) -> list[int]:
+        return [d.start for d in self.declarations]
+
     def declaration_at(self, offset: int) -> Declaration | None:
-        """The declaration the offset is in (or at the end of, where a word is typed)."""
-        starts = [d.start for d in self.declarations]
-        i = bisect.bisect_right(starts, offset) - 1
-        if i >= 0 and offset <= self.declarations[i].end:
-            return self.declarations[i]
-        return None
+        """The declaration the offset is in: before its ``;`` or ``}``, or before the next
+        declaration when it is not closed (at its end, where a word is typed)."""
+        i = bisect.bisect_right(self._declaration_starts, offset) - 1
+        if i < 0:
+            return None
+        d = self.declarations[i]
+        return d if offset < d.end or (offset == d.end and not d.closed) else None
 
     def declared(self) -> dict[str, Declaration]:
         """The declarations by name, the first of each name (the checker says of the next
@@ -267,7 +274,8 @@ class _Declarations:
         # one not closed runs on to the next declaration: a cursor after it is still in it
         end = self.t[last].end if self.closed else \
             self.t[self.i].start if self.i < len(self.t) else self.size
-        return Declaration(kind, keyword, name, params, first, last, end, body=body, **task)
+        return Declaration(kind, keyword, name, params, first, last, end, body=body,
+                           closed=self.closed, **task)
 
     def _params(self) -> tuple[Token, ...]:
         """``( NAME, ... )``: the names, up to the ``)`` or to what cannot be in the list."""

@@ -83,6 +83,8 @@ def test_the_outline_goes_on_where_the_parser_stops():
     ("property P: |", "property"),
     ("property P: never enabled(|", "atom"),
     ("const C = |", "value"),
+    ("const C = 1;|", "declaration"),
+    ("mission { A(); }\n|", "declaration"),
 ])
 def test_the_context_at_the_cursor(text: str, kind: str):
     at = text.index("|")
