@@ -79,12 +79,20 @@ class MclServer(LanguageServer):
 
     async def _check(self, uri: str, pause: float) -> None:
         await asyncio.sleep(pause)
+        if uri not in self.opened:      # closed meanwhile: its file is not ours to read
+            return
         document = self.workspace.get_text_document(uri)
         version, text = document.version, document.source
         loop = asyncio.get_running_loop()
-        found = await loop.run_in_executor(self._checks, self._diagnose, uri, text)
+        try:
+            found = await loop.run_in_executor(self._checks, self._diagnose, uri, text)
+        except Exception:   # noqa: BLE001 (a fault of ours: said, and the server goes on)
+            traceback.print_exc(file=sys.stderr)
+            return
+        if uri not in self.opened:
+            return
         document = self.workspace.get_text_document(uri)
-        if uri in self.opened and document.version == version and document.source == text:
+        if document.version == version and document.source is text:
             self.published[uri] = found
             self.text_document_publish_diagnostics(
                 types.PublishDiagnosticsParams(uri, found, version))

@@ -177,16 +177,18 @@ HEAD = ["primitive P();", "primitive Q();", "primitive R();",
         "task C() = AchieveGoal(R()) timeout 10;"]
 
 
-@pytest.mark.parametrize("code, body, word", [
-    ("W001", ["    monitor(A(), B());", "    C();"], "monitor"),
-    ("W004", ["    if (A()) then { B(); }", "    C();"], "if"),
-])
-async def test_a_warning_is_fixed_by_its_quick_fix(client, code, body, word):
-    lines = HEAD + ["mission {", *body, "}"]
-    after, text = await fixed(client, code.lower(), lines, code, word)
-    assert after == []
-    checked = pipeline.check_source(text)       # the fixed mission checks, with no warning
-    assert pipeline.warnings_of(checked) == []
+#: Each warning with a fix: its code, a mission's body that has it, the word it is at.
+FIXED = [("W001", ["    monitor(A(), B());", "    C();"], "monitor"),
+         ("W004", ["    if (A()) then { B(); }", "    C();"], "if")]
+
+
+async def test_a_warning_is_fixed_by_its_quick_fix(client):
+    for code, body, word in FIXED:
+        lines = HEAD + ["mission {", *body, "}"]
+        after, text = await fixed(client, code.lower(), lines, code, word)
+        assert after == [], code
+        checked = pipeline.check_source(text)       # the fixed mission checks, with no warning
+        assert pipeline.warnings_of(checked) == [], code
 
 
 async def test_a_bad_or_huge_document_is_a_diagnostic_and_the_server_goes_on(client):
@@ -228,9 +230,17 @@ async def test_completion_reads_a_document_that_does_not_parse(client):
 
 # -- every example ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
-async def test_every_example_is_diagnosed_completed_explained_and_outlined(client,
-                                                                          example: Path):
+async def test_every_example_is_diagnosed_completed_explained_and_outlined(client):
+    # one test, not one per example: its tests in few items keep the module on one test
+    # process (and one server) when the suite is spread over several
+    for example in EXAMPLES:
+        try:
+            await example_holds(client, example)
+        except AssertionError as e:
+            raise AssertionError(f"{example.name}: {e}") from e
+
+
+async def example_holds(client: LanguageClient, example: Path) -> None:
     uri, text = example.as_uri(), example.read_text(encoding="utf-8")
     found = await opened(client, uri, text)
     checked = pipeline.check_file(example)
