@@ -22,6 +22,8 @@ from mcl2pnml.commands import (analyze as analyzing, certify as certifying, chec
                                compile as compiling, fly as campaigning, page as showing,
                                query as querying, run as running, template as templating,
                                validate as validating, weigh as weighing)
+from mcl2pnml.cli_options import LSP_OPTIONS
+from mcl2pnml.commands import lsp as serving
 from mcl2pnml.commands.common import (VERSION, Mcl2PnmlError, Notes, ProgressMeter, RunsBar,
                                       SettingError, UsageProblem, visible)
 
@@ -304,4 +306,18 @@ def campaign(mission: Path, as_json: bool, progress: bool | None, **options) -> 
     with RunsBar(settings.runs, _shown(progress), sys.stderr) as bar:
         flown = campaigning.campaign(mission, settings, notes=bar.notes, progress=bar)
     _print(flown, as_json)
+    return 0
+
+
+@main.command(epilog=EXAMPLES)
+@LSP_OPTIONS
+def lsp(stdio: bool, **options) -> int:
+    """Serve MCL to an editor: a language server (LSP) on standard input and output.
+
+    Diagnostics as you type (every error, the warnings with their codes), completion,
+    hover (a task's pattern, time-out and results; a primitive on the simulated
+    vehicle), go to definition, document symbols and quick fixes. docs/editors.md sets
+    it up in VS Code, Neovim, Helix and Emacs.
+    """
+    serving.serve(serving.LspOptions(**options))   # stdio: the one transport
     return 0

@@ -18,6 +18,7 @@ from mcl2pnml.commands.fly import CampaignOptions
 from mcl2pnml.commands.certify import CertifyOptions
 from mcl2pnml.commands.common import FORMAT, MISSION_SIZE, PROPERTIES_SIZE
 from mcl2pnml.commands.compile import CompileOptions
+from mcl2pnml.commands.lsp import LspOptions
 from mcl2pnml.commands.weigh import OddsOptions
 from mcl2pnml.commands.query import EXAMINATIONS, QueryOptions
 from mcl2pnml.commands.page import ShowOptions
@@ -579,4 +580,15 @@ CAMPAIGN_OPTIONS = _composed(  # campaign MISSION
                  help="Show a bar of the runs done, their rate and the time left (default: "
                       "on a terminal)."),
     MISSION_SIZE_OPTION,
+)
+
+
+LSP_OPTIONS = _composed(  # lsp
+    click.option("--stdio", is_flag=True,
+                 help="Talk on standard input and output, as it always does (editors' "
+                      "clients pass it)."),
+    click.option("--max-document-size", metavar="SIZE",
+                 default=LspOptions.max_document_size, show_default=True,
+                 help="Check no document larger than this: one diagnostic says it is not "
+                      "checked."),
 )

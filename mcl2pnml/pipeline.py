@@ -54,7 +54,7 @@ __all__ = [
     "run_mission", "RunOptions", "show_nets", "save_show_page", "Shown", "certify_file",
     "load_certificate", "check_certificate", "save_certificate", "check_properties",
     "timed_ends", "check_properties_timed", "parse_size", "instance_trees", "call_sites",
-    "unflown",
+    "unflown", "pattern_ends", "simulated_primitives",
 ]
 
 
@@ -354,6 +354,18 @@ def template_clusters(name: str) -> dict[str, list[str]]:
     return default_library().slots(name)
 
 
+def pattern_ends(name: str, timeout: bool = True) -> tuple[tuple[str, ...], bool]:
+    """The results a task of pattern ``name`` ends in, started and not aborted (aborted,
+    every task ends ABORTED), with or without a ``timeout``, and whether it may instead
+    run for ever: as the pattern's proof against the interface contract gives them
+    (:mod:`mcl2pnml.certify.templates`, ``templates/proofs.json``; a user's pattern is
+    proven when asked). ``KeepGoal`` without a time-out ends FAIL only."""
+    # the proven templates, 0.2 s: only when a pattern's results are asked for
+    from mcl2pnml.certify.templates import current
+    row = current()[name if timeout else f"{name} without a time-out"]["results"][""]
+    return tuple(row["ends"]), bool(row["stuck"])
+
+
 # -- certificates (sections 2.3-2.5: proven from the parts) --------------------------------
 
 def certify_file(mission: str | Path, abort_pending: bool = False,
@@ -514,6 +526,15 @@ def run_mission(mission: str | Path, options: RunOptions | None = None, *,
     return run_session(mission, options or RunOptions(),
                        _engine_for(mission, net_id, lenient, max_mission_size), text=text,
                        log_path=Path(log_path) if log_path else None, note=note)
+
+
+def simulated_primitives() -> list[tuple[str, str, str, str]]:
+    """What each primitive of the simulated vehicle does (``run --vehicle sim``,
+    docs/simulator.md): its name, its arguments, when it reports achieved and when failed,
+    in words; the built-in ones and those installed packages add, by name."""
+    # the simulator's table, 25 ms with the entry points: only when it is asked for
+    from mcl2pnml.runtime.simprims import installed, table_rows
+    return table_rows(installed())
 
 
 # -- the token game ------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from helpers import DATA, ROOT, run_cli  # noqa: E402
 
 HELP = DATA / "cli" / "help"
 COMMANDS = ("", "analyze", "campaign", "certify", "check", "compile", "functional", "odds",
-            "query", "run", "show", "template", "validate")
+            "query", "run", "show", "template", "validate", "lsp")
 #: click wraps the help to the terminal's width, capped at 80 columns: the width is fixed
 ENV = {**os.environ, "COLUMNS": "80"}
 #: An example's environment setting before the command (NAME=VALUE).

@@ -32,6 +32,8 @@ def test_wheel_installs_the_command_and_the_templates(tmp_path):
     assert {n.split("/")[0] for n in names if not n.startswith("mcl2pnml-")} == {"mcl2pnml"}, \
         sorted({n.split("/")[0] for n in names})
     assert "mcl2pnml/certify/recheck.py" in names
+    # the commands the CLI imports, and the language server `lsp` starts
+    assert {"mcl2pnml/commands/check.py", "mcl2pnml/langserver/server.py"} <= set(names)
     assert "mcl2pnml/io/pnml/ptnet.rng" in names   # our PNML schema: validate needs it
     assert any(n.endswith("entry_points.txt") for n in names)
     subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",

@@ -1,9 +1,9 @@
 """The analysis (``analysis/``, installed as ``mcl2pnml.analysis``), the language, the
-certificates, io, the view, the core and the runtime keep the shape the project holds its
-code to: no function called a bare ``check`` (each says what it checks), none over 80 lines
-without a comment saying why it is long, every import inside a function headed by a comment
-saying what it costs and why it waits, and no module named as another module of the
-package."""
+certificates, io, the view, the core, the runtime and the language server keep the shape
+the project holds its code to: no function called a bare ``check`` (each says what it
+checks), none over 80 lines without a comment saying why it is long, every import inside a
+function headed by a comment saying what it costs and why it waits, and no module named as
+another module of the package."""
 from __future__ import annotations
 
 import ast
@@ -13,7 +13,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = (ROOT / "analysis", ROOT / "mcl2pnml" / "language", ROOT / "mcl2pnml" / "certify",
-            *(ROOT / "mcl2pnml" / name for name in ("io", "view", "core", "runtime")))
+            *(ROOT / "mcl2pnml" / name for name in ("io", "view", "core", "runtime",
+                                                    "langserver")))
 LONGEST = 80
 
 

@@ -114,20 +114,20 @@ def test_the_options_take_their_defaults_from_the_commands():
 
 
 @pytest.mark.parametrize("command", ["analyze", "query", "odds", "campaign", "run", "show",
-                                     "compile", "certify", "check"])
+                                     "compile", "certify", "check", "lsp"])
 def test_each_option_default_is_its_options_dataclass_default(command: str):
     """The default ``--help`` shows is the one the command takes when the option is not
     given: the options dataclass's field of the same name."""
     import dataclasses
 
     from mcl2pnml.cli import main
-    from mcl2pnml.commands import (analyze, certify, check, compile, fly, page, query, run,
-                                   weigh)
+    from mcl2pnml.commands import (analyze, certify, check, compile, fly, lsp, page, query,
+                                   run, weigh)
     options = {"analyze": analyze.AnalyzeOptions, "query": query.QueryOptions,
                "odds": weigh.OddsOptions, "campaign": fly.CampaignOptions,
                "run": run.RunOptions, "show": page.ShowOptions,
                "compile": compile.CompileOptions, "certify": certify.CertifyOptions,
-               "check": check.CheckOptions}[command]
+               "check": check.CheckOptions, "lsp": lsp.LspOptions}[command]
     fields = {f.name: f.default for f in dataclasses.fields(options)}
     compared = 0
     for param in main.commands[command].params:
