@@ -212,7 +212,7 @@ def compile_source(text: str, filename: str = "<mcl>", *, name: str | None = Non
     Net('dive': 29 places, 27 transitions, 114 arcs)
     """
     net = compile_checked(check_source(text, filename), reduced=reduced)
-    if name is None and filename == "<mcl>":
+    if name is None and filename.startswith("<"):   # no file: <mcl>, <stdin>
         name = "mission"
     return net if name is None else net.renamed(name)
 

@@ -1,6 +1,6 @@
 """examples/mission.ipynb runs on a Python kernel (nbclient, ipykernel), as Jupyter runs it
-from its folder, and shows what it says: the net's drawing, its verdicts, the timed answer
-and a run, as this process computes them."""
+from its folder, and shows what it says: the net's drawing, its verdicts and a run, as this
+process computes them."""
 from __future__ import annotations
 
 import pytest
@@ -31,6 +31,5 @@ def test_the_example_notebook_shows_the_drawing_and_the_verdicts():
     assert "<svg" in svg and f"<title>{net.name}</title>" in svg
     html = [d["text/html"] for d in data if "text/html" in d]
     assert notebook.analysis_html(pipeline.analyze(net, state_space_only=True)) in html
-    assert notebook.timed_html(pipeline.timed_ends(net)) in html
     run = pipeline.run_mission(EXAMPLES / "sauce.mcl")
     assert notebook.run_html(run) in html
