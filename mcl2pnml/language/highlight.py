@@ -140,6 +140,7 @@ def token_table() -> dict[str, list]:
     g = _Grammar()
     kinds = g.declarations()
     first = {kind: g.literal[rules[0][0].name] for kind, rules in kinds.items()}
+    word = {kind: re.escape(w) for kind, w in first.items()}
     every = {g.literal[t] for t in g.literal if g.is_word(t)}
     reached = {kind: g.reach(kind) for kind in kinds}
     contextual = every - g.reserved - set(first.values())
@@ -154,9 +155,9 @@ def token_table() -> dict[str, list]:
     for kind, rules in kinds.items():
         declared, push = _declared(g, rules), (INSIDE,) if kind in openers else ()
         if declared is not None:
-            root.append((rf"\b({first[kind]})({ws})({name})",
+            root.append((rf"\b({word[kind]})({ws})({name})",
                          bygroups(Keyword.Declaration, Whitespace, declared), *push))
-        root.append((rf"\b{first[kind]}\b", Keyword.Declaration, *push))
+        root.append((rf"\b{word[kind]}\b", Keyword.Declaration, *push))
     root += [(_words(g.reserved), Keyword),
              (_words(_patterns(name, g.reserved)), Name.Builtin),
              (rf"{name}(?=(?:{ws})?\()", Name.Function),
