@@ -452,9 +452,9 @@ def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> 
     (:func:`mcl2pnml.analysis.report.analyze`, which says the options);
     ``max_memory`` may be written as ``--max-memory`` takes it (:func:`parse_size`).
 
-    >>> facts = analyze(template_net("task")).facts
-    >>> facts.states, facts.safe, facts.ends_properly
-    (24, True, True)
+    >>> facts = analyze(compile_file("examples/sauce.mcl")).facts
+    >>> facts.states, facts.safe, facts.ends_properly, facts.reusable
+    (1509, True, True, True)
     """
     from mcl2pnml.analysis.report import analyze as run   # numpy, 0.1 s: only to analyse
     options["max_memory"] = size_or_none(options.get("max_memory"), "max_memory")
