@@ -522,15 +522,40 @@ def _yes(flag) -> str:
     return {True: "yes", False: "NO", None: "not computed"}[flag]
 
 
-def _textbook(r: dict[str, Any]) -> str:
+def _textbook(r: dict[str, Any]) -> tuple[bool | None, str]:
     """The textbook's deadlock-freedom (no dead marking reachable), with how many are."""
     free = r.get("deadlock_free_textbook")
     if free is None and r.get("terminal_markings") is not None:   # an answer of before
         free = not r["terminal_markings"]
     if free is not False or r.get("terminal_markings") is None:
-        return _yes(free)
+        return free, _yes(free)
     n = len(r["terminal_markings"])
-    return f"no ({n:,} dead marking{'s' if n != 1 else ''})"
+    return free, f"no ({n:,} dead marking{'s' if n != 1 else ''})"
+
+
+def verdict_rows(r: dict[str, Any]) -> list[tuple[str, bool | None, str]]:
+    """The analysis's verdicts (``r`` as :meth:`Analysis.as_json` gives it), each as the
+    property, whether it holds (None: not computed, a count, or the textbook's deadlocks of
+    a mission, whose dead markings are its ends) and the words the report says it in: the
+    report's first table, and a notebook's (:mod:`mcl2pnml.notebook`)."""
+    def row(what: str, key: str) -> tuple[str, bool | None, str]:
+        return what, r.get(key), _yes(r.get(key))
+    free, said = _textbook(r)
+    textbook = ("deadlock-free (textbook: no dead marking reachable)",
+                free if r.get("interface") == "none" else None, said)
+    states = r["states"]
+    return [
+        row("bounded", "bounded"),
+        row("every siphon marked and controlled (inputs aside)", "siphons_controlled"),
+        row(SAFE, "safe"),
+        *([textbook,
+           row(NO_DEADLOCK, "deadlock_free"),
+           row(CAN_END, "final_always_reachable"),
+           row(REUSABLE, "reusable")] if r.get("interface") != "none" else
+          [textbook, row("M0 reachable again from every marking", "home_marking")]),
+        ("reachable markings" + (" (coverability nodes)" if r["bounded"] is False else ""),
+         None, "not computed" if states is None else f"{states:,}"),
+    ]
 
 
 def render_text(r: dict[str, Any]) -> str:
@@ -538,20 +563,7 @@ def render_text(r: dict[str, Any]) -> str:
     size = ", ".join(counted(r[key], noun) if isinstance(r.get(key), int) else f"? {key}"
                      for key, noun in (("places", "place"), ("transitions", "transition")))
     out = [f"Net {r['net']}: {size}; M0 = {{{', '.join(r.get('initial_marking', []))}}}", ""]
-    textbook = ["deadlock-free (textbook: no dead marking reachable)", _textbook(r)]
-    out.append(_table(["property", "holds"], [
-        ["bounded", _yes(r["bounded"])],
-        ["every siphon marked and controlled (inputs aside)", _yes(r.get("siphons_controlled"))],
-        [SAFE, _yes(r["safe"])],
-        *([textbook,
-           [NO_DEADLOCK, _yes(r.get("deadlock_free"))],
-           [CAN_END, _yes(r.get("final_always_reachable"))],
-           [REUSABLE, _yes(r.get("reusable"))]] if r.get("interface") != "none" else
-          [textbook,
-           ["M0 reachable again from every marking", _yes(r.get("home_marking"))]]),
-        ["reachable markings" + (" (coverability nodes)" if r["bounded"] is False else ""),
-         "not computed" if r["states"] is None else f"{r['states']:,}"],
-    ]))
+    out.append(_table(["property", "holds"], [[what, said] for what, _, said in verdict_rows(r)]))
     m0 = _tokens(r)
     if r["terminal_markings"] is not None:
         out += ["", f"Terminal markings ({len(r['terminal_markings'])}), the dead ones, as "

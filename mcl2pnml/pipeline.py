@@ -22,9 +22,10 @@ import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, Sequence
+from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, NamedTuple, Sequence
 
-from mcl2pnml.core.bounds import (MAX_CERTIFICATE_SIZE, MAX_CHECK_STATES, MAX_MISSION_SIZE,
+from mcl2pnml.core.bounds import (MAX_CERTIFICATE_SIZE, MAX_CHAIN_STATES, MAX_CHECK_STATES,
+                                  MAX_MISSION_SIZE,
                                   MAX_PROPERTIES_SIZE, MAX_PROPERTY_ATOMS, MAX_TOKENS,
                                   MAX_TOKENS_TEXT, natural_at_most)
 from mcl2pnml.core.errors import (Location, Mcl2PnmlError, did_you_mean, line_of, source_lines,
@@ -44,6 +45,11 @@ if TYPE_CHECKING:   # for the annotations only
     from mcl2pnml.analysis.report import Analysis
     from mcl2pnml.core.patterns import Property
     from mcl2pnml.language.functional import Instance
+    from mcl2pnml.language.semantics import Checked
+    from mcl2pnml.odds import Odds
+    from mcl2pnml.runtime.engine import Run
+    from mcl2pnml.runtime.vehicle_model import VehicleModel
+    from mcl2pnml.timed_verdicts import TimedEnds
 
 
 __all__ = [
@@ -54,7 +60,7 @@ __all__ = [
     "run_mission", "RunOptions", "show_nets", "save_show_page", "Shown", "certify_file",
     "load_certificate", "check_certificate", "save_certificate", "check_properties",
     "timed_ends", "check_properties_timed", "parse_size", "instance_trees", "call_sites",
-    "unflown", "pattern_ends", "simulated_primitives",
+    "unflown", "pattern_ends", "simulated_primitives", "exact_odds", "Verdicts", "Certified",
 ]
 
 
@@ -67,12 +73,20 @@ FORMAT = "pnml"
 
 # -- the language: MCL to a net (section 2.4) ---------------------------------------------
 
-def check_file(path: str | Path, max_size: int | str | None = None):
-    """Parse and check an MCL file: the resolved program the compiler takes.
+def check_file(path: str | Path, max_size: int | str | None = None) -> "Checked":
+    """Parse and check an MCL file (``mcl2pnml check``): the resolved program the compiler
+    takes, or one :class:`~mcl2pnml.core.errors.Mcl2PnmlError` giving every error of the
+    file, each at its line and column.
 
     A file over ``max_size`` bytes (or as ``--max-mission-size`` takes it; default
     :data:`~mcl2pnml.core.bounds.MAX_MISSION_SIZE`) is refused before it is read: every
-    command and call that reads a mission reads it here."""
+    command and call that reads a mission reads it here. In a notebook the mission shows
+    its drawing, its warnings and its text (:mod:`mcl2pnml.notebook`).
+
+    >>> mission = check_file("examples/sauce.mcl")
+    >>> mission.summary()
+    '4 primitives, 4 tasks, 1 function, 4 consts'
+    """
     # lark, 40 ms: only a mission read
     from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse_file
@@ -88,8 +102,14 @@ def mission_limit(max_size: int | str | None = None) -> int:
     return size_or_none(max_size, "max_mission_size")
 
 
-def check_source(text: str, filename: str = "<mcl>"):
-    """Parse and check MCL text; errors name ``filename``."""
+def check_source(text: str, filename: str = "<mcl>") -> "Checked":
+    """Parse and check MCL text, as :func:`check_file` a file; errors name ``filename``.
+
+    >>> check_source("mission { Dive(); }", "dive.mcl")
+    Traceback (most recent call last):
+    ...
+    mcl2pnml.core.errors.Mcl2PnmlError: dive.mcl:1:11: unknown task or function 'Dive'; ...
+    """
     # lark, 40 ms: only a mission read
     from mcl2pnml.language.semantics import check_program
     from mcl2pnml.language.parser import parse
@@ -147,7 +167,8 @@ def _user_templates_proven() -> None:
         current()
 
 
-def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = False,
+def properties_of(mission: str | Path, *, extra: str | Path | None = None,
+                  reduced: bool = False,
                   max_memory: int | str | None = None, max_size: int | str | None = None,
                   max_atoms: int | None = None, checked=None,
                   max_mission_size: int | str | None = None
@@ -183,7 +204,11 @@ def properties_of(mission: Path, *, extra: Path | None = None, reduced: bool = F
 def compile_file(path: str | Path, *, reduced: bool = False,
                  max_memory: int | str | None = None, checked=None,
                  max_mission_size: int | str | None = None) -> Net:
-    """The mission in ``path`` compiled to one net, within the memory budget.
+    """The mission in ``path`` compiled to one net (``mcl2pnml compile``), within the
+    memory budget; the net is named after the file. In a notebook it shows its drawing.
+
+    >>> compile_file("examples/sauce.mcl")
+    Net('sauce': 203 places, 218 transitions, 948 arcs)
 
     A mission's net is about as large as its text is long, but only the
     compiling tells how large: it runs under the budget's guard
@@ -199,8 +224,24 @@ def compile_file(path: str | Path, *, reduced: bool = False,
         return compile_checked(checked, reduced=reduced)
 
 
-def compile_source(text: str, filename: str = "<mcl>", *, reduced: bool = False) -> Net:
-    return compile_checked(check_source(text, filename), reduced=reduced)
+def compile_source(text: str, filename: str = "<mcl>", *, name: str | None = None,
+                   reduced: bool = False) -> Net:
+    """MCL text compiled to one net, as :func:`compile_file` compiles a file: errors name
+    ``filename``; the net is called ``name``, else after ``filename`` as a file's is after
+    the file (``survey.mcl``: ``survey``), else ``mission``. ``reduced``: every task the
+    paper's reduced model (Fig. 3).
+
+    >>> compile_source('''
+    ...     primitive KeepDepth(depth);
+    ...     task Dive(d) = AchieveGoal(KeepDepth(d)) timeout 60;
+    ...     mission { Dive(10); }
+    ... ''', name="dive")
+    Net('dive': 29 places, 27 transitions, 114 arcs)
+    """
+    net = compile_checked(check_source(text, filename), reduced=reduced)
+    if name is None and filename.startswith("<"):   # no file: <mcl>, <stdin>
+        name = "mission"
+    return net if name is None else net.renamed(name)
 
 
 def functional_form(checked, *, functions: bool = False) -> list[str]:
@@ -368,18 +409,33 @@ def pattern_ends(name: str, timeout: bool = True) -> tuple[tuple[str, ...], bool
 
 # -- certificates (sections 2.3-2.5: proven from the parts) --------------------------------
 
+class Certified(NamedTuple):
+    """A mission's certificate, its net, and what the independent checker finds wrong with
+    the pair (nothing: it holds); a notebook shows whether it holds."""
+
+    certificate: dict[str, Any]
+    net: Net
+    problems: list[str]
+
+
 def certify_file(mission: str | Path, abort_pending: bool = False,
-                 max_mission_size: int | str | None = None
-                 ) -> tuple[dict[str, Any], Net, list[str]]:
-    """The certificate of ``mission`` (:mod:`mcl2pnml.certify.certificate`), its compiled
-    net (with ``mission.A`` marked too if ``abort_pending``), and what the independent
-    checker finds wrong with the pair (nothing: it holds)."""
+                 max_mission_size: int | str | None = None) -> Certified:
+    """The certificate of ``mission`` (``mcl2pnml certify``,
+    :mod:`mcl2pnml.certify.certificate`): the mission proven 1-safe, free of deadlocks,
+    ending properly and reusable from its parts (sections 2.3-2.5), without exploring;
+    with its compiled net (``mission.A`` marked too if ``abort_pending``) and what the
+    independent checker finds wrong with the pair (nothing: it holds).
+
+    >>> certified = certify_file("examples/sauce.mcl")
+    >>> certified.problems, certified.certificate["mission"]
+    ([], 'sauce')
+    """
     checked = check_file(mission, max_mission_size)
     net = compile_checked(checked)
     if abort_pending:
         net = net.with_initial({**net.initial, MissionPlace.A.id: 1})
     cert, problems = _certified(checked, net, abort_pending)
-    return cert, net, problems
+    return Certified(cert, net, problems)
 
 
 def load_certificate(path: str | Path, max_size: int | str = MAX_CERTIFICATE_SIZE
@@ -423,24 +479,43 @@ def save_certificate(cert: dict[str, Any], path: str | Path) -> Path:
 
 # -- analysis ------------------------------------------------------------------------------
 
+class Verdicts(list):
+    """Each property's verdict, in order (a list of
+    :class:`~mcl2pnml.analysis.checking.on_graph.Verdict`), which a notebook shows as one
+    table."""
+
+
 def analyze(net: Net, initial: dict[str, int] | None = None, **options: Any) -> "Analysis":
-    """Invariants, siphons and reachable markings (:func:`mcl2pnml.analysis.report.analyze`);
-    ``max_memory`` may be written as ``--max-memory`` takes it (:func:`parse_size`)."""
+    """Invariants, siphons and reachable markings, and the paper's verdicts (bounded,
+    1-safe, free of deadlocks, ends properly, reusable): ``mcl2pnml analyze``
+    (:func:`mcl2pnml.analysis.report.analyze`, which says the options);
+    ``max_memory`` may be written as ``--max-memory`` takes it (:func:`parse_size`).
+
+    >>> facts = analyze(compile_file("examples/sauce.mcl")).facts
+    >>> facts.states, facts.safe, facts.ends_properly, facts.reusable
+    (1509, True, True, True)
+    """
     from mcl2pnml.analysis.report import analyze as run   # numpy, 0.1 s: only to analyse
     options["max_memory"] = size_or_none(options.get("max_memory"), "max_memory")
     return run(net, initial, **options)
 
 
 def check_properties(net: Net, properties, max_states: int = MAX_CHECK_STATES,
-                     stubborn: bool = False, safe: bool = False) -> list:
+                     stubborn: bool = False, safe: bool = False) -> Verdicts:
     """Each property's :class:`mcl2pnml.analysis.checking.on_graph.Verdict` on ``net``'s runs, in order:
     holds, fails with a shortest counterexample, or unknown past ``max_states``; each
     searched on the fly (:mod:`mcl2pnml.analysis.checking.on_the_fly`), stopping at its first violation.
     ``stubborn``: with partial-order reduction, on a net ``safe`` says is proven 1-safe
-    (else a P-invariant must prove it: :class:`~mcl2pnml.analysis.checking.on_the_fly.NotProvenSafe`)."""
+    (else a P-invariant must prove it: :class:`~mcl2pnml.analysis.checking.on_the_fly.NotProvenSafe`).
+    The properties are :func:`properties_of`'s.
+
+    >>> net, properties = properties_of("examples/sauce.mcl", extra="examples/sauce.props")
+    >>> [v.status.value for v in check_properties(net, properties)][:4]
+    ['holds', 'holds', 'holds', 'holds']
+    """
     # numpy, 0.1 s: only an analysis
     from mcl2pnml.analysis.checking.on_graph import check_properties
-    return check_properties(net, properties, max_states, stubborn=stubborn, safe=safe)
+    return Verdicts(check_properties(net, properties, max_states, stubborn=stubborn, safe=safe))
 
 
 def proven_safe_by_certificate(mission: Path, net: Net,
@@ -514,12 +589,17 @@ def _engine_for(mission: Path, net_id: str | None, lenient: bool = False,
 def run_mission(mission: str | Path, options: RunOptions | None = None, *,
                 text: IO[str] | None = None, log_path: str | Path | None = None,
                 note: Callable[[str], None] = lambda line: None, net_id: str | None = None,
-                lenient: bool = False, max_mission_size: int | str | None = None):
-    """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle;
-    ``lenient``: a PNML read the forgiving way (docs/pnml.md).
+                lenient: bool = False, max_mission_size: int | str | None = None) -> "Run":
+    """Run ``mission`` (MCL, or a compiled PNML for the Petri-net engine) against a vehicle
+    (``mcl2pnml run``; ``options`` as its options, :class:`RunOptions`: the simulated AUV
+    by default); ``lenient``: a PNML read the forgiving way (docs/pnml.md).
 
     Returns the run (outcome, time, trace, safe stop); see
     :func:`mcl2pnml.runtime.session.run_session` for the rest.
+
+    >>> run = run_mission("examples/sauce.mcl")
+    >>> run.outcome.value, round(run.time, 1)
+    ('OK', 55.4)
     """
     from mcl2pnml.runtime.session import run_session   # the runtime, 0.1 s: only a run
     mission = Path(mission)
@@ -644,12 +724,20 @@ def call_sites(checked) -> dict:
 # -- time in the verdicts (docs/time.md) --------------------------------------------------
 
 def timed_ends(net: Net, assumptions: "Assumptions | None" = None,
-               max_states: int = MAX_CHECK_STATES, max_memory: int | str | None = None):
+               max_states: int = MAX_CHECK_STATES,
+               max_memory: int | str | None = None) -> "TimedEnds":
     """Whether every run of the compiled mission ``net`` ends under ``assumptions`` (the
     defaults of :class:`~mcl2pnml.core.timing.Assumptions` if None), its earliest and
     latest end times, and what a run that never ends waits for
     (:class:`mcl2pnml.timed_verdicts.TimedEnds`); past ``max_states`` zones or the
-    memory budget (``max_memory``, as ``analyze --max-memory``), unknown, saying why."""
+    memory budget (``max_memory``, as ``analyze --max-memory``), unknown, saying why.
+
+    >>> ends = timed_ends(compile_source("primitive KeepDepth(d); "
+    ...                                  "task Dive(d) = AchieveGoal(KeepDepth(d)) timeout 60; "
+    ...                                  "mission { Dive(10); }"))
+    >>> ends.always_ends, ends.earliest, ends.latest
+    (True, Fraction(0, 1), Fraction(60, 1))
+    """
     from mcl2pnml import timed_verdicts as timed   # numpy, 0.2 s: only timed
     return timed.ends(net, assumptions or Assumptions(), max_states,
                       Budget(size_or_none(max_memory, "max_memory")))
@@ -657,9 +745,40 @@ def timed_ends(net: Net, assumptions: "Assumptions | None" = None,
 
 def check_properties_timed(net: Net, properties, assumptions: "Assumptions | None" = None,
                            max_states: int = MAX_CHECK_STATES,
-                           max_memory: int | str | None = None) -> list:
+                           max_memory: int | str | None = None) -> Verdicts:
     """Each property's :class:`mcl2pnml.analysis.checking.on_graph.Verdict` on the mission's time-divergent
     runs (docs/time.md); past ``max_states`` zones or the memory budget, unknown."""
     from mcl2pnml import timed_verdicts as timed   # numpy, 0.2 s: only timed
-    return timed.check_properties_timed(net, properties, assumptions or Assumptions(), max_states,
-                                        Budget(size_or_none(max_memory, "max_memory")))
+    return Verdicts(timed.check_properties_timed(
+        net, properties, assumptions or Assumptions(), max_states,
+        Budget(size_or_none(max_memory, "max_memory"))))
+
+
+# -- the odds (docs/odds.md) --------------------------------------------------------------
+
+def exact_odds(net: Net, vehicle_model: "str | Path | VehicleModel", properties: Sequence = (),
+               max_states: int = MAX_CHAIN_STATES) -> "Odds":
+    """The exact odds of the compiled mission ``net`` with a vehicle model (``mcl2pnml
+    odds``, :mod:`mcl2pnml.odds`): the probability of each ending, the end time's
+    distribution, and the probability that each of ``properties`` holds. The model is a
+    file (docs/odds.md) or one loaded; one that models a primitive the mission does not
+    use is refused. Past ``max_states`` instants of the chain, an error says so.
+
+    >>> from mcl2pnml.runtime.vehicle_model import VehicleModel
+    >>> net = compile_source("primitive KeepDepth(d); "
+    ...                      "task Dive(d) = AchieveGoal(KeepDepth(d)) timeout 60; "
+    ...                      "mission { Dive(10); }")
+    >>> model = VehicleModel.from_json('''{"primitives": {"KeepDepth":
+    ...     {"achieve": 0.9, "fail": 0.1, "after": {"fixed": 5}}}}''')
+    >>> odds = exact_odds(net, model)
+    >>> print(f"P(OK) = {odds.exact['OK']}, ends after {odds.mean} s on average")
+    P(OK) = 9/10, ends after 5.0 s on average
+    """
+    # the chain's engine, vehicle model and solver: numpy, scipy, the runtime; only odds
+    from mcl2pnml import odds as exact
+    from mcl2pnml.runtime.executor import PetriEngine
+    from mcl2pnml.runtime.vehicle_model import VehicleModel
+    model = vehicle_model if isinstance(vehicle_model, VehicleModel) else \
+        VehicleModel.load(vehicle_model)
+    model.check_primitives(PetriEngine(net).primitives_used())
+    return exact.odds_of(exact.chain_of(net, model, max_states, properties))

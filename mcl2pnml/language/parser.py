@@ -405,6 +405,12 @@ def _tree_parser() -> Lark:
     return Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
 
 
+def grammar() -> Lark:
+    """The grammar as lark analysed it, its terminals and rules: what the highlighter
+    reads its words from (:mod:`mcl2pnml.language.highlight`)."""
+    return _tree_parser()
+
+
 @without_gc
 def parse(text: str, filename: str = "<mcl>") -> ast.Program:
     """Parse MCL source into a :class:`~mcl2pnml.language.ast.Program` (no checks beyond syntax)."""
