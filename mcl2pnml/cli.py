@@ -309,7 +309,7 @@ def campaign(mission: Path, as_json: bool, progress: bool | None, **options) -> 
     return 0
 
 
-@main.command(epilog=EXAMPLES)
+@main.command(epilog=examples("lsp"))
 @LSP_OPTIONS
 def lsp(stdio: bool, **options) -> int:
     """Serve MCL to an editor: a language server (LSP) on standard input and output.

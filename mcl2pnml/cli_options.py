@@ -94,6 +94,10 @@ EXAMPLES: dict[str, tuple[str, ...]] = {
         "mcl2pnml odds examples/lawnmower.mcl --vehicle-model examples/lawnmower.model.json "
         "--sensitivity",
     ),
+    "lsp": (
+        "mcl2pnml lsp",
+        "mcl2pnml lsp --max-document-size 4M",
+    ),
     "campaign": (
         "mcl2pnml campaign examples/sauce.mcl --vehicle-model examples/sauce.model.json "
         "--runs 10000",

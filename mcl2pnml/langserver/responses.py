@@ -3,7 +3,7 @@ document's symbols, and positions in the client's units.
 
 Every answer is read from the document's outline (:mod:`mcl2pnml.langserver.outline`),
 so that it is there while the text does not parse, and from what MCL's words mean
-(:mod:`mcl2pnml.langserver.vocabulary`). Hovers are Markdown: what the document says in
+(:mod:`mcl2pnml.langserver.meanings`). Hovers are Markdown: what the document says in
 them (its names, a declaration's text) is in a code block or escaped, never markup.
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ from lsprotocol import types
 
 from mcl2pnml.core.errors import visible
 from mcl2pnml.langserver.outline import Declaration, Outline, Token, context
-from mcl2pnml.langserver.vocabulary import (ABORTED, DECLARATION_WORDS, RESULTS,
+from mcl2pnml.langserver.meanings import (ABORTED, DECLARATION_WORDS, RESULTS,
                                             STATEMENT_WORDS, STRUCTURE_TEMPLATES,
                                             TASK_WORDS, Vocabulary)
 

@@ -29,7 +29,7 @@ from pygls.uris import to_fs_path
 from mcl2pnml.core.version import __version__
 from mcl2pnml.langserver import outline as outlines, reading, responses
 from mcl2pnml.langserver.responses import Units
-from mcl2pnml.langserver.vocabulary import Vocabulary
+from mcl2pnml.langserver.meanings import Vocabulary
 
 #: How long typing pauses, in seconds, before the document is checked again.
 PAUSE = 0.2

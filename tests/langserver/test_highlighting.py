@@ -11,7 +11,7 @@ from pathlib import Path
 from mcl2pnml.language.declared_properties import ATOMS
 from mcl2pnml.language.library import default_library
 from mcl2pnml.language.template_parser import TemplateKind
-from mcl2pnml.langserver.vocabulary import RESULTS, grammar_words
+from mcl2pnml.langserver.meanings import RESULTS, grammar_words
 
 ROOT = Path(__file__).resolve().parents[2]
 EDITORS = ROOT / "docs" / "editors"

@@ -13,7 +13,7 @@ from mcl2pnml.language import ast
 from mcl2pnml.language.parser import KEYWORDS, parse
 from mcl2pnml.langserver import outline, reading
 from mcl2pnml.langserver.responses import Units, hover, symbols
-from mcl2pnml.langserver.vocabulary import (DECLARATION_WORDS, FOLLOWING_WORDS,
+from mcl2pnml.langserver.meanings import (DECLARATION_WORDS, FOLLOWING_WORDS,
                                             STATEMENT_WORDS, STRUCTURE_TEMPLATES, TASK_WORDS,
                                             Vocabulary, grammar_words)
 
