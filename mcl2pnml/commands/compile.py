@@ -111,8 +111,9 @@ def compile_mission(mission: Path, options: CompileOptions = CompileOptions(), *
                                  query_paths(net, output, timing, props)],
                       inputs)
     opened = None if o.expand == "all" else tuple(n for n in o.expand.split(",") if n)
+    labels = pipeline.call_labels(checked) if "drawing" in FORMATS[o.fmt].options else None
     pipeline.save_net(net, output, o.fmt, layout=o.layout_engine, title=mission.name,
-                      mission=True, expand=opened, timing=timing, note=notes)
+                      mission=True, expand=opened, timing=timing, note=notes, labels=labels)
     notes(f"wrote {output}: {net.summary()}")
     beside = _saved_beside(net, output, timing, o.queries, o.tool, props, stem, notes)
     return CompileOutcome(net, (output, *beside))
