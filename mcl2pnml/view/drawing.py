@@ -23,13 +23,16 @@ Conventions of the drawings (a legend is part of every figure):
   site of a mission), named inside their box without the box's name; the
   places where boxes meet (fusion places) are drawn outside every box,
   between the boxes they join;
-* a mission is drawn as its calls: each box shut, one node, framed (grey) with
-  its own border places (B, A, OK, FAIL, ABORTED...) beside it, so that every
-  circle says whose it is, the frames ranked by the call hierarchy rather than
-  the flow, so that the overview is as deep as the hierarchy; ``expand``
-  opens the boxes it names; with every box open (``--expand all``) the boxes
-  are still ranked by the calls, each framed with its border places, a page
-  rather than a strip of every call side by side;
+* a mission is drawn one call at a time (:mod:`mcl2pnml.view.calls`): the
+  call's net in its dashed frame, each call it makes one node, a box named as
+  MCL writes the call (``Dive(Depth)``, its instance's name under it), framed
+  (grey) with the places the call marks in it (B, A, OK, FAIL, ABORTED...), so
+  that every circle says whose it is, ranked as the tokens flow: a readable
+  slide whatever the mission's size; ``expand`` names the calls drawn (the
+  mission's own net by default); with every box open (``--expand all``) the
+  boxes are ranked by the calls, each framed with its border places, a page
+  rather than a strip of every call side by side (and the page lays a mission
+  out whole as its overview: every box shut, ranked by the call hierarchy);
 * a figure wider than a slide (16:9) has its widest rows wrapped: every
   other node (or frame) of such a row one rank down (:func:`_wrap`);
 * every node has a ``class`` (``place``, ``transition``, ``copy``, ``box``,
@@ -140,8 +143,9 @@ def _tokens(n: int) -> str:
 
 
 def _text(label: str) -> str:
-    """A label as plain text: graphviz must neither read it as HTML nor expand ``\\N``."""
-    return graphviz.escape(label)
+    """A label as plain text: graphviz must neither read it as HTML nor expand ``\\N``,
+    nor take ``&amp;`` in it for the entity of ``&`` (it decodes entities in every label)."""
+    return graphviz.escape(label.replace("&", "&amp;"))
 
 
 def dot_graph(net: Net, *, marking: Mapping[str, int] | None = None,
@@ -173,7 +177,7 @@ def dot_graph(net: Net, *, marking: Mapping[str, int] | None = None,
     d.labels, d.flow, d.texts = labels or {}, flow, {} if texts is None else texts
     if flow and not legend:
         # one call's view on a page: as close as a slide's, its text as large as it can be
-        d.g.graph_attr.update(nodesep="0.12", ranksep="0.3")
+        d.g.graph_attr.update(nodesep="0.09", ranksep="0.25")
     # (in this order: the DOT text lists the nodes, boxes and arcs as they are drawn)
     d.loose_nodes()
     d.shut_boxes(box_sizes)

@@ -2,7 +2,9 @@
 
 The page is for teaching Petri-net supervisors: it draws the net as its
 static drawing does (:mod:`mcl2pnml.view.drawing`, laid out by
-:func:`~mcl2pnml.view.layout.drawn_layout`): each arc along dot's route
+:func:`~mcl2pnml.view.layout.drawn_layout`), each node as large as dot laid it
+out with its name inside (:func:`view_json`: no text lies on another), each arc
+along dot's route
 around the nodes (its bend points), a place that many transitions read or
 give back to (a primitive's ON and OFF, a task's MTX) as a small dashed
 copy beside each of them, the boxes of the drawing (the primitive of
@@ -20,9 +22,18 @@ and a mission or a
 task can be switched to its reduced model (Fig. 3 of the paper: every task
 started by B, ending in OK, FAIL or ABORTED, without its primitive).
 
-Watching a whole mission. The page opens on the whole net (*Fit* comes
-back to it) and, while a run is replayed, *follows* each firing: the view
-moves to the transition and the places it took from and gave to. The
+One call at a time. A mission's page opens on the mission's own net, each call
+it makes shut in a box named as MCL writes it (:mod:`mcl2pnml.view.calls`, laid
+out by :func:`~mcl2pnml.view.layout.call_layouts`, :func:`calls_json`); a box
+clicked opens its call, a breadcrumb goes back up, and a box shows whether its
+inside runs and how many of its transitions may fire. The header is one row,
+the side panels fold (folded on a narrow screen), and at *Fit* on a 1024 x 768
+projector or a 1920 x 1080 screen every text of the paper's mission is at least
+10 or 12 pixels high (``tests/view/test_show_screens.py``).
+
+Watching a whole mission. *Fit* shows the whole view, and *follow* (on by
+default) goes to each firing: to the call it is in, one call at a time; on the
+whole net, to the transition and the places it took from and gave to. The
 places the last firing changed are ringed and listed + or −; the marking
 and the P-invariants can be filtered, and the invariants are one summary
 line until opened. Beside the net, a mission's functional form (the

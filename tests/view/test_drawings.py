@@ -23,6 +23,7 @@ from drawcheck import fitted_text, laid_out, layout_json, problems
 from helpers import ROOT, run_cli
 from sampling import variants
 from mcl2pnml import pipeline
+from mcl2pnml.commands.compile import CompileOptions, compile_mission
 from mcl2pnml.view.calls import mission_calls, short_label
 from mcl2pnml.view.drawing import box_node, dot_graph, drawing, instance_clusters
 from mcl2pnml.language.library import default_library
@@ -377,3 +378,47 @@ def test_a_missions_positions_group_each_call_in_its_box(tmp_path, name):
             (ax0, ay0, ax1, ay1), (bx0, by0, bx1, by1) = extent[a], extent[b]
             assert ax1 < bx0 or bx1 < ax0 or ay1 < by0 or by1 < ay0, (a, b)
     assert sum(1 for pts in _arcs(path).values() if pts) > len(net.arcs) // 2
+
+
+#: A mission of three calls, as a lecturer writes one (one of them with a string that is
+#: markup in SVG and in graphviz's labels).
+THREE_CALLS = """\
+const Depth = 5.0;
+const Shallow = 2.0;
+primitive KeepDepth(depth);
+primitive Say(text);
+task Dive(d) = AchieveGoal(KeepDepth(d)) timeout 60;
+task Tell(t) = AchieveGoal(Say(t)) timeout 30;
+mission {
+    Dive(Shallow);
+    Dive(Depth);
+    Tell("<b>&amp; \\"x\\"</b>");
+}
+"""
+
+
+def test_a_three_call_mission_is_a_slide_per_call(tmp_path):
+    """``compile --format svg``: the mission's own net, then with ``--expand`` each call
+    (by its name, or as MCL writes it): boxes named as MCL writes the calls, text at least
+    14 px on a 1920 x 1080 slide, the string's markup drawn as text."""
+    mission = tmp_path / "three.mcl"
+    mission.write_text(THREE_CALLS)
+    # (the command itself, in this process: a process of the CLI's costs its start-up)
+    compile_mission(mission, CompileOptions(output=tmp_path / "three.svg", fmt="svg",
+                                            expand="Dive(Depth)"))
+    svgs = {"Dive(Depth)": (tmp_path / "three.svg").read_bytes()}
+    checked = pipeline.check_file(mission)
+    net, names = pipeline.compile_checked(checked), pipeline.call_labels(checked)
+    for call in ("", "sequence-1"):         # as compile draws them, without its start-up
+        source = drawing(net, mission.name, expand=[call] if call else (), labels=names).source
+        svgs[call] = laid_out(source, "svg")
+    texts = {}
+    for call, svg in svgs.items():
+        least, size = fitted_text(svg, SLIDE)
+        assert least >= LEAST, (call, size, least)
+        texts[call] = {t.text for t in etree.fromstring(svg).iter(
+            "{http://www.w3.org/2000/svg}text")}
+    assert {"Dive(Shallow)", "Dive-1", "sequence(Dive(Depth),", "sequence-1"} <= texts[""]
+    assert {"Dive(Depth)", "Dive-2", 'Tell("<b>&amp; \\"x\\"</b>")', "Tell-1"} \
+        <= texts["sequence-1"]
+    assert {"task Dive(d)", "Dive"} <= texts["Dive(Depth)"]

@@ -116,7 +116,7 @@ def listener():
     server.close()
 
 
-VIEWPORT = {"width": 1400, "height": 900}
+VIEWPORT = {"width": 1600, "height": 900}
 
 
 class Witnessed:
