@@ -235,8 +235,8 @@ def save_net(net: Net, path: str | Path, fmt: str = FORMAT, *, layout: str = LAY
     executor's timing. A drawing (svg, png, dot) shows ``clusters`` as boxes
     (:func:`template_clusters` for a template), or a mission one call at a time: the
     calls ``expand`` names (by default its own net; None: every call), their callees
-    shut, each box named by ``labels`` (:func:`call_labels`). ``timing``: what the vehicle is assumed to
-    do, for the formats that write a mission's timed semantics (tapn). ``note`` hears
+    shut, each box named by ``labels`` (:func:`call_labels`). ``timing``: what the vehicle is
+    assumed to do, for the formats that write a mission's timed semantics (tapn). ``note`` hears
     what the format could not say of the net (PIPE's: the time-outs' delays).
     """
     form = FORMATS.get(fmt)

@@ -61,6 +61,9 @@ def test_a_box_opens_its_call_and_the_breadcrumb_goes_back(two, page_of):
     assert "KeepDepth.ON" in marking(page)
     page.click("#crumbs button >> nth=0")
     assert crumbs(page) == ["mission"] and boxes(page)["Depth-1"].startswith("running")
+    page.focus('#net g.box[data-name="Goto-1"]')        # a box is a button of the keyboard too
+    page.keyboard.press("Enter")
+    assert crumbs(page) == ["mission", "Goto((10.0, 5.0, 5.0))"]
 
 
 def test_follow_goes_to_the_call_of_a_firing(two, page_of):
