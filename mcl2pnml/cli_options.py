@@ -233,8 +233,10 @@ COMPILE_OPTIONS = _composed(  # compile MISSION
                  help="Node positions in the PNML: graphviz dot, BFS layers, or none "
                       f"(auto: dot up to {DOT_LIMIT:,} nodes, layers up to {LAYERS_LIMIT:,})."),
     click.option("--expand", metavar="NAME[,NAME...]|all", default=CompileOptions.expand,
-                 help="For a drawing (svg, png, dot): the calls drawn open, by the names on "
-                      "their boxes, or all; the others are drawn shut, one box each."),
+                 help="For a drawing (svg, png, dot): the calls drawn, by the names on "
+                      "their boxes (the instance's, or as MCL writes the call), each with the "
+                      "calls it makes shut, one box each; by default the mission's own net; "
+                      "all: the whole net."),
     click.option("--queries", type=OUTPUT, metavar="FILE.xml",
                  help=f"Also write the mission's properties (a deadlock, {CAN_END}) in the "
                       "Model Checking Contest's XML, for the tools that read the PNML."),

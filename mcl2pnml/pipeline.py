@@ -61,6 +61,7 @@ __all__ = [
     "load_certificate", "check_certificate", "save_certificate", "check_properties",
     "timed_ends", "check_properties_timed", "parse_size", "instance_trees", "call_sites",
     "unflown", "pattern_ends", "simulated_primitives", "exact_odds", "Verdicts", "Certified",
+    "call_labels",
 ]
 
 
@@ -293,23 +294,26 @@ def save_net(net: Net, path: str | Path, fmt: str = FORMAT, *, layout: str = LAY
              title: str | None = None, mission: bool = False,
              clusters: Mapping[str, Sequence[str]] | None = None,
              expand: Sequence[str] | None = (), timing: "Assumptions | None" = None,
-             note: Callable[[str], None] = lambda line: None) -> Path:
+             note: Callable[[str], None] = lambda line: None,
+             labels: Mapping[str, str] | None = None) -> Path:
     """Write ``net`` to ``path`` in format ``fmt`` (a name of the format table).
 
     ``layout`` places the nodes where the format keeps positions (PNML):
     ``auto``, ``dot``, ``layers`` or ``none``; with dot, the arcs' bend points
     too. ``mission``: a compiled mission, whose TINA file follows the
     executor's timing. A drawing (svg, png, dot) shows ``clusters`` as boxes
-    (None: a mission's calls, :func:`template_clusters` for a template) and
-    opens those ``expand`` names (None: all). ``timing``: what the vehicle is assumed to
-    do, for the formats that write a mission's timed semantics (tapn). ``note`` hears
+    (:func:`template_clusters` for a template), or a mission one call at a time: the
+    calls ``expand`` names (by default its own net; None: every call), their callees
+    shut, each box named by ``labels`` (:func:`call_labels`). ``timing``: what the vehicle is
+    assumed to do, for the formats that write a mission's timed semantics (tapn). ``note`` hears
     what the format could not say of the net (PIPE's: the time-outs' delays).
     """
     form = FORMATS.get(fmt)
     if form is None:
         raise ValueError(f"unknown format {fmt!r}; known: {', '.join(FORMATS)}")
     drawn = _drawn(net, layout) if "positions" in form.options else None
-    drawing = _drawing(net, title, clusters, expand) if "drawing" in form.options else None
+    drawing = (_drawing(net, title, clusters, expand, labels) if "drawing" in form.options
+               else None)
     said = form.write(net, path, SaveOptions(positions=drawn and drawn.positions,
                                             bends=drawn and drawn.bends, drawing=drawing,
                                             urgent=mission, timing=timing))
@@ -346,10 +350,18 @@ def to_pnml_bytes(net: Net, layout_engine: str = LAYOUT) -> bytes:
 
 
 def _drawing(net: Net, title: str | None, clusters: Mapping[str, Sequence[str]] | None,
-             expand: Sequence[str] | None) -> str:
+             expand: Sequence[str] | None, labels: Mapping[str, str] | None) -> str:
     """The DOT text of ``net``'s drawing (:func:`mcl2pnml.view.drawing.drawing`)."""
     from mcl2pnml.view.drawing import drawing   # graphviz, 0.03 s: only for a drawing
-    return drawing(net, title, clusters=clusters, expand=expand).source
+    return drawing(net, title, clusters=clusters, expand=expand, labels=labels).source
+
+
+def call_labels(checked) -> dict[str, str]:
+    """Each instance of the mission ``checked`` compiles to, named as MCL writes it
+    (``Dive(Depth)``, ``task Dive(d)``: :func:`mcl2pnml.language.functional.call_labels`)."""
+    # lark comes with the language's package, 40 ms: only a mission's drawing or page
+    from mcl2pnml.language.functional import call_labels as labels
+    return labels(checked)
 
 
 def _drawn(net: Net, layout: str):
@@ -631,6 +643,9 @@ class Shown:
     #: The boxes of each net's drawing by its label: a template's slots (the primitive of
     #: Fig. 2's task, T1 and T2 of Fig. 4); a net without, each instance in its box.
     boxes: dict[str, dict[str, list[str]]] = field(default_factory=dict)
+    #: A mission's calls named as MCL writes them (:func:`call_labels`): the page opens
+    #: its nets one call at a time.
+    labels: dict[str, str] | None = None
     #: Each net as the page draws it, made by the first page written: a run does not
     #: change it, so the pages of many runs of one mission (a counterexample's each,
     #: ``analyze --counterexamples``) lay the mission out and explore it once.
@@ -660,7 +675,7 @@ def show_nets(what: str, *, with_run: bool = False, net_id: str | None = None,
         return Shown(path.stem, [(compile_checked(checked), "the mission"),
                                  (compile_checked(checked, reduced=True),
                                   "the mission, every task reduced (Fig. 3)")],
-                     instance_trees(checked))
+                     instance_trees(checked), labels=call_labels(checked))
     if with_run:
         raise SettingError("run_log", "a run is of a mission: give the mission's .mcl or "
                                       "its compiled net, not a template")
@@ -696,7 +711,7 @@ def drawn(shown: Shown) -> dict[str, Any]:
     from mcl2pnml.view.show import tree_data, variant   # graphviz, 65 ms: only a page
     tree = tree_data(shown.trees)
     if not shown.drawn:
-        shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label))
+        shown.drawn.extend(variant(net, label, tree, shown.boxes.get(label), shown.labels)
                            for net, label in shown.nets)
     return tree
 

@@ -55,19 +55,13 @@ def dot() -> str:
     return path
 
 
-#: Chromium as the tests run it: headless, offline, as root in a container.
-CHROMIUM_FLAGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update",
-                  "--disable-sync"]
-
-
 @pytest.fixture(scope="session")
 def browser():
     """Headless Chromium, one per test process (each test opens its own pages in their
     own contexts); its absence is a failure that says how to get it."""
-    import shutil
+    from screens import CHROMIUM_FLAGS, chromium   # (as docs/show_sauce_*.png are shot)
 
-    executable = shutil.which("chromium") or shutil.which("chromium-browser")
+    executable = chromium()
     if executable is None:
         pytest.fail("Chromium is needed to test the token game page: `make setup` installs "
                     "it with apt-get (or: apt-get install chromium)")

@@ -110,12 +110,25 @@ def compile_mission(mission: Path, options: CompileOptions = CompileOptions(), *
         check_outputs(outputs + [("output", path) for path in
                                  query_paths(net, output, timing, props)],
                       inputs)
-    opened = None if o.expand == "all" else tuple(n for n in o.expand.split(",") if n)
+    opened = None if o.expand == "all" else expand_names(o.expand)
+    labels = pipeline.call_labels(checked) if "drawing" in FORMATS[o.fmt].options else None
     pipeline.save_net(net, output, o.fmt, layout=o.layout_engine, title=mission.name,
-                      mission=True, expand=opened, timing=timing, note=notes)
+                      mission=True, expand=opened, timing=timing, note=notes, labels=labels)
     notes(f"wrote {output}: {net.summary()}")
     beside = _saved_beside(net, output, timing, o.queries, o.tool, props, stem, notes)
     return CompileOutcome(net, (output, *beside))
+
+
+def expand_names(text: str) -> tuple[str, ...]:
+    """The calls ``--expand`` names, split at its commas outside parentheses: a call as MCL
+    writes it (``monitor(Survey(), FindCross())``) is one name."""
+    names, depth, start = [], 0, 0
+    for k, c in enumerate(text + ","):
+        depth += (c == "(") - (c == ")")
+        if c == "," and depth <= 0:
+            names.append(text[start:k].strip())
+            start = k + 1
+    return tuple(n for n in names if n)
 
 
 def _compiled_with_properties(mission: Path, checked, extra: Path | None, o: CompileOptions):

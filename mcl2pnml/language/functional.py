@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Union
 
+from mcl2pnml.core.payloads import MISSION
 from mcl2pnml.language import ast
 
 
@@ -188,3 +189,33 @@ def instances(root: FNode, root_name: str, scope: str) -> list[Instance]:
     # and a survey of 10,000 calls has 20,000 instances)
     return [Instance(name, kind, line, parent, depth, size, node)
             for (name, kind, line, parent, depth, node), size in zip(out, sizes)]
+
+
+def box_label(node: FNode) -> str:
+    """A node as a drawing's box names it: a call as written (``AchieveDepth(CrossDepth)``),
+    a structure with its children one level deep (``monitor(Survey(), FindCross())``,
+    ``if-then-else(monitor(…), sequence(…), NULL)``)."""
+    if isinstance(node, FCall) or node.kind == NULL_KIND:
+        return format_node(node)
+    inner = (format_node(c) if isinstance(c, FCall) or c.kind == NULL_KIND else f"{c.kind}(\u2026)"
+             for c in node.children)
+    return f"{node.kind}({', '.join(inner)})"
+
+
+def call_labels(checked) -> dict[str, str]:
+    """Each instance of the compiled mission named as MCL writes it (section 2.5: one
+    instance per structure and call site, one shared net per task, function and
+    primitive): a call site by its call (``Dive(Depth)``), a structure by
+    :func:`box_label`, the mission's root ``mission``, a function's body, a task and a
+    primitive by their declarations with their parameters (``task Dive(d)``)."""
+    labels = {}
+    roots = [(MISSION, mission_expression(checked.mission), "")]
+    roots += [(name, function_expression(f), name) for name, f in checked.functions.items()]
+    for root, expression, scope in roots:
+        for k, instance in enumerate(instances(expression, root, scope)):
+            labels[instance.name] = box_label(instance.node) if k else root
+    for kind, declared in (("function", checked.functions), ("task", checked.tasks),
+                           ("primitive", checked.primitives)):
+        for name, d in declared.items():
+            labels[name] = f"{kind} {name}({', '.join(d.params)})"
+    return labels

@@ -23,13 +23,16 @@ Conventions of the drawings (a legend is part of every figure):
   site of a mission), named inside their box without the box's name; the
   places where boxes meet (fusion places) are drawn outside every box,
   between the boxes they join;
-* a mission is drawn as its calls: each box shut, one node, framed (grey) with
-  its own border places (B, A, OK, FAIL, ABORTED...) beside it, so that every
-  circle says whose it is, the frames ranked by the call hierarchy rather than
-  the flow, so that the overview is as deep as the hierarchy; ``expand``
-  opens the boxes it names; with every box open (``--expand all``) the boxes
-  are still ranked by the calls, each framed with its border places, a page
-  rather than a strip of every call side by side;
+* a mission is drawn one call at a time (:mod:`mcl2pnml.view.calls`): the
+  call's net in its dashed frame, each call it makes one node, a box named as
+  MCL writes the call (``Dive(Depth)``, its instance's name under it), framed
+  (grey) with the places the call marks in it (B, A, OK, FAIL, ABORTED...), so
+  that every circle says whose it is, ranked as the tokens flow: a readable
+  slide whatever the mission's size; ``expand`` names the calls drawn (the
+  mission's own net by default); with every box open (``--expand all``) the
+  boxes are ranked by the calls, each framed with its border places, a page
+  rather than a strip of every call side by side (and the page lays a mission
+  out whole as its overview: every box shut, ranked by the call hierarchy);
 * a figure wider than a slide (16:9) has its widest rows wrapped: every
   other node (or frame) of such a row one rank down (:func:`_wrap`);
 * every node has a ``class`` (``place``, ``transition``, ``copy``, ``box``,
@@ -57,6 +60,8 @@ from mcl2pnml.core.payloads import read_transition
 from mcl2pnml.core.settings import SettingError
 from mcl2pnml.core.timing import exact_seconds, seconds_text
 from mcl2pnml.io.dot import node_name
+from mcl2pnml.view.calls import (Calls, call_net, calls_of, instance_clusters,
+                                    mission_calls, short_label)
 
 TOKEN = "\u25cf"
 #: Top down: tokens flow from B at the top to OK, FAIL and ABORTED at the bottom, and
@@ -138,15 +143,18 @@ def _tokens(n: int) -> str:
 
 
 def _text(label: str) -> str:
-    """A label as plain text: graphviz must neither read it as HTML nor expand ``\\N``."""
-    return graphviz.escape(label)
+    """A label as plain text: graphviz must neither read it as HTML nor expand ``\\N``,
+    nor take ``&amp;`` in it for the entity of ``&`` (it decodes entities in every label)."""
+    return graphviz.escape(label.replace("&", "&amp;"))
 
 
 def dot_graph(net: Net, *, marking: Mapping[str, int] | None = None,
               clusters: Mapping[str, Sequence[str]] | None = None, title: str | None = None,
               legend: bool = True, expand: Collection[str] | None = None,
               box_sizes: Mapping[str, tuple[float, float]] | None = None,
-              by_calls: bool = False) -> graphviz.Digraph:
+              by_calls: bool = False, labels: Mapping[str, str] | None = None,
+              flow: bool = False, texts: dict[str, tuple[str, int]] | None = None
+              ) -> graphviz.Digraph:
     """The net as a graphviz graph (``.source`` for the text, ``.pipe()`` to render).
 
     ``expand`` names the boxes drawn open; every other box of ``clusters`` is
@@ -158,9 +166,18 @@ def dot_graph(net: Net, *, marking: Mapping[str, int] | None = None,
     the call hierarchy (:func:`_call_edge`), each box's inside by its flow:
     a mission with every call open is a page of the calls' nets stacked, a
     callee below its callers, not a strip of them side by side.
+    ``labels`` names boxes (a call as MCL writes it: ``Dive(Depth)``), the box's
+    own name under it. ``flow``: the view of one call (:mod:`mcl2pnml.view.calls`),
+    its callees shut, each framed with the places the call marks in it, ranked as the
+    tokens flow (a callee's B above its box, its results below). ``texts``, if given,
+    is filled with the text drawn in each node and its size, by the node's DOT name.
     """
     d = _Drawer(net, net.initial if marking is None else marking, clusters or {}, title,
                 legend, expand, by_calls)
+    d.labels, d.flow, d.texts = labels or {}, flow, {} if texts is None else texts
+    if flow and not legend:
+        # one call's view on a page: as close as a slide's, its text as large as it can be
+        d.g.graph_attr.update(nodesep="0.09", ranksep="0.25")
     # (in this order: the DOT text lists the nodes, boxes and arcs as they are drawn)
     d.loose_nodes()
     d.shut_boxes(box_sizes)
@@ -206,6 +223,10 @@ class _Drawer:
         self.framed: dict[str, list[Place]] = {}
         self.copies = 0
         self.marks: set[str] = set()     # the arcs' marks, apart until the legend's count
+        # (set by dot_graph: the boxes' names, one call's view, the texts drawn)
+        self.labels: Mapping[str, str] = {}
+        self.flow = False
+        self.texts: dict[str, tuple[str, int]] = {}
 
     def _framed_by(self, owner: str) -> bool:
         """Whether the places of box ``owner``'s border are drawn in its frame."""
@@ -220,8 +241,11 @@ class _Drawer:
         shown = _inside(p.label, owner if self._framed_by(owner) else box_name)
         label = shown + (f"\n{_tokens(tokens)}" if tokens else "")
         # circles all of one size read best; long names get a larger one
-        small = owner in self.shut       # the overview's places: only their short names
+        # (the overview's places: only their short names; one call's view keeps them as large
+        # as the call's own)
+        small = owner in self.shut and not self.flow
         size = SMALL if small else FONT
+        self.texts[node_name(p.id)] = (shown, size)
         target.node(node_name(p.id), _text(label), shape="circle",
                     width=_diameter(label, size, 3.0 if small else 3.6),
                     fixedsize="true", fontsize=str(size),
@@ -230,6 +254,7 @@ class _Drawer:
 
     def transition(self, target, t: Transition, box_name: str | None = None) -> None:
         """Transition ``t`` as a box in ``target``, its name inside."""
+        self.texts[node_name(t.id)] = (transition_label(t, box_name), FONT)
         target.node(node_name(t.id), _text(transition_label(t, box_name)),
                     **transition_style(t), **{"class": "transition"})
 
@@ -270,10 +295,18 @@ class _Drawer:
                 fixed = {"width": f"{w / 72:.2f}", "height": f"{h / 72:.2f}",
                          "fixedsize": "true"}
             with self.frame(name) as c:
-                c.node(box_node(name), _text(f"{name}\n({len(self.clusters[name])} nodes)"),
+                said = self.labels.get(name)
+                self.texts[box_node(name)] = (said or name, FONT)
+                c.node(box_node(name), _text(f"{said}\n{name}" if said else
+                                             f"{name}\n({len(self.clusters[name])} nodes)"),
                        shape="box", style="rounded,dashed,filled", fillcolor="gray97",
                        color="gray40", fontsize=str(FONT), margin="0.1,0.05", **fixed,
                        **{"class": "box"})
+                if self.flow:       # one call's view: the callee's places where tokens put them
+                    for p in self.framed.get(name, ()):
+                        self.place(c, p)
+                    self.used.add("shut")
+                    continue
                 # the places beside the box, not a row of their own above it: the
                 # overview as deep as the calls, a row each
                 with c.subgraph() as r:
@@ -296,7 +329,8 @@ class _Drawer:
                     for p in self.framed.get(name, ()):
                         self.place(r, p)
                 with f.subgraph(name=f"cluster_{name}") as c:
-                    c.attr(label=_text(name), style="rounded,dashed", color="gray50",
+                    c.attr(label=_text(self.labels.get(name, name)), style="rounded,dashed",
+                           color="gray50",
                            fontsize=str(FONT), margin="6")
                     self.used.add("box")
                     for m in members:   # net order within the cluster, as given
@@ -331,7 +365,9 @@ class _Drawer:
         transition it is drawn beside), if any: its DOT name."""
         self.copies += 1
         name = f"{node_name(place.id)}~{self.copies}"
-        shown = _inside(place.label, box_name)
+        owner = place.id.rpartition(".")[0]
+        # (a copy of a place framed with its box is named as there: ON, not KeepDepth.ON)
+        shown = _inside(place.label, owner if self.flow and owner in self.shut else box_name)
         with contextlib.ExitStack() as stack:
             c = self.g
             # (into the box where it is drawn: inside its frame on a page ranked by calls)
@@ -339,6 +375,7 @@ class _Drawer:
                 c = stack.enter_context(c.subgraph(name=f"cluster_call_{box_name}"))
             if box_name:
                 c = stack.enter_context(c.subgraph(name=f"cluster_{box_name}"))
+            self.texts[name] = (shown, SMALL)
             c.node(name, _text(shown), shape="circle", fixedsize="true", style="dashed",
                    width=_diameter(shown, SMALL, 3.0), fontsize=str(SMALL),
                    **{"class": "copy"})
@@ -363,7 +400,12 @@ class _Drawer:
                         self.drawn.get(a.target, node_name(a.target)), a.kind)
                 if ends[0] != ends[1] and ends not in joined:   # inside the box: hidden
                     joined.add(ends)
-                    _call_edge(self.g, a, ends, box, levels)
+                    if self.flow:
+                        self.g.edge(ends[0], ends[1], **(
+                            {"style": "dashed", "dir": "none"} if a.kind is ArcKind.READ
+                            else {}))
+                    else:
+                        _call_edge(self.g, a, ends, box, levels)
                     self.marks.add("read" if a.kind is ArcKind.READ else "arc")
                 continue
             if (a.source in between or a.target in between) and a.weight == 1:
@@ -393,7 +435,7 @@ class _Drawer:
             # a test is not a flow of tokens: it must not bend the layout
             attrs.update(style="dashed", arrowhead="none", constraint="false")
             self.marks.add("read")
-        elif goes_back and returned >= COPY_RETURNS:
+        elif goes_back and returned >= COPY_RETURNS and not self.flow:
             # many tokens going back to one place (a mutex freed by every
             # ending): each arc goes to a copy of the place drawn beside its
             # transition, as PNML's reference places do, instead of crossing
@@ -718,40 +760,27 @@ def _call_edge(g: graphviz.Digraph, a: Arc, ends: tuple[str, str, ArcKind], box:
         g.edge(tail, head, dir="back")
 
 
-#: The interface places through which a box calls another: a structure or call site
-#: starts its callee through the callee's B, a task its primitive through E.
-CALLS = ("B", "E")
-
-
 def box_levels(net: Net, clusters: Mapping[str, Sequence[str]]
                ) -> tuple[dict[str, int], dict[str, int]]:
     """How deep each box is in the call hierarchy, and each place between boxes: the
     shallowest box it touches.
 
     A box calls another when its transitions mark the other's begin place B
-    (or a task its primitive's E). A box's depth is the longest chain of calls
-    above it, so that a shared net (a task, a function, a primitive, entered
-    from every call site) sits below all its call sites, not beside the first
-    one found; a box no call reaches is at the top, and a box on a circle of
-    calls (not from MCL, which has no recursion) below all the others.
+    (or a task its primitive's E: :func:`~mcl2pnml.view.calls.calls_of`). A box's
+    depth is the longest chain of calls above it, so that a shared net (a task, a
+    function, a primitive, entered from every call site) sits below all its call
+    sites, not beside the first one found; a box no call reaches is at the top, and
+    a box on a circle of calls (not from MCL, which has no recursion) below all the
+    others.
     """
     box = {n: name for name, members in clusters.items() for n in members}
     touches: dict[str, set[str]] = {}
-    writers: dict[str, set[str]] = {}
-    readers: dict[str, set[str]] = {}
     for a in net.arcs:
         place, transition = ((a.source, a.target) if a.source in net.place_index
                              else (a.target, a.source))
         if place not in box and transition in box:
             touches.setdefault(place, set()).add(box[transition])
-        if a.kind is ArcKind.NORMAL and transition in box:
-            (writers if a.target == place else readers).setdefault(place, set()).add(
-                box[transition])
-    calls: dict[str, set[str]] = {name: set() for name in clusters}
-    for p in net.places:
-        if p.interface in CALLS:
-            for caller in writers.get(p.id, ()):
-                calls[caller] |= readers.get(p.id, set()) - {caller}
+    calls = calls_of(net, clusters)
     # longest chains by Kahn's algorithm: a box's level once all its callers have theirs
     above = {name: 0 for name in clusters}
     for callees in calls.values():
@@ -844,34 +873,32 @@ def check_expand(clusters: Mapping[str, Sequence[str]], expand: Collection[str])
     return list(expand)
 
 
-def instance_clusters(net: Net) -> dict[str, list[str]]:
-    """Nodes grouped by instance: the part of their id before the last dot.
-
-    A compiled mission names every node after its component
-    (``mission.sequence-1.t2``), so this draws each task, structure and call
-    site in its own box. Ids without a dot, and groups of one, stay loose.
-    """
-    groups: dict[str, list[str]] = {}
-    for node in (*net.places, *net.transitions):
-        stem, dot, _ = node.id.rpartition(".")
-        if dot and stem:
-            groups.setdefault(stem, []).append(node.id)
-    return {k: v for k, v in groups.items() if len(v) > 1}
-
-
 def drawing(net: Net, title: str | None = None, *,
             clusters: Mapping[str, Sequence[str]] | None = None,
-            expand: Collection[str] | None = ()) -> graphviz.Digraph:
+            expand: Collection[str] | None = (),
+            labels: Mapping[str, str] | None = None) -> graphviz.Digraph:
     """The figure of ``net``, titled, with the legend.
 
     ``clusters`` are its boxes (a template's slots: the primitive of a task,
-    T1 and T2 of a structure); None, one box per instance of a compiled
-    mission (:func:`instance_clusters`). ``expand`` names the boxes drawn
-    open: by default none, so a mission is drawn as its calls, one box each;
-    None opens them all.
+    T1 and T2 of a structure), all drawn open. None: a compiled mission, one
+    call at a time (:mod:`mcl2pnml.view.calls`): ``expand`` names the calls
+    drawn (by their names, or their ``labels`` where one call alone has it),
+    each open, its callees shut in boxes named by ``labels`` (``Dive(Depth)``, as
+    MCL writes the call); by default the mission's own net, the root of its
+    calls. ``expand`` None draws every call open, the whole net ranked by its calls:
+    a poster, not a slide.
     """
-    boxes = instance_clusters(net) if clusters is None else clusters
-    return dot_graph(net, clusters=boxes, title=title or net.name, legend=True, expand=expand,
-                  by_calls=clusters is None and expand is None)
-
-
+    if clusters is not None:
+        return dot_graph(net, clusters=clusters, title=title or net.name, legend=True,
+                         expand=expand)
+    if expand is None:
+        return dot_graph(net, clusters=instance_clusters(net), title=title or net.name,
+                         legend=True, expand=None, by_calls=True, labels=labels)
+    calls = mission_calls(net)
+    names = labels or {}
+    opened = [calls.name(n, names) for n in expand] or list(calls.roots)
+    part, boxes = call_net(net, calls, opened)
+    said = ", ".join(short_label(names.get(n, n)) for n in opened)
+    return dot_graph(part, clusters=boxes, title=f"{title or net.name}: {said}", legend=True,
+                     expand=opened, labels={n: short_label(names.get(n, n)) for n in boxes},
+                     flow=True)

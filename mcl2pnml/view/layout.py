@@ -26,6 +26,7 @@ Coordinates follow PNML: x to the right, y downwards, in points, all >= 0.
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 from dataclasses import dataclass, field, replace
@@ -69,12 +70,17 @@ class Drawn:
     the net's arcs, draws such an arc as a straight line to the place
     itself. ``boxes`` are the boxes of the drawing (a task's primitive, a
     structure's T1 and T2, a mission's calls): name -> (x0, y0, x1, y1).
+    ``sizes`` (half width, half height) and ``texts`` (the text drawn inside and its
+    font size) are each node's and copy's as dot laid them out, where it did: a page
+    draws the nodes so, and no text then lies on another.
     """
 
     positions: dict[str, tuple[float, float]]
     bends: dict[tuple[str, str], list[tuple[float, float]]] = field(default_factory=dict)
     copies: dict[str, tuple[str, tuple[float, float]]] = field(default_factory=dict)
     boxes: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)
+    sizes: dict[str, tuple[float, float]] = field(default_factory=dict)
+    texts: dict[str, tuple[str, int]] = field(default_factory=dict)
 
     def whole(self) -> "Drawn":
         """The positions and bend points in whole points, as a file keeps them: WoPeD
@@ -152,7 +158,9 @@ def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) ->
                                            "and auto lays out in layers when it is missing")
     boxes = border_out(net, instance_clusters(net)) if clusters is None else {}
     if not boxes:
-        graph = _run_dot(dot_graph(net, clusters=clusters, legend=False, expand=None).source)
+        texts: dict[str, tuple[str, int]] = {}
+        graph = _run_dot(dot_graph(net, clusters=clusters, legend=False, expand=None,
+                                   texts=texts).source)
         if graph is None:
             return None
         frame = _Frame(graph)
@@ -160,10 +168,100 @@ def _dot_drawn(net: Net, clusters: Mapping[str, Sequence[str]] | None = None) ->
         drawn = Drawn({n: frame(*p) for n, p in nodes.items()},
                       {arc: [frame(*p) for p in pts] for arc, pts in splines.items()},
                       {c: (place, frame(*nodes[c])) for c, place in copies.items()},
-                      {name: _framed(frame, *bb) for name, bb in _cluster_boxes(graph).items()})
+                      {name: _framed(frame, *bb) for name, bb in _cluster_boxes(graph).items()},
+                      _half_sizes(graph), _by_id(texts))
     else:
         drawn = _two_levels(net, boxes)
     return drawn and _of(net, drawn)
+
+
+@dataclass(frozen=True)
+class CallView:
+    """One call of a mission laid out, its callees shut (:mod:`mcl2pnml.view.calls`):
+    ``drawn`` its nodes (the call's own, the places it marks in its callees, the places
+    of others it touches), their copies, sizes and texts, its arcs' bend points and its
+    own dashed frame (``drawn.boxes``); ``shut`` each callee's box, ``names`` the text
+    drawn in it, ``frames`` each callee's grey frame with its places; ``box_arcs`` the
+    arcs between a shut box and a place, once per place and way: (callee, place, ``in``,
+    ``out`` or ``read``, bends)."""
+
+    drawn: Drawn
+    shut: dict[str, tuple[float, float, float, float]]
+    names: dict[str, str]
+    frames: dict[str, tuple[float, float, float, float]]
+    box_arcs: list[tuple[str, str, str, list[tuple[float, float]]]]
+
+
+def call_layouts(net: Net, calls, labels: Mapping[str, str]) -> dict[str, CallView] | None:
+    """Every call of the mission ``net`` (``calls``: :func:`mcl2pnml.view.calls.mission_calls`)
+    laid out as its view, its callees' boxes named by ``labels``; None where dot failed."""
+    # graphviz (0.03 s, python -X importtime) comes with these: only when dot lays out
+    from mcl2pnml.view.calls import call_net, short_label
+    from mcl2pnml.view.drawing import dot_graph
+    made = []
+    for name in calls.clusters:
+        part, boxes = call_net(net, calls, [name])
+        texts: dict[str, tuple[str, int]] = {}
+        graph = dot_graph(part, clusters=boxes, legend=False, expand=[name], flow=True,
+                          labels={n: short_label(labels.get(n, n)) for n in boxes},
+                          texts=texts)
+        made.append((name, part, texts, graph.source))
+    graphs = _run_dots([source for *_, source in made])
+    if graphs is None or len(graphs) != len(made):
+        return None
+    return {name: _call_view(part, graph, texts, calls)
+            for (name, part, texts, _), graph in zip(made, graphs)}
+
+
+def _call_view(part: Net, graph: dict, texts: Mapping[str, tuple[str, int]], calls) -> CallView:
+    """One call's view read from dot's layout ``graph`` of its part of the net ``part``."""
+    from mcl2pnml.view.drawing import box_node   # graphviz: as _dot_drawn says
+    frame = _Frame(graph)
+    nodes, splines, copies = _read(graph, fine=True)
+    sizes = _half_sizes(graph)
+    named = {box_node(name): name for name in calls.clusters}
+    shut = {}
+    for node, (x, y) in nodes.items():
+        if node in named:
+            w, h = sizes[node]
+            shut[named[node]] = _framed(frame, x - w, y - h, x + w, y + h)
+    clusters = _cluster_boxes(graph)
+    frames = {name[len("call_"):]: _framed(frame, *bb) for name, bb in clusters.items()
+              if name.startswith("call_")}
+    opened = {name: _framed(frame, *bb) for name, bb in clusters.items()
+              if not name.startswith("call_")}
+    box_arcs, bends = [], {}
+    kinds = {(a.source, a.target): a.kind.value for a in part.arcs}
+    for (tail, head), pts in splines.items():
+        points = [frame(*p) for p in pts]
+        if tail in named:
+            box_arcs.append((named[tail], head, "out", points))
+        elif head in named:
+            box_arcs.append((named[head], tail, "in", points))
+        else:
+            bends[(tail, head)] = points
+    # a read arc (dashed, from the place): the box reads it, never takes its token
+    reads = {(calls_box, p) for calls_box, p, way, _ in box_arcs if way == "in"
+             and any(kinds.get((p, t)) == "read" for t in calls.clusters[calls_box])}
+    box_arcs = [(b, p, "read" if (b, p) in reads else way, pts) for b, p, way, pts in box_arcs]
+    drawn = Drawn({n: frame(*p) for n, p in nodes.items() if n in part.place_index
+                   or n in part.transition_index},
+                  bends, {c: (place, frame(*nodes[c])) for c, place in copies.items()},
+                  opened, sizes, _by_id(texts))
+    return CallView(_of(part, drawn), shut,
+                    {name: texts[box_node(name)][0] for name in shut}, frames, box_arcs)
+
+
+def _run_dots(sources: Sequence[str]) -> list[dict] | None:
+    """dot's layouts of several graphs, a run of dot each (several graphs in one run are
+    laid out differently from one run to the next: a page must be the same every time
+    it is written), as many at once as there are processors; None if one failed."""
+    # concurrent.futures, 5 ms (python -X importtime) at the CLI's start, which imports this
+    # module: only for a page's calls (threads, waiting on dot: the paper's 21 in 0.3 s)
+    from concurrent.futures import ThreadPoolExecutor
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        graphs = list(pool.map(_run_dot, sources))
+    return None if any(g is None for g in graphs) else graphs
 
 
 def _cluster_boxes(graph: dict) -> dict[str, tuple[float, float, float, float]]:
@@ -189,9 +287,11 @@ def _of(net: Net, drawn: Drawn) -> Drawn:
     # an arc drawn to a copy: the copy at one end, a transition of the net at the other
     drawn_arcs = arcs | {(c, t) for (c, t) in drawn.bends if c in copies and t in ids} \
         | {(t, c) for (t, c) in drawn.bends if c in copies and t in ids}
+    kept = ids | copies.keys()
     return Drawn({n: p for n, p in drawn.positions.items() if n in ids},
                  {arc: pts for arc, pts in drawn.bends.items() if arc in drawn_arcs and pts},
-                 copies, drawn.boxes)
+                 copies, drawn.boxes, {n: s for n, s in drawn.sizes.items() if n in kept},
+                 {n: t for n, t in drawn.texts.items() if n in kept})
 
 
 def _two_levels(net: Net, boxes: dict[str, list[str]]) -> Drawn | None:
@@ -204,13 +304,17 @@ def _two_levels(net: Net, boxes: dict[str, list[str]]) -> Drawn | None:
                  tuple(t for t in net.transitions if t.id in box),
                  tuple(a for a in net.arcs if a.source in box and box[a.source] == box.get(a.target)),
                  Marking({p: k for p, k in net.initial.items() if p in box}))
-    inner = _run_dot(dot_graph(inside, clusters=boxes, legend=False, expand=None).source)
+    texts: dict[str, tuple[str, int]] = {}
+    inner = _run_dot(dot_graph(inside, clusters=boxes, legend=False, expand=None,
+                               texts=texts).source)
     if inner is None:
         return None
     extent = {o["name"][len("cluster_"):]: [float(v) for v in o["bb"].split(",")]
               for o in inner.get("objects", []) if o.get("name", "").startswith("cluster_")}
     sizes = {name: (x1 - x0, y1 - y0) for name, (x0, y0, x1, y1) in extent.items()}
-    outer = _overview(dot_graph(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes))
+    outside: dict[str, tuple[str, int]] = {}
+    outer = _overview(dot_graph(net, clusters=boxes, legend=False, expand=(), box_sizes=sizes,
+                                texts=outside))
     if outer is None:
         return None
     frame = _Frame(outer)
@@ -265,7 +369,17 @@ def _two_levels(net: Net, boxes: dict[str, list[str]]) -> Drawn | None:
             if arc.source in box:
                 pts = way_in(box[arc.source], pts[0], arc.source)[::-1] + pts
             bends[(arc.source, arc.target)] = pts
-    return Drawn(positions, bends, copies, rects)
+    # each node's size and text as dot drew it: inside its box, or (between boxes) in the
+    # overview
+    return Drawn(positions, bends, copies, rects, {**_half_sizes(outer), **sizes},
+                 {**_by_id(outside), **_by_id(texts)})
+
+
+def _by_id(texts: Mapping[str, tuple[str, int]]) -> dict[str, tuple[str, int]]:
+    """The texts a drawing recorded by DOT name, by the net's ids (a copy's or a box's by
+    its DOT name, as :func:`_read` names them)."""
+    from mcl2pnml.io.dot import node_id   # graphviz: as _dot_drawn says
+    return {(node_id(name) or name): text for name, text in texts.items()}
 
 
 def _overview(overview) -> dict | None:
@@ -392,9 +506,12 @@ class _Frame:
 
 #: Where each Bézier piece of dot's spline is sampled, besides its end.
 _SAMPLES = (0.25, 0.5, 0.75)
+#: The same on a page's view of one call, whose nodes dot packs closer: a straight line
+#: between quarters may cut the corner of the next transition.
+_FINE = tuple(k / 8 for k in range(1, 8))
 
 
-def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
+def _read(graph: dict, fine: bool = False) -> tuple[dict[str, tuple[float, float]],
                                 dict[tuple[str, str], list[tuple[float, float]]],
                                 dict[str, str]]:
     """The nodes' positions and the arcs' bend points in dot's JSON, by the ids of the
@@ -405,7 +522,8 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
     each Bézier piece's quarters and end, the last end (at the node) left out,
     close enough to the curve that lines between them pass no node the curve
     passes by (a piece's middle alone cut the corner of a long bend across a
-    node).
+    node). ``fine``: each piece's eighths, and both ends of the spline kept, where dot
+    left them on its nodes' borders (a page's view of one call, packed closer).
     """
     from mcl2pnml.io.dot import node_id   # graphviz: as _dot_drawn says
     objects = graph.get("objects", [])
@@ -424,13 +542,15 @@ def _read(graph: dict) -> tuple[dict[str, tuple[float, float]],
         on_curve = []
         for k in range(0, len(pts) - 3, 3):
             (x0, y0), (x1, y1), (x2, y2), (x3, y3) = pts[k:k + 4]
-            for t in _SAMPLES:
+            for t in (_FINE if fine else _SAMPLES):
                 u = 1 - t
                 a, b, c, d = u * u * u, 3 * u * u * t, 3 * u * t * t, t * t * t
                 on_curve.append((a * x0 + b * x1 + c * x2 + d * x3,
                                  a * y0 + b * y1 + c * y2 + d * y3))
             on_curve.append((x3, y3))
         tail, head = names[e["tail"]], names[e["head"]]
+        if fine:
+            on_curve = [tuple(pts[0]), *on_curve, on_curve[-1]]
         if e.get("dir") == "back":    # drawn from head to tail: the arc runs that way
             tail, head, on_curve = head, tail, [*reversed(on_curve[:-1]), pts[0]]
         splines[(tail, head)] = on_curve[:-1]

@@ -2,7 +2,9 @@
 
 The page is for teaching Petri-net supervisors: it draws the net as its
 static drawing does (:mod:`mcl2pnml.view.drawing`, laid out by
-:func:`~mcl2pnml.view.layout.drawn_layout`): each arc along dot's route
+:func:`~mcl2pnml.view.layout.drawn_layout`), each node as large as dot laid it
+out with its name inside (:func:`view_json`: no text lies on another), each arc
+along dot's route
 around the nodes (its bend points), a place that many transitions read or
 give back to (a primitive's ON and OFF, a task's MTX) as a small dashed
 copy beside each of them, the boxes of the drawing (the primitive of
@@ -20,9 +22,18 @@ and a mission or a
 task can be switched to its reduced model (Fig. 3 of the paper: every task
 started by B, ending in OK, FAIL or ABORTED, without its primitive).
 
-Watching a whole mission. The page opens on the whole net (*Fit* comes
-back to it) and, while a run is replayed, *follows* each firing: the view
-moves to the transition and the places it took from and gave to. The
+One call at a time. A mission's page opens on the mission's own net, each call
+it makes shut in a box named as MCL writes it (:mod:`mcl2pnml.view.calls`, laid
+out by :func:`~mcl2pnml.view.layout.call_layouts`, :func:`calls_json`); a box
+clicked opens its call, a breadcrumb goes back up, and a box shows whether its
+inside runs and how many of its transitions may fire. The header is one row,
+the side panels fold (folded on a narrow screen), and at *Fit* on a 1024 x 768
+projector or a 1920 x 1080 screen every text of the paper's mission is at least
+10 or 12 pixels high (``tests/view/test_show_screens.py``).
+
+Watching a whole mission. *Fit* shows the whole view, and *follow* (on by
+default) goes to each firing: to the call it is in, one call at a time; on the
+whole net, to the transition and the places it took from and gave to. The
 places the last firing changed are ringed and listed + or −; the marking
 and the P-invariants can be filtered, and the invariants are one summary
 line until opened. Beside the net, a mission's functional form (the
@@ -146,8 +157,9 @@ from mcl2pnml.core.jsontext import offsets
 from mcl2pnml.core.net import Net, thaw
 from mcl2pnml.core.payloads import MissionPlace, TransitionPayload, doc_of, read_transition
 from mcl2pnml.core.structure import structure
+from mcl2pnml.view.calls import mission_calls, short_label
 from mcl2pnml.view.drawing import border_out, instance_clusters
-from mcl2pnml.view.layout import Drawn, drawn_layout
+from mcl2pnml.view.layout import Drawn, call_layouts, drawn_layout
 from mcl2pnml.view.reachability import reachability_graph
 
 #: Above this many nodes the page would be a heap nobody can read: refused.
@@ -242,10 +254,12 @@ def role(payload: TransitionPayload, timed: bool) -> str:
 
 
 def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
-            clusters: Mapping[str, Sequence[str]] | None = None) -> dict[str, Any]:
-    """One net as the page draws it: nodes with positions, arcs by index with their bend
-    points, copies of places, boxes, invariants, where the nodes of ``tree``
-    (:func:`tree_data`) are, and its reachability graph.
+            clusters: Mapping[str, Sequence[str]] | None = None,
+            labels: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """One net as the page draws it: its nodes, its arcs by index, its invariants, where
+    the nodes of ``tree`` (:func:`tree_data`) are, its reachability graph, and its views
+    (:func:`view_json`): the whole net, and with ``labels`` (a mission's calls named as
+    MCL writes them: :func:`mcl2pnml.pipeline.call_labels`) each of its calls alone.
 
     ``clusters`` are the boxes of a template's drawing (its slots: the
     primitive of Fig. 2's task, T1 and T2 of Fig. 4); None, each instance
@@ -256,18 +270,16 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
         raise Mcl2PnmlError(f"net '{net.name}' has {nodes:,} nodes; a page draws at most "
                             f"{MAX_NODES:,} (compile it to PNML or DOT instead)")
     drawn = drawn_layout(net, "auto", clusters)
-    pos = drawn.positions
     boxes = instance_clusters(net) if clusters is None else dict(clusters)
     kept = border_out(net, boxes)
     box_of = {n: name for name, members in kept.items() for n in members}
     index = {p.id: k for k, p in enumerate(net.places)}
     # the places a box had and border_out took out: where boxes meet
     border = {n for members in boxes.values() for n in members} - set(box_of)
-    places = [{"id": p.id, "label": p.label, "x": pos[p.id][0], "y": pos[p.id][1],
+    places = [{"id": p.id, "label": p.label,
                "tokens": net.initial[p.id], "interface": p.interface,
                "fusion": p.id in border, "group": box_of.get(p.id),
-               "doc": _text(doc_of(p.payload)), "copies": []} for p in net.places]
-    lines = _lines(net, drawn, places, index)
+               "doc": _text(doc_of(p.payload))} for p in net.places]
     transitions = []
     for t in net.transitions:
         payload = read_transition(t)
@@ -275,7 +287,7 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
                 else "action" if payload.actions else "call" if payload.entry is not None
                 else "")
         transitions.append({
-            "id": t.id, "label": t.label, "x": pos[t.id][0], "y": pos[t.id][1],
+            "id": t.id, "label": t.label,
             "timing": str(t.timing) if t.timing is not None else None, "kind": kind,
             "role": role(payload, t.timing is not None),
             # what the vehicle reports by it (on, achieved, failed, off): automatic play's odds
@@ -288,31 +300,55 @@ def variant(net: Net, label: str, tree: Sequence[dict[str, Any]] = (),
                     if a.kind.value == "normal"],
             "read": [[index[a.source], a.weight] for a in net.pre[t.id]
                      if a.kind.value == "read"],
-            "post": [[index[a.target], a.weight] for a in net.post[t.id]],
-            # how each arc of pre, read and post is drawn, in the same order
-            "lines": {"pre": [lines(a) for a in net.pre[t.id] if a.kind.value == "normal"],
-                      "read": [lines(a) for a in net.pre[t.id] if a.kind.value == "read"],
-                      "post": [lines(a) for a in net.post[t.id]]}})
+            "post": [[index[a.target], a.weight] for a in net.post[t.id]]})
     basis = p_invariant_basis(structure(net))[:MAX_INVARIANTS]
     invariants = [{"terms": [[index[p], c] for p, c in y.items()],
                    "value": sum(c * net.initial[p] for p, c in y.items())} for y in basis]
+    groups = {name: drawn.boxes.get(name) or _around(drawn, members)
+              for name, members in sorted(kept.items())}
     return {"label": label, "name": net.name, "places": places, "transitions": transitions,
             "results": [index[p] for p in MISSION_RESULTS if p in index],
-            "groups": sorted(kept), "invariants": invariants, "tree": tree_parts(net, tree),
-            "boxes": [[name, *drawn.boxes[name]] for name in sorted(kept) if name in drawn.boxes],
+            "invariants": invariants, "tree": tree_parts(net, tree),
+            "whole": view_json(net, drawn, groups={n: (n, r) for n, r in groups.items()}),
+            "calls": None if labels is None else calls_json(net, labels),
             "graph": reachability_graph(net).to_json()}
 
 
-def _lines(net: Net, drawn: Drawn, places: list[dict[str, Any]], index: dict[str, int]):
-    """Gives each place its copies' positions (``places[k]["copies"]``) and returns how an
-    arc is drawn: ``[copy, bends]``, the copy of its place it is drawn to (an index in
-    the place's copies, -1 for the place itself) and its bend points as one flat list
-    of numbers (x, y, x, y...) from the arc's source to its target."""
-    number: dict[str, int] = {}
+def _around(drawn: Drawn, members: Sequence[str]) -> tuple[float, float, float, float]:
+    """A box around its nodes where the layout drew none (the layered layout)."""
+    xs = [drawn.positions[n][0] for n in members if n in drawn.positions]
+    ys = [drawn.positions[n][1] for n in members if n in drawn.positions]
+    return (min(xs) - 28, min(ys) - 34, max(xs) + 28, max(ys) + 34) if xs else (0, 0, 0, 0)
+
+
+#: A node's size where no layout gave one (the layered layout): a place's radius, a
+#: transition's half width and half height, a text's size (points).
+PLACE_RADIUS, HALF_WIDTH, HALF_HEIGHT, TEXT_SIZE = 16.0, 10.0, 10.0, 12
+
+
+def view_json(net: Net, drawn: Drawn, *, groups: Mapping[str, tuple[str, Any]] = {},
+              shut: Mapping[str, tuple[float, ...]] = {}, names: Mapping[str, str] = {},
+              frames: Sequence[tuple] = (), box_arcs: Sequence[tuple] = ()
+              ) -> dict[str, Any]:
+    """A view of ``net`` as the page draws it, from its layout ``drawn``: each node drawn
+    (its index, where, its size, its text and font size: as dot laid it out, the text
+    inside), each copy of a place likewise, each arc between drawn nodes (its
+    transition, role and rank in the transition's ``pre``, ``read`` or ``post``, the
+    copy of its place it is drawn to, its bend points as one flat list), the open boxes
+    (``groups``: name -> its title and rectangle), the shut ones (``shut``, the text in
+    each ``names``, with ``box_arcs`` between them and their places) and the grey frames
+    of calls."""
+    index = {p.id: k for k, p in enumerate(net.places)}
+    tindex = {t.id: k for k, t in enumerate(net.transitions)}
+    pos, sizes, texts = drawn.positions, drawn.sizes, drawn.texts
+
+    def text(node: str, default: str) -> list[Any]:
+        return list(texts.get(node, (default, TEXT_SIZE)))
+    copies, number = [], {}
     for c, (place, (x, y)) in drawn.copies.items():
-        copies = places[index[place]]["copies"]
         number[c] = len(copies)
-        copies.append([x, y])
+        copies.append([index[place], x, y, sizes.get(c, (PLACE_RADIUS,))[0],
+                       *text(c, net.place_index[place].label)])
     # the arcs drawn to a copy: (place, transition) or (transition, place) -> the copy
     to_copy: dict[tuple[str, str], str] = {}
     for a, b in drawn.bends:
@@ -320,14 +356,55 @@ def _lines(net: Net, drawn: Drawn, places: list[dict[str, Any]], index: dict[str
             to_copy[(drawn.copies[a][0], b)] = a
         elif b in drawn.copies:
             to_copy[(a, drawn.copies[b][0])] = b
+    arcs = []
+    for t in net.transitions:
+        if t.id not in pos:
+            continue
+        ranks = {"pre": 0, "read": 0, "post": 0}
+        for a in (*net.pre[t.id], *net.post[t.id]):
+            way = "post" if a.source == t.id else a.kind.value.replace("normal", "pre")
+            k, ranks[way] = ranks[way], ranks[way] + 1
+            place = a.target if way == "post" else a.source
+            c = to_copy.get((a.source, a.target))
+            if place not in pos and c is None:
+                continue        # a place this view does not draw (the caller's)
+            key = (a.source, a.target) if c is None else \
+                ((c, a.target) if way != "post" else (a.source, c))
+            arcs.append([tindex[t.id], way, k, -1 if c is None else number[c],
+                         [v for point in drawn.bends.get(key, ()) for v in point]])
+    return {
+        "places": [[index[p.id], *pos[p.id], sizes.get(p.id, (PLACE_RADIUS,))[0],
+                    *text(p.id, p.label)] for p in net.places if p.id in pos],
+        "transitions": [[tindex[t.id], *pos[t.id],
+                         *sizes.get(t.id, (HALF_WIDTH, HALF_HEIGHT)), text(t.id, t.label)[0]]
+                        for t in net.transitions if t.id in pos],
+        "copies": copies, "arcs": arcs,
+        "groups": [[name, title, *rect] for name, (title, rect) in groups.items()],
+        "boxes": [[name, *rect, names.get(name, name)] for name, rect in shut.items()],
+        "boxArcs": [[list(shut).index(b), index[p], way, [v for pt in pts for v in pt]]
+                    for b, p, way, pts in box_arcs],
+        "frames": [list(rect) for rect in frames]}
 
-    def line(arc) -> list[Any]:
-        c = to_copy.get((arc.source, arc.target))
-        key = (arc.source, arc.target) if c is None else \
-            ((c, arc.target) if arc.target in net.transition_index else (arc.source, c))
-        return [-1 if c is None else number[c],
-                [v for point in drawn.bends.get(key, ()) for v in point]]
-    return line
+
+def calls_json(net: Net, labels: Mapping[str, str]) -> dict[str, Any] | None:
+    """A mission's calls as the page opens them one at a time (:mod:`mcl2pnml.view.calls`):
+    its root, each call's name as MCL writes it, its callers and callees, what runs
+    inside its box (:meth:`~mcl2pnml.view.calls.Calls.within`), and its view
+    (:func:`view_json`); None where dot could not lay them out."""
+    calls = mission_calls(net)
+    laid = call_layouts(net, calls, labels)
+    if laid is None or not calls.roots:
+        return None
+    views = {}
+    for name, view in laid.items():
+        views[name] = view_json(
+            net, view.drawn, shut=view.shut, names=view.names,
+            frames=list(view.frames.values()),
+            box_arcs=view.box_arcs,
+            groups={n: (short_label(labels.get(n, n)), r) for n, r in view.drawn.boxes.items()})
+    return {"root": calls.roots[0], "labels": {n: labels.get(n, n) for n in calls.clusters},
+            "callers": calls.callers, "callees": calls.callees,
+            "within": {n: calls.within(n) for n in calls.clusters}, "views": views}
 
 
 def _text(doc: Any) -> str | None:

@@ -35,14 +35,25 @@ def test_default_output_is_next_to_the_mission(tmp_path):
     assert (tmp_path / "sauce.pnml").exists()
 
 
-def test_dot_source_draws_each_instance_in_a_box(tmp_path):
-    """Shut by default, one node each (the overview); open with --expand."""
+def test_dot_source_draws_one_call_at_a_time(tmp_path):
+    """The mission's own net by default, each call it makes shut in a box named as MCL
+    writes it; ``--expand`` draws the calls it names (by their names or, where one call
+    alone has it, as MCL writes them), ``all`` the whole net."""
     out = run("compile", SAUCE, "--format", "dot", "-o", tmp_path / "sauce.dot")
     assert out.returncode == 0, out.stderr
     text = (tmp_path / "sauce.dot").read_text()
-    assert text.startswith("digraph") and "subgraph cluster_AchieveDepth " not in text
-    for instance in ("AchieveDepth", "Survey", "KeepDepth"):  # a task, a function, a primitive
-        assert f'[label="{instance}\n(' in text and "class=box" in text
+    assert text.startswith("digraph") and "subgraph cluster_mission " in text
+    assert "class=box" in text and "AchieveDepth(SurfaceDepth)\nAchieveDepth-2" in text
+    assert "AchieveDepth-1" not in text               # a call inside the if-then-else
+    for call in ("AchieveDepth-1", "AchieveDepth(CrossDepth)"):
+        out = run("compile", SAUCE, "--format", "dot", "--expand", call, "-o",
+                  tmp_path / "call.dot")
+        assert out.returncode == 0, out.stderr
+        text = (tmp_path / "call.dot").read_text()
+        assert "subgraph \"cluster_AchieveDepth-1\" " in text and "task AchieveDepth(d)" in text
+    twice = run("compile", SAUCE, "--format", "dot", "--expand", "AchieveDepth(d)", "-o",
+                tmp_path / "x.dot")
+    assert twice.returncode == 2 and "no call 'AchieveDepth(d)'" in twice.stderr
     out = run("compile", SAUCE, "--format", "dot", "--expand", "all", "-o",
               tmp_path / "open.dot")
     assert out.returncode == 0, out.stderr

@@ -29,7 +29,7 @@ mission {
 """
 
 
-VIEWPORT = {"width": 1400, "height": 900}
+VIEWPORT = {"width": 1600, "height": 900}
 
 
 @pytest.fixture

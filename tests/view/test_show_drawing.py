@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
+from collections import Counter
 from functools import lru_cache
 from pathlib import Path
 
@@ -30,10 +31,6 @@ from test_show import TWO_TASKS, page_of  # noqa: F401 (fixtures)
 pytestmark = pytest.mark.skipif(shutil.which("dot") is None,
                                 reason="graphviz's dot is not installed")
 
-#: The page's shapes (show_page.html): a place's radius, a copy's, a transition's bar.
-R, RC, TW, TH = 16, 10, 9, 20
-
-
 @lru_cache(maxsize=None)
 def page_data(what: str, directory: str) -> dict:
     """The data of ``mcl2pnml show WHAT``'s page, read back from the page itself."""
@@ -44,15 +41,16 @@ def page_data(what: str, directory: str) -> dict:
                                 html, re.S).group(1))
 
 
-def nodes(v: dict) -> list[tuple[str, Bbox, bool]]:
-    """Every node the page draws: its name, its shape's box, whether it is round."""
-    out = []
-    for p in v["places"]:
-        out.append((f"place {p['id']}", _box(p["x"], p["y"], R, R), True))
-        out += [(f"place {p['id']} (copy {k})", _box(x, y, RC, RC), True)
-                for k, (x, y) in enumerate(p["copies"])]
-    out += [(f"transition {t['id']}", _box(t["x"], t["y"], TW / 2, TH / 2), False)
-            for t in v["transitions"]]
+def nodes(view: dict, v: dict) -> list[tuple[str, Bbox, bool]]:
+    """Every node the page draws in ``view`` of the net ``v``: its name, its shape's box
+    (as dot laid it out: a circle of its radius, a box of its half sizes), whether it is
+    round."""
+    out = [(f"place {v['places'][i]['id']}", _box(x, y, r, r), True)
+           for i, x, y, r, *_ in view["places"]]
+    out += [(f"place {v['places'][i]['id']} (copy {k})", _box(x, y, r, r), True)
+            for k, (i, x, y, r, *_) in enumerate(view["copies"])]
+    out += [(f"transition {v['transitions'][i]['id']}", _box(x, y, w, h), False)
+            for i, x, y, w, h, _ in view["transitions"]]
     return out
 
 
@@ -60,32 +58,31 @@ def _box(x: float, y: float, hw: float, hh: float) -> Bbox:
     return Bbox([[x - hw, y - hh], [x + hw, y + hh]])
 
 
-def arcs(v: dict, straight: bool = False):
+def arcs(view: dict, v: dict, straight: bool = False):
     """Each arc as the page draws it: its name, the names of the two nodes it joins, its
     points (``straight``: from centre to centre, as the page drew them before)."""
-    for t in v["transitions"]:
-        for role in ("pre", "read", "post"):
-            for (p, _), (copy, flat) in zip(t[role], t["lines"][role]):
-                place = v["places"][p]
-                if straight:
-                    copy, flat = -1, []
-                end = (f"place {place['id']}" if copy < 0
-                       else f"place {place['id']} (copy {copy})")
-                at = (place["x"], place["y"]) if copy < 0 else tuple(place["copies"][copy])
-                bends = list(zip(flat[::2], flat[1::2]))
-                ends = [at, (t["x"], t["y"])]
-                if role == "post":
-                    ends.reverse()
-                name = (f"{place['id']}->{t['id']}" if role != "post"
-                        else f"{t['id']}->{place['id']}")
-                yield name, {end, f"transition {t['id']}"}, [ends[0], *bends, ends[1]]
+    at = {i: (x, y) for i, x, y, *_ in view["places"]}
+    where = {i: (x, y) for i, x, y, *_ in view["transitions"]}
+    for ti, role, k, copy, flat in view["arcs"]:
+        t = v["transitions"][ti]
+        place = v["places"][t[role][k][0]]
+        if straight:
+            copy, flat = -1, []
+        end = (f"place {place['id']}" if copy < 0 else f"place {place['id']} (copy {copy})")
+        spot = at[t[role][k][0]] if copy < 0 else tuple(view["copies"][copy][1:3])
+        bends = list(zip(flat[::2], flat[1::2]))
+        ends = [spot, where[ti]]
+        if role == "post":
+            ends.reverse()
+        name = (f"{place['id']}->{t['id']}" if role != "post" else f"{t['id']}->{place['id']}")
+        yield name, {end, f"transition {t['id']}"}, [ends[0], *bends, ends[1]]
 
 
-def crossings(v: dict, straight: bool = False) -> list[str]:
+def crossings(view: dict, v: dict, straight: bool = False) -> list[str]:
     """Every arc drawn through a node it does not join."""
-    shapes = nodes(v)
+    shapes = nodes(view, v)
     found = []
-    for name, ends, points in arcs(v, straight):
+    for name, ends, points in arcs(view, v, straight):
         line = Curve(points)
         for node, box, round_ in shapes:
             if node not in ends and line.intersects_bbox(_core(box, round_), filled=False):
@@ -97,25 +94,25 @@ def test_the_task_and_its_reduced_model_are_drawn_around_their_nodes(tmp_path_fa
     """Fig. 2's task with its primitive, and Fig. 3's reduced task (the page's model
     switch): drawn straight, t3->MTX and t2->MTX ran through EXE and t1."""
     task, reduced = page_data("task", str(tmp_path_factory.mktemp("task")))["variants"]
-    assert crossings(task) == []
-    assert crossings(reduced) == []
-    assert crossings(task, straight=True) != []
-    old = crossings(reduced, straight=True)
+    assert crossings(task["whole"], task) == []
+    assert crossings(reduced["whole"], reduced) == []
+    assert crossings(task["whole"], task, straight=True) != []
+    old = crossings(reduced["whole"], reduced, straight=True)
     assert any(c.startswith(("arc t3->MTX", "arc t2->MTX")) for c in old), old
     # the places many transitions read (ON, OFF) or get back (MTX) are drawn beside each
-    copies = {p["id"]: len(p["copies"]) for p in task["places"]}
+    copies = Counter(task["places"][i]["id"] for i, *_ in task["whole"]["copies"])
     assert copies["ON"] >= 3 and copies["OFF"] >= 3 and copies["MTX"] >= 2
     # the primitive in its box, as Fig. 2 draws it
-    (name, x0, y0, x1, y1), = task["boxes"]
-    t = {t["id"]: t for t in task["transitions"]}
-    assert name == "primitive" and x0 < t["on"]["x"] < x1 and y0 < t["on"]["y"] < y1
+    (name, _, x0, y0, x1, y1), = task["whole"]["groups"]
+    on = next(n for n in task["whole"]["transitions"] if task["transitions"][n[0]]["id"] == "on")
+    assert name == "primitive" and x0 < on[1] < x1 and y0 < on[2] < y1
 
 
 def test_the_sequence_is_drawn_around_its_nodes_with_t1_and_t2_boxed(tmp_path_factory):
     """Fig. 4's sequence: T1 and T2 in their boxes, no arc through a node."""
     v, = page_data("sequence", str(tmp_path_factory.mktemp("sequence")))["variants"]
-    assert crossings(v) == []
-    assert sorted(b[0] for b in v["boxes"]) == ["T1", "T2"]
+    assert crossings(v["whole"], v) == []
+    assert sorted(b[0] for b in v["whole"]["groups"]) == ["T1", "T2"]
 
 
 def test_a_mission_is_drawn_around_its_nodes(tmp_path_factory):
@@ -123,13 +120,21 @@ def test_a_mission_is_drawn_around_its_nodes(tmp_path_factory):
     directory = tmp_path_factory.mktemp("two")
     (directory / "two.mcl").write_text(TWO_TASKS)
     for v in page_data(str(directory / "two.mcl"), str(directory))["variants"]:
-        assert crossings(v) == [], v["label"]
+        whole = v["whole"]
+        assert crossings(whole, v) == [], v["label"]
         # each box of the overview holds its nodes
-        where = {name: (x0, y0, x1, y1) for name, x0, y0, x1, y1 in v["boxes"]}
-        for n in [*v["places"], *v["transitions"]]:
-            if n["group"] is not None:
-                x0, y0, x1, y1 = where[n["group"]]
-                assert x0 <= n["x"] <= x1 and y0 <= n["y"] <= y1, n["id"]
+        where = {name: (x0, y0, x1, y1) for name, _, x0, y0, x1, y1 in whole["groups"]}
+        for kind in ("places", "transitions"):
+            for i, x, y, *_ in whole[kind]:
+                n = v[kind][i]
+                if n["group"] is not None:
+                    x0, y0, x1, y1 = where[n["group"]]
+                    assert x0 <= x <= x1 and y0 <= y <= y1, n["id"]
+        # one call at a time: each call's own nodes, no arc through a node
+        for name, view in v["calls"]["views"].items():
+            assert crossings(view, v) == [], (v["label"], name)
+            assert {v["transitions"][i]["id"].rpartition(".")[0]
+                    for i, *_ in view["transitions"]} == {name}
 
 
 def test_the_copies_are_the_pages_alone_pnml_draws_the_nets_own_nodes():
@@ -154,18 +159,16 @@ def test_the_page_draws_arcs_along_their_bends_and_copies_with_their_place(tmp_p
     points = page.locator('#net path.arc[data-from="t05"][data-to="W_OK"], '
                           '#net path.arc[data-from="EXE"][data-to="t03"]').evaluate_all(
         "(ps) => ps.map((p) => p.getAttribute('d').split('L').length)")
-    bent = {(t["id"], len(flat) // 2) for t in data["transitions"]
-            for _, flat in t["lines"]["post"] if flat}
-    assert bent, "no arc of the task has bends"
+    view = data["whole"]
+    assert [a for a in view["arcs"] if a[1] == "post" and a[4]], "no arc of the task has bends"
     # every arc drawn with all its points: its two ends and each bend between them
     counts = page.locator("#net path.arc").evaluate_all(
         "(ps) => ps.map((p) => p.getAttribute('d').split('L').length)")
-    expected = sorted(2 + len(flat) // 2 for t in data["transitions"]
-                      for role in ("pre", "read", "post") for _, flat in t["lines"][role])
+    expected = sorted(2 + len(flat) // 2 for *_, flat in view["arcs"])
     assert sorted(counts) == expected and max(counts) > 2 and points
     # OFF and its copies hold its token; after t01 and on, ON's copies hold one
     off = page.locator('#net g.place[data-id="OFF"], #net g.copy[data-id="OFF"]')
-    assert off.count() == 1 + len(next(p for p in data["places"] if p["id"] == "OFF")["copies"])
+    assert off.count() == 1 + sum(data["places"][i]["id"] == "OFF" for i, *_ in view["copies"])
     assert off.evaluate_all("(gs) => gs.map((g) => g.querySelectorAll('.token').length)") \
         == [1] * off.count()
     page.click('#net g.transition[data-id="t01"]')

@@ -116,7 +116,7 @@ def listener():
     server.close()
 
 
-VIEWPORT = {"width": 1400, "height": 900}
+VIEWPORT = {"width": 1600, "height": 900}
 
 
 class Witnessed:
@@ -260,8 +260,10 @@ def test_a_hostile_mission_tree_is_text(tmp_path, witnessed, listener):
     w = witnessed(tmp_path / "page.html")
     labels = w.page.locator("#tree div.call > span:first-child").all_text_contents()
     assert labels == [f"T({mcl_string(e)})" for e in evil]
+    # a call clicked in the tree opens its net, named as text above the drawing
     w.page.click("#tree div.call >> nth=0")
-    assert w.page.locator("#net .focus").count() > 0
+    assert w.page.locator("#crumbs button").last.text_content() == f"T({mcl_string(evil[0])})"
+    assert w.page.locator("#net g.transition").count() > 0
     w.assert_nothing_happened(heard)
 
 

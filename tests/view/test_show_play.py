@@ -45,8 +45,14 @@ def listed(page, who: str) -> list[str]:
     return page.locator(f'#enabled .who-list[data-who="{who}"] button').all_text_contents()
 
 
+def whole(page) -> None:
+    """The mission's whole net drawn, not one call at a time (every transition in it)."""
+    page.select_option("#view-kind", "whole")
+
+
 def test_the_vehicles_and_the_supervisors_transitions_are_told_apart(sauce, page_of):
     page = page_of(sauce)
+    whole(page)
     role = roles(page)
     who = {"event": "vehicle", "timeout": "time", "step": "supervisor", "entry": "supervisor"}
     # in the drawing: each transition's class says who fires it
@@ -61,8 +67,8 @@ def test_the_vehicles_and_the_supervisors_transitions_are_told_apart(sauce, page
         == "rgb(31, 95, 191)"
     assert page.locator('#net g.transition[data-id="mission.t1"]').evaluate(stroke) \
         != "rgb(31, 95, 191)"
-    assert "the vehicle's" in page.text_content("header .legend")
-    assert "the supervisor's" in page.text_content("header .legend")
+    assert "the vehicle's" in page.text_content("#legend")
+    assert "the supervisor's" in page.text_content("#legend")
     # in the list: under a heading, each button with its kind
     assert listed(page, "vehicle") == [] and "mission.t1" in listed(page, "supervisor")
     page.click("#settle")
@@ -174,8 +180,8 @@ def test_play_and_pause_with_a_speed(sauce, page_of):
                          "return b.textContent; }") == "Pause"
     # looked at every 50 ms (by default at every frame: Chromium drawing 60 frames a second
     # for the whole game)
-    page.wait_for_function("() => document.getElementById('play-status').className === 'result'",
-                           timeout=30_000, polling=50)
+    page.wait_for_function("() => document.getElementById('play-status').classList"
+                           ".contains('result')", timeout=30_000, polling=50)
     assert page.text_content("#play") == "Play"
     assert page.evaluate("() => result()") in marking(page)
     states = page.locator("#tree div.node").evaluate_all("(ds) => ds.map((d) => d.dataset.state)")
@@ -200,6 +206,7 @@ def targets(page) -> list[dict]:
 
 def test_an_enabled_transition_is_a_target_of_24_pixels_at_any_zoom(sauce, page_of):
     page = page_of(sauce)
+    whole(page)
     page.click("#fit")
     bar = page.locator('#net g.transition[data-id="mission.t1"] rect').bounding_box()
     assert bar["width"] < 8                        # the bar alone: a few pixels at Fit
@@ -262,6 +269,7 @@ def test_a_places_tokens_set_by_hand_break_invariants(sauce, page_of):
 
 def test_the_drawing_as_shown_is_an_svg_document_and_a_png(sauce, page_of):
     page = page_of(sauce)
+    whole(page)
     page.click("#settle")
     text = page.evaluate("() => svgText()")
     root = ET.fromstring(text.encode("utf-8"))                  # well-formed XML
@@ -285,6 +293,7 @@ def test_the_drawing_as_shown_is_an_svg_document_and_a_png(sauce, page_of):
 
 def test_a_node_dragged_moves_with_its_arcs_and_fires_nothing(sauce, page_of):
     page = page_of(sauce)
+    whole(page)
     page.click("#settle")
     page.click('#enabled button[data-id="GoToWayPoint.on"]')
     t = '#net g.transition[data-id="GoToWayPoint.achieved"]'
@@ -331,8 +340,12 @@ def test_the_drawing_downloads_as_svg_and_png(sauce, page_of, tmp_path):
     root = ET.parse(svg).getroot()                               # well-formed XML
     assert root.tag == "{http://www.w3.org/2000/svg}svg"
     ids = {e.get("data-id") for e in root.iter() if e.get("data-id")}
-    nodes = page.evaluate("() => [...V.places, ...V.transitions].map((n) => n.id)")
-    assert set(nodes) <= ids
+    # the drawing as shown: the call the supervisor's last step is in, its boxes named
+    nodes = page.evaluate("() => [...V.places, ...V.transitions].filter((n) => n.drawn)"
+                          ".map((n) => n.id)")
+    assert nodes and set(nodes) <= ids
+    boxes = {e.get("data-name") for e in root.iter() if "box" in (e.get("class") or "").split()}
+    assert boxes == set(page.evaluate("() => view.boxes.map((b) => b[0])"))
     with page.expect_download() as got:
         page.click("#save-png")
     png = tmp_path / "drawing.png"

@@ -229,6 +229,7 @@ def test_settle_is_bounded(tmp_path, tab):
     (tmp_path / "loop.html").write_text(show_page("loop", [variant(net, "loop")]))
     page = tab.page({"width": 1280, "height": 720})    # a new page's size
     page.goto((tmp_path / "loop.html").resolve().as_uri())
+    page.click("#side > .fold")                         # folded on a screen this narrow
     page.click("#settle")
     assert "Settle stopped after 10,000 firings" in page.text_content("#supervisor-note")
     assert page.evaluate("() => history.length") == 10_000

@@ -54,12 +54,18 @@ def inside(page, selector: str) -> bool:
     }""", selector)
 
 
+def whole(page) -> None:
+    """The mission's whole net drawn, not one call at a time (every node in the window)."""
+    page.select_option("#view-kind", "whole")
+
+
 def tree_state(page, name: str) -> str:
     return page.get_attribute(f'#tree div.node[data-name="{name}"]', "data-state")
 
 
 def test_fit_shows_the_whole_mission(page_of, mission):
     page = page_of(mission["page"])
+    whole(page)
     nodes = "#net g.place circle, #net g.transition rect"
     assert page.locator(nodes).count() > 100 and inside(page, nodes)   # the first view
     page.mouse.move(700, 450)
@@ -73,6 +79,7 @@ def test_fit_shows_the_whole_mission(page_of, mission):
 
 def test_follow_pans_to_each_firing(page_of, mission):
     page = page_of(mission["page"])
+    whole(page)
     assert page.is_checked("#follow")                 # on by default with a run
     seen = set()
     for _ in range(4):
@@ -111,6 +118,7 @@ def test_the_marking_shows_what_the_last_firing_changed(page_of, mission):
 
 def test_places_and_invariants_filtered(page_of, mission):
     page = page_of(mission["page"])
+    whole(page)
     page.fill("#place-filter", "keepdepth")
     assert marking(page) == ["KeepDepth.C", "KeepDepth.LOCK", "KeepDepth.OFF"]
     assert page.locator("#net g.place.match").count() == 8        # marked or not
@@ -155,6 +163,7 @@ def test_the_tree_follows_a_replayed_run(page_of, mission):
     page.click("#run-back")                            # stepping back: running again
     assert tree_state(page, "Goto-1") == "running" and tree_state(page, "mission") == "running"
     # a node's part of the net: its instance's nodes, highlighted and in the window
+    whole(page)
     page.click("#fit")
     before = view_box(page)
     page.click('#tree div.node[data-name="Depth-1"]')
@@ -180,6 +189,7 @@ def test_the_tree_of_the_reduced_model(page_of, mission):
 
 def test_a_time_out_waits_for_its_time(page_of, mission):
     page = page_of(mission["page"])
+    whole(page)
     assert page.text_content("#clock") == "t = 0 s"
     for t in ("mission.t1", "Depth-1.enter", "Depth.t01", "KeepDepth.on"):
         page.click(f'#enabled button[data-id="{t}"]')
