@@ -895,6 +895,10 @@ def drawing(net: Net, title: str | None = None, *,
         return dot_graph(net, clusters=instance_clusters(net), title=title or net.name,
                          legend=True, expand=None, by_calls=True, labels=labels)
     calls = mission_calls(net)
+    if not calls.roots and not expand:
+        # no calls: a net that is not a compiled mission (a template, another tool's) is
+        # drawn whole, as it is
+        return dot_graph(net, title=title or net.name, legend=True)
     names = labels or {}
     opened = [calls.name(n, names) for n in expand] or list(calls.roots)
     part, boxes = call_net(net, calls, opened)
