@@ -46,6 +46,10 @@ $(STAMP): pyproject.toml analysis/statespace/loops/_native.c
 	install -e '.[test,mavlink,storm]' \
 	  || { echo "warning: could not install stormpy; the tests that compare the odds with Storm's will say so"; \
 	       install -e '.[test,mavlink]'; }
+	@# Byte-compiled once, on every core: otherwise each of the tests' workers, and each
+	@# command a test starts, compiles the same libraries before the first has written them
+	$(PY) -m compileall -q -j 0 "$$($(PY) -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')" \
+	  mcl2pnml analysis templates >/dev/null || echo "warning: could not byte-compile; the tests will"
 	touch $(STAMP)
 
 setup: system-deps $(STAMP)
