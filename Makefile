@@ -36,8 +36,9 @@ system-deps:
 $(STAMP): pyproject.toml analysis/statespace/loops/_native.c
 	$(PYTHON) -m venv $(VENV)
 	@# uv installs the dependencies in a few seconds where pip takes a minute and more
-	@# (pip resolves one by one and compiles every module to bytecode; the tests compile
-	@# those they import). Where uv cannot be had or fails, pip does the same install.
+	@# (pip resolves one by one and compiles every module to bytecode, one at a time; the
+	@# modules are compiled below, on every core). Where uv cannot be had or fails, pip
+	@# does the same install.
 	$(PY) -m pip install --quiet uv || echo "warning: could not install uv; installing with pip"
 	@# Storm checks the exact odds in the tests; where its wheel cannot be had, they skip.
 	@# One install with it (one resolution, one build of the C loops), without it on failure
