@@ -754,7 +754,8 @@ class ZoneGraph:
 
     def _widen_loop(self, k: int, key: tuple) -> tuple[tuple, bool]:
         """``key`` (a successor of state ``k``) widened against its nearest ancestor of the
-        same marking and clocks, if it is not included in it: every bound that grew from
+        same marking and clocks, once it has :data:`WIDEN_AFTER` such ancestors and is not
+        included in the nearest: every bound that grew from
         the ancestor's is dropped, then the deadlines and ``x >= 0`` put back (the widening
         of Cousot and Halbwachs on difference-bound matrices, Mine 2001). The result
         includes both zones, and a loop's growing bounds reach their deadline, or none, in
