@@ -225,6 +225,16 @@ def test_an_arc_to_nothing_in_a_one_line_file_is_pointed_at():
     assert line[column - 1:].startswith('<arc id="a2"'), column
 
 
+def test_an_arc_whose_id_has_spaces_around_its_equals_sign_is_pointed_at():
+    """XML allows ``id = "a2"``: the arc is found there all the same, at its line."""
+    lines = ['<pnml><net id="n"><page id="g">', '<place id="p"/><transition id="t"/>',
+             '<arc id="a1" source="p" target="t"/>', '<arc id\n = "a2" source="t" target="q"/>',
+             '</page></net></pnml>']
+    with pytest.raises(PnmlError, match="arc 'a2': its target 'q' is not a place") as info:
+        parse_pnml("\n".join(lines).encode(), "spaced.pnml")
+    assert (info.value.location.line, info.value.location.column) == (4, 1)
+
+
 def test_foreign_nets_round_trip_through_our_writer(assert_valid):
     """What the forgiving reading makes of another tool's file, once written by us, is
     read strictly as the same net."""

@@ -1114,7 +1114,9 @@ def _written_id(xml_id: str) -> "re.Pattern[bytes]":
         if c == " ":
             options.append(rb"[\t\n\r]")
         parts.append(b"(?:" + b"|".join(options) + b")")
-    return re.compile(rb"""\bid=(?:"|')""" + b"".join(parts) + rb"""(?:"|')""")
+    # XML lets white space stand on either side of the '=' (its production Eq)
+    return re.compile(rb"""\bid[ \t\r\n]*=[ \t\r\n]*(?:"|')""" + b"".join(parts)
+                      + rb"""(?:"|')""")
 
 
 def _id_fault(xml_id: str) -> str:
