@@ -33,7 +33,7 @@ def _whole(net, f):
     return bool(Graph(space).check(f, None)[0])
 
 
-@settings(max_examples=sample(1500, 150), deadline=None,
+@settings(max_examples=sample(1500, 100), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(st.data())
 def test_the_search_answers_what_the_whole_graph_does(data):

@@ -59,7 +59,7 @@ def test_the_markings_found_before_the_limit_are_reachable_and_distinct(data):
     assert len(set(found)) == len(found) == error.explored
 
 
-@settings(max_examples=sample(1500, 150), **SETTINGS)
+@settings(max_examples=sample(1500, 100), **SETTINGS)
 @given(st.data())
 def test_a_question_settled_by_a_found_marking_is_answered_as_the_whole_graph_answers(data):
     net = data.draw(nets())

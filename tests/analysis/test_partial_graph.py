@@ -49,7 +49,7 @@ def _stopped(net, limit: int):
     return None
 
 
-@settings(max_examples=sample(1500, 150), deadline=None,
+@settings(max_examples=sample(1500, 100), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(st.data())
 def test_what_the_partial_graph_decides_is_what_the_whole_graph_answers(data):

@@ -90,7 +90,7 @@ def _bounded_net_and_formula(data):
     return None if space.coverability else (net, s, f)
 
 
-@settings(max_examples=sample(800, 100), deadline=None,
+@settings(max_examples=sample(800, 60), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(st.data())
 def test_a_simplified_formula_has_the_original_answer(data):
@@ -126,7 +126,7 @@ def test_the_initial_marking_decides_what_every_path_from_it_decides():
                     a_now) is True
 
 
-@settings(max_examples=sample(800, 100), deadline=None,
+@settings(max_examples=sample(800, 60), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(st.data())
 def test_what_one_run_of_a_walker_settles_is_what_the_whole_graph_answers(data):
