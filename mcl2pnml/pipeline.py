@@ -34,7 +34,7 @@ from mcl2pnml.core.files import atomic_write_text, read_text
 from mcl2pnml.core.jsontext import load_json
 from mcl2pnml.core.memory import Budget, check_load, guard, release
 from mcl2pnml.core.net import Net
-from mcl2pnml.core.payloads import MISSION, MissionPlace
+from mcl2pnml.core.payloads import MissionPlace
 from mcl2pnml.core.settings import SettingError, parse_size, size_or_none
 from mcl2pnml.core.timing import Assumptions
 from mcl2pnml.io.formats import FORMATS, SUFFIXES, SaveOptions, reader_of
@@ -721,11 +721,8 @@ def instance_trees(checked) -> list[tuple[str, list["Instance"]]]:
     instances (:func:`mcl2pnml.language.functional.instances`): the page's tree, and
     where each instance of the net comes from."""
     # lark, 40 ms: only a mission read
-    from mcl2pnml.language.functional import function_expression, instances, mission_expression
-    trees = [(MISSION, instances(mission_expression(checked.mission), MISSION, ""))]
-    trees += [(name, instances(function_expression(checked.functions[name]), name, name))
-              for name in checked.function_order]
-    return trees
+    from mcl2pnml.language.functional import instance_trees as trees
+    return trees(checked)
 
 
 def call_sites(checked) -> dict:

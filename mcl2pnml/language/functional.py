@@ -202,6 +202,15 @@ def box_label(node: FNode) -> str:
     return f"{node.kind}({', '.join(inner)})"
 
 
+def instance_trees(checked) -> list[tuple[str, list[Instance]]]:
+    """The mission's functional form, then each function's, as the compiled net names
+    their instances (:func:`instances`): where each instance of the net comes from."""
+    trees = [(MISSION, instances(mission_expression(checked.mission), MISSION, ""))]
+    trees += [(name, instances(function_expression(checked.functions[name]), name, name))
+              for name in checked.function_order]
+    return trees
+
+
 def call_labels(checked) -> dict[str, str]:
     """Each instance of the compiled mission named as MCL writes it (section 2.5: one
     instance per structure and call site, one shared net per task, function and
@@ -209,10 +218,8 @@ def call_labels(checked) -> dict[str, str]:
     :func:`box_label`, the mission's root ``mission``, a function's body, a task and a
     primitive by their declarations with their parameters (``task Dive(d)``)."""
     labels = {}
-    roots = [(MISSION, mission_expression(checked.mission), "")]
-    roots += [(name, function_expression(f), name) for name, f in checked.functions.items()]
-    for root, expression, scope in roots:
-        for k, instance in enumerate(instances(expression, root, scope)):
+    for root, tree in instance_trees(checked):
+        for k, instance in enumerate(tree):
             labels[instance.name] = box_label(instance.node) if k else root
     for kind, declared in (("function", checked.functions), ("task", checked.tasks),
                            ("primitive", checked.primitives)):
